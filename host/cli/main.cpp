@@ -1,0 +1,189 @@
+// wavetrace: the command line. `render` (the default scene when no file is
+// named), `devices`, `bench`.
+#include "bench/bench.h"
+#include "core/log.h"
+#include "device/context.h"
+#include "device/program.h"
+#include "output/image_io.h"
+#include "render/renderer.h"
+#include "scene/default_scene.h"
+
+#include <CLI/CLI.hpp>
+
+#include <atomic>
+#include <chrono>
+#include <csignal>
+#include <cstdio>
+#include <unistd.h>
+
+namespace {
+
+std::atomic<bool> g_interrupted{false};
+
+extern "C" void onInterrupt(int) { g_interrupted = true; }
+
+struct RenderOptions {
+  std::string scene;
+  std::vector<std::string> outputs;
+  wt::RenderSettings settings;
+  std::string device;
+  int sceneIndex = -1;
+  int camera = 0;
+  std::string kernelDir;
+  bool quiet = false;
+};
+
+void writeOutputs(const RenderOptions& options, const wt::Image& image) {
+  for (const std::string& out : options.outputs) {
+    wt::writeImage(out, image);
+    std::printf("wrote %s\n", out.c_str());
+  }
+}
+
+int runRender(const RenderOptions& options) {
+  wt::log::setQuiet(options.quiet);
+  if (!options.kernelDir.empty()) wt::setKernelDirectory(std::filesystem::path(options.kernelDir));
+
+  // Fail on an unwritable output before spending any time rendering.
+  for (const std::string& out : options.outputs) wt::checkWritable(out);
+
+  wt::GltfLoadOptions loadOptions;
+  loadOptions.sceneIndex = options.sceneIndex;
+  loadOptions.cameraIndex = options.camera;
+  auto loadStart = std::chrono::steady_clock::now();
+  wt::Scene scene = options.scene.empty() ? wt::loadDefaultScene(loadOptions)
+                                          : wt::loadScene(options.scene, loadOptions);
+  for (const std::string& w : scene.warnings) wt::log::warnOnce(scene.sourceName + ": " + w);
+  if (scene.triangles.empty()) wt::log::warnOnce(scene.sourceName + ": the scene has no triangles");
+  double loadSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - loadStart).count();
+
+  wt::DeviceInfo device = wt::selectDevice(options.device);
+  wt::Context context(device);
+  wt::Renderer renderer(context, scene, options.settings);
+  const wt::BvhBuildStats& bvh = renderer.sceneBuffers().bvh().stats;
+  wt::log::info("scene " + scene.sourceName + ": " + std::to_string(scene.triangles.size()) +
+                " triangles, loaded in " + std::to_string(int(loadSeconds * 1e3)) + " ms; BVH " +
+                std::to_string(bvh.nodeCount) + " nodes built in " +
+                std::to_string(bvh.buildSeconds * 1e3).substr(0, 6) + " ms; device " + device.name);
+
+  std::signal(SIGINT, onInterrupt);
+  std::signal(SIGTERM, onInterrupt);
+  const bool tty = isatty(STDERR_FILENO);
+  const int spp = options.settings.samplesPerPixel;
+  auto lastReport = std::chrono::steady_clock::now();
+  std::string failure;
+  try {
+    for (int s = 0; s < spp && !g_interrupted; ++s) {
+      renderer.renderSample();
+      auto now = std::chrono::steady_clock::now();
+      bool last = s + 1 == spp;
+      if (!options.quiet && (tty || last || now - lastReport > std::chrono::seconds(5))) {
+        const wt::RenderStats& st = renderer.stats();
+        std::fprintf(stderr, "%ssample %d/%d  %.2f Mrays/s  %.1f s%s", tty ? "\r" : "", st.samplesDone,
+                     spp, st.raysTraced / st.seconds * 1e-6, st.seconds, tty && !last ? "" : "\n");
+        lastReport = now;
+      }
+    }
+  } catch (const std::exception& e) {
+    failure = e.what();
+  }
+
+  // Whatever happened, keep what was accumulated.
+  if (renderer.stats().samplesDone > 0) {
+    wt::Image image = renderer.readImage();
+    writeOutputs(options, image);
+    if (renderer.stats().nonFiniteSamples > 0)
+      wt::log::warnOnce(std::to_string(renderer.stats().nonFiniteSamples) +
+                        " NaN/Inf samples discarded");
+  }
+  if (!failure.empty()) {
+    wt::log::error("render failed after " + std::to_string(renderer.stats().samplesDone) +
+                   " samples: " + failure);
+    return 1;
+  }
+  if (g_interrupted) {
+    wt::log::error("interrupted after " + std::to_string(renderer.stats().samplesDone) +
+                   " samples; the image so far was written");
+    return 130;
+  }
+  return 0;
+}
+
+int runDevices() {
+  std::vector<wt::DeviceInfo> devices = wt::listDevices();
+  if (devices.empty()) {
+    wt::log::error("no OpenCL device found (install an ICD, e.g. pocl-opencl-icd)");
+    return 1;
+  }
+  int def = wt::defaultDeviceIndex(devices);
+  for (const wt::DeviceInfo& d : devices)
+    std::printf("%s %d: %s [%s] %s%s\n", d.index == def ? "*" : " ", d.index, d.name.c_str(),
+                d.platformName.c_str(), d.version.c_str(), d.fp64 ? ", fp64" : "");
+  std::printf("(* = default)\n");
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"wavetrace: a wavefront path tracer for OpenCL devices"};
+  app.require_subcommand(1);
+  app.set_version_flag("--version", "wavetrace 0.1.0");
+
+  RenderOptions render;
+  CLI::App* renderCmd = app.add_subcommand("render", "Render a glTF scene (the built-in Cornell box when none is named)");
+  renderCmd->add_option("scene", render.scene, "Scene file (.gltf, .glb)");
+  renderCmd->add_option("-o,--output", render.outputs, "Output image(s), .exr (linear float) or .png (sRGB); repeatable")
+      ->default_str("render.png");
+  renderCmd->add_option("--spp", render.settings.samplesPerPixel, "Samples per pixel")
+      ->check(CLI::Range(1, 1 << 24))->capture_default_str();
+  renderCmd->add_option("--width", render.settings.width, "Image width in pixels")
+      ->check(CLI::Range(1, 16384))->capture_default_str();
+  renderCmd->add_option("--height", render.settings.height, "Image height in pixels")
+      ->check(CLI::Range(1, 16384))->capture_default_str();
+  renderCmd->add_option("--max-bounces", render.settings.maxBounces, "Bounces after the camera hit")
+      ->check(CLI::Range(0, 1024))->capture_default_str();
+  renderCmd->add_option("--seed", render.settings.seed, "Random seed")->capture_default_str();
+  renderCmd->add_option("--exposure", render.settings.exposureStops, "Exposure in stops for PNG output")
+      ->capture_default_str();
+  renderCmd->add_option("--device", render.device, "Device index or name substring (see 'wavetrace devices')");
+  renderCmd->add_option("--scene-index", render.sceneIndex, "glTF scene to render (default: the file's default scene)")
+      ->check(CLI::Range(-1, 1 << 20));
+  renderCmd->add_option("--camera", render.camera, "Camera to use, by order in the scene")
+      ->check(CLI::Range(0, 1 << 20))->capture_default_str();
+  renderCmd->add_option("--kernel-dir", render.kernelDir, "Developer option: read kernels from this folder");
+  renderCmd->add_flag("-q,--quiet", render.quiet, "No progress output");
+
+  CLI::App* devicesCmd = app.add_subcommand("devices", "List OpenCL platforms and devices");
+
+  wt::BenchOptions bench;
+  CLI::App* benchCmd = app.add_subcommand("bench", "BVH build and ray throughput benchmark");
+  benchCmd->add_option("scenes", bench.scenes, "Scene files (default: built-in Cornell box and a generated 1M-triangle mesh)");
+  benchCmd->add_option("--device", bench.device, "Device index or name substring");
+  benchCmd->add_flag("--json", bench.json, "Machine-readable output");
+  benchCmd->add_option("--primary-width", bench.primaryWidth, "Primary ray set is N x N")
+      ->check(CLI::Range(1, 8192))->capture_default_str();
+  benchCmd->add_option("--mesh-triangles", bench.meshTriangles, "Size of the generated mesh")
+      ->check(CLI::Range(2, 1 << 26))->capture_default_str();
+  benchCmd->add_option("--repetitions", bench.repetitions, "Timed runs per figure (median)")
+      ->check(CLI::Range(1, 1000))->capture_default_str();
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  }
+
+  try {
+    if (*renderCmd) {
+      if (render.outputs.empty()) render.outputs.push_back("render.png");
+      return runRender(render);
+    }
+    if (*devicesCmd) return runDevices();
+    if (*benchCmd) return wt::runBench(bench);
+  } catch (const std::exception& e) {
+    wt::log::error(e.what());
+    return 1;
+  }
+  return 0;
+}

@@ -1,0 +1,11 @@
+#include "core/embedded.h"
+
+namespace wt::embedded {
+
+std::optional<std::string_view> find(std::string_view path) {
+  for (const File& f : files())
+    if (f.path == path) return f.contents;
+  return std::nullopt;
+}
+
+}  // namespace wt::embedded

@@ -1,0 +1,146 @@
+#include "device/context.h"
+
+#include <algorithm>
+#include <cctype>
+
+namespace wt {
+
+std::vector<DeviceInfo> listDevices() {
+  std::vector<DeviceInfo> result;
+  std::vector<cl::Platform> platforms;
+  try {
+    cl::Platform::get(&platforms);
+  } catch (const cl::Error&) {
+    return result;  // no ICD or no platform: callers report "no OpenCL device"
+  }
+  for (cl::Platform& platform : platforms) {
+    std::vector<cl::Device> devices;
+    try {
+      platform.getDevices(CL_DEVICE_TYPE_ALL, &devices);
+    } catch (const cl::Error&) {
+      continue;
+    }
+    for (cl::Device& device : devices) {
+      DeviceInfo info;
+      info.index = int(result.size());
+      info.platformName = platform.getInfo<CL_PLATFORM_NAME>();
+      info.name = device.getInfo<CL_DEVICE_NAME>();
+      info.version = device.getInfo<CL_DEVICE_VERSION>();
+      info.isGpu = (device.getInfo<CL_DEVICE_TYPE>() & CL_DEVICE_TYPE_GPU) != 0;
+      info.fp64 = device.getInfo<CL_DEVICE_EXTENSIONS>().find("cl_khr_fp64") != std::string::npos;
+      info.platform = platform;
+      info.device = device;
+      result.push_back(std::move(info));
+    }
+  }
+  return result;
+}
+
+int defaultDeviceIndex(const std::vector<DeviceInfo>& devices) {
+  for (const DeviceInfo& d : devices)
+    if (d.isGpu) return d.index;
+  return devices.empty() ? -1 : 0;
+}
+
+namespace {
+std::string lower(std::string s) {
+  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return std::tolower(c); });
+  return s;
+}
+}  // namespace
+
+DeviceInfo selectDevice(const std::string& spec) {
+  std::vector<DeviceInfo> devices = listDevices();
+  if (devices.empty())
+    throw DeviceError(
+        "no OpenCL device found (is an ICD such as pocl-opencl-icd installed? see 'wavetrace devices')");
+  if (spec.empty()) return devices[defaultDeviceIndex(devices)];
+  bool numeric = std::all_of(spec.begin(), spec.end(), [](unsigned char c) { return std::isdigit(c); });
+  if (numeric) {
+    long index = std::stol(spec);
+    if (index < 0 || index >= long(devices.size()))
+      throw DeviceError("--device " + spec + ": no such device index (" +
+                        std::to_string(devices.size()) + " devices; see 'wavetrace devices')");
+    return devices[index];
+  }
+  std::string needle = lower(spec);
+  for (const DeviceInfo& d : devices)
+    if (lower(d.name).find(needle) != std::string::npos ||
+        lower(d.platformName).find(needle) != std::string::npos)
+      return d;
+  throw DeviceError("--device " + spec + ": no device name contains '" + spec +
+                    "' (see 'wavetrace devices')");
+}
+
+Context::Context(const DeviceInfo& device, bool profiling)
+    : m_info(device), m_profiling(profiling) {
+  try {
+    m_context = cl::Context(device.device);
+    m_queue = cl::CommandQueue(m_context, device.device,
+                               profiling ? CL_QUEUE_PROFILING_ENABLE : cl_command_queue_properties(0));
+  } catch (const cl::Error& e) {
+    throw DeviceError("cannot open OpenCL device '" + device.name + "': " + e.what() + " (" +
+                      clErrorName(e.err()) + ")");
+  }
+}
+
+void Context::launch(const char* stage, cl::Kernel& kernel, std::size_t count, std::size_t localSize) {
+  if (count == 0) return;
+  std::size_t global = (count + localSize - 1) / localSize * localSize;
+  cl::Event event;
+  try {
+    m_queue.enqueueNDRangeKernel(kernel, cl::NullRange, cl::NDRange(global), cl::NDRange(localSize),
+                                 nullptr, m_profiling ? &event : nullptr);
+#ifndef NDEBUG
+    // Debug builds stop at the launch that failed, not at a later read.
+    m_queue.finish();
+#endif
+  } catch (const cl::Error& e) {
+    throw DeviceError(std::string("launching stage '") + stage + "' failed: " + e.what() + " (" +
+                      clErrorName(e.err()) + ")");
+  }
+  if (m_profiling) m_pending.emplace_back(stage, event);
+}
+
+void Context::finish() {
+  m_queue.finish();
+  for (auto& [stage, event] : m_pending) {
+    auto start = event.getProfilingInfo<CL_PROFILING_COMMAND_START>();
+    auto end = event.getProfilingInfo<CL_PROFILING_COMMAND_END>();
+    m_times.seconds[stage] += double(end - start) * 1e-9;
+    m_times.launches[stage] += 1;
+  }
+  m_pending.clear();
+}
+
+std::string clErrorName(int code) {
+  switch (code) {
+    case CL_SUCCESS: return "CL_SUCCESS";
+    case CL_DEVICE_NOT_FOUND: return "CL_DEVICE_NOT_FOUND";
+    case CL_DEVICE_NOT_AVAILABLE: return "CL_DEVICE_NOT_AVAILABLE";
+    case CL_COMPILER_NOT_AVAILABLE: return "CL_COMPILER_NOT_AVAILABLE";
+    case CL_MEM_OBJECT_ALLOCATION_FAILURE: return "CL_MEM_OBJECT_ALLOCATION_FAILURE";
+    case CL_OUT_OF_RESOURCES: return "CL_OUT_OF_RESOURCES";
+    case CL_OUT_OF_HOST_MEMORY: return "CL_OUT_OF_HOST_MEMORY";
+    case CL_BUILD_PROGRAM_FAILURE: return "CL_BUILD_PROGRAM_FAILURE";
+    case CL_INVALID_VALUE: return "CL_INVALID_VALUE";
+    case CL_INVALID_DEVICE: return "CL_INVALID_DEVICE";
+    case CL_INVALID_BINARY: return "CL_INVALID_BINARY";
+    case CL_INVALID_BUILD_OPTIONS: return "CL_INVALID_BUILD_OPTIONS";
+    case CL_INVALID_PROGRAM: return "CL_INVALID_PROGRAM";
+    case CL_INVALID_KERNEL_NAME: return "CL_INVALID_KERNEL_NAME";
+    case CL_INVALID_KERNEL_ARGS: return "CL_INVALID_KERNEL_ARGS";
+    case CL_INVALID_ARG_INDEX: return "CL_INVALID_ARG_INDEX";
+    case CL_INVALID_ARG_VALUE: return "CL_INVALID_ARG_VALUE";
+    case CL_INVALID_ARG_SIZE: return "CL_INVALID_ARG_SIZE";
+    case CL_INVALID_WORK_GROUP_SIZE: return "CL_INVALID_WORK_GROUP_SIZE";
+    case CL_INVALID_WORK_ITEM_SIZE: return "CL_INVALID_WORK_ITEM_SIZE";
+    case CL_INVALID_GLOBAL_WORK_SIZE: return "CL_INVALID_GLOBAL_WORK_SIZE";
+    case CL_INVALID_BUFFER_SIZE: return "CL_INVALID_BUFFER_SIZE";
+    case CL_INVALID_MEM_OBJECT: return "CL_INVALID_MEM_OBJECT";
+    case CL_PLATFORM_NOT_FOUND_KHR: return "CL_PLATFORM_NOT_FOUND_KHR";
+    default: return "OpenCL error " + std::to_string(code);
+  }
+}
+
+}  // namespace wt

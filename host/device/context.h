@@ -1,0 +1,80 @@
+// OpenCL platforms and devices, the context and queue of the chosen one, and
+// the single launch helper every stage goes through.
+#pragma once
+
+#include <CL/opencl.hpp>
+
+#include <cstddef>
+#include <map>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace wt {
+
+/// No platform, no device matching the request, a failed build or launch.
+struct DeviceError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+struct DeviceInfo {
+  int index = 0;              ///< position in listDevices(), across all platforms
+  std::string platformName;
+  std::string name;
+  std::string version;        ///< CL_DEVICE_VERSION
+  bool isGpu = false;
+  bool fp64 = false;
+  cl::Platform platform;
+  cl::Device device;
+};
+
+/// Every device of every platform, in a stable order.
+std::vector<DeviceInfo> listDevices();
+
+/// The default device: the first GPU, else the first device.
+int defaultDeviceIndex(const std::vector<DeviceInfo>& devices);
+
+/// Pick by index ("1") or by a case-insensitive substring of the device or
+/// platform name ("pthread"); "" picks the default. Throws DeviceError.
+DeviceInfo selectDevice(const std::string& spec);
+
+/// Per-stage kernel time from profiling events (benchmarks).
+struct StageTimes {
+  std::map<std::string, double> seconds;
+  std::map<std::string, std::size_t> launches;
+};
+
+class Context {
+ public:
+  explicit Context(const DeviceInfo& device, bool profiling = false);
+
+  const DeviceInfo& info() const { return m_info; }
+  cl::Context& context() { return m_context; }
+  cl::CommandQueue& queue() { return m_queue; }
+
+  /// Enqueue `kernel` over `count` work-items in groups of `localSize`
+  /// (global size rounded up; kernels guard with `if (i >= count) return`).
+  /// With profiling on, the kernel time is added to stageTimes()[stage].
+  void launch(const char* stage, cl::Kernel& kernel, std::size_t count,
+              std::size_t localSize = kLocalSize);
+  /// Wait for the queue and fold pending profiling events into the totals.
+  void finish();
+
+  const StageTimes& stageTimes() const { return m_times; }
+  void resetStageTimes() { m_times = {}; }
+
+  static constexpr std::size_t kLocalSize = 64;
+
+ private:
+  DeviceInfo m_info;
+  cl::Context m_context;
+  cl::CommandQueue m_queue;
+  bool m_profiling;
+  std::vector<std::pair<std::string, cl::Event>> m_pending;
+  StageTimes m_times;
+};
+
+/// "CL_OUT_OF_RESOURCES" for -5, etc.
+std::string clErrorName(int code);
+
+}  // namespace wt

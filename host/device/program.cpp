@@ -1,0 +1,116 @@
+#include "device/program.h"
+
+#include "core/embedded.h"
+
+#include <cstdlib>
+#include <fstream>
+#include <set>
+#include <sstream>
+
+namespace wt {
+namespace {
+
+std::optional<std::filesystem::path> g_kernelDir;
+bool g_kernelDirFromEnv = false;
+
+std::optional<std::filesystem::path> kernelDirectory() {
+  if (!g_kernelDirFromEnv) {
+    g_kernelDirFromEnv = true;
+    if (!g_kernelDir) {
+      if (const char* env = std::getenv("WT_KERNEL_DIR"); env && *env) g_kernelDir = env;
+    }
+  }
+  return g_kernelDir;
+}
+
+/// A kernel file by its path relative to kernels/, from disk or embedded.
+std::optional<std::string> readKernelFile(const std::string& rel) {
+  if (auto dir = kernelDirectory()) {
+    std::ifstream in(*dir / rel, std::ios::binary);
+    if (!in) return std::nullopt;
+    std::ostringstream ss;
+    ss << in.rdbuf();
+    return ss.str();
+  }
+  if (auto contents = embedded::find("kernels/" + rel)) return std::string(*contents);
+  return std::nullopt;
+}
+
+std::string normalise(const std::filesystem::path& p) { return p.lexically_normal().generic_string(); }
+
+void expandInto(const std::string& rel, std::set<std::string>& seen, std::ostringstream& out,
+                const std::string& includedFrom) {
+  if (!seen.insert(rel).second) return;
+  std::optional<std::string> text = readKernelFile(rel);
+  if (!text)
+    throw DeviceError("kernel source '" + rel + "' not found" +
+                      (includedFrom.empty() ? "" : " (included from " + includedFrom + ")") +
+                      (kernelDirectory() ? " in " + kernelDirectory()->string() : ""));
+  std::istringstream in(*text);
+  std::string line;
+  int lineNo = 0;
+  out << "#line 1 \"" << rel << "\"\n";
+  while (std::getline(in, line)) {
+    ++lineNo;
+    std::size_t hash = line.find_first_not_of(" \t");
+    if (hash != std::string::npos && line.compare(hash, 8, "#include") == 0) {
+      std::size_t open = line.find('"', hash);
+      std::size_t close = open == std::string::npos ? open : line.find('"', open + 1);
+      // <system> headers only appear in the host branches of shared headers:
+      // leave them for the device preprocessor, which skips those branches.
+      if (open == std::string::npos || close == std::string::npos) {
+        out << line << '\n';
+        continue;
+      }
+      std::string name = line.substr(open + 1, close - open - 1);
+      std::string sibling = normalise(std::filesystem::path(rel).parent_path() / name);
+      std::string target = readKernelFile(sibling) ? sibling : normalise(name);
+      expandInto(target, seen, out, rel + ":" + std::to_string(lineNo));
+      out << "#line " << lineNo + 1 << " \"" << rel << "\"\n";
+      continue;
+    }
+    out << line << '\n';
+  }
+}
+
+}  // namespace
+
+void setKernelDirectory(const std::optional<std::filesystem::path>& dir) {
+  g_kernelDir = dir;
+  g_kernelDirFromEnv = true;
+}
+
+std::string expandKernelSource(const std::string& file) {
+  std::set<std::string> seen;
+  std::ostringstream out;
+  expandInto(file, seen, out, "");
+  return out.str();
+}
+
+std::vector<std::string> kernelDefines(const KernelFeatures& features) {
+  return {
+      "-D WT_INTEGRATOR_MINIMAL=" + std::string(features.integratorMinimal ? "1" : "0"),
+      "-D WT_BVH_STACK_SIZE=" + std::to_string(features.bvhStackSize),
+  };
+}
+
+cl::Program buildProgram(Context& context, const KernelFeatures& features) {
+  std::string source = expandKernelSource("wavetrace.cl");
+  std::string options = "-cl-std=CL1.2";
+  for (const std::string& d : kernelDefines(features)) options += " " + d;
+  cl::Program program(context.context(), source);
+  try {
+    program.build({context.info().device}, options.c_str());
+  } catch (const cl::Error& e) {
+    std::string log;
+    try {
+      log = program.getBuildInfo<CL_PROGRAM_BUILD_LOG>(context.info().device);
+    } catch (const cl::Error&) {
+    }
+    throw DeviceError("building kernels for '" + context.info().name + "' failed (" +
+                      clErrorName(e.err()) + "), options: " + options + "\n" + log);
+  }
+  return program;
+}
+
+}  // namespace wt

@@ -1,0 +1,37 @@
+// Kernel sources (embedded at build time, or a folder on disk for kernel
+// development) and the program build, specialised by the scene's features.
+#pragma once
+
+#include "device/context.h"
+
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace wt {
+
+/// What a scene needs compiled in; becomes -D options (kernelDefines). Keep
+/// the set coarse so few variants exist and PoCL's cache keeps them warm.
+struct KernelFeatures {
+  bool integratorMinimal = true;  ///< the brute-force reference (the only integrator so far)
+  int bvhStackSize = 64;          ///< traversal stack entries; >= BVH depth + 1, rounded up to 32
+};
+
+/// The build options for a feature set, e.g. "-D WT_INTEGRATOR_MINIMAL=1 ...".
+std::vector<std::string> kernelDefines(const KernelFeatures& features);
+
+/// Read kernels from this folder instead of the embedded copies (developer
+/// option, --kernel-dir; also the WT_KERNEL_DIR environment variable).
+void setKernelDirectory(const std::optional<std::filesystem::path>& dir);
+
+/// The source of `file` (relative to kernels/) with every `#include "..."`
+/// expanded once, resolved against the including file's folder and then the
+/// kernels root; `#line` directives keep build logs pointing at real files.
+std::string expandKernelSource(const std::string& file);
+
+/// Build kernels/wavetrace.cl for the context's device. Throws DeviceError
+/// carrying the device's build log.
+cl::Program buildProgram(Context& context, const KernelFeatures& features);
+
+}  // namespace wt

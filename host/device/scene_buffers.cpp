@@ -1,0 +1,62 @@
+#include "device/scene_buffers.h"
+
+#include <algorithm>
+#include <cstddef>
+
+namespace wt {
+namespace {
+
+template <typename T>
+cl::Buffer upload(Context& context, const std::vector<T>& data, std::size_t& bytes) {
+  // OpenCL rejects zero-sized buffers: keep one element where a scene has none.
+  std::size_t size = std::max<std::size_t>(data.size(), 1) * sizeof(T);
+  cl::Buffer buffer(context.context(), CL_MEM_READ_ONLY, size);
+  if (!data.empty())
+    context.queue().enqueueWriteBuffer(buffer, CL_TRUE, 0, data.size() * sizeof(T), data.data());
+  bytes += data.size() * sizeof(T);
+  return buffer;
+}
+
+}  // namespace
+
+SceneBuffers::SceneBuffers(Context& context, const Scene& scene, const BvhBuildOptions& options) {
+  std::vector<Aabb> bounds(scene.triangles.size());
+  for (std::size_t i = 0; i < bounds.size(); ++i) bounds[i] = scene.triangleBounds(std::uint32_t(i));
+  m_bvh = buildLbvh(bounds, options);
+  nodeCount = std::uint32_t(m_bvh.nodes.size());
+
+  // Reorder triangles to leaf order, so a leaf addresses a contiguous range.
+  std::vector<WtVec4> verts(3 * scene.triangles.size());
+  std::vector<WtTriangle> ordered(scene.triangles.size());
+  for (std::size_t i = 0; i < ordered.size(); ++i) {
+    const WtTriangle& t = scene.triangles[m_bvh.primIndices[i]];
+    ordered[i] = t;
+    verts[3 * i + 0] = scene.positions[t.v0];
+    verts[3 * i + 1] = scene.positions[t.v1];
+    verts[3 * i + 2] = scene.positions[t.v2];
+  }
+  std::size_t bytes = 0;
+  nodes = upload(context, m_bvh.nodes, bytes);
+  triVerts = upload(context, verts, bytes);
+  triangles = upload(context, ordered, bytes);
+  uploadedBytes = bytes;
+  std::size_t attributeBytes = 0;
+  normals = upload(context, scene.normals, attributeBytes);
+  materials = upload(context, scene.materials, attributeBytes);
+}
+
+int SceneBuffers::stackSize() const {
+  int needed = m_bvh.stats.maxDepth + 1;
+  return std::max(32, (needed + 31) / 32 * 32);
+}
+
+}  // namespace wt
+
+// One definition, two compilers: the kernels see these exact sizes.
+static_assert(sizeof(WtVec4) == 16);
+static_assert(sizeof(WtTriangle) == 16);
+static_assert(sizeof(WtBvhNode) == 32);
+static_assert(offsetof(WtBvhNode, hi_x) == 16);
+static_assert(sizeof(WtMaterial) == 32);
+static_assert(sizeof(WtCamera) == 64);
+static_assert(sizeof(WtFrameParams) == 32);

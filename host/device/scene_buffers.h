@@ -1,0 +1,37 @@
+// The scene on the device: BVH nodes and triangles in leaf order, vertex
+// attributes and materials, uploaded once and shared by every stage.
+#pragma once
+
+#include "bvh/lbvh.h"
+#include "device/context.h"
+#include "scene/scene.h"
+
+#include <cstdint>
+#include <vector>
+
+namespace wt {
+
+class SceneBuffers {
+ public:
+  /// Build the BVH over the scene's triangles and upload everything.
+  SceneBuffers(Context& context, const Scene& scene, const BvhBuildOptions& options = {});
+
+  cl::Buffer nodes;       ///< WtBvhNode[nodeCount] (one dummy node when empty)
+  cl::Buffer triVerts;    ///< float4[3 * triangles], leaf order, world space
+  cl::Buffer triangles;   ///< WtTriangle[], leaf order
+  cl::Buffer normals;     ///< float4 per vertex
+  cl::Buffer materials;   ///< WtMaterial[]
+  std::uint32_t nodeCount = 0;
+  std::size_t uploadedBytes = 0;  ///< nodes + triangle data
+
+  const Bvh& bvh() const { return m_bvh; }
+  /// Leaf-order triangle index -> the scene's triangle index.
+  std::uint32_t sceneTriangle(std::uint32_t leafIndex) const { return m_bvh.primIndices[leafIndex]; }
+  /// Traversal stack entries the BVH needs, for KernelFeatures::bvhStackSize.
+  int stackSize() const;
+
+ private:
+  Bvh m_bvh;
+};
+
+}  // namespace wt

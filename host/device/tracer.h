@@ -1,0 +1,57 @@
+// Ray batches traced outside the wavefront loop: the interface the traversal
+// tests and the throughput benchmark use.
+#pragma once
+
+#include "device/context.h"
+#include "device/scene_buffers.h"
+#include "scene/scene.h"
+
+#include <glm/glm.hpp>
+
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <vector>
+
+namespace wt {
+
+struct Ray {
+  glm::vec3 origin;
+  float tmin = 0.0f;
+  glm::vec3 direction;
+  float tmax = 1e30f;
+};
+static_assert(sizeof(Ray) == 32, "Ray is uploaded as two float4");
+
+struct RayHit {
+  float t = 0.0f;
+  float b1 = 0.0f, b2 = 0.0f;       ///< barycentrics of the triangle's v1 and v2
+  std::uint32_t triangle = kNoHit;  ///< the scene's triangle index
+  static constexpr std::uint32_t kNoHit = 0xffffffffu;
+};
+
+class Tracer {
+ public:
+  Tracer(Context& context, const Scene& scene, const BvhBuildOptions& options = {});
+  ~Tracer();
+
+  std::vector<RayHit> traceClosest(std::span<const Ray> rays);
+  std::vector<std::uint8_t> traceOccluded(std::span<const Ray> rays);
+
+  const SceneBuffers& sceneBuffers() const { return *m_scene; }
+  /// Kernel time of the last trace call (profiling events), seconds.
+  double lastKernelSeconds() const { return m_lastKernelSeconds; }
+
+ private:
+  void uploadRays(std::span<const Ray> rays);
+
+  Context& m_context;
+  std::unique_ptr<SceneBuffers> m_scene;
+  cl::Program m_program;
+  cl::Kernel m_closest, m_occluded;
+  cl::Buffer m_rayO, m_rayD, m_out;
+  std::size_t m_capacity = 0;
+  double m_lastKernelSeconds = 0.0;
+};
+
+}  // namespace wt

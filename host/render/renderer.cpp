@@ -1,0 +1,169 @@
+#include "render/renderer.h"
+
+#include "device/program.h"
+
+#include <chrono>
+#include <cmath>
+
+namespace wt {
+namespace {
+
+WtFrameParams frameParams(const RenderSettings& s, int sample, int bounce) {
+  WtFrameParams p{};
+  p.width = cl_uint(s.width);
+  p.height = cl_uint(s.height);
+  p.sample = cl_uint(sample);
+  p.bounce = cl_uint(bounce);
+  p.max_bounces = cl_uint(s.maxBounces);
+  p.seed = s.seed;
+  p.exposure = std::exp2(s.exposureStops);
+  return p;
+}
+
+}  // namespace
+
+Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& settings)
+    : m_context(context), m_settings(settings) {
+  CameraDesc desc = scene.camera ? *scene.camera : defaultCamera(scene.bounds());
+  m_camera = makeCamera(desc, settings.width, settings.height);
+  m_scene = std::make_unique<SceneBuffers>(context, scene);
+
+  KernelFeatures features;
+  features.integratorMinimal = true;
+  features.bvhStackSize = m_scene->stackSize();
+  m_program = buildProgram(context, features);
+  m_generate = cl::Kernel(m_program, "generate");
+  m_extend = cl::Kernel(m_program, "extend");
+  m_shade = cl::Kernel(m_program, "shade");
+  m_accumulate = cl::Kernel(m_program, "accumulate");
+  m_tonemap = cl::Kernel(m_program, "tonemap");
+
+  std::size_t pixels = std::size_t(settings.width) * std::size_t(settings.height);
+  cl::Context& ctx = context.context();
+  auto make = [&](std::size_t bytesPerPixel) {
+    return cl::Buffer(ctx, CL_MEM_READ_WRITE, pixels * bytesPerPixel);
+  };
+  m_rayO = make(16), m_rayD = make(16), m_hits = make(16);
+  m_throughput = make(16), m_radiance = make(16);
+  m_queueA = make(4), m_queueB = make(4);
+  m_counters = cl::Buffer(ctx, CL_MEM_READ_WRITE, WT_COUNTER_COUNT * sizeof(cl_uint));
+  m_mean = make(16), m_m2 = make(16), m_sampleCount = make(4), m_pixels = make(4);
+
+  cl::CommandQueue& q = context.queue();
+  q.enqueueFillBuffer(m_mean, cl_float(0), 0, pixels * 16);
+  q.enqueueFillBuffer(m_m2, cl_float(0), 0, pixels * 16);
+  q.enqueueFillBuffer(m_sampleCount, cl_uint(0), 0, pixels * 4);
+  q.enqueueFillBuffer(m_counters, cl_uint(0), 0, WT_COUNTER_COUNT * sizeof(cl_uint));
+  q.finish();
+
+  // Arguments that never change; per-launch ones are set in renderSample().
+  int a = 2;  // generate: frame, camera set per pass
+  for (cl::Buffer* b : {&m_rayO, &m_rayD, &m_throughput, &m_radiance, &m_queueA, &m_counters})
+    m_generate.setArg(a++, *b);
+
+  m_extend.setArg(0, m_counters);
+  m_extend.setArg(3, m_rayO);
+  m_extend.setArg(4, m_rayD);
+  m_extend.setArg(5, m_scene->nodes);
+  m_extend.setArg(6, m_scene->nodeCount);
+  m_extend.setArg(7, m_scene->triVerts);
+  m_extend.setArg(8, m_hits);
+
+  m_shade.setArg(1, m_counters);
+  a = 6;
+  for (cl::Buffer* b : {&m_rayO, &m_rayD, &m_hits, &m_throughput, &m_radiance, &m_scene->triangles,
+                        &m_scene->triVerts, &m_scene->normals, &m_scene->materials})
+    m_shade.setArg(a++, *b);
+
+  a = 1;
+  for (cl::Buffer* b : {&m_radiance, &m_mean, &m_m2, &m_sampleCount, &m_counters})
+    m_accumulate.setArg(a++, *b);
+
+  m_tonemap.setArg(1, m_mean);
+  m_tonemap.setArg(2, m_pixels);
+}
+
+Renderer::~Renderer() = default;
+
+void Renderer::renderSample() {
+  auto start = std::chrono::steady_clock::now();
+  const int sample = m_stats.samplesDone;
+  const std::size_t pixels = std::size_t(m_settings.width) * std::size_t(m_settings.height);
+  cl::CommandQueue& q = m_context.queue();
+
+  // generate: every pixel's path enters queue A
+  m_generate.setArg(0, frameParams(m_settings, sample, 0));
+  m_generate.setArg(1, m_camera);
+  m_context.launch("generate", m_generate, pixels);
+
+  cl::Buffer* queueIn = &m_queueA;
+  cl::Buffer* queueOut = &m_queueB;
+  cl_uint inSlot = WT_COUNTER_QUEUE_A, outSlot = WT_COUNTER_QUEUE_B;
+  std::size_t alive = pixels;
+  for (int bounce = 0; bounce <= m_settings.maxBounces && alive > 0; ++bounce) {
+    m_stats.raysTraced += alive;
+    q.enqueueFillBuffer(m_counters, cl_uint(0), outSlot * sizeof(cl_uint), sizeof(cl_uint));
+
+    // extend: closest hit of every queued path
+    m_extend.setArg(1, inSlot);
+    m_extend.setArg(2, *queueIn);
+    m_context.launch("extend", m_extend, alive);
+
+    // shade: emission and the next direction; survivors go to the other queue
+    m_shade.setArg(0, frameParams(m_settings, sample, bounce));
+    m_shade.setArg(2, inSlot);
+    m_shade.setArg(3, outSlot);
+    m_shade.setArg(4, *queueIn);
+    m_shade.setArg(5, *queueOut);
+    m_context.launch("shade", m_shade, alive);
+
+    // end of the bounce: the only point where the host reads a count back
+    cl_uint next = 0;
+    q.enqueueReadBuffer(m_counters, CL_TRUE, outSlot * sizeof(cl_uint), sizeof(cl_uint), &next);
+    alive = next;
+    std::swap(queueIn, queueOut);
+    std::swap(inSlot, outSlot);
+  }
+
+  // accumulate: fold the pass into the running mean
+  m_accumulate.setArg(0, frameParams(m_settings, sample, 0));
+  m_context.launch("accumulate", m_accumulate, pixels);
+  m_context.finish();
+  ++m_stats.samplesDone;
+  m_stats.seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+Image Renderer::readImage() {
+  const std::size_t pixels = std::size_t(m_settings.width) * std::size_t(m_settings.height);
+  cl::CommandQueue& q = m_context.queue();
+  m_tonemap.setArg(0, frameParams(m_settings, m_stats.samplesDone, 0));
+  m_context.launch("tonemap", m_tonemap, pixels);
+
+  std::vector<float> mean(4 * pixels), m2(4 * pixels);
+  Image image;
+  image.width = m_settings.width;
+  image.height = m_settings.height;
+  image.samples.resize(pixels);
+  image.srgba.resize(4 * pixels);
+  q.enqueueReadBuffer(m_mean, CL_FALSE, 0, mean.size() * 4, mean.data());
+  q.enqueueReadBuffer(m_m2, CL_FALSE, 0, m2.size() * 4, m2.data());
+  q.enqueueReadBuffer(m_sampleCount, CL_FALSE, 0, pixels * 4, image.samples.data());
+  q.enqueueReadBuffer(m_pixels, CL_FALSE, 0, pixels * 4, image.srgba.data());
+  cl_uint counters[WT_COUNTER_COUNT];
+  q.enqueueReadBuffer(m_counters, CL_FALSE, 0, sizeof(counters), counters);
+  m_context.finish();
+  m_stats.nonFiniteSamples = counters[WT_COUNTER_NONFINITE];
+
+  image.rgb.resize(3 * pixels);
+  image.rgbVariance.resize(3 * pixels);
+  for (std::size_t i = 0; i < pixels; ++i) {
+    std::uint32_t n = image.samples[i];
+    for (int c = 0; c < 3; ++c) {
+      image.rgb[3 * i + c] = mean[4 * i + c];
+      image.rgbVariance[3 * i + c] = n > 1 ? m2[4 * i + c] / float(n - 1) : 0.0f;
+    }
+  }
+  return image;
+}
+
+}  // namespace wt

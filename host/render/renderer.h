@@ -1,0 +1,71 @@
+// The wavefront scheduler: which stage runs when, the path-state and queue
+// buffers, and the sample loop. One pass renders one sample per pixel:
+// generate, then extend/shade per bounce until no path is alive, then
+// accumulate.
+#pragma once
+
+#include "device/context.h"
+#include "device/scene_buffers.h"
+#include "scene/scene.h"
+
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+namespace wt {
+
+struct RenderSettings {
+  int width = 512;
+  int height = 512;
+  int samplesPerPixel = 64;
+  int maxBounces = 8;       ///< hits shaded after the camera hit (0: direct view of emitters only)
+  std::uint32_t seed = 0;
+  float exposureStops = 0.0f;
+};
+
+/// The accumulated image read back from the device.
+struct Image {
+  int width = 0, height = 0;
+  std::vector<float> rgb;              ///< linear radiance, per-pixel mean, row-major from the top
+  std::vector<float> rgbVariance;      ///< per-pixel sample variance of the radiance (unbiased)
+  std::vector<std::uint32_t> samples;  ///< samples folded into each pixel
+  std::vector<std::uint8_t> srgba;     ///< tone-mapped 8-bit sRGB, alpha 255
+};
+
+struct RenderStats {
+  int samplesDone = 0;
+  std::uint64_t raysTraced = 0;       ///< extend rays (camera and bounce rays)
+  std::uint64_t nonFiniteSamples = 0; ///< discarded NaN/Inf samples
+  double seconds = 0.0;               ///< wall time in renderSample()
+};
+
+class Renderer {
+ public:
+  Renderer(Context& context, const Scene& scene, const RenderSettings& settings);
+  ~Renderer();
+
+  /// Render and accumulate one more sample per pixel.
+  void renderSample();
+  /// Read the accumulated image (and tone-map it on the device).
+  Image readImage();
+
+  const RenderStats& stats() const { return m_stats; }
+  const RenderSettings& settings() const { return m_settings; }
+  const SceneBuffers& sceneBuffers() const { return *m_scene; }
+
+ private:
+  Context& m_context;
+  RenderSettings m_settings;
+  WtCamera m_camera;
+  std::unique_ptr<SceneBuffers> m_scene;
+  cl::Program m_program;
+  cl::Kernel m_generate, m_extend, m_shade, m_accumulate, m_tonemap;
+  // path state (structure of arrays, one entry per pixel)
+  cl::Buffer m_rayO, m_rayD, m_hits, m_throughput, m_radiance;
+  cl::Buffer m_queueA, m_queueB, m_counters;
+  // accumulation
+  cl::Buffer m_mean, m_m2, m_sampleCount, m_pixels;
+  RenderStats m_stats;
+};
+
+}  // namespace wt

@@ -1,0 +1,132 @@
+#include "scene/generators.h"
+
+#include <cmath>
+#include <map>
+#include <random>
+#include <utility>
+
+namespace wt {
+namespace {
+
+WtVec4 toVec4(glm::vec3 v, float w = 0.0f) { return {v.x, v.y, v.z, w}; }
+
+}  // namespace
+
+WtMaterial makeMaterial(glm::vec3 albedo, glm::vec3 emission) {
+  WtMaterial m{};
+  m.base_color = toVec4(albedo);
+  m.emission = toVec4(emission);
+  return m;
+}
+
+Scene makeIcosphere(int subdivisions, glm::vec3 center, float radius, const WtMaterial& material) {
+  // unit icosahedron
+  const float t = (1.0f + std::sqrt(5.0f)) / 2.0f;
+  std::vector<glm::vec3> verts = {{-1, t, 0}, {1, t, 0},  {-1, -t, 0}, {1, -t, 0},
+                                  {0, -1, t}, {0, 1, t},  {0, -1, -t}, {0, 1, -t},
+                                  {t, 0, -1}, {t, 0, 1},  {-t, 0, -1}, {-t, 0, 1}};
+  for (glm::vec3& v : verts) v = glm::normalize(v);
+  std::vector<glm::uvec3> faces = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11},
+                                   {1, 5, 9},  {5, 11, 4}, {11, 10, 2}, {10, 7, 6}, {7, 1, 8},
+                                   {3, 9, 4},  {3, 4, 2},  {3, 2, 6},   {3, 6, 8},  {3, 8, 9},
+                                   {4, 9, 5},  {2, 4, 11}, {6, 2, 10},  {8, 6, 7},  {9, 8, 1}};
+  // subdivide, sharing each edge's midpoint so the mesh stays closed
+  for (int s = 0; s < subdivisions; ++s) {
+    std::map<std::pair<unsigned, unsigned>, unsigned> midpoints;
+    auto midpoint = [&](unsigned a, unsigned b) {
+      auto key = std::minmax(a, b);
+      auto it = midpoints.find(key);
+      if (it != midpoints.end()) return it->second;
+      verts.push_back(glm::normalize(verts[a] + verts[b]));
+      unsigned index = unsigned(verts.size() - 1);
+      midpoints.emplace(key, index);
+      return index;
+    };
+    std::vector<glm::uvec3> next;
+    next.reserve(faces.size() * 4);
+    for (const glm::uvec3& f : faces) {
+      unsigned ab = midpoint(f.x, f.y), bc = midpoint(f.y, f.z), ca = midpoint(f.z, f.x);
+      next.push_back({f.x, ab, ca});
+      next.push_back({f.y, bc, ab});
+      next.push_back({f.z, ca, bc});
+      next.push_back({ab, bc, ca});
+    }
+    faces = std::move(next);
+  }
+  Scene scene;
+  scene.sourceName = "icosphere";
+  for (const glm::vec3& v : verts) {
+    scene.positions.push_back(toVec4(center + radius * v));
+    scene.normals.push_back(toVec4(v));
+    scene.texcoords.emplace_back(0.0f);
+  }
+  for (const glm::uvec3& f : faces) scene.triangles.push_back({f.x, f.y, f.z, 0});
+  scene.materials.push_back(material);
+  scene.materialNames.push_back("icosphere");
+  return scene;
+}
+
+Scene makeTriangleSoup(std::uint32_t count, std::uint32_t seed, float maxEdge) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> unit(0.0f, 1.0f), edge(-maxEdge, maxEdge);
+  Scene scene;
+  scene.sourceName = "triangle soup";
+  for (std::uint32_t i = 0; i < count; ++i) {
+    glm::vec3 a(unit(rng), unit(rng), unit(rng));
+    glm::vec3 b = a + glm::vec3(edge(rng), edge(rng), edge(rng));
+    glm::vec3 c = a + glm::vec3(edge(rng), edge(rng), edge(rng));
+    std::uint32_t base = std::uint32_t(scene.positions.size());
+    for (const glm::vec3& p : {a, b, c}) {
+      scene.positions.push_back(toVec4(p));
+      scene.normals.push_back({0, 0, 0, 0});
+      scene.texcoords.emplace_back(0.0f);
+    }
+    scene.triangles.push_back({base, base + 1, base + 2, 0});
+  }
+  scene.materials.push_back(makeMaterial(glm::vec3(0.8f)));
+  scene.materialNames.push_back("default");
+  return scene;
+}
+
+Scene makeBumpyGrid(std::uint32_t triangleCount) {
+  std::uint32_t n = std::max<std::uint32_t>(1, std::uint32_t(std::sqrt(triangleCount / 2.0)));
+  Scene scene;
+  scene.sourceName = "bumpy grid";
+  scene.positions.reserve(std::size_t(n + 1) * (n + 1));
+  for (std::uint32_t y = 0; y <= n; ++y) {
+    for (std::uint32_t x = 0; x <= n; ++x) {
+      float u = 2.0f * float(x) / float(n) - 1.0f, v = 2.0f * float(y) / float(n) - 1.0f;
+      float h = 0.1f * std::sin(9.0f * u) * std::cos(7.0f * v) + 0.02f * std::sin(61.0f * u + 47.0f * v);
+      scene.positions.push_back({u, h, v, 0.0f});
+      scene.normals.push_back({0, 0, 0, 0});
+      scene.texcoords.emplace_back(0.5f * (u + 1.0f), 0.5f * (v + 1.0f));
+    }
+  }
+  scene.triangles.reserve(std::size_t(2) * n * n);
+  for (std::uint32_t y = 0; y < n; ++y) {
+    for (std::uint32_t x = 0; x < n; ++x) {
+      std::uint32_t i = y * (n + 1) + x;
+      scene.triangles.push_back({i, i + n + 1, i + 1, 0});
+      scene.triangles.push_back({i + 1, i + n + 1, i + n + 2, 0});
+    }
+  }
+  scene.materials.push_back(makeMaterial(glm::vec3(0.8f)));
+  scene.materialNames.push_back("default");
+  return scene;
+}
+
+void appendScene(Scene& dst, const Scene& src) {
+  std::uint32_t vertexBase = std::uint32_t(dst.positions.size());
+  std::uint32_t materialBase = std::uint32_t(dst.materials.size());
+  dst.positions.insert(dst.positions.end(), src.positions.begin(), src.positions.end());
+  dst.normals.insert(dst.normals.end(), src.normals.begin(), src.normals.end());
+  dst.texcoords.insert(dst.texcoords.end(), src.texcoords.begin(), src.texcoords.end());
+  for (WtTriangle t : src.triangles) {
+    t.v0 += vertexBase, t.v1 += vertexBase, t.v2 += vertexBase, t.material += materialBase;
+    dst.triangles.push_back(t);
+  }
+  dst.materials.insert(dst.materials.end(), src.materials.begin(), src.materials.end());
+  dst.materialNames.insert(dst.materialNames.end(), src.materialNames.begin(), src.materialNames.end());
+}
+
+}  // namespace wt

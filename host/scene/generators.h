@@ -1,0 +1,29 @@
+// Scenes the project makes itself, for tests and benchmarks: closed meshes,
+// random triangle soups and large meshes, with no file involved.
+#pragma once
+
+#include "scene/scene.h"
+
+#include <cstdint>
+
+namespace wt {
+
+/// A closed, watertight sphere: an icosahedron subdivided `subdivisions`
+/// times (20 * 4^s triangles) with shared vertices, projected to the sphere.
+/// Outward winding, per-vertex normals, one material.
+Scene makeIcosphere(int subdivisions, glm::vec3 center, float radius, const WtMaterial& material);
+
+/// `count` random triangles inside the unit cube, edges up to `maxEdge`.
+Scene makeTriangleSoup(std::uint32_t count, std::uint32_t seed, float maxEdge = 0.1f);
+
+/// A height field of about `triangleCount` triangles over [-1,1]^2 with
+/// bumps, as a stand-in for a large scanned mesh.
+Scene makeBumpyGrid(std::uint32_t triangleCount);
+
+/// Append `src` to `dst` (vertices, triangles, materials re-indexed).
+void appendScene(Scene& dst, const Scene& src);
+
+/// A Lambertian material.
+WtMaterial makeMaterial(glm::vec3 albedo, glm::vec3 emission = glm::vec3(0.0f));
+
+}  // namespace wt

@@ -1,0 +1,25 @@
+// glTF 2.0 (.gltf, .glb) to Scene, with validation that names the file and
+// the element on every error.
+#pragma once
+
+#include "scene/scene.h"
+
+#include <string>
+#include <string_view>
+
+namespace wt {
+
+struct GltfLoadOptions {
+  int sceneIndex = -1;   ///< -1: the file's default scene (or scene 0)
+  int cameraIndex = 0;   ///< which camera node (in traversal order) to use, if any
+};
+
+/// Load a .gltf or .glb file. Throws SceneError.
+Scene loadGltf(const std::string& path, const GltfLoadOptions& options = {});
+
+/// Load a .gltf held in memory (the embedded default scene). `name` is used
+/// in messages; external buffers are resolved against `baseDir`.
+Scene loadGltfFromMemory(std::string_view contents, const std::string& name,
+                         const std::string& baseDir, const GltfLoadOptions& options = {});
+
+}  // namespace wt

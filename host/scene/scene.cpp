@@ -1,0 +1,72 @@
+#include "scene/scene.h"
+
+#include <glm/gtc/matrix_transform.hpp>
+
+#include <algorithm>
+#include <cmath>
+
+namespace wt {
+
+Aabb Scene::bounds() const {
+  Aabb box;
+  for (const WtTriangle& t : triangles)
+    for (std::uint32_t v : {t.v0, t.v1, t.v2})
+      box.extend(glm::vec3(positions[v].x, positions[v].y, positions[v].z));
+  return box;
+}
+
+Aabb Scene::triangleBounds(std::uint32_t tri) const {
+  Aabb box;
+  const WtTriangle& t = triangles[tri];
+  for (std::uint32_t v : {t.v0, t.v1, t.v2})
+    box.extend(glm::vec3(positions[v].x, positions[v].y, positions[v].z));
+  return box;
+}
+
+void Scene::addWarning(const std::string& text) {
+  if (std::find(warnings.begin(), warnings.end(), text) == warnings.end())
+    warnings.push_back(text);
+}
+
+CameraDesc defaultCamera(const Aabb& bounds) {
+  CameraDesc desc;
+  desc.name = "default (framing the scene bounds)";
+  desc.yfov = glm::radians(45.0f);
+  glm::vec3 center = bounds.empty() ? glm::vec3(0.0f) : bounds.center();
+  float radius = bounds.empty() ? 1.0f : std::max(0.5f * glm::length(bounds.extent()), 1e-6f);
+  // Distance at which a sphere of that radius fills the vertical field of view.
+  float distance = radius / std::sin(0.5f * desc.yfov);
+  glm::vec3 eye = center + distance * glm::normalize(glm::vec3(0.0f, 0.25f, 1.0f));
+  desc.cameraToWorld = glm::inverse(glm::lookAt(eye, center, glm::vec3(0.0f, 1.0f, 0.0f)));
+  desc.znear = 0.0f;
+  return desc;
+}
+
+WtCamera makeCamera(const CameraDesc& desc, int width, int height) {
+  const glm::mat4& m = desc.cameraToWorld;
+  glm::vec3 origin(m[3]);
+  glm::vec3 axisX = glm::normalize(glm::vec3(m[0]));
+  glm::vec3 axisY = glm::normalize(glm::vec3(m[1]));
+  glm::vec3 axisZ = glm::normalize(glm::vec3(m[2]));
+  // The image decides the aspect ratio; the camera keeps its vertical extent.
+  float aspect = float(width) / float(std::max(height, 1));
+  glm::vec3 right, up;
+  if (desc.orthographic) {
+    up = axisY * desc.ymag;
+    right = axisX * desc.ymag * aspect;
+  } else {
+    float tanHalf = std::tan(0.5f * desc.yfov);
+    up = axisY * tanHalf;
+    right = axisX * tanHalf * aspect;
+  }
+  glm::vec3 forward = -axisZ;
+  WtCamera cam;
+  cam.origin = {origin.x, origin.y, origin.z,
+                float(desc.orthographic ? WT_CAMERA_ORTHOGRAPHIC : WT_CAMERA_PERSPECTIVE)};
+  cam.right = {right.x, right.y, right.z, 0.0f};
+  cam.up = {up.x, up.y, up.z, 0.0f};
+  cam.forward = {forward.x, forward.y, forward.z, desc.znear};
+  return cam;
+}
+
+}  // namespace wt

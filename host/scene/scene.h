@@ -1,0 +1,60 @@
+// The scene as flat arrays, ready to be uploaded: world-space vertices,
+// triangles, materials and one camera. Loaders produce it; nothing here
+// knows about glTF or OpenCL.
+#pragma once
+
+#include "core/math.h"
+#include "shared/types.h"
+
+#include <glm/glm.hpp>
+
+#include <cstdint>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace wt {
+
+/// A malformed or unreadable scene. what() names the file and the element,
+/// e.g. "box.gltf: mesh 3, primitive 0: index 1234 out of range (1000 vertices)".
+struct SceneError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+/// A camera as the scene describes it; turned into WtCamera per image size.
+struct CameraDesc {
+  glm::mat4 cameraToWorld{1.0f};  ///< camera looks down -Z, +Y up (glTF convention)
+  bool orthographic = false;
+  float yfov = 0.6911f;           ///< radians, perspective only
+  float aspectRatio = 0.0f;       ///< 0: use the image's
+  float xmag = 1.0f, ymag = 1.0f; ///< half extents, orthographic only
+  float znear = 0.0f;             ///< ray tmin along the view direction
+  std::string name;
+};
+
+struct Scene {
+  std::vector<WtVec4> positions;   ///< world space, w = 0
+  std::vector<WtVec4> normals;     ///< world space, unit; (0,0,0) = none, use the geometric normal. Same size as positions.
+  std::vector<glm::vec2> texcoords;///< TEXCOORD_0, same size as positions ((0,0) where absent)
+  std::vector<WtTriangle> triangles;
+  std::vector<WtMaterial> materials;      ///< never empty after loading (a default grey is added when needed)
+  std::vector<std::string> materialNames; ///< same size as materials
+  std::optional<CameraDesc> camera;       ///< absent: frame the bounds (defaultCamera)
+  std::vector<std::string> warnings;      ///< unsupported features, once each, by name
+  std::string sourceName;                 ///< file the scene came from, for messages
+
+  Aabb bounds() const;
+  /// Bounds of one triangle.
+  Aabb triangleBounds(std::uint32_t tri) const;
+  void addWarning(const std::string& text);  ///< keeps each text once
+};
+
+/// A camera looking at the bounds from +Z (and a little above), far enough
+/// that the whole box fits the vertical field of view.
+CameraDesc defaultCamera(const Aabb& bounds);
+
+/// The device camera for an image of width x height pixels.
+WtCamera makeCamera(const CameraDesc& desc, int width, int height);
+
+}  // namespace wt

@@ -1,0 +1,40 @@
+// Stage 1: one camera ray per pixel, jittered within the pixel; every path
+// starts with unit throughput and no radiance, and enters queue A.
+#include "common.h"
+
+__kernel void generate(WtFrameParams frame, WtCamera camera, __global float4* ray_o,
+                       __global float4* ray_d, __global float4* throughput,
+                       __global float4* radiance, __global uint* queue,
+                       __global uint* counters) {
+  uint i = get_global_id(0);
+  uint pixel_count = frame.width * frame.height;
+  if (i >= pixel_count) return;
+  if (i == 0) counters[WT_COUNTER_QUEUE_A] = pixel_count;
+
+  // image plane in [-1,1]^2, y up
+  uint px = i % frame.width;
+  uint py = i / frame.width;
+  float jx = rng_uniform(i, frame.sample, 0u, 0u, frame.seed);
+  float jy = rng_uniform(i, frame.sample, 0u, 1u, frame.seed);
+  float sx = 2.0f * ((float)px + jx) / (float)frame.width - 1.0f;
+  float sy = 1.0f - 2.0f * ((float)py + jy) / (float)frame.height;
+
+  float3 forward = vec4_xyz(camera.forward);
+  float3 offset = sx * vec4_xyz(camera.right) + sy * vec4_xyz(camera.up);
+  float3 origin = vec4_xyz(camera.origin);
+  float3 dir;
+  if (camera.origin.w == (float)WT_CAMERA_ORTHOGRAPHIC) {
+    origin += offset;
+    dir = forward;
+  } else {
+    dir = normalize(forward + offset);
+  }
+  // The near plane is a distance along the view axis; convert it to this ray's t.
+  float tmin = camera.forward.w / fmax(dot(dir, forward), 1e-6f);
+
+  ray_o[i] = (float4)(origin, tmin);
+  ray_d[i] = (float4)(dir, INFINITY);
+  throughput[i] = (float4)(1.0f, 1.0f, 1.0f, 0.0f);
+  radiance[i] = (float4)(0.0f);
+  queue[i] = i;
+}

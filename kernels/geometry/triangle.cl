@@ -1,0 +1,91 @@
+// Triangle geometry: watertight ray/triangle intersection (Woop, Benthin and
+// Wald 2013) and the surface data a shading stage needs.
+#ifndef WT_GEOMETRY_TRIANGLE_CL
+#define WT_GEOMETRY_TRIANGLE_CL
+
+#include "common.h"
+
+/// Per-ray constants of the watertight test: the axis permutation that makes
+/// kz the dominant direction axis, and the shear that maps the ray to +z.
+typedef struct RayShear {
+  int kx, ky, kz;
+  float sx, sy, sz;
+} RayShear;
+
+inline RayShear triangle_ray_shear(float3 d) {
+  RayShear s;
+  float3 ad = fabs(d);
+  s.kz = (ad.x > ad.y) ? (ad.x > ad.z ? 0 : 2) : (ad.y > ad.z ? 1 : 2);
+  s.kx = s.kz == 2 ? 0 : s.kz + 1;
+  s.ky = s.kx == 2 ? 0 : s.kx + 1;
+  float dz = vec3_component(d, s.kz);
+  // Keep the winding of the sheared triangle independent of the ray's sign.
+  if (dz < 0.0f) {
+    int tmp = s.kx;
+    s.kx = s.ky;
+    s.ky = tmp;
+  }
+  s.sx = vec3_component(d, s.kx) / dz;
+  s.sy = vec3_component(d, s.ky) / dz;
+  s.sz = 1.0f / dz;
+  return s;
+}
+
+/// Hit in (tmin, tmax): writes the distance and the barycentrics of p1 and p2.
+inline bool triangle_intersect(float3 org, RayShear s, float tmin, float tmax, float3 p0,
+                               float3 p1, float3 p2, float* t_hit, float* b1, float* b2) {
+  float3 a = p0 - org;
+  float3 b = p1 - org;
+  float3 c = p2 - org;
+  float az = vec3_component(a, s.kz), bz = vec3_component(b, s.kz), cz = vec3_component(c, s.kz);
+  float ax = vec3_component(a, s.kx) - s.sx * az;
+  float ay = vec3_component(a, s.ky) - s.sy * az;
+  float bx = vec3_component(b, s.kx) - s.sx * bz;
+  float by = vec3_component(b, s.ky) - s.sy * bz;
+  float cx = vec3_component(c, s.kx) - s.sx * cz;
+  float cy = vec3_component(c, s.ky) - s.sy * cz;
+
+  float u = cx * by - cy * bx;
+  float v = ax * cy - ay * cx;
+  float w = bx * ay - by * ax;
+#if WT_HAS_FP64
+  // An edge function of exactly zero is ambiguous in float: decide it in double
+  // so that a ray through a shared edge hits exactly one of the two triangles.
+  if (u == 0.0f || v == 0.0f || w == 0.0f) {
+    u = (float)((double)cx * (double)by - (double)cy * (double)bx);
+    v = (float)((double)ax * (double)cy - (double)ay * (double)cx);
+    w = (float)((double)bx * (double)ay - (double)by * (double)ax);
+  }
+#endif
+  if ((u < 0.0f || v < 0.0f || w < 0.0f) && (u > 0.0f || v > 0.0f || w > 0.0f)) return false;
+  float det = u + v + w;
+  if (det == 0.0f) return false;
+
+  float t_scaled = u * s.sz * az + v * s.sz * bz + w * s.sz * cz;
+  float inv_det = 1.0f / det;
+  float t = t_scaled * inv_det;
+  if (!(t > tmin && t < tmax)) return false;
+  *t_hit = t;
+  *b1 = v * inv_det;
+  *b2 = w * inv_det;
+  return true;
+}
+
+/// Surface at a hit: position from the barycentrics (more precise than
+/// o + t*d), unit geometric normal (zero for a degenerate triangle) and the
+/// interpolated shading normal (the geometric one where the file has none).
+inline void triangle_surface(float3 p0, float3 p1, float3 p2, float3 n0, float3 n1, float3 n2,
+                             float b1, float b2, float3* position, float3* n_geometric,
+                             float3* n_shading) {
+  float b0 = 1.0f - b1 - b2;
+  *position = b0 * p0 + b1 * p1 + b2 * p2;
+  float3 ng = cross(p1 - p0, p2 - p0);
+  float len = length(ng);
+  *n_geometric = len > 0.0f ? ng / len : (float3)(0.0f);
+  float3 ns = b0 * n0 + b1 * n1 + b2 * n2;
+  bool has_normals = dot(n0, n0) > 0.0f && dot(n1, n1) > 0.0f && dot(n2, n2) > 0.0f;
+  float ns_len = length(ns);
+  *n_shading = (has_normals && ns_len > 0.0f) ? ns / ns_len : *n_geometric;
+}
+
+#endif  // WT_GEOMETRY_TRIANGLE_CL

@@ -1,0 +1,19 @@
+// Lambertian reflection: the only material model until the full glTF
+// material lands. Sampling is cosine-weighted around the shading normal, so
+// the estimator's weight f * cos / pdf is exactly the albedo.
+#ifndef WT_MATERIALS_LAMBERT_CL
+#define WT_MATERIALS_LAMBERT_CL
+
+#include "common.h"
+
+/// A cosine-distributed direction about n from two uniforms in [0,1).
+inline float3 lambert_sample(float3 n, float u1, float u2) {
+  float r = sqrt(u1);
+  float phi = 2.0f * WT_PI * u2;
+  float3 t, b;
+  frame_from_normal(n, &t, &b);
+  float z = sqrt(fmax(0.0f, 1.0f - u1));
+  return normalize(r * cos(phi) * t + r * sin(phi) * b + z * n);
+}
+
+#endif  // WT_MATERIALS_LAMBERT_CL

@@ -1,0 +1,32 @@
+// Counter-based random numbers: a pure function of (pixel, sample, bounce,
+// dimension, seed), so the image never depends on scheduling or device
+// count. Shared by host (tests) and kernels.
+//
+// Dimension allocation: bounce 0, dims 0-1: pixel jitter; every bounce,
+// dims 2-3: BSDF direction. Later stages take the next free dimensions.
+#ifndef WT_SHARED_RNG_H
+#define WT_SHARED_RNG_H
+
+#include "shared/types.h"
+
+#ifdef __OPENCL_C_VERSION__
+#define WT_INLINE inline
+#else
+#define WT_INLINE static inline
+#endif
+
+// PCG-style integer hash (Jarzynski and Olano 2020, "pcg" variant).
+WT_INLINE wt_uint rng_hash(wt_uint x) {
+  wt_uint state = x * 747796405u + 2891336453u;
+  wt_uint word = ((state >> ((state >> 28u) + 4u)) ^ state) * 277803737u;
+  return (word >> 22u) ^ word;
+}
+
+// Uniform float in [0,1): 24 random bits, so 1.0 is never returned.
+WT_INLINE float rng_uniform(wt_uint pixel, wt_uint sample, wt_uint bounce, wt_uint dim,
+                            wt_uint seed) {
+  wt_uint h = rng_hash(seed ^ rng_hash(pixel ^ rng_hash(sample ^ rng_hash((bounce << 8u) + dim))));
+  return (float)(h >> 8u) * (1.0f / 16777216.0f);
+}
+
+#endif  // WT_SHARED_RNG_H

@@ -1,0 +1,72 @@
+// Plain-data layouts shared by the host (g++) and the kernels (OpenCL C).
+// One definition, two compilers: only 4-byte scalars, no float3, explicit
+// padding. The host static_asserts every size (host/device/scene_buffers.cpp).
+#ifndef WT_SHARED_TYPES_H
+#define WT_SHARED_TYPES_H
+
+#ifdef __OPENCL_C_VERSION__
+typedef uint wt_uint;
+#else
+#include <cstdint>
+typedef std::uint32_t wt_uint;
+#endif
+
+/// Four floats; positions and directions keep w as padding or a flag.
+typedef struct WtVec4 {
+  float x, y, z, w;
+} WtVec4;
+
+/// A triangle of the scene, in BVH leaf order once uploaded.
+typedef struct WtTriangle {
+  wt_uint v0, v1, v2;  ///< indices into the vertex arrays
+  wt_uint material;    ///< index into the material array
+} WtTriangle;
+
+/// Binary BVH node, 32 bytes. Children of an internal node are adjacent:
+/// left = first, right = first + 1. Node 0 is the root.
+typedef struct WtBvhNode {
+  float lo_x, lo_y, lo_z;  ///< box minimum, world space
+  wt_uint first;           ///< internal: left child index; leaf: first primitive
+  float hi_x, hi_y, hi_z;  ///< box maximum, world space
+  wt_uint count;           ///< 0 for an internal node, primitive count of a leaf
+} WtBvhNode;
+
+/// Lambertian surface with emission (the full material model comes later).
+typedef struct WtMaterial {
+  WtVec4 base_color;  ///< linear RGB albedo in [0,1]; w unused
+  WtVec4 emission;    ///< emitted radiance, W sr^-1 m^-2 per channel (factor x strength); w unused
+} WtMaterial;
+
+#define WT_CAMERA_PERSPECTIVE 0
+#define WT_CAMERA_ORTHOGRAPHIC 1
+
+/// Pinhole or orthographic camera, world space. A primary ray for image
+/// coordinates (sx, sy) in [-1,1]^2 (y up) has direction
+/// forward + sx*right + sy*up (perspective), or origin offset
+/// sx*right + sy*up and direction forward (orthographic).
+typedef struct WtCamera {
+  WtVec4 origin;   ///< world; w = projection (WT_CAMERA_*)
+  WtVec4 right;    ///< world; scaled by tan(yfov/2)*aspect, or by xmag
+  WtVec4 up;       ///< world; scaled by tan(yfov/2), or by ymag
+  WtVec4 forward;  ///< world, unit; w = near distance (ray tmin)
+} WtCamera;
+
+/// Per-launch constants of the wavefront loop, passed by value.
+typedef struct WtFrameParams {
+  wt_uint width;        ///< image width, pixels
+  wt_uint height;       ///< image height, pixels
+  wt_uint sample;       ///< sample index of this pass
+  wt_uint bounce;       ///< bounce of this extend/shade pair (0 = camera ray)
+  wt_uint max_bounces;  ///< last bounce whose hit is shaded
+  wt_uint seed;         ///< user seed
+  float exposure;       ///< tonemap scale, 2^stops
+  wt_uint pad0;
+} WtFrameParams;
+
+/// Slots of the queue-counter buffer.
+#define WT_COUNTER_QUEUE_A 0      ///< paths in queue A
+#define WT_COUNTER_QUEUE_B 1      ///< paths in queue B
+#define WT_COUNTER_NONFINITE 2    ///< samples discarded as NaN/Inf
+#define WT_COUNTER_COUNT 4
+
+#endif  // WT_SHARED_TYPES_H

@@ -1,0 +1,20 @@
+// The OpenCL device the device tests run on (PoCL in CI), opened once.
+#pragma once
+
+#include "device/context.h"
+
+#include <gtest/gtest.h>
+
+#include <memory>
+
+namespace wt::test {
+
+/// The default device's context, shared by every test in the binary.
+inline Context& deviceContext() {
+  static std::unique_ptr<Context> context = [] {
+    return std::make_unique<Context>(selectDevice(""), /*profiling=*/true);
+  }();
+  return *context;
+}
+
+}  // namespace wt::test

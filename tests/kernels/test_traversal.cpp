@@ -1,0 +1,122 @@
+// The kernels' closest-hit and any-hit traversal against a brute-force loop
+// over every triangle, on random soups, for every BVH leaf size.
+#include "brute_force.h"
+#include "device_fixture.h"
+#include "scene/generators.h"
+
+#include <gtest/gtest.h>
+
+#include <random>
+
+namespace wt {
+namespace {
+
+std::vector<Ray> randomRays(std::size_t count, std::uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> box(-0.5f, 1.5f), unit(-1.0f, 1.0f), t01(0.0f, 1.0f);
+  std::vector<Ray> rays(count);
+  for (std::size_t i = 0; i < count; ++i) {
+    Ray& r = rays[i];
+    r.origin = glm::vec3(box(rng), box(rng), box(rng));
+    glm::vec3 d;
+    do d = glm::vec3(unit(rng), unit(rng), unit(rng));
+    while (glm::dot(d, d) > 1.0f || glm::dot(d, d) < 1e-4f);
+    r.direction = glm::normalize(d);
+    // a mix of open rays, finite segments and rays starting ahead of the origin
+    r.tmin = (i % 5 == 3) ? 0.3f * t01(rng) : 0.0f;
+    r.tmax = (i % 3 == 1) ? 0.2f + t01(rng) : 1e30f;
+  }
+  // axis-parallel rays hit the slab test's zero-direction path
+  for (std::size_t i = 0; i < std::min<std::size_t>(count, 300); i += 3) {
+    int axis = int(i / 3) % 3;
+    glm::vec3 d(0.0f);
+    d[axis] = (i % 2) ? 1.0f : -1.0f;
+    rays[i].direction = d;
+  }
+  return rays;
+}
+
+void expectAgreement(const Scene& scene, const std::vector<Ray>& rays, const BvhBuildOptions& options) {
+  Tracer tracer(test::deviceContext(), scene, options);
+  std::vector<RayHit> hits = tracer.traceClosest(rays);
+  std::vector<std::uint8_t> occluded = tracer.traceOccluded(rays);
+  ASSERT_EQ(hits.size(), rays.size());
+  int disagreements = 0, hitCount = 0, occlusionErrors = 0;
+  for (std::size_t i = 0; i < rays.size(); ++i) {
+    test::BruteHit want = test::bruteClosest(scene, rays[i]);
+    hitCount += want.triangle != RayHit::kNoHit;
+    if (!test::agrees(scene, rays[i], hits[i], want)) {
+      if (++disagreements <= 5)
+        ADD_FAILURE() << "ray " << i << ": kernel triangle " << hits[i].triangle << " t=" << hits[i].t
+                      << ", brute force triangle " << want.triangle << " t=" << want.t;
+    }
+    // any-hit must agree with "closest hit exists", except at edge grazes
+    bool wantOccluded = want.triangle != RayHit::kNoHit;
+    if (bool(occluded[i]) != wantOccluded && !(wantOccluded && want.minBarycentric < 1e-5) &&
+        !(bool(occluded[i]) && hits[i].triangle != RayHit::kNoHit))
+      ++occlusionErrors;
+  }
+  EXPECT_EQ(disagreements, 0);
+  EXPECT_EQ(occlusionErrors, 0);
+  // the ray set must actually exercise hits and misses
+  EXPECT_GT(hitCount, int(rays.size() / 10));
+  EXPECT_LT(hitCount, int(rays.size()));
+}
+
+class TraversalLeafSize : public ::testing::TestWithParam<int> {};
+
+TEST_P(TraversalLeafSize, RandomSoupMatchesBruteForce) {
+  BvhBuildOptions options;
+  options.maxLeafSize = GetParam();
+  for (std::uint32_t seed : {1u, 2u}) {
+    Scene scene = makeTriangleSoup(3000, seed, 0.15f);
+    expectAgreement(scene, randomRays(4000, seed + 100), options);
+  }
+}
+
+TEST_P(TraversalLeafSize, ClosedSphereMatchesBruteForce) {
+  BvhBuildOptions options;
+  options.maxLeafSize = GetParam();
+  Scene scene = makeIcosphere(3, glm::vec3(0.5f), 0.6f, makeMaterial(glm::vec3(0.5f)));
+  expectAgreement(scene, randomRays(4000, 7), options);
+}
+
+INSTANTIATE_TEST_SUITE_P(LeafSizes, TraversalLeafSize, ::testing::Values(1, 4, 8));
+
+TEST(Traversal, DegenerateTrianglesAreNeverHit) {
+  // zero-area triangles: a point and a segment, among ordinary ones
+  Scene scene = makeTriangleSoup(50, 3, 0.2f);
+  std::uint32_t base = std::uint32_t(scene.positions.size());
+  for (glm::vec3 p : {glm::vec3(0.5f), glm::vec3(0.5f), glm::vec3(0.5f), glm::vec3(0.2f), glm::vec3(0.4f),
+                      glm::vec3(0.6f)}) {
+    scene.positions.push_back({p.x, p.y, p.z, 0});
+    scene.normals.push_back({0, 0, 0, 0});
+    scene.texcoords.emplace_back(0.0f);
+  }
+  scene.triangles.push_back({base, base + 1, base + 2, 0});
+  scene.triangles.push_back({base + 3, base + 4, base + 5, 0});
+  std::vector<Ray> rays;
+  for (int i = 0; i < 64; ++i) {
+    Ray r;
+    r.origin = glm::vec3(0.5f) - glm::vec3(std::cos(i * 0.1f), std::sin(i * 0.1f), 0.3f);
+    r.direction = glm::normalize(glm::vec3(0.5f) - r.origin);
+    rays.push_back(r);
+  }
+  Tracer tracer(test::deviceContext(), scene);
+  for (const RayHit& h : tracer.traceClosest(rays)) {
+    EXPECT_NE(h.triangle, base / 3);
+    EXPECT_NE(h.triangle, base / 3 + 1);
+  }
+}
+
+TEST(Traversal, EmptySceneMissesEverything) {
+  Scene scene;
+  scene.materials.push_back(makeMaterial(glm::vec3(0.5f)));
+  Tracer tracer(test::deviceContext(), scene);
+  std::vector<Ray> rays = randomRays(100, 5);
+  for (const RayHit& h : tracer.traceClosest(rays)) EXPECT_EQ(h.triangle, RayHit::kNoHit);
+  for (std::uint8_t o : tracer.traceOccluded(rays)) EXPECT_EQ(o, 0);
+}
+
+}  // namespace
+}  // namespace wt

@@ -1,0 +1,87 @@
+// Image output: formats by extension, round trips, and writes that never
+// destroy an earlier image.
+#include "output/image_io.h"
+#include "test_util.h"
+
+#include <gtest/gtest.h>
+#include <stb_image.h>
+
+#include <fstream>
+
+namespace wt {
+namespace {
+
+Image gradient(int w, int h) {
+  Image image;
+  image.width = w;
+  image.height = h;
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      image.rgb.insert(image.rgb.end(), {float(x) / w, float(y) / h, 1e-3f * float(x * y) + 12.5f});
+      image.srgba.insert(image.srgba.end(), {std::uint8_t(x), std::uint8_t(y), 7, 255});
+    }
+  return image;
+}
+
+TEST(ImageIo, ExrRoundTripIsExact) {
+  std::filesystem::path path = test::scratchDir("image_io") / "gradient.exr";
+  Image image = gradient(37, 21);
+  writeImage(path, image);
+  Image back = readExr(path);
+  EXPECT_EQ(back.width, 37);
+  EXPECT_EQ(back.height, 21);
+  EXPECT_EQ(back.rgb, image.rgb);
+}
+
+TEST(ImageIo, PngHasTheTonemappedPixels) {
+  std::filesystem::path path = test::scratchDir("image_io") / "gradient.png";
+  Image image = gradient(19, 11);
+  writeImage(path, image);
+  int w = 0, h = 0, n = 0;
+  unsigned char* data = stbi_load(path.c_str(), &w, &h, &n, 4);
+  ASSERT_NE(data, nullptr);
+  EXPECT_EQ(w, 19);
+  EXPECT_EQ(h, 11);
+  EXPECT_EQ(std::vector<std::uint8_t>(data, data + 4 * w * h), image.srgba);
+  stbi_image_free(data);
+}
+
+TEST(ImageIo, FormatFromExtension) {
+  EXPECT_EQ(imageFormatFor("a/b.EXR"), ImageFormat::Exr);
+  EXPECT_EQ(imageFormatFor("b.png"), ImageFormat::Png);
+  EXPECT_THROW(imageFormatFor("b.jpg"), OutputError);
+  EXPECT_THROW(imageFormatFor("noextension"), OutputError);
+}
+
+TEST(ImageIo, UnwritablePathsAreReportedBeforeRendering) {
+  EXPECT_THROW(checkWritable("/nonexistent-folder/x.png"), OutputError);
+  EXPECT_THROW(checkWritable(test::scratchDir("image_io") / "x.tiff"), OutputError);
+  EXPECT_THROW(checkWritable(test::scratchDir("image_io")), OutputError);
+  EXPECT_NO_THROW(checkWritable(test::scratchDir("image_io") / "ok.exr"));
+  try {
+    checkWritable("/nonexistent-folder/x.png");
+  } catch (const OutputError& e) {
+    EXPECT_NE(std::string(e.what()).find("/nonexistent-folder/x.png"), std::string::npos);
+  }
+}
+
+TEST(ImageIo, FailedWriteKeepsTheEarlierImage) {
+  std::filesystem::path path = test::scratchDir("image_io") / "keep.exr";
+  Image good = gradient(8, 8);
+  writeImage(path, good);
+  auto before = std::filesystem::file_size(path);
+  Image broken;  // zero-sized: OpenEXR refuses the data window
+  broken.width = 0;
+  broken.height = 0;
+  EXPECT_THROW(writeImage(path, broken), OutputError);
+  EXPECT_EQ(std::filesystem::file_size(path), before);
+  EXPECT_EQ(readExr(path).rgb, good.rgb);
+  // and no temporary file is left behind
+  int files = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(path.parent_path()))
+    files += entry.path().filename().string().find("keep.exr.tmp") != std::string::npos;
+  EXPECT_EQ(files, 0);
+}
+
+}  // namespace
+}  // namespace wt
