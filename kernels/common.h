@@ -14,6 +14,10 @@
 #error "WT_BVH_STACK_SIZE is not defined: build options must come from kernelDefines()"
 #endif
 
+// Products must round separately: a fused multiply-add in the edge functions
+// of the watertight triangle test breaks its exactness on shared edges.
+#pragma OPENCL FP_CONTRACT OFF
+
 #ifdef cl_khr_fp64
 #pragma OPENCL EXTENSION cl_khr_fp64 : enable
 #define WT_HAS_FP64 1

@@ -94,8 +94,8 @@ std::vector<std::string> kernelDefines(const KernelFeatures& features) {
   };
 }
 
-cl::Program buildProgram(Context& context, const KernelFeatures& features) {
-  std::string source = expandKernelSource("wavetrace.cl");
+cl::Program buildProgram(Context& context, const KernelFeatures& features, const std::string& root) {
+  std::string source = expandKernelSource(root);
   std::string options = "-cl-std=CL1.2";
   for (const std::string& d : kernelDefines(features)) options += " " + d;
   cl::Program program(context.context(), source);

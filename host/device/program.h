@@ -30,8 +30,9 @@ void setKernelDirectory(const std::optional<std::filesystem::path>& dir);
 /// kernels root; `#line` directives keep build logs pointing at real files.
 std::string expandKernelSource(const std::string& file);
 
-/// Build kernels/wavetrace.cl for the context's device. Throws DeviceError
-/// carrying the device's build log.
-cl::Program buildProgram(Context& context, const KernelFeatures& features);
+/// Build kernels/<root> (the renderer's program by default) for the
+/// context's device. Throws DeviceError carrying the device's build log.
+cl::Program buildProgram(Context& context, const KernelFeatures& features,
+                         const std::string& root = "wavetrace.cl");
 
 }  // namespace wt

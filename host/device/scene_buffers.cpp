@@ -1,6 +1,7 @@
 #include "device/scene_buffers.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstddef>
 
 namespace wt {
@@ -20,14 +21,36 @@ cl::Buffer upload(Context& context, const std::vector<T>& data, std::size_t& byt
 }  // namespace
 
 SceneBuffers::SceneBuffers(Context& context, const Scene& scene, const BvhBuildOptions& options) {
-  std::vector<Aabb> bounds(scene.triangles.size());
-  for (std::size_t i = 0; i < bounds.size(); ++i) bounds[i] = scene.triangleBounds(std::uint32_t(i));
+  // Zero-area and non-finite triangles never enter the BVH: they cannot be
+  // hit meaningfully, and in float a ray through a collinear triangle can
+  // still produce a spurious hit.
+  std::vector<Aabb> bounds;
+  bounds.reserve(scene.triangles.size());
+  m_bvhToScene.reserve(scene.triangles.size());
+  for (std::size_t i = 0; i < scene.triangles.size(); ++i) {
+    const WtTriangle& t = scene.triangles[i];
+    auto pos = [&](std::uint32_t v) {
+      return glm::vec3(scene.positions[v].x, scene.positions[v].y, scene.positions[v].z);
+    };
+    glm::vec3 p0 = pos(t.v0), p1 = pos(t.v1), p2 = pos(t.v2);
+    glm::vec3 n = glm::cross(p1 - p0, p2 - p0);
+    auto finite3 = [](glm::vec3 v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); };
+    bool finite = finite3(p0) && finite3(p1) && finite3(p2);
+    if (!finite || glm::dot(n, n) == 0.0f) {
+      ++m_skippedTriangles;
+      continue;
+    }
+    bounds.push_back(scene.triangleBounds(std::uint32_t(i)));
+    m_bvhToScene.push_back(std::uint32_t(i));
+  }
   m_bvh = buildLbvh(bounds, options);
   nodeCount = std::uint32_t(m_bvh.nodes.size());
+  // From here on primIndices address the scene's triangles directly.
+  for (std::uint32_t& p : m_bvh.primIndices) p = m_bvhToScene[p];
 
   // Reorder triangles to leaf order, so a leaf addresses a contiguous range.
-  std::vector<WtVec4> verts(3 * scene.triangles.size());
-  std::vector<WtTriangle> ordered(scene.triangles.size());
+  std::vector<WtVec4> verts(3 * m_bvh.primIndices.size());
+  std::vector<WtTriangle> ordered(m_bvh.primIndices.size());
   for (std::size_t i = 0; i < ordered.size(); ++i) {
     const WtTriangle& t = scene.triangles[m_bvh.primIndices[i]];
     ordered[i] = t;

@@ -13,7 +13,7 @@ namespace wt {
 
 class SceneBuffers {
  public:
-  /// Build the BVH over the scene's triangles and upload everything.
+  /// Build the BVH over the scene's triangles (but degenerate ones) and upload.
   SceneBuffers(Context& context, const Scene& scene, const BvhBuildOptions& options = {});
 
   cl::Buffer nodes;       ///< WtBvhNode[nodeCount] (one dummy node when empty)
@@ -27,11 +27,15 @@ class SceneBuffers {
   const Bvh& bvh() const { return m_bvh; }
   /// Leaf-order triangle index -> the scene's triangle index.
   std::uint32_t sceneTriangle(std::uint32_t leafIndex) const { return m_bvh.primIndices[leafIndex]; }
+  /// Triangles left out of the BVH (zero area or non-finite vertices).
+  std::size_t skippedTriangles() const { return m_skippedTriangles; }
   /// Traversal stack entries the BVH needs, for KernelFeatures::bvhStackSize.
   int stackSize() const;
 
  private:
-  Bvh m_bvh;
+  Bvh m_bvh;  ///< primIndices hold scene triangle indices
+  std::vector<std::uint32_t> m_bvhToScene;
+  std::size_t m_skippedTriangles = 0;
 };
 
 }  // namespace wt

@@ -17,7 +17,7 @@ TEST(Embedded, KernelsAndDefaultSceneArePresent) {
 
 TEST(Embedded, IncludesExpandOnceWithLineMarkers) {
   std::string source = expandKernelSource("wavetrace.cl");
-  EXPECT_EQ(source.find("#include"), std::string::npos);
+  EXPECT_EQ(source.find("#include \""), std::string::npos);
   // shared/types.h is included by many files but expanded once
   std::size_t first = source.find("typedef struct WtBvhNode");
   ASSERT_NE(first, std::string::npos);

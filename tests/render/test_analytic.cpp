@@ -73,7 +73,13 @@ TEST_P(EmissiveSphere, ConvergesToGeometricSeries) {
 INSTANTIATE_TEST_SUITE_P(Cases, EmissiveSphere,
                          ::testing::Values(FurnaceCase{0.5f, 1.0f, 0}, FurnaceCase{0.5f, 1.0f, 3},
                                            FurnaceCase{0.8f, 2.0f, 8}, FurnaceCase{0.0f, 1.0f, 4},
-                                           FurnaceCase{0.95f, 0.5f, 20}));
+                                           FurnaceCase{0.95f, 0.5f, 20}),
+                         [](const ::testing::TestParamInfo<FurnaceCase>& info) {
+                           const FurnaceCase& c = info.param;
+                           return "albedo" + std::to_string(int(c.albedo * 100)) + "_emission" +
+                                  std::to_string(int(c.emission * 10)) + "_bounces" +
+                                  std::to_string(c.maxBounces);
+                         });
 
 }  // namespace
 }  // namespace wt

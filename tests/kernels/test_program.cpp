@@ -1,0 +1,47 @@
+// Program builds: a broken kernel gives the device's build log, and the
+// kernels compile with the host's shared layouts unchanged.
+#include "device/program.h"
+#include "device_fixture.h"
+#include "test_util.h"
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+
+namespace wt {
+namespace {
+
+TEST(Program, BuildFailureCarriesTheBuildLog) {
+  std::filesystem::path dir = test::scratchDir("broken_kernels");
+  std::ofstream(dir / "wavetrace.cl") << "__kernel void generate() { this is not C; }\n";
+  setKernelDirectory(dir);
+  try {
+    buildProgram(test::deviceContext(), KernelFeatures{});
+    setKernelDirectory(std::nullopt);
+    FAIL() << "expected DeviceError";
+  } catch (const DeviceError& e) {
+    setKernelDirectory(std::nullopt);
+    std::string what = e.what();
+    EXPECT_NE(what.find("building kernels"), std::string::npos) << what;
+    EXPECT_NE(what.find("wavetrace.cl:1"), std::string::npos) << "no build log in: " << what;
+  }
+}
+
+TEST(Program, KernelDirectoryOverridesEmbeddedSources) {
+  std::filesystem::path dir = test::scratchDir("kernel_dir");
+  std::ofstream(dir / "wavetrace.cl") << "#include \"extra.h\"\n__kernel void k() {}\n";
+  std::ofstream(dir / "extra.h") << "// from disk\n";
+  setKernelDirectory(dir);
+  std::string source = expandKernelSource("wavetrace.cl");
+  setKernelDirectory(std::nullopt);
+  EXPECT_NE(source.find("// from disk"), std::string::npos);
+}
+
+TEST(Program, EmbeddedKernelsBuild) {
+  cl::Program program = buildProgram(test::deviceContext(), KernelFeatures{});
+  for (const char* name : {"generate", "extend", "shade", "accumulate", "tonemap", "trace_closest", "trace_occluded"})
+    EXPECT_NO_THROW(cl::Kernel(program, name)) << name;
+}
+
+}  // namespace
+}  // namespace wt
