@@ -1,0 +1,936 @@
+// glTF 2.0 to Scene. tinygltf parses the JSON and resolves buffers; every
+// offset, length, stride and index is then checked here before it is read,
+// because tinygltf 2.7 leaves most of that to the caller (and does not apply
+// sparse accessors at all).
+#include "scene/gltf_loader.h"
+
+#include <tiny_gltf.h>
+
+#include <glm/gtc/matrix_transform.hpp>
+#include <glm/gtc/quaternion.hpp>
+#include <glm/gtc/type_ptr.hpp>
+
+#include <algorithm>
+#include <array>
+#include <cctype>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <limits>
+#include <memory>
+#include <new>
+#include <sstream>
+#include <type_traits>
+#include <utility>
+#include <vector>
+
+namespace wt {
+namespace {
+
+constexpr const char* kEmissiveStrength = "KHR_materials_emissive_strength";
+/// Extensions whose absence changes where the geometry is or how its bytes
+/// read: a file that requires one cannot be drawn correctly without it.
+constexpr std::array<const char*, 3> kGeometryExtensions = {
+    "KHR_draco_mesh_compression", "EXT_meshopt_compression", "KHR_mesh_quantization"};
+/// Nodes reached through shared children multiply; stop runaway graphs.
+constexpr std::size_t kMaxNodeInstances = std::size_t(1) << 22;
+/// An accessor without a buffer view is materialized as zeros; its count is
+/// not backed by file bytes, so it gets its own limit.
+constexpr std::size_t kMaxUnbackedElements = std::size_t(1) << 26;
+constexpr std::uint32_t kGlbMagic = 0x46546C67;      // "glTF"
+constexpr std::uint32_t kGlbChunkJson = 0x4E4F534A;  // "JSON"
+constexpr std::uint32_t kGlbChunkBin = 0x004E4942;   // "BIN\0"
+constexpr float kDefaultAlbedo = 0.8f;
+
+using tinygltf::Accessor;
+using tinygltf::Model;
+
+// glTF enums as text
+
+std::string componentTypeName(int componentType) {
+  switch (componentType) {
+    case TINYGLTF_COMPONENT_TYPE_BYTE: return "BYTE";
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: return "UNSIGNED_BYTE";
+    case TINYGLTF_COMPONENT_TYPE_SHORT: return "SHORT";
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: return "UNSIGNED_SHORT";
+    case TINYGLTF_COMPONENT_TYPE_INT: return "INT";
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT: return "UNSIGNED_INT";
+    case TINYGLTF_COMPONENT_TYPE_FLOAT: return "FLOAT";
+    case TINYGLTF_COMPONENT_TYPE_DOUBLE: return "DOUBLE";
+    default: return std::to_string(componentType);
+  }
+}
+
+const char* accessorTypeName(int type) {
+  switch (type) {
+    case TINYGLTF_TYPE_SCALAR: return "SCALAR";
+    case TINYGLTF_TYPE_VEC2: return "VEC2";
+    case TINYGLTF_TYPE_VEC3: return "VEC3";
+    case TINYGLTF_TYPE_VEC4: return "VEC4";
+    case TINYGLTF_TYPE_MAT2: return "MAT2";
+    case TINYGLTF_TYPE_MAT3: return "MAT3";
+    case TINYGLTF_TYPE_MAT4: return "MAT4";
+    default: return "UNKNOWN";
+  }
+}
+
+const char* vectorTypeName(int components) {
+  switch (components) {
+    case 1: return "SCALAR";
+    case 2: return "VEC2";
+    case 3: return "VEC3";
+    default: return "VEC4";
+  }
+}
+
+const char* modeName(int mode) {
+  switch (mode) {
+    case TINYGLTF_MODE_POINTS: return "POINTS";
+    case TINYGLTF_MODE_LINE: return "LINES";
+    case TINYGLTF_MODE_LINE_LOOP: return "LINE_LOOP";
+    case TINYGLTF_MODE_LINE_STRIP: return "LINE_STRIP";
+    case TINYGLTF_MODE_TRIANGLES: return "TRIANGLES";
+    case TINYGLTF_MODE_TRIANGLE_STRIP: return "TRIANGLE_STRIP";
+    case TINYGLTF_MODE_TRIANGLE_FAN: return "TRIANGLE_FAN";
+    default: return "unknown";
+  }
+}
+
+/// Bytes per component of the types glTF 2.0 allows; 0 for anything else
+/// (tinygltf also lets INT and DOUBLE through, which glTF does not define).
+std::size_t componentSize(int componentType) {
+  switch (componentType) {
+    case TINYGLTF_COMPONENT_TYPE_BYTE:
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: return 1;
+    case TINYGLTF_COMPONENT_TYPE_SHORT:
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: return 2;
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT:
+    case TINYGLTF_COMPONENT_TYPE_FLOAT: return 4;
+    default: return 0;
+  }
+}
+
+int componentCount(int type) {
+  switch (type) {
+    case TINYGLTF_TYPE_SCALAR: return 1;
+    case TINYGLTF_TYPE_VEC2: return 2;
+    case TINYGLTF_TYPE_VEC3: return 3;
+    case TINYGLTF_TYPE_VEC4: return 4;
+    default: return 0;  // matrices are never read here
+  }
+}
+
+std::string joinNames(const std::vector<int>& componentTypes) {
+  std::string text;
+  for (std::size_t i = 0; i < componentTypes.size(); ++i) {
+    if (i > 0) text += i + 1 == componentTypes.size() ? " or " : ", ";
+    text += componentTypeName(componentTypes[i]);
+  }
+  return text;
+}
+
+std::string formatVec3(const glm::vec3& v) {
+  std::ostringstream out;
+  out << '(' << v.x << ", " << v.y << ", " << v.z << ')';
+  return out.str();
+}
+
+/// a * b + c, or false when it does not fit a size_t.
+bool mulAdd(std::size_t a, std::size_t b, std::size_t c, std::size_t* result) {
+  std::size_t product = 0;
+  return !__builtin_mul_overflow(a, b, &product) && !__builtin_add_overflow(product, c, result);
+}
+
+std::uint32_t readU32(const unsigned char* p) {
+  // glTF is little-endian, and so is every machine we build for
+  std::uint32_t v;
+  std::memcpy(&v, p, sizeof v);
+  return v;
+}
+
+/// One component as a number; integer types are mapped to [0,1] or [-1,1]
+/// when `normalized` (glTF 2.0, "Animation" / "Accessor data types").
+double readComponent(const unsigned char* p, int componentType, bool normalized) {
+  switch (componentType) {
+    case TINYGLTF_COMPONENT_TYPE_BYTE: {
+      std::int8_t v;
+      std::memcpy(&v, p, 1);
+      return normalized ? std::max(double(v) / 127.0, -1.0) : double(v);
+    }
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE:
+      return normalized ? double(p[0]) / 255.0 : double(p[0]);
+    case TINYGLTF_COMPONENT_TYPE_SHORT: {
+      std::int16_t v;
+      std::memcpy(&v, p, 2);
+      return normalized ? std::max(double(v) / 32767.0, -1.0) : double(v);
+    }
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: {
+      std::uint16_t v;
+      std::memcpy(&v, p, 2);
+      return normalized ? double(v) / 65535.0 : double(v);
+    }
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT: {
+      std::uint32_t v = readU32(p);
+      return normalized ? double(v) / 4294967295.0 : double(v);
+    }
+    case TINYGLTF_COMPONENT_TYPE_FLOAT: {
+      float v;
+      std::memcpy(&v, p, 4);
+      return double(v);
+    }
+    default: return 0.0;  // unreachable: component types are checked before reading
+  }
+}
+
+/// Components per element of the types readAccessor produces.
+template <typename T>
+constexpr int kComponents = std::is_arithmetic_v<T> ? 1 : int(sizeof(T) / sizeof(float));
+
+template <typename T>
+T readElement(const unsigned char* p, int componentType, bool normalized) {
+  const std::size_t size = componentSize(componentType);
+  T element{};
+  for (int c = 0; c < kComponents<T>; ++c) {
+    double v = readComponent(p + std::size_t(c) * size, componentType, normalized);
+    if constexpr (std::is_arithmetic_v<T>)
+      element = T(v);  // integer T only reads unsigned integer components
+    else
+      element[c] = float(v);
+  }
+  return element;
+}
+
+bool isFinite(const glm::vec3& v) {
+  return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
+}
+
+/// Accept every image without decoding it: textures are not used yet, so a
+/// missing or undecodable image must not fail the load.
+bool ignoreImage(tinygltf::Image*, const int, std::string*, std::string*, int, int,
+                 const unsigned char*, int, void*) {
+  return true;
+}
+
+/// How a primitive reads one accessor, for the checks and the messages.
+struct AccessorUse {
+  std::string where;               ///< "mesh 0, primitive 1"
+  std::string semantic;            ///< "POSITION", "indices", ...
+  std::vector<int> componentTypes; ///< allowed component types
+  bool integersNormalized = false; ///< integer components must be normalized
+};
+
+/// A primitive decoded once, in mesh space, and reused by every node that
+/// instances its mesh.
+struct DecodedPrimitive {
+  bool skipped = false;
+  std::vector<glm::vec3> positions;
+  std::vector<glm::vec3> normals;     ///< empty: the primitive has none
+  std::vector<glm::vec2> texcoords;   ///< empty: the primitive has none
+  std::vector<std::uint32_t> corners; ///< 3 per triangle, indices into positions
+  std::uint32_t material = 0;
+};
+
+class Converter {
+ public:
+  Converter(const Model& model, std::string name, const GltfLoadOptions& options, Scene& scene)
+      : m_model(model), m_name(std::move(name)), m_options(options), m_scene(scene) {}
+
+  void run() {
+    checkExtensions();
+    convertMaterials();
+    traverse(chooseRoots());
+    chooseCamera();
+    if (m_scene.materials.empty()) defaultMaterial();
+    if (!m_model.images.empty())
+      m_scene.addWarning("textures are not supported yet; " + std::to_string(m_model.images.size()) +
+                         " images ignored");
+    if (!m_model.animations.empty())
+      m_scene.addWarning("animations are not supported; the static pose is drawn");
+  }
+
+ private:
+  [[noreturn]] void fail(const std::string& what) const { throw SceneError(m_name + ": " + what); }
+
+  // extensions
+
+  void checkExtensions() {
+    for (const std::string& ext : m_model.extensionsRequired) {
+      if (std::find(kGeometryExtensions.begin(), kGeometryExtensions.end(), ext) !=
+          kGeometryExtensions.end())
+        fail("requires extension " + ext + ", which is not supported");
+    }
+    for (const std::string& ext : m_model.extensionsUsed) {
+      if (ext == kEmissiveStrength) continue;
+      bool required = std::find(m_model.extensionsRequired.begin(), m_model.extensionsRequired.end(),
+                                ext) != m_model.extensionsRequired.end();
+      m_scene.addWarning(ext + " is not supported; ignored" +
+                         (required ? " (the file marks it required; the result may look wrong)" : ""));
+    }
+  }
+
+  // materials
+
+  std::uint32_t defaultMaterial() {
+    if (m_defaultMaterial < 0) {
+      m_defaultMaterial = int(m_scene.materials.size());
+      WtMaterial grey{};
+      grey.base_color = {kDefaultAlbedo, kDefaultAlbedo, kDefaultAlbedo, 0.0f};
+      m_scene.materials.push_back(grey);
+      m_scene.materialNames.push_back("default");
+    }
+    return std::uint32_t(m_defaultMaterial);
+  }
+
+  void convertMaterials() {
+    for (std::size_t i = 0; i < m_model.materials.size(); ++i) {
+      const tinygltf::Material& src = m_model.materials[i];
+      const std::string label = "material " + std::to_string(i) +
+                                (src.name.empty() ? "" : " '" + src.name + "'");
+      const tinygltf::PbrMetallicRoughness& pbr = src.pbrMetallicRoughness;
+
+      glm::vec3 albedo(1.0f);
+      if (pbr.baseColorFactor.size() >= 3)
+        albedo = glm::vec3(float(pbr.baseColorFactor[0]), float(pbr.baseColorFactor[1]),
+                           float(pbr.baseColorFactor[2]));
+      if (!isFinite(albedo)) fail(label + ": baseColorFactor is not finite");
+      glm::vec3 clamped = glm::clamp(albedo, glm::vec3(0.0f), glm::vec3(1.0f));
+      if (clamped != albedo)
+        m_scene.addWarning(label + ": baseColorFactor " + formatVec3(albedo) +
+                           " is outside [0,1]; clamped");
+
+      glm::vec3 emissive(0.0f);
+      if (src.emissiveFactor.size() >= 3)
+        emissive = glm::vec3(float(src.emissiveFactor[0]), float(src.emissiveFactor[1]),
+                             float(src.emissiveFactor[2]));
+      float strength = 1.0f;
+      auto ext = src.extensions.find(kEmissiveStrength);
+      if (ext != src.extensions.end() && ext->second.IsObject() &&
+          ext->second.Has("emissiveStrength") && ext->second.Get("emissiveStrength").IsNumber())
+        strength = float(ext->second.Get("emissiveStrength").GetNumberAsDouble());
+      glm::vec3 emission = emissive * strength;
+      if (!isFinite(emission)) fail(label + ": emission is not finite");
+      if (glm::any(glm::lessThan(emission, glm::vec3(0.0f)))) {
+        m_scene.addWarning(label + ": negative emission " + formatVec3(emission) + "; clamped to 0");
+        emission = glm::max(emission, glm::vec3(0.0f));
+      }
+
+      // features a Lambertian material cannot show
+      if (pbr.baseColorTexture.index >= 0 || pbr.metallicRoughnessTexture.index >= 0 ||
+          src.normalTexture.index >= 0 || src.occlusionTexture.index >= 0 ||
+          src.emissiveTexture.index >= 0)
+        m_scene.addWarning("material textures are not supported yet; ignored");
+      // A rough dielectric (metallic 0, roughness 1) is what Lambert draws.
+      if (pbr.metallicFactor > 0.0 || pbr.roughnessFactor < 1.0)
+        m_scene.addWarning(
+            "metallicFactor/roughnessFactor are not supported yet (materials are Lambertian); ignored");
+      if (src.alphaMode != "OPAQUE")
+        m_scene.addWarning("alphaMode " + src.alphaMode + " is not supported yet; drawn as OPAQUE");
+
+      WtMaterial material{};
+      material.base_color = {clamped.x, clamped.y, clamped.z, 0.0f};
+      material.emission = {emission.x, emission.y, emission.z, 0.0f};
+      m_scene.materials.push_back(material);
+      m_scene.materialNames.push_back(src.name.empty() ? "material " + std::to_string(i) : src.name);
+    }
+  }
+
+  // buffers and accessors
+
+  /// The bytes of a buffer view, checked against its buffer.
+  std::pair<const unsigned char*, std::size_t> viewBytes(int viewIndex, const std::string& who) const {
+    if (viewIndex < 0 || std::size_t(viewIndex) >= m_model.bufferViews.size())
+      fail(who + ": references missing buffer view " + std::to_string(viewIndex));
+    const tinygltf::BufferView& view = m_model.bufferViews[std::size_t(viewIndex)];
+    const std::string label = "buffer view " + std::to_string(viewIndex);
+    if (view.buffer < 0 || std::size_t(view.buffer) >= m_model.buffers.size())
+      fail(label + ": references missing buffer " + std::to_string(view.buffer));
+    const std::vector<unsigned char>& data = m_model.buffers[std::size_t(view.buffer)].data;
+    std::size_t end = 0;
+    if (__builtin_add_overflow(view.byteOffset, view.byteLength, &end) || end > data.size()) {
+      std::ostringstream msg;
+      msg << label << ": extends past the end of buffer " << view.buffer << " (needs "
+          << view.byteOffset << " + " << view.byteLength << " bytes, has " << data.size() << ")";
+      fail(msg.str());
+    }
+    return {data.data() + view.byteOffset, view.byteLength};
+  }
+
+  /// Read an accessor as T (uint32_t, glm::vec2, glm::vec3): bounds-checked,
+  /// strided, converted from any allowed component type, sparse applied.
+  template <typename T>
+  std::vector<T> readAccessor(int index, const AccessorUse& use) const {
+    constexpr int kN = kComponents<T>;
+    const std::string user = use.where + ": " + use.semantic;
+    if (index < 0 || std::size_t(index) >= m_model.accessors.size())
+      fail(user + " references missing accessor " + std::to_string(index));
+    const Accessor& acc = m_model.accessors[std::size_t(index)];
+    if (componentCount(acc.type) != kN)
+      fail(user + " accessor has type " + accessorTypeName(acc.type) + ", expected " +
+           vectorTypeName(kN));
+    if (std::find(use.componentTypes.begin(), use.componentTypes.end(), acc.componentType) ==
+        use.componentTypes.end())
+      fail(user + " accessor has component type " + componentTypeName(acc.componentType) +
+           ", expected " + joinNames(use.componentTypes));
+    if (use.integersNormalized && acc.componentType != TINYGLTF_COMPONENT_TYPE_FLOAT && !acc.normalized)
+      fail(user + " accessor has " + componentTypeName(acc.componentType) +
+           " components that are not normalized");
+
+    const std::string label = "accessor " + std::to_string(index);
+    const std::string usedBy = "; read as " + use.semantic + " of " + use.where;
+    const std::size_t elementSize = componentSize(acc.componentType) * std::size_t(kN);
+    // integer formats are never normalized when read as integers
+    const bool normalized = acc.normalized && !std::is_integral_v<T>;
+    std::vector<T> out;
+
+    if (acc.bufferView >= 0) {
+      auto [bytes, length] = viewBytes(acc.bufferView, label);
+      const std::size_t viewStride = m_model.bufferViews[std::size_t(acc.bufferView)].byteStride;
+      if (viewStride != 0 && viewStride < elementSize)
+        fail(label + ": byteStride " + std::to_string(viewStride) + " of buffer view " +
+             std::to_string(acc.bufferView) + " is smaller than the element size " +
+             std::to_string(elementSize) + usedBy);
+      const std::size_t stride = viewStride != 0 ? viewStride : elementSize;
+      if (acc.count > 0) {
+        std::size_t needed = 0;
+        if (!mulAdd(acc.count - 1, stride, elementSize, &needed) ||
+            __builtin_add_overflow(needed, acc.byteOffset, &needed))
+          fail(label + ": count " + std::to_string(acc.count) + " with stride " +
+               std::to_string(stride) + " overflows" + usedBy);
+        if (needed > length)
+          fail(label + ": extends past the end of buffer view " + std::to_string(acc.bufferView) +
+               " (needs " + std::to_string(needed) + " bytes, has " + std::to_string(length) + ")" +
+               usedBy);
+      }
+      out.resize(acc.count);
+      const unsigned char* p = bytes + acc.byteOffset;
+      for (std::size_t i = 0; i < acc.count; ++i, p += stride)
+        out[i] = readElement<T>(p, acc.componentType, normalized);
+    } else {
+      // no buffer view: all zeros, unless sparse values overwrite some
+      if (acc.count > kMaxUnbackedElements)
+        fail(label + ": count " + std::to_string(acc.count) +
+             " is too large for an accessor without a buffer view" + usedBy);
+      out.assign(acc.count, T{});
+    }
+
+    if (acc.sparse.isSparse) applySparse(acc, label, usedBy, elementSize, normalized, out);
+    return out;
+  }
+
+  /// Overwrite the elements listed by a sparse accessor (tinygltf parses the
+  /// description but leaves applying it to us).
+  template <typename T>
+  void applySparse(const Accessor& acc, const std::string& label, const std::string& usedBy,
+                   std::size_t elementSize, bool normalized, std::vector<T>& out) const {
+    const auto& sparse = acc.sparse;
+    if (sparse.count < 1 || std::size_t(sparse.count) > acc.count)
+      fail(label + ": sparse count " + std::to_string(sparse.count) + " is not in [1, " +
+           std::to_string(acc.count) + "]" + usedBy);
+    const int indexType = sparse.indices.componentType;
+    if (indexType != TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE &&
+        indexType != TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT &&
+        indexType != TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT)
+      fail(label + ": sparse indices have component type " + componentTypeName(indexType) +
+           ", expected UNSIGNED_BYTE, UNSIGNED_SHORT or UNSIGNED_INT" + usedBy);
+    if (sparse.indices.byteOffset < 0 || sparse.values.byteOffset < 0)
+      fail(label + ": negative sparse byteOffset" + usedBy);
+
+    const std::size_t count = std::size_t(sparse.count);
+    const std::size_t indexSize = componentSize(indexType);
+    auto [indexBytes, indexLength] = viewBytes(sparse.indices.bufferView, label + " sparse indices");
+    auto [valueBytes, valueLength] = viewBytes(sparse.values.bufferView, label + " sparse values");
+    std::size_t indexNeeded = 0, valueNeeded = 0;
+    // sparse indices and values are tightly packed (byteStride does not apply)
+    if (!mulAdd(count, indexSize, std::size_t(sparse.indices.byteOffset), &indexNeeded) ||
+        indexNeeded > indexLength)
+      fail(label + ": sparse indices extend past the end of buffer view " +
+           std::to_string(sparse.indices.bufferView) + " (needs " + std::to_string(indexNeeded) +
+           " bytes, has " + std::to_string(indexLength) + ")" + usedBy);
+    if (!mulAdd(count, elementSize, std::size_t(sparse.values.byteOffset), &valueNeeded) ||
+        valueNeeded > valueLength)
+      fail(label + ": sparse values extend past the end of buffer view " +
+           std::to_string(sparse.values.bufferView) + " (needs " + std::to_string(valueNeeded) +
+           " bytes, has " + std::to_string(valueLength) + ")" + usedBy);
+
+    const unsigned char* indices = indexBytes + sparse.indices.byteOffset;
+    const unsigned char* values = valueBytes + sparse.values.byteOffset;
+    for (std::size_t k = 0; k < count; ++k) {
+      auto target = std::size_t(readComponent(indices + k * indexSize, indexType, false));
+      if (target >= out.size())
+        fail(label + ": sparse index " + std::to_string(target) + " out of range (" +
+             std::to_string(out.size()) + " elements)" + usedBy);
+      out[target] = readElement<T>(values + k * elementSize, acc.componentType, normalized);
+    }
+  }
+
+  // primitives
+
+  const DecodedPrimitive& primitive(std::size_t meshIndex, std::size_t primIndex) {
+    auto& slots = m_decoded[meshIndex];
+    if (slots.empty()) slots.resize(m_model.meshes[meshIndex].primitives.size());
+    if (!slots[primIndex])
+      slots[primIndex] = std::make_unique<DecodedPrimitive>(decode(meshIndex, primIndex));
+    return *slots[primIndex];
+  }
+
+  DecodedPrimitive decode(std::size_t meshIndex, std::size_t primIndex) {
+    const tinygltf::Primitive& prim = m_model.meshes[meshIndex].primitives[primIndex];
+    const std::string where =
+        "mesh " + std::to_string(meshIndex) + ", primitive " + std::to_string(primIndex);
+    DecodedPrimitive out;
+
+    const int mode = prim.mode < 0 ? TINYGLTF_MODE_TRIANGLES : prim.mode;
+    if (mode >= TINYGLTF_MODE_POINTS && mode <= TINYGLTF_MODE_LINE_STRIP) {
+      m_scene.addWarning(std::string(modeName(mode)) + " primitives are not supported; skipped");
+      out.skipped = true;
+      return out;
+    }
+    if (mode > TINYGLTF_MODE_TRIANGLE_FAN) fail(where + ": invalid mode " + std::to_string(mode));
+
+    auto attribute = [&](const char* semantic) {
+      auto it = prim.attributes.find(semantic);
+      return it == prim.attributes.end() ? -1 : it->second;
+    };
+    const int positionAccessor = attribute("POSITION");
+    if (positionAccessor < 0) {
+      // the spec lets a primitive omit positions; there is nothing to draw
+      m_scene.addWarning(where + ": no POSITION attribute; skipped");
+      out.skipped = true;
+      return out;
+    }
+    const std::vector<int> kFloat = {TINYGLTF_COMPONENT_TYPE_FLOAT};
+    out.positions = readAccessor<glm::vec3>(positionAccessor, {where, "POSITION", kFloat});
+    const std::size_t vertexCount = out.positions.size();
+    if (vertexCount > std::numeric_limits<std::uint32_t>::max())
+      fail(where + ": " + std::to_string(vertexCount) + " vertices do not fit 32-bit indices");
+
+    if (int normal = attribute("NORMAL"); normal >= 0) {
+      out.normals = readAccessor<glm::vec3>(normal, {where, "NORMAL", kFloat});
+      if (out.normals.size() != vertexCount)
+        fail(where + ": NORMAL has " + std::to_string(out.normals.size()) + " elements, POSITION has " +
+             std::to_string(vertexCount));
+    }
+    if (int uv = attribute("TEXCOORD_0"); uv >= 0) {
+      out.texcoords = readAccessor<glm::vec2>(
+          uv, {where, "TEXCOORD_0",
+               {TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE,
+                TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT},
+               true});
+      if (out.texcoords.size() != vertexCount)
+        fail(where + ": TEXCOORD_0 has " + std::to_string(out.texcoords.size()) +
+             " elements, POSITION has " + std::to_string(vertexCount));
+    }
+    if (!prim.targets.empty())
+      m_scene.addWarning("morph targets are not supported; the base shape is drawn");
+
+    // vertex references in drawing order
+    std::vector<std::uint32_t> refs;
+    if (prim.indices >= 0) {
+      refs = readAccessor<std::uint32_t>(
+          prim.indices, {where, "indices",
+                         {TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE, TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT,
+                          TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT}});
+      for (std::uint32_t index : refs)
+        if (index >= vertexCount)
+          fail(where + ": index " + std::to_string(index) + " out of range (" +
+               std::to_string(vertexCount) + " vertices)");
+    } else {
+      refs.resize(vertexCount);
+      for (std::size_t i = 0; i < vertexCount; ++i) refs[i] = std::uint32_t(i);
+    }
+
+    // triangles, in the winding the spec gives for each mode
+    const std::size_t n = refs.size();
+    if (mode == TINYGLTF_MODE_TRIANGLES) {
+      if (n % 3 != 0)
+        fail(where + ": " + std::to_string(n) + (prim.indices >= 0 ? " indices" : " vertices") +
+             " is not a multiple of 3 for TRIANGLES");
+      out.corners = std::move(refs);
+    } else if (n >= 3) {
+      out.corners.reserve(3 * (n - 2));
+      for (std::size_t i = 0; i + 2 < n; ++i) {
+        if (mode == TINYGLTF_MODE_TRIANGLE_STRIP) {
+          const std::size_t odd = i % 2;
+          out.corners.insert(out.corners.end(), {refs[i], refs[i + 1 + odd], refs[i + 2 - odd]});
+        } else {
+          out.corners.insert(out.corners.end(), {refs[i + 1], refs[i + 2], refs[0]});
+        }
+      }
+    }
+
+    if (prim.material >= 0) {
+      if (std::size_t(prim.material) >= m_model.materials.size())
+        fail(where + ": references missing material " + std::to_string(prim.material));
+      out.material = std::uint32_t(prim.material);
+    } else {
+      out.material = defaultMaterial();
+    }
+    return out;
+  }
+
+  /// Append one placed copy of a primitive to the scene.
+  void emit(const DecodedPrimitive& prim, const glm::mat4& world, std::size_t nodeIndex,
+            std::size_t meshIndex, std::size_t primIndex) {
+    if (prim.skipped) return;
+    const std::size_t base = m_scene.positions.size();
+    const std::size_t count = prim.positions.size();
+    if (count > std::numeric_limits<std::uint32_t>::max() - base)
+      fail("the scene has more vertices than 32-bit indices can address");
+
+    const glm::mat3 linear(world);
+    const glm::mat3 normalMatrix = glm::transpose(glm::inverse(linear));
+    // A mirroring transform turns counter-clockwise into clockwise; swap two
+    // corners so the front face stays the front face.
+    const bool flip = glm::determinant(linear) < 0.0f;
+
+    m_scene.positions.reserve(base + count);
+    m_scene.normals.reserve(base + count);
+    m_scene.texcoords.reserve(base + count);
+    for (std::size_t i = 0; i < count; ++i) {
+      glm::vec3 p = glm::vec3(world * glm::vec4(prim.positions[i], 1.0f));
+      if (!isFinite(p))
+        fail("mesh " + std::to_string(meshIndex) + ", primitive " + std::to_string(primIndex) +
+             " (node " + std::to_string(nodeIndex) + "): vertex " + std::to_string(i) +
+             " has a non-finite position " + formatVec3(p));
+      m_scene.positions.push_back({p.x, p.y, p.z, 0.0f});
+
+      glm::vec3 n(0.0f);
+      if (!prim.normals.empty()) {
+        glm::vec3 transformed = normalMatrix * prim.normals[i];
+        float length = glm::length(transformed);
+        // zero, NaN and infinite normals all mean "use the geometric normal"
+        if (std::isfinite(length) && length > 0.0f) n = transformed / length;
+      }
+      m_scene.normals.push_back({n.x, n.y, n.z, 0.0f});
+
+      glm::vec2 uv = prim.texcoords.empty() ? glm::vec2(0.0f) : prim.texcoords[i];
+      if (!std::isfinite(uv.x) || !std::isfinite(uv.y)) uv = glm::vec2(0.0f);
+      m_scene.texcoords.push_back(uv);
+    }
+
+    const auto offset = std::uint32_t(base);
+    m_scene.triangles.reserve(m_scene.triangles.size() + prim.corners.size() / 3);
+    for (std::size_t t = 0; t + 2 < prim.corners.size(); t += 3) {
+      WtTriangle tri;
+      tri.v0 = offset + prim.corners[t];
+      tri.v1 = offset + prim.corners[t + (flip ? 2 : 1)];
+      tri.v2 = offset + prim.corners[t + (flip ? 1 : 2)];
+      tri.material = prim.material;
+      m_scene.triangles.push_back(tri);
+    }
+  }
+
+  // nodes
+
+  glm::mat4 localMatrix(std::size_t nodeIndex) const {
+    const tinygltf::Node& node = m_model.nodes[nodeIndex];
+    const std::string label = "node " + std::to_string(nodeIndex);
+    auto check = [&](const std::vector<double>& values, std::size_t expected, const char* what) {
+      if (!values.empty() && values.size() != expected)
+        fail(label + ": " + what + " has " + std::to_string(values.size()) + " values, expected " +
+             std::to_string(expected));
+      for (double v : values)
+        if (!std::isfinite(v)) fail(label + ": " + what + " is not finite");
+    };
+    check(node.matrix, 16, "matrix");
+    check(node.translation, 3, "translation");
+    check(node.rotation, 4, "rotation");
+    check(node.scale, 3, "scale");
+
+    if (!node.matrix.empty()) {
+      std::array<float, 16> m;
+      for (std::size_t i = 0; i < 16; ++i) m[i] = float(node.matrix[i]);
+      return glm::make_mat4(m.data());  // both column-major
+    }
+    glm::mat4 local(1.0f);
+    if (!node.translation.empty())
+      local = glm::translate(local, glm::vec3(float(node.translation[0]), float(node.translation[1]),
+                                              float(node.translation[2])));
+    if (!node.rotation.empty()) {
+      // glTF stores (x, y, z, w); glm::quat takes w first
+      glm::quat q(float(node.rotation[3]), float(node.rotation[0]), float(node.rotation[1]),
+                  float(node.rotation[2]));
+      float length = glm::length(q);
+      if (!(length > 0.0f) || !std::isfinite(length))
+        fail(label + ": rotation is not a valid quaternion");
+      local = local * glm::mat4_cast(q / length);
+    }
+    if (!node.scale.empty())
+      local = glm::scale(local, glm::vec3(float(node.scale[0]), float(node.scale[1]),
+                                          float(node.scale[2])));
+    return local;
+  }
+
+  const glm::mat4& cachedLocal(std::size_t nodeIndex) {
+    if (!m_localDone[nodeIndex]) {
+      m_local[nodeIndex] = localMatrix(nodeIndex);
+      m_localDone[nodeIndex] = true;
+    }
+    return m_local[nodeIndex];
+  }
+
+  std::vector<int> chooseRoots() {
+    const std::size_t sceneCount = m_model.scenes.size();
+    int index = m_options.sceneIndex;
+    if (index < -1 || index >= int(sceneCount))
+      fail("scene " + std::to_string(index) + " out of range (" + std::to_string(sceneCount) +
+           " scenes)");
+    if (index == -1 && m_model.defaultScene >= 0) {
+      if (std::size_t(m_model.defaultScene) >= sceneCount)
+        fail("default scene " + std::to_string(m_model.defaultScene) + " does not exist (" +
+             std::to_string(sceneCount) + " scenes)");
+      index = m_model.defaultScene;
+    }
+    if (index == -1 && sceneCount > 0) index = 0;
+    m_rootsLabel = "scene " + std::to_string(index);
+    if (index >= 0) return m_model.scenes[std::size_t(index)].nodes;
+
+    // No scenes at all: draw every node that is nobody's child.
+    m_scene.addWarning("the file has no scenes; drawing all root nodes");
+    m_rootsLabel = "root nodes";
+    std::vector<bool> isChild(m_model.nodes.size(), false);
+    for (const tinygltf::Node& node : m_model.nodes)
+      for (int child : node.children)
+        if (child >= 0 && std::size_t(child) < isChild.size()) isChild[std::size_t(child)] = true;
+    std::vector<int> roots;
+    for (std::size_t i = 0; i < isChild.size(); ++i)
+      if (!isChild[i]) roots.push_back(int(i));
+    return roots;
+  }
+
+  /// Depth-first, parents before children, with an explicit stack so deep
+  /// hierarchies cannot overflow the call stack.
+  void traverse(const std::vector<int>& roots) {
+    const std::size_t nodeCount = m_model.nodes.size();
+    m_local.assign(nodeCount, glm::mat4(1.0f));
+    m_localDone.assign(nodeCount, false);
+    m_decoded.clear();
+    m_decoded.resize(m_model.meshes.size());
+    std::vector<bool> onPath(nodeCount, false);
+    struct Frame {
+      std::size_t node;
+      glm::mat4 world;
+      std::size_t nextChild;
+    };
+    std::vector<Frame> stack;
+    std::size_t instances = 0;
+
+    auto enter = [&](int nodeIndex, const glm::mat4& parentWorld, const std::string& parentLabel) {
+      if (nodeIndex < 0 || std::size_t(nodeIndex) >= nodeCount)
+        fail(parentLabel + ": references missing node " + std::to_string(nodeIndex));
+      const auto index = std::size_t(nodeIndex);
+      if (onPath[index])
+        fail("node " + std::to_string(index) + ": is its own ancestor (cycle in the node graph)");
+      if (++instances > kMaxNodeInstances)
+        fail("the node graph expands to more than " + std::to_string(kMaxNodeInstances) +
+             " node instances");
+      glm::mat4 world = parentWorld * cachedLocal(index);
+      visit(index, world);
+      onPath[index] = true;
+      stack.push_back({index, world, 0});
+    };
+
+    for (int root : roots) {
+      enter(root, glm::mat4(1.0f), m_rootsLabel);
+      while (!stack.empty()) {
+        Frame& top = stack.back();
+        const std::vector<int>& children = m_model.nodes[top.node].children;
+        if (top.nextChild < children.size()) {
+          int child = children[top.nextChild++];
+          glm::mat4 parentWorld = top.world;  // `top` dies when the stack grows
+          enter(child, parentWorld, "node " + std::to_string(top.node));
+        } else {
+          onPath[top.node] = false;
+          stack.pop_back();
+        }
+      }
+    }
+  }
+
+  void visit(std::size_t nodeIndex, const glm::mat4& world) {
+    const tinygltf::Node& node = m_model.nodes[nodeIndex];
+    const std::string label = "node " + std::to_string(nodeIndex);
+    if (node.camera >= 0) {
+      if (std::size_t(node.camera) >= m_model.cameras.size())
+        fail(label + ": references missing camera " + std::to_string(node.camera));
+      m_cameraNodes.push_back({nodeIndex, world});
+    }
+    if (node.mesh >= 0) {
+      if (std::size_t(node.mesh) >= m_model.meshes.size())
+        fail(label + ": references missing mesh " + std::to_string(node.mesh));
+      if (node.skin >= 0)
+        m_scene.addWarning("skinning is not supported; skinned meshes are drawn in their bind pose");
+      const auto meshIndex = std::size_t(node.mesh);
+      const std::size_t primCount = m_model.meshes[meshIndex].primitives.size();
+      for (std::size_t p = 0; p < primCount; ++p)
+        emit(primitive(meshIndex, p), world, nodeIndex, meshIndex, p);
+    }
+  }
+
+  // cameras
+
+  void chooseCamera() {
+    if (m_cameraNodes.empty()) return;
+    const int index = m_options.cameraIndex;
+    if (index < 0 || std::size_t(index) >= m_cameraNodes.size())
+      fail("camera " + std::to_string(index) + " out of range (" +
+           std::to_string(m_cameraNodes.size()) + " camera nodes in " + m_rootsLabel + ")");
+    const auto& [nodeIndex, world] = m_cameraNodes[std::size_t(index)];
+    const tinygltf::Node& node = m_model.nodes[nodeIndex];
+    const tinygltf::Camera& src = m_model.cameras[std::size_t(node.camera)];
+    const std::string label = "camera " + std::to_string(node.camera);
+
+    CameraDesc desc;
+    desc.cameraToWorld = world;
+    desc.name = !src.name.empty() ? src.name : !node.name.empty() ? node.name : label;
+    auto positive = [&](double v, const char* what) {
+      if (!std::isfinite(v) || v <= 0.0) fail(label + ": " + what + " must be positive and finite");
+      return float(v);
+    };
+    if (src.type == "perspective") {
+      desc.orthographic = false;
+      desc.yfov = positive(src.perspective.yfov, "yfov");
+      desc.aspectRatio = src.perspective.aspectRatio > 0.0
+                             ? positive(src.perspective.aspectRatio, "aspectRatio")
+                             : 0.0f;
+      desc.znear = src.perspective.znear >= 0.0 && std::isfinite(src.perspective.znear)
+                       ? float(src.perspective.znear)
+                       : 0.0f;
+    } else if (src.type == "orthographic") {
+      desc.orthographic = true;
+      // the spec only forbids zero; a negative magnification mirrors the image
+      desc.xmag = positive(std::fabs(src.orthographic.xmag), "xmag");
+      desc.ymag = positive(std::fabs(src.orthographic.ymag), "ymag");
+      desc.znear = src.orthographic.znear >= 0.0 && std::isfinite(src.orthographic.znear)
+                       ? float(src.orthographic.znear)
+                       : 0.0f;
+    } else {
+      fail(label + ": unknown type '" + src.type + "'");
+    }
+    m_scene.camera = desc;
+  }
+
+  const Model& m_model;
+  const std::string m_name;
+  const GltfLoadOptions& m_options;
+  Scene& m_scene;
+  int m_defaultMaterial = -1;
+  std::string m_rootsLabel;
+  std::vector<glm::mat4> m_local;
+  std::vector<bool> m_localDone;
+  std::vector<std::vector<std::unique_ptr<DecodedPrimitive>>> m_decoded;
+  std::vector<std::pair<std::size_t, glm::mat4>> m_cameraNodes;
+};
+
+/// Check the GLB container ourselves: tinygltf 2.7 does not count the BIN
+/// chunk's 8-byte header when it checks the chunk against the file length,
+/// and would read past the end of a truncated file. Returns the length to
+/// hand to tinygltf (the header's, which may be less than the bytes we have).
+std::size_t checkGlb(const unsigned char* bytes, std::size_t size, const std::string& name) {
+  auto fail = [&](const std::string& what) { throw SceneError(name + ": " + what); };
+  if (size < 12)
+    fail("truncated .glb: " + std::to_string(size) + " bytes, the header alone needs 12");
+  const std::uint32_t version = readU32(bytes + 4);
+  const std::uint32_t length = readU32(bytes + 8);
+  if (version != 2) fail("unsupported glTF binary version " + std::to_string(version));
+  if (length > size)
+    fail("truncated .glb: the header says " + std::to_string(length) + " bytes, the file has " +
+         std::to_string(size));
+  if (length < 20) fail("truncated .glb: no room for the JSON chunk header");
+  const std::uint64_t jsonLength = readU32(bytes + 12);
+  if (readU32(bytes + 16) != kGlbChunkJson) fail(".glb: the first chunk is not JSON");
+  const std::uint64_t jsonEnd = 20 + jsonLength;
+  if (jsonEnd > length)
+    fail("truncated .glb: the JSON chunk needs " + std::to_string(jsonEnd) + " bytes, the file has " +
+         std::to_string(length));
+  if (jsonEnd + 8 <= length) {
+    const std::uint64_t binLength = readU32(bytes + jsonEnd);
+    const std::uint32_t binType = readU32(bytes + jsonEnd + 4);
+    if (binType == kGlbChunkBin && jsonEnd + 8 + binLength > length)
+      fail("truncated .glb: the BIN chunk needs " + std::to_string(jsonEnd + 8 + binLength) +
+           " bytes, the file has " + std::to_string(length));
+  }
+  return length;
+}
+
+Scene loadFromBytes(const unsigned char* bytes, std::size_t size, bool expectBinary,
+                    const std::string& name, const std::string& sourceName,
+                    const std::string& baseDir, const GltfLoadOptions& options) {
+  if (size > std::numeric_limits<unsigned int>::max())
+    throw SceneError(name + ": file is too large (" + std::to_string(size) + " bytes)");
+
+  const bool binary = size >= 4 && readU32(bytes) == kGlbMagic;
+  if (expectBinary && !binary) throw SceneError(name + ": not a binary glTF file (no 'glTF' magic)");
+
+  tinygltf::Model model;
+  tinygltf::TinyGLTF parser;
+  parser.SetImageLoader(&ignoreImage, nullptr);
+  std::string err, warn;
+  bool ok = false;
+  try {
+    if (binary) {
+      std::size_t length = checkGlb(bytes, size, name);
+      ok = parser.LoadBinaryFromMemory(&model, &err, &warn, bytes, unsigned(length), baseDir);
+    } else {
+      ok = parser.LoadASCIIFromString(&model, &err, &warn, reinterpret_cast<const char*>(bytes),
+                                      unsigned(size), baseDir);
+    }
+  } catch (const SceneError&) {
+    throw;
+  } catch (const std::exception& e) {
+    // tinygltf 2.7 throws on a few malformed inputs (empty data URIs, empty BIN buffers)
+    throw SceneError(name + ": glTF parse error: " + e.what());
+  }
+  // tinygltf's warnings are all about image files, which we do not read
+  (void)warn;
+  if (!ok) {
+    while (!err.empty() && (err.back() == '\n' || err.back() == ' ')) err.pop_back();
+    throw SceneError(name + ": glTF parse error: " + (err.empty() ? "unknown error" : err));
+  }
+
+  Scene scene;
+  scene.sourceName = sourceName;
+  try {
+    Converter(model, name, options, scene).run();
+  } catch (const std::bad_alloc&) {
+    throw SceneError(name + ": out of memory while converting the scene");
+  } catch (const std::length_error&) {
+    throw SceneError(name + ": out of memory while converting the scene");
+  }
+  return scene;
+}
+
+}  // namespace
+
+Scene loadGltf(const std::string& path, const GltfLoadOptions& options) {
+  namespace fs = std::filesystem;
+  const fs::path file(path);
+  const std::string name = file.filename().string().empty() ? path : file.filename().string();
+  std::error_code ec;
+  if (!fs::is_regular_file(file, ec))
+    throw SceneError(name + ": cannot open " + path +
+                     (fs::exists(file, ec) ? " (not a regular file)" : " (no such file)"));
+  std::ifstream in(file, std::ios::binary);
+  if (!in) throw SceneError(name + ": cannot open " + path);
+  std::vector<unsigned char> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  if (in.bad()) throw SceneError(name + ": cannot read " + path);
+  if (bytes.empty()) throw SceneError(name + ": the file is empty");
+
+  std::string ext = file.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+  std::string baseDir = file.parent_path().string();
+  if (baseDir.empty()) baseDir = ".";
+  return loadFromBytes(bytes.data(), bytes.size(), ext == ".glb", name, path, baseDir, options);
+}
+
+Scene loadGltfFromMemory(std::string_view contents, const std::string& name,
+                         const std::string& baseDir, const GltfLoadOptions& options) {
+  if (contents.empty()) throw SceneError(name + ": the scene text is empty");
+  return loadFromBytes(reinterpret_cast<const unsigned char*>(contents.data()), contents.size(),
+                       false, name, name, baseDir, options);
+}
+
+}  // namespace wt

@@ -1,0 +1,300 @@
+// The glTF loader on Khronos sample models (../shared/assets/gltf). The
+// expected numbers were computed from the models' own JSON and .bin files
+// with python3 (json + struct), as each comment says; they are not whatever
+// the loader produced.
+#include "scene/gltf_loader.h"
+
+#include "test_util.h"
+
+#include <gtest/gtest.h>
+
+#include <glm/glm.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+namespace wt {
+namespace {
+
+glm::vec3 pos(const Scene& s, std::uint32_t v) {
+  return {s.positions[v].x, s.positions[v].y, s.positions[v].z};
+}
+glm::vec3 nrm(const Scene& s, std::uint32_t v) {
+  return {s.normals[v].x, s.normals[v].y, s.normals[v].z};
+}
+
+void expectNear(const glm::vec3& actual, const glm::vec3& expected, float eps = 1e-5f) {
+  EXPECT_NEAR(actual.x, expected.x, eps);
+  EXPECT_NEAR(actual.y, expected.y, eps);
+  EXPECT_NEAR(actual.z, expected.z, eps);
+}
+
+bool hasWarning(const Scene& s, const std::string& part) {
+  return std::any_of(s.warnings.begin(), s.warnings.end(),
+                     [&](const std::string& w) { return w.find(part) != std::string::npos; });
+}
+
+void expectConsistent(const Scene& s) {
+  ASSERT_EQ(s.normals.size(), s.positions.size());
+  ASSERT_EQ(s.texcoords.size(), s.positions.size());
+  ASSERT_FALSE(s.materials.empty());
+  ASSERT_EQ(s.materialNames.size(), s.materials.size());
+  for (const WtTriangle& t : s.triangles) {
+    ASSERT_LT(std::max({t.v0, t.v1, t.v2}), s.positions.size());
+    ASSERT_LT(t.material, s.materials.size());
+  }
+}
+
+/// Of the triangles with vertex normals and non-zero area, the fraction whose
+/// winding (counter-clockwise = front) agrees with their vertex normals. A
+/// mirrored node without the winding flip, or normals transformed by the
+/// matrix instead of its inverse transpose, pulls this down.
+double fractionFacingTheirNormals(const Scene& s) {
+  std::size_t counted = 0, agreeing = 0;
+  for (const WtTriangle& t : s.triangles) {
+    glm::vec3 n = nrm(s, t.v0) + nrm(s, t.v1) + nrm(s, t.v2);
+    glm::vec3 g = glm::cross(pos(s, t.v1) - pos(s, t.v0), pos(s, t.v2) - pos(s, t.v0));
+    if (glm::length(n) < 1e-3f || glm::length(g) < 1e-12f) continue;
+    ++counted;
+    if (glm::dot(n, g) > 0.0f) ++agreeing;
+  }
+  return counted == 0 ? 0.0 : double(agreeing) / double(counted);
+}
+
+TEST(GltfAssets, Triangle) {
+  WT_REQUIRE_ASSET(path, "gltf/Triangle/glTF/Triangle.gltf");
+  Scene s = loadGltf(path.string());
+  expectConsistent(s);
+  // Triangle.gltf: indices accessor count 3, data URI buffer
+  ASSERT_EQ(s.triangles.size(), 1u);
+  expectNear(pos(s, s.triangles[0].v1), {1, 0, 0});
+  expectNear(pos(s, s.triangles[0].v2), {0, 1, 0});
+  EXPECT_EQ(s.materialNames, std::vector<std::string>{"default"});
+}
+
+TEST(GltfAssets, TriangleWithoutIndices) {
+  WT_REQUIRE_ASSET(path, "gltf/TriangleWithoutIndices/glTF/TriangleWithoutIndices.gltf");
+  Scene s = loadGltf(path.string());
+  expectConsistent(s);
+  // POSITION accessor count 3, no indices
+  ASSERT_EQ(s.triangles.size(), 1u);
+  EXPECT_GT(glm::cross(pos(s, 1) - pos(s, 0), pos(s, 2) - pos(s, 0)).z, 0.0f);
+}
+
+TEST(GltfAssets, SimpleSparseAccessor) {
+  WT_REQUIRE_ASSET(path, "gltf/SimpleSparseAccessor/glTF/SimpleSparseAccessor.gltf");
+  Scene s = loadGltf(path.string());
+  expectConsistent(s);
+  // indices accessor count 36 -> 12 triangles over 14 vertices
+  ASSERT_EQ(s.triangles.size(), 12u);
+  ASSERT_EQ(s.positions.size(), 14u);
+  // SimpleSparseAccessor.bin: the base grid has vertex i at (i % 7, i / 7, 0);
+  // the sparse indices (UNSIGNED_SHORT at byte 240) are 8, 10, 12 and the
+  // values (FLOAT VEC3 at byte 248) move them to (1,2,0), (3,3,0), (5,4,0).
+  // One node, one primitive: scene vertex i is accessor element i.
+  expectNear(pos(s, 8), {1, 2, 0});
+  expectNear(pos(s, 10), {3, 3, 0});
+  expectNear(pos(s, 12), {5, 4, 0});
+  expectNear(pos(s, 9), {2, 1, 0});  // not in the sparse set
+  expectNear(pos(s, 7), {0, 1, 0});
+  // the accessor's max [6, 4, 0] holds only with the sparse values applied
+  EXPECT_FLOAT_EQ(s.bounds().hi.y, 4.0f);
+}
+
+TEST(GltfAssets, MultipleScenes) {
+  WT_REQUIRE_ASSET(path, "gltf/MultipleScenes/glTF/MultipleScenes.gltf");
+  // "scene": 1 is the default; scene 0 holds node 0 (mesh 0: 3 indices),
+  // scene 1 holds node 1 (mesh 1: 6 indices)
+  Scene byDefault = loadGltf(path.string());
+  EXPECT_EQ(byDefault.triangles.size(), 2u);
+  GltfLoadOptions options;
+  options.sceneIndex = 0;
+  EXPECT_EQ(loadGltf(path.string(), options).triangles.size(), 1u);
+  options.sceneIndex = 1;
+  EXPECT_EQ(loadGltf(path.string(), options).triangles.size(), 2u);
+  options.sceneIndex = 2;
+  try {
+    loadGltf(path.string(), options);
+    ADD_FAILURE() << "scene 2 does not exist";
+  } catch (const SceneError& e) {
+    EXPECT_NE(std::string(e.what()).find("MultipleScenes.gltf: scene 2 out of range (2 scenes)"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
+TEST(GltfAssets, Cameras) {
+  WT_REQUIRE_ASSET(path, "gltf/Cameras/glTF/Cameras.gltf");
+  // nodes 1 and 2 carry camera 0 (perspective: yfov 0.7, aspectRatio 1,
+  // znear 0.01) and camera 1 (orthographic: xmag 1, ymag 1, znear 0.01),
+  // both translated to (0.5, 0.5, 3)
+  Scene s = loadGltf(path.string());
+  expectConsistent(s);
+  EXPECT_EQ(s.triangles.size(), 2u);  // indices accessor count 6
+  ASSERT_TRUE(s.camera.has_value());
+  EXPECT_FALSE(s.camera->orthographic);
+  EXPECT_FLOAT_EQ(s.camera->yfov, 0.7f);
+  EXPECT_FLOAT_EQ(s.camera->aspectRatio, 1.0f);
+  EXPECT_FLOAT_EQ(s.camera->znear, 0.01f);
+  expectNear(glm::vec3(s.camera->cameraToWorld[3]), {0.5f, 0.5f, 3.0f});
+
+  GltfLoadOptions options;
+  options.cameraIndex = 1;
+  Scene ortho = loadGltf(path.string(), options);
+  ASSERT_TRUE(ortho.camera.has_value());
+  EXPECT_TRUE(ortho.camera->orthographic);
+  EXPECT_FLOAT_EQ(ortho.camera->xmag, 1.0f);
+  EXPECT_FLOAT_EQ(ortho.camera->ymag, 1.0f);
+
+  options.cameraIndex = 2;
+  EXPECT_THROW(loadGltf(path.string(), options), SceneError);
+}
+
+TEST(GltfAssets, NegativeScaleTest) {
+  WT_REQUIRE_ASSET(path, "gltf/NegativeScaleTest/glTF/NegativeScaleTest.gltf");
+  Scene s = loadGltf(path.string());
+  expectConsistent(s);
+  // sum over the scene's mesh instances of indices count / 3
+  EXPECT_EQ(s.triangles.size(), 7724u);
+  // Several nodes mirror their meshes (scale -1 on one or three axes); with
+  // the winding flipped, front faces still agree with the vertex normals.
+  EXPECT_EQ(fractionFacingTheirNormals(s), 1.0);
+  EXPECT_TRUE(hasWarning(s, "images ignored"));
+}
+
+TEST(GltfAssets, Box) {
+  for (const char* rel : {"gltf/Box/glTF/Box.gltf", "gltf/Box/glTF-Binary/Box.glb"}) {
+    SCOPED_TRACE(rel);
+    WT_REQUIRE_ASSET(path, rel);
+    Scene s = loadGltf(path.string());
+    expectConsistent(s);
+    // indices accessor count 36
+    ASSERT_EQ(s.triangles.size(), 12u);
+    // POSITION min/max is +-0.5; the root's matrix only swaps axes
+    expectNear(s.bounds().lo, glm::vec3(-0.5f));
+    expectNear(s.bounds().hi, glm::vec3(0.5f));
+    // outward winding and outward normals
+    for (std::size_t t = 0; t < s.triangles.size(); ++t) {
+      const WtTriangle& tri = s.triangles[t];
+      glm::vec3 centroid = (pos(s, tri.v0) + pos(s, tri.v1) + pos(s, tri.v2)) / 3.0f;
+      glm::vec3 g = glm::cross(pos(s, tri.v1) - pos(s, tri.v0), pos(s, tri.v2) - pos(s, tri.v0));
+      EXPECT_GT(glm::dot(g, centroid), 0.0f) << "triangle " << t;
+    }
+    EXPECT_EQ(fractionFacingTheirNormals(s), 1.0);
+    // material "Red": baseColorFactor [0.8, 0, 0, 1]
+    ASSERT_EQ(s.materials.size(), 1u);
+    EXPECT_EQ(s.materialNames[0], "Red");
+    EXPECT_FLOAT_EQ(s.materials[0].base_color.x, 0.8f);
+    EXPECT_FLOAT_EQ(s.materials[0].base_color.y, 0.0f);
+  }
+}
+
+TEST(GltfAssets, BoxInterleaved) {
+  WT_REQUIRE_ASSET(path, "gltf/BoxInterleaved/glTF/BoxInterleaved.gltf");
+  Scene s = loadGltf(path.string());
+  expectConsistent(s);
+  // indices accessor count 36; POSITION and NORMAL share one bufferView
+  // with byteStride 24
+  ASSERT_EQ(s.triangles.size(), 12u);
+  expectNear(s.bounds().lo, glm::vec3(-0.5f));
+  expectNear(s.bounds().hi, glm::vec3(0.5f));
+  EXPECT_EQ(fractionFacingTheirNormals(s), 1.0);
+  for (std::size_t v = 0; v < s.positions.size(); ++v)
+    EXPECT_NEAR(glm::length(nrm(s, std::uint32_t(v))), 1.0f, 1e-5f);
+}
+
+TEST(GltfAssets, SimpleMeshes) {
+  WT_REQUIRE_ASSET(path, "gltf/SimpleMeshes/glTF/SimpleMeshes.gltf");
+  Scene s = loadGltf(path.string());
+  expectConsistent(s);
+  // one 3-index mesh, instanced by node 0 and by node 1 at translation (1,0,0)
+  ASSERT_EQ(s.triangles.size(), 2u);
+  expectNear(pos(s, s.triangles[1].v0) - pos(s, s.triangles[0].v0), {1, 0, 0});
+}
+
+TEST(GltfAssets, MeshPrimitiveModes) {
+  WT_REQUIRE_ASSET(path, "gltf/MeshPrimitiveModes/glTF/MeshPrimitiveModes.gltf");
+  Scene s = loadGltf(path.string());
+  expectConsistent(s);
+  // TRIANGLES: 18 indices -> 6; TRIANGLE_STRIP: 6 indices -> 4;
+  // TRIANGLE_FAN: 8 indices -> 6; POINTS, LINES, LINE_LOOP, LINE_STRIP skipped
+  EXPECT_EQ(s.triangles.size(), 16u);
+  for (const char* mode : {"POINTS", "LINES", "LINE_LOOP", "LINE_STRIP"})
+    EXPECT_TRUE(hasWarning(s, std::string(mode) + " primitives are not supported")) << mode;
+  // all modes draw the same flat shape facing +z
+  for (std::size_t t = 0; t < s.triangles.size(); ++t) {
+    const WtTriangle& tri = s.triangles[t];
+    glm::vec3 g = glm::cross(pos(s, tri.v1) - pos(s, tri.v0), pos(s, tri.v2) - pos(s, tri.v0));
+    EXPECT_GT(g.z, 0.0f) << "triangle " << t;
+  }
+}
+
+TEST(GltfAssets, TextureCoordinateTest) {
+  for (const char* rel : {"gltf/TextureCoordinateTest/glTF/TextureCoordinateTest.gltf",
+                          "gltf/TextureCoordinateTest/glTF-Binary/TextureCoordinateTest.glb"}) {
+    SCOPED_TRACE(rel);
+    WT_REQUIRE_ASSET(path, rel);
+    Scene s = loadGltf(path.string());
+    expectConsistent(s);
+    // five meshes of 6 indices each -> 10 triangles
+    EXPECT_EQ(s.triangles.size(), 10u);
+    EXPECT_EQ(s.materials.size(), 5u);
+    EXPECT_TRUE(hasWarning(s, "textures are not supported yet; 1 images ignored"));
+    // every TEXCOORD_0 min/max lies in [0, 1]; some are not zero
+    bool anyNonZero = false;
+    for (const glm::vec2& uv : s.texcoords) {
+      EXPECT_GE(uv.x, -1e-6f);
+      EXPECT_LE(uv.x, 1.0f + 1e-6f);
+      EXPECT_GE(uv.y, -1e-6f);
+      EXPECT_LE(uv.y, 1.0f + 1e-6f);
+      anyNonZero = anyNonZero || uv != glm::vec2(0.0f);
+    }
+    EXPECT_TRUE(anyNonZero);
+  }
+}
+
+TEST(GltfAssets, SimpleInstancing) {
+  WT_REQUIRE_ASSET(path, "gltf/SimpleInstancing/glTF/SimpleInstancing.gltf");
+  Scene s = loadGltf(path.string());
+  expectConsistent(s);
+  // EXT_mesh_gpu_instancing (125 instances) is not applied: the node's own
+  // mesh (36 indices) is drawn once
+  EXPECT_EQ(s.triangles.size(), 12u);
+  EXPECT_TRUE(hasWarning(s, "EXT_mesh_gpu_instancing is not supported"));
+}
+
+TEST(GltfAssets, OrientationTest) {
+  WT_REQUIRE_ASSET(gltf, "gltf/OrientationTest/glTF/OrientationTest.gltf");
+  WT_REQUIRE_ASSET(glb, "gltf/OrientationTest/glTF-Binary/OrientationTest.glb");
+  Scene a = loadGltf(gltf.string());
+  Scene b = loadGltf(glb.string());
+  expectConsistent(a);
+  // sum over the 13 mesh nodes of indices count / 3
+  EXPECT_EQ(a.triangles.size(), 524u);
+  // TRS and matrix nodes both place the arrows; normals agree with windings
+  EXPECT_EQ(fractionFacingTheirNormals(a), 1.0);
+  // the .glb holds the same scene
+  ASSERT_EQ(b.triangles.size(), a.triangles.size());
+  ASSERT_EQ(b.positions.size(), a.positions.size());
+  for (std::size_t v = 0; v < a.positions.size(); ++v)
+    expectNear(pos(b, std::uint32_t(v)), pos(a, std::uint32_t(v)), 1e-4f);
+}
+
+TEST(GltfAssets, DamagedHelmet) {
+  // Only the .gltf of DamagedHelmet is in the assets (no glTF-Binary folder).
+  WT_REQUIRE_ASSET(path, "gltf/DamagedHelmet/glTF/DamagedHelmet.gltf");
+  Scene s = loadGltf(path.string());
+  expectConsistent(s);
+  // indices accessor count 46356 -> 15452 triangles over 14556 vertices
+  EXPECT_EQ(s.triangles.size(), 15452u);
+  EXPECT_EQ(s.positions.size(), 14556u);
+  EXPECT_TRUE(hasWarning(s, "textures are not supported yet; 5 images ignored"));
+  EXPECT_TRUE(hasWarning(s, "material textures are not supported"));
+  // Material_MR: emissiveFactor [1, 1, 1] (the emissive texture is ignored)
+  EXPECT_FLOAT_EQ(s.materials[0].emission.x, 1.0f);
+  EXPECT_EQ(fractionFacingTheirNormals(s), 1.0);
+}
+
+}  // namespace
+}  // namespace wt

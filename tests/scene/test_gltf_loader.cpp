@@ -1,0 +1,1072 @@
+// glTF loader tests on files the tests write themselves: geometry and
+// transforms checked numerically, every validation error checked for the
+// file and element it names, and a mutation fuzz that must never crash.
+#include "scene/gltf_loader.h"
+
+#include "test_util.h"
+
+#include <gtest/gtest.h>
+
+#include <glm/glm.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <random>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace wt {
+namespace {
+
+constexpr int kUByte = 5121;
+constexpr int kUShort = 5123;
+constexpr int kUInt = 5125;
+constexpr int kFloat = 5126;
+constexpr float kEps = 1e-5f;
+
+std::string str(std::size_t v) { return std::to_string(v); }
+std::string num(float v) {
+  std::ostringstream out;
+  out.precision(9);
+  out << v;
+  return out.str();
+}
+
+std::string base64(const std::vector<unsigned char>& bytes) {
+  static const char* kAlphabet = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  std::string out;
+  for (std::size_t i = 0; i < bytes.size(); i += 3) {
+    std::uint32_t chunk = std::uint32_t(bytes[i]) << 16;
+    if (i + 1 < bytes.size()) chunk |= std::uint32_t(bytes[i + 1]) << 8;
+    if (i + 2 < bytes.size()) chunk |= bytes[i + 2];
+    out += kAlphabet[(chunk >> 18) & 63];
+    out += kAlphabet[(chunk >> 12) & 63];
+    out += i + 1 < bytes.size() ? kAlphabet[(chunk >> 6) & 63] : '=';
+    out += i + 2 < bytes.size() ? kAlphabet[chunk & 63] : '=';
+  }
+  return out;
+}
+
+/// A glTF document assembled from JSON fragments plus one binary buffer, so
+/// a test can start from a valid file and break exactly one element.
+struct GltfDoc {
+  std::vector<std::string> accessors, bufferViews, meshes, nodes, materials, cameras, scenes, images;
+  std::string extensionsUsed;      ///< JSON array text; empty: absent
+  std::string extensionsRequired;  ///< JSON array text; empty: absent
+  int scene = -1;                  ///< the "scene" property; -1: absent
+  std::vector<unsigned char> bin;
+
+  /// Append bytes (4-byte aligned) and a buffer view over them.
+  int addView(const void* data, std::size_t bytes, std::size_t stride = 0) {
+    while (bin.size() % 4 != 0) bin.push_back(0);
+    std::size_t offset = bin.size();
+    bin.resize(offset + bytes);
+    std::memcpy(bin.data() + offset, data, bytes);
+    std::string view = "{\"buffer\":0,\"byteOffset\":" + str(offset) + ",\"byteLength\":" + str(bytes);
+    if (stride != 0) view += ",\"byteStride\":" + str(stride);
+    bufferViews.push_back(view + "}");
+    return int(bufferViews.size()) - 1;
+  }
+  template <typename T>
+  int addView(const std::vector<T>& values, std::size_t stride = 0) {
+    return addView(values.data(), values.size() * sizeof(T), stride);
+  }
+  int addAccessor(int view, int componentType, std::size_t count, const char* type,
+                  const std::string& extra = "") {
+    std::string acc = "{";
+    if (view >= 0) acc += "\"bufferView\":" + str(std::size_t(view)) + ",";
+    acc += "\"componentType\":" + str(std::size_t(componentType)) + ",\"count\":" + str(count) +
+           ",\"type\":\"" + type + "\"" + extra + "}";
+    accessors.push_back(acc);
+    return int(accessors.size()) - 1;
+  }
+  int addVec3(const std::vector<glm::vec3>& values) {
+    return addAccessor(addView(values), kFloat, values.size(), "VEC3");
+  }
+  int addVec2(const std::vector<glm::vec2>& values) {
+    return addAccessor(addView(values), kFloat, values.size(), "VEC2");
+  }
+  template <typename T>
+  int addIndices(const std::vector<T>& values) {
+    int type = sizeof(T) == 1 ? kUByte : sizeof(T) == 2 ? kUShort : kUInt;
+    return addAccessor(addView(values), type, values.size(), "SCALAR");
+  }
+  int addMesh(const std::string& primitives) {
+    meshes.push_back("{\"primitives\":[" + primitives + "]}");
+    return int(meshes.size()) - 1;
+  }
+  int addNode(const std::string& node) {
+    nodes.push_back(node);
+    return int(nodes.size()) - 1;
+  }
+
+  /// The document; `bufferUri` empty: no uri (the GLB BIN chunk).
+  std::string json(const std::string& bufferUri) const {
+    std::string out = "{\"asset\":{\"version\":\"2.0\"}";
+    if (scene >= 0) out += ",\"scene\":" + str(std::size_t(scene));
+    auto list = [&](const char* key, const std::vector<std::string>& items) {
+      if (items.empty()) return;
+      out += std::string(",\"") + key + "\":[";
+      for (std::size_t i = 0; i < items.size(); ++i) out += (i ? "," : "") + items[i];
+      out += "]";
+    };
+    list("scenes", scenes);
+    list("nodes", nodes);
+    list("meshes", meshes);
+    list("materials", materials);
+    list("cameras", cameras);
+    list("images", images);
+    list("accessors", accessors);
+    list("bufferViews", bufferViews);
+    if (!bin.empty()) {
+      out += ",\"buffers\":[{\"byteLength\":" + str(bin.size());
+      if (!bufferUri.empty()) out += ",\"uri\":\"" + bufferUri + "\"";
+      out += "}]";
+    }
+    if (!extensionsUsed.empty()) out += ",\"extensionsUsed\":" + extensionsUsed;
+    if (!extensionsRequired.empty()) out += ",\"extensionsRequired\":" + extensionsRequired;
+    return out + "}";
+  }
+  std::string embedded() const {
+    return json("data:application/octet-stream;base64," + base64(bin));
+  }
+  std::vector<unsigned char> glb() const {
+    std::string text = json("");
+    while (text.size() % 4 != 0) text += ' ';
+    std::vector<unsigned char> payload = bin;
+    while (payload.size() % 4 != 0) payload.push_back(0);
+    std::vector<unsigned char> out;
+    auto u32 = [&](std::uint32_t v) {
+      for (int i = 0; i < 4; ++i) out.push_back(static_cast<unsigned char>(v >> (8 * i)));
+    };
+    std::size_t total = 12 + 8 + text.size() + (payload.empty() ? 0 : 8 + payload.size());
+    u32(0x46546C67);  // "glTF"
+    u32(2);
+    u32(std::uint32_t(total));
+    u32(std::uint32_t(text.size()));
+    u32(0x4E4F534A);  // "JSON"
+    out.insert(out.end(), text.begin(), text.end());
+    if (!payload.empty()) {
+      u32(std::uint32_t(payload.size()));
+      u32(0x004E4942);  // "BIN\0"
+      out.insert(out.end(), payload.begin(), payload.end());
+    }
+    return out;
+  }
+};
+
+/// One triangle in the z = 0 plane, counter-clockwise seen from +z.
+GltfDoc triangleDoc(bool indexed = true, const std::string& nodeExtra = "") {
+  GltfDoc doc;
+  int pos = doc.addVec3({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}});
+  std::string prim = "{\"attributes\":{\"POSITION\":" + str(std::size_t(pos)) + "}";
+  if (indexed) prim += ",\"indices\":" + str(std::size_t(doc.addIndices<std::uint16_t>({0, 1, 2})));
+  doc.addMesh(prim + "}");
+  doc.addNode("{\"mesh\":0" + nodeExtra + "}");
+  doc.scenes.push_back("{\"nodes\":[0]}");
+  return doc;
+}
+
+/// A scratch file named after the running test, so parallel tests never share one.
+std::filesystem::path scratchFile(const std::string& suffix) {
+  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+  std::string name = std::string(info->test_suite_name()) + "." + info->name();
+  for (char& c : name)
+    if (c == '/') c = '_';
+  return test::scratchDir("gltf") / (name + suffix);
+}
+
+std::filesystem::path writeFile(const std::string& suffix, const std::string& contents) {
+  std::filesystem::path path = scratchFile(suffix);
+  std::ofstream(path, std::ios::binary).write(contents.data(), std::streamsize(contents.size()));
+  return path;
+}
+std::filesystem::path writeFile(const std::string& suffix, const std::vector<unsigned char>& bytes) {
+  return writeFile(suffix, std::string(bytes.begin(), bytes.end()));
+}
+
+Scene loadDoc(const GltfDoc& doc, const GltfLoadOptions& options = {}) {
+  return loadGltf(writeFile(".gltf", doc.embedded()).string(), options);
+}
+
+/// The SceneError message of `load` (a failure when it throws none).
+template <typename F>
+std::string errorOf(F&& load) {
+  try {
+    load();
+  } catch (const SceneError& e) {
+    return e.what();
+  }
+  ADD_FAILURE() << "expected a SceneError";
+  return "";
+}
+
+/// The message names the file first, then the element.
+std::string docError(const GltfDoc& doc, const GltfLoadOptions& options = {}) {
+  std::string message = errorOf([&] { loadDoc(doc, options); });
+  std::string file = scratchFile(".gltf").filename().string();
+  EXPECT_EQ(message.rfind(file + ": ", 0), 0u) << "message does not start with the file name: " << message;
+  return message;
+}
+
+#define EXPECT_CONTAINS(text, part) \
+  EXPECT_NE(std::string(text).find(part), std::string::npos) << "in: " << (text)
+
+glm::vec3 pos(const Scene& s, std::uint32_t v) {
+  return {s.positions[v].x, s.positions[v].y, s.positions[v].z};
+}
+glm::vec3 nrm(const Scene& s, std::uint32_t v) {
+  return {s.normals[v].x, s.normals[v].y, s.normals[v].z};
+}
+glm::vec3 geometricNormal(const Scene& s, std::size_t tri) {
+  const WtTriangle& t = s.triangles[tri];
+  return glm::cross(pos(s, t.v1) - pos(s, t.v0), pos(s, t.v2) - pos(s, t.v0));
+}
+
+void expectNear(const glm::vec3& actual, const glm::vec3& expected, float eps = kEps) {
+  EXPECT_NEAR(actual.x, expected.x, eps);
+  EXPECT_NEAR(actual.y, expected.y, eps);
+  EXPECT_NEAR(actual.z, expected.z, eps);
+}
+
+/// What every loaded scene must satisfy, whatever the file said.
+void expectConsistent(const Scene& s) {
+  ASSERT_EQ(s.normals.size(), s.positions.size());
+  ASSERT_EQ(s.texcoords.size(), s.positions.size());
+  ASSERT_FALSE(s.materials.empty());
+  ASSERT_EQ(s.materialNames.size(), s.materials.size());
+  for (const WtTriangle& t : s.triangles) {
+    ASSERT_LT(t.v0, s.positions.size());
+    ASSERT_LT(t.v1, s.positions.size());
+    ASSERT_LT(t.v2, s.positions.size());
+    ASSERT_LT(t.material, s.materials.size());
+  }
+  for (std::size_t i = 0; i < s.positions.size(); ++i) {
+    ASSERT_TRUE(std::isfinite(s.positions[i].x) && std::isfinite(s.positions[i].y) &&
+                std::isfinite(s.positions[i].z));
+    glm::vec3 n = nrm(s, std::uint32_t(i));
+    float length = glm::length(n);
+    ASSERT_TRUE(length == 0.0f || std::fabs(length - 1.0f) < 1e-4f) << "normal " << i;
+  }
+  for (const WtMaterial& m : s.materials) {
+    for (float c : {m.base_color.x, m.base_color.y, m.base_color.z}) {
+      ASSERT_GE(c, 0.0f);
+      ASSERT_LE(c, 1.0f);
+    }
+  }
+}
+
+// ---------------------------------------------------------------------------
+// geometry
+
+TEST(GltfLoader, SingleTriangleIndexed) {
+  Scene s = loadDoc(triangleDoc(true));
+  expectConsistent(s);
+  ASSERT_EQ(s.triangles.size(), 1u);
+  ASSERT_EQ(s.positions.size(), 3u);
+  const WtTriangle& t = s.triangles[0];
+  expectNear(pos(s, t.v0), {0, 0, 0});
+  expectNear(pos(s, t.v1), {1, 0, 0});
+  expectNear(pos(s, t.v2), {0, 1, 0});
+  // no NORMAL / TEXCOORD_0: the "none" values
+  expectNear(nrm(s, 0), {0, 0, 0});
+  EXPECT_EQ(s.texcoords[2], glm::vec2(0.0f));
+  // no material: one default grey
+  ASSERT_EQ(s.materials.size(), 1u);
+  EXPECT_EQ(s.materialNames[0], "default");
+  EXPECT_FLOAT_EQ(s.materials[0].base_color.y, 0.8f);
+  EXPECT_EQ(t.material, 0u);
+  EXPECT_FALSE(s.camera.has_value());
+  EXPECT_NE(s.sourceName.find(".gltf"), std::string::npos);
+  EXPECT_TRUE(s.warnings.empty());
+}
+
+TEST(GltfLoader, SingleTriangleWithoutIndices) {
+  Scene s = loadDoc(triangleDoc(false));
+  expectConsistent(s);
+  ASSERT_EQ(s.triangles.size(), 1u);
+  EXPECT_GT(geometricNormal(s, 0).z, 0.0f);
+}
+
+TEST(GltfLoader, GlbAndGltfGiveTheSameTriangle) {
+  GltfDoc doc = triangleDoc();
+  Scene fromGlb = loadGltf(writeFile(".glb", doc.glb()).string());
+  ASSERT_EQ(fromGlb.triangles.size(), 1u);
+  expectNear(pos(fromGlb, 1), {1, 0, 0});
+  // the magic decides, not the extension
+  Scene misnamed = loadGltf(writeFile(".gltf", doc.glb()).string());
+  EXPECT_EQ(misnamed.triangles.size(), 1u);
+  // a .glb without the magic is refused
+  std::string message =
+      errorOf([&] { loadGltf(writeFile("_text.glb", doc.embedded()).string()); });
+  EXPECT_CONTAINS(message, "_text.glb: ");
+  EXPECT_CONTAINS(message, "magic");
+}
+
+TEST(GltfLoader, ExternalBinBuffer) {
+  GltfDoc doc = triangleDoc();
+  std::string binName = scratchFile(".bin").filename().string();
+  writeFile(".bin", doc.bin);
+  std::filesystem::path gltf = writeFile(".gltf", doc.json(binName));
+  Scene s = loadGltf(gltf.string());
+  ASSERT_EQ(s.triangles.size(), 1u);
+  expectNear(pos(s, 2), {0, 1, 0});
+
+  // in memory, buffers resolve against baseDir
+  Scene m = loadGltfFromMemory(doc.json(binName), "memory.gltf", gltf.parent_path().string());
+  EXPECT_EQ(m.triangles.size(), 1u);
+  EXPECT_EQ(m.sourceName, "memory.gltf");
+
+  std::string message = errorOf([&] { loadGltfFromMemory(doc.json(binName), "memory.gltf", "/nonexistent"); });
+  EXPECT_CONTAINS(message, "memory.gltf: ");
+  EXPECT_CONTAINS(message, binName);
+}
+
+TEST(GltfLoader, NodeHierarchyTrsAndMatrix) {
+  GltfDoc doc;
+  int position = doc.addVec3({{1, 0, 0}, {0, 1, 0}, {0, 0, 0}});
+  int normal = doc.addVec3({{1, 0, 0}, {1, 0, 0}, {1, 0, 0}});
+  doc.addMesh("{\"attributes\":{\"POSITION\":" + str(position) + ",\"NORMAL\":" + str(normal) + "}}");
+  // parent: T (1,2,3) * R (90 degrees about +z) * S 2; child: matrix translating by (0,0,5)
+  const float h = std::sqrt(0.5f);
+  doc.addNode("{\"translation\":[1,2,3],\"rotation\":[0,0," + num(h) + "," + num(h) +
+              "],\"scale\":[2,2,2],\"children\":[1]}");
+  doc.addNode("{\"matrix\":[1,0,0,0, 0,1,0,0, 0,0,1,0, 0,0,5,1],\"mesh\":0}");
+  doc.scenes.push_back("{\"nodes\":[0]}");
+  Scene s = loadDoc(doc);
+  expectConsistent(s);
+  ASSERT_EQ(s.positions.size(), 3u);
+  // (1,0,0) -> child (1,0,5) -> scale (2,0,10) -> rotate (0,2,10) -> translate (1,4,13)
+  expectNear(pos(s, 0), {1, 4, 13});
+  // (0,1,0) -> (0,1,5) -> (0,2,10) -> (-2,0,10) -> (-1,2,13)
+  expectNear(pos(s, 1), {-1, 2, 13});
+  expectNear(pos(s, 2), {1, 2, 13});
+  // normals rotate with the node and stay unit length
+  expectNear(nrm(s, 0), {0, 1, 0});
+}
+
+TEST(GltfLoader, NormalsUseTheInverseTranspose) {
+  GltfDoc doc;
+  int position = doc.addVec3({{0, 0, 0}, {1, -1, 0}, {0, 0, 1}});
+  const float r = std::sqrt(0.5f);
+  // a unit normal, an unnormalized one, a zero one
+  int normal = doc.addVec3({{r, r, 0}, {0, 0, 3}, {0, 0, 0}});
+  doc.addMesh("{\"attributes\":{\"POSITION\":" + str(position) + ",\"NORMAL\":" + str(normal) + "}}");
+  doc.addNode("{\"mesh\":0,\"scale\":[2,1,1]}");
+  doc.scenes.push_back("{\"nodes\":[0]}");
+  Scene s = loadDoc(doc);
+  expectConsistent(s);
+  // the plane x + y = 0 becomes x/2 + y = 0, whose normal is (0.5, 1, 0)
+  expectNear(nrm(s, 0), glm::normalize(glm::vec3(0.5f, 1.0f, 0.0f)));
+  expectNear(nrm(s, 1), {0, 0, 1});
+  expectNear(nrm(s, 2), {0, 0, 0});
+}
+
+TEST(GltfLoader, InterleavedByteStride) {
+  struct Vertex {
+    float position[3];
+    float normal[3];
+    float uv[2];
+  };
+  std::vector<Vertex> vertices = {
+      {{0, 0, 0}, {0, 0, 1}, {0.0f, 0.25f}},
+      {{2, 0, 0}, {0, 0, 1}, {0.5f, 0.75f}},
+      {{0, 3, 0}, {0, 0, 1}, {1.0f, 1.0f}},
+  };
+  GltfDoc doc;
+  int view = doc.addView(vertices, sizeof(Vertex));
+  int position = doc.addAccessor(view, kFloat, 3, "VEC3");
+  int normal = doc.addAccessor(view, kFloat, 3, "VEC3", ",\"byteOffset\":12");
+  int uv = doc.addAccessor(view, kFloat, 3, "VEC2", ",\"byteOffset\":24");
+  doc.addMesh("{\"attributes\":{\"POSITION\":" + str(position) + ",\"NORMAL\":" + str(normal) +
+              ",\"TEXCOORD_0\":" + str(uv) + "}}");
+  doc.addNode("{\"mesh\":0}");
+  doc.scenes.push_back("{\"nodes\":[0]}");
+  Scene s = loadDoc(doc);
+  expectConsistent(s);
+  ASSERT_EQ(s.positions.size(), 3u);
+  expectNear(pos(s, 1), {2, 0, 0});
+  expectNear(pos(s, 2), {0, 3, 0});
+  expectNear(nrm(s, 1), {0, 0, 1});
+  EXPECT_FLOAT_EQ(s.texcoords[1].x, 0.5f);
+  EXPECT_FLOAT_EQ(s.texcoords[1].y, 0.75f);
+  EXPECT_FLOAT_EQ(s.texcoords[0].y, 0.25f);
+}
+
+class GltfIndexType : public ::testing::TestWithParam<int> {};
+
+TEST_P(GltfIndexType, QuadFromIndices) {
+  GltfDoc doc;
+  int position = doc.addVec3({{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}});
+  // the indices start one byte into their view, to exercise accessor byteOffset
+  std::vector<std::uint32_t> quad = {0, 1, 2, 0, 2, 3};
+  int componentType = GetParam();
+  std::vector<unsigned char> bytes(1, 0xEE);
+  std::size_t size = componentType == kUByte ? 1 : componentType == kUShort ? 2 : 4;
+  for (std::uint32_t i : quad)
+    for (std::size_t b = 0; b < size; ++b) bytes.push_back(static_cast<unsigned char>(i >> (8 * b)));
+  int view = doc.addView(bytes);
+  int indices = doc.addAccessor(view, componentType, quad.size(), "SCALAR", ",\"byteOffset\":1");
+  doc.addMesh("{\"attributes\":{\"POSITION\":" + str(position) + "},\"indices\":" + str(indices) + "}");
+  doc.addNode("{\"mesh\":0}");
+  doc.scenes.push_back("{\"nodes\":[0]}");
+  Scene s = loadDoc(doc);
+  expectConsistent(s);
+  ASSERT_EQ(s.triangles.size(), 2u);
+  EXPECT_EQ(s.triangles[1].v0, 0u);
+  EXPECT_EQ(s.triangles[1].v1, 2u);
+  EXPECT_EQ(s.triangles[1].v2, 3u);
+  EXPECT_GT(geometricNormal(s, 0).z, 0.0f);
+  EXPECT_GT(geometricNormal(s, 1).z, 0.0f);
+}
+
+INSTANTIATE_TEST_SUITE_P(ComponentTypes, GltfIndexType, ::testing::Values(kUByte, kUShort, kUInt),
+                         [](const auto& info) {
+                           return info.param == kUByte    ? std::string("UnsignedByte")
+                                  : info.param == kUShort ? std::string("UnsignedShort")
+                                                          : std::string("UnsignedInt");
+                         });
+
+TEST(GltfLoader, SparseAccessorOverBufferView) {
+  GltfDoc doc;
+  int base = doc.addView(std::vector<glm::vec3>{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {5, 5, 5}});
+  int sparseIndices = doc.addView(std::vector<std::uint16_t>{1, 3});
+  int sparseValues = doc.addView(std::vector<glm::vec3>{{2, 0, 0}, {7, 8, 9}});
+  int position = doc.addAccessor(
+      base, kFloat, 4, "VEC3",
+      ",\"sparse\":{\"count\":2,\"indices\":{\"bufferView\":" + str(sparseIndices) +
+          ",\"componentType\":5123},\"values\":{\"bufferView\":" + str(sparseValues) + "}}");
+  doc.addMesh("{\"attributes\":{\"POSITION\":" + str(position) + "}}");
+  doc.addNode("{\"mesh\":0}");
+  doc.scenes.push_back("{\"nodes\":[0]}");
+  doc.meshes[0] = "{\"primitives\":[{\"attributes\":{\"POSITION\":" + str(position) +
+                  "},\"indices\":" + str(doc.addIndices<std::uint8_t>({0, 1, 3})) + "}]}";
+  Scene s = loadDoc(doc);
+  expectConsistent(s);
+  ASSERT_EQ(s.positions.size(), 4u);
+  expectNear(pos(s, 0), {0, 0, 0});  // untouched
+  expectNear(pos(s, 1), {2, 0, 0});  // replaced
+  expectNear(pos(s, 2), {0, 1, 0});  // untouched
+  expectNear(pos(s, 3), {7, 8, 9});  // replaced
+}
+
+TEST(GltfLoader, SparseAccessorWithoutBufferView) {
+  GltfDoc doc;
+  int sparseIndices = doc.addView(std::vector<std::uint8_t>{1, 2});
+  int sparseValues = doc.addView(std::vector<glm::vec3>{{1, 0, 0}, {0, 1, 0}});
+  int position = doc.addAccessor(
+      -1, kFloat, 3, "VEC3",
+      ",\"sparse\":{\"count\":2,\"indices\":{\"bufferView\":" + str(sparseIndices) +
+          ",\"componentType\":5121},\"values\":{\"bufferView\":" + str(sparseValues) + "}}");
+  doc.addMesh("{\"attributes\":{\"POSITION\":" + str(position) + "}}");
+  doc.addNode("{\"mesh\":0}");
+  doc.scenes.push_back("{\"nodes\":[0]}");
+  Scene s = loadDoc(doc);
+  expectConsistent(s);
+  ASSERT_EQ(s.triangles.size(), 1u);
+  expectNear(pos(s, 0), {0, 0, 0});  // zeros where no sparse value lands
+  expectNear(pos(s, 1), {1, 0, 0});
+  expectNear(pos(s, 2), {0, 1, 0});
+}
+
+/// Five vertices zig-zagging along +x in the z = 0 plane; `mode` draws them.
+GltfDoc fiveVertexDoc(int mode, const std::vector<glm::vec3>& vertices) {
+  GltfDoc doc;
+  int position = doc.addVec3(vertices);
+  doc.addMesh("{\"attributes\":{\"POSITION\":" + str(position) + "},\"mode\":" + str(mode) + "}");
+  doc.addNode("{\"mesh\":0}");
+  doc.scenes.push_back("{\"nodes\":[0]}");
+  return doc;
+}
+
+TEST(GltfLoader, TriangleStrip) {
+  Scene s = loadDoc(fiveVertexDoc(5, {{0, 0, 0}, {0, -1, 0}, {1, 0, 0}, {1, -1, 0}, {2, 0, 0}}));
+  expectConsistent(s);
+  ASSERT_EQ(s.triangles.size(), 3u);
+  // The first triangle (0,0,0) (0,-1,0) (1,0,0) is counter-clockwise seen
+  // from +z; every other strip triangle is reversed, so all face +z.
+  for (std::size_t t = 0; t < 3; ++t) EXPECT_GT(geometricNormal(s, t).z, 0.0f) << "triangle " << t;
+  // triangle i uses vertices i, i+1, i+2
+  for (std::size_t t = 0; t < 3; ++t) {
+    const WtTriangle& tri = s.triangles[t];
+    EXPECT_EQ(std::min({tri.v0, tri.v1, tri.v2}), t);
+    EXPECT_EQ(std::max({tri.v0, tri.v1, tri.v2}), t + 2);
+  }
+}
+
+TEST(GltfLoader, TriangleFan) {
+  Scene s = loadDoc(fiveVertexDoc(6, {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {-1, 1, 0}}));
+  expectConsistent(s);
+  ASSERT_EQ(s.triangles.size(), 3u);
+  for (std::size_t t = 0; t < 3; ++t) {
+    EXPECT_GT(geometricNormal(s, t).z, 0.0f) << "triangle " << t;
+    const WtTriangle& tri = s.triangles[t];
+    EXPECT_TRUE(tri.v0 == 0 || tri.v1 == 0 || tri.v2 == 0) << "fan triangle without the hub";
+  }
+}
+
+TEST(GltfLoader, NonTriangleModesAreSkippedWithAWarning) {
+  GltfDoc doc = triangleDoc();
+  doc.meshes[0] = "{\"primitives\":[{\"attributes\":{\"POSITION\":0},\"mode\":1},"
+                  "{\"attributes\":{\"POSITION\":0},\"mode\":0},"
+                  "{\"attributes\":{\"POSITION\":0}}]}";
+  Scene s = loadDoc(doc);
+  expectConsistent(s);
+  EXPECT_EQ(s.triangles.size(), 1u);
+  ASSERT_EQ(s.warnings.size(), 2u);
+  EXPECT_CONTAINS(s.warnings[0], "LINES");
+  EXPECT_CONTAINS(s.warnings[1], "POINTS");
+}
+
+TEST(GltfLoader, NegativeScaleKeepsFrontFaces) {
+  // Seen from +z the triangle is counter-clockwise, with normal +z.
+  // Mirroring x keeps it facing +z; mirroring z turns it to face -z.
+  struct Case {
+    const char* scale;
+    float facing;
+  };
+  for (Case c : {Case{"[1,1,1]", 1.0f}, Case{"[-1,1,1]", 1.0f}, Case{"[1,1,-1]", -1.0f}}) {
+    SCOPED_TRACE(c.scale);
+    GltfDoc doc;
+    int position = doc.addVec3({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}});
+    int normal = doc.addVec3({{0, 0, 1}, {0, 0, 1}, {0, 0, 1}});
+    doc.addMesh("{\"attributes\":{\"POSITION\":" + str(position) + ",\"NORMAL\":" + str(normal) + "}}");
+    doc.addNode(std::string("{\"mesh\":0,\"scale\":") + c.scale + "}");
+    doc.scenes.push_back("{\"nodes\":[0]}");
+    Scene s = loadDoc(doc);
+    ASSERT_EQ(s.triangles.size(), 1u);
+    glm::vec3 geometric = glm::normalize(geometricNormal(s, 0));
+    expectNear(geometric, {0, 0, c.facing});
+    // and the shading normal agrees with the winding
+    expectNear(nrm(s, s.triangles[0].v0), {0, 0, c.facing});
+  }
+}
+
+TEST(GltfLoader, SharedMeshIsInstancedPerNode) {
+  GltfDoc doc = triangleDoc();
+  doc.addNode("{\"mesh\":0,\"translation\":[10,0,0]}");
+  doc.scenes[0] = "{\"nodes\":[0,1]}";
+  Scene s = loadDoc(doc);
+  expectConsistent(s);
+  ASSERT_EQ(s.triangles.size(), 2u);
+  expectNear(pos(s, s.triangles[1].v1), {11, 0, 0});
+}
+
+TEST(GltfLoader, DeepHierarchyDoesNotOverflowTheStack) {
+  GltfDoc doc = triangleDoc();
+  const std::size_t depth = 50000;
+  doc.nodes.clear();
+  for (std::size_t i = 0; i + 1 < depth; ++i)
+    doc.addNode("{\"translation\":[1,0,0],\"children\":[" + str(i + 1) + "]}");
+  doc.addNode("{\"mesh\":0}");
+  Scene s = loadDoc(doc);
+  ASSERT_EQ(s.triangles.size(), 1u);
+  EXPECT_EQ(pos(s, 0).x, float(depth - 1));  // exact: small integers
+}
+
+TEST(GltfLoader, NormalizedTexcoords) {
+  GltfDoc doc = triangleDoc();
+  int bytes = doc.addView(std::vector<std::uint8_t>{0, 255, 255, 0, 51, 102});
+  int ubyteUv = doc.addAccessor(bytes, kUByte, 3, "VEC2", ",\"normalized\":true");
+  doc.meshes[0] = "{\"primitives\":[{\"attributes\":{\"POSITION\":0,\"TEXCOORD_0\":" + str(ubyteUv) + "}}]}";
+  Scene s = loadDoc(doc);
+  EXPECT_FLOAT_EQ(s.texcoords[0].x, 0.0f);
+  EXPECT_FLOAT_EQ(s.texcoords[0].y, 1.0f);
+  EXPECT_FLOAT_EQ(s.texcoords[2].x, 0.2f);
+  EXPECT_FLOAT_EQ(s.texcoords[2].y, 0.4f);
+
+  int shorts = doc.addView(std::vector<std::uint16_t>{65535, 0, 0, 0, 0, 13107});
+  int ushortUv = doc.addAccessor(shorts, kUShort, 3, "VEC2", ",\"normalized\":true");
+  doc.meshes[0] = "{\"primitives\":[{\"attributes\":{\"POSITION\":0,\"TEXCOORD_0\":" + str(ushortUv) + "}}]}";
+  s = loadDoc(doc);
+  EXPECT_FLOAT_EQ(s.texcoords[0].x, 1.0f);
+  EXPECT_FLOAT_EQ(s.texcoords[2].y, 0.2f);
+
+  // integers must be normalized to be texture coordinates
+  doc.accessors[std::size_t(ushortUv)] =
+      "{\"bufferView\":" + str(shorts) + ",\"componentType\":5123,\"count\":3,\"type\":\"VEC2\"}";
+  EXPECT_CONTAINS(docError(doc), "mesh 0, primitive 0: TEXCOORD_0 accessor has UNSIGNED_SHORT components that are not normalized");
+}
+
+TEST(GltfLoader, EmptySceneIsNotAnError) {
+  GltfDoc doc = triangleDoc();
+  doc.scenes[0] = "{\"nodes\":[]}";
+  Scene s = loadDoc(doc);
+  expectConsistent(s);
+  EXPECT_TRUE(s.triangles.empty());
+  EXPECT_EQ(s.materials.size(), 1u);  // never empty
+}
+
+TEST(GltfLoader, NoScenesDrawsRootNodes) {
+  GltfDoc doc = triangleDoc();
+  doc.scenes.clear();
+  Scene s = loadDoc(doc);
+  EXPECT_EQ(s.triangles.size(), 1u);
+  ASSERT_EQ(s.warnings.size(), 1u);
+  EXPECT_CONTAINS(s.warnings[0], "no scenes");
+}
+
+TEST(GltfLoader, SceneSelection) {
+  GltfDoc doc = triangleDoc();
+  doc.addNode("{\"mesh\":0,\"translation\":[0,0,1]}");
+  doc.scenes.push_back("{\"nodes\":[0,1]}");
+  doc.scene = 1;
+  EXPECT_EQ(loadDoc(doc).triangles.size(), 2u);  // the default scene
+  GltfLoadOptions options;
+  options.sceneIndex = 0;
+  EXPECT_EQ(loadDoc(doc, options).triangles.size(), 1u);
+  options.sceneIndex = 2;
+  EXPECT_CONTAINS(docError(doc, options), "scene 2 out of range (2 scenes)");
+  doc.scene = 5;
+  EXPECT_CONTAINS(docError(doc), "default scene 5 does not exist");
+}
+
+// ---------------------------------------------------------------------------
+// cameras
+
+GltfDoc cameraDoc() {
+  GltfDoc doc = triangleDoc();
+  doc.cameras.push_back(
+      "{\"type\":\"perspective\",\"name\":\"persp\",\"perspective\":{\"yfov\":0.7,\"aspectRatio\":1.5,"
+      "\"znear\":0.01,\"zfar\":100}}");
+  doc.cameras.push_back(
+      "{\"type\":\"orthographic\",\"orthographic\":{\"xmag\":2,\"ymag\":3,\"znear\":0.5,\"zfar\":10}}");
+  doc.addNode("{\"camera\":0,\"translation\":[0.5,0.5,3]}");
+  doc.addNode("{\"camera\":1,\"name\":\"orthoNode\",\"translation\":[0,0,-4]}");
+  doc.scenes[0] = "{\"nodes\":[0,1,2]}";
+  return doc;
+}
+
+TEST(GltfLoader, PerspectiveCamera) {
+  Scene s = loadDoc(cameraDoc());
+  ASSERT_TRUE(s.camera.has_value());
+  const CameraDesc& c = *s.camera;
+  EXPECT_FALSE(c.orthographic);
+  EXPECT_FLOAT_EQ(c.yfov, 0.7f);
+  EXPECT_FLOAT_EQ(c.aspectRatio, 1.5f);
+  EXPECT_FLOAT_EQ(c.znear, 0.01f);
+  EXPECT_EQ(c.name, "persp");
+  expectNear(glm::vec3(c.cameraToWorld[3]), {0.5f, 0.5f, 3.0f});
+}
+
+TEST(GltfLoader, OrthographicCameraByIndex) {
+  GltfLoadOptions options;
+  options.cameraIndex = 1;
+  Scene s = loadDoc(cameraDoc(), options);
+  ASSERT_TRUE(s.camera.has_value());
+  const CameraDesc& c = *s.camera;
+  EXPECT_TRUE(c.orthographic);
+  EXPECT_FLOAT_EQ(c.xmag, 2.0f);
+  EXPECT_FLOAT_EQ(c.ymag, 3.0f);
+  EXPECT_FLOAT_EQ(c.znear, 0.5f);
+  EXPECT_EQ(c.name, "orthoNode");  // the camera has no name; the node has
+  expectNear(glm::vec3(c.cameraToWorld[3]), {0, 0, -4});
+
+  options.cameraIndex = 2;
+  EXPECT_CONTAINS(docError(cameraDoc(), options), "camera 2 out of range (2 camera nodes");
+}
+
+TEST(GltfLoader, CameraUnderARotatedParent) {
+  GltfDoc doc = cameraDoc();
+  // rotate the perspective camera 90 degrees about +y: it now looks down -x
+  const float h = std::sqrt(0.5f);
+  doc.addNode("{\"rotation\":[0," + num(h) + ",0," + num(h) + "],\"children\":[1]}");
+  doc.scenes[0] = "{\"nodes\":[0,3]}";
+  Scene s = loadDoc(doc);
+  ASSERT_TRUE(s.camera.has_value());
+  glm::vec3 forward = -glm::vec3(s.camera->cameraToWorld[2]);
+  expectNear(forward, {-1, 0, 0});
+  expectNear(glm::vec3(s.camera->cameraToWorld[3]), {3, 0.5f, -0.5f});
+}
+
+// ---------------------------------------------------------------------------
+// materials and warnings
+
+TEST(GltfLoader, EmissiveStrength) {
+  GltfDoc doc = triangleDoc();
+  doc.materials.push_back(
+      "{\"name\":\"lamp\",\"emissiveFactor\":[1,0.5,0],\"extensions\":{"
+      "\"KHR_materials_emissive_strength\":{\"emissiveStrength\":4}}}");
+  doc.materials.push_back("{\"emissiveFactor\":[0.25,0.5,1]}");
+  doc.extensionsUsed = "[\"KHR_materials_emissive_strength\"]";
+  doc.meshes[0] = "{\"primitives\":[{\"attributes\":{\"POSITION\":0},\"material\":0},"
+                  "{\"attributes\":{\"POSITION\":0},\"material\":1}]}";
+  Scene s = loadDoc(doc);
+  expectConsistent(s);
+  ASSERT_EQ(s.materials.size(), 2u);  // no default needed
+  EXPECT_EQ(s.materialNames[0], "lamp");
+  EXPECT_FLOAT_EQ(s.materials[0].emission.x, 4.0f);
+  EXPECT_FLOAT_EQ(s.materials[0].emission.y, 2.0f);
+  EXPECT_FLOAT_EQ(s.materials[0].emission.z, 0.0f);
+  EXPECT_FLOAT_EQ(s.materials[1].emission.z, 1.0f);  // strength defaults to 1
+  EXPECT_FLOAT_EQ(s.materials[0].base_color.x, 1.0f);  // baseColorFactor defaults to 1
+  EXPECT_EQ(s.triangles[1].material, 1u);
+  EXPECT_TRUE(s.warnings.empty()) << s.warnings[0];
+}
+
+TEST(GltfLoader, AlbedoIsClampedWithAWarning) {
+  GltfDoc doc = triangleDoc();
+  doc.materials.push_back("{\"name\":\"hot\",\"pbrMetallicRoughness\":{\"baseColorFactor\":[1.5,-0.2,0.5,1]}}");
+  doc.meshes[0] = "{\"primitives\":[{\"attributes\":{\"POSITION\":0},\"material\":0}]}";
+  Scene s = loadDoc(doc);
+  expectConsistent(s);
+  EXPECT_FLOAT_EQ(s.materials[0].base_color.x, 1.0f);
+  EXPECT_FLOAT_EQ(s.materials[0].base_color.y, 0.0f);
+  EXPECT_FLOAT_EQ(s.materials[0].base_color.z, 0.5f);
+  ASSERT_EQ(s.warnings.size(), 1u);
+  EXPECT_CONTAINS(s.warnings[0], "'hot'");
+  EXPECT_CONTAINS(s.warnings[0], "clamped");
+}
+
+TEST(GltfLoader, DefaultMaterialIsAppendedOnce) {
+  GltfDoc doc = triangleDoc();
+  doc.materials.push_back("{\"pbrMetallicRoughness\":{\"baseColorFactor\":[0.1,0.2,0.3,1]}}");
+  doc.meshes[0] = "{\"primitives\":[{\"attributes\":{\"POSITION\":0}},{\"attributes\":{\"POSITION\":0},"
+                  "\"material\":0},{\"attributes\":{\"POSITION\":0}}]}";
+  Scene s = loadDoc(doc);
+  expectConsistent(s);
+  ASSERT_EQ(s.materials.size(), 2u);
+  EXPECT_EQ(s.materialNames[0], "material 0");
+  EXPECT_EQ(s.materialNames[1], "default");
+  EXPECT_EQ(s.triangles[0].material, 1u);
+  EXPECT_EQ(s.triangles[1].material, 0u);
+  EXPECT_EQ(s.triangles[2].material, 1u);
+  EXPECT_FLOAT_EQ(s.materials[0].base_color.z, 0.3f);
+}
+
+TEST(GltfLoader, UnsupportedFeaturesWarnOnceEach) {
+  GltfDoc doc = triangleDoc();
+  doc.extensionsUsed = "[\"KHR_materials_transmission\",\"KHR_materials_emissive_strength\",\"KHR_lights_punctual\"]";
+  doc.images.push_back("{\"uri\":\"does_not_exist.png\"}");
+  doc.images.push_back("{\"uri\":\"also_missing.jpg\"}");
+  doc.materials.push_back(
+      "{\"pbrMetallicRoughness\":{\"baseColorTexture\":{\"index\":0},\"metallicFactor\":0},"
+      "\"alphaMode\":\"BLEND\"}");
+  doc.materials.push_back("{\"pbrMetallicRoughness\":{\"baseColorTexture\":{\"index\":0}},\"doubleSided\":true}");
+  doc.meshes[0] = "{\"primitives\":[{\"attributes\":{\"POSITION\":0},\"material\":0}]}";
+  Scene s = loadDoc(doc);
+  EXPECT_EQ(s.triangles.size(), 1u);
+  auto count = [&](const std::string& part) {
+    return std::count_if(s.warnings.begin(), s.warnings.end(),
+                         [&](const std::string& w) { return w.find(part) != std::string::npos; });
+  };
+  EXPECT_EQ(count("KHR_materials_transmission is not supported; ignored"), 1);
+  EXPECT_EQ(count("KHR_lights_punctual is not supported"), 1);
+  EXPECT_EQ(count("emissive_strength"), 0);
+  EXPECT_EQ(count("textures are not supported yet; 2 images ignored"), 1);
+  EXPECT_EQ(count("material textures"), 1);
+  EXPECT_EQ(count("metallic"), 1);
+  EXPECT_EQ(count("alphaMode BLEND"), 1);
+  EXPECT_EQ(count("doubleSided"), 0);
+}
+
+TEST(GltfLoader, RequiredGeometryExtensionIsAnError) {
+  GltfDoc doc = triangleDoc();
+  doc.extensionsUsed = "[\"KHR_draco_mesh_compression\"]";
+  doc.extensionsRequired = "[\"KHR_draco_mesh_compression\"]";
+  EXPECT_CONTAINS(docError(doc), "KHR_draco_mesh_compression");
+  // merely used (with an uncompressed fallback): a warning
+  doc.extensionsRequired.clear();
+  Scene s = loadDoc(doc);
+  EXPECT_EQ(s.triangles.size(), 1u);
+  EXPECT_EQ(s.warnings.size(), 1u);
+}
+
+// ---------------------------------------------------------------------------
+// validation: each error names the file and the element
+
+TEST(GltfLoaderErrors, IndexOutOfRange) {
+  GltfDoc doc = triangleDoc();
+  doc.bin.clear();
+  doc.bufferViews.clear();
+  doc.accessors.clear();
+  doc.addVec3({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}});
+  doc.addIndices<std::uint16_t>({0, 1, 1234});
+  EXPECT_CONTAINS(docError(doc), "mesh 0, primitive 0: index 1234 out of range (3 vertices)");
+}
+
+TEST(GltfLoaderErrors, AccessorPastTheEndOfItsBufferView) {
+  GltfDoc doc = triangleDoc();
+  doc.accessors[0] = "{\"bufferView\":0,\"componentType\":5126,\"count\":4,\"type\":\"VEC3\"}";
+  EXPECT_CONTAINS(docError(doc), "accessor 0: extends past the end of buffer view 0 (needs 48 bytes, has 36)");
+  doc.accessors[0] = "{\"bufferView\":0,\"byteOffset\":4,\"componentType\":5126,\"count\":3,\"type\":\"VEC3\"}";
+  EXPECT_CONTAINS(docError(doc), "accessor 0: extends past the end of buffer view 0 (needs 40 bytes, has 36)");
+}
+
+TEST(GltfLoaderErrors, BufferViewPastTheEndOfItsBuffer) {
+  GltfDoc doc = triangleDoc();
+  doc.bufferViews[1] = "{\"buffer\":0,\"byteOffset\":36,\"byteLength\":600}";
+  EXPECT_CONTAINS(docError(doc), "buffer view 1: extends past the end of buffer 0");
+  doc.bufferViews[1] = "{\"buffer\":3,\"byteOffset\":36,\"byteLength\":6}";
+  EXPECT_CONTAINS(docError(doc), "buffer view 1: references missing buffer 3");
+}
+
+TEST(GltfLoaderErrors, StrideSmallerThanElement) {
+  GltfDoc doc = triangleDoc();
+  doc.bufferViews[0] = "{\"buffer\":0,\"byteOffset\":0,\"byteLength\":36,\"byteStride\":8}";
+  EXPECT_CONTAINS(docError(doc), "accessor 0: byteStride 8 of buffer view 0 is smaller than the element size 12");
+}
+
+TEST(GltfLoaderErrors, CountTimesStrideOverflows) {
+  GltfDoc doc = triangleDoc();
+  doc.accessors[0] =
+      "{\"bufferView\":0,\"componentType\":5126,\"count\":4611686018427387904,\"type\":\"VEC3\"}";
+  EXPECT_CONTAINS(docError(doc), "accessor 0: count 4611686018427387904 with stride 12 overflows");
+}
+
+TEST(GltfLoaderErrors, WrongAccessorTypes) {
+  GltfDoc doc = triangleDoc();
+  doc.accessors[0] = "{\"bufferView\":0,\"componentType\":5126,\"count\":4,\"type\":\"VEC2\"}";
+  EXPECT_CONTAINS(docError(doc), "mesh 0, primitive 0: POSITION accessor has type VEC2, expected VEC3");
+  doc.accessors[0] = "{\"bufferView\":0,\"componentType\":5123,\"count\":3,\"type\":\"VEC3\"}";
+  EXPECT_CONTAINS(docError(doc),
+                  "mesh 0, primitive 0: POSITION accessor has component type UNSIGNED_SHORT, expected FLOAT");
+  doc = triangleDoc();
+  doc.accessors[1] = "{\"bufferView\":1,\"componentType\":5126,\"count\":1,\"type\":\"SCALAR\"}";
+  EXPECT_CONTAINS(docError(doc), "mesh 0, primitive 0: indices accessor has component type FLOAT");
+}
+
+TEST(GltfLoaderErrors, MissingReferences) {
+  GltfDoc doc = triangleDoc();
+  doc.nodes[0] = "{\"mesh\":9}";
+  EXPECT_CONTAINS(docError(doc), "node 0: references missing mesh 9");
+  doc.nodes[0] = "{\"mesh\":0,\"children\":[7]}";
+  EXPECT_CONTAINS(docError(doc), "node 0: references missing node 7");
+  doc.nodes[0] = "{\"camera\":2}";
+  EXPECT_CONTAINS(docError(doc), "node 0: references missing camera 2");
+  doc = triangleDoc();
+  doc.scenes[0] = "{\"nodes\":[4]}";
+  EXPECT_CONTAINS(docError(doc), "scene 0: references missing node 4");
+  doc = triangleDoc();
+  doc.meshes[0] = "{\"primitives\":[{\"attributes\":{\"POSITION\":0,\"NORMAL\":8}}]}";
+  EXPECT_CONTAINS(docError(doc), "mesh 0, primitive 0: NORMAL references missing accessor 8");
+  doc.meshes[0] = "{\"primitives\":[{\"attributes\":{\"POSITION\":0},\"material\":3}]}";
+  EXPECT_CONTAINS(docError(doc), "mesh 0, primitive 0: references missing material 3");
+  doc = triangleDoc();
+  doc.accessors[0] = "{\"bufferView\":6,\"componentType\":5126,\"count\":3,\"type\":\"VEC3\"}";
+  EXPECT_CONTAINS(docError(doc), "accessor 0: references missing buffer view 6");
+}
+
+TEST(GltfLoaderErrors, NonFinitePosition) {
+  GltfDoc doc;
+  doc.addVec3({{0, 0, 0}, {std::numeric_limits<float>::quiet_NaN(), 0, 0}, {0, 1, 0}});
+  doc.addMesh("{\"attributes\":{\"POSITION\":0}}");
+  doc.addNode("{\"mesh\":0}");
+  doc.scenes.push_back("{\"nodes\":[0]}");
+  std::string message = docError(doc);
+  EXPECT_CONTAINS(message, "mesh 0, primitive 0 (node 0): vertex 1 has a non-finite position");
+  // finite in the file, infinite once placed
+  doc.bin.clear();
+  doc.bufferViews.clear();
+  doc.accessors.clear();
+  doc.addVec3({{0, 0, 0}, {1e30f, 0, 0}, {0, 1, 0}});
+  doc.nodes[0] = "{\"mesh\":0,\"scale\":[1e30,1,1]}";
+  EXPECT_CONTAINS(docError(doc), "vertex 1 has a non-finite position");
+}
+
+TEST(GltfLoaderErrors, IndexCountNotAMultipleOfThree) {
+  GltfDoc doc = triangleDoc();
+  doc.accessors[1] = "{\"bufferView\":1,\"componentType\":5123,\"count\":2,\"type\":\"SCALAR\"}";
+  EXPECT_CONTAINS(docError(doc), "mesh 0, primitive 0: 2 indices is not a multiple of 3 for TRIANGLES");
+  doc = triangleDoc(false);
+  doc.accessors[0] = "{\"bufferView\":0,\"componentType\":5126,\"count\":2,\"type\":\"VEC3\"}";
+  EXPECT_CONTAINS(docError(doc), "mesh 0, primitive 0: 2 vertices is not a multiple of 3");
+}
+
+TEST(GltfLoaderErrors, AttributeCountsDiffer) {
+  GltfDoc doc = triangleDoc();
+  int normal = doc.addVec3({{0, 0, 1}, {0, 0, 1}});
+  doc.meshes[0] = "{\"primitives\":[{\"attributes\":{\"POSITION\":0,\"NORMAL\":" + str(normal) + "}}]}";
+  EXPECT_CONTAINS(docError(doc), "mesh 0, primitive 0: NORMAL has 2 elements, POSITION has 3");
+}
+
+TEST(GltfLoaderErrors, InvalidMode) {
+  GltfDoc doc = triangleDoc();
+  doc.meshes[0] = "{\"primitives\":[{\"attributes\":{\"POSITION\":0},\"mode\":9}]}";
+  EXPECT_CONTAINS(docError(doc), "mesh 0, primitive 0: invalid mode 9");
+}
+
+TEST(GltfLoaderErrors, CycleInTheNodeGraph) {
+  GltfDoc doc = triangleDoc();
+  doc.nodes[0] = "{\"mesh\":0,\"children\":[1]}";
+  doc.addNode("{\"children\":[2]}");
+  doc.addNode("{\"children\":[1]}");
+  EXPECT_CONTAINS(docError(doc), "node 1: is its own ancestor (cycle in the node graph)");
+  doc.nodes[0] = "{\"mesh\":0,\"children\":[0]}";
+  EXPECT_CONTAINS(docError(doc), "node 0: is its own ancestor");
+}
+
+TEST(GltfLoaderErrors, MalformedTransforms) {
+  GltfDoc doc = triangleDoc();
+  doc.nodes[0] = "{\"mesh\":0,\"matrix\":[1,0,0,0,0,1,0,0,0,0,1,0,0,0,0]}";
+  EXPECT_CONTAINS(docError(doc), "node 0: matrix has 15 values, expected 16");
+  doc.nodes[0] = "{\"mesh\":0,\"rotation\":[0,0,0,0]}";
+  EXPECT_CONTAINS(docError(doc), "node 0: rotation is not a valid quaternion");
+  doc.nodes[0] = "{\"mesh\":0,\"scale\":[1,1]}";
+  EXPECT_CONTAINS(docError(doc), "node 0: scale has 2 values, expected 3");
+}
+
+TEST(GltfLoaderErrors, BadSparseAccessors) {
+  GltfDoc doc;
+  int base = doc.addView(std::vector<glm::vec3>{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}});
+  int indices = doc.addView(std::vector<std::uint16_t>{1, 3});
+  int values = doc.addView(std::vector<glm::vec3>{{2, 0, 0}, {7, 8, 9}});
+  auto sparse = [&](int count, int valuesView) {
+    return ",\"sparse\":{\"count\":" + str(std::size_t(count)) + ",\"indices\":{\"bufferView\":" +
+           str(indices) + ",\"componentType\":5123},\"values\":{\"bufferView\":" +
+           str(std::size_t(valuesView)) + "}}";
+  };
+  doc.addAccessor(base, kFloat, 3, "VEC3", sparse(2, values));
+  doc.addMesh("{\"attributes\":{\"POSITION\":0}}");
+  doc.addNode("{\"mesh\":0}");
+  doc.scenes.push_back("{\"nodes\":[0]}");
+  EXPECT_CONTAINS(docError(doc), "accessor 0: sparse index 3 out of range (3 elements)");
+  doc.accessors[0] = "{\"bufferView\":0,\"componentType\":5126,\"count\":3,\"type\":\"VEC3\"" + sparse(3, values) + "}";
+  EXPECT_CONTAINS(docError(doc), "accessor 0: sparse indices extend past the end of buffer view 1");
+  doc.accessors[0] = "{\"bufferView\":0,\"componentType\":5126,\"count\":3,\"type\":\"VEC3\"" + sparse(2, indices) + "}";
+  EXPECT_CONTAINS(docError(doc), "accessor 0: sparse values extend past the end of buffer view 1 (needs 24 bytes, has 4)");
+}
+
+TEST(GltfLoaderErrors, CorruptJson) {
+  std::string text = triangleDoc().embedded();
+  text.resize(text.size() / 2);
+  std::string message = errorOf([&] { loadGltf(writeFile(".gltf", text).string()); });
+  EXPECT_EQ(message.rfind(scratchFile(".gltf").filename().string() + ": glTF parse error: ", 0), 0u) << message;
+  EXPECT_GT(message.size(), 60u) << "tinygltf's own text is missing: " << message;
+
+  message = errorOf([&] { loadGltfFromMemory("{\"asset\":{}}", "nover.gltf", "."); });
+  EXPECT_CONTAINS(message, "nover.gltf: glTF parse error");
+  EXPECT_CONTAINS(message, "asset");
+}
+
+TEST(GltfLoaderErrors, MissingFile) {
+  std::string message = errorOf([] { loadGltf("/nonexistent/dir/box.gltf"); });
+  EXPECT_EQ(message.rfind("box.gltf: cannot open", 0), 0u) << message;
+  message = errorOf([] { loadGltf(test::scratchDir("gltf").string()); });
+  EXPECT_CONTAINS(message, "cannot open");
+  message = errorOf([&] { loadGltf(writeFile(".gltf", std::string()).string()); });
+  EXPECT_CONTAINS(message, "empty");
+}
+
+TEST(GltfLoaderErrors, MissingExternalBuffer) {
+  GltfDoc doc = triangleDoc();
+  std::string message = errorOf([&] { loadGltf(writeFile(".gltf", doc.json("nowhere.bin")).string()); });
+  EXPECT_CONTAINS(message, "glTF parse error");
+  EXPECT_CONTAINS(message, "nowhere.bin");
+}
+
+TEST(GltfLoaderErrors, TruncatedGlb) {
+  std::vector<unsigned char> glb = triangleDoc().glb();
+  std::vector<unsigned char> half(glb.begin(), glb.begin() + std::ptrdiff_t(glb.size() / 2));
+  std::string message = errorOf([&] { loadGltf(writeFile(".glb", half).string()); });
+  EXPECT_EQ(message.rfind(scratchFile(".glb").filename().string() + ": truncated .glb", 0), 0u) << message;
+  // every shorter prefix fails cleanly too
+  for (std::size_t size = 0; size < glb.size(); ++size) {
+    std::string_view prefix(reinterpret_cast<const char*>(glb.data()), size);
+    EXPECT_THROW(loadGltfFromMemory(prefix, "cut.glb", "."), SceneError) << size << " bytes";
+  }
+  // a BIN chunk that claims more than the file holds
+  std::vector<unsigned char> lying = glb;
+  std::size_t jsonLength = lying[12] | (lying[13] << 8) | (lying[14] << 16) | (std::size_t(lying[15]) << 24);
+  lying[20 + jsonLength] += 8;
+  message = errorOf([&] {
+    loadGltfFromMemory(std::string_view(reinterpret_cast<const char*>(lying.data()), lying.size()),
+                       "lying.glb", ".");
+  });
+  EXPECT_CONTAINS(message, "lying.glb: truncated .glb: the BIN chunk");
+}
+
+// ---------------------------------------------------------------------------
+// fuzz: mutated copies of a valid file load or throw SceneError, never crash
+
+/// A document that touches most of the loader: hierarchy, normals,
+/// texcoords, sparse positions, a strip, a camera and materials.
+GltfDoc richDoc() {
+  GltfDoc doc;
+  int base = doc.addView(std::vector<glm::vec3>{{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}});
+  int sparseIndices = doc.addView(std::vector<std::uint8_t>{2});
+  int sparseValues = doc.addView(std::vector<glm::vec3>{{2, 2, 0}});
+  int position = doc.addAccessor(
+      base, kFloat, 4, "VEC3",
+      ",\"sparse\":{\"count\":1,\"indices\":{\"bufferView\":" + str(sparseIndices) +
+          ",\"componentType\":5121},\"values\":{\"bufferView\":" + str(sparseValues) + "}}");
+  int normal = doc.addVec3({{0, 0, 1}, {0, 0, 1}, {0, 0, 1}, {0, 0, 1}});
+  int uv = doc.addAccessor(doc.addView(std::vector<std::uint16_t>{0, 0, 65535, 0, 65535, 65535, 0, 65535}),
+                           kUShort, 4, "VEC2", ",\"normalized\":true");
+  int indices = doc.addIndices<std::uint16_t>({0, 1, 2, 0, 2, 3});
+  doc.addMesh("{\"attributes\":{\"POSITION\":" + str(position) + ",\"NORMAL\":" + str(normal) +
+              ",\"TEXCOORD_0\":" + str(uv) + "},\"indices\":" + str(indices) + ",\"material\":0},"
+              "{\"attributes\":{\"POSITION\":" + str(position) + "},\"mode\":5}");
+  doc.materials.push_back("{\"name\":\"m\",\"pbrMetallicRoughness\":{\"baseColorFactor\":[0.5,0.5,0.5,1]},"
+                          "\"emissiveFactor\":[1,1,1]}");
+  doc.cameras.push_back("{\"type\":\"perspective\",\"perspective\":{\"yfov\":0.7,\"znear\":0.1}}");
+  doc.addNode("{\"translation\":[1,2,3],\"rotation\":[0,0,0,1],\"scale\":[1,-1,1],\"children\":[1,2]}");
+  doc.addNode("{\"mesh\":0}");
+  doc.addNode("{\"camera\":0,\"matrix\":[1,0,0,0,0,1,0,0,0,0,1,0,0,0,9,1]}");
+  doc.scenes.push_back("{\"nodes\":[0]}");
+  doc.scene = 0;
+  return doc;
+}
+
+/// Load `bytes`; success must give a consistent scene, failure a SceneError.
+void loadMutant(const std::string& bytes, const std::string& name, int iteration) {
+  try {
+    Scene s = loadGltfFromMemory(bytes, name, test::scratchDir("gltf").string());
+    expectConsistent(s);
+  } catch (const SceneError& e) {
+    std::string message = e.what();
+    ASSERT_EQ(message.rfind(name + ": ", 0), 0u) << "iteration " << iteration << ": " << message;
+  }
+}
+
+TEST(GltfLoaderFuzz, MutatedFilesNeverCrash) {
+  GltfDoc doc = richDoc();
+  const std::string text = doc.embedded();
+  const std::vector<unsigned char> glbBytes = doc.glb();
+  const std::string glb(glbBytes.begin(), glbBytes.end());
+  {
+    Scene s = loadGltfFromMemory(text, "rich.gltf", ".");
+    ASSERT_EQ(s.triangles.size(), 4u);  // the valid file really loads
+    ASSERT_TRUE(s.camera.has_value());
+    ASSERT_EQ(loadGltfFromMemory(glb, "rich.glb", ".").triangles.size(), 4u);
+  }
+  // where the JSON's numbers are: mutating digits keeps most files parseable
+  // and so reaches the loader's own checks rather than the JSON parser
+  const std::size_t jsonEnd = text.find("\"buffers\"");
+  std::vector<std::size_t> digits;
+  for (std::size_t i = 0; i < jsonEnd; ++i)
+    if (text[i] >= '0' && text[i] <= '9') digits.push_back(i);
+
+  std::mt19937 rng(20240601);
+  auto pick = [&](std::size_t n) { return std::uniform_int_distribution<std::size_t>(0, n - 1)(rng); };
+  auto byte = [&] { return char(std::uniform_int_distribution<int>(0, 255)(rng)); };
+  for (int i = 0; i < 300; ++i) {
+    std::string mutant = text;
+    for (std::size_t k = 1 + pick(4); k > 0; --k) mutant[pick(mutant.size())] = byte();
+    loadMutant(mutant, "bytes.gltf", i);
+  }
+  for (int i = 0; i < 400; ++i) {
+    std::string mutant = text;
+    for (std::size_t k = 1 + pick(2); k > 0; --k) {
+      std::size_t at = digits[pick(digits.size())];
+      mutant[at] = char('0' + pick(10));
+      if (pick(4) == 0) mutant.insert(at, std::string(1 + pick(9), char('1' + pick(9))));
+    }
+    loadMutant(mutant, "digits.gltf", i);
+  }
+  for (int i = 0; i < 300; ++i) {
+    std::string mutant = glb;
+    for (std::size_t k = 1 + pick(4); k > 0; --k) mutant[pick(mutant.size())] = byte();
+    if (pick(8) == 0) mutant.resize(pick(mutant.size()));
+    loadMutant(mutant, "bytes.glb", i);
+  }
+}
+
+}  // namespace
+}  // namespace wt
