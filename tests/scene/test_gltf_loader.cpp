@@ -691,9 +691,10 @@ TEST(GltfLoader, CameraUnderARotatedParent) {
 TEST(GltfLoader, EmissiveStrength) {
   GltfDoc doc = triangleDoc();
   doc.materials.push_back(
-      "{\"name\":\"lamp\",\"emissiveFactor\":[1,0.5,0],\"extensions\":{"
+      "{\"name\":\"lamp\",\"pbrMetallicRoughness\":{\"metallicFactor\":0},"
+      "\"emissiveFactor\":[1,0.5,0],\"extensions\":{"
       "\"KHR_materials_emissive_strength\":{\"emissiveStrength\":4}}}");
-  doc.materials.push_back("{\"emissiveFactor\":[0.25,0.5,1]}");
+  doc.materials.push_back("{\"pbrMetallicRoughness\":{\"metallicFactor\":0},\"emissiveFactor\":[0.25,0.5,1]}");
   doc.extensionsUsed = "[\"KHR_materials_emissive_strength\"]";
   doc.meshes[0] = "{\"primitives\":[{\"attributes\":{\"POSITION\":0},\"material\":0},"
                   "{\"attributes\":{\"POSITION\":0},\"material\":1}]}";
@@ -712,7 +713,8 @@ TEST(GltfLoader, EmissiveStrength) {
 
 TEST(GltfLoader, AlbedoIsClampedWithAWarning) {
   GltfDoc doc = triangleDoc();
-  doc.materials.push_back("{\"name\":\"hot\",\"pbrMetallicRoughness\":{\"baseColorFactor\":[1.5,-0.2,0.5,1]}}");
+  doc.materials.push_back("{\"name\":\"hot\",\"pbrMetallicRoughness\":{\"baseColorFactor\":[1.5,-0.2,0.5,1],"
+                          "\"metallicFactor\":0}}");
   doc.meshes[0] = "{\"primitives\":[{\"attributes\":{\"POSITION\":0},\"material\":0}]}";
   Scene s = loadDoc(doc);
   expectConsistent(s);
