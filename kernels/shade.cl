@@ -18,8 +18,11 @@ __kernel void shade(WtFrameParams frame, __global uint* counters, uint in_slot, 
   uint prim = as_uint(hit.w);
   float3 beta = throughput[path].xyz;
 
-  // miss: no environment yet, the background is black
-  if (prim == WT_NO_HIT) return;
+  // miss: the constant environment (black by default)
+  if (prim == WT_NO_HIT) {
+    radiance[path] += (float4)(beta * vec4_xyz(frame.background), 0.0f);
+    return;
+  }
 
   WtTriangle tri = triangles[prim];
   WtMaterial material = materials[tri.material];

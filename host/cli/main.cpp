@@ -12,6 +12,7 @@
 
 #include <atomic>
 #include <chrono>
+#include <cmath>
 #include <csignal>
 #include <cstdio>
 #include <unistd.h>
@@ -27,6 +28,7 @@ struct RenderOptions {
   std::vector<std::string> outputs;
   wt::RenderSettings settings;
   std::string device;
+  std::vector<float> background{0.0f, 0.0f, 0.0f};
   int sceneIndex = -1;
   int camera = 0;
   std::string kernelDir;
@@ -59,7 +61,11 @@ int runRender(const RenderOptions& options) {
 
   wt::DeviceInfo device = wt::selectDevice(options.device);
   wt::Context context(device);
-  wt::Renderer renderer(context, scene, options.settings);
+  wt::RenderSettings settings = options.settings;
+  for (float c : options.background)
+    if (!(c >= 0.0f) || !std::isfinite(c)) throw std::invalid_argument("--background: components must be finite and >= 0");
+  settings.background = glm::vec3(options.background[0], options.background[1], options.background[2]);
+  wt::Renderer renderer(context, scene, settings);
   const wt::BvhBuildStats& bvh = renderer.sceneBuffers().bvh().stats;
   wt::log::info("scene " + scene.sourceName + ": " + std::to_string(scene.triangles.size()) +
                 " triangles, loaded in " + std::to_string(int(loadSeconds * 1e3)) + " ms; BVH " +
@@ -146,6 +152,9 @@ int main(int argc, char** argv) {
   renderCmd->add_option("--seed", render.settings.seed, "Random seed")->capture_default_str();
   renderCmd->add_option("--exposure", render.settings.exposureStops, "Exposure in stops for PNG output")
       ->capture_default_str();
+  renderCmd->add_option("--background", render.background,
+                        "Constant environment radiance R,G,B seen by rays that leave the scene")
+      ->delimiter(',')->expected(3)->capture_default_str();
   renderCmd->add_option("--device", render.device, "Device index or name substring (see 'wavetrace devices')");
   renderCmd->add_option("--scene-index", render.sceneIndex, "glTF scene to render (default: the file's default scene)")
       ->check(CLI::Range(-1, 1 << 20));

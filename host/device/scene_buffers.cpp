@@ -82,4 +82,4 @@ static_assert(sizeof(WtBvhNode) == 32);
 static_assert(offsetof(WtBvhNode, hi_x) == 16);
 static_assert(sizeof(WtMaterial) == 32);
 static_assert(sizeof(WtCamera) == 64);
-static_assert(sizeof(WtFrameParams) == 32);
+static_assert(sizeof(WtFrameParams) == 48);

@@ -18,8 +18,12 @@ namespace {
 
 std::filesystem::path temporaryPath(const std::filesystem::path& path) {
   std::random_device rd;
-  return path.parent_path() /
-         ("." + path.filename().string() + ".tmp" + std::to_string(rd() % 1000000));
+  // Hidden, beside the target (same file system, so rename is atomic).
+  std::string name = ".";
+  name += path.filename().string();
+  name += ".tmp";
+  name += std::to_string(rd() % 1000000);
+  return path.parent_path() / name;
 }
 
 /// Write with `writer` to a temporary file beside `path`, then rename.

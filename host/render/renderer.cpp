@@ -17,6 +17,7 @@ WtFrameParams frameParams(const RenderSettings& s, int sample, int bounce) {
   p.max_bounces = cl_uint(s.maxBounces);
   p.seed = s.seed;
   p.exposure = std::exp2(s.exposureStops);
+  p.background = {s.background.x, s.background.y, s.background.z, 0.0f};
   return p;
 }
 

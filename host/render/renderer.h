@@ -8,6 +8,8 @@
 #include "device/scene_buffers.h"
 #include "scene/scene.h"
 
+#include <glm/glm.hpp>
+
 #include <cstdint>
 #include <memory>
 #include <vector>
@@ -21,6 +23,7 @@ struct RenderSettings {
   int maxBounces = 8;       ///< hits shaded after the camera hit (0: direct view of emitters only)
   std::uint32_t seed = 0;
   float exposureStops = 0.0f;
+  glm::vec3 background{0.0f};  ///< constant environment radiance seen by escaping paths
 };
 
 /// The accumulated image read back from the device.

@@ -61,6 +61,7 @@ typedef struct WtFrameParams {
   wt_uint seed;         ///< user seed
   float exposure;       ///< tonemap scale, 2^stops
   wt_uint pad0;
+  WtVec4 background;    ///< radiance of every direction that escapes the scene (constant environment); w unused
 } WtFrameParams;
 
 /// Slots of the queue-counter buffer.
