@@ -1,0 +1,496 @@
+// Linear BVH build: structural invariants on regular and degenerate inputs,
+// determinism across thread counts, and SAH quality against a median split.
+#include "bvh/lbvh.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <numeric>
+#include <random>
+#include <span>
+#include <sstream>
+#include <vector>
+
+namespace wt {
+namespace {
+
+Aabb nodeBox(const WtBvhNode& node) {
+  Aabb box;
+  box.lo = {node.lo_x, node.lo_y, node.lo_z};
+  box.hi = {node.hi_x, node.hi_y, node.hi_z};
+  return box;
+}
+
+bool sameBox(const Aabb& a, const Aabb& b) { return a.lo == b.lo && a.hi == b.hi; }
+
+std::string describe(const Aabb& box) {
+  std::ostringstream out;
+  out << "[(" << box.lo.x << ", " << box.lo.y << ", " << box.lo.z << ") - (" << box.hi.x << ", " << box.hi.y << ", "
+      << box.hi.z << ")]";
+  return out.str();
+}
+
+/// Everything a valid tree over `prims` must satisfy. With checkBoxes off (NaN input)
+/// only the topology and the primitive permutation are checked.
+::testing::AssertionResult checkBvhInvariants(const Bvh& bvh, std::span<const Aabb> prims, int maxLeafSize = 4,
+                                              bool checkBoxes = true) {
+  const std::size_t n = prims.size();
+  const std::vector<WtBvhNode>& nodes = bvh.nodes;
+  if (n == 0) {
+    if (!nodes.empty() || !bvh.primIndices.empty()) return ::testing::AssertionFailure() << "empty input, non-empty tree";
+    return ::testing::AssertionSuccess();
+  }
+  if (nodes.empty()) return ::testing::AssertionFailure() << "no nodes for " << n << " primitives";
+  if (bvh.primIndices.size() != n)
+    return ::testing::AssertionFailure() << "primIndices has " << bvh.primIndices.size() << " entries, want " << n;
+
+  // Topology: in-range children, every node but the root referenced exactly once.
+  std::vector<int> references(nodes.size(), 0);
+  for (std::size_t i = 0; i < nodes.size(); ++i) {
+    const WtBvhNode& node = nodes[i];
+    if (node.count > 0) continue;
+    if (std::size_t(node.first) + 1 >= nodes.size())
+      return ::testing::AssertionFailure() << "node " << i << " has children " << node.first << " out of range";
+    if (node.first == 0) return ::testing::AssertionFailure() << "node " << i << " points at the root";
+    ++references[node.first];
+    ++references[node.first + 1];
+  }
+  for (std::size_t i = 1; i < nodes.size(); ++i)
+    if (references[i] != 1)
+      return ::testing::AssertionFailure() << "node " << i << " is referenced " << references[i] << " times";
+  if (references[0] != 0) return ::testing::AssertionFailure() << "the root is referenced";
+
+  // Walk from the root: every node reached once, leaves tile primIndices exactly once.
+  std::vector<int> covered(n, 0);
+  std::vector<std::uint32_t> subtreePrims(nodes.size(), 0);
+  std::vector<char> visited(nodes.size(), 0);
+  std::vector<std::pair<std::uint32_t, int>> stack{{0u, 0}};
+  std::vector<std::uint32_t> order;  // preorder; reversed, children come before parents
+  int depth = 0;
+  std::size_t leaves = 0;
+  while (!stack.empty()) {
+    const auto [index, nodeDepth] = stack.back();
+    stack.pop_back();
+    if (visited[index]) return ::testing::AssertionFailure() << "node " << index << " reached twice";
+    visited[index] = 1;
+    order.push_back(index);
+    depth = std::max(depth, nodeDepth);
+    const WtBvhNode& node = nodes[index];
+    if (node.count == 0) {
+      stack.push_back({node.first, nodeDepth + 1});
+      stack.push_back({node.first + 1, nodeDepth + 1});
+      continue;
+    }
+    ++leaves;
+    if (node.count > std::uint32_t(maxLeafSize))
+      return ::testing::AssertionFailure() << "leaf " << index << " holds " << node.count << " > " << maxLeafSize;
+    if (std::size_t(node.first) + node.count > n)
+      return ::testing::AssertionFailure() << "leaf " << index << " range runs past primIndices";
+    for (std::uint32_t k = node.first; k < node.first + node.count; ++k) ++covered[k];
+    subtreePrims[index] = node.count;
+  }
+  if (order.size() != nodes.size())
+    return ::testing::AssertionFailure() << order.size() << " of " << nodes.size() << " nodes reachable";
+  for (std::size_t k = 0; k < n; ++k)
+    if (covered[k] != 1)
+      return ::testing::AssertionFailure() << "primIndices[" << k << "] is in " << covered[k] << " leaves";
+  std::vector<int> seen(n, 0);
+  for (std::uint32_t prim : bvh.primIndices) {
+    if (prim >= n) return ::testing::AssertionFailure() << "primitive index " << prim << " out of range";
+    if (seen[prim]++) return ::testing::AssertionFailure() << "primitive " << prim << " appears twice";
+  }
+
+  // Bottom-up: subtree sizes (a small subtree must have been collapsed) and boxes.
+  for (auto it = order.rbegin(); it != order.rend(); ++it) {
+    const std::uint32_t index = *it;
+    const WtBvhNode& node = nodes[index];
+    const Aabb box = nodeBox(node);
+    if (node.count == 0) {
+      subtreePrims[index] = subtreePrims[node.first] + subtreePrims[node.first + 1];
+      if (subtreePrims[index] <= std::uint32_t(maxLeafSize))
+        return ::testing::AssertionFailure() << "internal node " << index << " holds only " << subtreePrims[index]
+                                             << " primitives; it should be one leaf";
+      if (!checkBoxes) continue;
+      Aabb tight = nodeBox(nodes[node.first]);
+      tight.extend(nodeBox(nodes[node.first + 1]));
+      for (std::uint32_t child : {node.first, node.first + 1})
+        if (!box.contains(nodeBox(nodes[child])))
+          return ::testing::AssertionFailure() << "node " << index << " " << describe(box) << " misses child "
+                                               << child << " " << describe(nodeBox(nodes[child]));
+      if (!sameBox(box, tight))
+        return ::testing::AssertionFailure() << "node " << index << " " << describe(box) << " is not the union "
+                                             << describe(tight) << " of its children";
+    } else if (checkBoxes) {
+      Aabb tight;
+      for (std::uint32_t k = node.first; k < node.first + node.count; ++k) {
+        const Aabb& prim = prims[bvh.primIndices[k]];
+        if (!box.contains(prim))
+          return ::testing::AssertionFailure() << "leaf " << index << " " << describe(box) << " misses primitive "
+                                               << bvh.primIndices[k] << " " << describe(prim);
+        tight.extend(prim);
+      }
+      if (!sameBox(box, tight))
+        return ::testing::AssertionFailure() << "leaf " << index << " " << describe(box) << " is not the union "
+                                             << describe(tight) << " of its primitives";
+    }
+  }
+
+  if (bvh.stats.maxDepth != depth)
+    return ::testing::AssertionFailure() << "stats.maxDepth " << bvh.stats.maxDepth << ", real depth " << depth;
+  if (bvh.stats.nodeCount != nodes.size())
+    return ::testing::AssertionFailure() << "stats.nodeCount " << bvh.stats.nodeCount << ", real " << nodes.size();
+  if (bvh.stats.leafCount != leaves)
+    return ::testing::AssertionFailure() << "stats.leafCount " << bvh.stats.leafCount << ", real " << leaves;
+  // The build sums the cost per subtree, so it may differ from sahCost() in the last bits.
+  const double cost = sahCost(bvh);
+  if (!std::isfinite(cost) || !(std::abs(bvh.stats.sahCost - cost) <= 1e-9 * cost))
+    return ::testing::AssertionFailure() << "stats.sahCost " << bvh.stats.sahCost << ", sahCost() " << cost;
+  if (!(bvh.stats.buildSeconds >= 0.0)) return ::testing::AssertionFailure() << "negative build time";
+  return ::testing::AssertionSuccess();
+}
+
+Aabb boxAround(const glm::vec3& center, const glm::vec3& halfSize) {
+  Aabb box;
+  box.lo = center - halfSize;
+  box.hi = center + halfSize;
+  return box;
+}
+
+/// Boxes with centres uniform in [0,1)^3 and half-sizes up to maxHalf, then mapped by offset + scale * p.
+std::vector<Aabb> randomBoxes(std::size_t n, unsigned seed, float maxHalf = 0.02f, float offset = 0.0f,
+                              float scale = 1.0f) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+  std::vector<Aabb> boxes(n);
+  for (Aabb& box : boxes) {
+    const glm::vec3 c{unit(rng), unit(rng), unit(rng)};
+    const glm::vec3 h{maxHalf * unit(rng), maxHalf * unit(rng), maxHalf * unit(rng)};
+    box.lo = offset + scale * (c - h);
+    box.hi = offset + scale * (c + h);
+  }
+  return boxes;
+}
+
+BvhBuildOptions withLeafSize(int maxLeafSize, int threads = 0) {
+  BvhBuildOptions options;
+  options.maxLeafSize = maxLeafSize;
+  options.threads = threads;
+  return options;
+}
+
+/// SAH cost (same normalisation as sahCost) of a top-down build that splits the centroid
+/// range at the median of its widest axis: the simple reference the LBVH is held to.
+double medianSplitSah(std::span<const Aabb> prims, int maxLeafSize) {
+  std::vector<std::uint32_t> order(prims.size());
+  std::iota(order.begin(), order.end(), 0u);
+  auto area = [](const Aabb& box) { return double(box.surfaceArea()); };
+  double rootArea = 0.0;
+  double cost = 0.0;
+  struct Task {
+    std::size_t begin, end;
+  };
+  std::vector<Task> tasks{{0, prims.size()}};
+  while (!tasks.empty()) {
+    const Task task = tasks.back();
+    tasks.pop_back();
+    Aabb bounds, centroids;
+    for (std::size_t k = task.begin; k < task.end; ++k) {
+      bounds.extend(prims[order[k]]);
+      centroids.extend(prims[order[k]].center());
+    }
+    if (task.begin == 0 && task.end == prims.size()) rootArea = area(bounds);
+    const std::size_t count = task.end - task.begin;
+    if (count <= std::size_t(maxLeafSize)) {
+      cost += area(bounds) * double(count);
+      continue;
+    }
+    cost += area(bounds);
+    const glm::vec3 extent = centroids.extent();
+    const int axis = extent.x >= extent.y && extent.x >= extent.z ? 0 : (extent.y >= extent.z ? 1 : 2);
+    const std::size_t mid = task.begin + count / 2;
+    std::nth_element(order.begin() + task.begin, order.begin() + mid, order.begin() + task.end,
+                     [&](std::uint32_t a, std::uint32_t b) { return prims[a].center()[axis] < prims[b].center()[axis]; });
+    tasks.push_back({task.begin, mid});
+    tasks.push_back({mid, task.end});
+  }
+  return cost / rootArea;
+}
+
+/// Degenerate inputs measured 0.97-0.99x the median split's SAH; a tree without spatial order is several times worse.
+constexpr double kMedianSahFactor = 1.1;
+
+// ---- structure on random input ---------------------------------------------
+
+struct RandomCase {
+  std::size_t n;
+  unsigned seed;
+};
+
+class LbvhRandom : public ::testing::TestWithParam<RandomCase> {};
+
+TEST_P(LbvhRandom, Invariants) {
+  const auto [n, seed] = GetParam();
+  const std::vector<Aabb> prims = randomBoxes(n, seed);
+  const Bvh bvh = buildLbvh(prims);
+  EXPECT_TRUE(checkBvhInvariants(bvh, prims));
+}
+
+std::vector<RandomCase> randomCases() {
+  std::vector<RandomCase> cases;
+  for (std::size_t n : {1, 2, 3, 5, 100, 10000, 100000})
+    for (unsigned seed : {1u, 2u, 3u}) cases.push_back({n, seed});
+  return cases;
+}
+
+INSTANTIATE_TEST_SUITE_P(Sizes, LbvhRandom, ::testing::ValuesIn(randomCases()),
+                         [](const ::testing::TestParamInfo<RandomCase>& info) {
+                           return "n" + std::to_string(info.param.n) + "_seed" + std::to_string(info.param.seed);
+                         });
+
+TEST(Lbvh, EmptyInputGivesEmptyTree) {
+  const Bvh bvh = buildLbvh({});
+  EXPECT_TRUE(bvh.nodes.empty());
+  EXPECT_TRUE(bvh.primIndices.empty());
+  EXPECT_EQ(bvh.stats.nodeCount, 0u);
+  EXPECT_EQ(sahCost(bvh), 0.0);
+}
+
+TEST(Lbvh, OnePrimitiveIsARootLeaf) {
+  const std::vector<Aabb> prims{boxAround({1, 2, 3}, {0.5f, 0.25f, 0.125f})};
+  const Bvh bvh = buildLbvh(prims);
+  ASSERT_EQ(bvh.nodes.size(), 1u);
+  EXPECT_EQ(bvh.nodes[0].count, 1u);
+  EXPECT_EQ(bvh.nodes[0].first, 0u);
+  EXPECT_TRUE(sameBox(nodeBox(bvh.nodes[0]), prims[0]));
+  EXPECT_EQ(bvh.stats.maxDepth, 0);
+  EXPECT_DOUBLE_EQ(bvh.stats.sahCost, 1.0);
+  EXPECT_TRUE(checkBvhInvariants(bvh, prims));
+}
+
+TEST(Lbvh, AtMostMaxLeafSizeIsARootLeaf) {
+  const std::vector<Aabb> prims = randomBoxes(8, 7);
+  const Bvh bvh = buildLbvh(prims, withLeafSize(8));
+  ASSERT_EQ(bvh.nodes.size(), 1u);
+  EXPECT_EQ(bvh.nodes[0].count, 8u);
+  EXPECT_TRUE(checkBvhInvariants(bvh, prims, 8));
+}
+
+TEST(Lbvh, LeafSizeOneGivesFullBinaryTree) {
+  const std::vector<Aabb> prims = randomBoxes(5000, 11);
+  const Bvh bvh = buildLbvh(prims, withLeafSize(1));
+  EXPECT_EQ(bvh.nodes.size(), 2 * prims.size() - 1);
+  EXPECT_EQ(bvh.stats.leafCount, prims.size());
+  EXPECT_TRUE(checkBvhInvariants(bvh, prims, 1));
+}
+
+TEST(Lbvh, LeafSizeEight) {
+  const std::vector<Aabb> prims = randomBoxes(50000, 12);
+  const Bvh bvh = buildLbvh(prims, withLeafSize(8));
+  EXPECT_TRUE(checkBvhInvariants(bvh, prims, 8));
+  // Collapsing at 8 leaves far fewer nodes than one primitive per leaf would.
+  EXPECT_LT(bvh.nodes.size(), prims.size() / 2);
+}
+
+// ---- degenerate input ----------------------------------------------------------
+
+TEST(Lbvh, AllCentroidsEqual) {
+  const std::vector<Aabb> prims(1000, boxAround({0.5f, -2.0f, 3.0f}, {0.1f, 0.2f, 0.3f}));
+  const Bvh bvh = buildLbvh(prims);
+  EXPECT_TRUE(checkBvhInvariants(bvh, prims));
+  // Equal keys split on the index bits, so the tree is balanced: 1000 / 4 leaves need 8 levels.
+  EXPECT_LE(bvh.stats.maxDepth, 9);
+  EXPECT_TRUE(std::isfinite(bvh.stats.sahCost));
+}
+
+TEST(Lbvh, ClusteredDuplicates) {
+  // Ten positions, each shared by many primitives: long runs of equal keys between distinct ones.
+  std::mt19937 rng(5);
+  std::uniform_int_distribution<int> cluster(0, 9);
+  std::vector<Aabb> prims(30000);
+  for (Aabb& box : prims) {
+    const float c = float(cluster(rng));
+    box = boxAround({c, 2.0f * c, -c}, {0.5f, 0.5f, 0.5f});
+  }
+  const Bvh bvh = buildLbvh(prims, withLeafSize(4, 2));
+  EXPECT_TRUE(checkBvhInvariants(bvh, prims));
+  // Each leaf holds one cluster only: the sort groups equal keys.
+  for (const WtBvhNode& node : bvh.nodes) {
+    if (node.count == 0) continue;
+    EXPECT_EQ(node.lo_x + 1.0f, node.hi_x);
+  }
+}
+
+TEST(Lbvh, CollinearCentroidsAreSortedAlongTheLine) {
+  // Distinct x in shuffled order, y and z fixed: two axes have zero centroid extent.
+  const std::size_t n = 2000;
+  std::vector<float> xs(n);
+  for (std::size_t i = 0; i < n; ++i) xs[i] = -5.0f + 0.005f * float(i);
+  std::shuffle(xs.begin(), xs.end(), std::mt19937(3));
+  std::vector<Aabb> prims(n);
+  for (std::size_t i = 0; i < n; ++i) prims[i] = boxAround({xs[i], 1.0f, 7.0f}, {0.001f, 0.3f, 0.3f});
+  const Bvh bvh = buildLbvh(prims);
+  ASSERT_TRUE(checkBvhInvariants(bvh, prims));
+  for (std::size_t k = 1; k < n; ++k)
+    ASSERT_LT(xs[bvh.primIndices[k - 1]], xs[bvh.primIndices[k]]) << "at sorted position " << k;
+}
+
+TEST(Lbvh, CoplanarCentroids) {
+  std::vector<Aabb> prims = randomBoxes(20000, 21);
+  for (Aabb& box : prims) {
+    box.lo.z = -0.01f;
+    box.hi.z = 0.01f;
+  }
+  const Bvh bvh = buildLbvh(prims);
+  EXPECT_TRUE(checkBvhInvariants(bvh, prims));
+  EXPECT_LT(bvh.stats.sahCost, kMedianSahFactor * medianSplitSah(prims, 4));
+}
+
+TEST(Lbvh, PointBoxes) {
+  std::vector<Aabb> prims = randomBoxes(20000, 22, 0.0f);
+  for (const Aabb& box : prims) ASSERT_EQ(box.lo, box.hi);
+  const Bvh bvh = buildLbvh(prims);
+  EXPECT_TRUE(checkBvhInvariants(bvh, prims));
+  EXPECT_LT(bvh.stats.sahCost, kMedianSahFactor * medianSplitSah(prims, 4));
+}
+
+TEST(Lbvh, AllPrimitivesAtOnePointGiveFiniteSah) {
+  const std::vector<Aabb> prims(100, boxAround({1, 1, 1}, {0, 0, 0}));
+  const Bvh bvh = buildLbvh(prims);
+  EXPECT_TRUE(checkBvhInvariants(bvh, prims));
+  // Root area 0: every node counts with ratio 1, i.e. one per internal node plus one per primitive.
+  const std::size_t internal = bvh.nodes.size() - bvh.stats.leafCount;
+  EXPECT_DOUBLE_EQ(bvh.stats.sahCost, double(internal + prims.size()));
+}
+
+TEST(Lbvh, LargeOffset) {
+  // Float spacing at 1e6 is 1/16, so many centroids coincide after rounding.
+  const std::vector<Aabb> prims = randomBoxes(20000, 31, 0.02f, 1.0e6f, 100.0f);
+  const Bvh bvh = buildLbvh(prims);
+  EXPECT_TRUE(checkBvhInvariants(bvh, prims));
+  EXPECT_LT(bvh.stats.sahCost, kMedianSahFactor * medianSplitSah(prims, 4));
+}
+
+TEST(Lbvh, TinyScale) {
+  const std::vector<Aabb> prims = randomBoxes(20000, 32, 0.02f, 0.0f, 1.0e-6f);
+  const Bvh bvh = buildLbvh(prims);
+  EXPECT_TRUE(checkBvhInvariants(bvh, prims));
+  EXPECT_LT(bvh.stats.sahCost, kMedianSahFactor * medianSplitSah(prims, 4));
+}
+
+TEST(Lbvh, TinyBoxesFarFromTheOrigin) {
+  // Every centroid rounds to the same float: all keys equal, the tree is built on indices.
+  const std::vector<Aabb> prims = randomBoxes(5000, 33, 0.02f, 1.0e6f, 1.0e-6f);
+  const Bvh bvh = buildLbvh(prims);
+  EXPECT_TRUE(checkBvhInvariants(bvh, prims));
+}
+
+TEST(Lbvh, HugeCoordinates) {
+  // Centroids near the float limit: the sum lo + hi would overflow.
+  std::vector<Aabb> prims = randomBoxes(1000, 34, 0.02f, 0.0f, 3.0e38f);
+  const Bvh bvh = buildLbvh(prims);
+  EXPECT_TRUE(checkBvhInvariants(bvh, prims));
+  EXPECT_TRUE(std::isfinite(bvh.stats.sahCost));
+}
+
+TEST(Lbvh, NonFiniteBoundsDoNotBreakTheTree) {
+  std::vector<Aabb> prims = randomBoxes(3000, 41);
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const float inf = std::numeric_limits<float>::infinity();
+  for (std::size_t i = 0; i < prims.size(); i += 7) prims[i].lo.y = nan;
+  for (std::size_t i = 3; i < prims.size(); i += 11) prims[i] = Aabb{};  // empty: lo = +inf, hi = -inf
+  for (std::size_t i = 5; i < prims.size(); i += 13) prims[i].hi.x = inf;
+  const Bvh bvh = buildLbvh(prims, withLeafSize(4, 2));
+  EXPECT_TRUE(checkBvhInvariants(bvh, prims, 4, /*checkBoxes=*/false));
+  EXPECT_TRUE(std::isfinite(sahCost(bvh)));
+}
+
+TEST(Lbvh, InfiniteBoundsKeepBoxesValid) {
+  std::vector<Aabb> prims = randomBoxes(3000, 42);
+  const float inf = std::numeric_limits<float>::infinity();
+  for (std::size_t i = 0; i < prims.size(); i += 17) {
+    prims[i].lo.x = -inf;
+    prims[i].hi.z = inf;
+  }
+  const Bvh bvh = buildLbvh(prims);
+  EXPECT_TRUE(checkBvhInvariants(bvh, prims));
+  EXPECT_TRUE(std::isfinite(bvh.stats.sahCost));
+}
+
+// ---- determinism -----------------------------------------------------------------
+
+TEST(Lbvh, ThreadCountDoesNotChangeTheTree) {
+  const std::vector<Aabb> prims = randomBoxes(200000, 51);
+  const Bvh one = buildLbvh(prims, withLeafSize(4, 1));
+  ASSERT_TRUE(checkBvhInvariants(one, prims));
+  for (int threads : {2, 3, 8}) {
+    SCOPED_TRACE("threads = " + std::to_string(threads));
+    const Bvh many = buildLbvh(prims, withLeafSize(4, threads));
+    ASSERT_EQ(one.nodes.size(), many.nodes.size());
+    EXPECT_EQ(0, std::memcmp(one.nodes.data(), many.nodes.data(), one.nodes.size() * sizeof(WtBvhNode)));
+    EXPECT_EQ(one.primIndices, many.primIndices);
+    EXPECT_EQ(one.stats.maxDepth, many.stats.maxDepth);
+    EXPECT_EQ(one.stats.leafCount, many.stats.leafCount);
+    EXPECT_EQ(one.stats.sahCost, many.stats.sahCost);
+  }
+}
+
+// ---- SAH ---------------------------------------------------------------------------
+
+TEST(Lbvh, SahCostFollowsItsDefinition) {
+  // Root [0,1]^3 (area 6); children [0,.5]x[0,1]^2 and [.5,1]x[0,1]^2 (area 4 each) with 2 and 1 primitives:
+  // 1 + 4/6 * 2 + 4/6 * 1 = 3.
+  Bvh bvh;
+  bvh.nodes = {WtBvhNode{0, 0, 0, 1, 1, 1, 1, 0}, WtBvhNode{0, 0, 0, 0, 0.5f, 1, 1, 2},
+               WtBvhNode{0.5f, 0, 0, 2, 1, 1, 1, 1}};
+  EXPECT_DOUBLE_EQ(sahCost(bvh), 3.0);
+}
+
+/// 64 x 64 unit quads in the z = 0 plane, two triangles each: 8192 flat boxes.
+std::vector<Aabb> triangleGrid() {
+  std::vector<Aabb> boxes;
+  for (int y = 0; y < 64; ++y)
+    for (int x = 0; x < 64; ++x) {
+      const glm::vec3 a{float(x), float(y), 0.0f}, b{float(x + 1), float(y), 0.0f};
+      const glm::vec3 c{float(x), float(y + 1), 0.0f}, d{float(x + 1), float(y + 1), 0.0f};
+      Aabb lower, upper;
+      lower.extend(a), lower.extend(b), lower.extend(d);
+      upper.extend(a), upper.extend(d), upper.extend(c);
+      boxes.push_back(lower);
+      boxes.push_back(upper);
+    }
+  return boxes;
+}
+
+TEST(Lbvh, SahOfTriangleGridIsPerfectHalving) {
+  // The two triangles of a cell share its unit-square box, and halving the grid along x
+  // and y in turn gives nodes covering 4096, 2048, ..., 4 cells (11 levels) above leaves of
+  // 2 cells (4 triangles). The boxes are flat, so a node's area is proportional to its cell
+  // count and each level sums to the root's area: SAH = 11 * 1 + 1 * 4 = 15 exactly. The
+  // Morton order splits the centroid range at its top bits, which here are these halvings;
+  // the median-split reference reaches the same 15.
+  const std::vector<Aabb> prims = triangleGrid();
+  const Bvh bvh = buildLbvh(prims);
+  ASSERT_TRUE(checkBvhInvariants(bvh, prims));
+  EXPECT_NEAR(bvh.stats.sahCost, 15.0, 1e-9);
+  EXPECT_NEAR(medianSplitSah(prims, 4), 15.0, 1e-9);
+  EXPECT_EQ(bvh.stats.maxDepth, 11);
+}
+
+TEST(Lbvh, SahOfRandomBoxesIsNearMedianSplit) {
+  // Measured: the LBVH costs 0.95x the median split on these inputs (0.90x at 1 M boxes), as
+  // the Morton order also balances space rather than counts. 1.1x leaves room for noise while
+  // any loss of spatial order (a wrong split, unnormalised codes) costs several times more.
+  for (unsigned seed : {61u, 62u}) {
+    const std::vector<Aabb> prims = randomBoxes(50000, seed, 0.005f);
+    const Bvh bvh = buildLbvh(prims);
+    ASSERT_TRUE(checkBvhInvariants(bvh, prims));
+    const double reference = medianSplitSah(prims, 4);
+    EXPECT_LT(bvh.stats.sahCost, 1.1 * reference) << "median split " << reference << ", seed " << seed;
+  }
+}
+
+}  // namespace
+}  // namespace wt
