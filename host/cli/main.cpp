@@ -33,6 +33,7 @@ struct RenderOptions {
   int camera = 0;
   std::string kernelDir;
   bool quiet = false;
+  bool verbose = false;
 };
 
 void writeOutputs(const RenderOptions& options, const wt::Image& image) {
@@ -44,6 +45,7 @@ void writeOutputs(const RenderOptions& options, const wt::Image& image) {
 
 int runRender(const RenderOptions& options) {
   wt::log::setQuiet(options.quiet);
+  wt::log::setVerbose(options.verbose);
   if (!options.kernelDir.empty()) wt::setKernelDirectory(std::filesystem::path(options.kernelDir));
 
   // Fail on an unwritable output before spending any time rendering.
@@ -162,6 +164,7 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0, 1 << 20))->capture_default_str();
   renderCmd->add_option("--kernel-dir", render.kernelDir, "Developer option: read kernels from this folder");
   renderCmd->add_flag("-q,--quiet", render.quiet, "No progress output");
+  renderCmd->add_flag("-v,--verbose", render.verbose, "Timings of the scene set-up (BVH build phases)");
 
   CLI::App* devicesCmd = app.add_subcommand("devices", "List OpenCL platforms and devices");
 

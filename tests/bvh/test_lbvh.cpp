@@ -246,8 +246,13 @@ std::vector<RandomCase> randomCases() {
 }
 
 INSTANTIATE_TEST_SUITE_P(Sizes, LbvhRandom, ::testing::ValuesIn(randomCases()),
-                         [](const ::testing::TestParamInfo<RandomCase>& info) {
-                           return "n" + std::to_string(info.param.n) + "_seed" + std::to_string(info.param.seed);
+                         [](const ::testing::TestParamInfo<RandomCase>& param) {
+                           // built with += : GCC 12 warns falsely (-Wrestrict) on "literal" + string
+                           std::string name = "n";
+                           name += std::to_string(param.param.n);
+                           name += "_seed";
+                           name += std::to_string(param.param.seed);
+                           return name;
                          });
 
 TEST(Lbvh, EmptyInputGivesEmptyTree) {
@@ -292,6 +297,20 @@ TEST(Lbvh, LeafSizeEight) {
   EXPECT_TRUE(checkBvhInvariants(bvh, prims, 8));
   // Collapsing at 8 leaves far fewer nodes than one primitive per leaf would.
   EXPECT_LT(bvh.nodes.size(), prims.size() / 2);
+}
+
+TEST(Lbvh, LeafSizeLargerThanASubtreeTask) {
+  // Leaves of up to 10000 primitives: most of the tree collapses above the flatten's task size.
+  const std::vector<Aabb> prims = randomBoxes(300000, 13);
+  const Bvh bvh = buildLbvh(prims, withLeafSize(10000, 2));
+  EXPECT_TRUE(checkBvhInvariants(bvh, prims, 10000));
+}
+
+TEST(Lbvh, NonPositiveLeafSizeMeansOne) {
+  const std::vector<Aabb> prims = randomBoxes(1000, 14);
+  const Bvh bvh = buildLbvh(prims, withLeafSize(0));
+  EXPECT_EQ(bvh.nodes.size(), 2 * prims.size() - 1);
+  EXPECT_TRUE(checkBvhInvariants(bvh, prims, 1));
 }
 
 // ---- degenerate input ----------------------------------------------------------
