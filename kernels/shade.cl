@@ -1,8 +1,22 @@
-// Stage 3: emission at the hit, then (below the bounce limit) a new direction
-// from the material; surviving paths are appended to the output queue.
+// Stage 3: at each path's hit, emission (MIS-weighted against light
+// sampling), next-event estimation into the shadow queue, then (below the
+// bounce limit) a new direction from the material and Russian roulette;
+// surviving paths are appended to the output queue.
 #include "common.h"
 #include "geometry/triangle.cl"
+#include "lights/light_sampling.cl"
 #include "materials/lambert.cl"
+
+/// Weight of emission found by BSDF sampling (pdf_bsdf, solid angle) from a
+/// light that NEE could also have sampled with pdf_light (0: NEE cannot).
+inline float shade_emission_weight(WtFrameParams frame, float pdf_bsdf, float pdf_light) {
+  // camera rays, and lights NEE never samples, count in full
+  if (frame.bounce == 0 || pdf_bsdf <= 0.0f || pdf_light <= 0.0f) return 1.0f;
+  if (WT_INTEGRATOR_MINIMAL || !(frame.flags & WT_FLAG_NEE)) return 1.0f;
+  // NEE without MIS already counted this light
+  if (!(frame.flags & WT_FLAG_MIS)) return 0.0f;
+  return mis_weight(pdf_bsdf, pdf_light, frame.flags);
+}
 
 __kernel void shade(WtFrameParams frame, __global uint* counters, uint in_slot, uint out_slot,
                     __global const uint* queue_in, __global uint* queue_out,
@@ -10,47 +24,108 @@ __kernel void shade(WtFrameParams frame, __global uint* counters, uint in_slot, 
                     __global const float4* hits, __global float4* throughput,
                     __global float4* radiance, __global const WtTriangle* triangles,
                     __global const float4* tri_verts, __global const float4* normals,
-                    __global const WtMaterial* materials) {
+                    __global const WtMaterial* materials, __global const WtLight* lights,
+                    __global const WtAliasSlot* alias, __global const float* emitter_pdf_area,
+                    __global uint* shadow_queue, __global float4* shadow_o,
+                    __global float4* shadow_d, __global float4* shadow_radiance) {
   uint i = get_global_id(0);
   if (i >= counters[in_slot]) return;
   uint path = queue_in[i];
   float4 hit = hits[path];
   uint prim = as_uint(hit.w);
-  float3 beta = throughput[path].xyz;
+  float4 state = throughput[path];
+  float3 beta = state.xyz;
+  float pdf_prev = state.w;  // solid-angle pdf of the BSDF sample that made this ray; 0 for camera rays
+  float3 dir = ray_d[path].xyz;
 
-  // miss: the constant environment (black by default)
+  EnvScene env = {vec4_xyz(frame.background)};
+  LightScene ls = {lights, alias, frame.light_count, tri_verts, env};
+
+  // miss: the environment
   if (prim == WT_NO_HIT) {
-    radiance[path] += (float4)(beta * vec4_xyz(frame.background), 0.0f);
+    float3 le = env_eval(env, dir);
+    float w = shade_emission_weight(frame, pdf_prev, frame.env_pmf * env_pdf(env, dir));
+    radiance[path] += (float4)(beta * le * w, 0.0f);
     return;
   }
 
   WtTriangle tri = triangles[prim];
   WtMaterial material = materials[tri.material];
+  float3 p0 = tri_verts[3 * prim].xyz, p1 = tri_verts[3 * prim + 1].xyz, p2 = tri_verts[3 * prim + 2].xyz;
+  float3 p, ng, ns;
+  triangle_surface(p0, p1, p2, normals[tri.v0].xyz, normals[tri.v1].xyz, normals[tri.v2].xyz,
+                   hit.y, hit.z, &p, &ng, &ns);
+  if (dot(ng, ng) == 0.0f) return;  // degenerate triangle: absorb
 
-  // emission (two-sided); the minimal integrator counts it at every vertex
-  radiance[path] += (float4)(beta * vec4_xyz(material.emission), 0.0f);
+  // emission (two-sided)
+  float3 le = vec4_xyz(material.emission);
+  if (le.x > 0.0f || le.y > 0.0f || le.z > 0.0f) {
+    float pdf_light = light_triangle_pdf(emitter_pdf_area[prim], hit.x, dir, ng);
+    radiance[path] += (float4)(beta * le * shade_emission_weight(frame, pdf_prev, pdf_light), 0.0f);
+  }
   if (frame.bounce >= frame.max_bounces) return;
 
-  // surface
-  float3 p, ng, ns;
-  triangle_surface(tri_verts[3 * prim].xyz, tri_verts[3 * prim + 1].xyz,
-                   tri_verts[3 * prim + 2].xyz, normals[tri.v0].xyz, normals[tri.v1].xyz,
-                   normals[tri.v2].xyz, hit.y, hit.z, &p, &ng, &ns);
-  if (dot(ng, ng) == 0.0f) return;  // degenerate triangle: absorb
-  float3 wo = -ray_d[path].xyz;
+  float3 wo = -dir;
   if (dot(ng, wo) < 0.0f) ng = -ng;
   if (dot(ns, ng) < 0.0f) ns = -ns;
+  float3 albedo = vec4_xyz(material.base_color);
+  float3 origin = ray_offset_origin(p, ng);
+
+  // next-event estimation: the full light list by power (path), or one
+  // uniformly chosen analytic light (minimal)
+  uint nee_count = WT_INTEGRATOR_MINIMAL ? frame.analytic_count
+                                         : ((frame.flags & WT_FLAG_NEE) ? frame.light_count : 0u);
+  if (nee_count > 0u) {
+    float u_pick = rng_uniform(path, frame.sample, frame.bounce, 4u, frame.seed);
+    float pmf;
+    uint index;
+    if (WT_INTEGRATOR_MINIMAL) {
+      index = min((uint)(u_pick * (float)nee_count), nee_count - 1u);
+      pmf = 1.0f / (float)nee_count;
+    } else {
+      index = light_pick(ls, u_pick, &pmf);
+    }
+    LightSample s;
+    float u1 = rng_uniform(path, frame.sample, frame.bounce, 5u, frame.seed);
+    float u2 = rng_uniform(path, frame.sample, frame.bounce, 6u, frame.seed);
+    float cos_s;
+    if (pmf > 0.0f && light_sample(ls, index, p, u1, u2, &s) && (cos_s = dot(ns, s.wi)) > 0.0f &&
+        dot(ng, s.wi) > 0.0f) {
+      float pdf_light = s.pdf * pmf;
+      float w = (s.is_delta || !(frame.flags & WT_FLAG_MIS) || WT_INTEGRATOR_MINIMAL)
+                    ? 1.0f
+                    : mis_weight(pdf_light, cos_s / WT_PI, frame.flags);
+      float3 contribution = beta * albedo * (cos_s / WT_PI) * s.radiance * (w / pdf_light);
+      if (contribution.x > 0.0f || contribution.y > 0.0f || contribution.z > 0.0f) {
+        // stop short of the light by a relative margin, so its own surface never occludes
+        float tmax = isinf(s.distance) ? INFINITY : s.distance * (1.0f - 1e-4f);
+        uint slot = atomic_inc(&counters[WT_COUNTER_SHADOW]);
+        shadow_queue[slot] = path;
+        shadow_o[path] = (float4)(origin, 0.0f);
+        shadow_d[path] = (float4)(s.wi, tmax);
+        shadow_radiance[path] = (float4)(contribution, 0.0f);
+      }
+    }
+  }
 
   // Lambertian bounce; a direction below the geometric surface is absorbed
   float u1 = rng_uniform(path, frame.sample, frame.bounce, 2u, frame.seed);
   float u2 = rng_uniform(path, frame.sample, frame.bounce, 3u, frame.seed);
   float3 wi = lambert_sample(ns, u1, u2);
-  if (dot(wi, ng) <= 0.0f) return;
-  beta *= vec4_xyz(material.base_color);
+  float cos_i = dot(wi, ns);
+  if (dot(wi, ng) <= 0.0f || cos_i <= 0.0f) return;
+  beta *= albedo;
+
+  // Russian roulette: survive with probability from the throughput, reweight
+  if (!WT_INTEGRATOR_MINIMAL && (frame.flags & WT_FLAG_RR) && frame.bounce >= frame.rr_min_depth) {
+    float q = fmin(fmax(beta.x, fmax(beta.y, beta.z)), 0.95f);
+    if (rng_uniform(path, frame.sample, frame.bounce, 7u, frame.seed) >= q) return;
+    beta /= q;
+  }
   if (beta.x <= 0.0f && beta.y <= 0.0f && beta.z <= 0.0f) return;
 
-  throughput[path] = (float4)(beta, 0.0f);
-  ray_o[path] = (float4)(ray_offset_origin(p, ng), 0.0f);
+  throughput[path] = (float4)(beta, cos_i / WT_PI);
+  ray_o[path] = (float4)(origin, 0.0f);
   ray_d[path] = (float4)(wi, INFINITY);
   uint slot = atomic_inc(&counters[out_slot]);
   queue_out[slot] = path;

@@ -3,6 +3,7 @@
 #include "generate.cl"
 #include "extend.cl"
 #include "shade.cl"
+#include "connect.cl"
 #include "accumulate.cl"
 #include "tonemap.cl"
 #include "trace.cl"

@@ -29,6 +29,9 @@ struct RenderOptions {
   wt::RenderSettings settings;
   std::string device;
   std::vector<float> background{0.0f, 0.0f, 0.0f};
+  std::string integrator = "path";
+  std::string misHeuristic = "balance";
+  bool noNee = false, noMis = false, noRr = false;
   int sceneIndex = -1;
   int camera = 0;
   std::string kernelDir;
@@ -67,6 +70,11 @@ int runRender(const RenderOptions& options) {
   for (float c : options.background)
     if (!(c >= 0.0f) || !std::isfinite(c)) throw std::invalid_argument("--background: components must be finite and >= 0");
   settings.background = glm::vec3(options.background[0], options.background[1], options.background[2]);
+  settings.integrator = options.integrator == "minimal" ? wt::Integrator::Minimal : wt::Integrator::Path;
+  settings.useNee = !options.noNee;
+  settings.useMis = !options.noMis;
+  settings.useRussianRoulette = !options.noRr;
+  settings.powerHeuristic = options.misHeuristic == "power";
   wt::Renderer renderer(context, scene, settings);
   const wt::BvhBuildStats& bvh = renderer.sceneBuffers().bvh().stats;
   wt::log::info("scene " + scene.sourceName + ": " + std::to_string(scene.triangles.size()) +
@@ -157,6 +165,16 @@ int main(int argc, char** argv) {
   renderCmd->add_option("--background", render.background,
                         "Constant environment radiance R,G,B seen by rays that leave the scene")
       ->delimiter(',')->expected(3)->capture_default_str();
+  renderCmd->add_option("--integrator", render.integrator,
+                        "minimal (brute-force reference) or path (NEE, MIS, Russian roulette)")
+      ->check(CLI::IsMember({"minimal", "path"}))->capture_default_str();
+  renderCmd->add_flag("--no-nee", render.noNee, "path: no next-event estimation");
+  renderCmd->add_flag("--no-mis", render.noMis, "path: NEE without multiple importance sampling");
+  renderCmd->add_option("--mis-heuristic", render.misHeuristic, "path: balance or power")
+      ->check(CLI::IsMember({"balance", "power"}))->capture_default_str();
+  renderCmd->add_flag("--no-rr", render.noRr, "path: no Russian roulette");
+  renderCmd->add_option("--rr-depth", render.settings.rrMinDepth, "path: first bounce Russian roulette may end")
+      ->check(CLI::Range(0, 1024))->capture_default_str();
   renderCmd->add_option("--device", render.device, "Device index or name substring (see 'wavetrace devices')");
   renderCmd->add_option("--scene-index", render.sceneIndex, "glTF scene to render (default: the file's default scene)")
       ->check(CLI::Range(-1, 1 << 20));

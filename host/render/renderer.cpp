@@ -2,13 +2,15 @@
 
 #include "device/program.h"
 
+#include <algorithm>
 #include <chrono>
+#include <type_traits>
 #include <cmath>
 
 namespace wt {
 namespace {
 
-WtFrameParams frameParams(const RenderSettings& s, int sample, int bounce) {
+WtFrameParams frameParams(const RenderSettings& s, const LightList& lights, int sample, int bounce) {
   WtFrameParams p{};
   p.width = cl_uint(s.width);
   p.height = cl_uint(s.height);
@@ -18,6 +20,14 @@ WtFrameParams frameParams(const RenderSettings& s, int sample, int bounce) {
   p.seed = s.seed;
   p.exposure = std::exp2(s.exposureStops);
   p.background = {s.background.x, s.background.y, s.background.z, 0.0f};
+  p.light_count = lights.sampleable ? cl_uint(lights.lights.size()) : 0u;
+  p.analytic_count = lights.analyticCount;
+  p.env_pmf = lights.environmentPmf;
+  p.rr_min_depth = cl_uint(std::max(0, s.rrMinDepth));
+  if (s.integrator == Integrator::Path) {
+    p.flags = (s.useNee ? WT_FLAG_NEE : 0u) | (s.useMis ? WT_FLAG_MIS : 0u) |
+              (s.powerHeuristic ? WT_FLAG_POWER_HEURISTIC : 0u) | (s.useRussianRoulette ? WT_FLAG_RR : 0u);
+  }
   return p;
 }
 
@@ -28,14 +38,17 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
   CameraDesc desc = scene.camera ? *scene.camera : defaultCamera(scene.bounds());
   m_camera = makeCamera(desc, settings.width, settings.height);
   m_scene = std::make_unique<SceneBuffers>(context, scene);
+  double envLum = luminance(settings.background);
+  m_lights = buildLightList(scene, *m_scene, envLum > 0.0 ? environmentPowerEstimate(scene, envLum) : 0.0);
 
   KernelFeatures features;
-  features.integratorMinimal = true;
+  features.integratorMinimal = settings.integrator == Integrator::Minimal;
   features.bvhStackSize = m_scene->stackSize();
   m_program = buildProgram(context, features);
   m_generate = cl::Kernel(m_program, "generate");
   m_extend = cl::Kernel(m_program, "extend");
   m_shade = cl::Kernel(m_program, "shade");
+  m_connect = cl::Kernel(m_program, "connect");
   m_accumulate = cl::Kernel(m_program, "accumulate");
   m_tonemap = cl::Kernel(m_program, "tonemap");
 
@@ -49,6 +62,17 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
   m_queueA = make(4), m_queueB = make(4);
   m_counters = cl::Buffer(ctx, CL_MEM_READ_WRITE, WT_COUNTER_COUNT * sizeof(cl_uint));
   m_mean = make(16), m_m2 = make(16), m_sampleCount = make(4), m_pixels = make(4);
+  m_shadowQueue = make(4), m_shadowO = make(16), m_shadowD = make(16), m_shadowRadiance = make(16);
+  auto upload = [&](const auto& data) {
+    using T = typename std::decay_t<decltype(data)>::value_type;
+    std::size_t bytes = std::max<std::size_t>(data.size(), 1) * sizeof(T);
+    cl::Buffer b(ctx, CL_MEM_READ_ONLY, bytes);
+    if (!data.empty()) context.queue().enqueueWriteBuffer(b, CL_TRUE, 0, data.size() * sizeof(T), data.data());
+    return b;
+  };
+  m_lightBuffer = upload(m_lights.lights);
+  m_aliasBuffer = upload(m_lights.alias);
+  m_emitterPdfBuffer = upload(m_lights.emitterPdfArea);
 
   cl::CommandQueue& q = context.queue();
   q.enqueueFillBuffer(m_mean, cl_float(0), 0, pixels * 16);
@@ -73,8 +97,17 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
   m_shade.setArg(1, m_counters);
   a = 6;
   for (cl::Buffer* b : {&m_rayO, &m_rayD, &m_hits, &m_throughput, &m_radiance, &m_scene->triangles,
-                        &m_scene->triVerts, &m_scene->normals, &m_scene->materials})
+                        &m_scene->triVerts, &m_scene->normals, &m_scene->materials, &m_lightBuffer,
+                        &m_aliasBuffer, &m_emitterPdfBuffer, &m_shadowQueue, &m_shadowO, &m_shadowD,
+                        &m_shadowRadiance})
     m_shade.setArg(a++, *b);
+
+  a = 0;
+  for (cl::Buffer* b : {&m_counters, &m_shadowQueue, &m_shadowO, &m_shadowD, &m_shadowRadiance, &m_scene->nodes})
+    m_connect.setArg(a++, *b);
+  m_connect.setArg(a++, m_scene->nodeCount);
+  m_connect.setArg(a++, m_scene->triVerts);
+  m_connect.setArg(a++, m_radiance);
 
   a = 1;
   for (cl::Buffer* b : {&m_radiance, &m_mean, &m_m2, &m_sampleCount, &m_counters})
@@ -93,7 +126,7 @@ void Renderer::renderSample() {
   cl::CommandQueue& q = m_context.queue();
 
   // generate: every pixel's path enters queue A
-  m_generate.setArg(0, frameParams(m_settings, sample, 0));
+  m_generate.setArg(0, frameParams(m_settings, m_lights, sample, 0));
   m_generate.setArg(1, m_camera);
   m_context.launch("generate", m_generate, pixels);
 
@@ -104,6 +137,7 @@ void Renderer::renderSample() {
   for (int bounce = 0; bounce <= m_settings.maxBounces && alive > 0; ++bounce) {
     m_stats.raysTraced += alive;
     q.enqueueFillBuffer(m_counters, cl_uint(0), outSlot * sizeof(cl_uint), sizeof(cl_uint));
+    q.enqueueFillBuffer(m_counters, cl_uint(0), WT_COUNTER_SHADOW * sizeof(cl_uint), sizeof(cl_uint));
 
     // extend: closest hit of every queued path
     m_extend.setArg(1, inSlot);
@@ -111,12 +145,15 @@ void Renderer::renderSample() {
     m_context.launch("extend", m_extend, alive);
 
     // shade: emission and the next direction; survivors go to the other queue
-    m_shade.setArg(0, frameParams(m_settings, sample, bounce));
+    m_shade.setArg(0, frameParams(m_settings, m_lights, sample, bounce));
     m_shade.setArg(2, inSlot);
     m_shade.setArg(3, outSlot);
     m_shade.setArg(4, *queueIn);
     m_shade.setArg(5, *queueOut);
     m_context.launch("shade", m_shade, alive);
+
+    // connect: shadow rays of this bounce (count read on the device)
+    if (m_lights.sampleable) m_context.launch("connect", m_connect, alive);
 
     // end of the bounce: the only point where the host reads a count back
     cl_uint next = 0;
@@ -127,7 +164,7 @@ void Renderer::renderSample() {
   }
 
   // accumulate: fold the pass into the running mean
-  m_accumulate.setArg(0, frameParams(m_settings, sample, 0));
+  m_accumulate.setArg(0, frameParams(m_settings, m_lights, sample, 0));
   m_context.launch("accumulate", m_accumulate, pixels);
   m_context.finish();
   ++m_stats.samplesDone;
@@ -137,7 +174,7 @@ void Renderer::renderSample() {
 Image Renderer::readImage() {
   const std::size_t pixels = std::size_t(m_settings.width) * std::size_t(m_settings.height);
   cl::CommandQueue& q = m_context.queue();
-  m_tonemap.setArg(0, frameParams(m_settings, m_stats.samplesDone, 0));
+  m_tonemap.setArg(0, frameParams(m_settings, m_lights, m_stats.samplesDone, 0));
   m_context.launch("tonemap", m_tonemap, pixels);
 
   std::vector<float> mean(4 * pixels), m2(4 * pixels);

@@ -6,6 +6,7 @@
 
 #include "device/context.h"
 #include "device/scene_buffers.h"
+#include "render/light_list.h"
 #include "scene/scene.h"
 
 #include <glm/glm.hpp>
@@ -16,6 +17,11 @@
 
 namespace wt {
 
+enum class Integrator {
+  Minimal,  ///< brute force (Falcor's MinimalPathTracer): emission at hits, environment on miss, one uniformly chosen analytic light per vertex; no MIS, no Russian roulette
+  Path,     ///< next-event estimation towards every light by power, MIS, Russian roulette
+};
+
 struct RenderSettings {
   int width = 512;
   int height = 512;
@@ -24,6 +30,12 @@ struct RenderSettings {
   std::uint32_t seed = 0;
   float exposureStops = 0.0f;
   glm::vec3 background{0.0f};  ///< constant environment radiance seen by escaping paths
+  Integrator integrator = Integrator::Path;
+  bool useNee = true;           ///< path: next-event estimation
+  bool useMis = true;           ///< path: MIS between NEE and BSDF sampling
+  bool powerHeuristic = false;  ///< path: power heuristic instead of balance
+  bool useRussianRoulette = true;  ///< path
+  int rrMinDepth = 3;           ///< path: first bounce at which roulette may end a path
 };
 
 /// The accumulated image read back from the device.
@@ -62,7 +74,10 @@ class Renderer {
   WtCamera m_camera;
   std::unique_ptr<SceneBuffers> m_scene;
   cl::Program m_program;
-  cl::Kernel m_generate, m_extend, m_shade, m_accumulate, m_tonemap;
+  cl::Kernel m_generate, m_extend, m_shade, m_connect, m_accumulate, m_tonemap;
+  LightList m_lights;
+  cl::Buffer m_lightBuffer, m_aliasBuffer, m_emitterPdfBuffer;
+  cl::Buffer m_shadowQueue, m_shadowO, m_shadowD, m_shadowRadiance;
   // path state (structure of arrays, one entry per pixel)
   cl::Buffer m_rayO, m_rayD, m_hits, m_throughput, m_radiance;
   cl::Buffer m_queueA, m_queueB, m_counters;

@@ -31,6 +31,7 @@ namespace wt {
 namespace {
 
 constexpr const char* kEmissiveStrength = "KHR_materials_emissive_strength";
+constexpr const char* kLightsPunctual = "KHR_lights_punctual";
 /// Extensions whose absence changes where the geometry is or how its bytes
 /// read: a file that requires one cannot be drawn correctly without it.
 constexpr std::array<const char*, 3> kGeometryExtensions = {
@@ -263,7 +264,7 @@ class Converter {
         fail("requires extension " + ext + ", which is not supported");
     }
     for (const std::string& ext : m_model.extensionsUsed) {
-      if (ext == kEmissiveStrength) continue;
+      if (ext == kEmissiveStrength || ext == kLightsPunctual) continue;
       bool required = std::find(m_model.extensionsRequired.begin(), m_model.extensionsRequired.end(),
                                 ext) != m_model.extensionsRequired.end();
       m_scene.addWarning(ext + " is not supported; ignored" +
@@ -758,6 +759,8 @@ class Converter {
         fail(label + ": references missing camera " + std::to_string(node.camera));
       m_cameraNodes.push_back({nodeIndex, world});
     }
+    if (auto ext = node.extensions.find(kLightsPunctual); ext != node.extensions.end())
+      placeLight(label, ext->second, world);
     if (node.mesh >= 0) {
       if (std::size_t(node.mesh) >= m_model.meshes.size())
         fail(label + ": references missing mesh " + std::to_string(node.mesh));
@@ -768,6 +771,49 @@ class Converter {
       for (std::size_t p = 0; p < primCount; ++p)
         emit(primitive(meshIndex, p), world, nodeIndex, meshIndex, p);
     }
+  }
+
+  // lights
+
+  void placeLight(const std::string& nodeLabel, const tinygltf::Value& ext, const glm::mat4& world) {
+    if (!ext.IsObject() || !ext.Has("light") || !ext.Get("light").IsInt())
+      fail(nodeLabel + ": " + kLightsPunctual + " has no integer 'light'");
+    int index = ext.Get("light").GetNumberAsInt();
+    if (index < 0 || std::size_t(index) >= m_model.lights.size())
+      fail(nodeLabel + ": references missing light " + std::to_string(index) + " (" +
+           std::to_string(m_model.lights.size()) + " lights)");
+    const tinygltf::Light& src = m_model.lights[std::size_t(index)];
+    const std::string label = "light " + std::to_string(index);
+    PunctualLight light;
+    light.name = src.name.empty() ? label : src.name;
+    if (src.type == "point") light.type = WT_LIGHT_POINT;
+    else if (src.type == "spot") light.type = WT_LIGHT_SPOT;
+    else if (src.type == "directional") light.type = WT_LIGHT_DIRECTIONAL;
+    else fail(label + ": unknown type '" + src.type + "'");
+    glm::vec3 color(1.0f);
+    if (!src.color.empty()) {
+      if (src.color.size() != 3) fail(label + ": color must have 3 components");
+      color = glm::vec3(float(src.color[0]), float(src.color[1]), float(src.color[2]));
+    }
+    if (!std::isfinite(src.intensity) || src.intensity < 0.0 || !std::isfinite(color.x) ||
+        !std::isfinite(color.y) || !std::isfinite(color.z) || glm::any(glm::lessThan(color, glm::vec3(0.0f))))
+      fail(label + ": intensity and color must be finite and non-negative");
+    light.intensity = color * float(src.intensity);
+    if (src.range > 0.0)
+      m_scene.addWarning("light range is not supported (lights reach every distance, inverse square)");
+    light.position = glm::vec3(world[3]);
+    glm::vec3 forward = -glm::vec3(world[2]);
+    if (!(glm::length(forward) > 0.0f) || !std::isfinite(glm::length(forward)))
+      fail(nodeLabel + ": the transform of " + label + " has no direction (zero scale)");
+    light.direction = glm::normalize(forward);
+    if (light.type == WT_LIGHT_SPOT) {
+      light.innerConeAngle = float(src.spot.innerConeAngle);
+      light.outerConeAngle = float(src.spot.outerConeAngle);
+      if (!(light.innerConeAngle >= 0.0f && light.innerConeAngle < light.outerConeAngle &&
+            light.outerConeAngle <= 1.5707964f))
+        fail(label + ": spot cone angles must satisfy 0 <= inner < outer <= pi/2");
+    }
+    m_scene.lights.push_back(light);
   }
 
   // cameras

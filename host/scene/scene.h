@@ -4,6 +4,7 @@
 #pragma once
 
 #include "core/math.h"
+#include "shared/lights.h"
 #include "shared/types.h"
 
 #include <glm/glm.hpp>
@@ -33,6 +34,18 @@ struct CameraDesc {
   std::string name;
 };
 
+/// A KHR_lights_punctual light placed in the world. Units as glTF: candela
+/// for point and spot, lux for directional (see kernels/shared/lights.h).
+struct PunctualLight {
+  int type = WT_LIGHT_POINT;        ///< WT_LIGHT_POINT, _SPOT or _DIRECTIONAL
+  glm::vec3 position{0.0f};         ///< world
+  glm::vec3 direction{0, 0, -1};    ///< world, unit: where the light travels (the node's -Z)
+  glm::vec3 intensity{1.0f};        ///< colour x intensity
+  float innerConeAngle = 0.0f;      ///< spot, radians
+  float outerConeAngle = 0.7853982f;///< spot, radians
+  std::string name;
+};
+
 struct Scene {
   std::vector<WtVec4> positions;   ///< world space, w = 0
   std::vector<WtVec4> normals;     ///< world space, unit; (0,0,0) = none, use the geometric normal. Same size as positions.
@@ -41,6 +54,7 @@ struct Scene {
   std::vector<WtMaterial> materials;      ///< never empty after loading (a default grey is added when needed)
   std::vector<std::string> materialNames; ///< same size as materials
   std::optional<CameraDesc> camera;       ///< absent: frame the bounds (defaultCamera)
+  std::vector<PunctualLight> lights;      ///< KHR_lights_punctual
   std::vector<std::string> warnings;      ///< unsupported features, once each, by name
   std::string sourceName;                 ///< file the scene came from, for messages
 

@@ -2,8 +2,9 @@
 // dimension, seed), so the image never depends on scheduling or device
 // count. Shared by host (tests) and kernels.
 //
-// Dimension allocation: bounce 0, dims 0-1: pixel jitter; every bounce,
-// dims 2-3: BSDF direction. Later stages take the next free dimensions.
+// Dimension allocation: bounce 0, dims 0-1: pixel jitter. Every bounce:
+// dims 2-3: BSDF direction; 4: light selection; 5-6: point on the light;
+// 7: Russian roulette. Later features take the next free dimensions.
 #ifndef WT_SHARED_RNG_H
 #define WT_SHARED_RNG_H
 

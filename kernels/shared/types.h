@@ -62,12 +62,25 @@ typedef struct WtFrameParams {
   float exposure;       ///< tonemap scale, 2^stops
   wt_uint pad0;
   WtVec4 background;    ///< radiance of every direction that escapes the scene (constant environment); w unused
+  wt_uint light_count;     ///< entries in the light list (0: no light sampling)
+  wt_uint analytic_count;  ///< lights [0, analytic_count) are point, spot or directional
+  wt_uint flags;           ///< WT_FLAG_* integrator switches
+  wt_uint rr_min_depth;    ///< Russian roulette starts at this bounce
+  float env_pmf;           ///< probability that light selection picks the environment (0: not a light)
+  wt_uint pad1, pad2, pad3;
 } WtFrameParams;
+
+/// Integrator switches in WtFrameParams::flags (runtime: no rebuild).
+#define WT_FLAG_NEE 1u            ///< next-event estimation towards every light
+#define WT_FLAG_MIS 2u            ///< weight NEE and BSDF hits of lights by MIS
+#define WT_FLAG_POWER_HEURISTIC 4u ///< power heuristic (beta 2) instead of the balance heuristic
+#define WT_FLAG_RR 8u             ///< Russian roulette
 
 /// Slots of the queue-counter buffer.
 #define WT_COUNTER_QUEUE_A 0      ///< paths in queue A
 #define WT_COUNTER_QUEUE_B 1      ///< paths in queue B
 #define WT_COUNTER_NONFINITE 2    ///< samples discarded as NaN/Inf
+#define WT_COUNTER_SHADOW 3       ///< shadow rays queued by shade for connect
 #define WT_COUNTER_COUNT 4
 
 #endif  // WT_SHARED_TYPES_H

@@ -744,7 +744,7 @@ TEST(GltfLoader, DefaultMaterialIsAppendedOnce) {
 
 TEST(GltfLoader, UnsupportedFeaturesWarnOnceEach) {
   GltfDoc doc = triangleDoc();
-  doc.extensionsUsed = "[\"KHR_materials_transmission\",\"KHR_materials_emissive_strength\",\"KHR_lights_punctual\"]";
+  doc.extensionsUsed = "[\"KHR_materials_transmission\",\"KHR_materials_emissive_strength\",\"KHR_materials_sheen\"]";
   doc.images.push_back("{\"uri\":\"does_not_exist.png\"}");
   doc.images.push_back("{\"uri\":\"also_missing.jpg\"}");
   doc.materials.push_back(
@@ -759,7 +759,7 @@ TEST(GltfLoader, UnsupportedFeaturesWarnOnceEach) {
                          [&](const std::string& w) { return w.find(part) != std::string::npos; });
   };
   EXPECT_EQ(count("KHR_materials_transmission is not supported; ignored"), 1);
-  EXPECT_EQ(count("KHR_lights_punctual is not supported"), 1);
+  EXPECT_EQ(count("KHR_materials_sheen is not supported"), 1);
   EXPECT_EQ(count("emissive_strength"), 0);
   EXPECT_EQ(count("textures are not supported yet; 2 images ignored"), 1);
   EXPECT_EQ(count("material textures"), 1);

@@ -1,0 +1,17 @@
+// Stage 4 of a bounce: shadow rays queued by shade; an unblocked one adds
+// its precomputed contribution to its path's radiance.
+#include "bvh.cl"
+
+__kernel void connect(__global const uint* counters, __global const uint* shadow_queue,
+                      __global const float4* shadow_o, __global const float4* shadow_d,
+                      __global const float4* shadow_radiance, __global const WtBvhNode* nodes,
+                      uint node_count, __global const float4* tri_verts,
+                      __global float4* radiance) {
+  uint i = get_global_id(0);
+  if (i >= counters[WT_COUNTER_SHADOW]) return;
+  uint path = shadow_queue[i];
+  float4 o = shadow_o[path];
+  float4 d = shadow_d[path];
+  BvhScene scene = {nodes, node_count, tri_verts};
+  if (!bvh_occluded(scene, o.xyz, d.xyz, o.w, d.w)) radiance[path] += shadow_radiance[path];
+}

@@ -1,0 +1,107 @@
+// Shared pieces of the render tests: scenes built in code, a render call and
+// a statistical comparison of two images by regions.
+#pragma once
+
+#include "device_fixture.h"
+#include "render/renderer.h"
+#include "scene/generators.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+
+namespace wt::test {
+
+inline Image render(const Scene& scene, RenderSettings settings, int spp) {
+  Renderer renderer(deviceContext(), scene, settings);
+  for (int s = 0; s < spp; ++s) renderer.renderSample();
+  Image image = renderer.readImage();
+  EXPECT_EQ(renderer.stats().nonFiniteSamples, 0u);
+  return image;
+}
+
+/// Two quads (four triangles) spanning [-half, half]^2 in the y = height plane.
+inline Scene makeFloor(float half, float height, const WtMaterial& material, bool faceDown = false) {
+  Scene scene;
+  glm::vec3 corners[4] = {{-half, height, -half}, {half, height, -half}, {half, height, half}, {-half, height, half}};
+  for (const glm::vec3& c : corners) {
+    scene.positions.push_back({c.x, c.y, c.z, 0});
+    scene.normals.push_back({0, 0, 0, 0});
+    scene.texcoords.emplace_back(0.0f);
+  }
+  if (faceDown) {
+    scene.triangles.push_back({0, 1, 2, 0});
+    scene.triangles.push_back({0, 2, 3, 0});
+  } else {
+    scene.triangles.push_back({0, 2, 1, 0});
+    scene.triangles.push_back({0, 3, 2, 0});
+  }
+  scene.materials.push_back(material);
+  scene.materialNames.push_back("floor");
+  return scene;
+}
+
+/// An orthographic camera at `eye` looking straight down, seeing 2*ymag across.
+inline CameraDesc topDownCamera(glm::vec3 eye, float ymag) {
+  CameraDesc c;
+  c.orthographic = true;
+  c.ymag = c.xmag = ymag;
+  // camera -Z along world -Y, camera +Y along world -Z
+  c.cameraToWorld = glm::mat4(glm::vec4(1, 0, 0, 0), glm::vec4(0, 0, -1, 0), glm::vec4(0, 1, 0, 0),
+                              glm::vec4(eye, 1));
+  return c;
+}
+
+/// Mean of a channel over a pixel block and the variance of that mean,
+/// from the per-pixel sample variances.
+struct BlockStat {
+  double mean = 0.0, varianceOfMean = 0.0;
+};
+
+inline BlockStat blockStat(const Image& img, int x0, int y0, int x1, int y1, int channel) {
+  BlockStat s;
+  int n = 0;
+  for (int y = y0; y < y1; ++y)
+    for (int x = x0; x < x1; ++x, ++n) {
+      std::size_t p = std::size_t(y) * img.width + x;
+      s.mean += img.rgb[3 * p + channel];
+      s.varianceOfMean += img.rgbVariance[3 * p + channel] / std::max<std::uint32_t>(img.samples[p], 1);
+    }
+  s.mean /= n;
+  s.varianceOfMean /= double(n) * n;
+  return s;
+}
+
+/// Compare two renders of the same scene region by region: each block's
+/// channel means must agree within `zLimit` standard errors of their
+/// difference. Returns the largest |z| seen (for diagnostics).
+inline double expectSameImage(const Image& a, const Image& b, int blocks, double zLimit,
+                              const std::string& what) {
+  EXPECT_EQ(a.width, b.width);
+  EXPECT_EQ(a.height, b.height);
+  double worst = 0.0;
+  int failures = 0;
+  for (int by = 0; by < blocks; ++by)
+    for (int bx = 0; bx < blocks; ++bx)
+      for (int c = 0; c < 3; ++c) {
+        int x0 = bx * a.width / blocks, x1 = (bx + 1) * a.width / blocks;
+        int y0 = by * a.height / blocks, y1 = (by + 1) * a.height / blocks;
+        BlockStat sa = blockStat(a, x0, y0, x1, y1, c), sb = blockStat(b, x0, y0, x1, y1, c);
+        double se = std::sqrt(sa.varianceOfMean + sb.varianceOfMean);
+        double diff = sa.mean - sb.mean;
+        if (se == 0.0) {
+          EXPECT_NEAR(sa.mean, sb.mean, 1e-5 * std::max(1.0, std::abs(sb.mean))) << what;
+          continue;
+        }
+        double z = diff / se;
+        worst = std::max(worst, std::abs(z));
+        if (std::abs(z) > zLimit && ++failures <= 5)
+          ADD_FAILURE() << what << ": block (" << bx << "," << by << ") channel " << c << ": "
+                        << sa.mean << " vs " << sb.mean << " (z = " << z << ", standard error " << se << ")";
+      }
+  EXPECT_EQ(failures, 0) << what;
+  return worst;
+}
+
+}  // namespace wt::test

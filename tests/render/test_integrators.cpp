@@ -1,0 +1,222 @@
+// The two integrators against closed forms and against each other: `path`
+// (NEE, MIS, Russian roulette) must converge to what `minimal` converges to.
+#include "render/render_helpers.h"
+#include "scene/default_scene.h"
+
+#include <glm/gtc/constants.hpp>
+#include <glm/gtc/matrix_transform.hpp>
+
+#include <numbers>
+
+namespace wt {
+namespace {
+
+using test::expectSameImage;
+using test::render;
+
+RenderSettings small(Integrator integrator, int size = 16) {
+  RenderSettings s;
+  s.width = s.height = size;
+  s.integrator = integrator;
+  s.seed = 11;
+  return s;
+}
+
+/// Every pixel's mean is `expected` within `zLimit` standard errors (from the
+/// pixel's own variance) plus a relative float allowance.
+void expectUniform(const Image& img, glm::vec3 expected, double relFloat, double zLimit, const std::string& what) {
+  int bad = 0;
+  for (std::size_t p = 0; p < img.samples.size(); ++p)
+    for (int c = 0; c < 3; ++c) {
+      double mean = img.rgb[3 * p + c];
+      double se = std::sqrt(img.rgbVariance[3 * p + c] / img.samples[p]);
+      double tol = zLimit * se + relFloat * std::abs(expected[c]);
+      if (std::abs(mean - expected[c]) > tol && ++bad <= 5)
+        ADD_FAILURE() << what << ": pixel " << p << " channel " << c << ": " << mean << " vs "
+                      << expected[c] << " (tolerance " << tol << ")";
+    }
+  EXPECT_EQ(bad, 0) << what;
+}
+
+// ---- analytic lights -------------------------------------------------------------
+
+Scene floorUnder(PunctualLight light, float albedo) {
+  Scene scene = test::makeFloor(10.0f, 0.0f, makeMaterial(glm::vec3(albedo)));
+  scene.lights.push_back(light);
+  return scene;
+}
+
+TEST(Integrators, PointLightInverseSquare) {
+  const float albedo = 0.6f, h = 2.5f;
+  PunctualLight light;
+  light.type = WT_LIGHT_POINT;
+  light.position = {0.0f, h, 0.0f};
+  light.intensity = {3.0f, 2.0f, 1.0f};
+  Scene scene = floorUnder(light, albedo);
+  // a footprint of 2e-3 h: radiance varies by < 1e-6 across it
+  scene.camera = test::topDownCamera({0.0f, 1.0f, 0.0f}, 1e-3f * h);
+  glm::vec3 expected = albedo / std::numbers::pi_v<float> * light.intensity / (h * h);
+  for (Integrator integrator : {Integrator::Minimal, Integrator::Path}) {
+    RenderSettings s = small(integrator, 8);
+    s.maxBounces = 1;
+    expectUniform(render(scene, s, 4), expected, 1e-5, 0.0, "point light");
+  }
+}
+
+TEST(Integrators, SpotLightConeFalloff) {
+  const float albedo = 0.5f, h = 2.0f;
+  PunctualLight light;
+  light.type = WT_LIGHT_SPOT;
+  light.position = {0.0f, h, 0.0f};
+  light.direction = {0.0f, -1.0f, 0.0f};
+  light.intensity = glm::vec3(10.0f);
+  light.innerConeAngle = 0.3f;
+  light.outerConeAngle = 0.5f;
+  Scene scene = floorUnder(light, albedo);
+  // look at a point 0.4 rad off the axis: between the cones
+  const float theta = 0.4f, x = h * std::tan(theta), d2 = h * h + x * x;
+  scene.camera = test::topDownCamera({x, 1.0f, 0.0f}, 1e-6f);
+  float t = (std::cos(theta) - std::cos(0.5f)) / (std::cos(0.3f) - std::cos(0.5f));
+  glm::vec3 expected = albedo / std::numbers::pi_v<float> * light.intensity * (t * t) * (h / std::sqrt(d2)) / d2;
+  for (Integrator integrator : {Integrator::Minimal, Integrator::Path}) {
+    RenderSettings s = small(integrator, 4);
+    s.maxBounces = 1;
+    expectUniform(render(scene, s, 2), expected, 2e-4, 0.0, "spot light");
+  }
+}
+
+TEST(Integrators, DirectionalLightCosine) {
+  const float albedo = 0.8f, angle = 0.7f;
+  PunctualLight light;
+  light.type = WT_LIGHT_DIRECTIONAL;
+  light.direction = glm::normalize(glm::vec3(std::sin(angle), -std::cos(angle), 0.0f));
+  light.intensity = glm::vec3(2.0f);
+  Scene scene = floorUnder(light, albedo);
+  scene.camera = test::topDownCamera({0.0f, 1.0f, 0.0f}, 0.5f);
+  glm::vec3 expected = albedo / std::numbers::pi_v<float> * light.intensity * std::cos(angle);
+  for (Integrator integrator : {Integrator::Minimal, Integrator::Path}) {
+    RenderSettings s = small(integrator, 8);
+    s.maxBounces = 1;
+    expectUniform(render(scene, s, 2), expected, 1e-5, 0.0, "directional light");
+  }
+}
+
+// ---- area light: a square emitter over a plane point ----------------------------
+
+/// Irradiance at the origin (normal +y) from a polygon of uniform radiance L
+/// (Lambert's formula: E = L/2 * sum over edges of angle * cos to the normal).
+double polygonIrradiance(const std::vector<glm::dvec3>& poly, double radiance) {
+  double sum = 0.0;
+  for (std::size_t i = 0; i < poly.size(); ++i) {
+    glm::dvec3 a = glm::normalize(poly[i]), b = glm::normalize(poly[(i + 1) % poly.size()]);
+    double angle = std::acos(glm::clamp(glm::dot(a, b), -1.0, 1.0));
+    glm::dvec3 g = glm::normalize(glm::cross(a, b));
+    sum += angle * g.y;
+  }
+  return 0.5 * radiance * std::abs(sum);
+}
+
+TEST(Integrators, SquareEmitterIrradianceMatchesClosedForm) {
+  const float albedo = 0.5f, h = 1.0f, half = 0.5f, le = 4.0f;
+  Scene scene = test::makeFloor(20.0f, 0.0f, makeMaterial(glm::vec3(albedo)));
+  Scene lamp = test::makeFloor(half, h, makeMaterial(glm::vec3(0.0f), glm::vec3(le)), /*faceDown=*/true);
+  // shift the lamp off-centre so the closed form is not symmetric
+  for (WtVec4& p : lamp.positions) p.x += 0.3f;
+  appendScene(scene, lamp);
+  scene.camera = test::topDownCamera({0.0f, 0.5f, 0.0f}, 1e-4f);
+  std::vector<glm::dvec3> poly = {{-half + 0.3, h, -half}, {half + 0.3, h, -half}, {half + 0.3, h, half}, {-half + 0.3, h, half}};
+  double expected = albedo / std::numbers::pi * polygonIrradiance(poly, le);
+  for (Integrator integrator : {Integrator::Minimal, Integrator::Path}) {
+    RenderSettings s = small(integrator, 8);
+    s.maxBounces = 1;
+    Image img = render(scene, s, integrator == Integrator::Minimal ? 512 : 64);
+    test::BlockStat all = test::blockStat(img, 0, 0, img.width, img.height, 1);
+    EXPECT_NEAR(all.mean, expected, 5.0 * std::sqrt(all.varianceOfMean) + 1e-3 * expected)
+        << (integrator == Integrator::Minimal ? "minimal" : "path");
+    EXPECT_LT(std::sqrt(all.varianceOfMean), 0.02 * expected) << "too few samples to test anything";
+  }
+}
+
+// ---- environment: the furnace ------------------------------------------------------
+
+TEST(Integrators, ConvexDiffuseSphereUnderUniformSkyReflectsItsAlbedo) {
+  // A convex object never sees itself: one bounce to the sky, radiance a * L.
+  const float albedo = 0.7f;
+  Scene scene = makeIcosphere(3, glm::vec3(0.0f), 1.0f, makeMaterial(glm::vec3(albedo)));
+  for (WtVec4& n : scene.normals) n = {0, 0, 0, 0};
+  CameraDesc cam;
+  cam.cameraToWorld = glm::translate(glm::mat4(1.0f), glm::vec3(0.0f, 0.0f, 4.0f));
+  cam.yfov = 0.2f;  // the sphere fills the frame
+  scene.camera = cam;
+  for (Integrator integrator : {Integrator::Minimal, Integrator::Path}) {
+    RenderSettings s = small(integrator, 8);
+    s.background = glm::vec3(1.0f, 0.5f, 0.25f);
+    s.maxBounces = 4;
+    Image img = render(scene, s, 64);
+    expectUniform(img, albedo * s.background, 1e-4, 5.0, "furnace");
+  }
+}
+
+// ---- path against minimal ----------------------------------------------------------
+
+TEST(Integrators, PathMatchesMinimalOnCornell) {
+  Scene scene = loadDefaultScene();
+  RenderSettings s = small(Integrator::Minimal, 16);
+  s.maxBounces = 4;
+  Image reference = render(scene, s, 768);
+  for (auto [nee, mis, rr, label] : {std::tuple{true, true, true, "path"}, std::tuple{true, false, false, "NEE only"},
+                                     std::tuple{false, false, true, "BSDF only + RR"},
+                                     std::tuple{true, true, false, "NEE+MIS, no RR"}}) {
+    RenderSettings p = s;
+    p.integrator = Integrator::Path;
+    p.useNee = nee, p.useMis = mis, p.useRussianRoulette = rr;
+    p.rrMinDepth = 1;
+    Image img = render(scene, p, nee ? 128 : 768);
+    expectSameImage(reference, img, 4, 5.0, label);
+  }
+}
+
+TEST(Integrators, PathMatchesMinimalWithAnalyticLightsAndSky) {
+  // a floor and a wall, lit by a point, a spot and the sky
+  Scene scene = test::makeFloor(2.0f, 0.0f, makeMaterial(glm::vec3(0.6f, 0.5f, 0.4f)));
+  Scene wall = test::makeFloor(1.0f, 0.0f, makeMaterial(glm::vec3(0.3f, 0.7f, 0.3f)));
+  for (WtVec4& p : wall.positions) std::swap(p.y, p.z), p.y += 1.0f, p.z -= 1.0f;
+  appendScene(scene, wall);
+  PunctualLight point;
+  point.type = WT_LIGHT_POINT;
+  point.position = {0.5f, 1.0f, 0.5f};
+  point.intensity = {2.0f, 2.0f, 1.5f};
+  PunctualLight spot;
+  spot.type = WT_LIGHT_SPOT;
+  spot.position = {-0.7f, 1.5f, 0.2f};
+  spot.direction = glm::normalize(glm::vec3(0.3f, -1.0f, -0.2f));
+  spot.intensity = glm::vec3(6.0f);
+  spot.innerConeAngle = 0.2f;
+  spot.outerConeAngle = 0.6f;
+  scene.lights = {point, spot};
+  CameraDesc cam;
+  cam.cameraToWorld = glm::inverse(glm::lookAt(glm::vec3(0.0f, 2.0f, 3.0f), glm::vec3(0.0f, 0.3f, 0.0f), glm::vec3(0, 1, 0)));
+  scene.camera = cam;
+  RenderSettings s = small(Integrator::Minimal, 16);
+  s.maxBounces = 3;
+  s.background = glm::vec3(0.2f, 0.3f, 0.5f);
+  Image reference = render(scene, s, 256);
+  RenderSettings p = s;
+  p.integrator = Integrator::Path;
+  Image img = render(scene, p, 256);
+  expectSameImage(reference, img, 4, 5.0, "analytic lights and sky");
+}
+
+TEST(Integrators, MisHeuristicsAgree) {
+  Scene scene = loadDefaultScene();
+  RenderSettings s = small(Integrator::Path, 16);
+  s.maxBounces = 3;
+  Image balance = render(scene, s, 128);
+  s.powerHeuristic = true;
+  s.seed = 12;
+  Image power = render(scene, s, 128);
+  expectSameImage(balance, power, 4, 5.0, "balance vs power heuristic");
+}
+
+}  // namespace
+}  // namespace wt
