@@ -23,3 +23,24 @@ __kernel void test_offset(uint count, __global const float4* p, __global const f
   if (i >= count) return;
   out[i] = (float4)(ray_offset_origin(p[i].xyz, n[i].xyz), 0.0f);
 }
+
+#include "lights/light_sampling.cl"
+
+__kernel void test_light_pick(uint count, __global const WtAliasSlot* alias, uint light_count,
+                              __global uint* chosen, __global float* pmf) {
+  uint i = get_global_id(0);
+  if (i >= count) return;
+  LightScene ls;
+  ls.alias = alias;
+  ls.light_count = light_count;
+  float p;
+  chosen[i] = light_pick(ls, rng_uniform(i, 0u, 0u, 4u, 77u), &p);
+  pmf[i] = p;
+}
+
+__kernel void test_mis(uint count, __global const float2* pdfs, uint flags, __global float2* weights) {
+  uint i = get_global_id(0);
+  if (i >= count) return;
+  float2 p = pdfs[i];
+  weights[i] = (float2)(mis_weight(p.x, p.y, flags), mis_weight(p.y, p.x, flags));
+}
