@@ -1,6 +1,7 @@
 // Stage 1: one camera ray per pixel, jittered within the pixel; every path
 // starts with unit throughput and no radiance, and enters queue A.
 #include "common.h"
+#include "sampler.cl"
 
 __kernel void generate(WtFrameParams frame, WtCamera camera, __global float4* ray_o,
                        __global float4* ray_d, __global float4* throughput,
@@ -14,8 +15,8 @@ __kernel void generate(WtFrameParams frame, WtCamera camera, __global float4* ra
   // image plane in [-1,1]^2, y up
   uint px = i % frame.width;
   uint py = i / frame.width;
-  float jx = rng_uniform(i, frame.sample, 0u, 0u, frame.seed);
-  float jy = rng_uniform(i, frame.sample, 0u, 1u, frame.seed);
+  float jx = sampler_get(frame, i, 0u);
+  float jy = sampler_get(frame, i, 1u);
   float sx = 2.0f * ((float)px + jx) / (float)frame.width - 1.0f;
   float sy = 1.0f - 2.0f * ((float)py + jy) / (float)frame.height;
 

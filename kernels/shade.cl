@@ -5,6 +5,7 @@
 #include "common.h"
 #include "geometry/triangle.cl"
 #include "lights/light_sampling.cl"
+#include "sampler.cl"
 #include "materials/lambert.cl"
 
 /// Weight of emission found by BSDF sampling (pdf_bsdf, solid angle) from a
@@ -76,7 +77,7 @@ __kernel void shade(WtFrameParams frame, __global uint* counters, uint in_slot, 
   uint nee_count = WT_INTEGRATOR_MINIMAL ? frame.analytic_count
                                          : ((frame.flags & WT_FLAG_NEE) ? frame.light_count : 0u);
   if (nee_count > 0u) {
-    float u_pick = rng_uniform(path, frame.sample, frame.bounce, 4u, frame.seed);
+    float u_pick = sampler_get(frame, path, 6u);
     float pmf;
     uint index;
     if (WT_INTEGRATOR_MINIMAL) {
@@ -86,8 +87,8 @@ __kernel void shade(WtFrameParams frame, __global uint* counters, uint in_slot, 
       index = light_pick(ls, u_pick, &pmf);
     }
     LightSample s;
-    float u1 = rng_uniform(path, frame.sample, frame.bounce, 5u, frame.seed);
-    float u2 = rng_uniform(path, frame.sample, frame.bounce, 6u, frame.seed);
+    float u1 = sampler_get(frame, path, 4u);
+    float u2 = sampler_get(frame, path, 5u);
     float cos_s;
     if (pmf > 0.0f && light_sample(ls, index, p, u1, u2, &s) && (cos_s = dot(ns, s.wi)) > 0.0f &&
         dot(ng, s.wi) > 0.0f) {
@@ -109,8 +110,8 @@ __kernel void shade(WtFrameParams frame, __global uint* counters, uint in_slot, 
   }
 
   // Lambertian bounce; a direction below the geometric surface is absorbed
-  float u1 = rng_uniform(path, frame.sample, frame.bounce, 2u, frame.seed);
-  float u2 = rng_uniform(path, frame.sample, frame.bounce, 3u, frame.seed);
+  float u1 = sampler_get(frame, path, 2u);
+  float u2 = sampler_get(frame, path, 3u);
   float3 wi = lambert_sample(ns, u1, u2);
   float cos_i = dot(wi, ns);
   if (dot(wi, ng) <= 0.0f || cos_i <= 0.0f) return;
@@ -119,7 +120,7 @@ __kernel void shade(WtFrameParams frame, __global uint* counters, uint in_slot, 
   // Russian roulette: survive with probability from the throughput, reweight
   if (!WT_INTEGRATOR_MINIMAL && (frame.flags & WT_FLAG_RR) && frame.bounce >= frame.rr_min_depth) {
     float q = fmin(fmax(beta.x, fmax(beta.y, beta.z)), 0.95f);
-    if (rng_uniform(path, frame.sample, frame.bounce, 7u, frame.seed) >= q) return;
+    if (sampler_get(frame, path, 7u) >= q) return;
     beta /= q;
   }
   if (beta.x <= 0.0f && beta.y <= 0.0f && beta.z <= 0.0f) return;

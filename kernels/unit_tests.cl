@@ -44,3 +44,11 @@ __kernel void test_mis(uint count, __global const float2* pdfs, uint flags, __gl
   float2 p = pdfs[i];
   weights[i] = (float2)(mis_weight(p.x, p.y, flags), mis_weight(p.y, p.x, flags));
 }
+
+#include "shared/sampler.h"
+
+__kernel void test_sobol(uint count, uint pixel, uint bounce, uint dim, uint seed, __global float* out) {
+  uint i = get_global_id(0);
+  if (i >= count) return;
+  out[i] = sampler_sobol(pixel, i, bounce, dim, seed);
+}

@@ -32,6 +32,7 @@ struct RenderOptions {
   std::string integrator = "path";
   std::string misHeuristic = "balance";
   bool noNee = false, noMis = false, noRr = false;
+  std::string sampler = "independent";
   int sceneIndex = -1;
   int camera = 0;
   std::string kernelDir;
@@ -75,6 +76,7 @@ int runRender(const RenderOptions& options) {
   settings.useMis = !options.noMis;
   settings.useRussianRoulette = !options.noRr;
   settings.powerHeuristic = options.misHeuristic == "power";
+  settings.sobol = options.sampler == "sobol";
   wt::Renderer renderer(context, scene, settings);
   const wt::BvhBuildStats& bvh = renderer.sceneBuffers().bvh().stats;
   wt::log::info("scene " + scene.sourceName + ": " + std::to_string(scene.triangles.size()) +
@@ -173,6 +175,8 @@ int main(int argc, char** argv) {
   renderCmd->add_option("--mis-heuristic", render.misHeuristic, "path: balance or power")
       ->check(CLI::IsMember({"balance", "power"}))->capture_default_str();
   renderCmd->add_flag("--no-rr", render.noRr, "path: no Russian roulette");
+  renderCmd->add_option("--sampler", render.sampler, "independent (hashed) or sobol (Owen-scrambled Sobol)")
+      ->check(CLI::IsMember({"independent", "sobol"}))->capture_default_str();
   renderCmd->add_option("--rr-depth", render.settings.rrMinDepth, "path: first bounce Russian roulette may end")
       ->check(CLI::Range(0, 1024))->capture_default_str();
   renderCmd->add_option("--device", render.device, "Device index or name substring (see 'wavetrace devices')");

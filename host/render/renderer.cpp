@@ -28,6 +28,7 @@ WtFrameParams frameParams(const RenderSettings& s, const LightList& lights, int 
     p.flags = (s.useNee ? WT_FLAG_NEE : 0u) | (s.useMis ? WT_FLAG_MIS : 0u) |
               (s.powerHeuristic ? WT_FLAG_POWER_HEURISTIC : 0u) | (s.useRussianRoulette ? WT_FLAG_RR : 0u);
   }
+  if (s.sobol) p.flags |= WT_FLAG_SOBOL;
   return p;
 }
 

@@ -36,6 +36,7 @@ struct RenderSettings {
   bool powerHeuristic = false;  ///< path: power heuristic instead of balance
   bool useRussianRoulette = true;  ///< path
   int rrMinDepth = 3;           ///< path: first bounce at which roulette may end a path
+  bool sobol = false;           ///< Owen-scrambled Sobol instead of independent random numbers
 };
 
 /// The accumulated image read back from the device.

@@ -75,6 +75,7 @@ typedef struct WtFrameParams {
 #define WT_FLAG_MIS 2u            ///< weight NEE and BSDF hits of lights by MIS
 #define WT_FLAG_POWER_HEURISTIC 4u ///< power heuristic (beta 2) instead of the balance heuristic
 #define WT_FLAG_RR 8u             ///< Russian roulette
+#define WT_FLAG_SOBOL 16u         ///< Owen-scrambled Sobol sampler instead of independent hashes
 
 /// Slots of the queue-counter buffer.
 #define WT_COUNTER_QUEUE_A 0      ///< paths in queue A

@@ -207,6 +207,17 @@ TEST(Integrators, PathMatchesMinimalWithAnalyticLightsAndSky) {
   expectSameImage(reference, img, 4, 5.0, "analytic lights and sky");
 }
 
+TEST(Integrators, SobolSamplerConvergesToTheSameImage) {
+  Scene scene = loadDefaultScene();
+  RenderSettings s = small(Integrator::Path, 16);
+  s.maxBounces = 3;
+  Image independent = render(scene, s, 128);
+  s.sobol = true;
+  Image sobol = render(scene, s, 128);
+  // Sobol's error is lower than its sample variance suggests: the test errs on the safe side
+  expectSameImage(independent, sobol, 4, 5.0, "independent vs Sobol");
+}
+
 TEST(Integrators, MisHeuristicsAgree) {
   Scene scene = loadDefaultScene();
   RenderSettings s = small(Integrator::Path, 16);

@@ -1,0 +1,66 @@
+// The Owen-scrambled Sobol sampler: each dimension pair is a (0,m,2)-net,
+// and the device computes exactly what the host build of the header does.
+#include "device/program.h"
+#include "device_fixture.h"
+#include "shared/sampler.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace wt {
+namespace {
+
+/// The first 2^m points of dims (d0, d1) put exactly one point in every
+/// elementary interval of area 2^-m (all 2^a x 2^(m-a) shapes).
+void expectNet(int m, wt_uint pixel, wt_uint bounce, wt_uint d0, wt_uint d1, wt_uint seed) {
+  const wt_uint n = 1u << m;
+  for (int a = 0; a <= m; ++a) {
+    const wt_uint cols = 1u << a, rows = 1u << (m - a);
+    std::vector<int> cells(n, 0);
+    for (wt_uint i = 0; i < n; ++i) {
+      float x = sampler_sobol(pixel, i, bounce, d0, seed), y = sampler_sobol(pixel, i, bounce, d1, seed);
+      ASSERT_GE(x, 0.0f);
+      ASSERT_LT(x, 1.0f);
+      wt_uint cx = wt_uint(x * cols), cy = wt_uint(y * rows);
+      ++cells[cy * cols + cx];
+    }
+    for (wt_uint c = 0; c < n; ++c)
+      ASSERT_EQ(cells[c], 1) << "m=" << m << " shape " << cols << "x" << rows << " cell " << c
+                             << " dims " << d0 << "," << d1 << " pixel " << pixel;
+  }
+}
+
+TEST(Sampler, SobolProjectionsAreNets) {
+  for (wt_uint pixel : {0u, 1u, 12345u})
+    for (int m : {2, 5, 8}) {
+      expectNet(m, pixel, 0, 0, 1, 7);  // pixel jitter
+      expectNet(m, pixel, 3, 2, 3, 7);  // a bounce's BSDF pair
+      expectNet(m, pixel, 1, 4, 5, 7);  // a point on a light
+    }
+}
+
+TEST(Sampler, PixelsAreDecorrelated) {
+  // the same sample index in two pixels gives unrelated values
+  int equal = 0;
+  for (wt_uint i = 0; i < 1024; ++i) equal += sampler_sobol(1, i, 0, 2, 0) == sampler_sobol(2, i, 0, 2, 0);
+  EXPECT_LT(equal, 3);
+}
+
+TEST(Sampler, DeviceMatchesHost) {
+  Context& ctx = test::deviceContext();
+  cl::Program program = buildProgram(ctx, KernelFeatures{}, "unit_tests.cl");
+  const cl_uint n = 4096;
+  cl::Buffer out(ctx.context(), CL_MEM_WRITE_ONLY, n * 4);
+  cl::Kernel k(program, "test_sobol");
+  for (cl_uint dim : {0u, 3u, 6u}) {
+    k.setArg(0, n), k.setArg(1, cl_uint(77)), k.setArg(2, cl_uint(2)), k.setArg(3, dim), k.setArg(4, cl_uint(5)), k.setArg(5, out);
+    ctx.launch("test_sobol", k, n);
+    std::vector<float> got(n);
+    ctx.queue().enqueueReadBuffer(out, CL_TRUE, 0, n * 4, got.data());
+    for (cl_uint i = 0; i < n; ++i) ASSERT_EQ(got[i], sampler_sobol(77, i, 2, dim, 5)) << i;
+  }
+}
+
+}  // namespace
+}  // namespace wt
