@@ -5,6 +5,7 @@
 #include "device/context.h"
 #include "device/program.h"
 #include "output/image_io.h"
+#include "render/image_error.h"
 #include "render/renderer.h"
 #include "scene/default_scene.h"
 
@@ -14,6 +15,7 @@
 #include <chrono>
 #include <cmath>
 #include <csignal>
+#include <optional>
 #include <cstdio>
 #include <unistd.h>
 
@@ -33,6 +35,7 @@ struct RenderOptions {
   std::string misHeuristic = "balance";
   bool noNee = false, noMis = false, noRr = false;
   std::string sampler = "independent";
+  std::string reference, errorLog;
   int sceneIndex = -1;
   int camera = 0;
   std::string kernelDir;
@@ -84,6 +87,26 @@ int runRender(const RenderOptions& options) {
                 std::to_string(bvh.nodeCount) + " nodes built in " +
                 std::to_string(bvh.buildSeconds * 1e3).substr(0, 6) + " ms; device " + device.name);
 
+  // error against a reference at power-of-two sample counts (not timed)
+  std::optional<wt::Image> reference;
+  std::FILE* errorOut = nullptr;
+  if (!options.reference.empty()) {
+    reference = wt::readExr(options.reference);
+    if (reference->width != settings.width || reference->height != settings.height)
+      throw std::invalid_argument(options.reference + ": reference is " + std::to_string(reference->width) + "x" +
+                                  std::to_string(reference->height) + ", the render " +
+                                  std::to_string(settings.width) + "x" + std::to_string(settings.height));
+    errorOut = options.errorLog.empty() ? stdout : std::fopen(options.errorLog.c_str(), "w");
+    if (!errorOut) throw std::runtime_error(options.errorLog + ": cannot write the error log");
+    std::fprintf(errorOut, "samples,seconds,rmse,relmse,relmse_raw,p99,mean_ratio\n");
+  }
+  auto logError = [&]() {
+    wt::ImageError e = wt::imageError(renderer.readImage(), *reference);
+    std::fprintf(errorOut, "%d,%.6f,%.8g,%.8g,%.8g,%.8g,%.6f\n", renderer.stats().samplesDone,
+                 renderer.stats().seconds, e.rmse, e.relMse, e.relMseRaw, e.p99, e.meanRatio);
+    std::fflush(errorOut);
+  };
+
   std::signal(SIGINT, onInterrupt);
   std::signal(SIGTERM, onInterrupt);
   const bool tty = isatty(STDERR_FILENO);
@@ -93,6 +116,8 @@ int runRender(const RenderOptions& options) {
   try {
     for (int s = 0; s < spp && !g_interrupted; ++s) {
       renderer.renderSample();
+      int done = renderer.stats().samplesDone;
+      if (reference && ((done & (done - 1)) == 0 || done == spp)) logError();
       auto now = std::chrono::steady_clock::now();
       bool last = s + 1 == spp;
       if (!options.quiet && (tty || last || now - lastReport > std::chrono::seconds(5))) {
@@ -105,6 +130,8 @@ int runRender(const RenderOptions& options) {
   } catch (const std::exception& e) {
     failure = e.what();
   }
+
+  if (errorOut && errorOut != stdout) std::fclose(errorOut);
 
   // Whatever happened, keep what was accumulated.
   if (renderer.stats().samplesDone > 0) {
@@ -179,6 +206,10 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"independent", "sobol"}))->capture_default_str();
   renderCmd->add_option("--rr-depth", render.settings.rrMinDepth, "path: first bounce Russian roulette may end")
       ->check(CLI::Range(0, 1024))->capture_default_str();
+  renderCmd->add_option("--reference", render.reference,
+                        "EXR of the converged image: log the error at 1, 2, 4, ... samples (see --error-log)");
+  renderCmd->add_option("--error-log", render.errorLog,
+                        "CSV of samples, seconds, RMSE, relMSE, p99 against --reference (default: stdout)");
   renderCmd->add_option("--device", render.device, "Device index or name substring (see 'wavetrace devices')");
   renderCmd->add_option("--scene-index", render.sceneIndex, "glTF scene to render (default: the file's default scene)")
       ->check(CLI::Range(-1, 1 << 20));

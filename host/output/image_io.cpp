@@ -46,11 +46,22 @@ void writeAtomically(const std::filesystem::path& path, Writer writer) {
 }
 
 void writeExr(const std::filesystem::path& path, const Image& image) {
+  // Beside RGB, the variance of each pixel's mean (sample variance / samples)
+  // as a layer, so the image can serve as a reference with known noise.
+  const std::size_t pixels = std::size_t(image.width) * std::size_t(std::max(image.height, 0));
+  std::vector<float> meanVariance;
+  if (image.rgbVariance.size() == 3 * pixels && image.samples.size() == pixels) {
+    meanVariance.resize(3 * pixels);
+    for (std::size_t p = 0; p < pixels; ++p)
+      for (int c = 0; c < 3; ++c)
+        meanVariance[3 * p + c] = image.samples[p] > 0 ? image.rgbVariance[3 * p + c] / float(image.samples[p]) : 0.0f;
+  }
   try {
     Imf::Header header(image.width, image.height);
-    header.channels().insert("R", Imf::Channel(Imf::FLOAT));
-    header.channels().insert("G", Imf::Channel(Imf::FLOAT));
-    header.channels().insert("B", Imf::Channel(Imf::FLOAT));
+    for (const char* name : {"R", "G", "B"}) header.channels().insert(name, Imf::Channel(Imf::FLOAT));
+    if (!meanVariance.empty())
+      for (const char* name : {"mean_variance.R", "mean_variance.G", "mean_variance.B"})
+        header.channels().insert(name, Imf::Channel(Imf::FLOAT));
     Imf::OutputFile file(path.c_str(), header);
     Imf::FrameBuffer fb;
     const std::size_t xStride = 3 * sizeof(float), yStride = xStride * image.width;
@@ -58,6 +69,12 @@ void writeExr(const std::filesystem::path& path, const Image& image) {
     fb.insert("R", Imf::Slice(Imf::FLOAT, base + 0, xStride, yStride));
     fb.insert("G", Imf::Slice(Imf::FLOAT, base + 4, xStride, yStride));
     fb.insert("B", Imf::Slice(Imf::FLOAT, base + 8, xStride, yStride));
+    if (!meanVariance.empty()) {
+      char* var = reinterpret_cast<char*>(meanVariance.data());
+      fb.insert("mean_variance.R", Imf::Slice(Imf::FLOAT, var + 0, xStride, yStride));
+      fb.insert("mean_variance.G", Imf::Slice(Imf::FLOAT, var + 4, xStride, yStride));
+      fb.insert("mean_variance.B", Imf::Slice(Imf::FLOAT, var + 8, xStride, yStride));
+    }
     file.setFrameBuffer(fb);
     file.writePixels(image.height);
   } catch (const std::exception& e) {
@@ -122,6 +139,16 @@ Image readExr(const std::filesystem::path& path) {
     fb.insert("R", Imf::Slice(Imf::FLOAT, base + 0, xStride, yStride));
     fb.insert("G", Imf::Slice(Imf::FLOAT, base + 4, xStride, yStride));
     fb.insert("B", Imf::Slice(Imf::FLOAT, base + 8, xStride, yStride));
+    // a variance layer written by wavetrace comes back as 1 sample of that variance
+    bool hasVariance = file.header().channels().findChannel("mean_variance.R") != nullptr;
+    if (hasVariance) {
+      image.rgbVariance.assign(image.rgb.size(), 0.0f);
+      image.samples.assign(std::size_t(image.width) * image.height, 1u);
+      char* var = reinterpret_cast<char*>(image.rgbVariance.data()) - (dw.min.x * xStride + dw.min.y * yStride);
+      fb.insert("mean_variance.R", Imf::Slice(Imf::FLOAT, var + 0, xStride, yStride));
+      fb.insert("mean_variance.G", Imf::Slice(Imf::FLOAT, var + 4, xStride, yStride));
+      fb.insert("mean_variance.B", Imf::Slice(Imf::FLOAT, var + 8, xStride, yStride));
+    }
     file.setFrameBuffer(fb);
     file.readPixels(dw.min.y, dw.max.y);
     return image;

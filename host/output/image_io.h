@@ -27,7 +27,9 @@ void checkWritable(const std::filesystem::path& path);
 /// Write the image in the path's format. Throws OutputError.
 void writeImage(const std::filesystem::path& path, const Image& image);
 
-/// Read an EXR written by writeImage (tests, reference images): RGB floats.
+/// Read an EXR (tests, reference images): RGB floats, and when the file has
+/// wavetrace's mean_variance layer, the variance of each pixel's mean in
+/// rgbVariance with samples = 1.
 Image readExr(const std::filesystem::path& path);
 
 }  // namespace wt

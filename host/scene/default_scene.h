@@ -5,13 +5,18 @@
 #include "scene/gltf_loader.h"
 
 #include <string>
+#include <vector>
 
 namespace wt {
 
 /// The embedded Cornell box (scenes/cornell.gltf).
 Scene loadDefaultScene(const GltfLoadOptions& options = {});
 
-/// Load a scene file by its extension (.gltf, .glb). Throws SceneError.
+/// Names of the built-in scenes (scenes/*.gltf), e.g. "cornell".
+std::vector<std::string> builtInSceneNames();
+
+/// Load a scene file by its extension (.gltf, .glb), or a built-in scene by
+/// its bare name ("cornell_small_light"). Throws SceneError.
 Scene loadScene(const std::string& path, const GltfLoadOptions& options = {});
 
 }  // namespace wt
