@@ -58,9 +58,10 @@ __kernel void shade(WtFrameParams frame, __global uint* counters, uint in_slot, 
                    hit.y, hit.z, &p, &ng, &ns);
   if (dot(ng, ng) == 0.0f) return;  // degenerate triangle: absorb
 
-  // emission (two-sided)
+  // emission: the front face only unless the material is double-sided
   float3 le = vec4_xyz(material.emission);
-  if (le.x > 0.0f || le.y > 0.0f || le.z > 0.0f) {
+  bool emits = material.emission.w != 0.0f || dot(ng, dir) < 0.0f;
+  if (emits && (le.x > 0.0f || le.y > 0.0f || le.z > 0.0f)) {
     float pdf_light = light_triangle_pdf(emitter_pdf_area[prim], hit.x, dir, ng);
     radiance[path] += (float4)(beta * le * shade_emission_weight(frame, pdf_prev, pdf_light), 0.0f);
   }

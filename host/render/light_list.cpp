@@ -88,9 +88,11 @@ LightList buildLightList(const Scene& scene, const SceneBuffers& buffers, double
     l.type = WT_LIGHT_TRIANGLE;
     l.triangle = std::uint32_t(leaf);
     l.intensity = {le.x, le.y, le.z, 0.0f};
+    const bool twoSided = e.w != 0.0f;
+    l.position.w = twoSided ? 1.0f : 0.0f;
     lightOfLeaf[leaf] = std::uint32_t(list.lights.size());
-    // two-sided: pi * L * area from each face
-    power.push_back(2.0 * std::numbers::pi * area * luminance(le));
+    // pi * L * area from each emitting face
+    power.push_back((twoSided ? 2.0 : 1.0) * std::numbers::pi * area * luminance(le));
     areas.push_back(area);
     list.lights.push_back(l);
   }

@@ -12,10 +12,10 @@ WtVec4 toVec4(glm::vec3 v, float w = 0.0f) { return {v.x, v.y, v.z, w}; }
 
 }  // namespace
 
-WtMaterial makeMaterial(glm::vec3 albedo, glm::vec3 emission) {
+WtMaterial makeMaterial(glm::vec3 albedo, glm::vec3 emission, bool twoSided) {
   WtMaterial m{};
   m.base_color = toVec4(albedo);
-  m.emission = toVec4(emission);
+  m.emission = toVec4(emission, twoSided ? 1.0f : 0.0f);
   return m;
 }
 

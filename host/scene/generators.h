@@ -23,7 +23,7 @@ Scene makeBumpyGrid(std::uint32_t triangleCount);
 /// Append `src` to `dst` (vertices, triangles, materials re-indexed).
 void appendScene(Scene& dst, const Scene& src);
 
-/// A Lambertian material.
-WtMaterial makeMaterial(glm::vec3 albedo, glm::vec3 emission = glm::vec3(0.0f));
+/// A Lambertian material; emission from the front face only unless twoSided.
+WtMaterial makeMaterial(glm::vec3 albedo, glm::vec3 emission = glm::vec3(0.0f), bool twoSided = false);
 
 }  // namespace wt

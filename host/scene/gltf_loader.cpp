@@ -332,7 +332,8 @@ class Converter {
 
       WtMaterial material{};
       material.base_color = {clamped.x, clamped.y, clamped.z, 0.0f};
-      material.emission = {emission.x, emission.y, emission.z, 0.0f};
+      // glTF draws a single-sided material's back face not at all: it emits from the front only
+      material.emission = {emission.x, emission.y, emission.z, src.doubleSided ? 1.0f : 0.0f};
       m_scene.materials.push_back(material);
       m_scene.materialNames.push_back(src.name.empty() ? "material " + std::to_string(i) : src.name);
     }

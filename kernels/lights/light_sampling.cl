@@ -79,7 +79,9 @@ inline bool light_sample(LightScene ls, uint index, float3 p, float u1, float u2
     if (!(area2 > 0.0f) || !(d2 > 0.0f)) return false;
     s->distance = sqrt(d2);
     s->wi = to_light / s->distance;
-    float cos_light = fabs(dot(n, s->wi)) / area2;  // emission is two-sided
+    // a single-sided light only emits from its front (n) side
+    float cos_light = -dot(n, s->wi) / area2;
+    if (light.position.w != 0.0f) cos_light = fabs(cos_light);
     if (!(cos_light > 0.0f)) return false;
     s->pdf = (2.0f / area2) * d2 / cos_light;
     s->radiance = vec4_xyz(light.intensity);

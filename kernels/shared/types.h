@@ -34,7 +34,7 @@ typedef struct WtBvhNode {
 /// Lambertian surface with emission (the full material model comes later).
 typedef struct WtMaterial {
   WtVec4 base_color;  ///< linear RGB albedo in [0,1]; w unused
-  WtVec4 emission;    ///< emitted radiance, W sr^-1 m^-2 per channel (factor x strength); w unused
+  WtVec4 emission;    ///< emitted radiance (nits) per channel (factor x strength); w = 1: both faces emit (doubleSided), 0: the front face only (counter-clockwise winding)
 } WtMaterial;
 
 #define WT_CAMERA_PERSPECTIVE 0

@@ -24,7 +24,7 @@ class EmissiveSphere : public ::testing::TestWithParam<FurnaceCase> {};
 TEST_P(EmissiveSphere, ConvergesToGeometricSeries) {
   const FurnaceCase c = GetParam();
   Scene scene = makeIcosphere(3, glm::vec3(0.0f), 1.0f,
-                              makeMaterial(glm::vec3(c.albedo), glm::vec3(c.emission)));
+                              makeMaterial(glm::vec3(c.albedo), glm::vec3(c.emission), /*twoSided=*/true));
   // Flat normals: with cosine sampling about the geometric normal the
   // estimator weight is exactly the albedo, so no direction is absorbed.
   for (WtVec4& n : scene.normals) n = {0, 0, 0, 0};
