@@ -19,7 +19,9 @@ inline float shade_emission_weight(WtFrameParams frame, float pdf_bsdf, float pd
   return mis_weight(pdf_bsdf, pdf_light, frame.flags);
 }
 
-__kernel void shade(WtFrameParams frame, __global uint* counters, uint in_slot, uint out_slot,
+__kernel void shade(WtFrameParams frame, WtEnvironment environment, __global const float4* env_texels,
+                    __global const float* env_marginal_cdf, __global const float* env_conditional_cdf,
+                    __global uint* counters, uint in_slot, uint out_slot,
                     __global const uint* queue_in, __global uint* queue_out,
                     __global float4* ray_o, __global float4* ray_d,
                     __global const float4* hits, __global float4* throughput,
@@ -39,11 +41,12 @@ __kernel void shade(WtFrameParams frame, __global uint* counters, uint in_slot, 
   float pdf_prev = state.w;  // solid-angle pdf of the BSDF sample that made this ray; 0 for camera rays
   float3 dir = ray_d[path].xyz;
 
-  EnvScene env = {vec4_xyz(frame.background)};
+  EnvScene env = {environment, env_texels, env_marginal_cdf, env_conditional_cdf};
   LightScene ls = {lights, alias, frame.light_count, tri_verts, env};
 
-  // miss: the environment
+  // miss: the environment (camera rays see it unless it is hidden)
   if (prim == WT_NO_HIT) {
+    if (frame.bounce == 0 && (frame.flags & WT_FLAG_ENV_HIDDEN)) return;
     float3 le = env_eval(env, dir);
     float w = shade_emission_weight(frame, pdf_prev, frame.env_pmf * env_pdf(env, dir));
     radiance[path] += (float4)(beta * le * w, 0.0f);

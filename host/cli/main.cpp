@@ -137,9 +137,13 @@ int runRender(const RenderOptions& options) {
   if (renderer.stats().samplesDone > 0) {
     wt::Image image = renderer.readImage();
     writeOutputs(options, image);
-    if (renderer.stats().nonFiniteSamples > 0)
-      wt::log::warnOnce(std::to_string(renderer.stats().nonFiniteSamples) +
-                        " NaN/Inf samples discarded");
+    if (renderer.stats().nonFiniteSamples > 0) {
+      // a pixel that lost samples has fewer than the passes rendered
+      std::size_t pixels = 0;
+      for (std::uint32_t n : image.samples) pixels += n < std::uint32_t(renderer.stats().samplesDone);
+      wt::log::warnOnce(std::to_string(renderer.stats().nonFiniteSamples) + " NaN/Inf samples discarded in " +
+                        std::to_string(pixels) + " pixels");
+    }
   }
   if (!failure.empty()) {
     wt::log::error("render failed after " + std::to_string(renderer.stats().samplesDone) +
@@ -210,6 +214,15 @@ int main(int argc, char** argv) {
                         "EXR of the converged image: log the error at 1, 2, 4, ... samples (see --error-log)");
   renderCmd->add_option("--error-log", render.errorLog,
                         "CSV of samples, seconds, RMSE, relMSE, p99 against --reference (default: stdout)");
+  renderCmd->add_option("--env-map", render.settings.environmentMap,
+                        "Equirectangular environment (.hdr, .exr) lighting the scene; replaces --background");
+  renderCmd->add_option("--env-intensity", render.settings.environmentIntensity, "Scale on the environment")
+      ->check(CLI::NonNegativeNumber)->capture_default_str();
+  renderCmd->add_option("--env-rotation", render.settings.environmentRotationDegrees,
+                        "Turn the environment about +Y, degrees, counter-clockwise seen from above")
+      ->capture_default_str();
+  renderCmd->add_flag("--env-hidden", render.settings.environmentHidden,
+                      "Camera rays see black where they escape; the environment still lights the scene");
   renderCmd->add_option("--device", render.device, "Device index or name substring (see 'wavetrace devices')");
   renderCmd->add_option("--scene-index", render.sceneIndex, "glTF scene to render (default: the file's default scene)")
       ->check(CLI::Range(-1, 1 << 20));

@@ -84,6 +84,6 @@ static_assert(sizeof(WtBvhNode) == 32);
 static_assert(offsetof(WtBvhNode, hi_x) == 16);
 static_assert(sizeof(WtMaterial) == 32);
 static_assert(sizeof(WtCamera) == 64);
-static_assert(sizeof(WtFrameParams) == 80);
+static_assert(sizeof(WtFrameParams) == 64);
 static_assert(sizeof(WtLight) == 64);
 static_assert(sizeof(WtAliasSlot) == 16);

@@ -19,7 +19,6 @@ WtFrameParams frameParams(const RenderSettings& s, const LightList& lights, int 
   p.max_bounces = cl_uint(s.maxBounces);
   p.seed = s.seed;
   p.exposure = std::exp2(s.exposureStops);
-  p.background = {s.background.x, s.background.y, s.background.z, 0.0f};
   p.light_count = lights.sampleable ? cl_uint(lights.lights.size()) : 0u;
   p.analytic_count = lights.analyticCount;
   p.env_pmf = lights.environmentPmf;
@@ -29,6 +28,7 @@ WtFrameParams frameParams(const RenderSettings& s, const LightList& lights, int 
               (s.powerHeuristic ? WT_FLAG_POWER_HEURISTIC : 0u) | (s.useRussianRoulette ? WT_FLAG_RR : 0u);
   }
   if (s.sobol) p.flags |= WT_FLAG_SOBOL;
+  if (s.environmentHidden) p.flags |= WT_FLAG_ENV_HIDDEN;
   return p;
 }
 
@@ -39,7 +39,11 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
   CameraDesc desc = scene.camera ? *scene.camera : defaultCamera(scene.bounds());
   m_camera = makeCamera(desc, settings.width, settings.height);
   m_scene = std::make_unique<SceneBuffers>(context, scene);
-  double envLum = luminance(settings.background);
+  m_environment = settings.environmentMap.empty()
+                      ? constantEnvironment(settings.background)
+                      : loadEnvironmentMap(settings.environmentMap, settings.environmentIntensity,
+                                           settings.environmentRotationDegrees);
+  double envLum = m_environment.meanLuminance;
   m_lights = buildLightList(scene, *m_scene, envLum > 0.0 ? environmentPowerEstimate(scene, envLum) : 0.0);
 
   KernelFeatures features;
@@ -74,6 +78,15 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
   m_lightBuffer = upload(m_lights.lights);
   m_aliasBuffer = upload(m_lights.alias);
   m_emitterPdfBuffer = upload(m_lights.emitterPdfArea);
+  EnvironmentUpload env = environmentUpload(m_environment);
+  auto uploadSpan = [&](auto span) {
+    cl::Buffer b(ctx, CL_MEM_READ_ONLY, span.size_bytes());
+    context.queue().enqueueWriteBuffer(b, CL_TRUE, 0, span.size_bytes(), span.data());
+    return b;
+  };
+  m_envTexels = uploadSpan(env.texels);
+  m_envMarginal = uploadSpan(env.marginalCdf);
+  m_envConditional = uploadSpan(env.conditionalCdf);
 
   cl::CommandQueue& q = context.queue();
   q.enqueueFillBuffer(m_mean, cl_float(0), 0, pixels * 16);
@@ -95,8 +108,13 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
   m_extend.setArg(7, m_scene->triVerts);
   m_extend.setArg(8, m_hits);
 
-  m_shade.setArg(1, m_counters);
-  a = 6;
+  // shade: 0 frame, 1 environment, 2-4 its arrays, 5 counters, 6-9 queues (per bounce), 10- fixed
+  m_shade.setArg(1, m_environment.header);
+  m_shade.setArg(2, m_envTexels);
+  m_shade.setArg(3, m_envMarginal);
+  m_shade.setArg(4, m_envConditional);
+  m_shade.setArg(5, m_counters);
+  a = 10;
   for (cl::Buffer* b : {&m_rayO, &m_rayD, &m_hits, &m_throughput, &m_radiance, &m_scene->triangles,
                         &m_scene->triVerts, &m_scene->normals, &m_scene->materials, &m_lightBuffer,
                         &m_aliasBuffer, &m_emitterPdfBuffer, &m_shadowQueue, &m_shadowO, &m_shadowD,
@@ -147,10 +165,10 @@ void Renderer::renderSample() {
 
     // shade: emission and the next direction; survivors go to the other queue
     m_shade.setArg(0, frameParams(m_settings, m_lights, sample, bounce));
-    m_shade.setArg(2, inSlot);
-    m_shade.setArg(3, outSlot);
-    m_shade.setArg(4, *queueIn);
-    m_shade.setArg(5, *queueOut);
+    m_shade.setArg(6, inSlot);
+    m_shade.setArg(7, outSlot);
+    m_shade.setArg(8, *queueIn);
+    m_shade.setArg(9, *queueOut);
     m_context.launch("shade", m_shade, alive);
 
     // connect: shadow rays of this bounce (count read on the device)

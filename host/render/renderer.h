@@ -7,11 +7,13 @@
 #include "device/context.h"
 #include "device/scene_buffers.h"
 #include "render/light_list.h"
+#include "scene/environment.h"
 #include "scene/scene.h"
 
 #include <glm/glm.hpp>
 
 #include <cstdint>
+#include <string>
 #include <memory>
 #include <vector>
 
@@ -29,7 +31,11 @@ struct RenderSettings {
   int maxBounces = 8;       ///< hits shaded after the camera hit (0: direct view of emitters only)
   std::uint32_t seed = 0;
   float exposureStops = 0.0f;
-  glm::vec3 background{0.0f};  ///< constant environment radiance seen by escaping paths
+  glm::vec3 background{0.0f};  ///< constant environment radiance seen by escaping paths (without environmentMap)
+  std::string environmentMap;  ///< equirectangular .hdr/.exr lighting the scene (replaces background)
+  float environmentIntensity = 1.0f;
+  float environmentRotationDegrees = 0.0f;  ///< about +Y, counter-clockwise seen from above
+  bool environmentHidden = false;  ///< camera rays see black where they escape; the environment still lights
   Integrator integrator = Integrator::Path;
   bool useNee = true;           ///< path: next-event estimation
   bool useMis = true;           ///< path: MIS between NEE and BSDF sampling
@@ -68,6 +74,7 @@ class Renderer {
   const RenderStats& stats() const { return m_stats; }
   const RenderSettings& settings() const { return m_settings; }
   const SceneBuffers& sceneBuffers() const { return *m_scene; }
+  const Environment& environment() const { return m_environment; }
 
  private:
   Context& m_context;
@@ -77,6 +84,8 @@ class Renderer {
   cl::Program m_program;
   cl::Kernel m_generate, m_extend, m_shade, m_connect, m_accumulate, m_tonemap;
   LightList m_lights;
+  Environment m_environment;
+  cl::Buffer m_envTexels, m_envMarginal, m_envConditional;
   cl::Buffer m_lightBuffer, m_aliasBuffer, m_emitterPdfBuffer;
   cl::Buffer m_shadowQueue, m_shadowO, m_shadowD, m_shadowRadiance;
   // path state (structure of arrays, one entry per pixel)

@@ -61,7 +61,6 @@ typedef struct WtFrameParams {
   wt_uint seed;         ///< user seed
   float exposure;       ///< tonemap scale, 2^stops
   wt_uint pad0;
-  WtVec4 background;    ///< radiance of every direction that escapes the scene (constant environment); w unused
   wt_uint light_count;     ///< entries in the light list (0: no light sampling)
   wt_uint analytic_count;  ///< lights [0, analytic_count) are point, spot or directional
   wt_uint flags;           ///< WT_FLAG_* integrator switches
@@ -76,6 +75,7 @@ typedef struct WtFrameParams {
 #define WT_FLAG_POWER_HEURISTIC 4u ///< power heuristic (beta 2) instead of the balance heuristic
 #define WT_FLAG_RR 8u             ///< Russian roulette
 #define WT_FLAG_SOBOL 16u         ///< Owen-scrambled Sobol sampler instead of independent hashes
+#define WT_FLAG_ENV_HIDDEN 32u    ///< camera rays that escape see black; the environment still lights the scene
 
 /// Slots of the queue-counter buffer.
 #define WT_COUNTER_QUEUE_A 0      ///< paths in queue A

@@ -1,0 +1,340 @@
+#include "scene/environment.h"
+
+#include "core/log.h"
+
+#include <ImfChannelList.h>
+#include <ImfFrameBuffer.h>
+#include <ImfHeader.h>
+#include <ImfInputFile.h>
+#include <ImfRgbaFile.h>
+#include <stb_image.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cerrno>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <iterator>
+#include <memory>
+#include <numbers>
+#include <optional>
+#include <sstream>
+
+namespace wt {
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+
+double luminance709(const WtVec4& c) { return 0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z; }
+
+[[noreturn]] void fail(const std::string& name, const std::string& what) {
+  throw EnvironmentError(name + ": " + what);
+}
+
+std::vector<unsigned char> readBytes(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) fail(path.string(), std::string("cannot open: ") + std::strerror(errno));
+  std::vector<unsigned char> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  if (in.bad()) fail(path.string(), "read error");
+  return bytes;
+}
+
+// ---------------------------------------------------------------------------
+// Radiance .hdr
+
+// stb_image 2.27 does not notice truncated run-length data (it reads zeros,
+// and loops forever on a zero run count), so the structure is walked here
+// before stb decodes it.
+void checkRadianceFile(const std::string& name, const std::vector<unsigned char>& bytes) {
+  std::size_t pos = 0;
+  auto nextLine = [&]() -> std::optional<std::string> {
+    auto end = std::find(bytes.begin() + std::ptrdiff_t(pos), bytes.end(), '\n');
+    if (end == bytes.end()) return std::nullopt;
+    std::string text(bytes.begin() + std::ptrdiff_t(pos), end);
+    pos = std::size_t(end - bytes.begin()) + 1;
+    return text;
+  };
+  std::optional<std::string> line = nextLine();
+  if (!line && bytes.size() >= 2 && bytes[0] == '#' && bytes[1] == '?') fail(name, "truncated: the header has no end");
+  if (!line || (*line != "#?RADIANCE" && *line != "#?RGBE"))
+    fail(name, "not a Radiance HDR file (no #?RADIANCE or #?RGBE first line)");
+  bool rgbe = false;
+  for (;;) {
+    line = nextLine();
+    if (!line) fail(name, "truncated: the header has no end");
+    if (line->empty()) break;
+    if (*line == "FORMAT=32-bit_rle_rgbe") rgbe = true;
+    else if (line->rfind("FORMAT=", 0) == 0) fail(name, "unsupported pixel format '" + line->substr(7) + "' (only 32-bit_rle_rgbe)");
+  }
+  if (!rgbe) fail(name, "no FORMAT=32-bit_rle_rgbe line in the header");
+  line = nextLine();
+  long width = 0, height = 0;
+  char tail = 0;
+  int parsed = line ? std::sscanf(line->c_str(), "-Y %ld +X %ld%c", &height, &width, &tail) : 0;
+  if (parsed < 2 || (parsed == 3 && !std::isspace(static_cast<unsigned char>(tail))))
+    fail(name, "unsupported resolution line '" + line.value_or("") + "' (only '-Y height +X width')");
+  if (width <= 0 || height <= 0 || width > (1 << 24) || height > (1 << 24))
+    fail(name, "bad image size " + std::to_string(width) + " x " + std::to_string(height));
+
+  const std::size_t w = std::size_t(width), h = std::size_t(height);
+  auto need = [&](std::size_t n, std::size_t row) {
+    if (bytes.size() - pos < n)
+      fail(name, "truncated: scanline " + std::to_string(row) + " of " + std::to_string(h) + " ends early (file has " +
+                     std::to_string(bytes.size()) + " bytes)");
+  };
+  const std::size_t flatBytes = w * h * 4;
+  if (w < 8 || w >= 32768) {
+    need(flatBytes, 0);  // flat pixels only
+    return;
+  }
+  for (std::size_t row = 0; row < h; ++row) {
+    need(4, row);
+    const unsigned char* s = bytes.data() + pos;
+    if (s[0] != 2 || s[1] != 2 || (s[2] & 0x80)) {
+      if (row != 0) fail(name, "scanline " + std::to_string(row) + " is not run-length encoded but earlier ones are");
+      need(flatBytes, row);
+      return;
+    }
+    std::size_t length = (std::size_t(s[2]) << 8) | s[3];
+    if (length != w) fail(name, "scanline " + std::to_string(row) + " has length " + std::to_string(length) + ", expected " + std::to_string(w));
+    pos += 4;
+    for (int channel = 0; channel < 4; ++channel) {
+      for (std::size_t x = 0; x < w;) {
+        need(1, row);
+        unsigned count = bytes[pos++];
+        if (count > 128) {
+          count -= 128;
+          need(1, row);
+          ++pos;
+        } else {
+          if (count == 0) fail(name, "scanline " + std::to_string(row) + ": zero-length run");
+          need(count, row);
+          pos += count;
+        }
+        if (count > w - x) fail(name, "scanline " + std::to_string(row) + ": run past the end of the line");
+        x += count;
+      }
+    }
+  }
+}
+
+std::vector<glm::vec3> readHdr(const std::filesystem::path& path, int& width, int& height) {
+  const std::string name = path.string();
+  std::vector<unsigned char> bytes = readBytes(path);
+  checkRadianceFile(name, bytes);
+  int channels = 0;
+  std::unique_ptr<float, void (*)(void*)> pixels(
+      stbi_loadf_from_memory(bytes.data(), int(bytes.size()), &width, &height, &channels, 3), stbi_image_free);
+  if (!pixels) fail(name, std::string("cannot decode: ") + stbi_failure_reason());
+  std::vector<glm::vec3> rgb(std::size_t(width) * std::size_t(height));
+  std::memcpy(rgb.data(), pixels.get(), rgb.size() * sizeof(glm::vec3));
+  return rgb;
+}
+
+// ---------------------------------------------------------------------------
+// OpenEXR
+
+std::vector<glm::vec3> readExrPixels(const std::string& name, int& width, int& height) {
+  Imf::InputFile file(name.c_str());
+  const Imf::Header& header = file.header();
+  const Imath::Box2i window = header.dataWindow();
+  width = window.max.x - window.min.x + 1;
+  height = window.max.y - window.min.y + 1;
+  if (width <= 0 || height <= 0) fail(name, "empty data window");
+  const std::size_t count = std::size_t(width) * std::size_t(height);
+
+  const Imf::ChannelList& channels = header.channels();
+  auto has = [&](const char* c) { return channels.findChannel(c) != nullptr; };
+  std::string names;
+  for (auto it = channels.begin(); it != channels.end(); ++it) {
+    names += (names.empty() ? "" : ", ") + std::string(it.name());
+    if (it.channel().xSampling != 1 || it.channel().ySampling != 1)
+      fail(name, std::string("channel ") + it.name() + " is sub-sampled (not supported)");
+  }
+
+  std::vector<glm::vec3> rgb(count);
+  if (has("R") && has("G") && has("B")) {
+    Imf::FrameBuffer fb;
+    const std::size_t xs = sizeof(glm::vec3), ys = xs * std::size_t(width);
+    fb.insert("R", Imf::Slice::Make(Imf::FLOAT, &rgb[0].x, window, xs, ys));
+    fb.insert("G", Imf::Slice::Make(Imf::FLOAT, &rgb[0].y, window, xs, ys));
+    fb.insert("B", Imf::Slice::Make(Imf::FLOAT, &rgb[0].z, window, xs, ys));
+    file.setFrameBuffer(fb);
+    file.readPixels(window.min.y, window.max.y);
+  } else if (has("Y") && !has("RY") && !has("BY")) {
+    std::vector<float> y(count);
+    Imf::FrameBuffer fb;
+    fb.insert("Y", Imf::Slice::Make(Imf::FLOAT, y.data(), window, sizeof(float), sizeof(float) * std::size_t(width)));
+    file.setFrameBuffer(fb);
+    file.readPixels(window.min.y, window.max.y);
+    for (std::size_t i = 0; i < count; ++i) rgb[i] = glm::vec3(y[i]);
+  } else if (has("Y")) {
+    // luminance/chroma: the RGBA interface converts (at half precision)
+    Imf::RgbaInputFile rgbaFile(name.c_str());
+    std::vector<Imf::Rgba> px(count);
+    rgbaFile.setFrameBuffer(px.data() - window.min.x - std::ptrdiff_t(window.min.y) * width, 1, std::size_t(width));
+    rgbaFile.readPixels(window.min.y, window.max.y);
+    for (std::size_t i = 0; i < count; ++i) rgb[i] = glm::vec3(float(px[i].r), float(px[i].g), float(px[i].b));
+  } else {
+    fail(name, "unsupported channel layout (" + names + "): an environment map needs R, G and B, or Y channels");
+  }
+  return rgb;
+}
+
+std::vector<glm::vec3> readExr(const std::filesystem::path& path, int& width, int& height) {
+  const std::string name = path.string();
+  {
+    std::ifstream probe(path, std::ios::binary);
+    if (!probe) fail(name, std::string("cannot open: ") + std::strerror(errno));
+  }
+  try {
+    return readExrPixels(name, width, height);
+  } catch (const EnvironmentError&) {
+    throw;
+  } catch (const std::exception& e) {
+    // OpenEXR's messages (unknown compression, truncated tiles, ...) as they are
+    fail(name, std::string("cannot read OpenEXR file: ") + e.what());
+  }
+}
+
+// ---------------------------------------------------------------------------
+// distribution
+
+// Rows weighted by luminance x sin(theta of the row centre), so the density
+// in (u, v) is proportional to luminance per solid angle. Sums in double,
+// cdfs normalised and stored as float with the last entry exactly 1.
+void buildDistribution(Environment& env) {
+  const std::size_t w = env.header.width, h = env.header.height;
+  env.conditionalCdf.assign(h * (w + 1), 0.0f);
+  env.marginalCdf.assign(h + 1, 0.0f);
+  std::vector<double> rowPrefix(w + 1), marginalPrefix(h + 1, 0.0);
+  double luminanceSolidAngle = 0.0;
+  for (std::size_t j = 0; j < h; ++j) {
+    const double theta0 = kPi * double(j) / double(h), theta1 = kPi * double(j + 1) / double(h);
+    const double sinTheta = std::sin(0.5 * (theta0 + theta1));
+    const double texelSolidAngle = 2.0 * kPi / double(w) * (std::cos(theta0) - std::cos(theta1));
+    rowPrefix[0] = 0.0;
+    for (std::size_t i = 0; i < w; ++i) {
+      double lum = luminance709(env.texels[j * w + i]);
+      rowPrefix[i + 1] = rowPrefix[i] + lum * sinTheta;
+      luminanceSolidAngle += lum * texelSolidAngle;
+    }
+    float* row = &env.conditionalCdf[j * (w + 1)];
+    const double sum = rowPrefix[w];
+    for (std::size_t i = 0; i < w; ++i)
+      row[i] = sum > 0.0 ? float(rowPrefix[i] / sum) : float(double(i) / double(w));  // black row: never chosen, kept finite
+    row[w] = 1.0f;
+    marginalPrefix[j + 1] = marginalPrefix[j] + sum;
+  }
+  const double total = marginalPrefix[h];
+  for (std::size_t j = 0; j < h; ++j)
+    env.marginalCdf[j] = total > 0.0 ? float(marginalPrefix[j] / total) : float(double(j) / double(h));
+  env.marginalCdf[h] = 1.0f;
+  env.header.mode = total > 0.0 ? WT_ENV_MAP : WT_ENV_MAP_UNIFORM;
+  env.meanLuminance = double(env.header.intensity) * luminanceSolidAngle / (4.0 * kPi);
+}
+
+void setRotation(WtEnvironment& header, float rotationDegrees) {
+  const double radians = double(rotationDegrees) * kPi / 180.0;
+  header.rotation = float(radians);
+  header.cos_rotation = float(std::cos(radians));
+  header.sin_rotation = float(std::sin(radians));
+}
+
+void checkParameters(const std::string& name, float intensity, float rotationDegrees) {
+  if (!std::isfinite(intensity) || intensity < 0.0f)
+    fail(name, "intensity " + std::to_string(intensity) + " must be finite and >= 0");
+  if (!std::isfinite(rotationDegrees)) fail(name, "rotation must be finite");
+}
+
+std::string lowerExtension(const std::filesystem::path& path) {
+  std::string ext = path.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+  return ext;
+}
+
+}  // namespace
+
+EnvironmentUpload environmentUpload(const Environment& environment) {
+  return {environment.texels, environment.marginalCdf, environment.conditionalCdf};
+}
+
+Environment makeEnvironmentMap(int width, int height, std::vector<glm::vec3> rgb, float intensity,
+                               float rotationDegrees, const std::string& sourceName) {
+  checkParameters(sourceName, intensity, rotationDegrees);
+  if (width <= 0 || height <= 0 || std::size_t(width) * std::size_t(height) != rgb.size())
+    fail(sourceName, "bad map size " + std::to_string(width) + " x " + std::to_string(height) + " for " +
+                         std::to_string(rgb.size()) + " pixels");
+  if (std::size_t(width) * std::size_t(height) >= (std::size_t(1) << 31))
+    fail(sourceName, "map too large (" + std::to_string(width) + " x " + std::to_string(height) + ")");
+
+  Environment env;
+  env.sourceName = sourceName;
+  env.header.color = {0.0f, 0.0f, 0.0f, 0.0f};
+  env.header.intensity = intensity;
+  setRotation(env.header, rotationDegrees);
+  env.header.width = wt_uint(width);
+  env.header.height = wt_uint(height);
+
+  // repair: negative and non-finite values become 0
+  std::size_t repaired = 0;
+  env.texels.resize(rgb.size());
+  for (std::size_t i = 0; i < rgb.size(); ++i) {
+    float c[3] = {rgb[i].x, rgb[i].y, rgb[i].z};
+    for (float& v : c)
+      if (!(std::isfinite(v) && v >= 0.0f)) {
+        v = 0.0f;
+        ++repaired;
+      }
+    env.texels[i] = {c[0], c[1], c[2], 0.0f};
+  }
+  if (repaired > 0) {
+    env.warnings.push_back(sourceName + ": " + std::to_string(repaired) +
+                           " texel values were negative or not finite; set to 0");
+    log::warnOnce(env.warnings.back());
+  }
+  if (width != 2 * height) {
+    env.warnings.push_back(sourceName + ": " + std::to_string(width) + " x " + std::to_string(height) +
+                           " is not 2:1; stretched over the sphere as latitude-longitude");
+    log::warnOnce(env.warnings.back());
+  }
+  buildDistribution(env);
+  return env;
+}
+
+Environment loadEnvironmentMap(const std::filesystem::path& path, float intensity, float rotationDegrees) {
+  const std::string name = path.string();
+  checkParameters(name, intensity, rotationDegrees);
+  if (!std::filesystem::exists(path)) fail(name, "no such file");
+  const std::string ext = lowerExtension(path);
+  int width = 0, height = 0;
+  std::vector<glm::vec3> rgb;
+  if (ext == ".hdr")
+    rgb = readHdr(path, width, height);
+  else if (ext == ".exr")
+    rgb = readExr(path, width, height);
+  else
+    fail(name, "unsupported environment map format '" + ext + "' (expected .hdr or .exr)");
+  return makeEnvironmentMap(width, height, std::move(rgb), intensity, rotationDegrees, name);
+}
+
+Environment constantEnvironment(glm::vec3 radiance) {
+  Environment env;
+  env.sourceName = "constant";
+  env.header.color = {radiance.x, radiance.y, radiance.z, 0.0f};
+  env.header.intensity = 1.0f;
+  setRotation(env.header, 0.0f);
+  env.header.mode = WT_ENV_CONSTANT;
+  env.header.width = 1;
+  env.header.height = 1;
+  env.texels = {{0.0f, 0.0f, 0.0f, 0.0f}};
+  env.marginalCdf = {0.0f, 1.0f};
+  env.conditionalCdf = {0.0f, 1.0f};
+  env.meanLuminance = luminance709(env.header.color);
+  return env;
+}
+
+static_assert(sizeof(WtEnvironment) == 48, "WtEnvironment must match the OpenCL layout");
+
+}  // namespace wt

@@ -1,0 +1,401 @@
+// Environment maps on the host: reading .hdr and .exr (and refusing what
+// cannot be read, naming the file), repairing bad texels, the constant
+// environment, and the sampling distribution's invariants.
+#include "scene/environment.h"
+#include "test_util.h"
+
+#include <ImfChannelList.h>
+#include <ImfFrameBuffer.h>
+#include <ImfHeader.h>
+#include <ImfOutputFile.h>
+#include <ImfTiledOutputFile.h>
+#include <stb_image_write.h>
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstddef>
+#include <fstream>
+#include <functional>
+#include <limits>
+#include <numbers>
+
+namespace wt {
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+
+static_assert(sizeof(WtEnvironment) == 48);
+static_assert(offsetof(WtEnvironment, intensity) == 16);
+static_assert(offsetof(WtEnvironment, mode) == 32);
+static_assert(offsetof(WtEnvironment, height) == 40);
+
+/// The call throws EnvironmentError whose message starts with `path` and contains `part`.
+void expectError(const std::filesystem::path& path, const std::string& part, const std::function<void()>& call) {
+  try {
+    call();
+    ADD_FAILURE() << path << ": no error (expected one mentioning '" << part << "')";
+  } catch (const EnvironmentError& e) {
+    std::string what = e.what();
+    EXPECT_EQ(what.rfind(path.string(), 0), 0u) << "message does not start with the path: " << what;
+    EXPECT_NE(what.find(part), std::string::npos) << "message lacks '" << part << "': " << what;
+  }
+}
+
+/// A w x h test image, distinct per pixel and channel.
+std::vector<float> testPixels(int w, int h) {
+  std::vector<float> rgb(std::size_t(w) * h * 3);
+  for (int k = 0; k < w * h; ++k) {
+    rgb[3 * k] = 0.25f + float(k % w);
+    rgb[3 * k + 1] = 0.5f + 0.1f * float(k / w);
+    rgb[3 * k + 2] = 1000.0f + float(k);
+  }
+  return rgb;
+}
+
+std::filesystem::path writeHdr(const std::string& name, int w, int h, const std::vector<float>& rgb) {
+  std::filesystem::path path = test::scratchDir("environment") / name;
+  EXPECT_TRUE(stbi_write_hdr(path.c_str(), w, h, 3, rgb.data()));
+  return path;
+}
+
+std::vector<char> readAll(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::vector<char>((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+void writeBytes(const std::filesystem::path& path, const std::vector<char>& bytes, std::size_t count) {
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  out.write(bytes.data(), std::streamsize(count));
+}
+
+/// A scanline EXR with the named FLOAT channels, channel c of pixel k = value(k, c).
+std::filesystem::path writeExr(const std::string& name, int w, int h, const std::vector<std::string>& channels,
+                               const std::function<float(int, int)>& value, Imath::V2i origin = {0, 0}) {
+  std::filesystem::path path = test::scratchDir("environment") / name;
+  Imath::Box2i window(origin, origin + Imath::V2i(w - 1, h - 1));
+  Imf::Header header(window, window);
+  std::vector<std::vector<float>> planes(channels.size(), std::vector<float>(std::size_t(w) * h));
+  Imf::FrameBuffer fb;
+  for (std::size_t c = 0; c < channels.size(); ++c) {
+    header.channels().insert(channels[c], Imf::Channel(Imf::FLOAT));
+    for (int k = 0; k < w * h; ++k) planes[c][k] = value(k, int(c));
+    fb.insert(channels[c], Imf::Slice::Make(Imf::FLOAT, planes[c].data(), window));
+  }
+  Imf::OutputFile out(path.c_str(), header);
+  out.setFrameBuffer(fb);
+  out.writePixels(h);
+  return path;
+}
+
+// ---------------------------------------------------------------------------
+// errors
+
+TEST(EnvironmentLoader, MissingFileIsNamed) {
+  for (const char* name : {"no_such_map.hdr", "no_such_map.exr"}) {
+    std::filesystem::path path = test::scratchDir("environment") / name;
+    expectError(path, "no such file", [&] { loadEnvironmentMap(path); });
+  }
+}
+
+TEST(EnvironmentLoader, UnsupportedFormatIsNamed) {
+  std::filesystem::path png = test::scratchDir("environment") / "map.png";
+  unsigned char pixels[12] = {};
+  ASSERT_TRUE(stbi_write_png(png.c_str(), 2, 2, 3, pixels, 6));
+  expectError(png, "unsupported environment map format '.png'", [&] { loadEnvironmentMap(png); });
+  // a PNG under a .hdr name is refused by its content
+  std::filesystem::path disguised = test::scratchDir("environment") / "png_inside.hdr";
+  std::vector<char> bytes = readAll(png);
+  writeBytes(disguised, bytes, bytes.size());
+  expectError(disguised, "not a Radiance HDR file", [&] { loadEnvironmentMap(disguised); });
+  // and a .hdr under an .exr name by OpenEXR
+  std::filesystem::path hdr = writeHdr("real.hdr", 16, 8, testPixels(16, 8));
+  std::filesystem::path wrongExr = test::scratchDir("environment") / "hdr_inside.exr";
+  bytes = readAll(hdr);
+  writeBytes(wrongExr, bytes, bytes.size());
+  expectError(wrongExr, "cannot read OpenEXR file", [&] { loadEnvironmentMap(wrongExr); });
+}
+
+TEST(EnvironmentLoader, TruncatedHdrIsRefused) {
+  // 64 wide: run-length encoded scanlines, where stb_image 2.27 would read zeros or hang
+  std::filesystem::path full = writeHdr("full.hdr", 64, 32, testPixels(64, 32));
+  std::vector<char> bytes = readAll(full);
+  ASSERT_GT(bytes.size(), 200u);
+  std::size_t headerEnd = std::string(bytes.begin(), bytes.end()).find("+X 64\n") + 6;
+  ASSERT_GT(headerEnd, 6u);
+  struct Cut {
+    std::size_t size;
+    const char* part;
+  };
+  for (Cut cut : {Cut{10, "truncated"}, Cut{headerEnd - 3, "resolution"}, Cut{headerEnd, "truncated"},
+                  Cut{headerEnd + 3, "truncated"}, Cut{headerEnd + 50, "truncated"},
+                  Cut{bytes.size() / 2, "truncated"}, Cut{bytes.size() - 1, "truncated"}}) {
+    std::filesystem::path cutPath = test::scratchDir("environment") / ("cut_" + std::to_string(cut.size) + ".hdr");
+    writeBytes(cutPath, bytes, cut.size);
+    expectError(cutPath, cut.part, [&] { loadEnvironmentMap(cutPath); });
+  }
+  EXPECT_NO_THROW(loadEnvironmentMap(full));
+}
+
+TEST(EnvironmentLoader, CorruptRunLengthDataIsRefused) {
+  std::filesystem::path full = writeHdr("rle.hdr", 64, 4, testPixels(64, 4));
+  std::vector<char> bytes = readAll(full);
+  std::size_t data = std::string(bytes.begin(), bytes.end()).find("+X 64\n") + 6;
+  // a zero run count right after the first scanline header
+  std::vector<char> zero = bytes;
+  zero[data + 4] = 0;
+  std::filesystem::path path = test::scratchDir("environment") / "zero_run.hdr";
+  writeBytes(path, zero, zero.size());
+  expectError(path, "zero-length run", [&] { loadEnvironmentMap(path); });
+  // a scanline length that is not the width
+  std::vector<char> length = bytes;
+  length[data + 3] = 63;
+  path = test::scratchDir("environment") / "bad_length.hdr";
+  writeBytes(path, length, length.size());
+  expectError(path, "expected 64", [&] { loadEnvironmentMap(path); });
+}
+
+TEST(EnvironmentLoader, TruncatedExrIsRefused) {
+  std::filesystem::path full = writeExr("full.exr", 32, 16, {"R", "G", "B"}, [](int k, int c) { return float(k + c); });
+  std::vector<char> bytes = readAll(full);
+  std::filesystem::path cut = test::scratchDir("environment") / "cut.exr";
+  writeBytes(cut, bytes, bytes.size() / 2);
+  expectError(cut, "cannot read OpenEXR file", [&] { loadEnvironmentMap(cut); });
+}
+
+TEST(EnvironmentLoader, UnsupportedExrChannelsAreNamed) {
+  std::filesystem::path g = writeExr("only_g.exr", 8, 4, {"G"}, [](int k, int) { return float(k); });
+  expectError(g, "unsupported channel layout (G)", [&] { loadEnvironmentMap(g); });
+  std::filesystem::path z = writeExr("depth.exr", 8, 4, {"Z"}, [](int k, int) { return float(k); });
+  expectError(z, "unsupported channel layout (Z)", [&] { loadEnvironmentMap(z); });
+}
+
+TEST(EnvironmentLoader, BadParametersAreNamed) {
+  std::filesystem::path hdr = writeHdr("params.hdr", 16, 8, testPixels(16, 8));
+  expectError(hdr, "intensity", [&] { loadEnvironmentMap(hdr, -1.0f); });
+  expectError(hdr, "intensity", [&] { loadEnvironmentMap(hdr, std::numeric_limits<float>::quiet_NaN()); });
+  expectError(hdr, "rotation", [&] { loadEnvironmentMap(hdr, 1.0f, std::numeric_limits<float>::infinity()); });
+}
+
+// ---------------------------------------------------------------------------
+// reading
+
+TEST(EnvironmentLoader, HdrRoundTrip) {
+  const int w = 16, h = 8;
+  std::vector<float> rgb = testPixels(w, h);
+  Environment env = loadEnvironmentMap(writeHdr("round.hdr", w, h, rgb), 2.0f, 90.0f);
+  ASSERT_EQ(env.header.width, wt_uint(w));
+  ASSERT_EQ(env.header.height, wt_uint(h));
+  ASSERT_EQ(env.texels.size(), std::size_t(w * h));
+  for (int k = 0; k < w * h; ++k) {
+    // RGBE keeps 8 bits of mantissa per channel, shared exponent
+    float scale = std::max({rgb[3 * k], rgb[3 * k + 1], rgb[3 * k + 2]}) / 128.0f;
+    EXPECT_NEAR(env.texels[k].x, rgb[3 * k], scale) << "texel " << k;
+    EXPECT_NEAR(env.texels[k].y, rgb[3 * k + 1], scale) << "texel " << k;
+    EXPECT_NEAR(env.texels[k].z, rgb[3 * k + 2], scale) << "texel " << k;
+  }
+  EXPECT_EQ(env.header.mode, wt_uint(WT_ENV_MAP));
+  EXPECT_FLOAT_EQ(env.header.intensity, 2.0f);
+  EXPECT_FLOAT_EQ(env.header.rotation, float(kPi / 2));
+  EXPECT_NEAR(env.header.cos_rotation, 0.0f, 1e-7f);
+  EXPECT_FLOAT_EQ(env.header.sin_rotation, 1.0f);
+  EXPECT_TRUE(env.warnings.empty());
+}
+
+TEST(EnvironmentLoader, ExrFloatRgbExactWithAnyDataWindow) {
+  const int w = 12, h = 6;
+  auto value = [](int k, int c) { return 1e5f * float(c + 1) + float(k) * 0.125f; };  // beyond half's range
+  for (Imath::V2i origin : {Imath::V2i(0, 0), Imath::V2i(-7, 30)}) {
+    Environment env = loadEnvironmentMap(
+        writeExr("rgba_" + std::to_string(origin.y) + ".exr", w, h, {"A", "B", "G", "R"}, value, origin));
+    ASSERT_EQ(env.header.width, wt_uint(w));
+    ASSERT_EQ(env.header.height, wt_uint(h));
+    // channels are stored alphabetically (A, B, G, R): c = 3 is R
+    for (int k = 0; k < w * h; ++k) {
+      ASSERT_EQ(env.texels[k].x, value(k, 3)) << "texel " << k;
+      ASSERT_EQ(env.texels[k].y, value(k, 2)) << "texel " << k;
+      ASSERT_EQ(env.texels[k].z, value(k, 1)) << "texel " << k;
+    }
+  }
+}
+
+TEST(EnvironmentLoader, ExrLuminanceOnlyIsGrey) {
+  Environment env = loadEnvironmentMap(writeExr("y.exr", 8, 4, {"Y"}, [](int k, int) { return 0.5f + float(k); }));
+  for (int k = 0; k < 32; ++k) {
+    EXPECT_EQ(env.texels[k].x, 0.5f + float(k));
+    EXPECT_EQ(env.texels[k].y, 0.5f + float(k));
+    EXPECT_EQ(env.texels[k].z, 0.5f + float(k));
+  }
+}
+
+TEST(EnvironmentLoader, TiledMipmappedExrGivesLevelZero) {
+  const int w = 40, h = 20;
+  std::filesystem::path path = test::scratchDir("environment") / "mip.exr";
+  {
+    Imath::Box2i window(Imath::V2i(0, 0), Imath::V2i(w - 1, h - 1));
+    Imf::Header header(window, window);
+    for (const char* c : {"R", "G", "B"}) header.channels().insert(c, Imf::Channel(Imf::HALF));
+    header.setTileDescription(Imf::TileDescription(16, 16, Imf::MIPMAP_LEVELS, Imf::ROUND_DOWN));
+    Imf::TiledOutputFile out(path.c_str(), header);
+    for (int level = 0; level < out.numLevels(); ++level) {
+      Imath::Box2i lw = out.dataWindowForLevel(level);
+      int lwidth = lw.max.x - lw.min.x + 1, lheight = lw.max.y - lw.min.y + 1;
+      // level 0 distinct per pixel, coarser levels a constant that must not show up
+      std::vector<half> px(std::size_t(lwidth) * lheight * 3);
+      for (int k = 0; k < lwidth * lheight; ++k)
+        for (int c = 0; c < 3; ++c) px[3 * k + c] = level == 0 ? half(float(k % 97) + 0.25f * c) : half(777.0f);
+      Imf::FrameBuffer fb;
+      const std::size_t xs = 3 * sizeof(half), ys = xs * lwidth;
+      fb.insert("R", Imf::Slice(Imf::HALF, reinterpret_cast<char*>(&px[0]), xs, ys));
+      fb.insert("G", Imf::Slice(Imf::HALF, reinterpret_cast<char*>(&px[1]), xs, ys));
+      fb.insert("B", Imf::Slice(Imf::HALF, reinterpret_cast<char*>(&px[2]), xs, ys));
+      out.setFrameBuffer(fb);
+      out.writeTiles(0, out.numXTiles(level) - 1, 0, out.numYTiles(level) - 1, level);
+    }
+  }
+  Environment env = loadEnvironmentMap(path);
+  ASSERT_EQ(env.header.width, wt_uint(w));
+  ASSERT_EQ(env.header.height, wt_uint(h));
+  for (int k = 0; k < w * h; ++k) {
+    ASSERT_EQ(env.texels[k].x, float(k % 97)) << "texel " << k;
+    ASSERT_EQ(env.texels[k].z, float(k % 97) + 0.5f) << "texel " << k;
+  }
+}
+
+TEST(EnvironmentLoader, BadTexelsBecomeZeroWithOneWarning) {
+  const float inf = std::numeric_limits<float>::infinity(), nan = std::numeric_limits<float>::quiet_NaN();
+  std::vector<glm::vec3> rgb(8, glm::vec3(1.0f));
+  rgb[1] = {nan, 1.0f, 1.0f};
+  rgb[2] = {1.0f, -3.0f, 1.0f};
+  rgb[5] = {inf, -inf, 2.0f};
+  Environment env = makeEnvironmentMap(4, 2, rgb, 1.0f, 0.0f, "bad.exr");
+  ASSERT_EQ(env.warnings.size(), 1u);
+  EXPECT_NE(env.warnings[0].find("bad.exr: 4 texel values"), std::string::npos) << env.warnings[0];
+  EXPECT_EQ(env.texels[1].x, 0.0f);
+  EXPECT_EQ(env.texels[1].y, 1.0f);
+  EXPECT_EQ(env.texels[2].y, 0.0f);
+  EXPECT_EQ(env.texels[5].x, 0.0f);
+  EXPECT_EQ(env.texels[5].y, 0.0f);
+  EXPECT_EQ(env.texels[5].z, 2.0f);
+  for (float c : env.marginalCdf) EXPECT_TRUE(std::isfinite(c));
+  for (float c : env.conditionalCdf) EXPECT_TRUE(std::isfinite(c));
+}
+
+// ---------------------------------------------------------------------------
+// distribution
+
+/// Sizes, end points, monotone cdfs; row probabilities proportional to the
+/// row's luminance x sin(theta of its centre).
+void expectDistributionValid(const Environment& env) {
+  const std::size_t w = env.header.width, h = env.header.height;
+  ASSERT_EQ(env.texels.size(), w * h);
+  ASSERT_EQ(env.marginalCdf.size(), h + 1);
+  ASSERT_EQ(env.conditionalCdf.size(), h * (w + 1));
+  EXPECT_EQ(env.marginalCdf.front(), 0.0f);
+  EXPECT_EQ(env.marginalCdf.back(), 1.0f);
+  for (std::size_t j = 0; j < h; ++j) {
+    EXPECT_LE(env.marginalCdf[j], env.marginalCdf[j + 1]);
+    const float* row = &env.conditionalCdf[j * (w + 1)];
+    EXPECT_EQ(row[0], 0.0f);
+    EXPECT_EQ(row[w], 1.0f);
+    for (std::size_t i = 0; i < w; ++i) ASSERT_LE(row[i], row[i + 1]) << "row " << j;
+  }
+  std::vector<double> rows(h, 0.0);
+  double total = 0.0;
+  for (std::size_t j = 0; j < h; ++j) {
+    for (std::size_t i = 0; i < w; ++i) {
+      const WtVec4& t = env.texels[j * w + i];
+      rows[j] += (0.2126 * t.x + 0.7152 * t.y + 0.0722 * t.z) * std::sin(kPi * (j + 0.5) / h);
+    }
+    total += rows[j];
+  }
+  if (total == 0.0) return;
+  for (std::size_t j = 0; j < h; ++j)
+    EXPECT_NEAR(env.marginalCdf[j + 1] - env.marginalCdf[j], rows[j] / total, 1e-6) << "row " << j;
+}
+
+TEST(EnvironmentDistribution, InvariantsHold) {
+  std::vector<glm::vec3> rgb(32 * 16);
+  for (std::size_t k = 0; k < rgb.size(); ++k) rgb[k] = glm::vec3(float(k % 5), float(k % 3), 0.5f);
+  for (int i = 0; i < 32; ++i) rgb[3 * 32 + i] = glm::vec3(0.0f);  // a black row
+  rgb[0] = glm::vec3(1e6f);                                          // a bright texel at the pole row
+  Environment env = makeEnvironmentMap(32, 16, rgb, 1.0f, 0.0f, "grid");
+  EXPECT_EQ(env.header.mode, wt_uint(WT_ENV_MAP));
+  expectDistributionValid(env);
+  // the black row is never chosen, its columns stay finite
+  EXPECT_EQ(env.marginalCdf[3], env.marginalCdf[4]);
+  EXPECT_GT(env.meanLuminance, 0.0);
+}
+
+TEST(EnvironmentDistribution, AllBlackFallsBackToUniform) {
+  Environment env = makeEnvironmentMap(8, 4, std::vector<glm::vec3>(32, glm::vec3(0.0f)), 1.0f, 0.0f, "black");
+  EXPECT_EQ(env.header.mode, wt_uint(WT_ENV_MAP_UNIFORM));
+  expectDistributionValid(env);
+  for (float c : env.conditionalCdf) EXPECT_TRUE(std::isfinite(c));
+  EXPECT_EQ(env.meanLuminance, 0.0);
+}
+
+TEST(EnvironmentDistribution, MeanLuminanceOfAUniformMap) {
+  // a uniform map of luminance 1 x intensity 3 has mean luminance 3
+  Environment env = makeEnvironmentMap(64, 32, std::vector<glm::vec3>(64 * 32, glm::vec3(1.0f)), 3.0f, 0.0f, "grey");
+  EXPECT_NEAR(env.meanLuminance, 3.0, 1e-9);
+  // rows by sin(theta) only
+  expectDistributionValid(env);
+}
+
+TEST(EnvironmentDistribution, ConstantEnvironment) {
+  Environment env = constantEnvironment({0.5f, 1.0f, 2.0f});
+  EXPECT_EQ(env.header.mode, wt_uint(WT_ENV_CONSTANT));
+  EXPECT_EQ(env.header.color.x, 0.5f);
+  EXPECT_EQ(env.header.color.z, 2.0f);
+  EXPECT_EQ(env.header.intensity, 1.0f);
+  EnvironmentUpload up = environmentUpload(env);
+  EXPECT_FALSE(up.texels.empty());
+  EXPECT_FALSE(up.marginalCdf.empty());
+  EXPECT_FALSE(up.conditionalCdf.empty());
+  EXPECT_NEAR(env.meanLuminance, 0.2126 * 0.5 + 0.7152 + 0.0722 * 2.0, 1e-6);
+}
+
+TEST(EnvironmentDistribution, UploadSpansTheArrays) {
+  Environment env = makeEnvironmentMap(4, 2, std::vector<glm::vec3>(8, glm::vec3(1.0f)), 1.0f, 0.0f, "tiny");
+  EnvironmentUpload up = environmentUpload(env);
+  EXPECT_EQ(up.texels.size(), 8u);
+  EXPECT_EQ(up.marginalCdf.size(), 3u);
+  EXPECT_EQ(up.conditionalCdf.size(), 10u);
+  EXPECT_EQ(up.texels.data(), env.texels.data());
+  // not 2:1: loads, with a warning
+  Environment wide = makeEnvironmentMap(4, 4, std::vector<glm::vec3>(16, glm::vec3(1.0f)), 1.0f, 0.0f, "square");
+  ASSERT_EQ(wide.warnings.size(), 1u);
+  EXPECT_NE(wide.warnings[0].find("not 2:1"), std::string::npos);
+}
+
+// ---------------------------------------------------------------------------
+// real files
+
+TEST(EnvironmentAssets, RealHdrMapsLoad) {
+  for (const char* name : {"royal_esplanade_1k.hdr", "chinese_garden_1k.hdr", "studio.hdr", "spot1Lux.hdr"}) {
+    WT_REQUIRE_ASSET(file, std::string("envmaps/") + name);
+    Environment env = loadEnvironmentMap(file);
+    EXPECT_EQ(env.header.width, 2 * env.header.height) << name;
+    EXPECT_EQ(env.header.mode, wt_uint(WT_ENV_MAP)) << name;
+    EXPECT_GT(env.meanLuminance, 0.0) << name;
+    expectDistributionValid(env);
+  }
+}
+
+TEST(EnvironmentAssets, TiledMipmappedOrientationMapLoads) {
+  WT_REQUIRE_ASSET(file, "envmaps/openexr-images/OrientationLatLong.exr");
+  Environment env = loadEnvironmentMap(file);
+  EXPECT_EQ(env.header.width, 1024u);
+  EXPECT_EQ(env.header.height, 512u);
+  EXPECT_TRUE(env.warnings.empty());
+}
+
+TEST(EnvironmentAssets, WideFloatRangeIsRefusedClearly) {
+  // PXR24, a single G channel: not an environment map's layout
+  WT_REQUIRE_ASSET(file, "envmaps/openexr-images/WideFloatRange.exr");
+  expectError(file, "unsupported channel layout (G)", [&] { loadEnvironmentMap(file); });
+}
+
+}  // namespace
+}  // namespace wt
