@@ -265,7 +265,7 @@ TEST(EnvironmentSampling, ChiSquareOnRotatedSyntheticMap) {
   chiSquareTest("synthetic_rotated", syntheticMap(37.0f, 2.5f), 24, 12, 4, 1 << 21, 2);
 }
 
-TEST(EnvironmentSampling, ChiSquareOnRealMap) {
+TEST(EnvironmentSamplingAssets, ChiSquareOnRealMap) {
   WT_REQUIRE_ASSET(file, "envmaps/royal_esplanade_1k.hdr");
   Environment env = loadEnvironmentMap(file);
   ASSERT_EQ(env.header.width, 1024u);
@@ -306,7 +306,7 @@ TEST(EnvironmentSampling, PdfFollowsLuminanceTimesSinTheta) {
   expectPdfFollowsLuminance(syntheticMap(-123.0f, 0.5f), 1e-7);
 }
 
-TEST(EnvironmentSampling, PdfFollowsLuminanceOnRealMap) {
+TEST(EnvironmentSamplingAssets, PdfFollowsLuminanceOnRealMap) {
   WT_REQUIRE_ASSET(file, "envmaps/royal_esplanade_1k.hdr");
   // float cdf differences near 1 carry absolute errors of ~1e-7
   expectPdfFollowsLuminance(loadEnvironmentMap(file, 1.0f, 90.0f), 3e-7);
@@ -340,7 +340,7 @@ TEST(EnvironmentSampling, PdfIntegratesToOne) {
   EXPECT_NEAR(pdfIntegralAroundX(black, 64), 1.0, 1e-3);
 }
 
-TEST(EnvironmentSampling, PdfIntegratesToOneOnRealMap) {
+TEST(EnvironmentSamplingAssets, PdfIntegratesToOneOnRealMap) {
   WT_REQUIRE_ASSET(file, "envmaps/royal_esplanade_1k.hdr");
   EXPECT_NEAR(pdfIntegralAroundX(loadEnvironmentMap(file), 1024), 1.0, 5e-3);
 }
@@ -364,7 +364,7 @@ TEST(EnvironmentSampling, ConstantAndBlackSampleTheUniformSphere) {
   }
 }
 
-TEST(EnvironmentSampling, SpotMapSamplesLandInItsTexel) {
+TEST(EnvironmentSamplingAssets, SpotMapSamplesLandInItsTexel) {
   WT_REQUIRE_ASSET(file, "envmaps/spot1Lux.hdr");
   Environment env = loadEnvironmentMap(file);
   const int w = int(env.header.width), h = int(env.header.height);
@@ -407,7 +407,7 @@ bool darkRed(const cl_float4& c) {
   return c.s[0] > 0.08f && c.s[1] < 0.35f * c.s[0] && c.s[2] < 0.35f * c.s[0];
 }
 
-TEST(EnvironmentOrientation, MatchesOpenExrLatLongMap) {
+TEST(EnvironmentOrientationAssets, MatchesOpenExrLatLongMap) {
   WT_REQUIRE_ASSET(file, "envmaps/openexr-images/OrientationLatLong.exr");
   Environment env = loadEnvironmentMap(file);
   const int w = int(env.header.width), h = int(env.header.height);
@@ -441,7 +441,7 @@ TEST(EnvironmentOrientation, MatchesOpenExrLatLongMap) {
 // OrientationLatLong.exr marks each horizontal axis with the dark red corner
 // of a frame whose lines run towards +Y and towards the positive other
 // horizontal axis (+X beside +-Z, +Z beside +-X); the poles are dark red caps.
-TEST(EnvironmentOrientation, AxesShowTheirMarks) {
+TEST(EnvironmentOrientationAssets, AxesShowTheirMarks) {
   WT_REQUIRE_ASSET(file, "envmaps/openexr-images/OrientationLatLong.exr");
   Environment env = loadEnvironmentMap(file);
   DeviceEnv dev(env);
@@ -480,7 +480,7 @@ TEST(EnvironmentOrientation, AxesShowTheirMarks) {
   EXPECT_TRUE(darkRed(poles[1])) << "-Y cap";
 }
 
-TEST(EnvironmentOrientation, RotationTurnsCounterClockwiseSeenFromAbove) {
+TEST(EnvironmentOrientationAssets, RotationTurnsCounterClockwiseSeenFromAbove) {
   // every texel a different colour; directions at texel centres of the unrotated map
   const int w = 16, h = 8;
   std::vector<glm::vec3> rgb(w * h);
@@ -553,7 +553,7 @@ TEST(EnvironmentEstimation, IrradianceMatchesBruteForce) {
     expectIrradianceMatches(env, n, 1 << 20, 64, 6);
 }
 
-TEST(EnvironmentEstimation, IrradianceMatchesBruteForceOnRealMap) {
+TEST(EnvironmentEstimationAssets, IrradianceMatchesBruteForceOnRealMap) {
   WT_REQUIRE_ASSET(file, "envmaps/royal_esplanade_1k.hdr");
   Environment env = loadEnvironmentMap(file, 0.7f, -45.0f);
   for (glm::dvec3 n : {glm::dvec3(0, 1, 0), glm::normalize(glm::dvec3(0.6, 0.2, -0.7))})
