@@ -2,11 +2,15 @@
 // (NEE, MIS, Russian roulette) must converge to what `minimal` converges to.
 #include "render/render_helpers.h"
 #include "scene/default_scene.h"
+#include "test_util.h"
 
 #include <glm/gtc/constants.hpp>
 #include <glm/gtc/matrix_transform.hpp>
 
 #include <numbers>
+#include <filesystem>
+
+#include <stb_image_write.h>
 
 namespace wt {
 namespace {
@@ -216,6 +220,40 @@ TEST(Integrators, SobolSamplerConvergesToTheSameImage) {
   Image sobol = render(scene, s, 128);
   // Sobol's error is lower than its sample variance suggests: the test errs on the safe side
   expectSameImage(independent, sobol, 4, 5.0, "independent vs Sobol");
+}
+
+TEST(Integrators, PathMatchesMinimalUnderAnEnvironmentMap) {
+  // a map with a small hot spot over a dim gradient: importance sampling matters
+  const int w = 64, h = 32;
+  std::vector<float> rgb(3 * w * h);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      float* p = &rgb[3 * (y * w + x)];
+      p[0] = 0.2f + 0.3f * float(y) / h, p[1] = 0.3f, p[2] = 0.5f - 0.3f * float(y) / h;
+      if (x >= 20 && x < 24 && y >= 8 && y < 12) p[0] = p[1] = p[2] = 30.0f;
+    }
+  std::filesystem::path map = test::scratchDir("integrators") / "hotspot.hdr";
+  ASSERT_TRUE(stbi_write_hdr(map.c_str(), w, h, 3, rgb.data()));
+
+  Scene scene = test::makeFloor(3.0f, 0.0f, makeMaterial(glm::vec3(0.7f)));
+  appendScene(scene, makeIcosphere(2, glm::vec3(0.0f, 0.6f, 0.0f), 0.6f, makeMaterial(glm::vec3(0.5f, 0.6f, 0.8f))));
+  CameraDesc cam;
+  cam.cameraToWorld = glm::inverse(glm::lookAt(glm::vec3(0.0f, 1.5f, 3.5f), glm::vec3(0.0f, 0.4f, 0.0f), glm::vec3(0, 1, 0)));
+  scene.camera = cam;
+  RenderSettings s = small(Integrator::Minimal, 16);
+  s.maxBounces = 3;
+  s.environmentMap = map.string();
+  s.environmentRotationDegrees = 30.0f;
+  Image reference = render(scene, s, 2048);
+  RenderSettings p = s;
+  p.integrator = Integrator::Path;
+  Image img = render(scene, p, 256);
+  expectSameImage(reference, img, 4, 5.0, "environment map");
+  // power: a 5% bias over the image would be many standard errors
+  for (const Image* i : {&reference, &img}) {
+    test::BlockStat all = test::blockStat(*i, 0, 0, i->width, i->height, 1);
+    EXPECT_LT(std::sqrt(all.varianceOfMean), 0.01 * all.mean);
+  }
 }
 
 TEST(Integrators, MisHeuristicsAgree) {
