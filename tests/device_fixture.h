@@ -2,6 +2,7 @@
 #pragma once
 
 #include "device/context.h"
+#include "device/program.h"
 
 #include <gtest/gtest.h>
 
@@ -15,6 +16,12 @@ inline Context& deviceContext() {
     return std::make_unique<Context>(selectDevice(""), /*profiling=*/true);
   }();
   return *context;
+}
+
+/// kernels/unit_tests.cl: small kernels exposing shared device code, built once.
+inline cl::Program unitTestProgram() {
+  static cl::Program program = buildProgram(deviceContext(), KernelFeatures{}, "unit_tests.cl");
+  return program;
 }
 
 }  // namespace wt::test

@@ -11,11 +11,6 @@
 namespace wt {
 namespace {
 
-cl::Program unitTestProgram() {
-  static cl::Program program = buildProgram(test::deviceContext(), KernelFeatures{}, "unit_tests.cl");
-  return program;
-}
-
 TEST(LightSampling, AliasTableReproducesItsPmf) {
   Context& ctx = test::deviceContext();
   // uneven weights, zeros included: a zero-weight light is never chosen
@@ -28,7 +23,7 @@ TEST(LightSampling, AliasTableReproducesItsPmf) {
   const cl_uint n = 1 << 20;
   cl::Buffer alias(ctx.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, table.size() * sizeof(WtAliasSlot), table.data());
   cl::Buffer chosen(ctx.context(), CL_MEM_WRITE_ONLY, n * 4), pmf(ctx.context(), CL_MEM_WRITE_ONLY, n * 4);
-  cl::Kernel k(unitTestProgram(), "test_light_pick");
+  cl::Kernel k(test::unitTestProgram(), "test_light_pick");
   k.setArg(0, n), k.setArg(1, alias), k.setArg(2, cl_uint(table.size())), k.setArg(3, chosen), k.setArg(4, pmf);
   ctx.launch("test_light_pick", k, n);
   std::vector<cl_uint> picks(n);
@@ -78,7 +73,7 @@ TEST(LightSampling, MisWeightsSumToOne) {
   const cl_uint n = cl_uint(pdfs.size());
   cl::Buffer in(ctx.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, n * 8, pdfs.data());
   cl::Buffer out(ctx.context(), CL_MEM_WRITE_ONLY, n * 8);
-  cl::Kernel k(unitTestProgram(), "test_mis");
+  cl::Kernel k(test::unitTestProgram(), "test_mis");
   for (cl_uint flags : {0u, cl_uint(WT_FLAG_POWER_HEURISTIC)}) {
     k.setArg(0, n), k.setArg(1, in), k.setArg(2, flags), k.setArg(3, out);
     ctx.launch("test_mis", k, n);

@@ -49,10 +49,9 @@ TEST(Sampler, PixelsAreDecorrelated) {
 
 TEST(Sampler, DeviceMatchesHost) {
   Context& ctx = test::deviceContext();
-  cl::Program program = buildProgram(ctx, KernelFeatures{}, "unit_tests.cl");
   const cl_uint n = 4096;
   cl::Buffer out(ctx.context(), CL_MEM_WRITE_ONLY, n * 4);
-  cl::Kernel k(program, "test_sobol");
+  cl::Kernel k(test::unitTestProgram(), "test_sobol");
   for (cl_uint dim : {0u, 3u, 6u}) {
     k.setArg(0, n), k.setArg(1, cl_uint(77)), k.setArg(2, cl_uint(2)), k.setArg(3, dim), k.setArg(4, cl_uint(5)), k.setArg(5, out);
     ctx.launch("test_sobol", k, n);

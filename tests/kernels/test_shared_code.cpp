@@ -14,16 +14,11 @@
 namespace wt {
 namespace {
 
-cl::Program unitTestProgram() {
-  static cl::Program program = buildProgram(test::deviceContext(), KernelFeatures{}, "unit_tests.cl");
-  return program;
-}
-
 TEST(SharedCode, RngMatchesTheHostBuildBitForBit) {
   Context& ctx = test::deviceContext();
   const cl_uint n = 4096;
   cl::Buffer out(ctx.context(), CL_MEM_WRITE_ONLY, n * sizeof(float));
-  cl::Kernel k(unitTestProgram(), "test_rng");
+  cl::Kernel k(test::unitTestProgram(), "test_rng");
   for (auto [sample, bounce, dim, seed] : {std::array<cl_uint, 4>{0, 0, 0, 0}, {17, 3, 2, 99}, {1u << 20, 7, 3, 12345}}) {
     k.setArg(0, n), k.setArg(1, sample), k.setArg(2, bounce), k.setArg(3, dim), k.setArg(4, seed), k.setArg(5, out);
     ctx.launch("test_rng", k, n);
@@ -51,7 +46,7 @@ TEST(SharedCode, LambertSamplesAreCosineDistributed) {
   glm::vec3 normal = glm::normalize(glm::vec3(0.3f, -0.5f, 0.8f));
   cl::Buffer in(ctx.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, n * sizeof(cl_float2), us.data());
   cl::Buffer out(ctx.context(), CL_MEM_WRITE_ONLY, n * sizeof(cl_float4));
-  cl::Kernel k(unitTestProgram(), "test_lambert");
+  cl::Kernel k(test::unitTestProgram(), "test_lambert");
   k.setArg(0, n), k.setArg(1, cl_float4{{normal.x, normal.y, normal.z, 0}}), k.setArg(2, in), k.setArg(3, out);
   ctx.launch("test_lambert", k, n);
   std::vector<cl_float4> dirs(n);
@@ -88,7 +83,7 @@ TEST(SharedCode, RayOffsetLeavesTheSurfaceOnTheNormalSide) {
   cl::Buffer bp(ctx.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, n * 16, p.data());
   cl::Buffer bn(ctx.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, n * 16, nrm.data());
   cl::Buffer out(ctx.context(), CL_MEM_WRITE_ONLY, n * 16);
-  cl::Kernel k(unitTestProgram(), "test_offset");
+  cl::Kernel k(test::unitTestProgram(), "test_offset");
   k.setArg(0, n), k.setArg(1, bp), k.setArg(2, bn), k.setArg(3, out);
   ctx.launch("test_offset", k, n);
   std::vector<cl_float4> got(n);
