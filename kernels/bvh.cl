@@ -1,5 +1,6 @@
-// BVH traversal: closest hit and any hit over the binary node layout of
-// shared/types.h (children adjacent, node 0 the root).
+// BVH traversal: closest hit and any hit over the 4-wide node layout of
+// shared/types.h (WtBvh4Node, node 0 the root). The buffer is declared as
+// WtBvhNode* in the kernels' arguments and BvhScene; it holds WtBvh4Node.
 #ifndef WT_BVH_CL
 #define WT_BVH_CL
 
@@ -26,19 +27,24 @@ inline float3 bvh_safe_rcp(float3 d) {
   return 1.0f / ds;
 }
 
-// Slab test. The far distance is scaled up by 1 + 2*gamma(3) (Ize 2013), so
-// rounding never culls a box the ray truly touches.
-inline bool bvh_box_hit(__global const WtBvhNode* n, float3 org, float3 inv_d, float tmin,
-                        float tmax, float* t_entry) {
-  float3 lo = (float3)(n->lo_x, n->lo_y, n->lo_z);
-  float3 hi = (float3)(n->hi_x, n->hi_y, n->hi_z);
-  float3 t0 = (lo - org) * inv_d;
-  float3 t1 = (hi - org) * inv_d;
-  float3 tn = fmin(t0, t1);
-  float3 tf = fmax(t0, t1);
-  float enter = fmax(fmax(tn.x, tn.y), fmax(tn.z, tmin));
-  float exit = fmin(fmin(tf.x, tf.y), tf.z) * 1.00000036f;
-  exit = fmin(exit, tmax);
+// Slab test of a node's four child boxes at once. The far distance is scaled
+// up by 1 + 2*gamma(3) (Ize 2013), so rounding never culls a box the ray truly
+// touches. Near and far planes are picked by the sign of the ray's direction,
+// so an empty slot's inverted box (lo = +inf, hi = -inf) is never entered.
+inline int4 bvh4_box_hit(__global const WtBvh4Node* n, float3 org, float3 inv_d, float tmin,
+                         float tmax, float4* t_entry) {
+  float4 lo_x = vload4(0, n->lo_x), hi_x = vload4(0, n->hi_x);
+  float4 lo_y = vload4(0, n->lo_y), hi_y = vload4(0, n->hi_y);
+  float4 lo_z = vload4(0, n->lo_z), hi_z = vload4(0, n->hi_z);
+  float4 tn_x = ((inv_d.x < 0.0f ? hi_x : lo_x) - org.x) * inv_d.x;
+  float4 tf_x = ((inv_d.x < 0.0f ? lo_x : hi_x) - org.x) * inv_d.x;
+  float4 tn_y = ((inv_d.y < 0.0f ? hi_y : lo_y) - org.y) * inv_d.y;
+  float4 tf_y = ((inv_d.y < 0.0f ? lo_y : hi_y) - org.y) * inv_d.y;
+  float4 tn_z = ((inv_d.z < 0.0f ? hi_z : lo_z) - org.z) * inv_d.z;
+  float4 tf_z = ((inv_d.z < 0.0f ? lo_z : hi_z) - org.z) * inv_d.z;
+  float4 enter = fmax(fmax(tn_x, tn_y), fmax(tn_z, (float4)(tmin)));
+  float4 exit = fmin(fmin(tf_x, tf_y), tf_z) * 1.00000036f;
+  exit = fmin(exit, (float4)(tmax));
   *t_entry = enter;
   return enter <= exit;
 }
@@ -50,49 +56,62 @@ inline Hit bvh_closest(BvhScene scene, float3 org, float3 dir, float tmin, float
   hit.b1 = hit.b2 = 0.0f;
   hit.prim = WT_NO_HIT;
   if (scene.node_count == 0) return hit;
+  __global const WtBvh4Node* nodes = (__global const WtBvh4Node*)scene.nodes;
 
   RayShear shear = triangle_ray_shear(dir);
   float3 inv_d = bvh_safe_rcp(dir);
-  float t_entry;
-  if (!bvh_box_hit(&scene.nodes[0], org, inv_d, tmin, tmax, &t_entry)) return hit;
-
+  // at most three pushes per level: WT_BVH_STACK_SIZE comes from bvh4StackEntries
   uint stack_node[WT_BVH_STACK_SIZE];
   float stack_t[WT_BVH_STACK_SIZE];
   int sp = 0;
   uint node = 0;
   for (;;) {
-    __global const WtBvhNode* n = &scene.nodes[node];
-    if (n->count > 0) {
-      uint end = n->first + n->count;
-      for (uint i = n->first; i < end; ++i) {
-        float t, b1, b2;
-        if (triangle_intersect(org, shear, tmin, hit.t, scene.tri_verts[3 * i].xyz,
-                               scene.tri_verts[3 * i + 1].xyz, scene.tri_verts[3 * i + 2].xyz, &t,
-                               &b1, &b2)) {
-          hit.t = t;
-          hit.b1 = b1;
-          hit.b2 = b2;
-          hit.prim = i;
+    __global const WtBvh4Node* n = &nodes[node];
+    float4 t4;
+    int4 hit4 = bvh4_box_hit(n, org, inv_d, tmin, hit.t, &t4);
+    float t_child[4] = {t4.s0, t4.s1, t4.s2, t4.s3};
+    int hit_child[4] = {hit4.s0, hit4.s1, hit4.s2, hit4.s3};
+    // Leaves now (they shorten hit.t); inner children sorted nearest first.
+    uint inner[4];
+    float inner_t[4];
+    int inner_count = 0;
+    for (int k = 0; k < 4; ++k) {
+      if (!hit_child[k]) continue;
+      uint first = n->child[k], count = n->count[k];
+      if (count > 0) {
+        uint end = first + count;
+        for (uint i = first; i < end; ++i) {
+          float t, b1, b2;
+          if (triangle_intersect(org, shear, tmin, hit.t, scene.tri_verts[3 * i].xyz,
+                                 scene.tri_verts[3 * i + 1].xyz, scene.tri_verts[3 * i + 2].xyz,
+                                 &t, &b1, &b2)) {
+            hit.t = t;
+            hit.b1 = b1;
+            hit.b2 = b2;
+            hit.prim = i;
+          }
         }
+      } else {
+        int j = inner_count++;
+        for (; j > 0 && inner_t[j - 1] > t_child[k]; --j) {
+          inner[j] = inner[j - 1];
+          inner_t[j] = inner_t[j - 1];
+        }
+        inner[j] = first;
+        inner_t[j] = t_child[k];
       }
-    } else {
-      uint left = n->first;
-      float t_left, t_right;
-      bool hit_left = bvh_box_hit(&scene.nodes[left], org, inv_d, tmin, hit.t, &t_left);
-      bool hit_right = bvh_box_hit(&scene.nodes[left + 1], org, inv_d, tmin, hit.t, &t_right);
-      if (hit_left && hit_right) {
-        // Visit the nearer child first; the farther one waits with its entry distance.
-        bool left_first = t_left <= t_right;
-        stack_node[sp] = left_first ? left + 1 : left;
-        stack_t[sp] = left_first ? t_right : t_left;
+    }
+    // Descend into the nearest inner child still in front of the closest hit;
+    // the others wait, farthest deepest.
+    if (inner_count > 0 && inner_t[0] <= hit.t) {
+      for (int k = inner_count - 1; k >= 1; --k) {
+        if (inner_t[k] > hit.t) continue;
+        stack_node[sp] = inner[k];
+        stack_t[sp] = inner_t[k];
         ++sp;
-        node = left_first ? left : left + 1;
-        continue;
       }
-      if (hit_left || hit_right) {
-        node = hit_left ? left : left + 1;
-        continue;
-      }
+      node = inner[0];
+      continue;
     }
     // Pop, skipping boxes entered beyond the closest hit found since the push.
     for (;;) {
@@ -107,39 +126,40 @@ inline Hit bvh_closest(BvhScene scene, float3 org, float3 dir, float tmin, float
 /// Any hit in (tmin, tmax): true when the segment is blocked.
 inline bool bvh_occluded(BvhScene scene, float3 org, float3 dir, float tmin, float tmax) {
   if (scene.node_count == 0) return false;
+  __global const WtBvh4Node* nodes = (__global const WtBvh4Node*)scene.nodes;
   RayShear shear = triangle_ray_shear(dir);
   float3 inv_d = bvh_safe_rcp(dir);
-  float t_entry;
-  if (!bvh_box_hit(&scene.nodes[0], org, inv_d, tmin, tmax, &t_entry)) return false;
 
   uint stack_node[WT_BVH_STACK_SIZE];
   int sp = 0;
   uint node = 0;
   for (;;) {
-    __global const WtBvhNode* n = &scene.nodes[node];
-    if (n->count > 0) {
-      uint end = n->first + n->count;
-      for (uint i = n->first; i < end; ++i) {
-        float t, b1, b2;
-        if (triangle_intersect(org, shear, tmin, tmax, scene.tri_verts[3 * i].xyz,
-                               scene.tri_verts[3 * i + 1].xyz, scene.tri_verts[3 * i + 2].xyz, &t,
-                               &b1, &b2))
-          return true;
+    __global const WtBvh4Node* n = &nodes[node];
+    float4 t4;
+    int4 hit4 = bvh4_box_hit(n, org, inv_d, tmin, tmax, &t4);
+    int hit_child[4] = {hit4.s0, hit4.s1, hit4.s2, hit4.s3};
+    int next = -1;
+    for (int k = 0; k < 4; ++k) {
+      if (!hit_child[k]) continue;
+      uint first = n->child[k], count = n->count[k];
+      if (count > 0) {
+        uint end = first + count;
+        for (uint i = first; i < end; ++i) {
+          float t, b1, b2;
+          if (triangle_intersect(org, shear, tmin, tmax, scene.tri_verts[3 * i].xyz,
+                                 scene.tri_verts[3 * i + 1].xyz, scene.tri_verts[3 * i + 2].xyz,
+                                 &t, &b1, &b2))
+            return true;
+        }
+      } else if (next < 0) {
+        next = (int)first;
+      } else {
+        stack_node[sp++] = first;
       }
-    } else {
-      uint left = n->first;
-      float t_left, t_right;
-      bool hit_left = bvh_box_hit(&scene.nodes[left], org, inv_d, tmin, tmax, &t_left);
-      bool hit_right = bvh_box_hit(&scene.nodes[left + 1], org, inv_d, tmin, tmax, &t_right);
-      if (hit_left && hit_right) {
-        stack_node[sp++] = left + 1;
-        node = left;
-        continue;
-      }
-      if (hit_left || hit_right) {
-        node = hit_left ? left : left + 1;
-        continue;
-      }
+    }
+    if (next >= 0) {
+      node = (uint)next;
+      continue;
     }
     if (sp == 0) return false;
     node = stack_node[--sp];

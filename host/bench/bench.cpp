@@ -1,5 +1,7 @@
 #include "bench/bench.h"
 
+#include "bench/embree_reference.h"
+#include "bvh/bvh4.h"
 #include "bvh/lbvh.h"
 #include "core/log.h"
 #include "device/context.h"
@@ -9,31 +11,72 @@
 #include "scene/generators.h"
 
 #include <algorithm>
+#include <bit>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
+#include <functional>
+#include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
 namespace wt {
 namespace {
 
+using Clock = std::chrono::steady_clock;
+
+double secondsSince(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
 double median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
   return v.empty() ? 0.0 : v[v.size() / 2];
 }
 
-struct SceneResult {
-  std::string name;
-  std::size_t triangles = 0;
-  double buildSeconds = 0.0;
-  std::size_t nodes = 0;
-  double sah = 0.0;
-  double bytesPerTriangle = 0.0;
-  double primaryWallMrays = 0.0, primaryKernelMrays = 0.0;
-  double primaryHitFraction = 0.0;
-  double pathMrays = 0.0;
+#ifdef WT_HAVE_EMBREE
+constexpr bool kHaveEmbree = true;
+#else
+constexpr bool kHaveEmbree = false;
+#endif
+
+// ---- ray sets ----------------------------------------------------------------------
+
+/// Uniform floats in [0,1) from a counter: the ray sets do not depend on the
+/// order or thread they are made in.
+struct Rng {
+  std::uint64_t state;
+  explicit Rng(std::uint64_t seed) : state(seed * 0x9e3779b97f4a7c15ull + 0x632be59bd9b4e019ull) {}
+  float next() {
+    // splitmix64
+    std::uint64_t z = (state += 0x9e3779b97f4a7c15ull);
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+    z ^= z >> 31;
+    return float(z >> 40) * 0x1p-24f;
+  }
 };
+
+glm::vec3 position(const Scene& scene, std::uint32_t v) {
+  return glm::vec3(scene.positions[v].x, scene.positions[v].y, scene.positions[v].z);
+}
+
+/// Host copy of ray_offset_origin (kernels/common.h): a few ULPs of p along
+/// the geometric normal, a fixed offset near the origin.
+glm::vec3 offsetOrigin(glm::vec3 p, glm::vec3 n) {
+  const float kOrigin = 1.0f / 32.0f, kFloatScale = 1.0f / 65536.0f, kIntScale = 256.0f;
+  glm::vec3 out;
+  for (int a = 0; a < 3; ++a) {
+    int of = int(kIntScale * n[a]);
+    int bits = std::bit_cast<int>(p[a]);
+    float pi = std::bit_cast<float>(bits + (bits < 0 ? -of : of));
+    float pf = p[a] + kFloatScale * n[a];
+    out[a] = std::fabs(p[a]) < kOrigin ? pf : pi;
+  }
+  return out;
+}
 
 /// Camera rays through pixel centres, as the generate stage makes them.
 std::vector<Ray> primaryRays(const Scene& scene, int width) {
@@ -57,6 +100,291 @@ std::vector<Ray> primaryRays(const Scene& scene, int width) {
   return rays;
 }
 
+/// Where a camera ray hit: the point from the barycentrics and the unit
+/// geometric normal turned towards the camera, the origin offset along it.
+struct SurfacePoint {
+  glm::vec3 origin;  ///< offset off the surface, camera side
+  glm::vec3 normal;  ///< unit, camera side
+};
+
+std::optional<SurfacePoint> surfacePoint(const Scene& scene, const Ray& ray, const RayHit& hit) {
+  if (hit.triangle == RayHit::kNoHit) return std::nullopt;
+  const WtTriangle& tri = scene.triangles[hit.triangle];
+  glm::vec3 p0 = position(scene, tri.v0), p1 = position(scene, tri.v1), p2 = position(scene, tri.v2);
+  glm::vec3 p = (1.0f - hit.b1 - hit.b2) * p0 + hit.b1 * p1 + hit.b2 * p2;
+  glm::vec3 n = glm::cross(p1 - p0, p2 - p0);
+  float len = glm::length(n);
+  if (!(len > 0.0f)) return std::nullopt;
+  n /= len;
+  if (glm::dot(n, ray.direction) > 0.0f) n = -n;
+  return SurfacePoint{offsetOrigin(p, n), n};
+}
+
+/// Cosine-distributed directions about the camera-side normal at every
+/// camera hit (misses make no ray).
+std::vector<Ray> diffuseRays(const Scene& scene, std::span<const Ray> primary, std::span<const RayHit> hits) {
+  std::vector<Ray> rays;
+  rays.reserve(primary.size());
+  for (std::size_t i = 0; i < primary.size(); ++i) {
+    std::optional<SurfacePoint> s = surfacePoint(scene, primary[i], hits[i]);
+    if (!s) continue;
+    Rng rng(2 * i + 1);
+    float u1 = rng.next(), u2 = rng.next();
+    float r = std::sqrt(u1), phi = 6.2831853f * u2;
+    glm::vec3 n = s->normal;
+    // orthonormal basis (Duff et al. 2017)
+    float sign = std::copysign(1.0f, n.z), a = -1.0f / (sign + n.z), c = n.x * n.y * a;
+    glm::vec3 t(1.0f + sign * n.x * n.x * a, sign * c, -sign * n.x), b(c, sign + n.y * n.y * a, -n.y);
+    glm::vec3 d = r * std::cos(phi) * t + r * std::sin(phi) * b + std::sqrt(std::max(0.0f, 1.0f - u1)) * n;
+    Ray ray;
+    ray.origin = s->origin;
+    ray.direction = glm::normalize(d);
+    ray.tmin = 0.0f;
+    ray.tmax = 1e30f;
+    rays.push_back(ray);
+  }
+  return rays;
+}
+
+/// From every camera hit to a random point on an emissive triangle (by area),
+/// or in the scene's bounds when nothing emits; tmax stops a relative 1e-4
+/// short of the target, so the target's own surface never counts.
+std::vector<Ray> shadowRays(const Scene& scene, std::span<const Ray> primary, std::span<const RayHit> hits,
+                            bool* toEmitters) {
+  std::vector<std::uint32_t> emitters;
+  std::vector<double> cdf;
+  double total = 0.0;
+  for (std::uint32_t i = 0; i < scene.triangles.size(); ++i) {
+    const WtTriangle& tri = scene.triangles[i];
+    const WtVec4& e = scene.materials[tri.material].emission;
+    if (!(e.x > 0.0f || e.y > 0.0f || e.z > 0.0f)) continue;
+    glm::vec3 p0 = position(scene, tri.v0), p1 = position(scene, tri.v1), p2 = position(scene, tri.v2);
+    double area = 0.5 * glm::length(glm::cross(p1 - p0, p2 - p0));
+    if (!(area > 0.0) || !std::isfinite(area)) continue;
+    total += area;
+    emitters.push_back(i);
+    cdf.push_back(total);
+  }
+  *toEmitters = !emitters.empty();
+  Aabb bounds = scene.bounds();
+  glm::vec3 lo(bounds.lo.x, bounds.lo.y, bounds.lo.z), hi(bounds.hi.x, bounds.hi.y, bounds.hi.z);
+
+  std::vector<Ray> rays;
+  rays.reserve(primary.size());
+  for (std::size_t i = 0; i < primary.size(); ++i) {
+    std::optional<SurfacePoint> s = surfacePoint(scene, primary[i], hits[i]);
+    if (!s) continue;
+    Rng rng(2 * i + 2);
+    glm::vec3 target;
+    if (!emitters.empty()) {
+      double pick = rng.next() * total;
+      std::size_t k = std::min<std::size_t>(std::upper_bound(cdf.begin(), cdf.end(), pick) - cdf.begin(),
+                                            emitters.size() - 1);
+      const WtTriangle& tri = scene.triangles[emitters[k]];
+      float u1 = std::sqrt(rng.next()), u2 = rng.next();
+      target = (1.0f - u1) * position(scene, tri.v0) + u1 * (1.0f - u2) * position(scene, tri.v1) +
+               u1 * u2 * position(scene, tri.v2);
+    } else {
+      target = lo + glm::vec3(rng.next(), rng.next(), rng.next()) * (hi - lo);
+    }
+    glm::vec3 d = target - s->origin;
+    float distance = glm::length(d);
+    if (!(distance > 0.0f) || !std::isfinite(distance)) continue;
+    Ray ray;
+    ray.origin = s->origin;
+    ray.direction = d / distance;
+    ray.tmin = 0.0f;
+    ray.tmax = (1.0f - 1e-4f) * distance;
+    rays.push_back(ray);
+  }
+  return rays;
+}
+
+// ---- agreement ---------------------------------------------------------------------
+
+/// Why wavetrace and Embree disagree on a ray, judged in double precision
+/// the way tests/brute_force.h judges the kernels.
+enum class Disagreement {
+  kTie,            ///< both hit, different triangles at the same t (shared edges, overlaps)
+  kEdge,           ///< the nearer reported hit lies within 1e-5 (barycentric) of an edge
+  kRange,          ///< the nearer reported hit lies within 1e-5 (relative) of tmin or tmax
+  kWavetraceMiss,  ///< Embree's hit is clearly inside its triangle and the range; wavetrace missed it
+  kEmbreeMiss,     ///< the converse
+  kWavetraceFalse, ///< wavetrace reported a hit clearly outside its triangle
+  kEmbreeFalse,    ///< the converse
+  kInconsistent,   ///< occlusion only: a tracer's any-hit answer contradicts its own closest hit
+  kCount
+};
+const char* kDisagreementNames[] = {"t_tie", "edge_graze", "range_end", "wavetrace_missed",
+                                    "embree_missed", "wavetrace_false_hit", "embree_false_hit",
+                                    "anyhit_vs_closest"};
+constexpr double kTie = 1e-5, kEdge = 1e-5;
+
+/// Ray-plane distance and the crossing's minimum barycentric, in double; false when parallel.
+bool crossing(const Scene& scene, std::uint32_t tri, const Ray& ray, double& t, double& minB) {
+  const WtTriangle& tr = scene.triangles[tri];
+  glm::dvec3 p0(position(scene, tr.v0)), p1(position(scene, tr.v1)), p2(position(scene, tr.v2));
+  glm::dvec3 o(ray.origin), d(ray.direction);
+  glm::dvec3 e1 = p1 - p0, e2 = p2 - p0, pv = glm::cross(d, e2);
+  double det = glm::dot(e1, pv);
+  if (det == 0.0) return false;
+  double inv = 1.0 / det;
+  glm::dvec3 tv = o - p0, qv = glm::cross(tv, e1);
+  double b1 = glm::dot(tv, pv) * inv, b2 = glm::dot(d, qv) * inv;
+  t = glm::dot(e2, qv) * inv;
+  minB = std::min({1.0 - b1 - b2, b1, b2});
+  return true;
+}
+
+Disagreement classify(const Scene& scene, const Ray& ray, const RayHit& wt, const RayHit& em) {
+  const bool wtHit = wt.triangle != RayHit::kNoHit, emHit = em.triangle != RayHit::kNoHit;
+  auto close = [](double a, double b) { return std::abs(a - b) <= kTie * std::max(1.0, std::abs(b)); };
+  if (wtHit && emHit && close(wt.t, em.t)) return Disagreement::kTie;
+  // the nearer of the two reported hits is the one the other tracer missed
+  const bool wtNearer = wtHit && (!emHit || wt.t < em.t);
+  const RayHit& nearer = wtNearer ? wt : em;
+  double t, minB;
+  if (!crossing(scene, nearer.triangle, ray, t, minB)) return Disagreement::kEdge;  // parallel: a graze
+  if (std::abs(minB) < kEdge) return Disagreement::kEdge;
+  if (minB < 0.0) return wtNearer ? Disagreement::kWavetraceFalse : Disagreement::kEmbreeFalse;
+  if (close(t, ray.tmin) || close(t, ray.tmax)) return Disagreement::kRange;
+  return wtNearer ? Disagreement::kEmbreeMiss : Disagreement::kWavetraceMiss;
+}
+
+struct Agreement {
+  std::size_t disagreements = 0;
+  std::size_t byClass[std::size_t(Disagreement::kCount)] = {};
+  std::size_t explained() const {
+    return byClass[std::size_t(Disagreement::kTie)] + byClass[std::size_t(Disagreement::kEdge)] +
+           byClass[std::size_t(Disagreement::kRange)];
+  }
+};
+
+// ---- timing ------------------------------------------------------------------------
+
+/// The reference tracer as the bench calls it (Embree when the build has it);
+/// plain functions, so this file links without Embree.
+struct Reference {
+  std::function<std::vector<RayHit>(std::span<const Ray>, bool coherent)> closest;
+  std::function<std::vector<std::uint8_t>(std::span<const Ray>, bool coherent)> occluded;
+};
+
+struct SetResult {
+  std::string name;
+  bool occlusion = false;
+  std::size_t rays = 0;
+  double hitFraction = 0.0;  ///< wavetrace: hit or occluded
+  double wallSeconds = 0.0, kernelSeconds = 0.0;
+  bool embree = false;
+  double embreeSeconds = 0.0;
+  double embreeHitFraction = 0.0;
+  Agreement agreement;
+};
+
+struct SceneResult {
+  std::string name;
+  std::size_t triangles = 0;
+  double buildSeconds = 0.0;
+  std::size_t nodes = 0;
+  double sah = 0.0;
+  std::size_t nodes4 = 0;  ///< the 4-wide tree the kernels traverse
+  double collapseSeconds = 0.0;  ///< binary to 4-wide, not in buildSeconds
+  double sah4 = 0.0;
+  double bytesPerTriangle = 0.0;
+  bool shadowToEmitters = false;
+  double embreeBuildSeconds = 0.0;
+  std::vector<SetResult> sets;
+  double pathMrays = 0.0;
+};
+
+template <typename Fn>
+std::vector<double> timeRuns(int repetitions, Fn&& fn) {
+  std::vector<double> seconds;
+  for (int r = 0; r < repetitions; ++r) {
+    auto start = Clock::now();
+    fn();
+    seconds.push_back(secondsSince(start));
+  }
+  return seconds;
+}
+
+/// Trace one ray set with wavetrace (and Embree): warm-up, then the median
+/// of the repetitions. Returns wavetrace's closest hits (empty for shadow rays).
+std::vector<RayHit> benchSet(const Scene& scene, Tracer& tracer, const Reference* embree, const std::string& name,
+                             const std::vector<Ray>& rays, bool occlusion, bool coherent,
+                             const BenchOptions& options, SetResult& result) {
+  result.name = name;
+  result.occlusion = occlusion;
+  result.rays = rays.size();
+  if (rays.empty()) return {};
+  std::vector<RayHit> hits;
+  std::vector<std::uint8_t> blocked;
+  std::vector<double> kernel;
+  std::vector<double> wall;
+  // warm-up (and the first launch's compile), then timed runs
+  if (occlusion) {
+    blocked = tracer.traceOccluded(rays);
+    wall = timeRuns(options.repetitions, [&] {
+      tracer.traceOccluded(rays);
+      kernel.push_back(tracer.lastKernelSeconds());
+    });
+  } else {
+    hits = tracer.traceClosest(rays);
+    wall = timeRuns(options.repetitions, [&] {
+      tracer.traceClosest(rays);
+      kernel.push_back(tracer.lastKernelSeconds());
+    });
+  }
+  result.wallSeconds = median(wall);
+  result.kernelSeconds = median(kernel);
+  std::size_t hitCount = 0;
+  for (std::size_t i = 0; i < rays.size(); ++i)
+    hitCount += occlusion ? blocked[i] != 0 : hits[i].triangle != RayHit::kNoHit;
+  result.hitFraction = double(hitCount) / rays.size();
+  if (!embree) return hits;
+
+  result.embree = true;
+  std::vector<RayHit> refHits;
+  std::vector<std::uint8_t> refBlocked;
+  if (occlusion) {
+    refBlocked = embree->occluded(rays, coherent);
+    result.embreeSeconds = median(timeRuns(options.repetitions, [&] { embree->occluded(rays, coherent); }));
+  } else {
+    refHits = embree->closest(rays, coherent);
+    result.embreeSeconds = median(timeRuns(options.repetitions, [&] { embree->closest(rays, coherent); }));
+  }
+
+  // agreement: closest hits by triangle; occlusion by flag, classified
+  // through both tracers' closest hits on the rays that differ
+  Agreement& agreement = result.agreement;
+  std::size_t refCount = 0;
+  if (occlusion) {
+    std::vector<Ray> differ;
+    for (std::size_t i = 0; i < rays.size(); ++i) {
+      refCount += refBlocked[i] != 0;
+      if ((blocked[i] != 0) != (refBlocked[i] != 0)) differ.push_back(rays[i]);
+    }
+    if (!differ.empty()) {
+      std::vector<RayHit> a = tracer.traceClosest(differ), b = embree->closest(differ, false);
+      for (std::size_t i = 0; i < differ.size(); ++i) {
+        Disagreement why = a[i].triangle == b[i].triangle ? Disagreement::kInconsistent
+                                                          : classify(scene, differ[i], a[i], b[i]);
+        ++agreement.byClass[std::size_t(why)];
+      }
+    }
+    agreement.disagreements = differ.size();
+  } else {
+    for (std::size_t i = 0; i < rays.size(); ++i) {
+      refCount += refHits[i].triangle != RayHit::kNoHit;
+      if (hits[i].triangle == refHits[i].triangle) continue;
+      ++agreement.disagreements;
+      ++agreement.byClass[std::size_t(classify(scene, rays[i], hits[i], refHits[i]))];
+    }
+  }
+  result.embreeHitFraction = double(refCount) / rays.size();
+  return hits;
+}
+
 SceneResult benchScene(Context& context, const std::string& name, const Scene& scene,
                        const BenchOptions& options) {
   SceneResult result;
@@ -75,24 +403,46 @@ SceneResult benchScene(Context& context, const std::string& name, const Scene& s
   result.buildSeconds = median(builds);
   result.nodes = bvh.stats.nodeCount;
   result.sah = bvh.stats.sahCost;
+  Bvh4 bvh4 = collapseToBvh4(bvh);
+  result.nodes4 = bvh4.stats.nodeCount;
+  result.sah4 = bvh4.stats.sahCost;
+  result.collapseSeconds = bvh4.stats.collapseSeconds;
+  bvh = {};
+  bvh4 = {};
 
-  // primary rays: kernel time from profiling events, wall time around the call
   Tracer tracer(context, scene);
   result.bytesPerTriangle =
       scene.triangles.empty() ? 0.0 : double(tracer.sceneBuffers().uploadedBytes) / scene.triangles.size();
-  std::vector<Ray> rays = primaryRays(scene, options.primaryWidth);
-  std::vector<RayHit> hits = tracer.traceClosest(rays);  // warm-up (and first-launch compile)
-  std::size_t hitCount = std::count_if(hits.begin(), hits.end(), [](const RayHit& h) { return h.triangle != RayHit::kNoHit; });
-  result.primaryHitFraction = rays.empty() ? 0.0 : double(hitCount) / rays.size();
-  std::vector<double> wall, kernel;
-  for (int r = 0; r < options.repetitions; ++r) {
-    auto start = std::chrono::steady_clock::now();
-    tracer.traceClosest(rays);
-    wall.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
-    kernel.push_back(tracer.lastKernelSeconds());
-  }
-  result.primaryWallMrays = rays.size() / median(wall) * 1e-6;
-  result.primaryKernelMrays = rays.size() / median(kernel) * 1e-6;
+  std::unique_ptr<Reference> embree;
+#ifdef WT_HAVE_EMBREE
+  EmbreeOptions embreeOptions;
+  embreeOptions.api = parseEmbreeApi(options.embreeApi);
+  embreeOptions.quality = options.embreeQuality;
+  embreeOptions.robust = options.embreeRobust;
+  auto reference = std::make_shared<EmbreeReference>(scene, embreeOptions);
+  result.embreeBuildSeconds = reference->buildSeconds();
+  embree = std::make_unique<Reference>();
+  embree->closest = [reference](std::span<const Ray> rays, bool coherent) {
+    return reference->traceClosest(rays, coherent);
+  };
+  embree->occluded = [reference](std::span<const Ray> rays, bool coherent) {
+    return reference->traceOccluded(rays, coherent);
+  };
+#endif
+
+  // the three ray sets, made once from the camera rays' hits
+  std::vector<Ray> primary = primaryRays(scene, options.primaryWidth);
+  result.sets.resize(3);
+  std::vector<RayHit> primaryHits = benchSet(scene, tracer, embree.get(), "primary", primary, false, true,
+                                             options, result.sets[0]);
+  std::vector<Ray> diffuse = diffuseRays(scene, primary, primaryHits);
+  std::vector<Ray> shadow = shadowRays(scene, primary, primaryHits, &result.shadowToEmitters);
+  primary = {};
+  benchSet(scene, tracer, embree.get(), "diffuse", diffuse, false, false, options, result.sets[1]);
+  diffuse = {};
+  benchSet(scene, tracer, embree.get(), "shadow", shadow, true, false, options, result.sets[2]);
+  shadow = {};
+  embree.reset();
 
   // whole paths: the wavefront renderer, rays of every bounce
   RenderSettings settings;
@@ -108,52 +458,177 @@ SceneResult benchScene(Context& context, const std::string& name, const Scene& s
   return result;
 }
 
+// ---- scenes ------------------------------------------------------------------------
+
+/// The asset folder: --assets, else ../shared/assets beside the source tree,
+/// else ../shared/assets from the current directory; empty when none exists.
+std::string findAssets(const std::string& option) {
+  namespace fs = std::filesystem;
+  if (!option.empty()) {
+    if (!fs::is_directory(option)) throw std::invalid_argument("--assets " + option + ": no such folder");
+    return option;
+  }
+  for (fs::path candidate : {fs::path(WT_SOURCE_DIR) / ".." / "shared" / "assets", fs::path("..") / "shared" / "assets"})
+    if (fs::is_directory(candidate)) return fs::weakly_canonical(candidate).string();
+  return {};
+}
+
+std::string jsonString(const std::string& s) {
+  std::string out = "\"";
+  for (char c : s) {
+    if (c == '"' || c == '\\') out += '\\';
+    if (static_cast<unsigned char>(c) < 0x20) continue;
+    out += c;
+  }
+  return out + "\"";
+}
+
+double mrays(std::size_t rays, double seconds) { return seconds > 0.0 ? rays / seconds * 1e-6 : 0.0; }
+
 }  // namespace
 
 int runBench(const BenchOptions& options) {
   DeviceInfo device = selectDevice(options.device);
   Context context(device, /*profiling=*/true);
+#ifdef WT_HAVE_EMBREE
+  parseEmbreeApi(options.embreeApi);  // a bad name fails before any work
+#endif
 
-  std::vector<std::pair<std::string, Scene>> scenes;
+  // scenes: loaded one at a time, so a 1M-triangle scene is freed before the next
+  struct SceneSource {
+    std::string name, path;  ///< path empty: built in or generated
+  };
+  std::vector<SceneSource> sources;
+  std::vector<std::pair<std::string, std::string>> skipped;  ///< name, reason
   if (options.scenes.empty()) {
-    scenes.emplace_back("cornell (default)", loadDefaultScene());
-    scenes.emplace_back("bumpy grid " + std::to_string(options.meshTriangles / 1000) + "k",
-                        makeBumpyGrid(std::uint32_t(options.meshTriangles)));
+    sources.push_back({"cornell (default)", ""});
+    std::string assets = findAssets(options.assetsDir);
+    for (const char* rel : {"gltf/MetalRoughSpheresNoTextures/glTF/MetalRoughSpheresNoTextures.gltf",
+                            "gltf/DamagedHelmet/glTF/DamagedHelmet.gltf"}) {
+      std::string stem = std::filesystem::path(rel).stem().string();
+      if (assets.empty())
+        skipped.emplace_back(stem, "no asset folder (../shared/assets absent; see --assets)");
+      else if (!std::filesystem::exists(std::filesystem::path(assets) / rel))
+        skipped.emplace_back(stem, "absent from " + assets);
+      else
+        sources.push_back({stem, (std::filesystem::path(assets) / rel).string()});
+    }
+    sources.push_back({"bumpy grid " + std::to_string(options.meshTriangles / 1000) + "k", "<grid>"});
   } else {
-    for (const std::string& path : options.scenes) scenes.emplace_back(path, loadScene(path));
+    for (const std::string& path : options.scenes) sources.push_back({path, path});
   }
 
   std::vector<SceneResult> results;
-  for (auto& [name, scene] : scenes) {
-    log::info("bench: " + name + " (" + std::to_string(scene.triangles.size()) + " triangles)");
-    results.push_back(benchScene(context, name, scene, options));
+  for (const SceneSource& source : sources) {
+    Scene scene;
+    try {
+      scene = source.path.empty()       ? loadDefaultScene()
+              : source.path == "<grid>" ? makeBumpyGrid(std::uint32_t(options.meshTriangles))
+                                        : loadScene(source.path);
+    } catch (const SceneError& e) {
+      if (!options.scenes.empty()) throw;  // a scene the user named must load
+      skipped.emplace_back(source.name, e.what());
+      continue;
+    }
+    log::info("bench: " + source.name + " (" + std::to_string(scene.triangles.size()) + " triangles)");
+    results.push_back(benchScene(context, source.name, scene, options));
   }
+  std::string embreeText = "Embree not found at build time; no comparison";
+#ifdef WT_HAVE_EMBREE
+  {
+    EmbreeOptions o;
+    o.api = parseEmbreeApi(options.embreeApi);
+    o.quality = options.embreeQuality;
+    o.robust = options.embreeRobust;
+    embreeText = EmbreeReference(Scene{}, o).description();
+  }
+#endif
 
   if (options.json) {
-    std::printf("{\"device\": \"%s\", \"scenes\": [\n", device.name.c_str());
+    std::printf("{\"device\": %s, \"platform\": %s, \"embree\": %s, \"embree_available\": %s,\n",
+                jsonString(device.name).c_str(), jsonString(device.platformName).c_str(),
+                jsonString(embreeText).c_str(), kHaveEmbree ? "true" : "false");
+    std::printf(" \"primary_width\": %d, \"repetitions\": %d, \"path_width\": %d, \"path_samples\": %d,\n",
+                options.primaryWidth, options.repetitions, options.pathWidth, options.pathSamples);
+    std::printf(" \"skipped\": [");
+    for (std::size_t i = 0; i < skipped.size(); ++i)
+      std::printf("%s{\"name\": %s, \"reason\": %s}", i ? ", " : "", jsonString(skipped[i].first).c_str(),
+                  jsonString(skipped[i].second).c_str());
+    std::printf("],\n \"scenes\": [\n");
     for (std::size_t i = 0; i < results.size(); ++i) {
       const SceneResult& r = results[i];
-      std::printf("  {\"name\": \"%s\", \"triangles\": %zu, \"bvh_build_s\": %.6f, \"bvh_mtris_per_s\": %.3f, "
-                  "\"bvh_nodes\": %zu, \"bvh_sah\": %.3f, \"bytes_per_triangle\": %.1f, "
-                  "\"primary_mrays_wall\": %.3f, \"primary_mrays_kernel\": %.3f, \"primary_hit_fraction\": %.4f, "
-                  "\"path_mrays\": %.3f}%s\n",
-                  r.name.c_str(), r.triangles, r.buildSeconds, r.triangles / r.buildSeconds * 1e-6, r.nodes,
-                  r.sah, r.bytesPerTriangle, r.primaryWallMrays, r.primaryKernelMrays,
-                  r.primaryHitFraction, r.pathMrays, i + 1 < results.size() ? "," : "");
+      std::printf("  {\"name\": %s, \"triangles\": %zu, \"bvh_build_s\": %.6f, \"bvh_mtris_per_s\": %.3f, "
+                  "\"bvh_nodes\": %zu, \"bvh_sah\": %.3f, \"bvh4_nodes\": %zu, \"bvh4_sah\": %.3f, \"bvh4_collapse_s\": %.6f, "
+                  "\"bytes_per_triangle\": %.1f, "
+                  "\"embree_build_s\": %.6f, \"shadow_targets\": \"%s\", \"path_mrays\": %.3f,\n   \"ray_sets\": [\n",
+                  jsonString(r.name).c_str(), r.triangles, r.buildSeconds,
+                  r.buildSeconds > 0 ? r.triangles / r.buildSeconds * 1e-6 : 0.0, r.nodes, r.sah,
+                  r.nodes4, r.sah4, r.collapseSeconds, r.bytesPerTriangle, r.embreeBuildSeconds, r.shadowToEmitters ? "emitters" : "bounds",
+                  r.pathMrays);
+      for (std::size_t k = 0; k < r.sets.size(); ++k) {
+        const SetResult& s = r.sets[k];
+        std::printf("    {\"name\": \"%s\", \"query\": \"%s\", \"rays\": %zu, \"hit_fraction\": %.6f, "
+                    "\"wall_s\": %.6f, \"kernel_s\": %.6f, \"mrays_wall\": %.3f, \"mrays_kernel\": %.3f",
+                    s.name.c_str(), s.occlusion ? "any_hit" : "closest_hit", s.rays, s.hitFraction, s.wallSeconds,
+                    s.kernelSeconds, mrays(s.rays, s.wallSeconds), mrays(s.rays, s.kernelSeconds));
+        if (s.embree) {
+          std::printf(", \"embree_s\": %.6f, \"embree_mrays\": %.3f, \"embree_hit_fraction\": %.6f, "
+                      "\"ratio_kernel\": %.4f, \"ratio_wall\": %.4f, \"agreement\": %.8f, \"disagreements\": %zu, "
+                      "\"disagreements_explained\": %zu, \"disagreement_classes\": {",
+                      s.embreeSeconds, mrays(s.rays, s.embreeSeconds), s.embreeHitFraction,
+                      s.kernelSeconds > 0 ? s.embreeSeconds / s.kernelSeconds : 0.0,
+                      s.wallSeconds > 0 ? s.embreeSeconds / s.wallSeconds : 0.0,
+                      s.rays ? 1.0 - double(s.agreement.disagreements) / s.rays : 1.0, s.agreement.disagreements,
+                      s.agreement.explained());
+          for (std::size_t c = 0; c < std::size_t(Disagreement::kCount); ++c)
+            std::printf("%s\"%s\": %zu", c ? ", " : "", kDisagreementNames[c], s.agreement.byClass[c]);
+          std::printf("}");
+        }
+        std::printf("}%s\n", k + 1 < r.sets.size() ? "," : "");
+      }
+      std::printf("  ]}%s\n", i + 1 < results.size() ? "," : "");
     }
     std::printf("]}\n");
     return 0;
   }
-  std::printf("device: %s (%s)\n", device.name.c_str(), device.platformName.c_str());
-  std::printf("primary rays: %dx%d, median of %d; paths: %dx%d, %d spp, up to 8 bounces\n\n",
-              options.primaryWidth, options.primaryWidth, options.repetitions, options.pathWidth,
-              options.pathWidth, options.pathSamples);
-  std::printf("%-22s %10s %9s %9s %9s %7s %8s %12s %12s %10s\n", "scene", "triangles", "build ms",
-              "Mtris/s", "nodes", "SAH", "B/tri", "primary Mr/s", "(kernel)", "path Mr/s");
+
+  std::printf("device: %s (%s); reference: %s\n", device.name.c_str(), device.platformName.c_str(),
+              embreeText.c_str());
+  std::printf("rays: primary %dx%d through pixel centres; diffuse and shadow rays from their hits; "
+              "median of %d after a warm-up\npaths: %dx%d, %d spp, up to 8 bounces, extend rays counted\n",
+              options.primaryWidth, options.primaryWidth, options.repetitions, options.pathWidth, options.pathWidth,
+              options.pathSamples);
+  for (const auto& [name, reason] : skipped) std::printf("skipped %s: %s\n", name.c_str(), reason.c_str());
+
+  // nodes and SAH: the binary LBVH, then the 4-wide tree collapsed from it (what the kernels traverse)
+  std::printf("\n%-28s %10s %9s %8s %9s %7s %9s %7s %6s %10s %9s\n", "scene", "triangles", "build ms", "Mtris/s",
+              "nodes", "SAH", "nodes4", "SAH4", "B/tri", "Embree ms", "path Mr/s");
+  for (const SceneResult& r : results) {
+    char embreeMs[32] = "-";
+    if (kHaveEmbree) std::snprintf(embreeMs, sizeof embreeMs, "%.2f", r.embreeBuildSeconds * 1e3);
+    std::printf("%-28s %10zu %9.2f %8.2f %9zu %7.2f %9zu %7.2f %6.1f %10s %9.2f\n", r.name.c_str(), r.triangles,
+                r.buildSeconds * 1e3, r.buildSeconds > 0 ? r.triangles / r.buildSeconds * 1e-6 : 0.0, r.nodes,
+                r.sah, r.nodes4, r.sah4, r.bytesPerTriangle, embreeMs, r.pathMrays);
+  }
+
+  // Mrays/s; ratio = wavetrace kernel throughput / Embree throughput
+  std::printf("\n%-28s %-8s %8s %6s %9s %9s %9s %7s %10s %s\n", "scene", "rays", "count", "hit %", "wt wall",
+              "wt kernel", "Embree", "ratio", "agree %", "disagreements (tie/edge/range/other)");
   for (const SceneResult& r : results)
-    std::printf("%-22s %10zu %9.2f %9.2f %9zu %7.2f %8.1f %12.2f %12.2f %10.2f\n", r.name.c_str(),
-                r.triangles, r.buildSeconds * 1e3, r.triangles / r.buildSeconds * 1e-6, r.nodes, r.sah,
-                r.bytesPerTriangle, r.primaryWallMrays, r.primaryKernelMrays, r.pathMrays);
+    for (const SetResult& s : r.sets) {
+      std::printf("%-28s %-8s %8zu %6.1f %9.2f %9.2f", r.name.c_str(), s.name.c_str(), s.rays, 100.0 * s.hitFraction,
+                  mrays(s.rays, s.wallSeconds), mrays(s.rays, s.kernelSeconds));
+      if (s.embree) {
+        const Agreement& a = s.agreement;
+        std::size_t other = a.disagreements - a.explained();
+        std::printf(" %9.2f %7.3f %10.4f %zu (%zu/%zu/%zu/%zu)", mrays(s.rays, s.embreeSeconds),
+                    s.kernelSeconds > 0 ? s.embreeSeconds / s.kernelSeconds : 0.0,
+                    s.rays ? 100.0 * (1.0 - double(a.disagreements) / s.rays) : 100.0, a.disagreements,
+                    a.byClass[std::size_t(Disagreement::kTie)], a.byClass[std::size_t(Disagreement::kEdge)],
+                    a.byClass[std::size_t(Disagreement::kRange)], other);
+      }
+      std::printf("\n");
+    }
   return 0;
 }
 

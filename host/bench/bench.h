@@ -1,5 +1,7 @@
-// `wavetrace bench`: BVH build and ray throughput figures for scenes, as a
-// table or JSON. Timings belong here, never in tests.
+// `wavetrace bench`: BVH build figures, and three standard ray sets (camera,
+// diffuse, shadow) traced by wavetrace and, when the build has Embree, by
+// Embree on the same rays, with throughput ratios and hit agreement. Output
+// is a table or JSON. Timings belong here, never in tests.
 #pragma once
 
 #include <string>
@@ -8,17 +10,24 @@
 namespace wt {
 
 struct BenchOptions {
-  std::vector<std::string> scenes;  ///< files; empty: the default scene and a generated ~1M-triangle mesh
+  std::vector<std::string> scenes;  ///< files; empty: the default set (see runBench)
   std::string device;               ///< --device spec
+  std::string assetsDir;            ///< --assets; empty: look for ../shared/assets (source dir, then cwd)
   bool json = false;
   int primaryWidth = 1024;          ///< primary ray set is width x width
   int pathWidth = 256;              ///< path rays: a render of pathWidth^2 pixels
   int pathSamples = 4;
-  int repetitions = 3;              ///< median of this many timed runs after a warm-up
+  int repetitions = 5;              ///< median of this many timed runs after a warm-up
   int meshTriangles = 1000000;      ///< size of the generated mesh
+  std::string embreeApi = "packet16"; ///< single, packet8, packet16, stream (host/bench/embree_reference.h)
+  int embreeQuality = 2;            ///< RTC_BUILD_QUALITY_: 0 low, 1 medium, 2 high
+  bool embreeRobust = false;        ///< RTC_SCENE_FLAG_ROBUST
 };
 
 /// Run the benchmark and print the results to stdout. Returns an exit code.
+/// Default scenes: the built-in Cornell box; MetalRoughSpheresNoTextures and
+/// DamagedHelmet from the asset folder (skipped, saying so, when absent); a
+/// generated height field of meshTriangles triangles.
 int runBench(const BenchOptions& options);
 
 }  // namespace wt

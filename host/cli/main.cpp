@@ -236,7 +236,10 @@ int main(int argc, char** argv) {
 
   wt::BenchOptions bench;
   CLI::App* benchCmd = app.add_subcommand("bench", "BVH build and ray throughput benchmark");
-  benchCmd->add_option("scenes", bench.scenes, "Scene files (default: built-in Cornell box and a generated 1M-triangle mesh)");
+  benchCmd->add_option("scenes", bench.scenes,
+                       "Scene files (default: built-in Cornell box, MetalRoughSpheresNoTextures and DamagedHelmet "
+                       "from the asset folder, a generated 1M-triangle mesh)");
+  benchCmd->add_option("--assets", bench.assetsDir, "Asset folder (default: ../shared/assets beside the source, or from here)");
   benchCmd->add_option("--device", bench.device, "Device index or name substring");
   benchCmd->add_flag("--json", bench.json, "Machine-readable output");
   benchCmd->add_option("--primary-width", bench.primaryWidth, "Primary ray set is N x N")
@@ -245,6 +248,11 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(2, 1 << 26))->capture_default_str();
   benchCmd->add_option("--repetitions", bench.repetitions, "Timed runs per figure (median)")
       ->check(CLI::Range(1, 1000))->capture_default_str();
+  benchCmd->add_option("--embree-api", bench.embreeApi, "Embree reference: how rays are handed over")
+      ->check(CLI::IsMember({"single", "packet8", "packet16", "stream"}))->capture_default_str();
+  benchCmd->add_option("--embree-quality", bench.embreeQuality, "Embree reference: build quality 0 low, 1 medium, 2 high")
+      ->check(CLI::Range(0, 2))->capture_default_str();
+  benchCmd->add_flag("--embree-robust", bench.embreeRobust, "Embree reference: RTC_SCENE_FLAG_ROBUST");
 
   try {
     app.parse(argc, argv);

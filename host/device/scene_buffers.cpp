@@ -46,7 +46,9 @@ SceneBuffers::SceneBuffers(Context& context, const Scene& scene, const BvhBuildO
     m_bvhToScene.push_back(std::uint32_t(i));
   }
   m_bvh = buildLbvh(bounds, options);
-  nodeCount = std::uint32_t(m_bvh.nodes.size());
+  Bvh4 bvh4 = collapseToBvh4(m_bvh);
+  m_bvh4Stats = bvh4.stats;
+  nodeCount = std::uint32_t(bvh4.nodes.size());
   // From here on primIndices address the scene's triangles directly.
   for (std::uint32_t& p : m_bvh.primIndices) p = m_bvhToScene[p];
 
@@ -61,7 +63,7 @@ SceneBuffers::SceneBuffers(Context& context, const Scene& scene, const BvhBuildO
     verts[3 * i + 2] = scene.positions[t.v2];
   }
   std::size_t bytes = 0;
-  nodes = upload(context, m_bvh.nodes, bytes);
+  nodes = upload(context, bvh4.nodes, bytes);
   triVerts = upload(context, verts, bytes);
   triangles = upload(context, ordered, bytes);
   uploadedBytes = bytes;
@@ -71,7 +73,7 @@ SceneBuffers::SceneBuffers(Context& context, const Scene& scene, const BvhBuildO
 }
 
 int SceneBuffers::stackSize() const {
-  int needed = m_bvh.stats.maxDepth + 1;
+  int needed = bvh4StackEntries(m_bvh4Stats);
   return std::max(32, (needed + 31) / 32 * 32);
 }
 
@@ -82,6 +84,9 @@ static_assert(sizeof(WtVec4) == 16);
 static_assert(sizeof(WtTriangle) == 16);
 static_assert(sizeof(WtBvhNode) == 32);
 static_assert(offsetof(WtBvhNode, hi_x) == 16);
+static_assert(sizeof(WtBvh4Node) == 128);
+static_assert(offsetof(WtBvh4Node, lo_y) == 32 && offsetof(WtBvh4Node, lo_z) == 64);
+static_assert(offsetof(WtBvh4Node, child) == 96 && offsetof(WtBvh4Node, count) == 112);
 static_assert(sizeof(WtMaterial) == 32);
 static_assert(sizeof(WtCamera) == 64);
 static_assert(sizeof(WtFrameParams) == 64);

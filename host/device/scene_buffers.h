@@ -2,6 +2,7 @@
 // attributes and materials, uploaded once and shared by every stage.
 #pragma once
 
+#include "bvh/bvh4.h"
 #include "bvh/lbvh.h"
 #include "device/context.h"
 #include "scene/scene.h"
@@ -13,10 +14,11 @@ namespace wt {
 
 class SceneBuffers {
  public:
-  /// Build the BVH over the scene's triangles (but degenerate ones) and upload.
+  /// Build the BVH over the scene's triangles (but degenerate ones), collapse
+  /// it to the 4-wide layout the kernels traverse, and upload.
   SceneBuffers(Context& context, const Scene& scene, const BvhBuildOptions& options = {});
 
-  cl::Buffer nodes;       ///< WtBvhNode[nodeCount] (one dummy node when empty)
+  cl::Buffer nodes;       ///< WtBvh4Node[nodeCount] (one dummy node when empty); kernels declare it WtBvhNode*
   cl::Buffer triVerts;    ///< float4[3 * triangles], leaf order, world space
   cl::Buffer triangles;   ///< WtTriangle[], leaf order
   cl::Buffer normals;     ///< float4 per vertex
@@ -24,7 +26,9 @@ class SceneBuffers {
   std::uint32_t nodeCount = 0;
   std::size_t uploadedBytes = 0;  ///< nodes + triangle data
 
+  /// The binary LBVH the 4-wide tree was collapsed from (its nodes are not uploaded).
   const Bvh& bvh() const { return m_bvh; }
+  const Bvh4Stats& bvh4Stats() const { return m_bvh4Stats; }
   /// Leaf-order triangle index -> the scene's triangle index.
   std::uint32_t sceneTriangle(std::uint32_t leafIndex) const { return m_bvh.primIndices[leafIndex]; }
   /// Triangles left out of the BVH (zero area or non-finite vertices).
@@ -34,6 +38,7 @@ class SceneBuffers {
 
  private:
   Bvh m_bvh;  ///< primIndices hold scene triangle indices
+  Bvh4Stats m_bvh4Stats;
   std::vector<std::uint32_t> m_bvhToScene;
   std::size_t m_skippedTriangles = 0;
 };

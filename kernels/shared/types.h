@@ -31,6 +31,22 @@ typedef struct WtBvhNode {
   wt_uint count;           ///< 0 for an internal node, primitive count of a leaf
 } WtBvhNode;
 
+/// 4-wide BVH node, 128 bytes, collapsed from the binary tree (host/bvh/bvh4.h).
+/// The four child boxes are stored per axis and bound (structure of arrays),
+/// so the kernel tests all four with float4 arithmetic. A child is an inner
+/// node (count 0, child = node index), a leaf (count > 0, child = first
+/// primitive in leaf order) or an empty slot (WT_BVH4_EMPTY with an inverted
+/// box, lo = +inf and hi = -inf, which the slab test never enters). Node 0 is
+/// the root.
+typedef struct WtBvh4Node {
+  float lo_x[4], hi_x[4];  ///< child boxes, world space
+  float lo_y[4], hi_y[4];
+  float lo_z[4], hi_z[4];
+  wt_uint child[4];        ///< inner: node index; leaf: first primitive; WT_BVH4_EMPTY: no child
+  wt_uint count[4];        ///< 0 for an inner node or an empty slot, primitive count of a leaf
+} WtBvh4Node;
+#define WT_BVH4_EMPTY 0xffffffffu
+
 /// Lambertian surface with emission (the full material model comes later).
 typedef struct WtMaterial {
   WtVec4 base_color;  ///< linear RGB albedo in [0,1]; w unused

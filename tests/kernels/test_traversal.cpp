@@ -81,7 +81,32 @@ TEST_P(TraversalLeafSize, ClosedSphereMatchesBruteForce) {
   expectAgreement(scene, randomRays(4000, 7), options);
 }
 
-INSTANTIATE_TEST_SUITE_P(LeafSizes, TraversalLeafSize, ::testing::Values(1, 4, 8));
+TEST_P(TraversalLeafSize, TinySoupsMatchBruteForce) {
+  // a root that is one leaf, and 4-wide nodes with empty slots
+  BvhBuildOptions options;
+  options.maxLeafSize = GetParam();
+  for (std::uint32_t count : {1u, 2u, 3u, 5u, 6u, 9u, 13u}) {
+    Scene scene = makeTriangleSoup(count, count, 0.9f);
+    Tracer tracer(test::deviceContext(), scene, options);
+    std::vector<Ray> rays = randomRays(2000, count + 40);
+    std::vector<RayHit> hits = tracer.traceClosest(rays);
+    std::vector<std::uint8_t> occluded = tracer.traceOccluded(rays);
+    int disagreements = 0;
+    for (std::size_t i = 0; i < rays.size(); ++i) {
+      test::BruteHit want = test::bruteClosest(scene, rays[i]);
+      if (!test::agrees(scene, rays[i], hits[i], want) && ++disagreements <= 3)
+        ADD_FAILURE() << count << " triangles, ray " << i << ": kernel triangle " << hits[i].triangle
+                      << ", brute force " << want.triangle;
+      bool wantOccluded = want.triangle != RayHit::kNoHit;
+      if (bool(occluded[i]) != wantOccluded && !(wantOccluded && want.minBarycentric < 1e-5) &&
+          !(bool(occluded[i]) && hits[i].triangle != RayHit::kNoHit))
+        ADD_FAILURE() << count << " triangles, ray " << i << ": occluded " << int(occluded[i]);
+    }
+  }
+}
+
+// Leaf sizes 1 and 2 give 4-wide nodes over many small leaves, 8 few large ones.
+INSTANTIATE_TEST_SUITE_P(LeafSizes, TraversalLeafSize, ::testing::Values(1, 2, 4, 8));
 
 TEST(Traversal, DegenerateTrianglesAreNeverHit) {
   // zero-area triangles: a point and a segment, among ordinary ones

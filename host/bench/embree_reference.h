@@ -1,0 +1,78 @@
+// Embree 3 as the bench's CPU reference: the same triangles and the same
+// rays, traced on every host thread. The .cpp is compiled only when CMake
+// finds Embree (WT_HAVE_EMBREE); this header has no Embree types.
+#pragma once
+
+#include "device/tracer.h"
+#include "scene/scene.h"
+
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace wt {
+
+/// How a thread hands its chunk of rays to Embree. Measured on the 2-core
+/// AVX-512 development VM (docs/performance.md), relative to kStream: kSingle
+/// 0.72x, kPacket8 1.00x, kPacket16 1.09x (geometric mean over the bench's
+/// twelve ray sets), so kPacket16 is the default.
+enum class EmbreeApi {
+  kSingle,    ///< rtcIntersect1 / rtcOccluded1 per ray
+  kPacket8,   ///< rtcIntersect8 / rtcOccluded8
+  kPacket16,  ///< rtcIntersect16 / rtcOccluded16
+  kStream,    ///< rtcIntersect1M / rtcOccluded1M over the chunk
+};
+
+inline const char* embreeApiName(EmbreeApi api) {
+  switch (api) {
+    case EmbreeApi::kSingle: return "single";
+    case EmbreeApi::kPacket8: return "packet8";
+    case EmbreeApi::kPacket16: return "packet16";
+    case EmbreeApi::kStream: return "stream";
+  }
+  return "?";
+}
+
+/// "single", "packet8", "packet16", "stream"; throws std::invalid_argument otherwise.
+inline EmbreeApi parseEmbreeApi(const std::string& name) {
+  for (EmbreeApi api : {EmbreeApi::kSingle, EmbreeApi::kPacket8, EmbreeApi::kPacket16, EmbreeApi::kStream})
+    if (name == embreeApiName(api)) return api;
+  throw std::invalid_argument("--embree-api " + name + ": expected single, packet8, packet16 or stream");
+}
+
+struct EmbreeOptions {
+  EmbreeApi api = EmbreeApi::kPacket16;
+  int quality = 2;      ///< RTC_BUILD_QUALITY_: 0 low, 1 medium, 2 high
+  bool robust = false;  ///< RTC_SCENE_FLAG_ROBUST
+  int threads = 0;      ///< tracing threads; 0: std::thread::hardware_concurrency()
+};
+
+class EmbreeReference {
+ public:
+  /// Build the scene: one triangle geometry sharing the scene's arrays, which
+  /// must outlive this object. Throws std::runtime_error when Embree fails.
+  EmbreeReference(const Scene& scene, const EmbreeOptions& options = {});
+  ~EmbreeReference();
+  EmbreeReference(const EmbreeReference&) = delete;
+  EmbreeReference& operator=(const EmbreeReference&) = delete;
+
+  /// Closest hit in [tmin, tmax]; triangle is the scene's index (or kNoHit).
+  /// `coherent` sets RTC_INTERSECT_CONTEXT_FLAG_COHERENT (camera rays).
+  std::vector<RayHit> traceClosest(std::span<const Ray> rays, bool coherent = false);
+  /// 1 where something blocks [tmin, tmax].
+  std::vector<std::uint8_t> traceOccluded(std::span<const Ray> rays, bool coherent = false);
+
+  double buildSeconds() const { return m_buildSeconds; }
+  /// "Embree 3.13.5, packet16 API, high quality, 2 threads".
+  std::string description() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> m_impl;
+  double m_buildSeconds = 0.0;
+};
+
+}  // namespace wt
