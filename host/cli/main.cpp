@@ -267,6 +267,9 @@ int main(int argc, char** argv) {
     }
     if (*devicesCmd) return runDevices();
     if (*benchCmd) return wt::runBench(bench);
+  } catch (const cl::Error& e) {
+    wt::log::error(std::string("OpenCL call ") + e.what() + " failed: " + wt::clErrorName(e.err()));
+    return 1;
   } catch (const std::exception& e) {
     wt::log::error(e.what());
     return 1;
