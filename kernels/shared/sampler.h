@@ -10,6 +10,18 @@
 
 #include "shared/rng.h"
 
+#if defined(WT_AVOID_BITREVERSE) && WT_AVOID_BITREVERSE
+// Oclgrind cannot run llvm.bitreverse, which the compiler makes of the
+// shift-and-mask form below: reverse one bit at a time instead.
+WT_INLINE wt_uint sampler_reverse_bits(wt_uint x) {
+  wt_uint r = 0u;
+  for (int i = 0; i < 32; ++i) {
+    r = (r << 1u) | (x & 1u);
+    x >>= 1u;
+  }
+  return r;
+}
+#else
 WT_INLINE wt_uint sampler_reverse_bits(wt_uint x) {
   x = ((x >> 1u) & 0x55555555u) | ((x & 0x55555555u) << 1u);
   x = ((x >> 2u) & 0x33333333u) | ((x & 0x33333333u) << 2u);
@@ -17,6 +29,7 @@ WT_INLINE wt_uint sampler_reverse_bits(wt_uint x) {
   x = ((x >> 8u) & 0x00ff00ffu) | ((x & 0x00ff00ffu) << 8u);
   return (x >> 16u) | (x << 16u);
 }
+#endif
 
 // A hash in which each bit depends only on itself and the bits below it
 // (Laine-Karras style, Burley's constants): applied to bit-reversed values it
