@@ -36,6 +36,7 @@ struct RenderOptions {
   bool noNee = false, noMis = false, noRr = false;
   std::string sampler = "independent";
   std::string reference, errorLog;
+  std::string accumulation = "kahan";
   int sceneIndex = -1;
   int camera = 0;
   std::string kernelDir;
@@ -80,6 +81,9 @@ int runRender(const RenderOptions& options) {
   settings.useRussianRoulette = !options.noRr;
   settings.powerHeuristic = options.misHeuristic == "power";
   settings.sobol = options.sampler == "sobol";
+  settings.accumulation = options.accumulation == "single"   ? WT_ACCUMULATE_SINGLE
+                          : options.accumulation == "double" ? WT_ACCUMULATE_DOUBLE
+                                                             : WT_ACCUMULATE_KAHAN;
   wt::Renderer renderer(context, scene, settings);
   const wt::BvhBuildStats& bvh = renderer.sceneBuffers().bvh().stats;
   wt::log::info("scene " + scene.sourceName + ": " + std::to_string(scene.triangles.size()) +
@@ -210,6 +214,9 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"independent", "sobol"}))->capture_default_str();
   renderCmd->add_option("--rr-depth", render.settings.rrMinDepth, "path: first bounce Russian roulette may end")
       ->check(CLI::Range(0, 1024))->capture_default_str();
+  renderCmd->add_option("--accumulation", render.accumulation,
+                        "Running-mean precision: single, kahan (compensated single) or double (fp64 devices)")
+      ->check(CLI::IsMember({"single", "kahan", "double"}))->capture_default_str();
   renderCmd->add_option("--reference", render.reference,
                         "EXR of the converged image: log the error at 1, 2, 4, ... samples (see --error-log)");
   renderCmd->add_option("--error-log", render.errorLog,

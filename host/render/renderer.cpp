@@ -28,6 +28,7 @@ WtFrameParams frameParams(const RenderSettings& s, const LightList& lights, int 
               (s.powerHeuristic ? WT_FLAG_POWER_HEURISTIC : 0u) | (s.useRussianRoulette ? WT_FLAG_RR : 0u);
   }
   if (s.sobol) p.flags |= WT_FLAG_SOBOL;
+  p.accumulate_mode = s.accumulation;
   if (s.environmentHidden) p.flags |= WT_FLAG_ENV_HIDDEN;
   return p;
 }
@@ -55,6 +56,9 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
   m_shade = cl::Kernel(m_program, "shade");
   m_connect = cl::Kernel(m_program, "connect");
   m_accumulate = cl::Kernel(m_program, "accumulate");
+  m_resolve = cl::Kernel(m_program, "accumulate_resolve");
+  if (settings.accumulation == WT_ACCUMULATE_DOUBLE && !context.info().fp64)
+    throw DeviceError("double-precision accumulation needs fp64, which '" + context.info().name + "' lacks");
   m_tonemap = cl::Kernel(m_program, "tonemap");
 
   std::size_t pixels = std::size_t(settings.width) * std::size_t(settings.height);
@@ -66,7 +70,7 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
   m_throughput = make(16), m_radiance = make(16);
   m_queueA = make(4), m_queueB = make(4);
   m_counters = cl::Buffer(ctx, CL_MEM_READ_WRITE, WT_COUNTER_COUNT * sizeof(cl_uint));
-  m_mean = make(16), m_m2 = make(16), m_sampleCount = make(4), m_pixels = make(4);
+  m_state = make(64), m_mean = make(16), m_m2 = make(16), m_sampleCount = make(4), m_pixels = make(4);
   m_shadowQueue = make(4), m_shadowO = make(16), m_shadowD = make(16), m_shadowRadiance = make(16);
   auto upload = [&](const auto& data) {
     using T = typename std::decay_t<decltype(data)>::value_type;
@@ -89,8 +93,7 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
   m_envConditional = uploadSpan(env.conditionalCdf);
 
   cl::CommandQueue& q = context.queue();
-  q.enqueueFillBuffer(m_mean, cl_float(0), 0, pixels * 16);
-  q.enqueueFillBuffer(m_m2, cl_float(0), 0, pixels * 16);
+  q.enqueueFillBuffer(m_state, cl_float(0), 0, pixels * 64);
   q.enqueueFillBuffer(m_sampleCount, cl_uint(0), 0, pixels * 4);
   q.enqueueFillBuffer(m_counters, cl_uint(0), 0, WT_COUNTER_COUNT * sizeof(cl_uint));
   q.finish();
@@ -129,8 +132,11 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
   m_connect.setArg(a++, m_radiance);
 
   a = 1;
-  for (cl::Buffer* b : {&m_radiance, &m_mean, &m_m2, &m_sampleCount, &m_counters})
+  for (cl::Buffer* b : {&m_radiance, &m_state, &m_sampleCount, &m_counters})
     m_accumulate.setArg(a++, *b);
+  m_resolve.setArg(1, m_state);
+  m_resolve.setArg(2, m_mean);
+  m_resolve.setArg(3, m_m2);
 
   m_tonemap.setArg(1, m_mean);
   m_tonemap.setArg(2, m_pixels);
@@ -193,6 +199,8 @@ void Renderer::renderSample() {
 Image Renderer::readImage() {
   const std::size_t pixels = std::size_t(m_settings.width) * std::size_t(m_settings.height);
   cl::CommandQueue& q = m_context.queue();
+  m_resolve.setArg(0, frameParams(m_settings, m_lights, m_stats.samplesDone, 0));
+  m_context.launch("accumulate_resolve", m_resolve, pixels);
   m_tonemap.setArg(0, frameParams(m_settings, m_lights, m_stats.samplesDone, 0));
   m_context.launch("tonemap", m_tonemap, pixels);
 

@@ -43,6 +43,7 @@ struct RenderSettings {
   bool useRussianRoulette = true;  ///< path
   int rrMinDepth = 3;           ///< path: first bounce at which roulette may end a path
   bool sobol = false;           ///< Owen-scrambled Sobol instead of independent random numbers
+  std::uint32_t accumulation = WT_ACCUMULATE_KAHAN;  ///< WT_ACCUMULATE_* (double needs fp64)
 };
 
 /// The accumulated image read back from the device.
@@ -82,7 +83,7 @@ class Renderer {
   WtCamera m_camera;
   std::unique_ptr<SceneBuffers> m_scene;
   cl::Program m_program;
-  cl::Kernel m_generate, m_extend, m_shade, m_connect, m_accumulate, m_tonemap;
+  cl::Kernel m_generate, m_extend, m_shade, m_connect, m_accumulate, m_resolve, m_tonemap;
   LightList m_lights;
   Environment m_environment;
   cl::Buffer m_envTexels, m_envMarginal, m_envConditional;
@@ -92,7 +93,7 @@ class Renderer {
   cl::Buffer m_rayO, m_rayD, m_hits, m_throughput, m_radiance;
   cl::Buffer m_queueA, m_queueB, m_counters;
   // accumulation
-  cl::Buffer m_mean, m_m2, m_sampleCount, m_pixels;
+  cl::Buffer m_state, m_mean, m_m2, m_sampleCount, m_pixels;
   RenderStats m_stats;
 };
 

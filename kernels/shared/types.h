@@ -82,8 +82,14 @@ typedef struct WtFrameParams {
   wt_uint flags;           ///< WT_FLAG_* integrator switches
   wt_uint rr_min_depth;    ///< Russian roulette starts at this bounce
   float env_pmf;           ///< probability that light selection picks the environment (0: not a light)
-  wt_uint pad1, pad2, pad3;
+  wt_uint accumulate_mode; ///< WT_ACCUMULATE_*
+  wt_uint pad2, pad3;
 } WtFrameParams;
+
+/// Precision of the per-pixel running mean (WtFrameParams::accumulate_mode).
+#define WT_ACCUMULATE_SINGLE 0u  ///< float Welford updates
+#define WT_ACCUMULATE_KAHAN 1u   ///< float with compensated increments
+#define WT_ACCUMULATE_DOUBLE 2u  ///< double (devices with fp64 only)
 
 /// Integrator switches in WtFrameParams::flags (runtime: no rebuild).
 #define WT_FLAG_NEE 1u            ///< next-event estimation towards every light
