@@ -1,7 +1,10 @@
 // The default scene through the whole pipeline at low resolution.
 #include "device_fixture.h"
 #include "render/renderer.h"
+#include "render/render_helpers.h"
 #include "scene/default_scene.h"
+
+#include <glm/gtc/matrix_transform.hpp>
 
 #include <gtest/gtest.h>
 
@@ -52,6 +55,34 @@ TEST(EndToEnd, CornellIsFiniteAndLit) {
   };
   EXPECT_GT(channelMean(0, 5, 0), 1.5 * channelMean(0, 5, 1));
   EXPECT_GT(channelMean(43, 48, 1), 1.5 * channelMean(43, 48, 0));
+}
+
+TEST(EndToEnd, NonFiniteSamplesAreCountedNotAccumulated) {
+  // a floor whose albedo is NaN (the loader would refuse it), filling the
+  // lower half of the view: every path that bounces off it turns NaN
+  Scene scene = test::makeFloor(50.0f, 0.0f, makeMaterial(glm::vec3(std::nanf(""))));
+  CameraDesc cam;
+  cam.cameraToWorld = glm::translate(glm::mat4(1.0f), glm::vec3(0.0f, 1.0f, 0.0f));
+  scene.camera = cam;
+  RenderSettings s;
+  s.width = 16, s.height = 16, s.maxBounces = 2;
+  s.background = glm::vec3(0.25f);
+  const int spp = 4;
+  Renderer renderer(test::deviceContext(), scene, s);
+  for (int i = 0; i < spp; ++i) renderer.renderSample();
+  Image img = renderer.readImage();
+  std::size_t lost = 0, kept = 0, discarded = 0;
+  for (std::size_t p = 0; p < img.samples.size(); ++p) {
+    for (int c = 0; c < 3; ++c) ASSERT_TRUE(std::isfinite(img.rgb[3 * p + c])) << "pixel " << p;
+    discarded += std::uint32_t(spp) - img.samples[p];
+    lost += img.samples[p] == 0;
+    kept += img.samples[p] == std::uint32_t(spp);
+  }
+  // the sky half keeps every sample, the floor half loses every one (pixels
+  // on the horizon some of each); every discarded sample is counted
+  EXPECT_GT(lost, img.samples.size() / 4);
+  EXPECT_GT(kept, img.samples.size() / 4);
+  EXPECT_EQ(renderer.stats().nonFiniteSamples, discarded);
 }
 
 TEST(EndToEnd, DeterministicForASeed) {
