@@ -65,7 +65,7 @@ __kernel void shade(WtFrameParams frame, WtEnvironment environment, __global con
   float3 le = vec4_xyz(material.emission);
   bool emits = material.emission.w != 0.0f || dot(ng, dir) < 0.0f;
   if (emits && (le.x > 0.0f || le.y > 0.0f || le.z > 0.0f)) {
-    float pdf_light = light_triangle_pdf(emitter_pdf_area[prim], hit.x, dir, ng);
+    float pdf_light = light_triangle_pdf(emitter_pdf_area[prim], ray_o[path].xyz, p0, p1, p2, hit.x, dir, ng);
     radiance[path] += (float4)(beta * le * shade_emission_weight(frame, pdf_prev, pdf_light), 0.0f);
   }
   if (frame.bounce >= frame.max_bounces) return;
@@ -102,12 +102,23 @@ __kernel void shade(WtFrameParams frame, WtEnvironment environment, __global con
                     : mis_weight(pdf_light, cos_s / WT_PI, frame.flags);
       float3 contribution = beta * albedo * (cos_s / WT_PI) * s.radiance * (w / pdf_light);
       if (contribution.x > 0.0f || contribution.y > 0.0f || contribution.z > 0.0f) {
-        // stop short of the light by a relative margin, so its own surface never occludes
-        float tmax = isinf(s.distance) ? INFINITY : s.distance * (1.0f - 1e-4f);
+        // Aim from the offset origin at the sampled point itself and stop short
+        // of it by a relative margin, so the light's own surface never occludes.
+        // (Keeping the direction from the unoffset point raised the ray by the
+        // offset, which at grazing angles crossed the light's plane before the
+        // margin: found by a square emitter 0.1 above a plane.)
+        float3 shadow_dir = s.wi;
+        float tmax = INFINITY;
+        if (!isinf(s.distance)) {
+          float3 to_target = (p + s.wi * s.distance) - origin;
+          float len = length(to_target);
+          shadow_dir = to_target / len;
+          tmax = len * (1.0f - 1e-4f);
+        }
         uint slot = atomic_inc(&counters[WT_COUNTER_SHADOW]);
         shadow_queue[slot] = path;
         shadow_o[path] = (float4)(origin, 0.0f);
-        shadow_d[path] = (float4)(s.wi, tmax);
+        shadow_d[path] = (float4)(shadow_dir, tmax);
         shadow_radiance[path] = (float4)(contribution, 0.0f);
       }
     }

@@ -26,6 +26,58 @@ typedef struct LightSample {
   int is_delta;     ///< point, spot, directional: BSDF sampling cannot hit these
 } LightSample;
 
+// Spherical-triangle sampling (Arvo 1995) where the triangle subtends at
+// least this solid angle: uniform in solid angle removes the 1/d^2 and the
+// light's cosine from the estimate, which is what makes nearby lights noisy.
+// Below it, area sampling is as good and spherical trigonometry loses precision.
+#define WT_SPHERICAL_MIN_SOLID_ANGLE 1e-3f
+#define WT_SPHERICAL_MAX_SOLID_ANGLE 6.2f
+
+/// Solid angle of triangle (p0, p1, p2) seen from p (Van Oosterom and
+/// Strackee 1983).
+inline float light_triangle_solid_angle(float3 p, float3 p0, float3 p1, float3 p2) {
+  float3 a = p0 - p, b = p1 - p, c = p2 - p;
+  float la = length(a), lb = length(b), lc = length(c);
+  float numerator = fabs(dot(a, cross(b, c)));
+  float denominator = la * lb * lc + dot(a, b) * lc + dot(a, c) * lb + dot(b, c) * la;
+  return fabs(2.0f * atan2(numerator, denominator));
+}
+
+inline bool light_use_spherical(float solid_angle) {
+  return solid_angle >= WT_SPHERICAL_MIN_SOLID_ANGLE && solid_angle <= WT_SPHERICAL_MAX_SOLID_ANGLE;
+}
+
+/// Unit vector of a orthogonalised against unit b.
+inline float3 light_orthonormal(float3 a, float3 b) {
+  float3 v = a - dot(a, b) * b;
+  float l = length(v);
+  return l > 0.0f ? v / l : (float3)(0.0f);
+}
+
+/// A direction uniform in the solid angle of spherical triangle (A, B, C)
+/// (unit vectors from the shading point), of area `solid_angle` (Arvo 1995).
+inline float3 light_sample_spherical_triangle(float3 A, float3 B, float3 C, float solid_angle,
+                                              float u1, float u2) {
+  // the angle at A between the great arcs AB and AC
+  float3 n_ab = light_orthonormal(B, A), n_ac = light_orthonormal(C, A);
+  float cos_alpha = clamp(dot(n_ab, n_ac), -1.0f, 1.0f);
+  float sin_alpha = sqrt(fmax(0.0f, 1.0f - cos_alpha * cos_alpha));
+  float alpha = acos(cos_alpha);
+  // pick the sub-triangle area, then the point C' on arc AC that bounds it
+  // phi = (sampled area + pi) - alpha
+  float area = u1 * solid_angle;
+  float s = -sin(area - alpha), t = -cos(area - alpha);
+  float cos_c = dot(A, B);
+  float k1 = t + cos_alpha, k2 = s - sin_alpha * cos_c;
+  float cos_b = (k2 + (k2 * t - k1 * s) * cos_alpha) / ((k2 * s + k1 * t) * sin_alpha);
+  cos_b = clamp(cos_b, -1.0f, 1.0f);
+  float3 c_prime = cos_b * A + sqrt(fmax(0.0f, 1.0f - cos_b * cos_b)) * n_ac;
+  // then uniformly along the arc from B to C' (in cos z)
+  float cos_theta = 1.0f - u2 * (1.0f - dot(c_prime, B));
+  float sin_theta = sqrt(fmax(0.0f, 1.0f - cos_theta * cos_theta));
+  return normalize(cos_theta * B + sin_theta * light_orthonormal(c_prime, B));
+}
+
 /// Pick a light with probability proportional to its power.
 inline uint light_pick(LightScene ls, float u, float* pmf) {
   float scaled = u * (float)ls.light_count;
@@ -66,13 +118,28 @@ inline bool light_sample(LightScene ls, uint index, float3 p, float u1, float u2
   }
   s->is_delta = 0;
   if (light.type == WT_LIGHT_TRIANGLE) {
-    // uniform by area (the square-root parameterisation), converted to solid angle
     uint t = light.triangle;
     float3 p0 = ls.tri_verts[3 * t].xyz, p1 = ls.tri_verts[3 * t + 1].xyz, p2 = ls.tri_verts[3 * t + 2].xyz;
+    float3 n = cross(p1 - p0, p2 - p0);
+    float solid_angle = light_triangle_solid_angle(p, p0, p1, p2);
+    if (light_use_spherical(solid_angle)) {
+      float3 w = light_sample_spherical_triangle(normalize(p0 - p), normalize(p1 - p), normalize(p2 - p),
+                                                 solid_angle, u1, u2);
+      // distance to the triangle's plane along w; a single-sided light emits on its n side
+      float facing = dot(n, w);
+      if (light.position.w == 0.0f && !(facing < 0.0f)) return false;
+      float dist = dot(n, p0 - p) / facing;
+      if (!(dist > 0.0f) || !isfinite(dist)) return false;
+      s->wi = w;
+      s->distance = dist;
+      s->pdf = 1.0f / solid_angle;
+      s->radiance = vec4_xyz(light.intensity);
+      return true;
+    }
+    // uniform by area (the square-root parameterisation), converted to solid angle
     float su = sqrt(u1);
     float b1 = su * (1.0f - u2), b2 = su * u2;
     float3 q = (1.0f - b1 - b2) * p0 + b1 * p1 + b2 * p2;
-    float3 n = cross(p1 - p0, p2 - p0);
     float area2 = length(n);
     float3 to_light = q - p;
     float d2 = dot(to_light, to_light);
@@ -93,10 +160,18 @@ inline bool light_sample(LightScene ls, uint index, float3 p, float u1, float u2
   return s->pdf > 0.0f;
 }
 
-/// Solid-angle pdf of reaching an emissive triangle by light sampling, as
-/// seen from a point at `distance` along unit `wi`; `pdf_area` already holds
-/// the selection probability over the triangle's area.
-inline float light_triangle_pdf(float pdf_area, float distance, float3 wi, float3 n_geometric) {
+/// Solid-angle pdf with which light sampling from `origin` reaches emissive
+/// triangle (p0, p1, p2) at `distance` along unit `wi`, as light_sample
+/// decides between spherical and area sampling; `pdf_area` is the triangle's
+/// selection probability over its area (emitterPdfArea).
+inline float light_triangle_pdf(float pdf_area, float3 origin, float3 p0, float3 p1, float3 p2,
+                                float distance, float3 wi, float3 n_geometric) {
+  if (!(pdf_area > 0.0f)) return 0.0f;
+  float solid_angle = light_triangle_solid_angle(origin, p0, p1, p2);
+  if (light_use_spherical(solid_angle)) {
+    float area = 0.5f * length(cross(p1 - p0, p2 - p0));
+    return pdf_area * area / solid_angle;  // the selection probability over the solid angle
+  }
   float cos_light = fabs(dot(n_geometric, wi));
   return cos_light > 0.0f ? pdf_area * distance * distance / cos_light : 0.0f;
 }

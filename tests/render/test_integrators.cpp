@@ -121,23 +121,29 @@ double polygonIrradiance(const std::vector<glm::dvec3>& poly, double radiance) {
 }
 
 TEST(Integrators, SquareEmitterIrradianceMatchesClosedForm) {
-  const float albedo = 0.5f, h = 1.0f, half = 0.5f, le = 4.0f;
-  Scene scene = test::makeFloor(20.0f, 0.0f, makeMaterial(glm::vec3(albedo)));
-  Scene lamp = test::makeFloor(half, h, makeMaterial(glm::vec3(0.0f), glm::vec3(le)), /*faceDown=*/true);
-  // shift the lamp off-centre so the closed form is not symmetric
-  for (WtVec4& p : lamp.positions) p.x += 0.3f;
-  appendScene(scene, lamp);
-  scene.camera = test::topDownCamera({0.0f, 0.5f, 0.0f}, 1e-4f);
-  std::vector<glm::dvec3> poly = {{-half + 0.3, h, -half}, {half + 0.3, h, -half}, {half + 0.3, h, half}, {-half + 0.3, h, half}};
-  double expected = albedo / std::numbers::pi * polygonIrradiance(poly, le);
-  for (Integrator integrator : {Integrator::Minimal, Integrator::Path}) {
-    RenderSettings s = small(integrator, 8);
-    s.maxBounces = 1;
-    Image img = render(scene, s, integrator == Integrator::Minimal ? 512 : 64);
-    test::BlockStat all = test::blockStat(img, 0, 0, img.width, img.height, 1);
-    EXPECT_NEAR(all.mean, expected, 5.0 * std::sqrt(all.varianceOfMean) + 1e-3 * expected)
-        << (integrator == Integrator::Minimal ? "minimal" : "path");
-    EXPECT_LT(std::sqrt(all.varianceOfMean), 0.02 * expected) << "too few samples to test anything";
+  // heights from grazing (0.1: the light's edge is seen at a few degrees,
+  // where shadow rays once hit the light itself) to far
+  for (float h : {0.1f, 1.0f, 3.0f}) {
+    const float albedo = 0.5f, half = 0.5f, le = 4.0f;
+    Scene scene = test::makeFloor(20.0f, 0.0f, makeMaterial(glm::vec3(albedo)));
+    Scene lamp = test::makeFloor(half, h, makeMaterial(glm::vec3(0.0f), glm::vec3(le)), /*faceDown=*/true);
+    // shift the lamp off-centre so the closed form is not symmetric; at
+    // h = 0.1 the point below sits outside the lamp's footprint, lit at grazing angles
+    const float shift = h < 0.5f ? 0.7f : 0.3f;
+    for (WtVec4& p : lamp.positions) p.x += shift;
+    appendScene(scene, lamp);
+    scene.camera = test::topDownCamera({0.0f, 0.5f * h, 0.0f}, 1e-4f);
+    std::vector<glm::dvec3> poly = {{-half + shift, h, -half}, {half + shift, h, -half}, {half + shift, h, half}, {-half + shift, h, half}};
+    double expected = albedo / std::numbers::pi * polygonIrradiance(poly, le);
+    for (Integrator integrator : {Integrator::Minimal, Integrator::Path}) {
+      RenderSettings s = small(integrator, 8);
+      s.maxBounces = 1;
+      Image img = render(scene, s, integrator == Integrator::Minimal ? 512 : 64);
+      test::BlockStat all = test::blockStat(img, 0, 0, img.width, img.height, 1);
+      const char* name = integrator == Integrator::Minimal ? "minimal" : "path";
+      EXPECT_NEAR(all.mean, expected, 5.0 * std::sqrt(all.varianceOfMean) + 1e-3 * expected) << name << " h=" << h;
+      EXPECT_LT(std::sqrt(all.varianceOfMean), 0.03 * expected) << "too few samples to test anything: " << name << " h=" << h;
+    }
   }
 }
 
