@@ -5,6 +5,7 @@
 
 #include "shared/types.h"
 #include "shared/rng.h"
+#include "shared/spawn.h"
 
 // Feature switches come from the host (host/device/program.cpp, kernelDefines).
 #ifndef WT_INTEGRATOR_MINIMAL
@@ -32,19 +33,15 @@ inline float3 vec4_xyz(WtVec4 v) { return (float3)(v.x, v.y, v.z); }
 
 inline float vec3_component(float3 v, int k) { return k == 0 ? v.x : (k == 1 ? v.y : v.z); }
 
-// Move a spawned ray's origin off the surface along the geometric normal by a
-// few ULPs of the hit position (Wächter and Binder 2019), so no world-space
-// epsilon is needed at any scale. Near the origin, where ULPs vanish, a small
-// fixed offset takes over.
-inline float3 ray_offset_origin(float3 p, float3 n_geometric) {
-  const float kOrigin = 1.0f / 32.0f;
-  const float kFloatScale = 1.0f / 65536.0f;
-  const float kIntScale = 256.0f;
-  int3 of_i = convert_int3(kIntScale * n_geometric);
-  int3 p_bits = as_int3(p);
-  float3 p_i = as_float3(p_bits + select(of_i, -of_i, p_bits < 0));
-  float3 p_f = p + kFloatScale * n_geometric;
-  return select(p_i, p_f, fabs(p) < kOrigin);
+// Origin of a ray leaving surface point p (error bound p_error per axis) on
+// the side unit normal n points to: p pushed along n past its rounding error
+// (shared/spawn.h). Scale-invariant: the offset follows the coordinates'
+// magnitude, so no world-space epsilon is needed anywhere.
+inline float3 ray_offset_origin(float3 p, float3 p_error, float3 n) {
+  float d = spawn_offset_distance(n.x, n.y, n.z, p_error.x, p_error.y, p_error.z);
+  float3 offset = d * n;
+  return (float3)(spawn_offset_coordinate(p.x, offset.x), spawn_offset_coordinate(p.y, offset.y),
+                  spawn_offset_coordinate(p.z, offset.z));
 }
 
 // Orthonormal basis around a unit vector (Duff et al. 2017).

@@ -56,9 +56,9 @@ __kernel void shade(WtFrameParams frame, WtEnvironment environment, __global con
   WtTriangle tri = triangles[prim];
   WtMaterial material = materials[tri.material];
   float3 p0 = tri_verts[3 * prim].xyz, p1 = tri_verts[3 * prim + 1].xyz, p2 = tri_verts[3 * prim + 2].xyz;
-  float3 p, ng, ns;
+  float3 p, p_error, ng, ns;
   triangle_surface(p0, p1, p2, normals[tri.v0].xyz, normals[tri.v1].xyz, normals[tri.v2].xyz,
-                   hit.y, hit.z, &p, &ng, &ns);
+                   hit.y, hit.z, &p, &p_error, &ng, &ns);
   if (dot(ng, ng) == 0.0f) return;  // degenerate triangle: absorb
 
   // emission: the front face only unless the material is double-sided
@@ -74,7 +74,7 @@ __kernel void shade(WtFrameParams frame, WtEnvironment environment, __global con
   if (dot(ng, wo) < 0.0f) ng = -ng;
   if (dot(ns, ng) < 0.0f) ns = -ns;
   float3 albedo = vec4_xyz(material.base_color);
-  float3 origin = ray_offset_origin(p, ng);
+  float3 origin = ray_offset_origin(p, p_error, ng);
 
   // next-event estimation: the full light list by power (path), or one
   // uniformly chosen analytic light (minimal)
@@ -102,24 +102,28 @@ __kernel void shade(WtFrameParams frame, WtEnvironment environment, __global con
                     : mis_weight(pdf_light, cos_s / WT_PI, frame.flags);
       float3 contribution = beta * albedo * (cos_s / WT_PI) * s.radiance * (w / pdf_light);
       if (contribution.x > 0.0f || contribution.y > 0.0f || contribution.z > 0.0f) {
-        // Aim from the offset origin at the sampled point itself and stop short
-        // of it by a relative margin, so the light's own surface never occludes.
-        // (Keeping the direction from the unoffset point raised the ray by the
-        // offset, which at grazing angles crossed the light's plane before the
-        // margin: found by a square emitter 0.1 above a plane.)
+        // Aim from the offset origin at the target (the sampled point pushed
+        // off the light's surface) and stop a relative margin short of it, so
+        // the light's own surface never occludes. (Keeping the direction from
+        // the unoffset point raised the ray by the offset, which at grazing
+        // angles crossed the light's plane before the margin: found by a
+        // square emitter 0.1 above a plane.)
         float3 shadow_dir = s.wi;
         float tmax = INFINITY;
         if (!isinf(s.distance)) {
-          float3 to_target = (p + s.wi * s.distance) - origin;
+          float3 to_target = s.target - origin;
           float len = length(to_target);
           shadow_dir = to_target / len;
-          tmax = len * (1.0f - 1e-4f);
+          tmax = len * (1.0f - WT_SHADOW_MARGIN);
         }
-        uint slot = atomic_inc(&counters[WT_COUNTER_SHADOW]);
-        shadow_queue[slot] = path;
-        shadow_o[path] = (float4)(origin, 0.0f);
-        shadow_d[path] = (float4)(shadow_dir, tmax);
-        shadow_radiance[path] = (float4)(contribution, 0.0f);
+        // a zero-length connection (the light point is the origin) carries nothing
+        if (tmax > 0.0f) {
+          uint slot = atomic_inc(&counters[WT_COUNTER_SHADOW]);
+          shadow_queue[slot] = path;
+          shadow_o[path] = (float4)(origin, 0.0f);
+          shadow_d[path] = (float4)(shadow_dir, tmax);
+          shadow_radiance[path] = (float4)(contribution, 0.0f);
+        }
       }
     }
   }

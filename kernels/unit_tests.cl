@@ -17,11 +17,20 @@ __kernel void test_lambert(uint count, float4 normal, __global const float2* u,
   out[i] = (float4)(lambert_sample(normal.xyz, u[i].x, u[i].y), 0.0f);
 }
 
-__kernel void test_offset(uint count, __global const float4* p, __global const float4* n,
+#include "geometry/triangle.cl"
+
+// The point at barycentrics bary[i] of triangle i, spawned off both faces:
+// out[2i] on the side of the winding normal, out[2i + 1] on the other.
+__kernel void test_offset(uint count, __global const float4* verts, __global const float2* bary,
                           __global float4* out) {
   uint i = get_global_id(0);
   if (i >= count) return;
-  out[i] = (float4)(ray_offset_origin(p[i].xyz, n[i].xyz), 0.0f);
+  float3 p0 = verts[3 * i].xyz, p1 = verts[3 * i + 1].xyz, p2 = verts[3 * i + 2].xyz;
+  float3 error;
+  float3 p = triangle_point(p0, p1, p2, bary[i].x, bary[i].y, &error);
+  float3 n = normalize(cross(p1 - p0, p2 - p0));
+  out[2 * i] = (float4)(ray_offset_origin(p, error, n), 0.0f);
+  out[2 * i + 1] = (float4)(ray_offset_origin(p, error, -n), 0.0f);
 }
 
 #include "lights/light_sampling.cl"

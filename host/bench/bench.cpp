@@ -4,6 +4,7 @@
 #include "bvh/bvh4.h"
 #include "bvh/lbvh.h"
 #include "core/log.h"
+#include "core/spawn.h"
 #include "device/context.h"
 #include "device/tracer.h"
 #include "render/renderer.h"
@@ -63,21 +64,6 @@ glm::vec3 position(const Scene& scene, std::uint32_t v) {
   return glm::vec3(scene.positions[v].x, scene.positions[v].y, scene.positions[v].z);
 }
 
-/// Host copy of ray_offset_origin (kernels/common.h): a few ULPs of p along
-/// the geometric normal, a fixed offset near the origin.
-glm::vec3 offsetOrigin(glm::vec3 p, glm::vec3 n) {
-  const float kOrigin = 1.0f / 32.0f, kFloatScale = 1.0f / 65536.0f, kIntScale = 256.0f;
-  glm::vec3 out;
-  for (int a = 0; a < 3; ++a) {
-    int of = int(kIntScale * n[a]);
-    int bits = std::bit_cast<int>(p[a]);
-    float pi = std::bit_cast<float>(bits + (bits < 0 ? -of : of));
-    float pf = p[a] + kFloatScale * n[a];
-    out[a] = std::fabs(p[a]) < kOrigin ? pf : pi;
-  }
-  return out;
-}
-
 /// Camera rays through pixel centres, as the generate stage makes them.
 std::vector<Ray> primaryRays(const Scene& scene, int width) {
   CameraDesc desc = scene.camera ? *scene.camera : defaultCamera(scene.bounds());
@@ -111,13 +97,14 @@ std::optional<SurfacePoint> surfacePoint(const Scene& scene, const Ray& ray, con
   if (hit.triangle == RayHit::kNoHit) return std::nullopt;
   const WtTriangle& tri = scene.triangles[hit.triangle];
   glm::vec3 p0 = position(scene, tri.v0), p1 = position(scene, tri.v1), p2 = position(scene, tri.v2);
-  glm::vec3 p = (1.0f - hit.b1 - hit.b2) * p0 + hit.b1 * p1 + hit.b2 * p2;
+  glm::vec3 error;
+  glm::vec3 p = trianglePoint(p0, p1, p2, hit.b1, hit.b2, &error);
   glm::vec3 n = glm::cross(p1 - p0, p2 - p0);
   float len = glm::length(n);
   if (!(len > 0.0f)) return std::nullopt;
   n /= len;
   if (glm::dot(n, ray.direction) > 0.0f) n = -n;
-  return SurfacePoint{offsetOrigin(p, n), n};
+  return SurfacePoint{offsetRayOrigin(p, error, n), n};
 }
 
 /// Cosine-distributed directions about the camera-side normal at every

@@ -39,6 +39,7 @@ struct RenderOptions {
   std::string accumulation = "kahan";
   int sceneIndex = -1;
   int camera = 0;
+  bool noRecenter = false;
   std::string kernelDir;
   bool quiet = false;
   bool verbose = false;
@@ -62,6 +63,7 @@ int runRender(const RenderOptions& options) {
   wt::GltfLoadOptions loadOptions;
   loadOptions.sceneIndex = options.sceneIndex;
   loadOptions.cameraIndex = options.camera;
+  loadOptions.recenter = !options.noRecenter;
   auto loadStart = std::chrono::steady_clock::now();
   wt::Scene scene = options.scene.empty() ? wt::loadDefaultScene(loadOptions)
                                           : wt::loadScene(options.scene, loadOptions);
@@ -235,6 +237,9 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(-1, 1 << 20));
   renderCmd->add_option("--camera", render.camera, "Camera to use, by order in the scene")
       ->check(CLI::Range(0, 1 << 20))->capture_default_str();
+  renderCmd->add_flag("--no-recenter", render.noRecenter,
+                      "Keep the file's world coordinates (default: the scene is stored relative to the camera, "
+                      "in double precision, so it renders the same far from the world origin)");
   renderCmd->add_option("--kernel-dir", render.kernelDir, "Developer option: read kernels from this folder");
   renderCmd->add_flag("-q,--quiet", render.quiet, "No progress output");
   renderCmd->add_flag("-v,--verbose", render.verbose, "Timings of the scene set-up (BVH build phases)");

@@ -232,6 +232,20 @@ struct DecodedPrimitive {
   std::vector<glm::vec2> texcoords;   ///< empty: the primitive has none
   std::vector<std::uint32_t> corners; ///< 3 per triangle, indices into positions
   std::uint32_t material = 0;
+  glm::dvec3 lo{0.0}, hi{0.0};        ///< bounds of positions, mesh space
+};
+
+/// A node's mesh in the world (before the origin is subtracted).
+struct MeshInstance {
+  std::size_t node, mesh;
+  glm::dmat4 world;
+};
+
+/// A node's KHR_lights_punctual light, placed once the origin is known.
+struct LightInstance {
+  std::string nodeLabel;
+  const tinygltf::Value* extension;  ///< in the model, which outlives the conversion
+  glm::dmat4 world;
 };
 
 class Converter {
@@ -244,6 +258,12 @@ class Converter {
     convertMaterials();
     traverse(chooseRoots());
     chooseCamera();
+    chooseOrigin();
+    for (const MeshInstance& instance : m_meshInstances) emitMesh(instance);
+    for (const LightInstance& instance : m_lightInstances)
+      placeLight(instance.nodeLabel, *instance.extension, instance.world);
+    if (m_scene.camera) m_scene.camera->cameraToWorld = glm::mat4(shifted(m_cameraWorld));
+    reportDegenerateTriangles();
     if (m_scene.materials.empty()) defaultMaterial();
     if (!m_model.images.empty())
       m_scene.addWarning("textures are not supported yet; " + std::to_string(m_model.images.size()) +
@@ -505,6 +525,12 @@ class Converter {
     }
     const std::vector<int> kFloat = {TINYGLTF_COMPONENT_TYPE_FLOAT};
     out.positions = readAccessor<glm::vec3>(positionAccessor, {where, "POSITION", kFloat});
+    if (!out.positions.empty()) {
+      out.lo = glm::dvec3(std::numeric_limits<double>::infinity());
+      out.hi = -out.lo;
+      for (const glm::vec3& p : out.positions)
+        if (isFinite(p)) out.lo = glm::min(out.lo, glm::dvec3(p)), out.hi = glm::max(out.hi, glm::dvec3(p));
+    }
     const std::size_t vertexCount = out.positions.size();
     if (vertexCount > std::numeric_limits<std::uint32_t>::max())
       fail(where + ": " + std::to_string(vertexCount) + " vertices do not fit 32-bit indices");
@@ -574,7 +600,15 @@ class Converter {
   }
 
   /// Append one placed copy of a primitive to the scene.
-  void emit(const DecodedPrimitive& prim, const glm::mat4& world, std::size_t nodeIndex,
+  void emitMesh(const MeshInstance& instance) {
+    const std::size_t primCount = m_model.meshes[instance.mesh].primitives.size();
+    for (std::size_t p = 0; p < primCount; ++p)
+      emit(primitive(instance.mesh, p), shifted(instance.world), instance.node, instance.mesh, p);
+  }
+
+  /// Append one placed copy of a primitive to the scene; `world` maps mesh
+  /// space to scene space (world space less the origin).
+  void emit(const DecodedPrimitive& prim, const glm::dmat4& world, std::size_t nodeIndex,
             std::size_t meshIndex, std::size_t primIndex) {
     if (prim.skipped) return;
     const std::size_t base = m_scene.positions.size();
@@ -582,17 +616,24 @@ class Converter {
     if (count > std::numeric_limits<std::uint32_t>::max() - base)
       fail("the scene has more vertices than 32-bit indices can address");
 
-    const glm::mat3 linear(world);
-    const glm::mat3 normalMatrix = glm::transpose(glm::inverse(linear));
+    const glm::dmat3 linear(world);
+    const double determinant = glm::determinant(linear);
+    // A singular transform has no inverse transpose: normals fall back to the
+    // geometric normal (of triangles that, flattened, are left out anyway).
+    const glm::dmat3 normalMatrix =
+        determinant != 0.0 ? glm::transpose(glm::inverse(linear)) : glm::dmat3(0.0);
+    if (determinant == 0.0 || !std::isfinite(determinant))
+      m_scene.addWarning("node " + std::to_string(nodeIndex) + ": its transform is singular (a zero scale); "
+                         "mesh " + std::to_string(meshIndex) + " is flattened and draws nothing");
     // A mirroring transform turns counter-clockwise into clockwise; swap two
     // corners so the front face stays the front face.
-    const bool flip = glm::determinant(linear) < 0.0f;
+    const bool flip = determinant < 0.0;
 
     m_scene.positions.reserve(base + count);
     m_scene.normals.reserve(base + count);
     m_scene.texcoords.reserve(base + count);
     for (std::size_t i = 0; i < count; ++i) {
-      glm::vec3 p = glm::vec3(world * glm::vec4(prim.positions[i], 1.0f));
+      glm::vec3 p(world * glm::dvec4(glm::dvec3(prim.positions[i]), 1.0));
       if (!isFinite(p))
         fail("mesh " + std::to_string(meshIndex) + ", primitive " + std::to_string(primIndex) +
              " (node " + std::to_string(nodeIndex) + "): vertex " + std::to_string(i) +
@@ -601,7 +642,7 @@ class Converter {
 
       glm::vec3 n(0.0f);
       if (!prim.normals.empty()) {
-        glm::vec3 transformed = normalMatrix * prim.normals[i];
+        glm::vec3 transformed(normalMatrix * glm::dvec3(prim.normals[i]));
         float length = glm::length(transformed);
         // zero, NaN and infinite normals all mean "use the geometric normal"
         if (std::isfinite(length) && length > 0.0f) n = transformed / length;
@@ -622,12 +663,75 @@ class Converter {
       tri.v2 = offset + prim.corners[t + (flip ? 1 : 2)];
       tri.material = prim.material;
       m_scene.triangles.push_back(tri);
+      if (zeroArea(tri) && m_degenerateTriangles++ == 0)
+        m_firstDegenerate = "mesh " + std::to_string(meshIndex) + ", primitive " + std::to_string(primIndex) +
+                            " (node " + std::to_string(nodeIndex) + "), triangle " + std::to_string(t / 3);
     }
+  }
+
+  bool zeroArea(const WtTriangle& tri) const {
+    auto pos = [&](std::uint32_t v) {
+      const WtVec4& p = m_scene.positions[v];
+      return glm::vec3(p.x, p.y, p.z);
+    };
+    glm::vec3 n = glm::cross(pos(tri.v1) - pos(tri.v0), pos(tri.v2) - pos(tri.v0));
+    return glm::dot(n, n) == 0.0f;
+  }
+
+  void reportDegenerateTriangles() {
+    if (m_degenerateTriangles == 0) return;
+    m_scene.addWarning(std::to_string(m_degenerateTriangles) + " of " + std::to_string(m_scene.triangles.size()) +
+                       " triangles have zero area (repeated or collinear corners, first: " + m_firstDegenerate +
+                       "); they are not drawn");
+  }
+
+  // origin
+
+  /// The scene is stored relative to an origin chosen in double precision
+  /// (the camera's position, else the centre of the geometry), so that float
+  /// coordinates are finest where the image is made: a scene placed 1e6
+  /// units from the world origin renders as it does at the origin.
+  void chooseOrigin() {
+    m_origin = glm::dvec3(0.0);
+    if (!m_options.recenter) return;
+    if (m_scene.camera) {
+      m_origin = glm::dvec3(m_cameraWorld[3]);
+      m_scene.origin = m_origin;
+      return;
+    }
+    glm::dvec3 lo(std::numeric_limits<double>::infinity()), hi(-std::numeric_limits<double>::infinity());
+    for (const MeshInstance& instance : m_meshInstances) {
+      const std::size_t primCount = m_model.meshes[instance.mesh].primitives.size();
+      for (std::size_t p = 0; p < primCount; ++p) {
+        const DecodedPrimitive& prim = primitive(instance.mesh, p);
+        if (prim.skipped || prim.positions.empty()) continue;
+        for (int corner = 0; corner < 8; ++corner) {
+          glm::dvec3 c((corner & 1) ? prim.hi.x : prim.lo.x, (corner & 2) ? prim.hi.y : prim.lo.y,
+                       (corner & 4) ? prim.hi.z : prim.lo.z);
+          glm::dvec3 w(instance.world * glm::dvec4(c, 1.0));
+          lo = glm::min(lo, w);
+          hi = glm::max(hi, w);
+        }
+      }
+    }
+    // Geometry beyond float range fails to load at its first vertex (emit);
+    // an origin in the middle of it would blame the wrong one.
+    const double kFloatMax = std::numeric_limits<float>::max();
+    if (lo.x <= hi.x && lo.y <= hi.y && lo.z <= hi.z &&
+        glm::all(glm::lessThanEqual(glm::max(glm::abs(lo), glm::abs(hi)), glm::dvec3(kFloatMax))))
+      m_origin = 0.5 * (lo + hi);
+    m_scene.origin = m_origin;
+  }
+
+  /// A world transform moved to the scene's origin.
+  glm::dmat4 shifted(glm::dmat4 world) const {
+    world[3] -= glm::dvec4(m_origin, 0.0);
+    return world;
   }
 
   // nodes
 
-  glm::mat4 localMatrix(std::size_t nodeIndex) const {
+  glm::dmat4 localMatrix(std::size_t nodeIndex) const {
     const tinygltf::Node& node = m_model.nodes[nodeIndex];
     const std::string label = "node " + std::to_string(nodeIndex);
     auto check = [&](const std::vector<double>& values, std::size_t expected, const char* what) {
@@ -642,31 +746,24 @@ class Converter {
     check(node.rotation, 4, "rotation");
     check(node.scale, 3, "scale");
 
-    if (!node.matrix.empty()) {
-      std::array<float, 16> m;
-      for (std::size_t i = 0; i < 16; ++i) m[i] = float(node.matrix[i]);
-      return glm::make_mat4(m.data());  // both column-major
-    }
-    glm::mat4 local(1.0f);
+    if (!node.matrix.empty()) return glm::make_mat4(node.matrix.data());  // both column-major
+    glm::dmat4 local(1.0);
     if (!node.translation.empty())
-      local = glm::translate(local, glm::vec3(float(node.translation[0]), float(node.translation[1]),
-                                              float(node.translation[2])));
+      local = glm::translate(local, glm::dvec3(node.translation[0], node.translation[1], node.translation[2]));
     if (!node.rotation.empty()) {
-      // glTF stores (x, y, z, w); glm::quat takes w first
-      glm::quat q(float(node.rotation[3]), float(node.rotation[0]), float(node.rotation[1]),
-                  float(node.rotation[2]));
-      float length = glm::length(q);
-      if (!(length > 0.0f) || !std::isfinite(length))
+      // glTF stores (x, y, z, w); glm::dquat takes w first
+      glm::dquat q(node.rotation[3], node.rotation[0], node.rotation[1], node.rotation[2]);
+      double length = glm::length(q);
+      if (!(length > 0.0) || !std::isfinite(length))
         fail(label + ": rotation is not a valid quaternion");
       local = local * glm::mat4_cast(q / length);
     }
     if (!node.scale.empty())
-      local = glm::scale(local, glm::vec3(float(node.scale[0]), float(node.scale[1]),
-                                          float(node.scale[2])));
+      local = glm::scale(local, glm::dvec3(node.scale[0], node.scale[1], node.scale[2]));
     return local;
   }
 
-  const glm::mat4& cachedLocal(std::size_t nodeIndex) {
+  const glm::dmat4& cachedLocal(std::size_t nodeIndex) {
     if (!m_localDone[nodeIndex]) {
       m_local[nodeIndex] = localMatrix(nodeIndex);
       m_localDone[nodeIndex] = true;
@@ -707,20 +804,20 @@ class Converter {
   /// hierarchies cannot overflow the call stack.
   void traverse(const std::vector<int>& roots) {
     const std::size_t nodeCount = m_model.nodes.size();
-    m_local.assign(nodeCount, glm::mat4(1.0f));
+    m_local.assign(nodeCount, glm::dmat4(1.0));
     m_localDone.assign(nodeCount, false);
     m_decoded.clear();
     m_decoded.resize(m_model.meshes.size());
     std::vector<bool> onPath(nodeCount, false);
     struct Frame {
       std::size_t node;
-      glm::mat4 world;
+      glm::dmat4 world;
       std::size_t nextChild;
     };
     std::vector<Frame> stack;
     std::size_t instances = 0;
 
-    auto enter = [&](int nodeIndex, const glm::mat4& parentWorld, const std::string& parentLabel) {
+    auto enter = [&](int nodeIndex, const glm::dmat4& parentWorld, const std::string& parentLabel) {
       if (nodeIndex < 0 || std::size_t(nodeIndex) >= nodeCount)
         fail(parentLabel + ": references missing node " + std::to_string(nodeIndex));
       const auto index = std::size_t(nodeIndex);
@@ -729,20 +826,20 @@ class Converter {
       if (++instances > kMaxNodeInstances)
         fail("the node graph expands to more than " + std::to_string(kMaxNodeInstances) +
              " node instances");
-      glm::mat4 world = parentWorld * cachedLocal(index);
+      glm::dmat4 world = parentWorld * cachedLocal(index);
       visit(index, world);
       onPath[index] = true;
       stack.push_back({index, world, 0});
     };
 
     for (int root : roots) {
-      enter(root, glm::mat4(1.0f), m_rootsLabel);
+      enter(root, glm::dmat4(1.0), m_rootsLabel);
       while (!stack.empty()) {
         Frame& top = stack.back();
         const std::vector<int>& children = m_model.nodes[top.node].children;
         if (top.nextChild < children.size()) {
           int child = children[top.nextChild++];
-          glm::mat4 parentWorld = top.world;  // `top` dies when the stack grows
+          glm::dmat4 parentWorld = top.world;  // `top` dies when the stack grows
           enter(child, parentWorld, "node " + std::to_string(top.node));
         } else {
           onPath[top.node] = false;
@@ -752,7 +849,8 @@ class Converter {
     }
   }
 
-  void visit(std::size_t nodeIndex, const glm::mat4& world) {
+  /// Note what a node holds; meshes and lights are placed once the origin is known.
+  void visit(std::size_t nodeIndex, const glm::dmat4& world) {
     const tinygltf::Node& node = m_model.nodes[nodeIndex];
     const std::string label = "node " + std::to_string(nodeIndex);
     if (node.camera >= 0) {
@@ -761,22 +859,20 @@ class Converter {
       m_cameraNodes.push_back({nodeIndex, world});
     }
     if (auto ext = node.extensions.find(kLightsPunctual); ext != node.extensions.end())
-      placeLight(label, ext->second, world);
+      m_lightInstances.push_back({label, &ext->second, world});
     if (node.mesh >= 0) {
       if (std::size_t(node.mesh) >= m_model.meshes.size())
         fail(label + ": references missing mesh " + std::to_string(node.mesh));
       if (node.skin >= 0)
         m_scene.addWarning("skinning is not supported; skinned meshes are drawn in their bind pose");
-      const auto meshIndex = std::size_t(node.mesh);
-      const std::size_t primCount = m_model.meshes[meshIndex].primitives.size();
-      for (std::size_t p = 0; p < primCount; ++p)
-        emit(primitive(meshIndex, p), world, nodeIndex, meshIndex, p);
+      m_meshInstances.push_back({nodeIndex, std::size_t(node.mesh), world});
     }
   }
 
   // lights
 
-  void placeLight(const std::string& nodeLabel, const tinygltf::Value& ext, const glm::mat4& world) {
+  void placeLight(const std::string& nodeLabel, const tinygltf::Value& ext, const glm::dmat4& worldUnshifted) {
+    const glm::mat4 world(shifted(worldUnshifted));
     if (!ext.IsObject() || !ext.Has("light") || !ext.Get("light").IsInt())
       fail(nodeLabel + ": " + kLightsPunctual + " has no integer 'light'");
     int index = ext.Get("light").GetNumberAsInt();
@@ -831,7 +927,8 @@ class Converter {
     const std::string label = "camera " + std::to_string(node.camera);
 
     CameraDesc desc;
-    desc.cameraToWorld = world;
+    m_cameraWorld = world;  // shifted to the origin once it is chosen
+    desc.cameraToWorld = glm::mat4(world);
     desc.name = !src.name.empty() ? src.name : !node.name.empty() ? node.name : label;
     auto positive = [&](double v, const char* what) {
       if (!std::isfinite(v) || v <= 0.0) fail(label + ": " + what + " must be positive and finite");
@@ -866,10 +963,16 @@ class Converter {
   Scene& m_scene;
   int m_defaultMaterial = -1;
   std::string m_rootsLabel;
-  std::vector<glm::mat4> m_local;
+  std::vector<glm::dmat4> m_local;
   std::vector<bool> m_localDone;
   std::vector<std::vector<std::unique_ptr<DecodedPrimitive>>> m_decoded;
-  std::vector<std::pair<std::size_t, glm::mat4>> m_cameraNodes;
+  std::vector<std::pair<std::size_t, glm::dmat4>> m_cameraNodes;
+  std::vector<MeshInstance> m_meshInstances;
+  std::vector<LightInstance> m_lightInstances;
+  glm::dmat4 m_cameraWorld{1.0};
+  glm::dvec3 m_origin{0.0};
+  std::size_t m_degenerateTriangles = 0;
+  std::string m_firstDegenerate;
 };
 
 /// Check the GLB container ourselves: tinygltf 2.7 does not count the BIN

@@ -12,6 +12,7 @@ namespace wt {
 struct GltfLoadOptions {
   int sceneIndex = -1;   ///< -1: the file's default scene (or scene 0)
   int cameraIndex = 0;   ///< which camera node (in traversal order) to use, if any
+  bool recenter = true;  ///< store the scene relative to the camera (else the geometry's centre), in double precision; false keeps world coordinates as they are
 };
 
 /// Load a .gltf or .glb file. Throws SceneError.

@@ -57,6 +57,7 @@ struct Scene {
   std::vector<PunctualLight> lights;      ///< KHR_lights_punctual
   std::vector<std::string> warnings;      ///< unsupported features, once each, by name
   std::string sourceName;                 ///< file the scene came from, for messages
+  glm::dvec3 origin{0.0};                 ///< world position of the scene's (0,0,0): every position, light and camera here is relative to it (GltfLoadOptions::recenter)
 
   Aabb bounds() const;
   /// Bounds of one triangle.

@@ -67,20 +67,46 @@ __attribute__((always_inline)) inline bool triangle_intersect(float3 org, RayShe
   float inv_det = 1.0f / det;
   float t = t_scaled * inv_det;
   if (!(t > tmin && t < tmax)) return false;
+
+  // Reject t within its own rounding error of the origin (the bound of
+  // pbrt-v4, sec. 6.8.7, on this test): with the error-bound origin offset
+  // (ray_offset_origin) a spawned ray cannot find the surface it left. Only
+  // candidate hits pay for it.
+  float max_zt = fabs(s.sz) * fmax(fabs(az), fmax(fabs(bz), fabs(cz)));
+  float max_xt = fmax(fabs(ax), fmax(fabs(bx), fabs(cx)));
+  float max_yt = fmax(fabs(ay), fmax(fabs(by), fabs(cy)));
+  float delta_z = spawn_gamma(3) * max_zt;
+  float delta_x = spawn_gamma(5) * (max_xt + max_zt);
+  float delta_y = spawn_gamma(5) * (max_yt + max_zt);
+  float delta_e = 2.0f * (spawn_gamma(2) * max_xt * max_yt + delta_y * max_xt + delta_x * max_yt);
+  float max_e = fmax(fabs(u), fmax(fabs(v), fabs(w)));
+  float delta_t = 3.0f * (spawn_gamma(3) * max_e * max_zt + delta_e * max_zt + delta_z * max_e) * fabs(inv_det);
+  if (!(t > delta_t)) return false;
   *t_hit = t;
   *b1 = v * inv_det;
   *b2 = w * inv_det;
   return true;
 }
 
-/// Surface at a hit: position from the barycentrics (more precise than
-/// o + t*d), unit geometric normal (zero for a degenerate triangle) and the
-/// interpolated shading normal (the geometric one where the file has none).
-inline void triangle_surface(float3 p0, float3 p1, float3 p2, float3 n0, float3 n1, float3 n2,
-                             float b1, float b2, float3* position, float3* n_geometric,
-                             float3* n_shading) {
+/// Point with barycentrics (1 - b1 - b2, b1, b2) on triangle (p0, p1, p2),
+/// and the rounding error bound of each of its coordinates.
+inline float3 triangle_point(float3 p0, float3 p1, float3 p2, float b1, float b2, float3* error) {
   float b0 = 1.0f - b1 - b2;
-  *position = b0 * p0 + b1 * p1 + b2 * p2;
+  *error = (float3)(spawn_barycentric_error(b0, b1, b2, p0.x, p1.x, p2.x),
+                    spawn_barycentric_error(b0, b1, b2, p0.y, p1.y, p2.y),
+                    spawn_barycentric_error(b0, b1, b2, p0.z, p1.z, p2.z));
+  return b0 * p0 + b1 * p1 + b2 * p2;
+}
+
+/// Surface at a hit: position from the barycentrics (more precise than
+/// o + t*d) with its error bound, unit geometric normal (zero for a
+/// degenerate triangle) and the interpolated shading normal (the geometric
+/// one where the file has none).
+inline void triangle_surface(float3 p0, float3 p1, float3 p2, float3 n0, float3 n1, float3 n2,
+                             float b1, float b2, float3* position, float3* position_error,
+                             float3* n_geometric, float3* n_shading) {
+  float b0 = 1.0f - b1 - b2;
+  *position = triangle_point(p0, p1, p2, b1, b2, position_error);
   float3 ng = cross(p1 - p0, p2 - p0);
   float len = length(ng);
   *n_geometric = len > 0.0f ? ng / len : (float3)(0.0f);

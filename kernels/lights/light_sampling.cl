@@ -5,6 +5,7 @@
 #define WT_LIGHTS_LIGHT_SAMPLING_CL
 
 #include "common.h"
+#include "geometry/triangle.cl"
 #include "shared/lights.h"
 #include "lights/environment_adapter.cl"
 
@@ -21,6 +22,7 @@ typedef struct LightScene {
 typedef struct LightSample {
   float3 wi;        ///< unit, world, towards the light
   float distance;   ///< to the sampled point; INFINITY for directional and environment
+  float3 target;    ///< where a shadow ray ends (finite distance only): the light's position, or the sampled point pushed off the emitter's surface towards the shading point past its rounding error
   float3 radiance;  ///< arriving radiance, or intensity / distance^2 for delta lights
   float pdf;        ///< solid-angle pdf given this light was picked; 1 for delta lights
   int is_delta;     ///< point, spot, directional: BSDF sampling cannot hit these
@@ -106,6 +108,7 @@ inline bool light_sample(LightScene ls, uint index, float3 p, float u1, float u2
     if (!(d2 > 0.0f)) return false;
     s->distance = sqrt(d2);
     s->wi = to_light / s->distance;
+    s->target = vec4_xyz(light.position);
     s->radiance = vec4_xyz(light.intensity) / d2;
     if (light.type == WT_LIGHT_SPOT) s->radiance *= light_spot_falloff(light, -s->wi);
     return true;
@@ -130,6 +133,21 @@ inline bool light_sample(LightScene ls, uint index, float3 p, float u1, float u2
       if (light.position.w == 0.0f && !(facing < 0.0f)) return false;
       float dist = dot(n, p0 - p) / facing;
       if (!(dist > 0.0f) || !isfinite(dist)) return false;
+      // the sampled point from its barycentrics (Moller-Trumbore), where its
+      // rounding error is known
+      float3 e1 = p1 - p0, e2 = p2 - p0, tv = p - p0;
+      float3 pv = cross(w, e2), qv = cross(tv, e1);
+      float inv_det = 1.0f / dot(e1, pv);
+      float b1 = clamp(dot(tv, pv) * inv_det, 0.0f, 1.0f), b2 = clamp(dot(w, qv) * inv_det, 0.0f, 1.0f);
+      if (b1 + b2 > 1.0f) {
+        float sum = b1 + b2;
+        b1 /= sum;
+        b2 /= sum;
+      }
+      if (!isfinite(b1) || !isfinite(b2)) return false;
+      float3 q_error;
+      float3 q = triangle_point(p0, p1, p2, b1, b2, &q_error);
+      s->target = ray_offset_origin(q, q_error, facing < 0.0f ? normalize(n) : -normalize(n));
       s->wi = w;
       s->distance = dist;
       s->pdf = 1.0f / solid_angle;
@@ -139,7 +157,8 @@ inline bool light_sample(LightScene ls, uint index, float3 p, float u1, float u2
     // uniform by area (the square-root parameterisation), converted to solid angle
     float su = sqrt(u1);
     float b1 = su * (1.0f - u2), b2 = su * u2;
-    float3 q = (1.0f - b1 - b2) * p0 + b1 * p1 + b2 * p2;
+    float3 q_error;
+    float3 q = triangle_point(p0, p1, p2, b1, b2, &q_error);
     float area2 = length(n);
     float3 to_light = q - p;
     float d2 = dot(to_light, to_light);
@@ -150,6 +169,8 @@ inline bool light_sample(LightScene ls, uint index, float3 p, float u1, float u2
     float cos_light = -dot(n, s->wi) / area2;
     if (light.position.w != 0.0f) cos_light = fabs(cos_light);
     if (!(cos_light > 0.0f)) return false;
+    // off the emitter, on the shading point's side of its plane
+    s->target = ray_offset_origin(q, q_error, dot(n, to_light) < 0.0f ? n / area2 : -n / area2);
     s->pdf = (2.0f / area2) * d2 / cos_light;
     s->radiance = vec4_xyz(light.intensity);
     return true;

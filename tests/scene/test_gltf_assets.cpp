@@ -17,9 +17,12 @@
 namespace wt {
 namespace {
 
+/// World position of vertex v (the loader stores positions relative to Scene::origin).
 glm::vec3 pos(const Scene& s, std::uint32_t v) {
-  return {s.positions[v].x, s.positions[v].y, s.positions[v].z};
+  return glm::vec3(s.origin + glm::dvec3(s.positions[v].x, s.positions[v].y, s.positions[v].z));
 }
+/// World position of the camera.
+glm::vec3 cameraPosition(const Scene& s) { return glm::vec3(s.origin + glm::dvec3(s.camera->cameraToWorld[3])); }
 glm::vec3 nrm(const Scene& s, std::uint32_t v) {
   return {s.normals[v].x, s.normals[v].y, s.normals[v].z};
 }
@@ -99,7 +102,7 @@ TEST(GltfAssets, SimpleSparseAccessor) {
   expectNear(pos(s, 9), {2, 1, 0});  // not in the sparse set
   expectNear(pos(s, 7), {0, 1, 0});
   // the accessor's max [6, 4, 0] holds only with the sparse values applied
-  EXPECT_FLOAT_EQ(s.bounds().hi.y, 4.0f);
+  EXPECT_FLOAT_EQ(float(s.bounds().hi.y + s.origin.y), 4.0f);
 }
 
 TEST(GltfAssets, MultipleScenes) {
@@ -137,7 +140,7 @@ TEST(GltfAssets, Cameras) {
   EXPECT_FLOAT_EQ(s.camera->yfov, 0.7f);
   EXPECT_FLOAT_EQ(s.camera->aspectRatio, 1.0f);
   EXPECT_FLOAT_EQ(s.camera->znear, 0.01f);
-  expectNear(glm::vec3(s.camera->cameraToWorld[3]), {0.5f, 0.5f, 3.0f});
+  expectNear(cameraPosition(s), {0.5f, 0.5f, 3.0f});
 
   GltfLoadOptions options;
   options.cameraIndex = 1;

@@ -218,9 +218,12 @@ std::string docError(const GltfDoc& doc, const GltfLoadOptions& options = {}) {
 #define EXPECT_CONTAINS(text, part) \
   EXPECT_NE(std::string(text).find(part), std::string::npos) << "in: " << (text)
 
+/// World position of vertex v (the loader stores positions relative to Scene::origin).
 glm::vec3 pos(const Scene& s, std::uint32_t v) {
-  return {s.positions[v].x, s.positions[v].y, s.positions[v].z};
+  return glm::vec3(s.origin + glm::dvec3(s.positions[v].x, s.positions[v].y, s.positions[v].z));
 }
+/// World position of the camera.
+glm::vec3 cameraPosition(const Scene& s) { return glm::vec3(s.origin + glm::dvec3(s.camera->cameraToWorld[3])); }
 glm::vec3 nrm(const Scene& s, std::uint32_t v) {
   return {s.normals[v].x, s.normals[v].y, s.normals[v].z};
 }
@@ -652,7 +655,7 @@ TEST(GltfLoader, PerspectiveCamera) {
   EXPECT_FLOAT_EQ(c.aspectRatio, 1.5f);
   EXPECT_FLOAT_EQ(c.znear, 0.01f);
   EXPECT_EQ(c.name, "persp");
-  expectNear(glm::vec3(c.cameraToWorld[3]), {0.5f, 0.5f, 3.0f});
+  expectNear(cameraPosition(s), {0.5f, 0.5f, 3.0f});
 }
 
 TEST(GltfLoader, OrthographicCameraByIndex) {
@@ -666,10 +669,82 @@ TEST(GltfLoader, OrthographicCameraByIndex) {
   EXPECT_FLOAT_EQ(c.ymag, 3.0f);
   EXPECT_FLOAT_EQ(c.znear, 0.5f);
   EXPECT_EQ(c.name, "orthoNode");  // the camera has no name; the node has
-  expectNear(glm::vec3(c.cameraToWorld[3]), {0, 0, -4});
+  expectNear(cameraPosition(s), {0, 0, -4});
 
   options.cameraIndex = 2;
   EXPECT_CONTAINS(docError(cameraDoc(), options), "camera 2 out of range (2 camera nodes");
+}
+
+// The scene is stored relative to the camera in double precision: the same
+// scene under a root node 1e6 units away gives the very same float
+// coordinates (bit for bit), although 1e6 + 0.1 has no float of its own.
+TEST(GltfLoader, SceneIsStoredRelativeToTheCameraExactly) {
+  auto placed = [](const std::string& rootTranslation) {
+    GltfDoc doc;
+    doc.addVec3({{0.1f, 0.2f, -0.3f}, {1.3f, 0.1f, -0.2f}, {0.2f, 1.7f, 0.05f}});
+    doc.addMesh("{\"attributes\":{\"POSITION\":0}}");
+    doc.cameras.push_back("{\"type\":\"perspective\",\"perspective\":{\"yfov\":0.7,\"znear\":0.01}}");
+    doc.addNode("{\"mesh\":0,\"rotation\":[0,0.2588190451,0,0.9659258263]}");
+    doc.addNode("{\"camera\":0,\"translation\":[0.25,0.5,3]}");
+    doc.addNode("{\"children\":[0,1]" + rootTranslation + "}");
+    doc.scenes.push_back("{\"nodes\":[2]}");
+    return loadDoc(doc);
+  };
+  Scene here = placed(""), far = placed(",\"translation\":[1000000,-1000000,1000000]");
+  ASSERT_EQ(here.positions.size(), far.positions.size());
+  for (std::size_t v = 0; v < here.positions.size(); ++v) {
+    EXPECT_EQ(here.positions[v].x, far.positions[v].x) << "vertex " << v;
+    EXPECT_EQ(here.positions[v].y, far.positions[v].y) << "vertex " << v;
+    EXPECT_EQ(here.positions[v].z, far.positions[v].z) << "vertex " << v;
+  }
+  EXPECT_EQ(glm::vec3(far.camera->cameraToWorld[3]), glm::vec3(0.0f));
+  EXPECT_EQ(far.origin, glm::dvec3(1000000.25, -999999.5, 1000003.0));
+  expectNear(cameraPosition(far), {1000000.25f, -999999.5f, 1000003.0f}, 0.07f);
+}
+
+TEST(GltfLoader, WithoutACameraTheOriginIsTheCentreOfTheGeometry) {
+  Scene s = loadDoc(triangleDoc(true, ",\"translation\":[100,0,-50]"));
+  EXPECT_EQ(s.origin, glm::dvec3(100.5, 0.5, -50.0));
+  expectNear(pos(s, 1), {101, 0, -50});
+  GltfLoadOptions options;
+  options.recenter = false;  // world coordinates as the file has them
+  Scene world = loadDoc(triangleDoc(true, ",\"translation\":[100,0,-50]"), options);
+  EXPECT_EQ(world.origin, glm::dvec3(0.0));
+  EXPECT_EQ(world.positions[1].x, 101.0f);
+}
+
+TEST(GltfLoader, LightsMoveWithTheOrigin) {
+  GltfDoc doc = triangleDoc(true, ",\"translation\":[5000,0,0]");
+  doc.extensionsUsed = "[\"KHR_lights_punctual\"]";
+  doc.addNode("{\"translation\":[5000,2,0],\"extensions\":{\"KHR_lights_punctual\":{\"light\":0}}}");
+  doc.scenes[0] = "{\"nodes\":[0,1]}";
+  std::string text = doc.embedded();
+  text.insert(text.size() - 1, ",\"extensions\":{\"KHR_lights_punctual\":{\"lights\":[{\"type\":\"point\"}]}}");
+  Scene s = loadGltf(writeFile(".gltf", text).string());
+  ASSERT_EQ(s.lights.size(), 1u);
+  expectNear(glm::vec3(s.origin + glm::dvec3(s.lights[0].position)), {5000, 2, 0});
+  expectNear(glm::vec3(s.lights[0].position), {-0.5f, 1.5f, 0.0f});
+}
+
+TEST(GltfLoader, ZeroScaleAndZeroAreaTrianglesLoadWithAWarning) {
+  Scene flat = loadDoc(triangleDoc(true, ",\"scale\":[1,0,1]"));
+  EXPECT_EQ(flat.triangles.size(), 1u);
+  ASSERT_GE(flat.warnings.size(), 1u);
+  EXPECT_CONTAINS(::testing::PrintToString(flat.warnings), "node 0: its transform is singular");
+  EXPECT_CONTAINS(::testing::PrintToString(flat.warnings), "1 of 1 triangles have zero area");
+  for (std::size_t v = 0; v < flat.normals.size(); ++v) EXPECT_TRUE(std::isfinite(flat.normals[v].x));
+
+  GltfDoc doc;
+  doc.addVec3({{0, 0, 0}, {1, 0, 0}, {2, 0, 0}, {0, 1, 0}});
+  doc.addIndices<std::uint16_t>({0, 1, 2, 0, 1, 3, 3, 3, 3});
+  doc.addMesh("{\"attributes\":{\"POSITION\":0},\"indices\":1}");
+  doc.addNode("{\"mesh\":0}");
+  doc.scenes.push_back("{\"nodes\":[0]}");
+  Scene s = loadDoc(doc);
+  EXPECT_EQ(s.triangles.size(), 3u);
+  EXPECT_CONTAINS(::testing::PrintToString(s.warnings),
+                  "2 of 3 triangles have zero area (repeated or collinear corners, first: mesh 0, primitive 0 "
+                  "(node 0), triangle 0)");
 }
 
 TEST(GltfLoader, CameraUnderARotatedParent) {
@@ -682,7 +757,7 @@ TEST(GltfLoader, CameraUnderARotatedParent) {
   ASSERT_TRUE(s.camera.has_value());
   glm::vec3 forward = -glm::vec3(s.camera->cameraToWorld[2]);
   expectNear(forward, {-1, 0, 0});
-  expectNear(glm::vec3(s.camera->cameraToWorld[3]), {3, 0.5f, -0.5f});
+  expectNear(cameraPosition(s), {3, 0.5f, -0.5f});
 }
 
 // ---------------------------------------------------------------------------
