@@ -49,13 +49,21 @@ inline int4 bvh4_box_hit(__global const WtBvh4Node* n, float3 org, float3 inv_d,
   return enter <= exit;
 }
 
+/// False for a ray with a NaN or infinite origin or direction component. The
+/// slab test would enter every child of such a ray, empty slots included
+/// (fmin and fmax drop NaNs), and read past the node array: it hits nothing.
+inline bool bvh_ray_is_finite(float3 org, float3 dir) {
+  return isfinite(org.x) && isfinite(org.y) && isfinite(org.z) && isfinite(dir.x) && isfinite(dir.y) &&
+         isfinite(dir.z);
+}
+
 /// Closest hit in (tmin, tmax).
 inline Hit bvh_closest(BvhScene scene, float3 org, float3 dir, float tmin, float tmax) {
   Hit hit;
   hit.t = tmax;
   hit.b1 = hit.b2 = 0.0f;
   hit.prim = WT_NO_HIT;
-  if (scene.node_count == 0) return hit;
+  if (scene.node_count == 0 || !bvh_ray_is_finite(org, dir)) return hit;
   __global const WtBvh4Node* nodes = (__global const WtBvh4Node*)scene.nodes;
 
   RayShear shear = triangle_ray_shear(dir);
@@ -125,7 +133,7 @@ inline Hit bvh_closest(BvhScene scene, float3 org, float3 dir, float tmin, float
 
 /// Any hit in (tmin, tmax): true when the segment is blocked.
 inline bool bvh_occluded(BvhScene scene, float3 org, float3 dir, float tmin, float tmax) {
-  if (scene.node_count == 0) return false;
+  if (scene.node_count == 0 || !bvh_ray_is_finite(org, dir)) return false;
   __global const WtBvh4Node* nodes = (__global const WtBvh4Node*)scene.nodes;
   RayShear shear = triangle_ray_shear(dir);
   float3 inv_d = bvh_safe_rcp(dir);

@@ -134,6 +134,29 @@ TEST(Traversal, DegenerateTrianglesAreNeverHit) {
   }
 }
 
+// NaN or infinite origins and directions (a zero vector normalised, an
+// overflow upstream) hit nothing. Before the guard, a NaN direction entered
+// every child of a 4-wide node, empty slots too, and read past the node
+// array: found by the self-intersection stress rows, where a degenerate
+// direction came out of float rounding 1e8 from the origin.
+TEST(Traversal, NonFiniteRaysHitNothingAndNeverCrash) {
+  Scene scene = makeIcosphere(3, glm::vec3(0.5f), 0.6f, makeMaterial(glm::vec3(0.5f)));
+  const float nan = std::nanf(""), inf = INFINITY;
+  std::vector<Ray> rays;
+  for (glm::vec3 bad : {glm::vec3(nan), glm::vec3(nan, 0, 0), glm::vec3(0, inf, 0), glm::vec3(-inf, 1, 0)}) {
+    for (int k = 0; k < 64; ++k) {
+      Ray r;
+      r.origin = glm::vec3(0.5f);
+      r.direction = k % 2 ? bad : glm::vec3(0, 0, 1);
+      if (k % 2 == 0) r.origin = bad;
+      rays.push_back(r);
+    }
+  }
+  Tracer tracer(test::deviceContext(), scene);
+  for (const RayHit& h : tracer.traceClosest(rays)) EXPECT_EQ(h.triangle, RayHit::kNoHit);
+  for (std::uint8_t o : tracer.traceOccluded(rays)) EXPECT_EQ(o, 0);
+}
+
 TEST(Traversal, EmptySceneMissesEverything) {
   Scene scene;
   scene.materials.push_back(makeMaterial(glm::vec3(0.5f)));
