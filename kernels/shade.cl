@@ -19,6 +19,14 @@ inline float shade_emission_weight(WtFrameParams frame, float pdf_bsdf, float pd
   return mis_weight(pdf_bsdf, pdf_light, frame.flags);
 }
 
+/// With WT_FLAG_CHECK_NONFINITE, note the first non-finite value any path
+/// makes (which path, bounce and quantity) for the host to stop at.
+inline void shade_check_finite(WtFrameParams frame, __global uint* counters, uint path, float3 v, uint what) {
+  if (!(frame.flags & WT_FLAG_CHECK_NONFINITE) || (isfinite(v.x) && isfinite(v.y) && isfinite(v.z))) return;
+  if (atomic_cmpxchg(&counters[WT_COUNTER_FIRST_NONFINITE], 0xffffffffu, path) == 0xffffffffu)
+    counters[WT_COUNTER_NONFINITE_WHERE] = frame.bounce | (what << 16);
+}
+
 __kernel void shade(WtFrameParams frame, WtEnvironment environment, __global const float4* env_texels,
                     __global const float* env_marginal_cdf, __global const float* env_conditional_cdf,
                     __global uint* counters, uint in_slot, uint out_slot,
@@ -49,6 +57,7 @@ __kernel void shade(WtFrameParams frame, WtEnvironment environment, __global con
     if (frame.bounce == 0 && (frame.flags & WT_FLAG_ENV_HIDDEN)) return;
     float3 le = env_eval(env, dir);
     float w = shade_emission_weight(frame, pdf_prev, frame.env_pmf * env_pdf(env, dir));
+    shade_check_finite(frame, counters, path, beta * le * w, WT_NONFINITE_EMISSION);
     radiance[path] += (float4)(beta * le * w, 0.0f);
     return;
   }
@@ -66,7 +75,9 @@ __kernel void shade(WtFrameParams frame, WtEnvironment environment, __global con
   bool emits = material.emission.w != 0.0f || dot(ng, dir) < 0.0f;
   if (emits && (le.x > 0.0f || le.y > 0.0f || le.z > 0.0f)) {
     float pdf_light = light_triangle_pdf(emitter_pdf_area[prim], ray_o[path].xyz, p0, p1, p2, hit.x, dir, ng);
-    radiance[path] += (float4)(beta * le * shade_emission_weight(frame, pdf_prev, pdf_light), 0.0f);
+    float3 emitted = beta * le * shade_emission_weight(frame, pdf_prev, pdf_light);
+    shade_check_finite(frame, counters, path, emitted, WT_NONFINITE_EMISSION);
+    radiance[path] += (float4)(emitted, 0.0f);
   }
   if (frame.bounce >= frame.max_bounces) return;
 
@@ -101,6 +112,7 @@ __kernel void shade(WtFrameParams frame, WtEnvironment environment, __global con
                     ? 1.0f
                     : mis_weight(pdf_light, cos_s / WT_PI, frame.flags);
       float3 contribution = beta * albedo * (cos_s / WT_PI) * s.radiance * (w / pdf_light);
+      shade_check_finite(frame, counters, path, contribution, WT_NONFINITE_LIGHT);
       if (contribution.x > 0.0f || contribution.y > 0.0f || contribution.z > 0.0f) {
         // Aim from the offset origin at the target (the sampled point pushed
         // off the light's surface) and stop a relative margin short of it, so
@@ -142,6 +154,7 @@ __kernel void shade(WtFrameParams frame, WtEnvironment environment, __global con
     if (sampler_get(frame, path, 7u) >= q) return;
     beta /= q;
   }
+  shade_check_finite(frame, counters, path, beta, WT_NONFINITE_THROUGHPUT);
   if (beta.x <= 0.0f && beta.y <= 0.0f && beta.z <= 0.0f) return;
 
   throughput[path] = (float4)(beta, cos_i / WT_PI);

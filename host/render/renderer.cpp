@@ -30,6 +30,7 @@ WtFrameParams frameParams(const RenderSettings& s, const LightList& lights, int 
   if (s.sobol) p.flags |= WT_FLAG_SOBOL;
   p.accumulate_mode = s.accumulation;
   if (s.environmentHidden) p.flags |= WT_FLAG_ENV_HIDDEN;
+  if (s.stopOnNonFinite) p.flags |= WT_FLAG_CHECK_NONFINITE;
   return p;
 }
 
@@ -96,6 +97,7 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
   q.enqueueFillBuffer(m_state, cl_float(0), 0, pixels * 64);
   q.enqueueFillBuffer(m_sampleCount, cl_uint(0), 0, pixels * 4);
   q.enqueueFillBuffer(m_counters, cl_uint(0), 0, WT_COUNTER_COUNT * sizeof(cl_uint));
+  q.enqueueFillBuffer(m_counters, cl_uint(0xffffffffu), WT_COUNTER_FIRST_NONFINITE * sizeof(cl_uint), sizeof(cl_uint));
   q.finish();
 
   // Arguments that never change; per-launch ones are set in renderSample().
@@ -181,9 +183,11 @@ void Renderer::renderSample() {
     if (m_lights.sampleable) m_context.launch("connect", m_connect, alive);
 
     // end of the bounce: the only point where the host reads a count back
-    cl_uint next = 0;
-    q.enqueueReadBuffer(m_counters, CL_TRUE, outSlot * sizeof(cl_uint), sizeof(cl_uint), &next);
-    alive = next;
+    cl_uint counters[WT_COUNTER_COUNT];
+    q.enqueueReadBuffer(m_counters, CL_TRUE, 0, sizeof(counters), counters);
+    alive = counters[outSlot];
+    if (m_settings.stopOnNonFinite && counters[WT_COUNTER_FIRST_NONFINITE] != 0xffffffffu)
+      throwNonFinite(sample, counters[WT_COUNTER_FIRST_NONFINITE], counters[WT_COUNTER_NONFINITE_WHERE]);
     std::swap(queueIn, queueOut);
     std::swap(inSlot, outSlot);
   }
@@ -194,6 +198,20 @@ void Renderer::renderSample() {
   m_context.finish();
   ++m_stats.samplesDone;
   m_stats.seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+void Renderer::throwNonFinite(int sample, std::uint32_t path, std::uint32_t where) {
+  m_context.finish();
+  const int x = int(path % std::uint32_t(m_settings.width)), y = int(path / std::uint32_t(m_settings.width));
+  const int bounce = int(where & 0xffffu);
+  const std::uint32_t what = where >> 16;
+  const char* quantity = what == WT_NONFINITE_EMISSION ? "emitted radiance"
+                         : what == WT_NONFINITE_LIGHT  ? "next-event contribution"
+                                                       : "path throughput";
+  throw NonFiniteSampleError("non-finite " + std::string(quantity) + " at pixel (" + std::to_string(x) + ", " +
+                                 std::to_string(y) + "), sample " + std::to_string(sample) + ", bounce " +
+                                 std::to_string(bounce) + " (stopped there: --stop-on-nan)",
+                             x, y, sample, bounce);
 }
 
 Image Renderer::readImage() {

@@ -13,6 +13,7 @@
 #include <glm/glm.hpp>
 
 #include <cstdint>
+#include <stdexcept>
 #include <string>
 #include <memory>
 #include <vector>
@@ -44,6 +45,21 @@ struct RenderSettings {
   int rrMinDepth = 3;           ///< path: first bounce at which roulette may end a path
   bool sobol = false;           ///< Owen-scrambled Sobol instead of independent random numbers
   std::uint32_t accumulation = WT_ACCUMULATE_KAHAN;  ///< WT_ACCUMULATE_* (double needs fp64)
+#ifdef NDEBUG
+  bool stopOnNonFinite = false;  ///< throw NonFiniteSampleError at the first NaN/Inf shade makes (on in debug builds)
+#else
+  bool stopOnNonFinite = true;
+#endif
+};
+
+/// The first NaN/Inf of a render with RenderSettings::stopOnNonFinite: where
+/// it arose. The sample it belongs to is not accumulated.
+struct NonFiniteSampleError : std::runtime_error {
+  NonFiniteSampleError(const std::string& what, int x, int y, int sample, int bounce)
+      : std::runtime_error(what), x(x), y(y), sample(sample), bounce(bounce) {}
+  int x, y;    ///< pixel, from the top left
+  int sample;  ///< sample index
+  int bounce;  ///< 0: the camera ray's hit
 };
 
 /// The accumulated image read back from the device.
@@ -78,6 +94,7 @@ class Renderer {
   const Environment& environment() const { return m_environment; }
 
  private:
+  [[noreturn]] void throwNonFinite(int sample, std::uint32_t path, std::uint32_t where);
   Context& m_context;
   RenderSettings m_settings;
   WtCamera m_camera;

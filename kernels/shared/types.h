@@ -98,12 +98,20 @@ typedef struct WtFrameParams {
 #define WT_FLAG_RR 8u             ///< Russian roulette
 #define WT_FLAG_SOBOL 16u         ///< Owen-scrambled Sobol sampler instead of independent hashes
 #define WT_FLAG_ENV_HIDDEN 32u    ///< camera rays that escape see black; the environment still lights the scene
+#define WT_FLAG_CHECK_NONFINITE 64u ///< shade records the first NaN/Inf it makes (WT_COUNTER_FIRST_NONFINITE) so the host can stop there
 
 /// Slots of the queue-counter buffer.
 #define WT_COUNTER_QUEUE_A 0      ///< paths in queue A
 #define WT_COUNTER_QUEUE_B 1      ///< paths in queue B
 #define WT_COUNTER_NONFINITE 2    ///< samples discarded as NaN/Inf
 #define WT_COUNTER_SHADOW 3       ///< shadow rays queued by shade for connect
-#define WT_COUNTER_COUNT 4
+#define WT_COUNTER_FIRST_NONFINITE 4  ///< path (= pixel) of the first NaN/Inf shade made; 0xffffffff: none (WT_FLAG_CHECK_NONFINITE)
+#define WT_COUNTER_NONFINITE_WHERE 5  ///< its bounce (low 16 bits) and quantity (WT_NONFINITE_* << 16)
+#define WT_COUNTER_COUNT 6
+
+/// Which quantity turned non-finite (WT_COUNTER_NONFINITE_WHERE).
+#define WT_NONFINITE_EMISSION 1u    ///< emission or sky radiance added at a hit or miss
+#define WT_NONFINITE_LIGHT 2u       ///< a next-event contribution
+#define WT_NONFINITE_THROUGHPUT 3u  ///< the path throughput after a bounce
 
 #endif  // WT_SHARED_TYPES_H

@@ -85,6 +85,35 @@ TEST(EndToEnd, NonFiniteSamplesAreCountedNotAccumulated) {
   EXPECT_EQ(renderer.stats().nonFiniteSamples, discarded);
 }
 
+TEST(EndToEnd, StopOnNonFiniteNamesThePixelSampleAndBounce) {
+  // the NaN floor again, seen only in the bottom rows: the first NaN is made
+  // at the camera ray's hit (bounce 0) of sample 0, in the bottom half
+  Scene scene = test::makeFloor(50.0f, 0.0f, makeMaterial(glm::vec3(std::nanf(""))));
+  CameraDesc cam;
+  cam.cameraToWorld = glm::translate(glm::mat4(1.0f), glm::vec3(0.0f, 1.0f, 0.0f));
+  scene.camera = cam;
+  RenderSettings s;
+  s.width = 16, s.height = 16, s.maxBounces = 2;
+  s.background = glm::vec3(0.25f);
+  s.stopOnNonFinite = true;
+  Renderer renderer(test::deviceContext(), scene, s);
+  try {
+    renderer.renderSample();
+    FAIL() << "expected a NonFiniteSampleError";
+  } catch (const NonFiniteSampleError& e) {
+    EXPECT_EQ(e.sample, 0);
+    EXPECT_EQ(e.bounce, 0);
+    EXPECT_GE(e.y, 8) << e.what();
+    EXPECT_NE(std::string(e.what()).find("sample 0, bounce 0"), std::string::npos) << e.what();
+  }
+  // without the switch the same render counts and discards instead
+  s.stopOnNonFinite = false;
+  Renderer counting(test::deviceContext(), scene, s);
+  counting.renderSample();
+  counting.readImage();
+  EXPECT_GT(counting.stats().nonFiniteSamples, 0u);
+}
+
 TEST(EndToEnd, DeterministicForASeed) {
   Image a = renderCornell(3), b = renderCornell(3), c = renderCornell(4);
   EXPECT_EQ(a.rgb, b.rgb);
