@@ -8,6 +8,7 @@
 #include "render/image_error.h"
 #include "render/renderer.h"
 #include "scene/default_scene.h"
+#include "stress/stress.h"
 
 #include <CLI/CLI.hpp>
 
@@ -40,6 +41,7 @@ struct RenderOptions {
   int sceneIndex = -1;
   int camera = 0;
   bool noRecenter = false;
+  bool stopOnNan = false;
   std::string kernelDir;
   bool quiet = false;
   bool verbose = false;
@@ -80,6 +82,7 @@ int runRender(const RenderOptions& options) {
   settings.integrator = options.integrator == "minimal" ? wt::Integrator::Minimal : wt::Integrator::Path;
   settings.useNee = !options.noNee;
   settings.useMis = !options.noMis;
+  if (options.stopOnNan) settings.stopOnNonFinite = true;
   settings.useRussianRoulette = !options.noRr;
   settings.powerHeuristic = options.misHeuristic == "power";
   settings.sobol = options.sampler == "sobol";
@@ -237,6 +240,9 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(-1, 1 << 20));
   renderCmd->add_option("--camera", render.camera, "Camera to use, by order in the scene")
       ->check(CLI::Range(0, 1 << 20))->capture_default_str();
+  renderCmd->add_flag("--stop-on-nan", render.stopOnNan,
+                      "Stop at the first NaN/Inf a path makes and name its pixel, sample and bounce "
+                      "(always on in debug builds); the samples before it are still written");
   renderCmd->add_flag("--no-recenter", render.noRecenter,
                       "Keep the file's world coordinates (default: the scene is stored relative to the camera, "
                       "in double precision, so it renders the same far from the world origin)");
@@ -266,6 +272,17 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0, 2))->capture_default_str();
   benchCmd->add_flag("--embree-robust", bench.embreeRobust, "Embree reference: RTC_SCENE_FLAG_ROBUST");
 
+  wt::StressOptions stress;
+  std::string stressDevice;
+  bool stressJson = false;
+  CLI::App* stressCmd = app.add_subcommand("stress", "Numerical-stability stress suite: every row with its figure and pass/fail");
+  stressCmd->add_flag("--quick", stress.quick, "Small images and ray counts (the subset the tests run)");
+  stressCmd->add_option("--group", stress.groups,
+                        "Only these groups: transform, cracks, self-intersection, degenerate, materials, "
+                        "accumulation, non-finite (repeatable)");
+  stressCmd->add_option("--device", stressDevice, "Device index or name substring");
+  stressCmd->add_flag("--json", stressJson, "Machine-readable output");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -279,6 +296,7 @@ int main(int argc, char** argv) {
     }
     if (*devicesCmd) return runDevices();
     if (*benchCmd) return wt::runBench(bench);
+    if (*stressCmd) return wt::runStressCommand(stress, stressDevice, stressJson);
   } catch (const cl::Error& e) {
     wt::log::error(std::string("OpenCL call ") + e.what() + " failed: " + wt::clErrorName(e.err()));
     return 1;

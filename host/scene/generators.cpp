@@ -66,6 +66,47 @@ Scene makeIcosphere(int subdivisions, glm::vec3 center, float radius, const WtMa
   return scene;
 }
 
+Scene makeBox(glm::vec3 lo, glm::vec3 hi, const WtMaterial& material) {
+  Scene scene;
+  scene.sourceName = "box";
+  for (int i = 0; i < 8; ++i) {
+    glm::vec3 p((i & 1) ? hi.x : lo.x, (i & 2) ? hi.y : lo.y, (i & 4) ? hi.z : lo.z);
+    scene.positions.push_back(toVec4(p));
+    scene.normals.push_back({0, 0, 0, 0});
+    scene.texcoords.emplace_back(0.0f);
+  }
+  const unsigned faces[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
+                                {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+  for (const auto& f : faces) {
+    scene.triangles.push_back({f[0], f[1], f[2], 0});
+    scene.triangles.push_back({f[0], f[2], f[3], 0});
+  }
+  scene.materials.push_back(material);
+  scene.materialNames.push_back("box");
+  return scene;
+}
+
+Scene makeGrid(std::uint32_t n, glm::vec3 center, float half, glm::vec3 u, glm::vec3 v, const WtMaterial& material) {
+  Scene scene;
+  scene.sourceName = "grid";
+  for (std::uint32_t y = 0; y <= n; ++y)
+    for (std::uint32_t x = 0; x <= n; ++x) {
+      float a = half * (2.0f * float(x) / float(n) - 1.0f), b = half * (2.0f * float(y) / float(n) - 1.0f);
+      scene.positions.push_back(toVec4(center + a * u + b * v));
+      scene.normals.push_back({0, 0, 0, 0});
+      scene.texcoords.emplace_back(0.0f);
+    }
+  for (std::uint32_t y = 0; y < n; ++y)
+    for (std::uint32_t x = 0; x < n; ++x) {
+      std::uint32_t i = y * (n + 1) + x;
+      scene.triangles.push_back({i, i + 1, i + n + 2, 0});
+      scene.triangles.push_back({i, i + n + 2, i + n + 1, 0});
+    }
+  scene.materials.push_back(material);
+  scene.materialNames.push_back("grid");
+  return scene;
+}
+
 Scene makeTriangleSoup(std::uint32_t count, std::uint32_t seed, float maxEdge) {
   std::mt19937 rng(seed);
   std::uniform_real_distribution<float> unit(0.0f, 1.0f), edge(-maxEdge, maxEdge);

@@ -13,6 +13,15 @@ namespace wt {
 /// Outward winding, per-vertex normals, one material.
 Scene makeIcosphere(int subdivisions, glm::vec3 center, float radius, const WtMaterial& material);
 
+/// A closed axis-aligned box of 12 triangles over 8 shared corners, wound
+/// outwards, one material.
+Scene makeBox(glm::vec3 lo, glm::vec3 hi, const WtMaterial& material);
+
+/// A flat grid of n x n quads (2 n^2 triangles, shared vertices) spanning
+/// [-half, half]^2 about `center`, in the plane spanned by unit vectors u and
+/// v, wound towards u x v; one material.
+Scene makeGrid(std::uint32_t n, glm::vec3 center, float half, glm::vec3 u, glm::vec3 v, const WtMaterial& material);
+
 /// `count` random triangles inside the unit cube, edges up to `maxEdge`.
 Scene makeTriangleSoup(std::uint32_t count, std::uint32_t seed, float maxEdge = 0.1f);
 

@@ -899,10 +899,12 @@ class Converter {
     if (src.range > 0.0)
       m_scene.addWarning("light range is not supported (lights reach every distance, inverse square)");
     light.position = glm::vec3(world[3]);
+    if (!isFinite(light.position)) fail(nodeLabel + ": " + label + " is placed at a non-finite position");
+    // a point light has no direction, so a zero scale does not matter to it
     glm::vec3 forward = -glm::vec3(world[2]);
-    if (!(glm::length(forward) > 0.0f) || !std::isfinite(glm::length(forward)))
+    if (light.type != WT_LIGHT_POINT && (!(glm::length(forward) > 0.0f) || !std::isfinite(glm::length(forward))))
       fail(nodeLabel + ": the transform of " + label + " has no direction (zero scale)");
-    light.direction = glm::normalize(forward);
+    if (light.type != WT_LIGHT_POINT) light.direction = glm::normalize(forward);
     if (light.type == WT_LIGHT_SPOT) {
       light.innerConeAngle = float(src.spot.innerConeAngle);
       light.outerConeAngle = float(src.spot.outerConeAngle);
@@ -926,6 +928,11 @@ class Converter {
     const tinygltf::Camera& src = m_model.cameras[std::size_t(node.camera)];
     const std::string label = "camera " + std::to_string(node.camera);
 
+    // the camera's axes come from its node: they must exist
+    const double determinant = glm::determinant(glm::dmat3(world));
+    if (!(std::abs(determinant) > 0.0) || !std::isfinite(determinant) || !std::isfinite(world[3].x + world[3].y + world[3].z))
+      fail(label + " (node " + std::to_string(nodeIndex) + "): its node's transform is singular or not finite "
+           "(a zero scale), so the camera has no view direction");
     CameraDesc desc;
     m_cameraWorld = world;  // shifted to the origin once it is chosen
     desc.cameraToWorld = glm::mat4(world);

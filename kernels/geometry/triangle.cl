@@ -107,9 +107,18 @@ inline void triangle_surface(float3 p0, float3 p1, float3 p2, float3 n0, float3 
                              float3* n_geometric, float3* n_shading) {
   float b0 = 1.0f - b1 - b2;
   *position = triangle_point(p0, p1, p2, b1, b2, position_error);
-  float3 ng = cross(p1 - p0, p2 - p0);
+  float3 e1 = p1 - p0, e2 = p2 - p0;
+  float3 ng = cross(e1, e2);
   float len = length(ng);
-  *n_geometric = len > 0.0f ? ng / len : (float3)(0.0f);
+  if (!(len > 1e-30f && len < 1e30f)) {
+    // the cross product under- or overflowed (edges below 1e-15 or above
+    // 1e15): take it again with the edges scaled to about unit length
+    float3 a1 = fabs(e1), a2 = fabs(e2);
+    float scale = 1.0f / fmax(fmax(fmax(a1.x, a1.y), a1.z), fmax(fmax(a2.x, a2.y), a2.z));
+    ng = cross(e1 * scale, e2 * scale);
+    len = length(ng);
+  }
+  *n_geometric = (len > 0.0f && isfinite(len)) ? ng / len : (float3)(0.0f);
   float3 ns = b0 * n0 + b1 * n1 + b2 * n2;
   bool has_normals = dot(n0, n0) > 0.0f && dot(n1, n1) > 0.0f && dot(n2, n2) > 0.0f;
   float ns_len = length(ns);

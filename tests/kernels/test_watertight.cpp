@@ -12,25 +12,6 @@
 namespace wt {
 namespace {
 
-/// A closed box from 12 triangles with shared corners.
-Scene makeBox(glm::vec3 lo, glm::vec3 hi) {
-  Scene scene;
-  for (int i = 0; i < 8; ++i) {
-    glm::vec3 p((i & 1) ? hi.x : lo.x, (i & 2) ? hi.y : lo.y, (i & 4) ? hi.z : lo.z);
-    scene.positions.push_back({p.x, p.y, p.z, 0});
-    scene.normals.push_back({0, 0, 0, 0});
-    scene.texcoords.emplace_back(0.0f);
-  }
-  const unsigned faces[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
-                                {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
-  for (const auto& f : faces) {
-    scene.triangles.push_back({f[0], f[1], f[2], 0});
-    scene.triangles.push_back({f[0], f[2], f[3], 0});
-  }
-  scene.materials.push_back(makeMaterial(glm::vec3(0.5f)));
-  return scene;
-}
-
 /// Every vertex, every edge midpoint and random points along every edge.
 std::vector<glm::vec3> edgeTargets(const Scene& scene, std::uint32_t seed, int perEdge) {
   std::mt19937 rng(seed);
@@ -81,7 +62,7 @@ TEST(Watertight, IcosphereFromInside) {
 }
 
 TEST(Watertight, BoxFromInsideAndOutside) {
-  Scene scene = makeBox(glm::vec3(-1.0f), glm::vec3(1.0f));
+  Scene scene = makeBox(glm::vec3(-1.0f), glm::vec3(1.0f), makeMaterial(glm::vec3(0.5f)));
   // inside, and outside on a diagonal so that every target is in front of a face
   std::vector<glm::vec3> inside = {glm::vec3(0.0f), glm::vec3(0.25f, -0.5f, 0.125f)};
   EXPECT_EQ(countLeaks(scene, inside, edgeTargets(scene, 2, 64)), 0);

@@ -1,0 +1,51 @@
+// The numerical-stability stress suite (issue 5): each row puts one part of
+// the renderer where float arithmetic is weakest and measures whether it
+// holds, with a pass criterion stated next to the figure. `wavetrace stress`
+// prints every row; the tests run the quick variant of each group.
+#pragma once
+
+#include "device/context.h"
+
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace wt {
+
+struct StressRow {
+  std::string group;      ///< "transform", "cracks", "self-intersection", "degenerate", "materials", "accumulation", "non-finite"
+  std::string name;       ///< the case
+  std::string figure;     ///< what was measured
+  std::string criterion;  ///< what passing means
+  bool pass = false;
+  double seconds = 0.0;
+};
+
+struct StressOptions {
+  bool quick = false;  ///< small images and ray counts (the CTest subset)
+  std::vector<std::string> groups;  ///< empty: every group
+};
+
+using StressGroup = std::vector<StressRow> (*)(Context&, const StressOptions&);
+
+/// The groups by name, in the order `wavetrace stress` runs them.
+const std::vector<std::pair<std::string, StressGroup>>& stressGroups();
+
+/// Run the selected groups; `onRow` sees each row as it is finished.
+std::vector<StressRow> runStress(Context& context, const StressOptions& options,
+                                 const std::function<void(const StressRow&)>& onRow = {});
+
+/// `wavetrace stress`: every row printed with its figure and criterion (or
+/// JSON); returns 1 when any row fails.
+int runStressCommand(const StressOptions& options, const std::string& device, bool json);
+
+// The groups (host/stress/*.cpp).
+std::vector<StressRow> stressTransforms(Context&, const StressOptions&);       ///< translated and scaled scenes render the same image
+std::vector<StressRow> stressCracks(Context&, const StressOptions&);           ///< rays at shared edges and vertices of closed meshes never leak
+std::vector<StressRow> stressSelfIntersection(Context&, const StressOptions&); ///< re-spawned grazing rays never find the surface they left
+std::vector<StressRow> stressDegenerate(Context&, const StressOptions&);       ///< degenerate files: a warning or a clear error, never a NaN
+std::vector<StressRow> stressMaterials(Context&, const StressOptions&);        ///< material extremes in a furnace: no NaN, no energy gain
+std::vector<StressRow> stressAccumulation(Context&, const StressOptions&);     ///< 2^20 samples per precision mode against double
+std::vector<StressRow> stressNonFinite(Context&, const StressOptions&);        ///< NaN samples are counted, reported and never accumulated
+
+}  // namespace wt
