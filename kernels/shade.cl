@@ -1,12 +1,12 @@
 // Stage 3: at each path's hit, emission (MIS-weighted against light
 // sampling), next-event estimation into the shadow queue, then (below the
-// bounce limit) a new direction from the material and Russian roulette;
+// bounce limits) a new direction from the material and Russian roulette;
 // surviving paths are appended to the output queue.
 #include "common.h"
 #include "geometry/triangle.cl"
 #include "lights/light_sampling.cl"
 #include "sampler.cl"
-#include "materials/lambert.cl"
+#include "materials/bsdf.cl"
 
 /// Weight of emission found by BSDF sampling (pdf_bsdf, solid angle) from a
 /// light that NEE could also have sampled with pdf_light (0: NEE cannot).
@@ -38,7 +38,8 @@ __kernel void shade(WtFrameParams frame, WtEnvironment environment, __global con
                     __global const WtMaterial* materials, __global const WtLight* lights,
                     __global const WtAliasSlot* alias, __global const float* emitter_pdf_area,
                     __global uint* shadow_queue, __global float4* shadow_o,
-                    __global float4* shadow_d, __global float4* shadow_radiance) {
+                    __global float4* shadow_d, __global float4* shadow_radiance,
+                    __global const float* pbr_table, __global uint* bounce_counts) {
   uint i = get_global_id(0);
   if (i >= counters[in_slot]) return;
   uint path = queue_in[i];
@@ -84,8 +85,20 @@ __kernel void shade(WtFrameParams frame, WtEnvironment environment, __global con
   float3 wo = -dir;
   if (dot(ng, wo) < 0.0f) ng = -ng;
   if (dot(ns, ng) < 0.0f) ns = -ns;
-  float3 albedo = vec4_xyz(material.base_color);
+  // a shading normal turned away from the viewer gives way to the geometric one
+  if (dot(ns, wo) <= 0.0f) ns = ng;
+  float3 frame_t, frame_b;
+  frame_from_normal(ns, &frame_t, &frame_b);
+  float3 wo_local = (float3)(dot(wo, frame_t), dot(wo, frame_b), dot(wo, ns));
+  Bsdf bsdf = bsdf_make(material, pbr_table);
   float3 origin = ray_offset_origin(p, p_error, ng);
+
+  // the lobes this path may still scatter by: diffuse bounces so far in the
+  // low 16 bits of its count, specular ones in the high 16
+  uint counts = bounce_counts[path];
+  uint lobes = ((counts & 0xffffu) < frame.max_diffuse_bounces ? WT_LOBE_DIFFUSE : 0u) |
+               ((counts >> 16) < frame.max_specular_bounces ? WT_LOBE_SPECULAR : 0u);
+  if (lobes == 0u) return;
 
   // next-event estimation: the full light list by power (path), or one
   // uniformly chosen analytic light (minimal)
@@ -104,14 +117,18 @@ __kernel void shade(WtFrameParams frame, WtEnvironment environment, __global con
     LightSample s;
     float u1 = sampler_get(frame, path, 4u);
     float u2 = sampler_get(frame, path, 5u);
-    float cos_s;
-    if (pmf > 0.0f && light_sample(ls, index, p, u1, u2, &s) && (cos_s = dot(ns, s.wi)) > 0.0f &&
-        dot(ng, s.wi) > 0.0f) {
+    float3 f_cos = (float3)(0.0f);
+    float pdf_bsdf = 0.0f;
+    if (pmf > 0.0f && light_sample(ls, index, p, u1, u2, &s) && dot(ng, s.wi) > 0.0f) {
+      float3 wi_local = (float3)(dot(s.wi, frame_t), dot(s.wi, frame_b), dot(s.wi, ns));
+      f_cos = bsdf_eval(bsdf, wo_local, wi_local, lobes, &pdf_bsdf);
+    }
+    if (f_cos.x > 0.0f || f_cos.y > 0.0f || f_cos.z > 0.0f) {
       float pdf_light = s.pdf * pmf;
       float w = (s.is_delta || !(frame.flags & WT_FLAG_MIS) || WT_INTEGRATOR_MINIMAL)
                     ? 1.0f
-                    : mis_weight(pdf_light, cos_s / WT_PI, frame.flags);
-      float3 contribution = beta * albedo * (cos_s / WT_PI) * s.radiance * (w / pdf_light);
+                    : mis_weight(pdf_light, pdf_bsdf, frame.flags);
+      float3 contribution = beta * f_cos * s.radiance * (w / pdf_light);
       shade_check_finite(frame, counters, path, contribution, WT_NONFINITE_LIGHT);
       if (contribution.x > 0.0f || contribution.y > 0.0f || contribution.z > 0.0f) {
         // Aim from the offset origin at the target (the sampled point pushed
@@ -140,13 +157,15 @@ __kernel void shade(WtFrameParams frame, WtEnvironment environment, __global con
     }
   }
 
-  // Lambertian bounce; a direction below the geometric surface is absorbed
-  float u1 = sampler_get(frame, path, 2u);
-  float u2 = sampler_get(frame, path, 3u);
-  float3 wi = lambert_sample(ns, u1, u2);
-  float cos_i = dot(wi, ns);
-  if (dot(wi, ng) <= 0.0f || cos_i <= 0.0f) return;
-  beta *= albedo;
+  // the next direction from the BSDF; one below the geometric surface is absorbed
+  BsdfSample bs;
+  if (!bsdf_sample(bsdf, wo_local, lobes, sampler_get(frame, path, 8u), sampler_get(frame, path, 2u),
+                   sampler_get(frame, path, 3u), &bs))
+    return;
+  float3 wi = bs.wi.x * frame_t + bs.wi.y * frame_b + bs.wi.z * ns;
+  if (dot(wi, ng) <= 0.0f) return;
+  beta *= bs.weight;
+  counts += (bs.lobe & WT_LOBE_DIFFUSE) ? 1u : 0x10000u;
 
   // Russian roulette: survive with probability from the throughput, reweight
   if (!WT_INTEGRATOR_MINIMAL && (frame.flags & WT_FLAG_RR) && frame.bounce >= frame.rr_min_depth) {
@@ -157,7 +176,8 @@ __kernel void shade(WtFrameParams frame, WtEnvironment environment, __global con
   shade_check_finite(frame, counters, path, beta, WT_NONFINITE_THROUGHPUT);
   if (beta.x <= 0.0f && beta.y <= 0.0f && beta.z <= 0.0f) return;
 
-  throughput[path] = (float4)(beta, cos_i / WT_PI);
+  throughput[path] = (float4)(beta, bs.pdf);
+  bounce_counts[path] = counts;
   ray_o[path] = (float4)(origin, 0.0f);
   ray_d[path] = (float4)(wi, INFINITY);
   uint slot = atomic_inc(&counters[out_slot]);

@@ -89,3 +89,34 @@ __kernel void test_accumulate(uint count, uint samples, uint mode, uint distribu
 #endif
   out_mean[i] = mean.x;
 }
+
+#include "materials/bsdf.cl"
+
+// bsdf_sample for `count` triples of uniforms (u_lobe, u1, u2): the local
+// direction and mixture pdf (w = -1: nothing sampled), the weight and lobe.
+__kernel void test_bsdf_sample(uint count, WtMaterial material, float4 wo, uint lobes,
+                               __global const float* table, __global const float4* u,
+                               __global float4* wi_pdf, __global float4* weight_lobe) {
+  uint i = get_global_id(0);
+  if (i >= count) return;
+  Bsdf b = bsdf_make(material, table);
+  BsdfSample s;
+  if (bsdf_sample(b, wo.xyz, lobes, u[i].x, u[i].y, u[i].z, &s)) {
+    wi_pdf[i] = (float4)(s.wi, s.pdf);
+    weight_lobe[i] = (float4)(s.weight, as_float(s.lobe));
+  } else {
+    wi_pdf[i] = (float4)(0.0f, 0.0f, 0.0f, -1.0f);
+    weight_lobe[i] = (float4)(0.0f);
+  }
+}
+
+// bsdf_eval for `count` local directions: f cos and the mixture pdf.
+__kernel void test_bsdf_eval(uint count, WtMaterial material, float4 wo, uint lobes,
+                             __global const float* table, __global const float4* wi, __global float4* out) {
+  uint i = get_global_id(0);
+  if (i >= count) return;
+  Bsdf b = bsdf_make(material, table);
+  float pdf;
+  float3 f = bsdf_eval(b, wo.xyz, wi[i].xyz, lobes, &pdf);
+  out[i] = (float4)(f, pdf);
+}

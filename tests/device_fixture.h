@@ -20,7 +20,11 @@ inline Context& deviceContext() {
 
 /// kernels/unit_tests.cl: small kernels exposing shared device code, built once.
 inline cl::Program unitTestProgram() {
-  static cl::Program program = buildProgram(deviceContext(), KernelFeatures{}, "unit_tests.cl");
+  static cl::Program program = [] {
+    KernelFeatures features;
+    features.pbr = true;  // the metallic-roughness BSDF's tests need it compiled in
+    return buildProgram(deviceContext(), features, "unit_tests.cl");
+  }();
   return program;
 }
 

@@ -91,6 +91,7 @@ std::vector<std::string> kernelDefines(const KernelFeatures& features) {
   return {
       "-D WT_INTEGRATOR_MINIMAL=" + std::string(features.integratorMinimal ? "1" : "0"),
       "-D WT_BVH_STACK_SIZE=" + std::to_string(features.bvhStackSize),
+      "-D WT_HAS_PBR=" + std::string(features.pbr ? "1" : "0"),
   };
 }
 

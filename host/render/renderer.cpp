@@ -1,6 +1,7 @@
 #include "render/renderer.h"
 
 #include "device/program.h"
+#include "render/material_tables.h"
 
 #include <algorithm>
 #include <chrono>
@@ -17,6 +18,10 @@ WtFrameParams frameParams(const RenderSettings& s, const LightList& lights, int 
   p.sample = cl_uint(sample);
   p.bounce = cl_uint(bounce);
   p.max_bounces = cl_uint(s.maxBounces);
+  auto lobeLimit = [&](int limit) { return cl_uint(limit < 0 ? s.maxBounces : std::min(limit, s.maxBounces)); };
+  p.max_diffuse_bounces = lobeLimit(s.maxDiffuseBounces);
+  p.max_specular_bounces = lobeLimit(s.maxSpecularBounces);
+  p.max_transmission_bounces = lobeLimit(s.maxTransmissionBounces);
   p.seed = s.seed;
   p.exposure = std::exp2(s.exposureStops);
   p.light_count = lights.sampleable ? cl_uint(lights.lights.size()) : 0u;
@@ -51,6 +56,8 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
   KernelFeatures features;
   features.integratorMinimal = settings.integrator == Integrator::Minimal;
   features.bvhStackSize = m_scene->stackSize();
+  features.pbr = std::any_of(scene.materials.begin(), scene.materials.end(),
+                             [](const WtMaterial& m) { return m.model == WT_MATERIAL_PBR; });
   m_program = buildProgram(context, features);
   m_generate = cl::Kernel(m_program, "generate");
   m_extend = cl::Kernel(m_program, "extend");
@@ -73,6 +80,7 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
   m_counters = cl::Buffer(ctx, CL_MEM_READ_WRITE, WT_COUNTER_COUNT * sizeof(cl_uint));
   m_state = make(64), m_mean = make(16), m_m2 = make(16), m_sampleCount = make(4), m_pixels = make(4);
   m_shadowQueue = make(4), m_shadowO = make(16), m_shadowD = make(16), m_shadowRadiance = make(16);
+  m_bounceCounts = make(4);
   auto upload = [&](const auto& data) {
     using T = typename std::decay_t<decltype(data)>::value_type;
     std::size_t bytes = std::max<std::size_t>(data.size(), 1) * sizeof(T);
@@ -80,6 +88,7 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
     if (!data.empty()) context.queue().enqueueWriteBuffer(b, CL_TRUE, 0, data.size() * sizeof(T), data.data());
     return b;
   };
+  m_pbrTable = upload(pbrAlbedoTable());
   m_lightBuffer = upload(m_lights.lights);
   m_aliasBuffer = upload(m_lights.alias);
   m_emitterPdfBuffer = upload(m_lights.emitterPdfArea);
@@ -102,7 +111,7 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
 
   // Arguments that never change; per-launch ones are set in renderSample().
   int a = 2;  // generate: frame, camera set per pass
-  for (cl::Buffer* b : {&m_rayO, &m_rayD, &m_throughput, &m_radiance, &m_queueA, &m_counters})
+  for (cl::Buffer* b : {&m_rayO, &m_rayD, &m_throughput, &m_radiance, &m_queueA, &m_counters, &m_bounceCounts})
     m_generate.setArg(a++, *b);
 
   m_extend.setArg(0, m_counters);
@@ -123,7 +132,7 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
   for (cl::Buffer* b : {&m_rayO, &m_rayD, &m_hits, &m_throughput, &m_radiance, &m_scene->triangles,
                         &m_scene->triVerts, &m_scene->normals, &m_scene->materials, &m_lightBuffer,
                         &m_aliasBuffer, &m_emitterPdfBuffer, &m_shadowQueue, &m_shadowO, &m_shadowD,
-                        &m_shadowRadiance})
+                        &m_shadowRadiance, &m_pbrTable, &m_bounceCounts})
     m_shade.setArg(a++, *b);
 
   a = 0;

@@ -30,6 +30,9 @@ struct RenderSettings {
   int height = 512;
   int samplesPerPixel = 64;
   int maxBounces = 8;       ///< hits shaded after the camera hit (0: direct view of emitters only)
+  int maxDiffuseBounces = -1;       ///< diffuse (cosine-sampled) bounces a path may take; -1: maxBounces
+  int maxSpecularBounces = -1;      ///< specular (GGX, mirror) bounces; -1: maxBounces
+  int maxTransmissionBounces = -1;  ///< transmission bounces (no transmitting material yet); -1: maxBounces
   std::uint32_t seed = 0;
   float exposureStops = 0.0f;
   glm::vec3 background{0.0f};  ///< constant environment radiance seen by escaping paths (without environmentMap)
@@ -106,6 +109,7 @@ class Renderer {
   cl::Buffer m_envTexels, m_envMarginal, m_envConditional;
   cl::Buffer m_lightBuffer, m_aliasBuffer, m_emitterPdfBuffer;
   cl::Buffer m_shadowQueue, m_shadowO, m_shadowD, m_shadowRadiance;
+  cl::Buffer m_pbrTable, m_bounceCounts;
   // path state (structure of arrays, one entry per pixel)
   cl::Buffer m_rayO, m_rayD, m_hits, m_throughput, m_radiance;
   cl::Buffer m_queueA, m_queueB, m_counters;

@@ -1,5 +1,6 @@
 #include "scene/generators.h"
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <random>
@@ -16,6 +17,16 @@ WtMaterial makeMaterial(glm::vec3 albedo, glm::vec3 emission, bool twoSided) {
   WtMaterial m{};
   m.base_color = toVec4(albedo);
   m.emission = toVec4(emission, twoSided ? 1.0f : 0.0f);
+  m.roughness = 1.0f;
+  m.model = WT_MATERIAL_DIFFUSE;
+  return m;
+}
+
+WtMaterial makePbrMaterial(glm::vec3 baseColor, float metallic, float roughness, glm::vec3 emission, bool twoSided) {
+  WtMaterial m = makeMaterial(glm::clamp(baseColor, glm::vec3(0.0f), glm::vec3(1.0f)), emission, twoSided);
+  m.base_color.w = std::clamp(metallic, 0.0f, 1.0f);
+  m.roughness = std::clamp(roughness, 0.0f, 1.0f);
+  m.model = WT_MATERIAL_PBR;
   return m;
 }
 

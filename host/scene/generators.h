@@ -35,4 +35,8 @@ void appendScene(Scene& dst, const Scene& src);
 /// A Lambertian material; emission from the front face only unless twoSided.
 WtMaterial makeMaterial(glm::vec3 albedo, glm::vec3 emission = glm::vec3(0.0f), bool twoSided = false);
 
+/// A glTF metallic-roughness material (values clamped to [0,1]).
+WtMaterial makePbrMaterial(glm::vec3 baseColor, float metallic, float roughness,
+                           glm::vec3 emission = glm::vec3(0.0f), bool twoSided = false);
+
 }  // namespace wt

@@ -4,6 +4,8 @@
 // sparse accessors at all).
 #include "scene/gltf_loader.h"
 
+#include "scene/generators.h"
+
 #include <tiny_gltf.h>
 
 #include <glm/gtc/matrix_transform.hpp>
@@ -44,7 +46,6 @@ constexpr std::size_t kMaxUnbackedElements = std::size_t(1) << 26;
 constexpr std::uint32_t kGlbMagic = 0x46546C67;      // "glTF"
 constexpr std::uint32_t kGlbChunkJson = 0x4E4F534A;  // "JSON"
 constexpr std::uint32_t kGlbChunkBin = 0x004E4942;   // "BIN\0"
-constexpr float kDefaultAlbedo = 0.8f;
 
 using tinygltf::Accessor;
 using tinygltf::Model;
@@ -297,9 +298,8 @@ class Converter {
   std::uint32_t defaultMaterial() {
     if (m_defaultMaterial < 0) {
       m_defaultMaterial = int(m_scene.materials.size());
-      WtMaterial grey{};
-      grey.base_color = {kDefaultAlbedo, kDefaultAlbedo, kDefaultAlbedo, 0.0f};
-      m_scene.materials.push_back(grey);
+      // the specification's default material: every factor at its default
+      m_scene.materials.push_back(makePbrMaterial(glm::vec3(1.0f), 1.0f, 1.0f));
       m_scene.materialNames.push_back("default");
     }
     return std::uint32_t(m_defaultMaterial);
@@ -338,22 +338,23 @@ class Converter {
         emission = glm::max(emission, glm::vec3(0.0f));
       }
 
-      // features a Lambertian material cannot show
+      auto unitFactor = [&](double v, const char* what) {
+        if (!std::isfinite(v)) fail(label + ": " + what + " is not finite");
+        if (v < 0.0 || v > 1.0) m_scene.addWarning(label + ": " + what + " " + std::to_string(v) + " is outside [0,1]; clamped");
+        return float(std::clamp(v, 0.0, 1.0));
+      };
+      const float metallic = unitFactor(pbr.metallicFactor, "metallicFactor");
+      const float roughness = unitFactor(pbr.roughnessFactor, "roughnessFactor");
+
       if (pbr.baseColorTexture.index >= 0 || pbr.metallicRoughnessTexture.index >= 0 ||
           src.normalTexture.index >= 0 || src.occlusionTexture.index >= 0 ||
           src.emissiveTexture.index >= 0)
         m_scene.addWarning("material textures are not supported yet; ignored");
-      // A rough dielectric (metallic 0, roughness 1) is what Lambert draws.
-      if (pbr.metallicFactor > 0.0 || pbr.roughnessFactor < 1.0)
-        m_scene.addWarning(
-            "metallicFactor/roughnessFactor are not supported yet (materials are Lambertian); ignored");
       if (src.alphaMode != "OPAQUE")
         m_scene.addWarning("alphaMode " + src.alphaMode + " is not supported yet; drawn as OPAQUE");
 
-      WtMaterial material{};
-      material.base_color = {clamped.x, clamped.y, clamped.z, 0.0f};
       // glTF draws a single-sided material's back face not at all: it emits from the front only
-      material.emission = {emission.x, emission.y, emission.z, src.doubleSided ? 1.0f : 0.0f};
+      WtMaterial material = makePbrMaterial(clamped, metallic, roughness, emission, src.doubleSided);
       m_scene.materials.push_back(material);
       m_scene.materialNames.push_back(src.name.empty() ? "material " + std::to_string(i) : src.name);
     }

@@ -375,8 +375,10 @@ GltfDoc furnaceDoc(const MaterialCase& c) {
   for (const WtTriangle& t : sphere.triangles)
     idx.insert(idx.end(), {std::uint16_t(t.v0), std::uint16_t(t.v1), std::uint16_t(t.v2)});
   int spherePos = doc.addVec3(p), sphereNrm = doc.addVec3(n), sphereIdx = doc.addIndices(idx);
-  doc.materials.push_back("{\"name\":\"white floor\",\"pbrMetallicRoughness\":{\"baseColorFactor\":[1,1,1,1],"
-                          "\"metallicFactor\":0,\"roughnessFactor\":1}}");
+  // the floor: white and rough, or the sphere's own material for the grazing view
+  doc.materials.push_back(c.grazing ? c.material
+                                    : "{\"name\":\"white floor\",\"pbrMetallicRoughness\":{\"baseColorFactor\":[1,1,1,1],"
+                                      "\"metallicFactor\":0,\"roughnessFactor\":1}}");
   doc.materials.push_back(c.material);
   doc.addMesh("{\"attributes\":{\"POSITION\":" + str(std::size_t(floorPos)) + "},\"indices\":" +
               str(std::size_t(floorIdx)) + ",\"material\":0}");
@@ -403,21 +405,36 @@ std::string pbr(const std::string& baseColor, double metallic, double roughness,
 
 std::vector<StressRow> stressMaterials(Context& context, const StressOptions& options) {
   const std::string white = "1,1,1,1";
-  std::vector<MaterialCase> cases = {
-      {"albedo 1 (the largest glTF allows)", pbr(white, 0, 1)},
-      {"albedo 0 (black)", pbr("0,0,0,1", 0, 1)},
-      {"albedo 1.5 in the file (outside [0,1])", pbr("1.5,1.5,1.5,1", 0, 1), MaterialCase::kFile, false, "clamped"},
-      {"roughness 0", pbr(white, 0, 0), MaterialCase::kFile, false, "roughnessFactor are not supported"},
-      {"roughness 1e-7", pbr(white, 0, 1e-7)},
-      {"metallic 1, roughness 0", pbr(white, 1, 0)},
-      {"ior 1 (KHR_materials_ior)", pbr(white, 0, 0.5, ",\"extensions\":{\"KHR_materials_ior\":{\"ior\":1.0}}"),
-       MaterialCase::kFile, false, "KHR_materials_ior is not supported", "[\"KHR_materials_ior\"]"},
-      {"ior 3 (KHR_materials_ior)", pbr(white, 0, 0.5, ",\"extensions\":{\"KHR_materials_ior\":{\"ior\":3.0}}"),
-       MaterialCase::kFile, false, "KHR_materials_ior is not supported", "[\"KHR_materials_ior\"]"},
-      {"back-facing shading normals", pbr(white, 0, 1), MaterialCase::kBackFacing},
-      {"shading normals tangent to the surface", pbr(white, 0, 1), MaterialCase::kTangent},
-      {"grazing view along the floor", pbr(white, 0, 1), MaterialCase::kFile, true},
+  auto make = [](std::string name, std::string material, std::string warning = "") {
+    MaterialCase c;
+    c.name = std::move(name);
+    c.material = std::move(material);
+    c.warning = std::move(warning);
+    return c;
   };
+  std::vector<MaterialCase> cases = {
+      make("white dielectric, roughness 1", pbr(white, 0, 1)),
+      make("white dielectric, roughness 0 (a mirror coat)", pbr(white, 0, 0)),
+      make("white metal, roughness 1 (multiple-scattering compensation at its largest)", pbr(white, 1, 1)),
+      make("white metal, roughness 0 (a perfect mirror)", pbr(white, 1, 0)),
+      make("white metal, roughness 1e-7", pbr(white, 1, 1e-7)),
+      make("white metal, roughness 0.0317 (the smoothest GGX: alpha 1e-3)", pbr(white, 1, 0.0317)),
+      make("black (base colour 0)", pbr("0,0,0,1", 0, 0.5)),
+      make("base colour 1.5 in the file", pbr("1.5,1.5,1.5,1", 0, 1), "clamped"),
+      make("metallic 1.5 and roughness -0.2 in the file", pbr(white, 1.5, -0.2), "metallicFactor 1.500000 is outside [0,1]; clamped"),
+      make("ior 1 (KHR_materials_ior)", pbr(white, 0, 0.5, ",\"extensions\":{\"KHR_materials_ior\":{\"ior\":1.0}}"),
+           "KHR_materials_ior is not supported"),
+      make("ior 3 (KHR_materials_ior)", pbr(white, 0, 0.5, ",\"extensions\":{\"KHR_materials_ior\":{\"ior\":3.0}}"),
+           "KHR_materials_ior is not supported"),
+  };
+  cases[9].extensions = cases[10].extensions = "[\"KHR_materials_ior\"]";
+  MaterialCase backFacing = make("back-facing shading normals (glossy metal)", pbr(white, 1, 0.3));
+  backFacing.normals = MaterialCase::kBackFacing;
+  MaterialCase tangent = make("shading normals tangent to the surface (glossy metal)", pbr(white, 1, 0.3));
+  tangent.normals = MaterialCase::kTangent;
+  MaterialCase grazing = make("grazing view along the floor (glossy metal floor and sphere)", pbr(white, 1, 0.2));
+  grazing.grazing = true;
+  cases.insert(cases.end(), {backFacing, tangent, grazing});
   RenderSettings settings;
   settings.width = settings.height = options.quick ? 24 : 48;
   settings.samplesPerPixel = options.quick ? 32 : 256;
@@ -480,11 +497,11 @@ std::vector<StressRow> stressMaterials(Context& context, const StressOptions& op
 
 std::vector<StressRow> stressNonFinite(Context& context, const StressOptions& options) {
   auto start = std::chrono::steady_clock::now();
-  // a floor whose albedo is NaN (the loader refuses such a file, so the scene
-  // is made in code) under the view's lower half: its paths all turn NaN
+  // a floor whose albedo is NaN in red (the loader refuses such a file, so
+  // the scene is made in code) under the view's lower half: its paths turn NaN
   Scene scene;
   appendScene(scene, makeGrid(1, glm::vec3(0.0f), 50.0f, glm::vec3(0, 0, 1), glm::vec3(1, 0, 0),
-                              makeMaterial(glm::vec3(std::nanf("")))));
+                              makeMaterial(glm::vec3(std::nanf(""), 0.5f, 0.5f))));
   CameraDesc camera;
   camera.cameraToWorld = glm::translate(glm::mat4(1.0f), glm::vec3(0.0f, 1.0f, 0.0f));
   scene.camera = camera;

@@ -47,11 +47,18 @@ typedef struct WtBvh4Node {
 } WtBvh4Node;
 #define WT_BVH4_EMPTY 0xffffffffu
 
-/// Lambertian surface with emission (the full material model comes later).
+/// A surface: Lambertian (scenes made in code, analytic tests) or glTF
+/// metallic-roughness (kernels/materials/bsdf.cl), with emission.
 typedef struct WtMaterial {
-  WtVec4 base_color;  ///< linear RGB albedo in [0,1]; w unused
+  WtVec4 base_color;  ///< linear RGB base colour in [0,1]; w = metallic in [0,1] (PBR only)
   WtVec4 emission;    ///< emitted radiance (nits) per channel (factor x strength); w = 1: both faces emit (doubleSided), 0: the front face only (counter-clockwise winding)
+  float roughness;    ///< perceptual roughness in [0,1], alpha = roughness^2 (PBR only)
+  wt_uint model;      ///< WT_MATERIAL_*
+  wt_uint pad0, pad1;
 } WtMaterial;
+
+#define WT_MATERIAL_DIFFUSE 0u  ///< Lambertian: base_color / pi
+#define WT_MATERIAL_PBR 1u      ///< glTF 2.0 metallic-roughness
 
 #define WT_CAMERA_PERSPECTIVE 0
 #define WT_CAMERA_ORTHOGRAPHIC 1
@@ -76,14 +83,15 @@ typedef struct WtFrameParams {
   wt_uint max_bounces;  ///< last bounce whose hit is shaded
   wt_uint seed;         ///< user seed
   float exposure;       ///< tonemap scale, 2^stops
-  wt_uint pad0;
+  wt_uint max_diffuse_bounces;   ///< diffuse bounces a path may take (cosine-sampled directions)
   wt_uint light_count;     ///< entries in the light list (0: no light sampling)
   wt_uint analytic_count;  ///< lights [0, analytic_count) are point, spot or directional
   wt_uint flags;           ///< WT_FLAG_* integrator switches
   wt_uint rr_min_depth;    ///< Russian roulette starts at this bounce
   float env_pmf;           ///< probability that light selection picks the environment (0: not a light)
   wt_uint accumulate_mode; ///< WT_ACCUMULATE_*
-  wt_uint pad2, pad3;
+  wt_uint max_specular_bounces;     ///< specular bounces a path may take (GGX and mirror directions)
+  wt_uint max_transmission_bounces; ///< transmission bounces (no transmitting material yet)
 } WtFrameParams;
 
 /// Precision of the per-pixel running mean (WtFrameParams::accumulate_mode).

@@ -58,9 +58,9 @@ TEST(EndToEnd, CornellIsFiniteAndLit) {
 }
 
 TEST(EndToEnd, NonFiniteSamplesAreCountedNotAccumulated) {
-  // a floor whose albedo is NaN (the loader would refuse it), filling the
-  // lower half of the view: every path that bounces off it turns NaN
-  Scene scene = test::makeFloor(50.0f, 0.0f, makeMaterial(glm::vec3(std::nanf(""))));
+  // a floor whose albedo is NaN in red (the loader would refuse it), filling
+  // the lower half of the view: every path that bounces off it turns NaN
+  Scene scene = test::makeFloor(50.0f, 0.0f, makeMaterial(glm::vec3(std::nanf(""), 0.5f, 0.5f)));
   CameraDesc cam;
   cam.cameraToWorld = glm::translate(glm::mat4(1.0f), glm::vec3(0.0f, 1.0f, 0.0f));
   scene.camera = cam;
@@ -88,7 +88,7 @@ TEST(EndToEnd, NonFiniteSamplesAreCountedNotAccumulated) {
 TEST(EndToEnd, StopOnNonFiniteNamesThePixelSampleAndBounce) {
   // the NaN floor again, seen only in the bottom rows: the first NaN is made
   // at the camera ray's hit (bounce 0) of sample 0, in the bottom half
-  Scene scene = test::makeFloor(50.0f, 0.0f, makeMaterial(glm::vec3(std::nanf(""))));
+  Scene scene = test::makeFloor(50.0f, 0.0f, makeMaterial(glm::vec3(std::nanf(""), 0.5f, 0.5f)));
   CameraDesc cam;
   cam.cameraToWorld = glm::translate(glm::mat4(1.0f), glm::vec3(0.0f, 1.0f, 0.0f));
   scene.camera = cam;

@@ -148,10 +148,13 @@ TEST(GltfLoader, SingleTriangleIndexed) {
   // no NORMAL / TEXCOORD_0: the "none" values
   expectNear(nrm(s, 0), {0, 0, 0});
   EXPECT_EQ(s.texcoords[2], glm::vec2(0.0f));
-  // no material: one default grey
+  // no material: the specification's default (white, metallic 1, roughness 1)
   ASSERT_EQ(s.materials.size(), 1u);
   EXPECT_EQ(s.materialNames[0], "default");
-  EXPECT_FLOAT_EQ(s.materials[0].base_color.y, 0.8f);
+  EXPECT_EQ(s.materials[0].model, WT_MATERIAL_PBR);
+  EXPECT_FLOAT_EQ(s.materials[0].base_color.y, 1.0f);
+  EXPECT_FLOAT_EQ(s.materials[0].base_color.w, 1.0f);
+  EXPECT_FLOAT_EQ(s.materials[0].roughness, 1.0f);
   EXPECT_EQ(t.material, 0u);
   EXPECT_FALSE(s.camera.has_value());
   EXPECT_NE(s.sourceName.find(".gltf"), std::string::npos);
@@ -706,7 +709,7 @@ TEST(GltfLoader, UnsupportedFeaturesWarnOnceEach) {
   EXPECT_EQ(count("emissive_strength"), 0);
   EXPECT_EQ(count("textures are not supported yet; 2 images ignored"), 1);
   EXPECT_EQ(count("material textures"), 1);
-  EXPECT_EQ(count("metallic"), 1);
+  EXPECT_EQ(count("metallic"), 0);  // the metallic-roughness model draws metallicFactor
   EXPECT_EQ(count("alphaMode BLEND"), 1);
   EXPECT_EQ(count("doubleSided"), 0);
 }
