@@ -36,8 +36,7 @@ GgxAlbedo ggxAlbedo(double mu, double roughness, double f0, int radial, int arou
   return sum;
 }
 
-const std::vector<float>& pbrAlbedoTable() {
-  static const std::vector<float> table = [] {
+std::vector<float> integratePbrAlbedoTable() {
     const int n = WT_PBR_TABLE_N;
     std::vector<float> t(WT_PBR_TABLE_SIZE, 0.0f);
     for (int j = 0; j < n; ++j) {
@@ -70,8 +69,6 @@ const std::vector<float>& pbrAlbedoTable() {
       t[WT_PBR_TABLE_E_COAT_AVG + j] = float(average(coat));
     }
     return t;
-  }();
-  return table;
 }
 
 }  // namespace wt

@@ -11,8 +11,13 @@
 
 namespace wt {
 
-/// The table the kernels read (WT_PBR_TABLE_* layout, shared/materials.h).
+/// The table the kernels read (WT_PBR_TABLE_* layout, shared/materials.h),
+/// integrated at build time by host/tools/make_pbr_table.cpp (about 0.5 s,
+/// too long to pay at every start).
 const std::vector<float>& pbrAlbedoTable();
+
+/// Integrate the table (what the build embeds).
+std::vector<float> integratePbrAlbedoTable();
 
 /// Directional albedos of the GGX single-scattering lobe at cos(theta_o) =
 /// mu and roughness r (alpha = r^2): with F = 1, and with Schlick Fresnel
