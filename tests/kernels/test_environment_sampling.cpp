@@ -26,10 +26,7 @@ namespace {
 
 constexpr double kPi = std::numbers::pi;
 
-cl::Program envProgram() {
-  static cl::Program program = buildProgram(test::deviceContext(), KernelFeatures{}, "env_tests.cl");
-  return program;
-}
+cl::Program envProgram() { return test::testProgram("env_tests.cl"); }
 
 // ---------------------------------------------------------------------------
 // the convention, written independently of the kernels (double precision)
