@@ -115,6 +115,9 @@ void Context::finish() {
 }
 
 void Context::fill(cl::Buffer& buffer, cl_uint word, std::size_t offset, std::size_t bytes) {
+  if (offset % sizeof(cl_uint) != 0 || bytes % sizeof(cl_uint) != 0)
+    throw DeviceError("fill: offset " + std::to_string(offset) + " and size " + std::to_string(bytes) +
+                      " must be multiples of 4 bytes");
   if (!m_oclgrind) {
     m_queue.enqueueFillBuffer(buffer, word, offset, bytes);
     return;
@@ -129,6 +132,9 @@ void Context::fill(cl::Buffer& buffer, cl_uint word, std::size_t offset, std::si
   // of it; the part not filled then counts as initialised, which holds for
   // the one buffer filled in part (the render counters, zeroed whole first).
   std::size_t size = buffer.getInfo<CL_MEM_SIZE>();
+  if (offset + bytes > size)
+    throw DeviceError("fill: bytes [" + std::to_string(offset) + ", " + std::to_string(offset + bytes) +
+                      ") lie outside a buffer of " + std::to_string(size));
   std::vector<cl_uint> words(size / sizeof(cl_uint));
   if (offset != 0 || bytes != size) m_queue.enqueueReadBuffer(buffer, CL_TRUE, 0, size, words.data());
   std::fill(words.begin() + std::ptrdiff_t(offset / 4), words.begin() + std::ptrdiff_t((offset + bytes) / 4), word);
