@@ -6,6 +6,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <limits>
 #include <random>
 
 namespace wt {
@@ -131,6 +133,35 @@ TEST(Traversal, DegenerateTrianglesAreNeverHit) {
   for (const RayHit& h : tracer.traceClosest(rays)) {
     EXPECT_NE(h.triangle, base / 3);
     EXPECT_NE(h.triangle, base / 3 + 1);
+  }
+}
+
+TEST(Traversal, NonFiniteRaysMissAndStayInTheTree) {
+  // A NaN or infinite origin or direction turns the slab test of an empty
+  // child slot (lo = +inf, hi = -inf) into NaN on every axis, which fmin and
+  // fmax drop: the slot passed and traversal read node 0xffffffff (PoCL
+  // crashed; Oclgrind reported the read and then never finished). Such a ray
+  // hits nothing, and carries no light: it counts as occluded.
+  Scene scene = makeTriangleSoup(200, 11, 0.1f);
+  const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
+  std::vector<Ray> rays;
+  for (glm::vec3 o : {glm::vec3(nan, 0.5f, 0.5f), glm::vec3(0.5f, inf, 0.5f), glm::vec3(0.5f, 0.5f, -inf),
+                      glm::vec3(nan), glm::vec3(inf), glm::vec3(0.5f, 0.5f, -2.0f)})
+    for (glm::vec3 d : {glm::vec3(0.0f, 0.0f, 1.0f), glm::vec3(nan, 0.0f, 1.0f), glm::vec3(0.0f, inf, 1.0f),
+                        glm::vec3(nan), glm::vec3(inf), glm::vec3(-inf, inf, inf), glm::vec3(0.3f, -0.2f, 0.9f)}) {
+      auto finite = [](glm::vec3 v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); };
+      if (finite(o) && finite(d)) continue;
+      Ray r;
+      r.origin = o;
+      r.direction = d;
+      rays.push_back(r);
+    }
+  Tracer tracer(test::deviceContext(), scene);
+  std::vector<RayHit> hits = tracer.traceClosest(rays);
+  std::vector<std::uint8_t> occluded = tracer.traceOccluded(rays);
+  for (std::size_t i = 0; i < rays.size(); ++i) {
+    EXPECT_EQ(hits[i].triangle, RayHit::kNoHit) << "ray " << i;
+    EXPECT_EQ(occluded[i], 1) << "ray " << i;
   }
 }
 
