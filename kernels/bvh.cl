@@ -49,15 +49,12 @@ inline int4 bvh4_box_hit(__global const WtBvh4Node* n, float3 org, float3 inv_d,
   return enter <= exit;
 }
 
-/// False for a ray with a NaN or infinite origin or direction component. The
-/// slab test would enter every child of such a ray, empty slots included
-/// (fmin and fmax drop NaNs), and read past the node array: it hits nothing.
-inline bool bvh_ray_is_finite(float3 org, float3 dir) {
-  return isfinite(org.x) && isfinite(org.y) && isfinite(org.z) && isfinite(dir.x) && isfinite(dir.y) &&
-         isfinite(dir.z);
-}
+// A ray whose origin or direction is NaN or infinite has no slab test: the
+// terms of an empty slot's inverted box become NaN on every axis, fmin and
+// fmax drop them, the slot passes and traversal reads node WT_BVH4_EMPTY.
+inline bool bvh_ray_is_finite(float3 org, float3 dir) { return all(isfinite(org)) && all(isfinite(dir)); }
 
-/// Closest hit in (tmin, tmax).
+/// Closest hit in (tmin, tmax); none for a ray that is not finite.
 inline Hit bvh_closest(BvhScene scene, float3 org, float3 dir, float tmin, float tmax) {
   Hit hit;
   hit.t = tmax;
@@ -131,9 +128,11 @@ inline Hit bvh_closest(BvhScene scene, float3 org, float3 dir, float tmin, float
   }
 }
 
-/// Any hit in (tmin, tmax): true when the segment is blocked.
+/// Any hit in (tmin, tmax): true when the segment is blocked, and for a ray
+/// that is not finite (no light is carried along it).
 inline bool bvh_occluded(BvhScene scene, float3 org, float3 dir, float tmin, float tmax) {
-  if (scene.node_count == 0 || !bvh_ray_is_finite(org, dir)) return false;
+  if (!bvh_ray_is_finite(org, dir)) return true;
+  if (scene.node_count == 0) return false;
   __global const WtBvh4Node* nodes = (__global const WtBvh4Node*)scene.nodes;
   RayShear shear = triangle_ray_shear(dir);
   float3 inv_d = bvh_safe_rcp(dir);

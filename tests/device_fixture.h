@@ -6,26 +6,55 @@
 
 #include <gtest/gtest.h>
 
+#include <map>
 #include <memory>
+#include <string>
 
 namespace wt::test {
 
-/// The default device's context, shared by every test in the binary.
-inline Context& deviceContext() {
-  static std::unique_ptr<Context> context = [] {
-    return std::make_unique<Context>(selectDevice(""), /*profiling=*/true);
-  }();
-  return *context;
+/// What the tests of one binary share: the default device's context and the
+/// test-only programs built on it, by root file.
+struct SharedDevice {
+  std::unique_ptr<Context> context;
+  std::map<std::string, cl::Program> programs;
+};
+
+inline SharedDevice& sharedDevice() {
+  static SharedDevice shared;
+  return shared;
 }
 
-/// kernels/unit_tests.cl: small kernels exposing shared device code, built once.
-inline cl::Program unitTestProgram() {
-  static cl::Program program = [] {
+/// The default device's context, shared by every test in the binary.
+inline Context& deviceContext() {
+  SharedDevice& shared = sharedDevice();
+  if (!shared.context) shared.context = std::make_unique<Context>(selectDevice(""), /*profiling=*/true);
+  return *shared.context;
+}
+
+/// A test-only kernel program (kernels/<root>), built once per binary.
+inline cl::Program testProgram(const std::string& root) {
+  SharedDevice& shared = sharedDevice();
+  auto it = shared.programs.find(root);
+  if (it == shared.programs.end()) {
     KernelFeatures features;
     features.pbr = true;  // the metallic-roughness BSDF's tests need it compiled in
-    return buildProgram(deviceContext(), features, "unit_tests.cl");
-  }();
-  return program;
+    it = shared.programs.emplace(root, buildProgram(deviceContext(), features, root)).first;
+  }
+  return it->second;
+}
+
+/// kernels/unit_tests.cl: small kernels exposing shared device code.
+inline cl::Program unitTestProgram() { return testProgram("unit_tests.cl"); }
+
+/// Release the shared programs and context; test_main calls it before main
+/// returns. OpenCL objects must not outlive main: exit() runs thread_local
+/// destructors before static ones, and Oclgrind's runtime keeps per-thread
+/// state that its clRelease* calls write to, so releasing from a static
+/// destructor corrupted the heap ("corrupted double-linked list").
+inline void releaseSharedDevice() {
+  SharedDevice& shared = sharedDevice();
+  shared.programs.clear();
+  shared.context.reset();
 }
 
 }  // namespace wt::test

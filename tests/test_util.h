@@ -3,8 +3,10 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdlib>
 #include <filesystem>
 #include <string>
+#include <string_view>
 
 namespace wt::test {
 
@@ -17,6 +19,16 @@ inline std::filesystem::path assetsDir() { return WT_ASSETS_DIR; }
   if (!std::filesystem::exists(var))                                                      \
   GTEST_SKIP() << "SKIPPED: asset " << var.string()                                       \
                << " is absent (../shared/assets is not beside this clone)"
+
+/// A device test's problem size (work-items, samples): `full`, or `small` when
+/// WT_TEST_SMALL is set and not 0. scripts/oclgrind sets it: under the
+/// simulator a work-item costs about 1e4 times what it costs on PoCL, and a
+/// checker needs every code path run, not statistical power. Every assertion
+/// of a test must hold at both sizes.
+inline unsigned testSize(unsigned full, unsigned small) {
+  const char* value = std::getenv("WT_TEST_SMALL");
+  return value && *value && std::string_view(value) != "0" ? small : full;
+}
 
 /// A scratch folder under the build tree for files a test writes.
 inline std::filesystem::path scratchDir(const std::string& name) {

@@ -73,7 +73,8 @@ DeviceInfo selectDevice(const std::string& spec) {
 }
 
 Context::Context(const DeviceInfo& device, bool profiling)
-    : m_info(device), m_profiling(profiling) {
+    : m_info(device), m_profiling(profiling),
+      m_oclgrind(device.platformName.find("Oclgrind") != std::string::npos) {
   try {
     m_context = cl::Context(device.device);
     m_queue = cl::CommandQueue(m_context, device.device,
@@ -111,6 +112,33 @@ void Context::finish() {
     m_times.launches[stage] += 1;
   }
   m_pending.clear();
+}
+
+void Context::fill(cl::Buffer& buffer, cl_uint word, std::size_t offset, std::size_t bytes) {
+  if (offset % sizeof(cl_uint) != 0 || bytes % sizeof(cl_uint) != 0)
+    throw DeviceError("fill: offset " + std::to_string(offset) + " and size " + std::to_string(bytes) +
+                      " must be multiples of 4 bytes");
+  if (!m_oclgrind) {
+    m_queue.enqueueFillBuffer(buffer, word, offset, bytes);
+    return;
+  }
+  // Oclgrind 21.10's uninitialised-value checker records a host write by
+  // replacing the buffer's whole shadow with a fresh one the size of the
+  // write (Uninitialized::hostMemoryStore -> ShadowMemory::allocate), and it
+  // runs clEnqueueFillBuffer as one write per pattern: after a fill, or after
+  // any write to part of a buffer, the rest of the buffer reads as
+  // uninitialised (tests/oclgrind/fill_buffer.c). So under Oclgrind a fill is
+  // one write of the whole buffer, read first when the fill covers only part
+  // of it; the part not filled then counts as initialised, which holds for
+  // the one buffer filled in part (the render counters, zeroed whole first).
+  std::size_t size = buffer.getInfo<CL_MEM_SIZE>();
+  if (offset + bytes > size)
+    throw DeviceError("fill: bytes [" + std::to_string(offset) + ", " + std::to_string(offset + bytes) +
+                      ") lie outside a buffer of " + std::to_string(size));
+  std::vector<cl_uint> words(size / sizeof(cl_uint));
+  if (offset != 0 || bytes != size) m_queue.enqueueReadBuffer(buffer, CL_TRUE, 0, size, words.data());
+  std::fill(words.begin() + std::ptrdiff_t(offset / 4), words.begin() + std::ptrdiff_t((offset + bytes) / 4), word);
+  m_queue.enqueueWriteBuffer(buffer, CL_TRUE, 0, size, words.data());
 }
 
 std::string clErrorName(int code) {

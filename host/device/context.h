@@ -60,6 +60,14 @@ class Context {
   /// Wait for the queue and fold pending profiling events into the totals.
   void finish();
 
+  /// Set `bytes` bytes of `buffer` from `offset` (both multiples of 4) to
+  /// copies of `word`, in queue order. Every buffer fill goes through here.
+  void fill(cl::Buffer& buffer, cl_uint word, std::size_t offset, std::size_t bytes);
+
+  /// The device is Oclgrind's simulator (scripts/oclgrind), which needs a
+  /// few accommodations; each is documented where it is made.
+  bool underOclgrind() const { return m_oclgrind; }
+
   const StageTimes& stageTimes() const { return m_times; }
   void resetStageTimes() { m_times = {}; }
 
@@ -70,6 +78,7 @@ class Context {
   cl::Context m_context;
   cl::CommandQueue m_queue;
   bool m_profiling;
+  bool m_oclgrind;
   std::vector<std::pair<std::string, cl::Event>> m_pending;
   StageTimes m_times;
 };

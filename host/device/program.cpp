@@ -100,7 +100,7 @@ cl::Program buildProgram(Context& context, const KernelFeatures& features, const
   std::string options = "-cl-std=CL1.2";
   for (const std::string& d : kernelDefines(features)) options += " " + d;
   // Oclgrind (the kernel checker) lacks the llvm.bitreverse intrinsic.
-  if (context.info().platformName.find("Oclgrind") != std::string::npos) options += " -D WT_AVOID_BITREVERSE=1";
+  if (context.underOclgrind()) options += " -D WT_AVOID_BITREVERSE=1";
   cl::Program program(context.context(), source);
   try {
     program.build({context.info().device}, options.c_str());

@@ -103,10 +103,11 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
   m_envConditional = uploadSpan(env.conditionalCdf);
 
   cl::CommandQueue& q = context.queue();
-  q.enqueueFillBuffer(m_state, cl_float(0), 0, pixels * 64);
-  q.enqueueFillBuffer(m_sampleCount, cl_uint(0), 0, pixels * 4);
-  q.enqueueFillBuffer(m_counters, cl_uint(0), 0, WT_COUNTER_COUNT * sizeof(cl_uint));
-  q.enqueueFillBuffer(m_counters, cl_uint(0xffffffffu), WT_COUNTER_FIRST_NONFINITE * sizeof(cl_uint), sizeof(cl_uint));
+  // zero bits are 0.0f as well
+  context.fill(m_state, 0u, 0, pixels * 64);
+  context.fill(m_sampleCount, 0u, 0, pixels * 4);
+  context.fill(m_counters, 0u, 0, WT_COUNTER_COUNT * sizeof(cl_uint));
+  context.fill(m_counters, 0xffffffffu, WT_COUNTER_FIRST_NONFINITE * sizeof(cl_uint), sizeof(cl_uint));
   q.finish();
 
   // Arguments that never change; per-launch ones are set in renderSample().
@@ -172,8 +173,8 @@ void Renderer::renderSample() {
   std::size_t alive = pixels;
   for (int bounce = 0; bounce <= m_settings.maxBounces && alive > 0; ++bounce) {
     m_stats.raysTraced += alive;
-    q.enqueueFillBuffer(m_counters, cl_uint(0), outSlot * sizeof(cl_uint), sizeof(cl_uint));
-    q.enqueueFillBuffer(m_counters, cl_uint(0), WT_COUNTER_SHADOW * sizeof(cl_uint), sizeof(cl_uint));
+    m_context.fill(m_counters, 0u, outSlot * sizeof(cl_uint), sizeof(cl_uint));
+    m_context.fill(m_counters, 0u, WT_COUNTER_SHADOW * sizeof(cl_uint), sizeof(cl_uint));
 
     // extend: closest hit of every queued path
     m_extend.setArg(1, inSlot);

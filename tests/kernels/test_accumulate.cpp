@@ -3,6 +3,7 @@
 #include "device_fixture.h"
 #include "shared/rng.h"
 #include "shared/types.h"
+#include "test_util.h"
 
 #include <gtest/gtest.h>
 
@@ -40,7 +41,7 @@ TEST(Accumulate, ConstantInputIsExactInEveryMode) {
   for (cl_uint mode : {WT_ACCUMULATE_SINGLE, WT_ACCUMULATE_KAHAN, WT_ACCUMULATE_DOUBLE}) {
     if (mode == WT_ACCUMULATE_DOUBLE && !test::deviceContext().info().fp64) continue;
     // float(0.7) repeated: every Welford delta after the first is exactly 0
-    EXPECT_EQ(accumulateOnDevice(mode, 0, 1u << 20, 8).worst, 0.0) << "mode " << mode;
+    EXPECT_EQ(accumulateOnDevice(mode, 0, test::testSize(1u << 20, 1u << 8), 8).worst, 0.0) << "mode " << mode;
   }
 }
 

@@ -3,6 +3,7 @@
 #include "device/program.h"
 #include "device_fixture.h"
 #include "shared/sampler.h"
+#include "test_util.h"
 
 #include <gtest/gtest.h>
 
@@ -49,7 +50,7 @@ TEST(Sampler, PixelsAreDecorrelated) {
 
 TEST(Sampler, DeviceMatchesHost) {
   Context& ctx = test::deviceContext();
-  const cl_uint n = 4096;
+  const cl_uint n = test::testSize(4096, 512);
   cl::Buffer out(ctx.context(), CL_MEM_WRITE_ONLY, n * 4);
   cl::Kernel k(test::unitTestProgram(), "test_sobol");
   for (cl_uint dim : {0u, 3u, 6u}) {

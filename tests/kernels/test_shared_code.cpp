@@ -4,6 +4,7 @@
 #include "device_fixture.h"
 #include "core/spawn.h"
 #include "shared/rng.h"
+#include "test_util.h"
 
 #include <glm/glm.hpp>
 
@@ -39,7 +40,7 @@ TEST(SharedCode, RngMatchesTheHostBuildBitForBit) {
 
 TEST(SharedCode, LambertSamplesAreCosineDistributed) {
   Context& ctx = test::deviceContext();
-  const cl_uint n = 1 << 16;
+  const cl_uint n = test::testSize(1 << 16, 1 << 12);
   std::mt19937 rng(5);
   std::uniform_real_distribution<float> u(0.0f, 1.0f);
   std::vector<cl_float2> us(n);

@@ -3,6 +3,7 @@
 #include "device_fixture.h"
 #include "device/tracer.h"
 #include "scene/generators.h"
+#include "test_util.h"
 
 #include <gtest/gtest.h>
 
@@ -65,10 +66,11 @@ TEST(Watertight, BoxFromInsideAndOutside) {
   Scene scene = makeBox(glm::vec3(-1.0f), glm::vec3(1.0f), makeMaterial(glm::vec3(0.5f)));
   // inside, and outside on a diagonal so that every target is in front of a face
   std::vector<glm::vec3> inside = {glm::vec3(0.0f), glm::vec3(0.25f, -0.5f, 0.125f)};
-  EXPECT_EQ(countLeaks(scene, inside, edgeTargets(scene, 2, 64)), 0);
+  const int perEdge = int(test::testSize(64, 8));
+  EXPECT_EQ(countLeaks(scene, inside, edgeTargets(scene, 2, perEdge)), 0);
   std::vector<glm::vec3> outside = {glm::vec3(3.0f, 2.0f, 2.5f)};
   std::vector<glm::vec3> visible;
-  for (const glm::vec3& t : edgeTargets(scene, 3, 64))
+  for (const glm::vec3& t : edgeTargets(scene, 3, perEdge))
     // edges shared by two visible faces; silhouette edges are grazing, not leaks
     if ((t.x > 0.99f) + (t.y > 0.99f) + (t.z > 0.99f) >= 2 && glm::all(glm::greaterThan(t, glm::vec3(-0.99f))))
       visible.push_back(t);
