@@ -2,9 +2,11 @@
 
 #include "core/log.h"
 
+#include <IexBaseExc.h>
 #include <ImfChannelList.h>
 #include <ImfFrameBuffer.h>
 #include <ImfHeader.h>
+#include <ImfIO.h>
 #include <ImfInputFile.h>
 #include <ImfRgbaFile.h>
 #include <stb_image.h>
@@ -13,8 +15,10 @@
 #include <cctype>
 #include <cerrno>
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <fstream>
+#include <initializer_list>
 #include <iterator>
 #include <memory>
 #include <numbers>
@@ -32,6 +36,15 @@ double luminance709(const WtVec4& c) { return 0.2126 * c.x + 0.7152 * c.y + 0.07
   throw EnvironmentError(name + ": " + what);
 }
 
+/// Maps of this many texels or more are refused (the sampling tables index
+/// them with 32-bit integers).
+constexpr std::int64_t kMaxTexels = std::int64_t(1) << 31;
+
+void checkMapSize(const std::string& name, std::int64_t width, std::int64_t height) {
+  if (width >= kMaxTexels || height >= kMaxTexels || width * height >= kMaxTexels)
+    fail(name, "map too large (" + std::to_string(width) + " x " + std::to_string(height) + ")");
+}
+
 std::vector<unsigned char> readBytes(const std::filesystem::path& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) fail(path.string(), std::string("cannot open: ") + std::strerror(errno));
@@ -46,7 +59,7 @@ std::vector<unsigned char> readBytes(const std::filesystem::path& path) {
 // stb_image 2.27 does not notice truncated run-length data (it reads zeros,
 // and loops forever on a zero run count), so the structure is walked here
 // before stb decodes it.
-void checkRadianceFile(const std::string& name, const std::vector<unsigned char>& bytes) {
+void checkRadianceFile(const std::string& name, std::span<const unsigned char> bytes) {
   std::size_t pos = 0;
   auto nextLine = [&]() -> std::optional<std::string> {
     auto end = std::find(bytes.begin() + std::ptrdiff_t(pos), bytes.end(), '\n');
@@ -119,9 +132,8 @@ void checkRadianceFile(const std::string& name, const std::vector<unsigned char>
   }
 }
 
-std::vector<glm::vec3> readHdr(const std::filesystem::path& path, int& width, int& height) {
-  const std::string name = path.string();
-  std::vector<unsigned char> bytes = readBytes(path);
+std::vector<glm::vec3> readHdr(const std::string& name, std::span<const unsigned char> bytes, int& width,
+                               int& height) {
   checkRadianceFile(name, bytes);
   int channels = 0;
   std::unique_ptr<float, void (*)(void*)> pixels(
@@ -135,26 +147,62 @@ std::vector<glm::vec3> readHdr(const std::filesystem::path& path, int& width, in
 // ---------------------------------------------------------------------------
 // OpenEXR
 
-std::vector<glm::vec3> readExrPixels(const std::string& name, int& width, int& height) {
-  Imf::InputFile file(name.c_str());
+/// A file's bytes as an OpenEXR input stream, so files and memory take one path.
+class MemoryIStream final : public Imf::IStream {
+ public:
+  MemoryIStream(const std::string& name, std::span<const unsigned char> bytes)
+      : Imf::IStream(name.c_str()), m_bytes(bytes) {}
+
+  bool read(char c[], int n) override {
+    if (n < 0 || m_pos > m_bytes.size() || std::uint64_t(n) > m_bytes.size() - m_pos)
+      throw Iex::InputExc("unexpected end of file: " + std::to_string(n) + " bytes requested at offset " +
+                          std::to_string(m_pos) + " of " + std::to_string(m_bytes.size()));
+    std::memcpy(c, m_bytes.data() + m_pos, std::size_t(n));
+    m_pos += std::uint64_t(n);
+    return m_pos < m_bytes.size();
+  }
+  std::uint64_t tellg() override { return m_pos; }
+  void seekg(std::uint64_t pos) override { m_pos = pos; }  // past the end: the next read throws
+
+ private:
+  std::span<const unsigned char> m_bytes;
+  std::uint64_t m_pos = 0;
+};
+
+std::vector<glm::vec3> readExrPixels(const std::string& name, std::span<const unsigned char> bytes, int& width,
+                                     int& height) {
+  MemoryIStream stream(name, bytes);
+  Imf::InputFile file(stream);
   const Imf::Header& header = file.header();
   const Imath::Box2i window = header.dataWindow();
-  width = window.max.x - window.min.x + 1;
-  height = window.max.y - window.min.y + 1;
-  if (width <= 0 || height <= 0) fail(name, "empty data window");
+  // in 64 bits: a corrupt window can span more than an int
+  const std::int64_t windowWidth = std::int64_t(window.max.x) - window.min.x + 1;
+  const std::int64_t windowHeight = std::int64_t(window.max.y) - window.min.y + 1;
+  if (windowWidth <= 0 || windowHeight <= 0) fail(name, "empty data window");
+  checkMapSize(name, windowWidth, windowHeight);
+  width = int(windowWidth);
+  height = int(windowHeight);
   const std::size_t count = std::size_t(width) * std::size_t(height);
 
   const Imf::ChannelList& channels = header.channels();
   auto has = [&](const char* c) { return channels.findChannel(c) != nullptr; };
   std::string names;
-  for (auto it = channels.begin(); it != channels.end(); ++it) {
+  for (auto it = channels.begin(); it != channels.end(); ++it)
     names += (names.empty() ? "" : ", ") + std::string(it.name());
-    if (it.channel().xSampling != 1 || it.channel().ySampling != 1)
-      fail(name, std::string("channel ") + it.name() + " is sub-sampled (not supported)");
-  }
+  // R, G, B and Y are read at full resolution; RY and BY are sub-sampled by
+  // design, and the RGBA interface reconstructs them
+  auto fullResolution = [&](std::initializer_list<const char*> read) {
+    for (const char* c : read) {
+      const Imf::Channel& channel = *channels.findChannel(c);
+      if (channel.xSampling != 1 || channel.ySampling != 1)
+        fail(name, std::string("channel ") + c + " is sub-sampled (not supported)");
+    }
+  };
 
-  std::vector<glm::vec3> rgb(count);
+  std::vector<glm::vec3> rgb;
   if (has("R") && has("G") && has("B")) {
+    fullResolution({"R", "G", "B"});
+    rgb.resize(count);
     Imf::FrameBuffer fb;
     const std::size_t xs = sizeof(glm::vec3), ys = xs * std::size_t(width);
     fb.insert("R", Imf::Slice::Make(Imf::FLOAT, &rgb[0].x, window, xs, ys));
@@ -163,6 +211,8 @@ std::vector<glm::vec3> readExrPixels(const std::string& name, int& width, int& h
     file.setFrameBuffer(fb);
     file.readPixels(window.min.y, window.max.y);
   } else if (has("Y") && !has("RY") && !has("BY")) {
+    fullResolution({"Y"});
+    rgb.resize(count);
     std::vector<float> y(count);
     Imf::FrameBuffer fb;
     fb.insert("Y", Imf::Slice::Make(Imf::FLOAT, y.data(), window, sizeof(float), sizeof(float) * std::size_t(width)));
@@ -171,7 +221,10 @@ std::vector<glm::vec3> readExrPixels(const std::string& name, int& width, int& h
     for (std::size_t i = 0; i < count; ++i) rgb[i] = glm::vec3(y[i]);
   } else if (has("Y")) {
     // luminance/chroma: the RGBA interface converts (at half precision)
-    Imf::RgbaInputFile rgbaFile(name.c_str());
+    fullResolution({"Y"});
+    rgb.resize(count);
+    MemoryIStream rgbaStream(name, bytes);
+    Imf::RgbaInputFile rgbaFile(rgbaStream);
     std::vector<Imf::Rgba> px(count);
     rgbaFile.setFrameBuffer(px.data() - window.min.x - std::ptrdiff_t(window.min.y) * width, 1, std::size_t(width));
     rgbaFile.readPixels(window.min.y, window.max.y);
@@ -182,14 +235,10 @@ std::vector<glm::vec3> readExrPixels(const std::string& name, int& width, int& h
   return rgb;
 }
 
-std::vector<glm::vec3> readExr(const std::filesystem::path& path, int& width, int& height) {
-  const std::string name = path.string();
-  {
-    std::ifstream probe(path, std::ios::binary);
-    if (!probe) fail(name, std::string("cannot open: ") + std::strerror(errno));
-  }
+std::vector<glm::vec3> readExr(const std::string& name, std::span<const unsigned char> bytes, int& width,
+                               int& height) {
   try {
-    return readExrPixels(name, width, height);
+    return readExrPixels(name, bytes, width, height);
   } catch (const EnvironmentError&) {
     throw;
   } catch (const std::exception& e) {
@@ -248,9 +297,12 @@ void checkParameters(const std::string& name, float intensity, float rotationDeg
   if (!std::isfinite(rotationDegrees)) fail(name, "rotation must be finite");
 }
 
-std::string lowerExtension(const std::filesystem::path& path) {
-  std::string ext = path.extension().string();
+/// The lower-case extension of `name`, which must be .hdr or .exr.
+std::string checkFormat(const std::string& name) {
+  std::string ext = std::filesystem::path(name).extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+  if (ext != ".hdr" && ext != ".exr")
+    fail(name, "unsupported environment map format '" + ext + "' (expected .hdr or .exr)");
   return ext;
 }
 
@@ -266,8 +318,7 @@ Environment makeEnvironmentMap(int width, int height, std::vector<glm::vec3> rgb
   if (width <= 0 || height <= 0 || std::size_t(width) * std::size_t(height) != rgb.size())
     fail(sourceName, "bad map size " + std::to_string(width) + " x " + std::to_string(height) + " for " +
                          std::to_string(rgb.size()) + " pixels");
-  if (std::size_t(width) * std::size_t(height) >= (std::size_t(1) << 31))
-    fail(sourceName, "map too large (" + std::to_string(width) + " x " + std::to_string(height) + ")");
+  checkMapSize(sourceName, width, height);
 
   Environment env;
   env.sourceName = sourceName;
@@ -307,15 +358,18 @@ Environment loadEnvironmentMap(const std::filesystem::path& path, float intensit
   const std::string name = path.string();
   checkParameters(name, intensity, rotationDegrees);
   if (!std::filesystem::exists(path)) fail(name, "no such file");
-  const std::string ext = lowerExtension(path);
+  checkFormat(name);
+  const std::vector<unsigned char> bytes = readBytes(path);
+  return loadEnvironmentMapFromMemory(bytes, name, intensity, rotationDegrees);
+}
+
+Environment loadEnvironmentMapFromMemory(std::span<const unsigned char> bytes, const std::string& name,
+                                         float intensity, float rotationDegrees) {
+  checkParameters(name, intensity, rotationDegrees);
+  const std::string ext = checkFormat(name);
   int width = 0, height = 0;
-  std::vector<glm::vec3> rgb;
-  if (ext == ".hdr")
-    rgb = readHdr(path, width, height);
-  else if (ext == ".exr")
-    rgb = readExr(path, width, height);
-  else
-    fail(name, "unsupported environment map format '" + ext + "' (expected .hdr or .exr)");
+  std::vector<glm::vec3> rgb =
+      ext == ".hdr" ? readHdr(name, bytes, width, height) : readExr(name, bytes, width, height);
   return makeEnvironmentMap(width, height, std::move(rgb), intensity, rotationDegrees, name);
 }
 

@@ -980,4 +980,9 @@ Scene loadGltfFromMemory(std::string_view contents, const std::string& name,
                        false, name, name, baseDir, options);
 }
 
+Scene loadGlbFromMemory(std::span<const unsigned char> bytes, const std::string& name,
+                        const std::string& baseDir, const GltfLoadOptions& options) {
+  return loadFromBytes(bytes.data(), bytes.size(), true, name, name, baseDir, options);
+}
+
 }  // namespace wt

@@ -4,6 +4,7 @@
 
 #include "scene/scene.h"
 
+#include <span>
 #include <string>
 #include <string_view>
 
@@ -18,8 +19,14 @@ struct GltfLoadOptions {
 Scene loadGltf(const std::string& path, const GltfLoadOptions& options = {});
 
 /// Load a .gltf held in memory (the embedded default scene). `name` is used
-/// in messages; external buffers are resolved against `baseDir`.
+/// in messages; external buffers are resolved against `baseDir`. Bytes that
+/// start with the binary magic are read as .glb.
 Scene loadGltfFromMemory(std::string_view contents, const std::string& name,
                          const std::string& baseDir, const GltfLoadOptions& options = {});
+
+/// Load a .glb held in memory, as loadGltf reads a .glb file: the bytes must
+/// start with the 'glTF' magic. `name` and `baseDir` as above.
+Scene loadGlbFromMemory(std::span<const unsigned char> bytes, const std::string& name,
+                        const std::string& baseDir, const GltfLoadOptions& options = {});
 
 }  // namespace wt

@@ -7,7 +7,9 @@
 #include <ImfChannelList.h>
 #include <ImfFrameBuffer.h>
 #include <ImfHeader.h>
+#include <ImfInputFile.h>
 #include <ImfOutputFile.h>
+#include <ImfRgbaFile.h>
 #include <ImfTiledOutputFile.h>
 #include <stb_image_write.h>
 
@@ -202,6 +204,34 @@ TEST(EnvironmentLoader, HdrRoundTrip) {
   EXPECT_TRUE(env.warnings.empty());
 }
 
+TEST(EnvironmentLoader, FromMemoryReadsWhatTheFileGives) {
+  const int w = 16, h = 8;
+  const std::filesystem::path files[] = {
+      writeHdr("memory.hdr", w, h, testPixels(w, h)),
+      writeExr("memory.exr", w, h, {"B", "G", "R"}, [](int k, int c) { return float(k) + 0.25f * float(c); })};
+  for (const std::filesystem::path& path : files) {
+    const std::vector<char> chars = readAll(path);
+    const std::vector<unsigned char> bytes(chars.begin(), chars.end());
+    Environment fromFile = loadEnvironmentMap(path, 1.5f, 30.0f);
+    Environment fromMemory = loadEnvironmentMapFromMemory(bytes, "sky" + path.extension().string(), 1.5f, 30.0f);
+    ASSERT_EQ(fromMemory.header.width, wt_uint(w)) << path;
+    ASSERT_EQ(fromMemory.texels.size(), fromFile.texels.size()) << path;
+    for (std::size_t k = 0; k < fromFile.texels.size(); ++k) {
+      ASSERT_EQ(fromMemory.texels[k].x, fromFile.texels[k].x) << path << " texel " << k;
+      ASSERT_EQ(fromMemory.texels[k].z, fromFile.texels[k].z) << path << " texel " << k;
+    }
+    EXPECT_EQ(fromMemory.conditionalCdf, fromFile.conditionalCdf) << path;
+    EXPECT_EQ(fromMemory.sourceName, "sky" + path.extension().string());
+    // truncated bytes are refused under the given name
+    const std::span<const unsigned char> cut(bytes.data(), bytes.size() / 2);
+    expectError("cut" + path.extension().string(), "", [&] {
+      loadEnvironmentMapFromMemory(cut, "cut" + path.extension().string());
+    });
+  }
+  expectError("sky.png", "unsupported environment map format '.png'",
+              [&] { loadEnvironmentMapFromMemory({}, "sky.png"); });
+}
+
 TEST(EnvironmentLoader, ExrFloatRgbExactWithAnyDataWindow) {
   const int w = 12, h = 6;
   auto value = [](int k, int c) { return 1e5f * float(c + 1) + float(k) * 0.125f; };  // beyond half's range
@@ -225,6 +255,33 @@ TEST(EnvironmentLoader, ExrLuminanceOnlyIsGrey) {
     EXPECT_EQ(env.texels[k].x, 0.5f + float(k));
     EXPECT_EQ(env.texels[k].y, 0.5f + float(k));
     EXPECT_EQ(env.texels[k].z, 0.5f + float(k));
+  }
+}
+
+TEST(EnvironmentLoader, ExrLuminanceChromaIsConvertedToRgb) {
+  // Y at full resolution, RY and BY sub-sampled 2 x 2 (OpenEXR's YC layout);
+  // these were refused as "sub-sampled" before the fuzz seeds covered them
+  const int w = 16, h = 8;
+  const Imf::Rgba colour(0.8f, 0.4f, 0.2f, 1.0f);
+  std::filesystem::path path = test::scratchDir("environment") / "yc.exr";
+  {
+    std::vector<Imf::Rgba> px(std::size_t(w) * h, colour);
+    Imf::RgbaOutputFile out(path.c_str(), w, h, Imf::WRITE_YC);
+    out.setFrameBuffer(px.data(), 1, w);
+    out.writePixels(h);
+  }
+  {
+    Imf::InputFile probe(path.c_str());
+    const Imf::Channel* ry = probe.header().channels().findChannel("RY");
+    ASSERT_NE(ry, nullptr);
+    ASSERT_EQ(ry->xSampling, 2);  // the file really is sub-sampled
+  }
+  Environment env = loadEnvironmentMap(path);
+  ASSERT_EQ(env.header.width, wt_uint(w));
+  for (int k = 0; k < w * h; ++k) {
+    ASSERT_NEAR(env.texels[k].x, 0.8f, 0.01f) << "texel " << k;
+    ASSERT_NEAR(env.texels[k].y, 0.4f, 0.01f) << "texel " << k;
+    ASSERT_NEAR(env.texels[k].z, 0.2f, 0.01f) << "texel " << k;
   }
 }
 

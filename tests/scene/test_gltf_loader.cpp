@@ -309,6 +309,25 @@ TEST(GltfLoader, GlbAndGltfGiveTheSameTriangle) {
   EXPECT_CONTAINS(message, "magic");
 }
 
+TEST(GltfLoader, GlbFromMemoryReadsWhatTheFileGives) {
+  GltfDoc doc = triangleDoc();
+  const std::vector<unsigned char> glb = doc.glb();
+  Scene fromFile = loadGltf(writeFile(".glb", glb).string());
+  Scene fromMemory = loadGlbFromMemory(glb, "memory.glb", ".");
+  ASSERT_EQ(fromMemory.triangles.size(), fromFile.triangles.size());
+  ASSERT_EQ(fromMemory.positions.size(), fromFile.positions.size());
+  for (std::uint32_t v = 0; v < fromFile.positions.size(); ++v) expectNear(pos(fromMemory, v), pos(fromFile, v));
+  EXPECT_EQ(fromMemory.sourceName, "memory.glb");
+  // text is refused, as a .glb file without the magic is
+  const std::string text = doc.embedded();
+  std::string message = errorOf([&] {
+    loadGlbFromMemory({reinterpret_cast<const unsigned char*>(text.data()), text.size()}, "text.glb", ".");
+  });
+  EXPECT_EQ(message.rfind("text.glb: ", 0), 0u) << message;
+  EXPECT_CONTAINS(message, "magic");
+  EXPECT_CONTAINS(errorOf([&] { loadGlbFromMemory({}, "empty.glb", "."); }), "empty.glb: ");
+}
+
 TEST(GltfLoader, ExternalBinBuffer) {
   GltfDoc doc = triangleDoc();
   std::string binName = scratchFile(".bin").filename().string();
