@@ -24,6 +24,7 @@
 #include <numbers>
 #include <optional>
 #include <sstream>
+#include <string_view>
 
 namespace wt {
 namespace {
@@ -34,6 +35,19 @@ double luminance709(const WtVec4& c) { return 0.2126 * c.x + 0.7152 * c.y + 0.07
 
 [[noreturn]] void fail(const std::string& name, const std::string& what) {
   throw EnvironmentError(name + ": " + what);
+}
+
+/// Text from a file as it can appear in a message: at most 64 characters,
+/// bytes outside printable ASCII as \xNN.
+std::string printable(std::string_view text) {
+  static const char* kHex = "0123456789abcdef";
+  std::string out;
+  for (std::size_t i = 0; i < text.size() && i < 64; ++i) {
+    const auto c = static_cast<unsigned char>(text[i]);
+    if (c >= 0x20 && c < 0x7f) out += char(c);
+    else out += std::string("\\x") + kHex[c >> 4] + kHex[c & 15];
+  }
+  return text.size() > 64 ? out + "..." : out;
 }
 
 /// Maps of this many texels or more are refused (the sampling tables index
@@ -78,7 +92,8 @@ void checkRadianceFile(const std::string& name, std::span<const unsigned char> b
     if (!line) fail(name, "truncated: the header has no end");
     if (line->empty()) break;
     if (*line == "FORMAT=32-bit_rle_rgbe") rgbe = true;
-    else if (line->rfind("FORMAT=", 0) == 0) fail(name, "unsupported pixel format '" + line->substr(7) + "' (only 32-bit_rle_rgbe)");
+    else if (line->rfind("FORMAT=", 0) == 0)
+      fail(name, "unsupported pixel format '" + printable(line->substr(7)) + "' (only 32-bit_rle_rgbe)");
   }
   if (!rgbe) fail(name, "no FORMAT=32-bit_rle_rgbe line in the header");
   line = nextLine();
@@ -86,7 +101,7 @@ void checkRadianceFile(const std::string& name, std::span<const unsigned char> b
   char tail = 0;
   int parsed = line ? std::sscanf(line->c_str(), "-Y %ld +X %ld%c", &height, &width, &tail) : 0;
   if (parsed < 2 || (parsed == 3 && !std::isspace(static_cast<unsigned char>(tail))))
-    fail(name, "unsupported resolution line '" + line.value_or("") + "' (only '-Y height +X width')");
+    fail(name, "unsupported resolution line '" + printable(line.value_or("")) + "' (only '-Y height +X width')");
   if (width <= 0 || height <= 0 || width > (1 << 24) || height > (1 << 24))
     fail(name, "bad image size " + std::to_string(width) + " x " + std::to_string(height));
 
@@ -147,7 +162,10 @@ std::vector<glm::vec3> readHdr(const std::string& name, std::span<const unsigned
 // ---------------------------------------------------------------------------
 // OpenEXR
 
-/// A file's bytes as an OpenEXR input stream, so files and memory take one path.
+/// A file's bytes as an OpenEXR input stream, so files and memory take one
+/// path. Not memory-mapped on purpose: OpenEXR 3.1 then decodes chunks in
+/// place and reads past a short uncompressed chunk, out of the buffer (found
+/// by fuzz_exr); read() copies into OpenEXR's own full-size line buffers.
 class MemoryIStream final : public Imf::IStream {
  public:
   MemoryIStream(const std::string& name, std::span<const unsigned char> bytes)
@@ -169,8 +187,107 @@ class MemoryIStream final : public Imf::IStream {
   std::uint64_t m_pos = 0;
 };
 
+std::uint32_t readU32(const unsigned char* p) {
+  std::uint32_t v;  // OpenEXR is little-endian, and so is every machine we build for
+  std::memcpy(&v, p, sizeof v);
+  return v;
+}
+
+/// Why an OpenEXR header attribute's value cannot be what its type reads, or
+/// empty when it can. OpenEXR 3.1 reads fixed-size types at their own size
+/// and channel lists up to their terminator, whatever size the file gives.
+std::string exrAttributeProblem(const std::string& type, std::span<const unsigned char> value) {
+  static const std::pair<const char*, std::size_t> kFixedSizes[] = {
+      {"box2i", 16}, {"box2f", 16},    {"chromaticities", 32}, {"compression", 1}, {"deepImageState", 1},
+      {"double", 8}, {"envmap", 1},    {"float", 4},           {"int", 4},         {"keycode", 28},
+      {"lineOrder", 1}, {"m33f", 36},  {"m33d", 72},           {"m44f", 64},       {"m44d", 128},
+      {"rational", 8}, {"tiledesc", 9}, {"timecode", 8},       {"v2i", 8},         {"v2f", 8},
+      {"v2d", 16},   {"v3i", 12},      {"v3f", 12},            {"v3d", 24}};
+  const std::size_t size = value.size();
+  for (const auto& [fixedType, fixedSize] : kFixedSizes)
+    if (type == fixedType)
+      return size == fixedSize ? "" : "has " + std::to_string(size) + " bytes, expected " + std::to_string(fixedSize);
+  if (type == "chlist") {
+    // entries of name, NUL, 16 bytes; an empty name ends the list
+    for (std::size_t pos = 0;;) {
+      auto end = std::find(value.begin() + std::ptrdiff_t(pos), value.end(), '\0');
+      if (end == value.end()) return "is not terminated within its " + std::to_string(size) + " bytes";
+      const bool last = end == value.begin() + std::ptrdiff_t(pos);
+      pos = std::size_t(end - value.begin()) + 1;
+      if (last) return pos == size ? "" : "ends after " + std::to_string(pos) + " of its " + std::to_string(size) + " bytes";
+      if (size - pos < 16) return "has a truncated channel entry";
+      pos += 16;
+    }
+  }
+  if (type == "stringvector") {
+    // strings of a 4-byte length and that many bytes, filling the value
+    for (std::size_t pos = 0; pos < size;) {
+      if (size - pos < 4) return "has a truncated string length";
+      const std::int32_t length = std::int32_t(readU32(value.data() + pos));
+      pos += 4;
+      if (length < 0 || std::size_t(length) > size - pos)
+        return "has a string of " + std::to_string(length) + " bytes where " + std::to_string(size - pos) + " remain";
+      pos += std::size_t(length);
+    }
+    return "";
+  }
+  if (type == "preview") {
+    // width, height, then 4 bytes per pixel
+    if (size < 8) return "has " + std::to_string(size) + " bytes, too few for a preview";
+    const std::uint64_t pixels = std::uint64_t(readU32(value.data())) * readU32(value.data() + 4);
+    return pixels * 4 + 8 == size ? "" : "has " + std::to_string(size) + " bytes for a preview of " +
+                                             std::to_string(pixels) + " pixels";
+  }
+  if (type == "floatvector" && size % 4 != 0)
+    return "has " + std::to_string(size) + " bytes, not a whole number of floats";
+  return "";
+}
+
+// OpenEXR 3.1 allocates each header attribute at the size the file claims
+// (up to 2 GiB, zero-filled for strings) before it finds the file shorter,
+// and where a value's declared size disagrees with what its type reads, it
+// reads the rest of the header out of step and allocates for whatever it
+// finds there. So a corrupt 100-byte file could take gigabytes; the header
+// structure is checked here first, everything else is left to OpenEXR.
+void checkExrHeaders(const std::string& name, std::span<const unsigned char> bytes) {
+  constexpr std::uint32_t kMagic = 20000630;
+  constexpr std::uint32_t kMultiPart = 0x1000;
+  if (bytes.size() < 8 || readU32(bytes.data()) != kMagic) return;  // OpenEXR says what it is not
+  const bool multiPart = (readU32(bytes.data() + 4) & kMultiPart) != 0;
+  std::size_t pos = 8;
+  auto text = [&]() -> std::optional<std::string> {
+    auto end = std::find(bytes.begin() + std::ptrdiff_t(pos), bytes.end(), '\0');
+    if (end == bytes.end()) return std::nullopt;
+    std::string s(bytes.begin() + std::ptrdiff_t(pos), end);
+    pos = std::size_t(end - bytes.begin()) + 1;
+    return s;
+  };
+  for (;;) {  // headers: one, or for multi-part files a list ended by an empty one
+    if (multiPart && pos < bytes.size() && bytes[pos] == 0) return;
+    for (;;) {  // attributes: name, type, size, value; an empty name ends the header
+      std::optional<std::string> attribute = text();
+      if (!attribute) return;  // truncated: OpenEXR reports it
+      if (attribute->empty()) break;
+      std::optional<std::string> type = text();
+      if (!type || bytes.size() - pos < 4) return;
+      const std::int32_t size = std::int32_t(readU32(bytes.data() + pos));
+      pos += 4;
+      const std::string label = "cannot read OpenEXR file: header attribute '" + printable(*attribute) +
+                                "' of type '" + printable(*type) + "' ";
+      if (size < 0 || std::size_t(size) > bytes.size() - pos)
+        fail(name, label + "claims " + std::to_string(size) + " bytes, " + std::to_string(bytes.size() - pos) +
+                       " follow");
+      const std::string problem = exrAttributeProblem(*type, bytes.subspan(pos, std::size_t(size)));
+      if (!problem.empty()) fail(name, label + problem);
+      pos += std::size_t(size);
+    }
+    if (!multiPart) return;
+  }
+}
+
 std::vector<glm::vec3> readExrPixels(const std::string& name, std::span<const unsigned char> bytes, int& width,
                                      int& height) {
+  checkExrHeaders(name, bytes);
   MemoryIStream stream(name, bytes);
   Imf::InputFile file(stream);
   const Imf::Header& header = file.header();
@@ -183,6 +300,16 @@ std::vector<glm::vec3> readExrPixels(const std::string& name, std::span<const un
   width = int(windowWidth);
   height = int(windowHeight);
   const std::size_t count = std::size_t(width) * std::size_t(height);
+  // The texels are allocated before OpenEXR decodes them: a corrupt header
+  // must not make a small file claim gigabytes. Every chunk has to be there,
+  // and deflate, the strongest of OpenEXR's compressors, packs at most
+  // 1032 bytes into one (516 half texels), so no file holds more texels
+  // than kMaxTexelsPerByte times its size.
+  if (!file.isComplete()) fail(name, "truncated: some scanlines or tiles are missing");
+  constexpr std::size_t kMaxTexelsPerByte = 1024;
+  if (count / kMaxTexelsPerByte > bytes.size())
+    fail(name, "corrupt header: a " + std::to_string(width) + " x " + std::to_string(height) +
+                   " data window cannot fit in " + std::to_string(bytes.size()) + " bytes");
 
   const Imf::ChannelList& channels = header.channels();
   auto has = [&](const char* c) { return channels.findChannel(c) != nullptr; };

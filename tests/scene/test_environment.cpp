@@ -9,13 +9,17 @@
 #include <ImfHeader.h>
 #include <ImfInputFile.h>
 #include <ImfOutputFile.h>
+#include <ImfPreviewImageAttribute.h>
 #include <ImfRgbaFile.h>
+#include <ImfStringVectorAttribute.h>
 #include <ImfTiledOutputFile.h>
 #include <stb_image_write.h>
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <cstddef>
 #include <fstream>
 #include <functional>
@@ -163,6 +167,63 @@ TEST(EnvironmentLoader, TruncatedExrIsRefused) {
   std::filesystem::path cut = test::scratchDir("environment") / "cut.exr";
   writeBytes(cut, bytes, bytes.size() / 2);
   expectError(cut, "cannot read OpenEXR file", [&] { loadEnvironmentMap(cut); });
+}
+
+TEST(EnvironmentLoader, ExrHeaderStructureIsCheckedFirst) {
+  // OpenEXR 3.1 reads each attribute at its type's own size and allocates by
+  // whatever size it then finds, so a value whose size disagrees with its
+  // type must be refused before OpenEXR sees it (see test_fuzz_regressions)
+  const int w = 8, h = 4;
+  std::filesystem::path path = test::scratchDir("environment") / "attributes.exr";
+  {
+    Imf::Header header(w, h);
+    header.setPreviewImage(Imf::PreviewImage(2, 1));
+    header.insert("names", Imf::StringVectorAttribute({"sky", "ground"}));
+    std::vector<float> px(std::size_t(w) * h * 3, 0.5f);
+    Imf::FrameBuffer fb;
+    for (int c = 0; c < 3; ++c) {
+      const char* channel = c == 0 ? "R" : c == 1 ? "G" : "B";
+      header.channels().insert(channel, Imf::Channel(Imf::FLOAT));
+      fb.insert(channel, Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(&px[c]), 3 * sizeof(float),
+                                    3 * sizeof(float) * w));
+    }
+    Imf::OutputFile out(path.c_str(), header);
+    out.setFrameBuffer(fb);
+    out.writePixels(h);
+  }
+  const std::vector<char> original = readAll(path);
+  ASSERT_EQ(loadEnvironmentMap(path).header.width, wt_uint(w));  // the unpatched file loads
+
+  // the 4 bytes `offset` bytes after the end of "name\0type\0", set to `value`
+  auto patched = [&](const std::string& attribute, std::size_t offset, std::uint32_t value) {
+    const std::string marker = attribute + '\0';
+    auto at = std::search(original.begin(), original.end(), marker.begin(), marker.end());
+    EXPECT_NE(at, original.end()) << attribute;
+    std::vector<char> bytes = original;
+    std::memcpy(bytes.data() + (at - original.begin()) + std::ptrdiff_t(marker.size() + offset), &value, 4);
+    std::filesystem::path out = test::scratchDir("environment") / ("patched_" + std::to_string(value) + ".exr");
+    writeBytes(out, bytes, bytes.size());
+    return out;
+  };
+  struct Case {
+    std::string attribute;  ///< "name\0type"
+    std::size_t offset;     ///< 0: the size field
+    std::uint32_t value;
+    std::string error;
+  };
+  const std::uint32_t chlistSize = 3 * 18 + 1;  // "R\0" + 16 bytes per channel, then a NUL
+  const Case cases[] = {
+      {std::string("pixelAspectRatio\0float", 22), 0, 3, "'pixelAspectRatio' of type 'float' has 3 bytes, expected 4"},
+      {std::string("channels\0chlist", 15), 0, chlistSize - 1, "'channels' of type 'chlist' is not terminated within its 54 bytes"},
+      {std::string("channels\0chlist", 15), 0, chlistSize + 1, "ends after 55 of its 56 bytes"},
+      {std::string("channels\0chlist", 15), 0, 0x7fffff00, "claims 2147483392 bytes"},
+      {std::string("preview\0preview", 15), 4, 100000, "has 16 bytes for a preview of 100000 pixels"},
+      {std::string("names\0stringvector", 18), 4, 0x7fffffff, "has a string of 2147483647 bytes where 13 remain"},
+  };
+  for (const Case& c : cases) {
+    std::filesystem::path bad = patched(c.attribute, c.offset, c.value);
+    expectError(bad, c.error, [&] { loadEnvironmentMap(bad); });
+  }
 }
 
 TEST(EnvironmentLoader, UnsupportedExrChannelsAreNamed) {
