@@ -16,10 +16,12 @@
 #include <cerrno>
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
 #include <cstring>
 #include <fstream>
 #include <initializer_list>
 #include <iterator>
+#include <limits>
 #include <memory>
 #include <numbers>
 #include <optional>
@@ -72,13 +74,19 @@ std::vector<unsigned char> readBytes(const std::filesystem::path& path) {
 
 // stb_image 2.27 does not notice truncated run-length data (it reads zeros,
 // and loops forever on a zero run count), so the structure is walked here
-// before stb decodes it.
-void checkRadianceFile(const std::string& name, std::span<const unsigned char> bytes) {
+// before stb decodes it. The header is read as stb reads it, or the two
+// could disagree on where the pixels start (found by fuzz_hdr: a line
+// starting with NUL ends stb's header, not a naive one): a line is its bytes
+// up to '\n', as a C string, at most 1023 characters. Returns the size.
+std::pair<int, int> checkRadianceFile(const std::string& name, std::span<const unsigned char> bytes) {
+  constexpr std::size_t kStbLineLength = 1023;  // STBI__HDR_BUFLEN - 1
   std::size_t pos = 0;
   auto nextLine = [&]() -> std::optional<std::string> {
     auto end = std::find(bytes.begin() + std::ptrdiff_t(pos), bytes.end(), '\n');
     if (end == bytes.end()) return std::nullopt;
-    std::string text(bytes.begin() + std::ptrdiff_t(pos), end);
+    auto stop = std::find(bytes.begin() + std::ptrdiff_t(pos), end, '\0');
+    std::string text(bytes.begin() + std::ptrdiff_t(pos), stop);
+    if (text.size() > kStbLineLength) text.resize(kStbLineLength);
     pos = std::size_t(end - bytes.begin()) + 1;
     return text;
   };
@@ -96,12 +104,25 @@ void checkRadianceFile(const std::string& name, std::span<const unsigned char> b
       fail(name, "unsupported pixel format '" + printable(line->substr(7)) + "' (only 32-bit_rle_rgbe)");
   }
   if (!rgbe) fail(name, "no FORMAT=32-bit_rle_rgbe line in the header");
+  // "-Y height +X width", parsed as stb parses it, but every field required
   line = nextLine();
-  long width = 0, height = 0;
-  char tail = 0;
-  int parsed = line ? std::sscanf(line->c_str(), "-Y %ld +X %ld%c", &height, &width, &tail) : 0;
-  if (parsed < 2 || (parsed == 3 && !std::isspace(static_cast<unsigned char>(tail))))
+  auto badResolution = [&] {
     fail(name, "unsupported resolution line '" + printable(line.value_or("")) + "' (only '-Y height +X width')");
+  };
+  if (!line || line->rfind("-Y ", 0) != 0) badResolution();
+  const char* text = line->c_str() + 3;
+  char* end = nullptr;
+  errno = 0;
+  const long height = std::strtol(text, &end, 10);
+  if (end == text || errno == ERANGE) badResolution();
+  while (*end == ' ') ++end;
+  if (std::strncmp(end, "+X ", 3) != 0) badResolution();
+  text = end + 3;
+  errno = 0;
+  const long width = std::strtol(text, &end, 10);
+  if (end == text || errno == ERANGE) badResolution();
+  for (; *end != '\0'; ++end)
+    if (!std::isspace(static_cast<unsigned char>(*end))) badResolution();
   if (width <= 0 || height <= 0 || width > (1 << 24) || height > (1 << 24))
     fail(name, "bad image size " + std::to_string(width) + " x " + std::to_string(height));
 
@@ -112,9 +133,10 @@ void checkRadianceFile(const std::string& name, std::span<const unsigned char> b
                      std::to_string(bytes.size()) + " bytes)");
   };
   const std::size_t flatBytes = w * h * 4;
+  const std::pair<int, int> size{int(width), int(height)};
   if (w < 8 || w >= 32768) {
     need(flatBytes, 0);  // flat pixels only
-    return;
+    return size;
   }
   for (std::size_t row = 0; row < h; ++row) {
     need(4, row);
@@ -122,7 +144,7 @@ void checkRadianceFile(const std::string& name, std::span<const unsigned char> b
     if (s[0] != 2 || s[1] != 2 || (s[2] & 0x80)) {
       if (row != 0) fail(name, "scanline " + std::to_string(row) + " is not run-length encoded but earlier ones are");
       need(flatBytes, row);
-      return;
+      return size;
     }
     std::size_t length = (std::size_t(s[2]) << 8) | s[3];
     if (length != w) fail(name, "scanline " + std::to_string(row) + " has length " + std::to_string(length) + ", expected " + std::to_string(w));
@@ -145,15 +167,23 @@ void checkRadianceFile(const std::string& name, std::span<const unsigned char> b
       }
     }
   }
+  return size;
 }
 
 std::vector<glm::vec3> readHdr(const std::string& name, std::span<const unsigned char> bytes, int& width,
                                int& height) {
-  checkRadianceFile(name, bytes);
+  if (bytes.size() > std::size_t(std::numeric_limits<int>::max()))
+    fail(name, "file too large for the .hdr reader (" + std::to_string(bytes.size()) + " bytes)");
+  const auto [checkedWidth, checkedHeight] = checkRadianceFile(name, bytes);
+  // stb must see the image the check walked, or the check proved nothing
   int channels = 0;
+  if (!stbi_info_from_memory(bytes.data(), int(bytes.size()), &width, &height, &channels) ||
+      width != checkedWidth || height != checkedHeight)
+    fail(name, "ambiguous header: stb_image reads it differently from the structure check");
   std::unique_ptr<float, void (*)(void*)> pixels(
       stbi_loadf_from_memory(bytes.data(), int(bytes.size()), &width, &height, &channels, 3), stbi_image_free);
   if (!pixels) fail(name, std::string("cannot decode: ") + stbi_failure_reason());
+  if (width != checkedWidth || height != checkedHeight) fail(name, "stb_image decoded an unexpected size");
   std::vector<glm::vec3> rgb(std::size_t(width) * std::size_t(height));
   std::memcpy(rgb.data(), pixels.get(), rgb.size() * sizeof(glm::vec3));
   return rgb;

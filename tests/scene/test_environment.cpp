@@ -161,6 +161,27 @@ TEST(EnvironmentLoader, CorruptRunLengthDataIsRefused) {
   expectError(path, "expected 64", [&] { loadEnvironmentMap(path); });
 }
 
+TEST(EnvironmentLoader, HdrHeaderIsReadAsStbReadsIt) {
+  // stb ends the header at a line that starts with NUL; a check that did not
+  // walked a harmless 4 x 1 image further down while stb decoded 64-wide
+  // run-length data the check had never seen (here with a zero run count)
+  using namespace std::string_literals;
+  const std::string text = "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n"s + '\0' + "\n-Y 1 +X 64\n" +
+                           "\x02\x02\x00\x40\x00 run of zero\n\n-Y 1 +X 4\n"s + std::string(16, '\x80');
+  std::filesystem::path path = test::scratchDir("environment") / "nul_line.hdr";
+  writeBytes(path, std::vector<char>(text.begin(), text.end()), text.size());
+  expectError(path, "scanline 0: zero-length run", [&] { loadEnvironmentMap(path); });
+  // the same without the zero run: stb's 64 x 1 reading is what is checked
+  std::string flat = text.substr(0, text.find("\x02\x02")) + std::string(256, '\x80');
+  writeBytes(path, std::vector<char>(flat.begin(), flat.end()), flat.size());
+  EXPECT_EQ(loadEnvironmentMap(path).header.width, 64u);
+  // and lines longer than stb's 1023-character buffer are cut where stb cuts them
+  std::string longLine = "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 1 +X " + std::string(1100, ' ') + "4\n" +
+                         std::string(16, '\x80');
+  writeBytes(path, std::vector<char>(longLine.begin(), longLine.end()), longLine.size());
+  expectError(path, "unsupported resolution line", [&] { loadEnvironmentMap(path); });
+}
+
 TEST(EnvironmentLoader, TruncatedExrIsRefused) {
   std::filesystem::path full = writeExr("full.exr", 32, 16, {"R", "G", "B"}, [](int k, int c) { return float(k + c); });
   std::vector<char> bytes = readAll(full);

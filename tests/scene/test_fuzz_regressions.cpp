@@ -32,6 +32,9 @@ const Finding kFindings[] = {
      "OpenEXR read 8 bytes anyway, lost step and allocated 1.8 GB for the next 'attribute'"},
     {"attribute_past_the_end.exr", "claims 1886152803 bytes, 19 follow",
      "OpenEXR allocated 1.8 GB for an attribute of a 51-byte file"},
+    {"nul_line_ends_the_header.hdr", "unsupported resolution line '-Y 6 +X  \\x80",
+     "stb ended the header at a line starting with NUL, the structure check did not: stb decoded a 0 x 6 "
+     "image the check had never seen (and a 0-byte memcpy from a null pointer followed, UBSan)"},
     {"short_uncompressed_chunk.exr", nullptr,
      "a segfault in OpenEXR's copyIntoFrameBuffer while the EXR stream was memory-mapped (chunks shorter "
      "than their lines are read past their end); it loads now (OpenEXR fills the gap from its line buffer)"},
