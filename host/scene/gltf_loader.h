@@ -4,6 +4,7 @@
 
 #include "scene/scene.h"
 
+#include <cstddef>
 #include <span>
 #include <string>
 #include <string_view>
@@ -13,6 +14,11 @@ namespace wt {
 struct GltfLoadOptions {
   int sceneIndex = -1;   ///< -1: the file's default scene (or scene 0)
   int cameraIndex = 0;   ///< which camera node (in traversal order) to use, if any
+  /// Refuse scenes that flatten (every mesh instance placed) to more; counted
+  /// from the accessors before anything is decoded. 2^28 vertices take
+  /// 10 GiB of host arrays.
+  std::size_t maxVertices = std::size_t(1) << 28;
+  std::size_t maxTriangles = std::size_t(1) << 28;
 };
 
 /// Load a .gltf or .glb file. Throws SceneError.
