@@ -27,6 +27,7 @@
 #include <optional>
 #include <sstream>
 #include <string_view>
+#include <tuple>
 
 namespace wt {
 namespace {
@@ -273,6 +274,24 @@ std::string exrAttributeProblem(const std::string& type, std::span<const unsigne
   return "";
 }
 
+/// The data window of a file of `fileSize` bytes, checked before anything
+/// is allocated for it (by OpenEXR, whose line buffers follow the window, or
+/// by us): deflate, the strongest of OpenEXR's compressors, packs at most
+/// 1032 bytes into one (516 half texels), so no file holds more texels than
+/// kMaxTexelsPerByte times its size. Returns width and height.
+std::pair<int, int> checkDataWindow(const std::string& name, const Imath::Box2i& window, std::size_t fileSize) {
+  constexpr std::int64_t kMaxTexelsPerByte = 1024;
+  // in 64 bits: a corrupt window can span more than an int
+  const std::int64_t width = std::int64_t(window.max.x) - window.min.x + 1;
+  const std::int64_t height = std::int64_t(window.max.y) - window.min.y + 1;
+  if (width <= 0 || height <= 0) fail(name, "empty data window");
+  checkMapSize(name, width, height);
+  if (width * height / kMaxTexelsPerByte > std::int64_t(fileSize))
+    fail(name, "corrupt header: a " + std::to_string(width) + " x " + std::to_string(height) +
+                   " data window cannot fit in " + std::to_string(fileSize) + " bytes");
+  return {int(width), int(height)};
+}
+
 // OpenEXR 3.1 allocates each header attribute at the size the file claims
 // (up to 2 GiB, zero-filled for strings) before it finds the file shorter,
 // and where a value's declared size disagrees with what its type reads, it
@@ -309,6 +328,11 @@ void checkExrHeaders(const std::string& name, std::span<const unsigned char> byt
                        " follow");
       const std::string problem = exrAttributeProblem(*type, bytes.subspan(pos, std::size_t(size)));
       if (!problem.empty()) fail(name, label + problem);
+      if (*attribute == "dataWindow" && *type == "box2i") {
+        const unsigned char* v = bytes.data() + pos;
+        const auto at = [&](int i) { return std::int32_t(readU32(v + 4 * i)); };
+        checkDataWindow(name, Imath::Box2i({at(0), at(1)}, {at(2), at(3)}), bytes.size());
+      }
       pos += std::size_t(size);
     }
     if (!multiPart) return;
@@ -322,24 +346,10 @@ std::vector<glm::vec3> readExrPixels(const std::string& name, std::span<const un
   Imf::InputFile file(stream);
   const Imf::Header& header = file.header();
   const Imath::Box2i window = header.dataWindow();
-  // in 64 bits: a corrupt window can span more than an int
-  const std::int64_t windowWidth = std::int64_t(window.max.x) - window.min.x + 1;
-  const std::int64_t windowHeight = std::int64_t(window.max.y) - window.min.y + 1;
-  if (windowWidth <= 0 || windowHeight <= 0) fail(name, "empty data window");
-  checkMapSize(name, windowWidth, windowHeight);
-  width = int(windowWidth);
-  height = int(windowHeight);
+  std::tie(width, height) = checkDataWindow(name, window, bytes.size());  // as checkExrHeaders did
   const std::size_t count = std::size_t(width) * std::size_t(height);
-  // The texels are allocated before OpenEXR decodes them: a corrupt header
-  // must not make a small file claim gigabytes. Every chunk has to be there,
-  // and deflate, the strongest of OpenEXR's compressors, packs at most
-  // 1032 bytes into one (516 half texels), so no file holds more texels
-  // than kMaxTexelsPerByte times its size.
+  // the texels are allocated before OpenEXR decodes them: every chunk must be there
   if (!file.isComplete()) fail(name, "truncated: some scanlines or tiles are missing");
-  constexpr std::size_t kMaxTexelsPerByte = 1024;
-  if (count / kMaxTexelsPerByte > bytes.size())
-    fail(name, "corrupt header: a " + std::to_string(width) + " x " + std::to_string(height) +
-                   " data window cannot fit in " + std::to_string(bytes.size()) + " bytes");
 
   const Imf::ChannelList& channels = header.channels();
   auto has = [&](const char* c) { return channels.findChannel(c) != nullptr; };

@@ -190,6 +190,40 @@ TEST(EnvironmentLoader, TruncatedExrIsRefused) {
   expectError(cut, "cannot read OpenEXR file", [&] { loadEnvironmentMap(cut); });
 }
 
+TEST(EnvironmentLoader, ExrWithMissingChunksIsRefusedBeforeAllocating) {
+  // one scanline per chunk (no compression), half the chunk offsets zero:
+  // OpenEXR marks such a file incomplete, and it is refused before the
+  // texels are allocated
+  const int w = 8, h = 512;
+  Imath::Box2i window(Imath::V2i(0, 0), Imath::V2i(w - 1, h - 1));
+  Imf::Header header(window, window);
+  header.compression() = Imf::NO_COMPRESSION;
+  std::vector<float> px(std::size_t(w) * h, 1.0f);
+  Imf::FrameBuffer fb;
+  for (const char* c : {"R", "G", "B"}) {
+    header.channels().insert(c, Imf::Channel(Imf::FLOAT));
+    fb.insert(c, Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(px.data()), sizeof(float), sizeof(float) * w));
+  }
+  std::filesystem::path full = test::scratchDir("environment") / "one_line_chunks.exr";
+  {
+    Imf::OutputFile out(full.c_str(), header);
+    out.setFrameBuffer(fb);
+    out.writePixels(h);
+  }
+  std::vector<char> bytes = readAll(full);
+  ASSERT_EQ(loadEnvironmentMap(full).header.height, wt_uint(h));
+  // the header ends after screenWindowWidth (the last attribute: 4 bytes of
+  // size, 4 of value) and a NUL; the offset table follows, 8 bytes a chunk
+  const std::string last = std::string("screenWindowWidth\0float\0", 24);
+  const std::size_t attribute = std::string(bytes.begin(), bytes.end()).find(last);
+  ASSERT_NE(attribute, std::string::npos);
+  const std::size_t table = attribute + last.size() + 4 + 4 + 1;
+  std::fill(bytes.begin() + std::ptrdiff_t(table + 8 * (h / 2)), bytes.begin() + std::ptrdiff_t(table + 8 * h), 0);
+  std::filesystem::path holes = test::scratchDir("environment") / "zero_offsets.exr";
+  writeBytes(holes, bytes, bytes.size());
+  expectError(holes, "truncated: some scanlines or tiles are missing", [&] { loadEnvironmentMap(holes); });
+}
+
 TEST(EnvironmentLoader, ExrHeaderStructureIsCheckedFirst) {
   // OpenEXR 3.1 reads each attribute at its type's own size and allocates by
   // whatever size it then finds, so a value whose size disagrees with its
