@@ -4,6 +4,7 @@
 
 #include <IexBaseExc.h>
 #include <ImfChannelList.h>
+#include <ImfCompression.h>
 #include <ImfFrameBuffer.h>
 #include <ImfHeader.h>
 #include <ImfIO.h>
@@ -276,20 +277,37 @@ std::string exrAttributeProblem(const std::string& type, std::span<const unsigne
 
 /// The data window of a file of `fileSize` bytes, checked before anything
 /// is allocated for it (by OpenEXR, whose line buffers follow the window, or
-/// by us): deflate, the strongest of OpenEXR's compressors, packs at most
-/// 1032 bytes into one (516 half texels), so no file holds more texels than
-/// kMaxTexelsPerByte times its size. Returns width and height.
-std::pair<int, int> checkDataWindow(const std::string& name, const Imath::Box2i& window, std::size_t fileSize) {
-  constexpr std::int64_t kMaxTexelsPerByte = 1024;
+/// by us). A file cannot hold more texels than its compression packs into
+/// its bytes: deflate (ZIP, PXR24) packs at most 1032 bytes into one, i.e.
+/// 516 half texels, the others less, except DWA, which stores a constant
+/// 8 x 8 block as one deflated value (64 x 1032 / 2 texels per byte).
+/// Returns width and height.
+std::pair<int, int> checkDataWindow(const std::string& name, const Imath::Box2i& window, int compression,
+                                    std::size_t fileSize) {
+  const bool dwa = compression == Imf::DWAA_COMPRESSION || compression == Imf::DWAB_COMPRESSION;
+  const std::int64_t maxTexelsPerByte = dwa ? 33024 : 1024;
   // in 64 bits: a corrupt window can span more than an int
   const std::int64_t width = std::int64_t(window.max.x) - window.min.x + 1;
   const std::int64_t height = std::int64_t(window.max.y) - window.min.y + 1;
   if (width <= 0 || height <= 0) fail(name, "empty data window");
   checkMapSize(name, width, height);
-  if (width * height / kMaxTexelsPerByte > std::int64_t(fileSize))
+  if (width * height / maxTexelsPerByte > std::int64_t(fileSize))
     fail(name, "corrupt header: a " + std::to_string(width) + " x " + std::to_string(height) +
                    " data window cannot fit in " + std::to_string(fileSize) + " bytes");
   return {int(width), int(height)};
+}
+
+/// Tiles may be larger than the data window (a 64 x 64 tile on a 50-row
+/// image), but OpenEXR allocates a tile, and a row of tiles across the
+/// window, before reading any: a tile much larger than the window is refused.
+void checkTileSize(const std::string& name, const Imath::Box2i& window, std::uint32_t tileWidth,
+                   std::uint32_t tileHeight) {
+  constexpr std::int64_t kSlack = 256;
+  const std::int64_t width = std::int64_t(window.max.x) - window.min.x + 1;
+  const std::int64_t height = std::int64_t(window.max.y) - window.min.y + 1;
+  if (tileWidth == 0 || tileHeight == 0 || tileWidth > std::max(width, kSlack) || tileHeight > std::max(height, kSlack))
+    fail(name, "corrupt header: " + std::to_string(tileWidth) + " x " + std::to_string(tileHeight) +
+                   " tiles for a " + std::to_string(width) + " x " + std::to_string(height) + " data window");
 }
 
 // OpenEXR 3.1 allocates each header attribute at the size the file claims
@@ -313,6 +331,9 @@ void checkExrHeaders(const std::string& name, std::span<const unsigned char> byt
   };
   for (;;) {  // headers: one, or for multi-part files a list ended by an empty one
     if (multiPart && pos < bytes.size() && bytes[pos] == 0) return;
+    std::optional<Imath::Box2i> window;
+    std::optional<std::pair<std::uint32_t, std::uint32_t>> tile;
+    int compression = Imf::ZIP_COMPRESSION;  // OpenEXR's default when the attribute is absent
     for (;;) {  // attributes: name, type, size, value; an empty name ends the header
       std::optional<std::string> attribute = text();
       if (!attribute) return;  // truncated: OpenEXR reports it
@@ -328,13 +349,17 @@ void checkExrHeaders(const std::string& name, std::span<const unsigned char> byt
                        " follow");
       const std::string problem = exrAttributeProblem(*type, bytes.subspan(pos, std::size_t(size)));
       if (!problem.empty()) fail(name, label + problem);
-      if (*attribute == "dataWindow" && *type == "box2i") {
-        const unsigned char* v = bytes.data() + pos;
-        const auto at = [&](int i) { return std::int32_t(readU32(v + 4 * i)); };
-        checkDataWindow(name, Imath::Box2i({at(0), at(1)}, {at(2), at(3)}), bytes.size());
-      }
+      // sizes are right here: what OpenEXR sizes its buffers by
+      const unsigned char* v = bytes.data() + pos;
+      const auto at = [&](int i) { return std::int32_t(readU32(v + 4 * i)); };
+      if (*attribute == "dataWindow" && *type == "box2i") window = Imath::Box2i({at(0), at(1)}, {at(2), at(3)});
+      if (*attribute == "tiles" && *type == "tiledesc") tile = std::pair(readU32(v), readU32(v + 4));
+      if (*attribute == "compression" && *type == "compression") compression = v[0];
       pos += std::size_t(size);
     }
+    if (!window) fail(name, "cannot read OpenEXR file: the header has no dataWindow");
+    checkDataWindow(name, *window, compression, bytes.size());
+    if (tile) checkTileSize(name, *window, tile->first, tile->second);
     if (!multiPart) return;
   }
 }
@@ -346,7 +371,7 @@ std::vector<glm::vec3> readExrPixels(const std::string& name, std::span<const un
   Imf::InputFile file(stream);
   const Imf::Header& header = file.header();
   const Imath::Box2i window = header.dataWindow();
-  std::tie(width, height) = checkDataWindow(name, window, bytes.size());  // as checkExrHeaders did
+  std::tie(width, height) = checkDataWindow(name, window, header.compression(), bytes.size());  // as checkExrHeaders did
   const std::size_t count = std::size_t(width) * std::size_t(height);
   // the texels are allocated before OpenEXR decodes them: every chunk must be there
   if (!file.isComplete()) fail(name, "truncated: some scanlines or tiles are missing");

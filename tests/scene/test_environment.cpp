@@ -224,6 +224,62 @@ TEST(EnvironmentLoader, ExrWithMissingChunksIsRefusedBeforeAllocating) {
   expectError(holes, "truncated: some scanlines or tiles are missing", [&] { loadEnvironmentMap(holes); });
 }
 
+TEST(EnvironmentLoader, ExrTilesMuchLargerThanTheWindowAreRefused) {
+  const int w = 40, h = 20;
+  std::filesystem::path path = test::scratchDir("environment") / "tiles.exr";
+  {
+    Imf::Header header(w, h);
+    for (const char* c : {"R", "G", "B"}) header.channels().insert(c, Imf::Channel(Imf::HALF));
+    header.setTileDescription(Imf::TileDescription(64, 64, Imf::ONE_LEVEL));  // larger than the window: fine
+    Imf::TiledOutputFile out(path.c_str(), header);
+    std::vector<half> px(std::size_t(w) * h * 3, half(0.25f));
+    Imf::FrameBuffer fb;
+    for (int c = 0; c < 3; ++c)
+      fb.insert(c == 0 ? "R" : c == 1 ? "G" : "B",
+                Imf::Slice(Imf::HALF, reinterpret_cast<char*>(&px[std::size_t(c)]), 3 * sizeof(half),
+                           3 * sizeof(half) * w));
+    out.setFrameBuffer(fb);
+    out.writeTiles(0, out.numXTiles() - 1, 0, out.numYTiles() - 1);
+  }
+  EXPECT_EQ(loadEnvironmentMap(path).header.width, wt_uint(w));
+  // the tile height patched to 2^24: OpenEXR would allocate gigabytes for it
+  std::vector<char> bytes = readAll(path);
+  const std::string marker = std::string("tiles\0tiledesc\0", 15);
+  const std::size_t at = std::string(bytes.begin(), bytes.end()).find(marker);
+  ASSERT_NE(at, std::string::npos);
+  const std::uint32_t tall = 1u << 24;
+  std::memcpy(bytes.data() + at + marker.size() + 4 + 4, &tall, 4);  // after the size and the tile width
+  std::filesystem::path bad = test::scratchDir("environment") / "tall_tiles.exr";
+  writeBytes(bad, bytes, bytes.size());
+  expectError(bad, "corrupt header: 64 x 16777216 tiles for a 40 x 20 data window", [&] { loadEnvironmentMap(bad); });
+}
+
+TEST(EnvironmentLoader, ConstantDwaMapIsNotTakenForCorrupt) {
+  // DWA stores a constant 8 x 8 block as one deflated value, so a constant
+  // map packs far more texels per byte than deflate alone could
+  const int w = 2048, h = 1024;
+  std::filesystem::path path = test::scratchDir("environment") / "constant_dwab.exr";
+  {
+    Imath::Box2i window(Imath::V2i(0, 0), Imath::V2i(w - 1, h - 1));
+    Imf::Header header(window, window);
+    header.compression() = Imf::DWAB_COMPRESSION;
+    std::vector<half> px(std::size_t(w) * h, half(0.5f));
+    Imf::FrameBuffer fb;
+    for (const char* c : {"R", "G", "B"}) {
+      header.channels().insert(c, Imf::Channel(Imf::HALF));
+      fb.insert(c, Imf::Slice(Imf::HALF, reinterpret_cast<char*>(px.data()), sizeof(half), sizeof(half) * w));
+    }
+    Imf::OutputFile out(path.c_str(), header);
+    out.setFrameBuffer(fb);
+    out.writePixels(h);
+  }
+  const std::size_t fileSize = std::filesystem::file_size(path);
+  EXPECT_GT(std::size_t(w) * h / fileSize, 1024u) << "the file is not denser than deflate alone: " << fileSize << " bytes";
+  Environment env = loadEnvironmentMap(path);
+  ASSERT_EQ(env.header.width, wt_uint(w));
+  EXPECT_NEAR(env.texels[12345].y, 0.5f, 0.01f);  // DWA is lossy
+}
+
 TEST(EnvironmentLoader, ExrHeaderStructureIsCheckedFirst) {
   // OpenEXR 3.1 reads each attribute at its type's own size and allocates by
   // whatever size it then finds, so a value whose size disagrees with its

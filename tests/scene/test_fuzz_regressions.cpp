@@ -36,6 +36,9 @@ const Finding kFindings[] = {
     {"nul_line_ends_the_header.hdr", "unsupported resolution line '-Y 6 +X  \\x80",
      "stb ended the header at a line starting with NUL, the structure check did not: stb decoded a 0 x 6 "
      "image the check had never seen (and a 0-byte memcpy from a null pointer followed, UBSan)"},
+    {"tiled_without_data_window.exr", "the header has no dataWindow",
+     "a tiled file with 14 x 16777220 tiles and no dataWindow (OpenEXR then assumes 64 x 64): OpenEXR "
+     "allocated 4 GiB for a row of tiles in InputFile::setFrameBuffer"},
     {"short_uncompressed_chunk.exr", nullptr,
      "a segfault in OpenEXR's copyIntoFrameBuffer while the EXR stream was memory-mapped (chunks shorter "
      "than their lines are read past their end); it loads now (OpenEXR fills the gap from its line buffer)"},
