@@ -53,6 +53,11 @@ EnvironmentUpload environmentUpload(const Environment& environment);
 Environment loadEnvironmentMap(const std::filesystem::path& path, float intensity = 1.0f,
                                float rotationDegrees = 0.0f);
 
+/// The same, from a file's bytes in memory: `name`'s extension (.hdr or .exr)
+/// picks the format and every message starts with `name`.
+Environment loadEnvironmentMapFromMemory(std::span<const unsigned char> bytes, const std::string& name,
+                                         float intensity = 1.0f, float rotationDegrees = 0.0f);
+
 /// The same radiance from every direction (nits per channel).
 Environment constantEnvironment(glm::vec3 radiance);
 

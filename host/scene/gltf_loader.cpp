@@ -24,6 +24,7 @@
 #include <limits>
 #include <memory>
 #include <new>
+#include <optional>
 #include <sstream>
 #include <type_traits>
 #include <utility>
@@ -144,6 +145,12 @@ std::string formatVec3(const glm::vec3& v) {
 bool mulAdd(std::size_t a, std::size_t b, std::size_t c, std::size_t* result) {
   std::size_t product = 0;
   return !__builtin_mul_overflow(a, b, &product) && !__builtin_add_overflow(product, c, result);
+}
+
+/// a + b, or the largest size_t when that does not fit (counts from the file can be anything).
+std::size_t saturatingAdd(std::size_t a, std::size_t b) {
+  std::size_t sum = 0;
+  return __builtin_add_overflow(a, b, &sum) ? std::numeric_limits<std::size_t>::max() : sum;
 }
 
 std::uint32_t readU32(const unsigned char* p) {
@@ -866,8 +873,51 @@ class Converter {
         fail(label + ": references missing mesh " + std::to_string(node.mesh));
       if (node.skin >= 0)
         m_scene.addWarning("skinning is not supported; skinned meshes are drawn in their bind pose");
-      m_meshInstances.push_back({nodeIndex, std::size_t(node.mesh), world});
+      const auto meshIndex = std::size_t(node.mesh);
+      const auto [vertices, triangles] = meshSize(meshIndex);
+      m_sceneVertices = saturatingAdd(m_sceneVertices, vertices);
+      m_sceneTriangles = saturatingAdd(m_sceneTriangles, triangles);
+      // counted before anything is decoded: instancing must not let a small
+      // file take all memory
+      if (m_sceneVertices > m_options.maxVertices || m_sceneTriangles > m_options.maxTriangles)
+        fail(label + ": mesh " + std::to_string(meshIndex) + " brings the flattened scene to " +
+             std::to_string(m_sceneVertices) + " vertices and " + std::to_string(m_sceneTriangles) +
+             " triangles, more than the " + std::to_string(m_options.maxVertices) + " and " +
+             std::to_string(m_options.maxTriangles) + " supported");
+      m_meshInstances.push_back({nodeIndex, meshIndex, world});
     }
+  }
+
+  /// Vertices and triangles one instance of a mesh adds, from the accessor
+  /// counts alone (nothing decoded). A count decode() would refuse (past its
+  /// buffer view, or too many unbacked zeros) counts only what could be read,
+  /// so that decode() still names the real problem.
+  std::pair<std::size_t, std::size_t> meshSize(std::size_t meshIndex) {
+    if (m_meshSizes.empty()) m_meshSizes.resize(m_model.meshes.size());
+    auto& cached = m_meshSizes[meshIndex];
+    if (cached) return *cached;
+    std::size_t vertices = 0, triangles = 0;
+    auto count = [&](int index) -> std::size_t {
+      if (index < 0 || std::size_t(index) >= m_model.accessors.size()) return 0;
+      const Accessor& acc = m_model.accessors[std::size_t(index)];
+      if (acc.bufferView < 0) return acc.count <= kMaxUnbackedElements ? acc.count : 0;
+      if (std::size_t(acc.bufferView) >= m_model.bufferViews.size()) return 0;
+      const std::size_t element = componentSize(acc.componentType) * std::size_t(componentCount(acc.type));
+      if (element == 0) return 0;
+      return std::min(acc.count, m_model.bufferViews[std::size_t(acc.bufferView)].byteLength / element);
+    };
+    for (const tinygltf::Primitive& prim : m_model.meshes[meshIndex].primitives) {
+      const int mode = prim.mode < 0 ? TINYGLTF_MODE_TRIANGLES : prim.mode;
+      if (mode < TINYGLTF_MODE_TRIANGLES || mode > TINYGLTF_MODE_TRIANGLE_FAN) continue;  // skipped or refused
+      auto position = prim.attributes.find("POSITION");
+      if (position == prim.attributes.end()) continue;
+      const std::size_t n = count(position->second);
+      const std::size_t refs = prim.indices >= 0 ? count(prim.indices) : n;
+      vertices = saturatingAdd(vertices, n);
+      triangles = saturatingAdd(triangles, mode == TINYGLTF_MODE_TRIANGLES ? refs / 3 : refs >= 3 ? refs - 2 : 0);
+    }
+    cached = std::pair(vertices, triangles);
+    return *cached;
   }
 
   // lights
@@ -975,12 +1025,15 @@ class Converter {
   std::vector<bool> m_localDone;
   std::vector<std::vector<std::unique_ptr<DecodedPrimitive>>> m_decoded;
   std::vector<std::pair<std::size_t, glm::dmat4>> m_cameraNodes;
-  std::vector<MeshInstance> m_meshInstances;
+  std::vector<MeshInstance> m_meshInstances;  ///< in traversal order
   std::vector<LightInstance> m_lightInstances;
   glm::dmat4 m_cameraWorld{1.0};
   glm::dvec3 m_origin{0.0};
   std::size_t m_degenerateTriangles = 0;
   std::string m_firstDegenerate;
+  std::vector<std::optional<std::pair<std::size_t, std::size_t>>> m_meshSizes;  ///< per mesh: vertices, triangles
+  std::size_t m_sceneVertices = 0;
+  std::size_t m_sceneTriangles = 0;
 };
 
 /// Check the GLB container ourselves: tinygltf 2.7 does not count the BIN
@@ -1089,6 +1142,11 @@ Scene loadGltfFromMemory(std::string_view contents, const std::string& name,
   if (contents.empty()) throw SceneError(name + ": the scene text is empty");
   return loadFromBytes(reinterpret_cast<const unsigned char*>(contents.data()), contents.size(),
                        false, name, name, baseDir, options);
+}
+
+Scene loadGlbFromMemory(std::span<const unsigned char> bytes, const std::string& name,
+                        const std::string& baseDir, const GltfLoadOptions& options) {
+  return loadFromBytes(bytes.data(), bytes.size(), true, name, name, baseDir, options);
 }
 
 }  // namespace wt

@@ -7,13 +7,19 @@
 #include <ImfChannelList.h>
 #include <ImfFrameBuffer.h>
 #include <ImfHeader.h>
+#include <ImfInputFile.h>
 #include <ImfOutputFile.h>
+#include <ImfPreviewImageAttribute.h>
+#include <ImfRgbaFile.h>
+#include <ImfStringVectorAttribute.h>
 #include <ImfTiledOutputFile.h>
 #include <stb_image_write.h>
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <cstddef>
 #include <fstream>
 #include <functional>
@@ -155,12 +161,180 @@ TEST(EnvironmentLoader, CorruptRunLengthDataIsRefused) {
   expectError(path, "expected 64", [&] { loadEnvironmentMap(path); });
 }
 
+TEST(EnvironmentLoader, HdrHeaderIsReadAsStbReadsIt) {
+  // stb ends the header at a line that starts with NUL; a check that did not
+  // walked a harmless 4 x 1 image further down while stb decoded 64-wide
+  // run-length data the check had never seen (here with a zero run count)
+  using namespace std::string_literals;
+  const std::string text = "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n"s + '\0' + "\n-Y 1 +X 64\n" +
+                           "\x02\x02\x00\x40\x00 run of zero\n\n-Y 1 +X 4\n"s + std::string(16, '\x80');
+  std::filesystem::path path = test::scratchDir("environment") / "nul_line.hdr";
+  writeBytes(path, std::vector<char>(text.begin(), text.end()), text.size());
+  expectError(path, "scanline 0: zero-length run", [&] { loadEnvironmentMap(path); });
+  // the same without the zero run: stb's 64 x 1 reading is what is checked
+  std::string flat = text.substr(0, text.find("\x02\x02")) + std::string(256, '\x80');
+  writeBytes(path, std::vector<char>(flat.begin(), flat.end()), flat.size());
+  EXPECT_EQ(loadEnvironmentMap(path).header.width, 64u);
+  // and lines longer than stb's 1023-character buffer are cut where stb cuts them
+  std::string longLine = "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 1 +X " + std::string(1100, ' ') + "4\n" +
+                         std::string(16, '\x80');
+  writeBytes(path, std::vector<char>(longLine.begin(), longLine.end()), longLine.size());
+  expectError(path, "unsupported resolution line", [&] { loadEnvironmentMap(path); });
+}
+
 TEST(EnvironmentLoader, TruncatedExrIsRefused) {
   std::filesystem::path full = writeExr("full.exr", 32, 16, {"R", "G", "B"}, [](int k, int c) { return float(k + c); });
   std::vector<char> bytes = readAll(full);
   std::filesystem::path cut = test::scratchDir("environment") / "cut.exr";
   writeBytes(cut, bytes, bytes.size() / 2);
   expectError(cut, "cannot read OpenEXR file", [&] { loadEnvironmentMap(cut); });
+}
+
+TEST(EnvironmentLoader, ExrWithMissingChunksIsRefusedBeforeAllocating) {
+  // one scanline per chunk (no compression), half the chunk offsets zero:
+  // OpenEXR marks such a file incomplete, and it is refused before the
+  // texels are allocated
+  const int w = 8, h = 512;
+  Imath::Box2i window(Imath::V2i(0, 0), Imath::V2i(w - 1, h - 1));
+  Imf::Header header(window, window);
+  header.compression() = Imf::NO_COMPRESSION;
+  std::vector<float> px(std::size_t(w) * h, 1.0f);
+  Imf::FrameBuffer fb;
+  for (const char* c : {"R", "G", "B"}) {
+    header.channels().insert(c, Imf::Channel(Imf::FLOAT));
+    fb.insert(c, Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(px.data()), sizeof(float), sizeof(float) * w));
+  }
+  std::filesystem::path full = test::scratchDir("environment") / "one_line_chunks.exr";
+  {
+    Imf::OutputFile out(full.c_str(), header);
+    out.setFrameBuffer(fb);
+    out.writePixels(h);
+  }
+  std::vector<char> bytes = readAll(full);
+  ASSERT_EQ(loadEnvironmentMap(full).header.height, wt_uint(h));
+  // the header ends after screenWindowWidth (the last attribute: 4 bytes of
+  // size, 4 of value) and a NUL; the offset table follows, 8 bytes a chunk
+  const std::string last = std::string("screenWindowWidth\0float\0", 24);
+  const std::size_t attribute = std::string(bytes.begin(), bytes.end()).find(last);
+  ASSERT_NE(attribute, std::string::npos);
+  const std::size_t table = attribute + last.size() + 4 + 4 + 1;
+  std::fill(bytes.begin() + std::ptrdiff_t(table + 8 * (h / 2)), bytes.begin() + std::ptrdiff_t(table + 8 * h), 0);
+  std::filesystem::path holes = test::scratchDir("environment") / "zero_offsets.exr";
+  writeBytes(holes, bytes, bytes.size());
+  expectError(holes, "truncated: some scanlines or tiles are missing", [&] { loadEnvironmentMap(holes); });
+}
+
+TEST(EnvironmentLoader, ExrTilesMuchLargerThanTheWindowAreRefused) {
+  const int w = 40, h = 20;
+  std::filesystem::path path = test::scratchDir("environment") / "tiles.exr";
+  {
+    Imf::Header header(w, h);
+    for (const char* c : {"R", "G", "B"}) header.channels().insert(c, Imf::Channel(Imf::HALF));
+    header.setTileDescription(Imf::TileDescription(64, 64, Imf::ONE_LEVEL));  // larger than the window: fine
+    Imf::TiledOutputFile out(path.c_str(), header);
+    std::vector<half> px(std::size_t(w) * h * 3, half(0.25f));
+    Imf::FrameBuffer fb;
+    for (int c = 0; c < 3; ++c)
+      fb.insert(c == 0 ? "R" : c == 1 ? "G" : "B",
+                Imf::Slice(Imf::HALF, reinterpret_cast<char*>(&px[std::size_t(c)]), 3 * sizeof(half),
+                           3 * sizeof(half) * w));
+    out.setFrameBuffer(fb);
+    out.writeTiles(0, out.numXTiles() - 1, 0, out.numYTiles() - 1);
+  }
+  EXPECT_EQ(loadEnvironmentMap(path).header.width, wt_uint(w));
+  // the tile height patched to 2^24: OpenEXR would allocate gigabytes for it
+  std::vector<char> bytes = readAll(path);
+  const std::string marker = std::string("tiles\0tiledesc\0", 15);
+  const std::size_t at = std::string(bytes.begin(), bytes.end()).find(marker);
+  ASSERT_NE(at, std::string::npos);
+  const std::uint32_t tall = 1u << 24;
+  std::memcpy(bytes.data() + at + marker.size() + 4 + 4, &tall, 4);  // after the size and the tile width
+  std::filesystem::path bad = test::scratchDir("environment") / "tall_tiles.exr";
+  writeBytes(bad, bytes, bytes.size());
+  expectError(bad, "corrupt header: 64 x 16777216 tiles for a 40 x 20 data window", [&] { loadEnvironmentMap(bad); });
+}
+
+TEST(EnvironmentLoader, ConstantDwaMapIsNotTakenForCorrupt) {
+  // DWA stores a constant 8 x 8 block as one deflated value, so a constant
+  // map packs far more texels per byte than deflate alone could
+  const int w = 2048, h = 1024;
+  std::filesystem::path path = test::scratchDir("environment") / "constant_dwab.exr";
+  {
+    Imath::Box2i window(Imath::V2i(0, 0), Imath::V2i(w - 1, h - 1));
+    Imf::Header header(window, window);
+    header.compression() = Imf::DWAB_COMPRESSION;
+    std::vector<half> px(std::size_t(w) * h, half(0.5f));
+    Imf::FrameBuffer fb;
+    for (const char* c : {"R", "G", "B"}) {
+      header.channels().insert(c, Imf::Channel(Imf::HALF));
+      fb.insert(c, Imf::Slice(Imf::HALF, reinterpret_cast<char*>(px.data()), sizeof(half), sizeof(half) * w));
+    }
+    Imf::OutputFile out(path.c_str(), header);
+    out.setFrameBuffer(fb);
+    out.writePixels(h);
+  }
+  const std::size_t fileSize = std::filesystem::file_size(path);
+  EXPECT_GT(std::size_t(w) * h / fileSize, 1024u) << "the file is not denser than deflate alone: " << fileSize << " bytes";
+  Environment env = loadEnvironmentMap(path);
+  ASSERT_EQ(env.header.width, wt_uint(w));
+  EXPECT_NEAR(env.texels[12345].y, 0.5f, 0.01f);  // DWA is lossy
+}
+
+TEST(EnvironmentLoader, ExrHeaderStructureIsCheckedFirst) {
+  // OpenEXR 3.1 reads each attribute at its type's own size and allocates by
+  // whatever size it then finds, so a value whose size disagrees with its
+  // type must be refused before OpenEXR sees it (see test_fuzz_regressions)
+  const int w = 8, h = 4;
+  std::filesystem::path path = test::scratchDir("environment") / "attributes.exr";
+  {
+    Imf::Header header(w, h);
+    header.setPreviewImage(Imf::PreviewImage(2, 1));
+    header.insert("names", Imf::StringVectorAttribute({"sky", "ground"}));
+    std::vector<float> px(std::size_t(w) * h * 3, 0.5f);
+    Imf::FrameBuffer fb;
+    for (int c = 0; c < 3; ++c) {
+      const char* channel = c == 0 ? "R" : c == 1 ? "G" : "B";
+      header.channels().insert(channel, Imf::Channel(Imf::FLOAT));
+      fb.insert(channel, Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(&px[c]), 3 * sizeof(float),
+                                    3 * sizeof(float) * w));
+    }
+    Imf::OutputFile out(path.c_str(), header);
+    out.setFrameBuffer(fb);
+    out.writePixels(h);
+  }
+  const std::vector<char> original = readAll(path);
+  ASSERT_EQ(loadEnvironmentMap(path).header.width, wt_uint(w));  // the unpatched file loads
+
+  // the 4 bytes `offset` bytes after the end of "name\0type\0", set to `value`
+  auto patched = [&](const std::string& attribute, std::size_t offset, std::uint32_t value) {
+    const std::string marker = attribute + '\0';
+    auto at = std::search(original.begin(), original.end(), marker.begin(), marker.end());
+    EXPECT_NE(at, original.end()) << attribute;
+    std::vector<char> bytes = original;
+    std::memcpy(bytes.data() + (at - original.begin()) + std::ptrdiff_t(marker.size() + offset), &value, 4);
+    std::filesystem::path out = test::scratchDir("environment") / ("patched_" + std::to_string(value) + ".exr");
+    writeBytes(out, bytes, bytes.size());
+    return out;
+  };
+  struct Case {
+    std::string attribute;  ///< "name\0type"
+    std::size_t offset;     ///< 0: the size field
+    std::uint32_t value;
+    std::string error;
+  };
+  const std::uint32_t chlistSize = 3 * 18 + 1;  // "R\0" + 16 bytes per channel, then a NUL
+  const Case cases[] = {
+      {std::string("pixelAspectRatio\0float", 22), 0, 3, "'pixelAspectRatio' of type 'float' has 3 bytes, expected 4"},
+      {std::string("channels\0chlist", 15), 0, chlistSize - 1, "'channels' of type 'chlist' is not terminated within its 54 bytes"},
+      {std::string("channels\0chlist", 15), 0, chlistSize + 1, "ends after 55 of its 56 bytes"},
+      {std::string("channels\0chlist", 15), 0, 0x7fffff00, "claims 2147483392 bytes"},
+      {std::string("preview\0preview", 15), 4, 100000, "has 16 bytes for a preview of 100000 pixels"},
+      {std::string("names\0stringvector", 18), 4, 0x7fffffff, "has a string of 2147483647 bytes where 13 remain"},
+  };
+  for (const Case& c : cases) {
+    std::filesystem::path bad = patched(c.attribute, c.offset, c.value);
+    expectError(bad, c.error, [&] { loadEnvironmentMap(bad); });
+  }
 }
 
 TEST(EnvironmentLoader, UnsupportedExrChannelsAreNamed) {
@@ -202,6 +376,34 @@ TEST(EnvironmentLoader, HdrRoundTrip) {
   EXPECT_TRUE(env.warnings.empty());
 }
 
+TEST(EnvironmentLoader, FromMemoryReadsWhatTheFileGives) {
+  const int w = 16, h = 8;
+  const std::filesystem::path files[] = {
+      writeHdr("memory.hdr", w, h, testPixels(w, h)),
+      writeExr("memory.exr", w, h, {"B", "G", "R"}, [](int k, int c) { return float(k) + 0.25f * float(c); })};
+  for (const std::filesystem::path& path : files) {
+    const std::vector<char> chars = readAll(path);
+    const std::vector<unsigned char> bytes(chars.begin(), chars.end());
+    Environment fromFile = loadEnvironmentMap(path, 1.5f, 30.0f);
+    Environment fromMemory = loadEnvironmentMapFromMemory(bytes, "sky" + path.extension().string(), 1.5f, 30.0f);
+    ASSERT_EQ(fromMemory.header.width, wt_uint(w)) << path;
+    ASSERT_EQ(fromMemory.texels.size(), fromFile.texels.size()) << path;
+    for (std::size_t k = 0; k < fromFile.texels.size(); ++k) {
+      ASSERT_EQ(fromMemory.texels[k].x, fromFile.texels[k].x) << path << " texel " << k;
+      ASSERT_EQ(fromMemory.texels[k].z, fromFile.texels[k].z) << path << " texel " << k;
+    }
+    EXPECT_EQ(fromMemory.conditionalCdf, fromFile.conditionalCdf) << path;
+    EXPECT_EQ(fromMemory.sourceName, "sky" + path.extension().string());
+    // truncated bytes are refused under the given name
+    const std::span<const unsigned char> cut(bytes.data(), bytes.size() / 2);
+    expectError("cut" + path.extension().string(), "", [&] {
+      loadEnvironmentMapFromMemory(cut, "cut" + path.extension().string());
+    });
+  }
+  expectError("sky.png", "unsupported environment map format '.png'",
+              [&] { loadEnvironmentMapFromMemory({}, "sky.png"); });
+}
+
 TEST(EnvironmentLoader, ExrFloatRgbExactWithAnyDataWindow) {
   const int w = 12, h = 6;
   auto value = [](int k, int c) { return 1e5f * float(c + 1) + float(k) * 0.125f; };  // beyond half's range
@@ -225,6 +427,33 @@ TEST(EnvironmentLoader, ExrLuminanceOnlyIsGrey) {
     EXPECT_EQ(env.texels[k].x, 0.5f + float(k));
     EXPECT_EQ(env.texels[k].y, 0.5f + float(k));
     EXPECT_EQ(env.texels[k].z, 0.5f + float(k));
+  }
+}
+
+TEST(EnvironmentLoader, ExrLuminanceChromaIsConvertedToRgb) {
+  // Y at full resolution, RY and BY sub-sampled 2 x 2 (OpenEXR's YC layout);
+  // these were refused as "sub-sampled" before the fuzz seeds covered them
+  const int w = 16, h = 8;
+  const Imf::Rgba colour(0.8f, 0.4f, 0.2f, 1.0f);
+  std::filesystem::path path = test::scratchDir("environment") / "yc.exr";
+  {
+    std::vector<Imf::Rgba> px(std::size_t(w) * h, colour);
+    Imf::RgbaOutputFile out(path.c_str(), w, h, Imf::WRITE_YC);
+    out.setFrameBuffer(px.data(), 1, w);
+    out.writePixels(h);
+  }
+  {
+    Imf::InputFile probe(path.c_str());
+    const Imf::Channel* ry = probe.header().channels().findChannel("RY");
+    ASSERT_NE(ry, nullptr);
+    ASSERT_EQ(ry->xSampling, 2);  // the file really is sub-sampled
+  }
+  Environment env = loadEnvironmentMap(path);
+  ASSERT_EQ(env.header.width, wt_uint(w));
+  for (int k = 0; k < w * h; ++k) {
+    ASSERT_NEAR(env.texels[k].x, 0.8f, 0.01f) << "texel " << k;
+    ASSERT_NEAR(env.texels[k].y, 0.4f, 0.01f) << "texel " << k;
+    ASSERT_NEAR(env.texels[k].z, 0.2f, 0.01f) << "texel " << k;
   }
 }
 

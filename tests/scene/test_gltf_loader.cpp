@@ -11,6 +11,7 @@
 #include <glm/glm.hpp>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -181,6 +182,25 @@ TEST(GltfLoader, GlbAndGltfGiveTheSameTriangle) {
       errorOf([&] { loadGltf(writeFile("_text.glb", doc.embedded()).string()); });
   EXPECT_CONTAINS(message, "_text.glb: ");
   EXPECT_CONTAINS(message, "magic");
+}
+
+TEST(GltfLoader, GlbFromMemoryReadsWhatTheFileGives) {
+  GltfDoc doc = triangleDoc();
+  const std::vector<unsigned char> glb = doc.glb();
+  Scene fromFile = loadGltf(writeFile(".glb", glb).string());
+  Scene fromMemory = loadGlbFromMemory(glb, "memory.glb", ".");
+  ASSERT_EQ(fromMemory.triangles.size(), fromFile.triangles.size());
+  ASSERT_EQ(fromMemory.positions.size(), fromFile.positions.size());
+  for (std::uint32_t v = 0; v < fromFile.positions.size(); ++v) expectNear(pos(fromMemory, v), pos(fromFile, v));
+  EXPECT_EQ(fromMemory.sourceName, "memory.glb");
+  // text is refused, as a .glb file without the magic is
+  const std::string text = doc.embedded();
+  std::string message = errorOf([&] {
+    loadGlbFromMemory({reinterpret_cast<const unsigned char*>(text.data()), text.size()}, "text.glb", ".");
+  });
+  EXPECT_EQ(message.rfind("text.glb: ", 0), 0u) << message;
+  EXPECT_CONTAINS(message, "magic");
+  EXPECT_CONTAINS(errorOf([&] { loadGlbFromMemory({}, "empty.glb", "."); }), "empty.glb: ");
 }
 
 TEST(GltfLoader, ExternalBinBuffer) {
@@ -848,6 +868,36 @@ TEST(GltfLoaderErrors, CycleInTheNodeGraph) {
   EXPECT_CONTAINS(docError(doc), "node 1: is its own ancestor (cycle in the node graph)");
   doc.nodes[0] = "{\"mesh\":0,\"children\":[0]}";
   EXPECT_CONTAINS(docError(doc), "node 0: is its own ancestor");
+}
+
+TEST(GltfLoaderErrors, FlattenedSceneIsLimitedBeforeDecoding) {
+  // five instances of one triangle: 15 vertices, 5 triangles
+  GltfDoc doc = triangleDoc();
+  for (int i = 1; i <= 4; ++i) doc.addNode("{\"mesh\":0,\"translation\":[" + str(std::size_t(i)) + ",0,0]}");
+  doc.scenes[0] = "{\"nodes\":[0,1,2,3,4]}";
+  GltfLoadOptions options;
+  options.maxVertices = 15;
+  EXPECT_EQ(loadDoc(doc, options).triangles.size(), 5u);
+  options.maxVertices = 14;
+  EXPECT_CONTAINS(docError(doc, options),
+                  "node 4: mesh 0 brings the flattened scene to 15 vertices and 5 triangles, more than the 14");
+  options = {};
+  options.maxTriangles = 4;
+  EXPECT_CONTAINS(docError(doc, options), "node 4: mesh 0 brings the flattened scene to 15 vertices and 5 triangles");
+
+  // A 300-byte file: 2^26 - 1 zero vertices without a buffer view (the most
+  // an accessor may claim), placed by five nodes. Decoded and placed one
+  // instance at a time that was about 14 GB of host arrays; now it is refused
+  // from the counts alone, before anything is allocated.
+  GltfDoc zeros;
+  const std::size_t count = (std::size_t(1) << 26) - 1;  // a multiple of 3
+  int position = zeros.addAccessor(-1, kFloat, count, "VEC3");
+  zeros.addMesh("{\"attributes\":{\"POSITION\":" + str(std::size_t(position)) + "}}");
+  for (int i = 0; i < 5; ++i) zeros.addNode("{\"mesh\":0}");
+  zeros.scenes.push_back("{\"nodes\":[0,1,2,3,4]}");
+  const auto start = std::chrono::steady_clock::now();
+  EXPECT_CONTAINS(docError(zeros), "node 4: mesh 0 brings the flattened scene to " + str(5 * count) + " vertices");
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 2.0);
 }
 
 TEST(GltfLoaderErrors, MalformedTransforms) {

@@ -1,0 +1,15 @@
+// libFuzzer harness: glTF JSON text through loadGltfFromMemory. Every input
+// must load into a consistent scene or throw a SceneError naming the file.
+#include "fuzz_checks.h"
+#include "scene/gltf_loader.h"
+
+extern "C" int LLVMFuzzerTestOneInput(const unsigned char* data, std::size_t size) {
+  const std::string name = "fuzz.gltf";
+  try {
+    wt::fuzz::checkScene(wt::loadGltfFromMemory(
+        std::string_view(reinterpret_cast<const char*>(data), size), name, wt::fuzz::emptyBaseDir()));
+  } catch (const wt::SceneError& e) {
+    wt::fuzz::checkMessage(e.what(), name);
+  }
+  return 0;
+}

@@ -1,0 +1,375 @@
+// Writes the fuzzers' seed corpus: small valid files that between them
+// reach every branch of the loaders (glTF node graphs, every accessor
+// component type, strides, sparse accessors, strips and fans, cameras,
+// lights, materials; .hdr flat and run-length encoded; .exr of every
+// compression, tiled and mip-mapped, Y-only and luminance/chroma).
+// Usage: wt_fuzz_seeds OUTDIR   (writes OUTDIR/{gltf,glb,hdr,exr}/...)
+#include <ImfChannelList.h>
+#include <ImfFrameBuffer.h>
+#include <ImfHeader.h>
+#include <ImfOutputFile.h>
+#include <ImfRgbaFile.h>
+#include <ImfTiledOutputFile.h>
+#include <ImfTiledRgbaFile.h>
+#include <stb_image_write.h>
+
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr int kUByte = 5121, kUShort = 5123, kUInt = 5125, kFloat = 5126;
+
+void writeFile(const fs::path& path, const void* data, std::size_t size) {
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  out.write(static_cast<const char*>(data), std::streamsize(size));
+  if (!out) {
+    std::fprintf(stderr, "wt_fuzz_seeds: cannot write %s\n", path.c_str());
+    std::exit(1);
+  }
+}
+void writeFile(const fs::path& path, const std::string& text) { writeFile(path, text.data(), text.size()); }
+
+std::string base64(const std::vector<unsigned char>& bytes) {
+  static const char* kAlphabet = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  std::string out;
+  for (std::size_t i = 0; i < bytes.size(); i += 3) {
+    std::uint32_t chunk = std::uint32_t(bytes[i]) << 16;
+    if (i + 1 < bytes.size()) chunk |= std::uint32_t(bytes[i + 1]) << 8;
+    if (i + 2 < bytes.size()) chunk |= bytes[i + 2];
+    out += kAlphabet[(chunk >> 18) & 63];
+    out += kAlphabet[(chunk >> 12) & 63];
+    out += i + 1 < bytes.size() ? kAlphabet[(chunk >> 6) & 63] : '=';
+    out += i + 2 < bytes.size() ? kAlphabet[chunk & 63] : '=';
+  }
+  return out;
+}
+
+// ---------------------------------------------------------------------------
+// glTF
+
+/// A glTF document built from JSON fragments and one binary buffer.
+struct Doc {
+  std::vector<std::string> accessors, bufferViews, meshes, nodes, materials, cameras, scenes, lights;
+  std::string extras;  ///< more top-level members, each starting with ','
+  std::vector<unsigned char> bin;
+
+  int view(const void* data, std::size_t bytes, std::size_t stride = 0) {
+    while (bin.size() % 4 != 0) bin.push_back(0);
+    const std::size_t offset = bin.size();
+    bin.resize(offset + bytes);
+    std::memcpy(bin.data() + offset, data, bytes);
+    std::string v = "{\"buffer\":0,\"byteOffset\":" + std::to_string(offset) +
+                    ",\"byteLength\":" + std::to_string(bytes);
+    if (stride != 0) v += ",\"byteStride\":" + std::to_string(stride);
+    bufferViews.push_back(v + "}");
+    return int(bufferViews.size()) - 1;
+  }
+  template <typename T>
+  int view(const std::vector<T>& values, std::size_t stride = 0) {
+    return view(values.data(), values.size() * sizeof(T), stride);
+  }
+  int accessor(int bufferView, int componentType, std::size_t count, const char* type,
+               const std::string& extra = "") {
+    std::string a = "{";
+    if (bufferView >= 0) a += "\"bufferView\":" + std::to_string(bufferView) + ",";
+    a += "\"componentType\":" + std::to_string(componentType) + ",\"count\":" + std::to_string(count) +
+         ",\"type\":\"" + type + "\"" + extra + "}";
+    accessors.push_back(a);
+    return int(accessors.size()) - 1;
+  }
+  int floats(const std::vector<float>& values, const char* type, std::size_t components) {
+    return accessor(view(values), kFloat, values.size() / components, type);
+  }
+
+  std::string json(bool glb) const {
+    std::string out = "{\"asset\":{\"version\":\"2.0\",\"generator\":\"wt_fuzz_seeds\"}";
+    auto list = [&](const char* key, const std::vector<std::string>& items) {
+      if (items.empty()) return;
+      out += std::string(",\"") + key + "\":[";
+      for (std::size_t i = 0; i < items.size(); ++i) out += (i ? "," : "") + items[i];
+      out += "]";
+    };
+    list("scenes", scenes);
+    list("nodes", nodes);
+    list("meshes", meshes);
+    list("materials", materials);
+    list("cameras", cameras);
+    list("accessors", accessors);
+    list("bufferViews", bufferViews);
+    if (!bin.empty()) {
+      out += ",\"buffers\":[{\"byteLength\":" + std::to_string(bin.size());
+      if (!glb) out += ",\"uri\":\"data:application/octet-stream;base64," + base64(bin) + "\"";
+      out += "}]";
+    }
+    if (!lights.empty()) {
+      out += ",\"extensions\":{\"KHR_lights_punctual\":{\"lights\":[";
+      for (std::size_t i = 0; i < lights.size(); ++i) out += (i ? "," : "") + lights[i];
+      out += "]}}";
+    }
+    return out + extras + "}";
+  }
+
+  std::vector<unsigned char> glb() const {
+    std::string text = json(true);
+    while (text.size() % 4 != 0) text += ' ';
+    std::vector<unsigned char> payload = bin;
+    while (payload.size() % 4 != 0) payload.push_back(0);
+    std::vector<unsigned char> out;
+    auto u32 = [&](std::uint32_t v) {
+      for (int i = 0; i < 4; ++i) out.push_back(static_cast<unsigned char>(v >> (8 * i)));
+    };
+    const std::size_t total = 12 + 8 + text.size() + (payload.empty() ? 0 : 8 + payload.size());
+    u32(0x46546C67);  // "glTF"
+    u32(2);
+    u32(std::uint32_t(total));
+    u32(std::uint32_t(text.size()));
+    u32(0x4E4F534A);  // "JSON"
+    out.insert(out.end(), text.begin(), text.end());
+    if (!payload.empty()) {
+      u32(std::uint32_t(payload.size()));
+      u32(0x004E4942);  // "BIN\0"
+      out.insert(out.end(), payload.begin(), payload.end());
+    }
+    return out;
+  }
+};
+
+/// One indexed triangle under one node.
+Doc triangle() {
+  Doc d;
+  int pos = d.floats({0, 0, 0, 1, 0, 0, 0, 1, 0}, "VEC3", 3);
+  int idx = d.accessor(d.view(std::vector<std::uint16_t>{0, 1, 2}), kUShort, 3, "SCALAR");
+  d.meshes.push_back("{\"primitives\":[{\"attributes\":{\"POSITION\":" + std::to_string(pos) +
+                     "},\"indices\":" + std::to_string(idx) + "}]}");
+  d.nodes.push_back("{\"mesh\":0}");
+  d.scenes.push_back("{\"nodes\":[0]}");
+  return d;
+}
+
+/// Hierarchy (TRS and matrix), interleaved normals with a stride, normalized
+/// texcoords, a sparse accessor, strip and fan, materials, cameras, lights.
+Doc rich() {
+  Doc d;
+  // interleaved position + normal, stride 24
+  std::vector<float> interleaved = {0, 0, 0, 0, 0, 1, 1, 0, 0, 0, 0, 1, 1, 1, 0, 0, 0, 1, 0, 1, 0, 0, 0, 1};
+  int inter = d.view(interleaved, 24);
+  int pos = d.accessor(inter, kFloat, 4, "VEC3", ",\"min\":[0,0,0],\"max\":[1,1,0]");
+  int nrm = d.accessor(inter, kFloat, 4, "VEC3", ",\"byteOffset\":12");
+  int uv = d.accessor(d.view(std::vector<std::uint16_t>{0, 0, 65535, 0, 65535, 65535, 0, 65535}), kUShort, 4,
+                      "VEC2", ",\"normalized\":true");
+  int uvBytes = d.accessor(d.view(std::vector<std::uint8_t>{0, 0, 255, 0, 255, 255, 0, 255}), kUByte, 4, "VEC2",
+                           ",\"normalized\":true");
+  int idx8 = d.accessor(d.view(std::vector<std::uint8_t>{0, 1, 2, 0, 2, 3}), kUByte, 6, "SCALAR");
+  int idx32 = d.accessor(d.view(std::vector<std::uint32_t>{0, 1, 2, 3}), kUInt, 4, "SCALAR");
+  int sparseIdx = d.view(std::vector<std::uint16_t>{1, 3});
+  int sparseVal = d.view(std::vector<float>{2, 0, 0, 0, 2, 0});
+  int sparse = d.accessor(d.view(std::vector<float>{0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0}), kFloat, 4, "VEC3",
+                          ",\"sparse\":{\"count\":2,\"indices\":{\"bufferView\":" + std::to_string(sparseIdx) +
+                              ",\"componentType\":5123},\"values\":{\"bufferView\":" + std::to_string(sparseVal) +
+                              "}}");
+  int zeros = d.accessor(-1, kFloat, 3, "VEC3",
+                         ",\"sparse\":{\"count\":1,\"indices\":{\"bufferView\":" + std::to_string(sparseIdx) +
+                             ",\"componentType\":5123},\"values\":{\"bufferView\":" + std::to_string(sparseVal) +
+                             "}}");
+  auto s = [](int v) { return std::to_string(v); };
+  d.meshes.push_back("{\"name\":\"quad\",\"primitives\":[{\"attributes\":{\"POSITION\":" + s(pos) +
+                     ",\"NORMAL\":" + s(nrm) + ",\"TEXCOORD_0\":" + s(uv) + "},\"indices\":" + s(idx8) +
+                     ",\"material\":0},{\"attributes\":{\"POSITION\":" + s(sparse) + ",\"TEXCOORD_0\":" +
+                     s(uvBytes) + "},\"indices\":" + s(idx32) + ",\"mode\":5,\"material\":1}]}");
+  d.meshes.push_back("{\"primitives\":[{\"attributes\":{\"POSITION\":" + s(sparse) + "},\"mode\":6},"
+                     "{\"attributes\":{\"POSITION\":" + s(zeros) + "}},"
+                     "{\"attributes\":{\"POSITION\":" + s(pos) + "},\"mode\":1}]}");
+  d.materials.push_back(
+      "{\"name\":\"lamp\",\"pbrMetallicRoughness\":{\"baseColorFactor\":[0.5,0.6,0.7,1],\"metallicFactor\":0,"
+      "\"roughnessFactor\":1},\"emissiveFactor\":[1,0.5,0.25],\"doubleSided\":true,"
+      "\"extensions\":{\"KHR_materials_emissive_strength\":{\"emissiveStrength\":4}}}");
+  d.materials.push_back("{\"alphaMode\":\"MASK\",\"alphaCutoff\":0.5}");
+  d.cameras.push_back(
+      "{\"type\":\"perspective\",\"perspective\":{\"yfov\":0.7,\"znear\":0.1,\"zfar\":100,\"aspectRatio\":1.5}}");
+  d.cameras.push_back("{\"type\":\"orthographic\",\"orthographic\":{\"xmag\":2,\"ymag\":1,\"znear\":0,\"zfar\":10}}");
+  d.lights.push_back("{\"type\":\"point\",\"color\":[1,0.9,0.8],\"intensity\":50}");
+  d.lights.push_back("{\"type\":\"spot\",\"intensity\":20,\"spot\":{\"innerConeAngle\":0.2,\"outerConeAngle\":0.6}}");
+  d.lights.push_back("{\"type\":\"directional\",\"intensity\":3}");
+  d.nodes.push_back("{\"name\":\"root\",\"translation\":[1,2,3],\"rotation\":[0,0.3826834,0,0.9238795],"
+                    "\"scale\":[1,-1,1],\"children\":[1,2,3,4]}");
+  d.nodes.push_back("{\"mesh\":0,\"children\":[5]}");
+  d.nodes.push_back("{\"camera\":0,\"matrix\":[1,0,0,0,0,1,0,0,0,0,1,0,0,0,9,1]}");
+  d.nodes.push_back("{\"camera\":1,\"translation\":[0,0,5]}");
+  d.nodes.push_back("{\"extensions\":{\"KHR_lights_punctual\":{\"light\":1}},\"rotation\":[-0.7071068,0,0,0.7071068]}");
+  d.nodes.push_back("{\"mesh\":1,\"scale\":[2,2,2],\"extensions\":{\"KHR_lights_punctual\":{\"light\":0}}}");
+  d.nodes.push_back("{\"extensions\":{\"KHR_lights_punctual\":{\"light\":2}}}");
+  d.scenes.push_back("{\"nodes\":[0,6]}");
+  d.scenes.push_back("{\"nodes\":[1]}");
+  d.extras = ",\"scene\":0,\"extensionsUsed\":[\"KHR_lights_punctual\",\"KHR_materials_emissive_strength\","
+             "\"KHR_texture_transform\"]";
+  return d;
+}
+
+/// Float normals and texcoords, 16-bit indices, a mesh shared by two nodes, no scenes.
+Doc components() {
+  Doc d;
+  int pos = d.floats({0, 0, 0, 1, 0, 0, 0, 1, 0, 1, 1, 0}, "VEC3", 3);
+  int nrm = d.floats({0, 0, 1, 0, 0, 1, 0, 0, 1, 0, 0, 1}, "VEC3", 3);
+  int uv = d.floats({0, 0, 1, 0, 0, 1, 1, 1}, "VEC2", 2);
+  int idx = d.accessor(d.view(std::vector<std::uint16_t>{0, 1, 2, 2, 1, 3}), kUShort, 6, "SCALAR");
+  auto s = [](int v) { return std::to_string(v); };
+  d.meshes.push_back("{\"primitives\":[{\"attributes\":{\"POSITION\":" + s(pos) + ",\"NORMAL\":" + s(nrm) +
+                     ",\"TEXCOORD_0\":" + s(uv) + "},\"indices\":" + s(idx) + "}]}");
+  d.nodes.push_back("{\"mesh\":0}");
+  d.nodes.push_back("{\"mesh\":0,\"translation\":[0,0,-1]}");
+  // no scenes: the loader draws every root node
+  return d;
+}
+
+void writeGltfSeeds(const fs::path& dir) {
+  fs::create_directories(dir / "gltf");
+  fs::create_directories(dir / "glb");
+  const std::pair<const char*, Doc> docs[] = {{"triangle", triangle()}, {"rich", rich()}, {"components", components()}};
+  for (const auto& [name, doc] : docs) {
+    writeFile(dir / "gltf" / (std::string(name) + ".gltf"), doc.json(false));
+    const std::vector<unsigned char> glb = doc.glb();
+    writeFile(dir / "glb" / (std::string(name) + ".glb"), glb.data(), glb.size());
+  }
+  // an external buffer (absent, so loading fails cleanly) and an empty scene
+  writeFile(dir / "gltf" / "external.gltf",
+            "{\"asset\":{\"version\":\"2.0\"},\"buffers\":[{\"byteLength\":12,\"uri\":\"missing.bin\"}],"
+            "\"bufferViews\":[{\"buffer\":0,\"byteLength\":12}],"
+            "\"accessors\":[{\"bufferView\":0,\"componentType\":5126,\"count\":1,\"type\":\"VEC3\"}],"
+            "\"meshes\":[{\"primitives\":[{\"attributes\":{\"POSITION\":0}}]}],\"nodes\":[{\"mesh\":0}]}");
+  writeFile(dir / "gltf" / "empty.gltf", "{\"asset\":{\"version\":\"2.0\"},\"scenes\":[{}],\"scene\":0}");
+}
+
+// ---------------------------------------------------------------------------
+// Radiance .hdr
+
+std::vector<float> gradient(int w, int h, int channels) {
+  std::vector<float> px(std::size_t(w) * std::size_t(h) * std::size_t(channels));
+  for (std::size_t i = 0; i < px.size(); ++i) px[i] = std::ldexp(float(1 + i % 7), int(i % 11) - 5);
+  return px;
+}
+
+void writeHdrSeeds(const fs::path& dir) {
+  fs::create_directories(dir / "hdr");
+  auto write = [](void* context, void* data, int size) {
+    auto* out = static_cast<std::string*>(context);
+    out->append(static_cast<const char*>(data), std::size_t(size));
+  };
+  // stb writes run-length encoded scanlines for widths 8..32767, flat ones otherwise
+  for (auto [w, h] : {std::pair{16, 8}, std::pair{4, 2}, std::pair{9, 3}}) {
+    std::string bytes;
+    std::vector<float> px = gradient(w, h, 3);
+    stbi_write_hdr_to_func(write, &bytes, w, h, 3, px.data());
+    writeFile(dir / "hdr" / ("stb_" + std::to_string(w) + "x" + std::to_string(h) + ".hdr"), bytes);
+  }
+  // flat RGBE pixels at a width that allows run-length encoding, #?RGBE magic,
+  // extra header lines and a run of identical pixels
+  std::string flat = "#?RGBE\n# made by wt_fuzz_seeds\nEXPOSURE=1.0\nFORMAT=32-bit_rle_rgbe\n\n-Y 2 +X 8\n";
+  for (int i = 0; i < 16; ++i) flat += std::string{char(64 + i), char(128), char(32), char(129)};
+  writeFile(dir / "hdr" / "flat_8x2.hdr", flat);
+  // hand-made run-length data: per channel one run of 8 equal bytes
+  std::string rle = "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 1 +X 8\n";
+  rle += std::string{2, 2, 0, 8};
+  for (char value : {char(200), char(100), char(50), char(129)}) rle += std::string{char(128 + 8), value};
+  writeFile(dir / "hdr" / "runs_8x1.hdr", rle);
+}
+
+// ---------------------------------------------------------------------------
+// OpenEXR
+
+/// A scanline file with FLOAT or HALF planes named `channels`.
+void writeScanline(const fs::path& path, int w, int h, const std::vector<std::string>& channels,
+                   Imf::PixelType type, Imf::Compression compression, Imath::V2i origin = {0, 0}) {
+  const Imath::Box2i window(origin, origin + Imath::V2i(w - 1, h - 1));
+  Imf::Header header(window, window);
+  header.compression() = compression;
+  const std::vector<float> values = gradient(w, h, int(channels.size()));
+  std::vector<half> halves(values.begin(), values.end());
+  Imf::FrameBuffer fb;
+  const std::size_t n = channels.size();
+  for (std::size_t c = 0; c < n; ++c) {
+    header.channels().insert(channels[c], Imf::Channel(type));
+    const std::size_t size = type == Imf::HALF ? sizeof(half) : sizeof(float);
+    char* base = type == Imf::HALF ? reinterpret_cast<char*>(halves.data() + c)
+                                   : reinterpret_cast<char*>(const_cast<float*>(values.data() + c));
+    base -= (std::ptrdiff_t(origin.x) + std::ptrdiff_t(origin.y) * w) * std::ptrdiff_t(n * size);
+    fb.insert(channels[c], Imf::Slice(type, base, n * size, n * size * std::size_t(w)));
+  }
+  Imf::OutputFile file(path.c_str(), header);
+  file.setFrameBuffer(fb);
+  file.writePixels(h);
+}
+
+void writeExrSeeds(const fs::path& dir) {
+  fs::create_directories(dir / "exr");
+  const fs::path out = dir / "exr";
+  const std::vector<std::string> rgb = {"R", "G", "B"};
+  const std::pair<const char*, Imf::Compression> compressions[] = {
+      {"none", Imf::NO_COMPRESSION}, {"rle", Imf::RLE_COMPRESSION},     {"zips", Imf::ZIPS_COMPRESSION},
+      {"zip", Imf::ZIP_COMPRESSION}, {"piz", Imf::PIZ_COMPRESSION},     {"pxr24", Imf::PXR24_COMPRESSION},
+      {"b44", Imf::B44_COMPRESSION}, {"b44a", Imf::B44A_COMPRESSION},   {"dwaa", Imf::DWAA_COMPRESSION},
+      {"dwab", Imf::DWAB_COMPRESSION}};
+  for (const auto& [name, compression] : compressions)
+    writeScanline(out / (std::string("half_") + name + ".exr"), 8, 4, rgb, Imf::HALF, compression);
+  writeScanline(out / "float_none.exr", 4, 2, rgb, Imf::FLOAT, Imf::NO_COMPRESSION);
+  writeScanline(out / "float_zip_window.exr", 6, 3, {"A", "B", "G", "R"}, Imf::FLOAT, Imf::ZIP_COMPRESSION,
+                {-3, 5});
+  writeScanline(out / "y_only.exr", 8, 4, {"Y"}, Imf::HALF, Imf::PIZ_COMPRESSION);
+
+  // luminance/chroma (sub-sampled RY, BY and full-resolution Y) through the RGBA interface
+  {
+    const int w = 8, h = 4;
+    std::vector<Imf::Rgba> px(std::size_t(w) * h);
+    for (std::size_t i = 0; i < px.size(); ++i) px[i] = Imf::Rgba(float(i % 5), 0.5f, float(i % 3), 1.0f);
+    Imf::RgbaOutputFile file((out / "luminance_chroma.exr").c_str(), w, h, Imf::WRITE_YCA, 1,
+                             Imath::V2f(0, 0), 1, Imf::INCREASING_Y, Imf::ZIP_COMPRESSION);
+    file.setFrameBuffer(px.data(), 1, w);
+    file.writePixels(h);
+  }
+  // tiled, single level and mip-mapped
+  for (auto [name, mode] : {std::pair{"tiled.exr", Imf::ONE_LEVEL}, std::pair{"tiled_mipmap.exr", Imf::MIPMAP_LEVELS}}) {
+    const int w = 8, h = 4;
+    Imf::Header header(w, h);
+    header.compression() = Imf::ZIP_COMPRESSION;
+    for (const std::string& c : rgb) header.channels().insert(c, Imf::Channel(Imf::HALF));
+    header.setTileDescription(Imf::TileDescription(4, 4, mode, Imf::ROUND_DOWN));
+    Imf::TiledOutputFile file((out / name).c_str(), header);
+    std::vector<half> planes(std::size_t(w) * h * 3);
+    for (std::size_t i = 0; i < planes.size(); ++i) planes[i] = half(float(i % 9) * 0.25f);
+    for (int level = 0; level < file.numLevels(); ++level) {
+      Imf::FrameBuffer fb;
+      for (std::size_t c = 0; c < 3; ++c)
+        fb.insert(rgb[c], Imf::Slice(Imf::HALF, reinterpret_cast<char*>(planes.data() + c), 3 * sizeof(half),
+                                     3 * sizeof(half) * std::size_t(w)));
+      file.setFrameBuffer(fb);
+      file.writeTiles(0, file.numXTiles(level) - 1, 0, file.numYTiles(level) - 1, level);
+    }
+  }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc != 2) {
+    std::fprintf(stderr, "usage: %s OUTDIR\n", argv[0]);
+    return 2;
+  }
+  const fs::path dir = argv[1];
+  try {
+    writeGltfSeeds(dir);
+    writeHdrSeeds(dir);
+    writeExrSeeds(dir);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "wt_fuzz_seeds: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}
