@@ -54,8 +54,12 @@ inline int4 bvh4_box_hit(__global const WtBvh4Node* n, float3 org, float3 inv_d,
 // fmax drop them, the slot passes and traversal reads node WT_BVH4_EMPTY.
 inline bool bvh_ray_is_finite(float3 org, float3 dir) { return all(isfinite(org)) && all(isfinite(dir)); }
 
-/// Closest hit in (tmin, tmax); none for a ray that is not finite.
-inline Hit bvh_closest(BvhScene scene, float3 org, float3 dir, float tmin, float tmax) {
+/// Closest hit in (tmin, tmax), never on leaf-order triangle `skip` (the one
+/// a spawned ray leaves; WT_NO_HIT for none); none for a ray that is not
+/// finite. Skipping the surface left is what keeps a spawned ray off it: a
+/// plane cannot be hit twice, and no distance threshold is needed that
+/// would also drop real hits close by (a concave corner's other face).
+inline Hit bvh_closest(BvhScene scene, float3 org, float3 dir, float tmin, float tmax, uint skip) {
   Hit hit;
   hit.t = tmax;
   hit.b1 = hit.b2 = 0.0f;
@@ -87,6 +91,7 @@ inline Hit bvh_closest(BvhScene scene, float3 org, float3 dir, float tmin, float
         uint end = first + count;
         for (uint i = first; i < end; ++i) {
           float t, b1, b2;
+          if (i == skip) continue;
           if (triangle_intersect(org, shear, tmin, hit.t, scene.tri_verts[3 * i].xyz,
                                  scene.tri_verts[3 * i + 1].xyz, scene.tri_verts[3 * i + 2].xyz,
                                  &t, &b1, &b2)) {
@@ -128,9 +133,12 @@ inline Hit bvh_closest(BvhScene scene, float3 org, float3 dir, float tmin, float
   }
 }
 
-/// Any hit in (tmin, tmax): true when the segment is blocked, and for a ray
-/// that is not finite (no light is carried along it).
-inline bool bvh_occluded(BvhScene scene, float3 org, float3 dir, float tmin, float tmax) {
+/// Any hit in (tmin, tmax) on a triangle other than skip_a and skip_b (the
+/// surface the shadow ray leaves, the emitter it aims at): true when the
+/// segment is blocked, and for a ray that is not finite (no light is carried
+/// along it).
+inline bool bvh_occluded(BvhScene scene, float3 org, float3 dir, float tmin, float tmax, uint skip_a,
+                         uint skip_b) {
   if (!bvh_ray_is_finite(org, dir)) return true;
   if (scene.node_count == 0) return false;
   __global const WtBvh4Node* nodes = (__global const WtBvh4Node*)scene.nodes;
@@ -153,6 +161,7 @@ inline bool bvh_occluded(BvhScene scene, float3 org, float3 dir, float tmin, flo
         uint end = first + count;
         for (uint i = first; i < end; ++i) {
           float t, b1, b2;
+          if (i == skip_a || i == skip_b) continue;
           if (triangle_intersect(org, shear, tmin, tmax, scene.tri_verts[3 * i].xyz,
                                  scene.tri_verts[3 * i + 1].xyz, scene.tri_verts[3 * i + 2].xyz,
                                  &t, &b1, &b2))

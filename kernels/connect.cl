@@ -6,12 +6,13 @@ __kernel void connect(__global const uint* counters, __global const uint* shadow
                       __global const float4* shadow_o, __global const float4* shadow_d,
                       __global const float4* shadow_radiance, __global const WtBvhNode* nodes,
                       uint node_count, __global const float4* tri_verts,
-                      __global float4* radiance) {
+                      __global float4* radiance, __global const uint2* shadow_skip) {
   uint i = get_global_id(0);
   if (i >= counters[WT_COUNTER_SHADOW]) return;
   uint path = shadow_queue[i];
   float4 o = shadow_o[path];
   float4 d = shadow_d[path];
   BvhScene scene = {nodes, node_count, tri_verts};
-  if (!bvh_occluded(scene, o.xyz, d.xyz, o.w, d.w)) radiance[path] += shadow_radiance[path];
+  uint2 skip = shadow_skip[path];
+  if (!bvh_occluded(scene, o.xyz, d.xyz, o.w, d.w, skip.x, skip.y)) radiance[path] += shadow_radiance[path];
 }

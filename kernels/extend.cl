@@ -4,13 +4,14 @@
 __kernel void extend(__global const uint* counters, uint queue_slot, __global const uint* queue,
                      __global const float4* ray_o, __global const float4* ray_d,
                      __global const WtBvhNode* nodes, uint node_count,
-                     __global const float4* tri_verts, __global float4* hits) {
+                     __global const float4* tri_verts, __global float4* hits,
+                     __global const uint* ray_skip) {
   uint i = get_global_id(0);
   if (i >= counters[queue_slot]) return;
   uint path = queue[i];
   float4 o = ray_o[path];
   float4 d = ray_d[path];
   BvhScene scene = {nodes, node_count, tri_verts};
-  Hit hit = bvh_closest(scene, o.xyz, d.xyz, o.w, d.w);
+  Hit hit = bvh_closest(scene, o.xyz, d.xyz, o.w, d.w, ray_skip[path]);
   hits[path] = (float4)(hit.t, hit.b1, hit.b2, as_float(hit.prim));
 }

@@ -39,7 +39,8 @@ __kernel void shade(WtFrameParams frame, WtEnvironment environment, __global con
                     __global const WtAliasSlot* alias, __global const float* emitter_pdf_area,
                     __global uint* shadow_queue, __global float4* shadow_o,
                     __global float4* shadow_d, __global float4* shadow_radiance,
-                    __global const float* pbr_table, __global uint* bounce_counts) {
+                    __global const float* pbr_table, __global uint* bounce_counts,
+                    __global uint* ray_skip, __global uint2* shadow_skip) {
   uint i = get_global_id(0);
   if (i >= counters[in_slot]) return;
   uint path = queue_in[i];
@@ -152,6 +153,7 @@ __kernel void shade(WtFrameParams frame, WtEnvironment environment, __global con
           shadow_o[path] = (float4)(origin, 0.0f);
           shadow_d[path] = (float4)(shadow_dir, tmax);
           shadow_radiance[path] = (float4)(contribution, 0.0f);
+          shadow_skip[path] = (uint2)(prim, s.prim);
         }
       }
     }
@@ -178,6 +180,7 @@ __kernel void shade(WtFrameParams frame, WtEnvironment environment, __global con
 
   throughput[path] = (float4)(beta, bs.pdf);
   bounce_counts[path] = counts;
+  ray_skip[path] = prim;
   ray_o[path] = (float4)(origin, 0.0f);
   ray_d[path] = (float4)(wi, INFINITY);
   uint slot = atomic_inc(&counters[out_slot]);

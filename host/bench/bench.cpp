@@ -91,6 +91,7 @@ std::vector<Ray> primaryRays(const Scene& scene, int width) {
 struct SurfacePoint {
   glm::vec3 origin;  ///< offset off the surface, camera side
   glm::vec3 normal;  ///< unit, camera side
+  glm::vec3 point, error;  ///< on the surface, and its rounding error bound
 };
 
 std::optional<SurfacePoint> surfacePoint(const Scene& scene, const Ray& ray, const RayHit& hit) {
@@ -104,7 +105,7 @@ std::optional<SurfacePoint> surfacePoint(const Scene& scene, const Ray& ray, con
   if (!(len > 0.0f)) return std::nullopt;
   n /= len;
   if (glm::dot(n, ray.direction) > 0.0f) n = -n;
-  return SurfacePoint{offsetRayOrigin(p, error, n), n};
+  return SurfacePoint{offsetRayOrigin(p, error, n), n, p, error};
 }
 
 /// Cosine-distributed directions about the camera-side normal at every
@@ -128,6 +129,7 @@ std::vector<Ray> diffuseRays(const Scene& scene, std::span<const Ray> primary, s
     ray.direction = glm::normalize(d);
     ray.tmin = 0.0f;
     ray.tmax = 1e30f;
+    ray.skip = hits[i].triangle;  // as the renderer spawns: never the triangle left (Embree has no such test)
     rays.push_back(ray);
   }
   return rays;
@@ -174,11 +176,19 @@ std::vector<Ray> shadowRays(const Scene& scene, std::span<const Ray> primary, st
     } else {
       target = lo + glm::vec3(rng.next(), rng.next(), rng.next()) * (hi - lo);
     }
-    glm::vec3 d = target - s->origin;
+    // Leave on the target's side of the surface, as a renderer spawns any ray
+    // (pbrt's OffsetRayOrigin): a target behind the surface is reached
+    // through it, the way light reaches a thin translucent sheet. From the
+    // camera side instead, such a ray would start within rounding error of
+    // the surface it must cross, which neither tracer can decide.
+    glm::vec3 origin = glm::dot(s->normal, target - s->point) >= 0.0f ? s->origin
+                                                                       : offsetRayOrigin(s->point, s->error, -s->normal);
+    glm::vec3 d = target - origin;
     float distance = glm::length(d);
     if (!(distance > 0.0f) || !std::isfinite(distance)) continue;
     Ray ray;
-    ray.origin = s->origin;
+    ray.skip = hits[i].triangle;
+    ray.origin = origin;
     ray.direction = d / distance;
     ray.tmin = 0.0f;
     ray.tmax = (1.0f - 1e-4f) * distance;
@@ -200,11 +210,12 @@ enum class Disagreement {
   kWavetraceFalse, ///< wavetrace reported a hit clearly outside its triangle
   kEmbreeFalse,    ///< the converse
   kInconsistent,   ///< occlusion only: a tracer's any-hit answer contradicts its own closest hit
+  kSelf,           ///< Embree hit the triangle the ray leaves, which wavetrace never tests (Ray::skip): a ray grazing its own plane, e.g. from a point on an emitter to another on the same triangle
   kCount
 };
 const char* kDisagreementNames[] = {"t_tie", "edge_graze", "range_end", "wavetrace_missed",
                                     "embree_missed", "wavetrace_false_hit", "embree_false_hit",
-                                    "anyhit_vs_closest"};
+                                    "anyhit_vs_closest", "embree_hit_the_triangle_left"};
 constexpr double kTie = 1e-5, kEdge = 1e-5;
 
 /// Ray-plane distance and the crossing's minimum barycentric, in double; false when parallel.
@@ -227,6 +238,7 @@ Disagreement classify(const Scene& scene, const Ray& ray, const RayHit& wt, cons
   const bool wtHit = wt.triangle != RayHit::kNoHit, emHit = em.triangle != RayHit::kNoHit;
   auto close = [](double a, double b) { return std::abs(a - b) <= kTie * std::max(1.0, std::abs(b)); };
   if (wtHit && emHit && close(wt.t, em.t)) return Disagreement::kTie;
+  if (emHit && em.triangle == ray.skip && (!wtHit || em.t < wt.t)) return Disagreement::kSelf;
   // the nearer of the two reported hits is the one the other tracer missed
   const bool wtNearer = wtHit && (!emHit || wt.t < em.t);
   const RayHit& nearer = wtNearer ? wt : em;
@@ -243,7 +255,7 @@ struct Agreement {
   std::size_t byClass[std::size_t(Disagreement::kCount)] = {};
   std::size_t explained() const {
     return byClass[std::size_t(Disagreement::kTie)] + byClass[std::size_t(Disagreement::kEdge)] +
-           byClass[std::size_t(Disagreement::kRange)];
+           byClass[std::size_t(Disagreement::kRange)] + byClass[std::size_t(Disagreement::kSelf)];
   }
 };
 
@@ -600,7 +612,7 @@ int runBench(const BenchOptions& options) {
 
   // Mrays/s; ratio = wavetrace kernel throughput / Embree throughput
   std::printf("\n%-28s %-8s %8s %6s %9s %9s %9s %7s %10s %s\n", "scene", "rays", "count", "hit %", "wt wall",
-              "wt kernel", "Embree", "ratio", "agree %", "disagreements (tie/edge/range/other)");
+              "wt kernel", "Embree", "ratio", "agree %", "disagreements (tie/edge/range/self/other)");
   for (const SceneResult& r : results)
     for (const SetResult& s : r.sets) {
       std::printf("%-28s %-8s %8zu %6.1f %9.2f %9.2f", r.name.c_str(), s.name.c_str(), s.rays, 100.0 * s.hitFraction,
@@ -608,11 +620,11 @@ int runBench(const BenchOptions& options) {
       if (s.embree) {
         const Agreement& a = s.agreement;
         std::size_t other = a.disagreements - a.explained();
-        std::printf(" %9.2f %7.3f %10.4f %zu (%zu/%zu/%zu/%zu)", mrays(s.rays, s.embreeSeconds),
+        std::printf(" %9.2f %7.3f %10.4f %zu (%zu/%zu/%zu/%zu/%zu)", mrays(s.rays, s.embreeSeconds),
                     s.kernelSeconds > 0 ? s.embreeSeconds / s.kernelSeconds : 0.0,
                     s.rays ? 100.0 * (1.0 - double(a.disagreements) / s.rays) : 100.0, a.disagreements,
                     a.byClass[std::size_t(Disagreement::kTie)], a.byClass[std::size_t(Disagreement::kEdge)],
-                    a.byClass[std::size_t(Disagreement::kRange)], other);
+                    a.byClass[std::size_t(Disagreement::kRange)], a.byClass[std::size_t(Disagreement::kSelf)], other);
       }
       std::printf("\n");
     }

@@ -51,6 +51,8 @@ SceneBuffers::SceneBuffers(Context& context, const Scene& scene, const BvhBuildO
   nodeCount = std::uint32_t(bvh4.nodes.size());
   // From here on primIndices address the scene's triangles directly.
   for (std::uint32_t& p : m_bvh.primIndices) p = m_bvhToScene[p];
+  m_sceneToLeaf.assign(scene.triangles.size(), 0xffffffffu);
+  for (std::size_t leaf = 0; leaf < m_bvh.primIndices.size(); ++leaf) m_sceneToLeaf[m_bvh.primIndices[leaf]] = std::uint32_t(leaf);
 
   // Reorder triangles to leaf order, so a leaf addresses a contiguous range.
   std::vector<WtVec4> verts(3 * m_bvh.primIndices.size());

@@ -31,6 +31,11 @@ class SceneBuffers {
   const Bvh4Stats& bvh4Stats() const { return m_bvh4Stats; }
   /// Leaf-order triangle index -> the scene's triangle index.
   std::uint32_t sceneTriangle(std::uint32_t leafIndex) const { return m_bvh.primIndices[leafIndex]; }
+  /// The scene's triangle index -> its leaf-order index; 0xffffffff for one
+  /// left out of the BVH or out of range.
+  std::uint32_t leafTriangle(std::uint32_t sceneIndex) const {
+    return sceneIndex < m_sceneToLeaf.size() ? m_sceneToLeaf[sceneIndex] : 0xffffffffu;
+  }
   /// Triangles left out of the BVH (zero area or non-finite vertices).
   std::size_t skippedTriangles() const { return m_skippedTriangles; }
   /// Traversal stack entries the BVH needs, for KernelFeatures::bvhStackSize.
@@ -40,6 +45,7 @@ class SceneBuffers {
   Bvh m_bvh;  ///< primIndices hold scene triangle indices
   Bvh4Stats m_bvh4Stats;
   std::vector<std::uint32_t> m_bvhToScene;
+  std::vector<std::uint32_t> m_sceneToLeaf;
   std::size_t m_skippedTriangles = 0;
 };
 

@@ -22,20 +22,24 @@ void Tracer::uploadRays(std::span<const Ray> rays) {
   if (n > m_capacity) {
     m_rayO = cl::Buffer(m_context.context(), CL_MEM_READ_ONLY, n * 16);
     m_rayD = cl::Buffer(m_context.context(), CL_MEM_READ_ONLY, n * 16);
+    m_skip = cl::Buffer(m_context.context(), CL_MEM_READ_ONLY, n * 4);
     m_out = cl::Buffer(m_context.context(), CL_MEM_READ_WRITE, n * 16);
     m_capacity = n;
   }
   // Split the interleaved rays into the two float4 streams the kernels read.
   std::vector<float> o(4 * rays.size()), d(4 * rays.size());
+  std::vector<cl_uint> skip(rays.size());
   for (std::size_t i = 0; i < rays.size(); ++i) {
     const Ray& r = rays[i];
     o[4 * i + 0] = r.origin.x, o[4 * i + 1] = r.origin.y, o[4 * i + 2] = r.origin.z, o[4 * i + 3] = r.tmin;
     d[4 * i + 0] = r.direction.x, d[4 * i + 1] = r.direction.y, d[4 * i + 2] = r.direction.z,
               d[4 * i + 3] = r.tmax;
+    skip[i] = m_scene->leafTriangle(r.skip);
   }
   if (!rays.empty()) {
     m_context.queue().enqueueWriteBuffer(m_rayO, CL_TRUE, 0, o.size() * 4, o.data());
     m_context.queue().enqueueWriteBuffer(m_rayD, CL_TRUE, 0, d.size() * 4, d.data());
+    m_context.queue().enqueueWriteBuffer(m_skip, CL_TRUE, 0, skip.size() * 4, skip.data());
   }
 }
 
@@ -50,6 +54,7 @@ std::vector<RayHit> Tracer::traceClosest(std::span<const Ray> rays) {
   m_closest.setArg(a++, m_scene->nodeCount);
   m_closest.setArg(a++, m_scene->triVerts);
   m_closest.setArg(a++, m_out);
+  m_closest.setArg(a++, m_skip);
   m_context.resetStageTimes();
   m_context.launch("trace_closest", m_closest, rays.size());
   m_context.finish();
@@ -82,6 +87,7 @@ std::vector<std::uint8_t> Tracer::traceOccluded(std::span<const Ray> rays) {
   m_occluded.setArg(a++, m_scene->nodeCount);
   m_occluded.setArg(a++, m_scene->triVerts);
   m_occluded.setArg(a++, m_out);
+  m_occluded.setArg(a++, m_skip);
   m_context.resetStageTimes();
   m_context.launch("trace_occluded", m_occluded, rays.size());
   m_context.finish();

@@ -20,8 +20,8 @@ struct Ray {
   float tmin = 0.0f;
   glm::vec3 direction;
   float tmax = 1e30f;
+  std::uint32_t skip = 0xffffffffu;  ///< a scene triangle the ray never hits (the one it leaves), or none
 };
-static_assert(sizeof(Ray) == 32, "Ray is uploaded as two float4");
 
 struct RayHit {
   float t = 0.0f;
@@ -49,7 +49,7 @@ class Tracer {
   std::unique_ptr<SceneBuffers> m_scene;
   cl::Program m_program;
   cl::Kernel m_closest, m_occluded;
-  cl::Buffer m_rayO, m_rayD, m_out;
+  cl::Buffer m_rayO, m_rayD, m_skip, m_out;
   std::size_t m_capacity = 0;
   double m_lastKernelSeconds = 0.0;
 };

@@ -81,6 +81,7 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
   m_state = make(64), m_mean = make(16), m_m2 = make(16), m_sampleCount = make(4), m_pixels = make(4);
   m_shadowQueue = make(4), m_shadowO = make(16), m_shadowD = make(16), m_shadowRadiance = make(16);
   m_bounceCounts = make(4);
+  m_raySkip = make(4), m_shadowSkip = make(8);
   auto upload = [&](const auto& data) {
     using T = typename std::decay_t<decltype(data)>::value_type;
     std::size_t bytes = std::max<std::size_t>(data.size(), 1) * sizeof(T);
@@ -112,7 +113,8 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
 
   // Arguments that never change; per-launch ones are set in renderSample().
   int a = 2;  // generate: frame, camera set per pass
-  for (cl::Buffer* b : {&m_rayO, &m_rayD, &m_throughput, &m_radiance, &m_queueA, &m_counters, &m_bounceCounts})
+  for (cl::Buffer* b : {&m_rayO, &m_rayD, &m_throughput, &m_radiance, &m_queueA, &m_counters, &m_bounceCounts,
+                        &m_raySkip})
     m_generate.setArg(a++, *b);
 
   m_extend.setArg(0, m_counters);
@@ -122,6 +124,7 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
   m_extend.setArg(6, m_scene->nodeCount);
   m_extend.setArg(7, m_scene->triVerts);
   m_extend.setArg(8, m_hits);
+  m_extend.setArg(9, m_raySkip);
 
   // shade: 0 frame, 1 environment, 2-4 its arrays, 5 counters, 6-9 queues (per bounce), 10- fixed
   m_shade.setArg(1, m_environment.header);
@@ -133,7 +136,7 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
   for (cl::Buffer* b : {&m_rayO, &m_rayD, &m_hits, &m_throughput, &m_radiance, &m_scene->triangles,
                         &m_scene->triVerts, &m_scene->normals, &m_scene->materials, &m_lightBuffer,
                         &m_aliasBuffer, &m_emitterPdfBuffer, &m_shadowQueue, &m_shadowO, &m_shadowD,
-                        &m_shadowRadiance, &m_pbrTable, &m_bounceCounts})
+                        &m_shadowRadiance, &m_pbrTable, &m_bounceCounts, &m_raySkip, &m_shadowSkip})
     m_shade.setArg(a++, *b);
 
   a = 0;
@@ -142,6 +145,7 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
   m_connect.setArg(a++, m_scene->nodeCount);
   m_connect.setArg(a++, m_scene->triVerts);
   m_connect.setArg(a++, m_radiance);
+  m_connect.setArg(a++, m_shadowSkip);
 
   a = 1;
   for (cl::Buffer* b : {&m_radiance, &m_state, &m_sampleCount, &m_counters})

@@ -110,6 +110,7 @@ class Renderer {
   cl::Buffer m_lightBuffer, m_aliasBuffer, m_emitterPdfBuffer;
   cl::Buffer m_shadowQueue, m_shadowO, m_shadowD, m_shadowRadiance;
   cl::Buffer m_pbrTable, m_bounceCounts;
+  cl::Buffer m_raySkip, m_shadowSkip;  ///< the triangle each ray leaves (and the emitter a shadow ray aims at): never hit
   // path state (structure of arrays, one entry per pixel)
   cl::Buffer m_rayO, m_rayD, m_hits, m_throughput, m_radiance;
   cl::Buffer m_queueA, m_queueB, m_counters;

@@ -68,20 +68,6 @@ __attribute__((always_inline)) inline bool triangle_intersect(float3 org, RayShe
   float t = t_scaled * inv_det;
   if (!(t > tmin && t < tmax)) return false;
 
-  // Reject t within its own rounding error of the origin (the bound of
-  // pbrt-v4, sec. 6.8.7, on this test): with the error-bound origin offset
-  // (ray_offset_origin) a spawned ray cannot find the surface it left. Only
-  // candidate hits pay for it.
-  float max_zt = fabs(s.sz) * fmax(fabs(az), fmax(fabs(bz), fabs(cz)));
-  float max_xt = fmax(fabs(ax), fmax(fabs(bx), fabs(cx)));
-  float max_yt = fmax(fabs(ay), fmax(fabs(by), fabs(cy)));
-  float delta_z = spawn_gamma(3) * max_zt;
-  float delta_x = spawn_gamma(5) * (max_xt + max_zt);
-  float delta_y = spawn_gamma(5) * (max_yt + max_zt);
-  float delta_e = 2.0f * (spawn_gamma(2) * max_xt * max_yt + delta_y * max_xt + delta_x * max_yt);
-  float max_e = fmax(fabs(u), fmax(fabs(v), fabs(w)));
-  float delta_t = 3.0f * (spawn_gamma(3) * max_e * max_zt + delta_e * max_zt + delta_z * max_e) * fabs(inv_det);
-  if (!(t > delta_t)) return false;
   *t_hit = t;
   *b1 = v * inv_det;
   *b2 = w * inv_det;

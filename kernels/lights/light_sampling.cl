@@ -26,6 +26,7 @@ typedef struct LightSample {
   float3 radiance;  ///< arriving radiance, or intensity / distance^2 for delta lights
   float pdf;        ///< solid-angle pdf given this light was picked; 1 for delta lights
   int is_delta;     ///< point, spot, directional: BSDF sampling cannot hit these
+  uint prim;        ///< the emitter's leaf-order triangle (its shadow ray skips it); WT_NO_HIT for other lights
 } LightSample;
 
 // Spherical-triangle sampling (Arvo 1995) where the triangle subtends at
@@ -102,6 +103,7 @@ inline bool light_sample(LightScene ls, uint index, float3 p, float u1, float u2
   WtLight light = ls.lights[index];
   s->is_delta = 1;
   s->pdf = 1.0f;
+  s->prim = WT_NO_HIT;
   if (light.type == WT_LIGHT_POINT || light.type == WT_LIGHT_SPOT) {
     float3 to_light = vec4_xyz(light.position) - p;
     float d2 = dot(to_light, to_light);
@@ -122,6 +124,7 @@ inline bool light_sample(LightScene ls, uint index, float3 p, float u1, float u2
   s->is_delta = 0;
   if (light.type == WT_LIGHT_TRIANGLE) {
     uint t = light.triangle;
+    s->prim = t;
     float3 p0 = ls.tri_verts[3 * t].xyz, p1 = ls.tri_verts[3 * t + 1].xyz, p2 = ls.tri_verts[3 * t + 2].xyz;
     float3 n = cross(p1 - p0, p2 - p0);
     float solid_angle = light_triangle_solid_angle(p, p0, p1, p2);
