@@ -5,6 +5,7 @@
 #include "common.h"
 #include "geometry/triangle.cl"
 #include "lights/light_sampling.cl"
+#include "lights/light_tree.cl"
 #include "sampler.cl"
 #include "materials/bsdf.cl"
 
@@ -40,7 +41,9 @@ __kernel void shade(WtFrameParams frame, WtEnvironment environment, __global con
                     __global uint* shadow_queue, __global float4* shadow_o,
                     __global float4* shadow_d, __global float4* shadow_radiance,
                     __global const float* pbr_table, __global uint* bounce_counts,
-                    __global uint* ray_skip, __global uint2* shadow_skip) {
+                    __global uint* ray_skip, __global uint2* shadow_skip,
+                    __global const WtLightNode* light_tree, __global const uint* emitter_leaf,
+                    __global float4* prev_normal) {
   uint i = get_global_id(0);
   if (i >= counters[in_slot]) return;
   uint path = queue_in[i];
@@ -76,7 +79,14 @@ __kernel void shade(WtFrameParams frame, WtEnvironment environment, __global con
   float3 le = vec4_xyz(material.emission);
   bool emits = material.emission.w != 0.0f || dot(ng, dir) < 0.0f;
   if (emits && (le.x > 0.0f || le.y > 0.0f || le.z > 0.0f)) {
-    float pdf_light = light_triangle_pdf(emitter_pdf_area[prim], ray_o[path].xyz, p0, p1, p2, hit.x, dir, ng);
+    // the probability that NEE at the previous vertex would have picked this
+    // emitter: its selection probability over its area, by the light tree's
+    // choice at that vertex when the tree holds it (camera rays need none)
+    float select = frame.bounce > 0u ? emitter_pdf_area[prim] : 0.0f;
+    uint leaf = emitter_leaf[prim];
+    if (select > 0.0f && leaf != WT_LIGHT_NODE_NONE)
+      select *= light_tree_pmf(light_tree, leaf, ray_o[path].xyz, prev_normal[path].xyz);
+    float pdf_light = light_triangle_pdf(select, ray_o[path].xyz, p0, p1, p2, hit.x, dir, ng);
     float3 emitted = beta * le * shade_emission_weight(frame, pdf_prev, pdf_light);
     shade_check_finite(frame, counters, path, emitted, WT_NONFINITE_EMISSION);
     radiance[path] += (float4)(emitted, 0.0f);
@@ -114,6 +124,12 @@ __kernel void shade(WtFrameParams frame, WtEnvironment environment, __global con
       pmf = 1.0f / (float)nee_count;
     } else {
       index = light_pick(ls, u_pick, &pmf);
+      // the light tree entry: an emitter by its importance here
+      if (ls.lights[index].type == WT_LIGHT_TREE) {
+        float pmf_tree;
+        index = light_tree_pick(light_tree, origin, ng, sampler_get(frame, path, 9u), &pmf_tree);
+        pmf *= pmf_tree;
+      }
     }
     LightSample s;
     float u1 = sampler_get(frame, path, 4u);
@@ -181,6 +197,7 @@ __kernel void shade(WtFrameParams frame, WtEnvironment environment, __global con
   throughput[path] = (float4)(beta, bs.pdf);
   bounce_counts[path] = counts;
   ray_skip[path] = prim;
+  prev_normal[path] = (float4)(ng, 0.0f);  // for the light tree's pmf if the ray finds an emitter
   ray_o[path] = (float4)(origin, 0.0f);
   ray_d[path] = (float4)(wi, INFINITY);
   uint slot = atomic_inc(&counters[out_slot]);

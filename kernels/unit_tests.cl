@@ -120,3 +120,23 @@ __kernel void test_bsdf_eval(uint count, WtMaterial material, float4 wo, uint lo
   float3 f = bsdf_eval(b, wo.xyz, wi[i].xyz, lobes, &pdf);
   out[i] = (float4)(f, pdf);
 }
+
+#include "lights/light_tree.cl"
+
+// light_tree_pick at (p, n) for `count` uniforms: the light index and pmf.
+__kernel void test_light_tree_pick(uint count, __global const WtLightNode* nodes, float4 p, float4 n,
+                                   __global const float* u, __global uint* chosen, __global float* pmf) {
+  uint i = get_global_id(0);
+  if (i >= count) return;
+  float q;
+  chosen[i] = light_tree_pick(nodes, p.xyz, n.xyz, u[i], &q);
+  pmf[i] = q;
+}
+
+// light_tree_pmf at (p, n) for `count` leaves.
+__kernel void test_light_tree_pmf(uint count, __global const WtLightNode* nodes, __global const uint* leaves,
+                                  float4 p, float4 n, __global float* pmf) {
+  uint i = get_global_id(0);
+  if (i >= count) return;
+  pmf[i] = light_tree_pmf(nodes, leaves[i], p.xyz, n.xyz);
+}

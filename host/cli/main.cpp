@@ -36,6 +36,7 @@ struct RenderOptions {
   std::string misHeuristic = "balance";
   bool noNee = false, noMis = false, noRr = false;
   std::string sampler = "independent";
+  std::string lightSampler = "auto";
   std::string reference, errorLog;
   std::string accumulation = "kahan";
   int sceneIndex = -1;
@@ -86,6 +87,9 @@ int runRender(const RenderOptions& options) {
   settings.useRussianRoulette = !options.noRr;
   settings.powerHeuristic = options.misHeuristic == "power";
   settings.sobol = options.sampler == "sobol";
+  settings.lightSampler = options.lightSampler == "power" ? wt::LightSampler::Power
+                          : options.lightSampler == "tree" ? wt::LightSampler::Tree
+                                                           : wt::LightSampler::Auto;
   settings.accumulation = options.accumulation == "single"   ? WT_ACCUMULATE_SINGLE
                           : options.accumulation == "double" ? WT_ACCUMULATE_DOUBLE
                                                              : WT_ACCUMULATE_KAHAN;
@@ -226,6 +230,10 @@ int main(int argc, char** argv) {
   renderCmd->add_flag("--no-rr", render.noRr, "path: no Russian roulette");
   renderCmd->add_option("--sampler", render.sampler, "independent (hashed) or sobol (Owen-scrambled Sobol)")
       ->check(CLI::IsMember({"independent", "sobol"}))->capture_default_str();
+  renderCmd->add_option("--light-sampler", render.lightSampler,
+                        "path: how NEE picks an emissive triangle: power (alias table), tree (light tree, by "
+                        "importance at the shading point) or auto (the tree from 8 emitters on)")
+      ->check(CLI::IsMember({"auto", "power", "tree"}))->capture_default_str();
   renderCmd->add_option("--rr-depth", render.settings.rrMinDepth, "path: first bounce Russian roulette may end")
       ->check(CLI::Range(0, 1024))->capture_default_str();
   renderCmd->add_option("--accumulation", render.accumulation,

@@ -94,3 +94,4 @@ static_assert(sizeof(WtCamera) == 64);
 static_assert(sizeof(WtFrameParams) == 64);
 static_assert(sizeof(WtLight) == 64);
 static_assert(sizeof(WtAliasSlot) == 16);
+static_assert(sizeof(WtLightNode) == 64);

@@ -1,5 +1,7 @@
 #include "render/light_list.h"
 
+#include "render/light_tree.h"
+
 #include <cmath>
 #include <numbers>
 
@@ -46,7 +48,8 @@ double environmentPowerEstimate(const Scene& scene, double meanLuminance) {
   return std::numbers::pi * r * r * std::numbers::pi * meanLuminance;
 }
 
-LightList buildLightList(const Scene& scene, const SceneBuffers& buffers, double environmentPower) {
+LightList buildLightList(const Scene& scene, const SceneBuffers& buffers, double environmentPower,
+                         LightSampler sampler) {
   LightList list;
   std::vector<double> power;
   Aabb box = scene.bounds();
@@ -97,6 +100,40 @@ LightList buildLightList(const Scene& scene, const SceneBuffers& buffers, double
     list.lights.push_back(l);
   }
   list.emissiveTriangles = areas.size();
+  const bool useTree = sampler == LightSampler::Tree ||
+                       (sampler == LightSampler::Auto && list.emissiveTriangles >= kLightTreeMinEmitters);
+  list.emitterLeaf.assign(order.size(), WT_LIGHT_NODE_NONE);
+
+  // With the tree, the triangles move behind one WT_LIGHT_TREE entry of
+  // their total power; the table picks among the entries before them.
+  std::uint32_t treeEntry = ~0u;
+  std::vector<WtLight> triangleLights;
+  if (useTree && list.emissiveTriangles > 0) {
+    const std::size_t first = list.analyticCount;
+    triangleLights.assign(list.lights.begin() + std::ptrdiff_t(first), list.lights.end());
+    std::vector<double> trianglePower(power.begin() + std::ptrdiff_t(first), power.end());
+    list.lights.resize(first);
+    power.resize(first);
+    double sum = 0.0;
+    for (double p : trianglePower) sum += p;
+    WtLight entry{};
+    entry.type = WT_LIGHT_TREE;
+    treeEntry = std::uint32_t(list.lights.size());
+    list.lights.push_back(entry);
+    power.push_back(sum);
+    // the emitters as the tree sees them; light indices are fixed below
+    std::vector<LightTreeEmitter> emitters(triangleLights.size());
+    for (std::size_t k = 0; k < triangleLights.size(); ++k) {
+      const WtTriangle& t = scene.triangles[order[triangleLights[k].triangle]];
+      auto pos = [&](std::uint32_t v) { return glm::vec3(scene.positions[v].x, scene.positions[v].y, scene.positions[v].z); };
+      emitters[k] = {pos(t.v0), pos(t.v1), pos(t.v2), trianglePower[k], triangleLights[k].position.w != 0.0f,
+                     std::uint32_t(k)};
+    }
+    LightTree tree = buildLightTree(emitters);
+    list.tree = std::move(tree.nodes);
+    for (std::size_t k = 0; k < triangleLights.size(); ++k)
+      list.emitterLeaf[triangleLights[k].triangle] = tree.leafOfEmitter[k];
+  }
 
   // environment
   std::uint32_t envIndex = ~0u;
@@ -107,6 +144,13 @@ LightList buildLightList(const Scene& scene, const SceneBuffers& buffers, double
     power.push_back(environmentPower);
     list.lights.push_back(l);
   }
+  // the tree's leaves point at the triangles, stored after the table's entries
+  if (treeEntry != ~0u) {
+    const std::uint32_t base = std::uint32_t(list.lights.size());
+    list.lights.insert(list.lights.end(), triangleLights.begin(), triangleLights.end());
+    for (WtLightNode& n : list.tree)
+      if (n.leaf) n.child += base;
+  }
 
   list.alias = buildAliasTable(power);
   list.emitterPdfArea.assign(order.size(), 0.0f);
@@ -116,8 +160,11 @@ LightList buildLightList(const Scene& scene, const SceneBuffers& buffers, double
   if (list.sampleable) {
     std::size_t k = 0;
     for (std::size_t leaf = 0; leaf < order.size(); ++leaf)
-      if (lightOfLeaf[leaf] != ~0u)
-        list.emitterPdfArea[leaf] = float(list.alias[lightOfLeaf[leaf]].pmf / areas[k++]);
+      if (lightOfLeaf[leaf] != ~0u) {
+        // the tree entry's probability, to be multiplied by the tree's choice on the device
+        float pick = treeEntry != ~0u ? list.alias[treeEntry].pmf : list.alias[lightOfLeaf[leaf]].pmf;
+        list.emitterPdfArea[leaf] = float(pick / areas[k++]);
+      }
     if (envIndex != ~0u) list.environmentPmf = list.alias[envIndex].pmf;
   }
   return list;

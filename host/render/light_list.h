@@ -1,6 +1,9 @@
 // The scene's lights as the kernels sample them: point, spot and directional
 // lights first, then emissive triangles, then the environment; an alias
-// table picks one with probability proportional to its estimated power.
+// table picks one with probability proportional to its estimated power. With
+// the light tree, the emissive triangles are one entry of the alias table
+// (WT_LIGHT_TREE, their total power) and are stored after the others, where
+// the tree's leaves point.
 #pragma once
 
 #include "device/scene_buffers.h"
@@ -13,10 +16,23 @@
 
 namespace wt {
 
+/// How next-event estimation picks among emissive triangles.
+enum class LightSampler {
+  Auto,   ///< the tree from kLightTreeMinEmitters emitters on, else by power
+  Power,  ///< an alias table by power (the shading point plays no part)
+  Tree,   ///< the light tree (importance at the shading point)
+};
+
+/// Emitter count from which LightSampler::Auto uses the light tree
+/// (docs/integrators.md: where it starts to win).
+constexpr std::size_t kLightTreeMinEmitters = 8;
+
 struct LightList {
-  std::vector<WtLight> lights;
-  std::vector<WtAliasSlot> alias;      ///< one slot per light
-  std::vector<float> emitterPdfArea;   ///< per leaf-order triangle: selection probability / area (0: not a light)
+  std::vector<WtLight> lights;         ///< the alias table's entries first, then (with the tree) the emissive triangles
+  std::vector<WtAliasSlot> alias;      ///< one slot per entry the table picks from (lights [0, alias.size()))
+  std::vector<float> emitterPdfArea;   ///< per leaf-order triangle: its (or, with the tree, the tree's) selection probability / area (0: not a light)
+  std::vector<WtLightNode> tree;       ///< the light tree (empty without it)
+  std::vector<std::uint32_t> emitterLeaf;  ///< per leaf-order triangle: its tree leaf, WT_LIGHT_NODE_NONE when not in the tree
   std::uint32_t analyticCount = 0;     ///< lights [0, analyticCount) are point/spot/directional
   float environmentPmf = 0.0f;         ///< selection probability of the environment
   std::size_t emissiveTriangles = 0;
@@ -29,7 +45,8 @@ std::vector<WtAliasSlot> buildAliasTable(std::span<const double> weights);
 /// The light list of a scene whose triangles were uploaded as `buffers`.
 /// `environmentPower` is the environment's estimated power (0: no environment
 /// light, see environmentPowerEstimate).
-LightList buildLightList(const Scene& scene, const SceneBuffers& buffers, double environmentPower);
+LightList buildLightList(const Scene& scene, const SceneBuffers& buffers, double environmentPower,
+                         LightSampler sampler = LightSampler::Auto);
 
 /// Power of a uniform environment of luminance `meanLuminance` falling on the scene's bounding sphere.
 double environmentPowerEstimate(const Scene& scene, double meanLuminance);

@@ -24,7 +24,7 @@ WtFrameParams frameParams(const RenderSettings& s, const LightList& lights, int 
   p.max_transmission_bounces = lobeLimit(s.maxTransmissionBounces);
   p.seed = s.seed;
   p.exposure = std::exp2(s.exposureStops);
-  p.light_count = lights.sampleable ? cl_uint(lights.lights.size()) : 0u;
+  p.light_count = lights.sampleable ? cl_uint(lights.alias.size()) : 0u;
   p.analytic_count = lights.analyticCount;
   p.env_pmf = lights.environmentPmf;
   p.rr_min_depth = cl_uint(std::max(0, s.rrMinDepth));
@@ -51,7 +51,8 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
                       : loadEnvironmentMap(settings.environmentMap, settings.environmentIntensity,
                                            settings.environmentRotationDegrees);
   double envLum = m_environment.meanLuminance;
-  m_lights = buildLightList(scene, *m_scene, envLum > 0.0 ? environmentPowerEstimate(scene, envLum) : 0.0);
+  m_lights = buildLightList(scene, *m_scene, envLum > 0.0 ? environmentPowerEstimate(scene, envLum) : 0.0,
+                            settings.lightSampler);
 
   KernelFeatures features;
   features.integratorMinimal = settings.integrator == Integrator::Minimal;
@@ -81,7 +82,7 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
   m_state = make(64), m_mean = make(16), m_m2 = make(16), m_sampleCount = make(4), m_pixels = make(4);
   m_shadowQueue = make(4), m_shadowO = make(16), m_shadowD = make(16), m_shadowRadiance = make(16);
   m_bounceCounts = make(4);
-  m_raySkip = make(4), m_shadowSkip = make(8);
+  m_raySkip = make(4), m_shadowSkip = make(8), m_prevNormal = make(16);
   auto upload = [&](const auto& data) {
     using T = typename std::decay_t<decltype(data)>::value_type;
     std::size_t bytes = std::max<std::size_t>(data.size(), 1) * sizeof(T);
@@ -93,6 +94,8 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
   m_lightBuffer = upload(m_lights.lights);
   m_aliasBuffer = upload(m_lights.alias);
   m_emitterPdfBuffer = upload(m_lights.emitterPdfArea);
+  m_lightTree = upload(m_lights.tree);
+  m_emitterLeaf = upload(m_lights.emitterLeaf);
   EnvironmentUpload env = environmentUpload(m_environment);
   auto uploadSpan = [&](auto span) {
     cl::Buffer b(ctx, CL_MEM_READ_ONLY, span.size_bytes());
@@ -136,7 +139,8 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
   for (cl::Buffer* b : {&m_rayO, &m_rayD, &m_hits, &m_throughput, &m_radiance, &m_scene->triangles,
                         &m_scene->triVerts, &m_scene->normals, &m_scene->materials, &m_lightBuffer,
                         &m_aliasBuffer, &m_emitterPdfBuffer, &m_shadowQueue, &m_shadowO, &m_shadowD,
-                        &m_shadowRadiance, &m_pbrTable, &m_bounceCounts, &m_raySkip, &m_shadowSkip})
+                        &m_shadowRadiance, &m_pbrTable, &m_bounceCounts, &m_raySkip, &m_shadowSkip,
+                        &m_lightTree, &m_emitterLeaf, &m_prevNormal})
     m_shade.setArg(a++, *b);
 
   a = 0;

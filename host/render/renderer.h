@@ -47,6 +47,7 @@ struct RenderSettings {
   bool useRussianRoulette = true;  ///< path
   int rrMinDepth = 3;           ///< path: first bounce at which roulette may end a path
   bool sobol = false;           ///< Owen-scrambled Sobol instead of independent random numbers
+  LightSampler lightSampler = LightSampler::Auto;  ///< path: how NEE picks among emissive triangles
   std::uint32_t accumulation = WT_ACCUMULATE_KAHAN;  ///< WT_ACCUMULATE_* (double needs fp64)
 #ifdef NDEBUG
   bool stopOnNonFinite = false;  ///< throw NonFiniteSampleError at the first NaN/Inf shade makes (on in debug builds)
@@ -110,7 +111,8 @@ class Renderer {
   cl::Buffer m_lightBuffer, m_aliasBuffer, m_emitterPdfBuffer;
   cl::Buffer m_shadowQueue, m_shadowO, m_shadowD, m_shadowRadiance;
   cl::Buffer m_pbrTable, m_bounceCounts;
-  cl::Buffer m_raySkip, m_shadowSkip;  ///< the triangle each ray leaves (and the emitter a shadow ray aims at): never hit
+  cl::Buffer m_raySkip, m_shadowSkip;
+  cl::Buffer m_lightTree, m_emitterLeaf, m_prevNormal;  ///< the triangle each ray leaves (and the emitter a shadow ray aims at): never hit
   // path state (structure of arrays, one entry per pixel)
   cl::Buffer m_rayO, m_rayD, m_hits, m_throughput, m_radiance;
   cl::Buffer m_queueA, m_queueB, m_counters;

@@ -13,6 +13,7 @@
 #define WT_LIGHT_SPOT 2         ///< KHR_lights_punctual spot
 #define WT_LIGHT_DIRECTIONAL 3  ///< KHR_lights_punctual directional
 #define WT_LIGHT_ENVIRONMENT 4  ///< the environment (constant or map), at most one
+#define WT_LIGHT_TREE 5         ///< the light tree over the emissive triangles (kernels/lights/light_tree.cl), at most one
 
 /// One light of the scene's light list, 64 bytes.
 typedef struct WtLight {
@@ -33,6 +34,23 @@ typedef struct WtAliasSlot {
   float pmf;        ///< probability of choosing light i (this slot's own light), for MIS
   wt_uint pad0;
 } WtAliasSlot;
+
+/// A node of the light tree over emissive triangles (host/render/light_tree.h):
+/// the bounds and normal cone of the emitters below it and their total
+/// power. An inner node's two children are adjacent (child, child + 1); a
+/// leaf holds one emitter. 64 bytes.
+typedef struct WtLightNode {
+  float lo_x, lo_y, lo_z;  ///< bounds of the emitters below, world
+  float power;             ///< their total estimated power (luminance)
+  float hi_x, hi_y, hi_z;
+  wt_uint child;           ///< inner: the first child; leaf: the emitter's index in the light list
+  float axis_x, axis_y, axis_z;  ///< unit axis of the cone holding the emitters' front normals
+  float cos_theta_o;       ///< cosine of the cone's half-angle; -1: any direction (a two-sided emitter below)
+  wt_uint leaf;            ///< 1 for a leaf
+  wt_uint parent;          ///< WT_LIGHT_NODE_NONE at the root
+  wt_uint pad0, pad1;
+} WtLightNode;
+#define WT_LIGHT_NODE_NONE 0xffffffffu
 
 /// Integrator switches that may change between renders without a rebuild.
 #define WT_MIS_BALANCE 0

@@ -4,7 +4,7 @@
 //
 // Dimension allocation: bounce 0, dims 0-1: pixel jitter. Every bounce:
 // dims 2-3: BSDF direction; 4-5: point on the light; 6: light selection;
-// 7: Russian roulette; 8: BSDF lobe. Pairs (2k, 2k+1) are stratified
+// 7: Russian roulette; 8: BSDF lobe; 9: light tree descent. Pairs (2k, 2k+1) are stratified
 // together by the Sobol sampler. Later features take the next free dimensions.
 #ifndef WT_SHARED_RNG_H
 #define WT_SHARED_RNG_H
