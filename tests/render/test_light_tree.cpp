@@ -6,6 +6,7 @@
 #include "device_fixture.h"
 #include "render/light_tree.h"
 #include "render/render_helpers.h"
+#include "test_util.h"
 
 #include <glm/gtc/matrix_transform.hpp>
 #include <gtest/gtest.h>
@@ -117,7 +118,7 @@ TEST(LightTree, DevicePicksFollowThePmfItReports) {
                    tree.nodes.data());
   std::vector<cl_uint> leaves(tree.leafOfEmitter.begin(), tree.leafOfEmitter.end());
   cl::Buffer leafBuffer(ctx.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, leaves.size() * 4, leaves.data());
-  const cl_uint n = 1 << 18;
+  const cl_uint n = test::testSize(1u << 18, 1u << 12);
   std::vector<float> us(n);
   for (cl_uint i = 0; i < n; ++i) us[i] = (float(i) + 0.5f) / float(n);  // stratified: the histogram converges fast
   cl::Buffer ub(ctx.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, n * 4, us.data());
