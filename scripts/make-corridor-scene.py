@@ -14,7 +14,12 @@ import base64
 import json
 import math
 import random
-import struct
+import sys
+import os
+
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from gltf_quads import pack_quads  # noqa: E402
 
 
 def main():
@@ -58,31 +63,7 @@ def main():
                            "extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": strength}}}
     names = list(materials)
 
-    buffer = bytearray()
-    buffer_views, accessors, primitives = [], [], []
-    for name in names:
-        positions, indices = [], []
-        for mat, corners in quads:
-            if mat != name:
-                continue
-            base = len(positions)
-            positions += corners
-            indices += [base, base + 1, base + 2, base, base + 2, base + 3]
-        lo = [min(p[i] for p in positions) for i in range(3)]
-        hi = [max(p[i] for p in positions) for i in range(3)]
-        pos_offset = len(buffer)
-        for p in positions:
-            buffer += struct.pack("<3f", *p)
-        idx_offset = len(buffer)
-        for i in indices:
-            buffer += struct.pack("<H", i)
-        while len(buffer) % 4:
-            buffer += b"\0"
-        buffer_views.append({"buffer": 0, "byteOffset": pos_offset, "byteLength": 12 * len(positions), "target": 34962})
-        buffer_views.append({"buffer": 0, "byteOffset": idx_offset, "byteLength": 2 * len(indices), "target": 34963})
-        accessors.append({"bufferView": len(buffer_views) - 2, "componentType": 5126, "count": len(positions), "type": "VEC3", "min": lo, "max": hi})
-        accessors.append({"bufferView": len(buffer_views) - 1, "componentType": 5123, "count": len(indices), "type": "SCALAR"})
-        primitives.append({"attributes": {"POSITION": len(accessors) - 2}, "indices": len(accessors) - 1, "material": names.index(name)})
+    buffer, buffer_views, accessors, primitives = pack_quads(quads, names)
 
     gltf = {
         "asset": {"version": "2.0", "generator": "wavetrace scripts/make-corridor-scene.py"},
@@ -100,7 +81,7 @@ def main():
         "materials": [dict(name=n, **materials[n]) for n in names],
         "accessors": accessors,
         "bufferViews": buffer_views,
-        "buffers": [{"byteLength": len(buffer), "uri": "data:application/octet-stream;base64," + base64.b64encode(bytes(buffer)).decode()}],
+        "buffers": [{"byteLength": len(buffer), "uri": "data:application/octet-stream;base64," + base64.b64encode(buffer).decode()}],
     }
     with open(args.out, "w") as f:
         json.dump(gltf, f, indent=1)

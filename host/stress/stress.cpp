@@ -16,11 +16,7 @@
 namespace wt {
 namespace {
 
-std::string format(const char* fmt, double v) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, fmt, v);
-  return buf;
-}
+std::string format(const char* fmt, double v) { return stressFormat(fmt, v); }
 
 /// Worst relative error of `samples` running-mean updates (kernels/unit_tests.cl,
 /// test_accumulate) over `items` work-items, against the same sum in double.
@@ -44,6 +40,12 @@ double accumulationError(Context& context, cl::Program& program, cl_uint mode, c
 }
 
 }  // namespace
+
+std::string stressFormat(const char* fmt, double v) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, fmt, v);
+  return buf;
+}
 
 std::vector<StressRow> stressAccumulation(Context& context, const StressOptions& options) {
   cl::Program program = buildProgram(context, KernelFeatures{}, "unit_tests.cl");

@@ -5,6 +5,10 @@
 #pragma once
 
 #include "device/context.h"
+#include "device/tracer.h"
+#include "scene/scene.h"
+
+#include <glm/glm.hpp>
 
 #include <functional>
 #include <string>
@@ -34,6 +38,22 @@ const std::vector<std::pair<std::string, StressGroup>>& stressGroups();
 /// Run the selected groups; `onRow` sees each row as it is finished.
 std::vector<StressRow> runStress(Context& context, const StressOptions& options,
                                  const std::function<void(const StressRow&)>& onRow = {});
+
+/// A figure formatted with printf's `fmt` (one double), for the rows.
+std::string stressFormat(const char* fmt, double v);
+
+/// Every vertex, every edge midpoint and `perEdge` random points along every
+/// edge of the scene's triangles; with `visibleFrom`, only the edges whose
+/// two ends face that point (vertex normals), so no target is a silhouette.
+/// The targets of the crack rows and of the watertightness tests.
+std::vector<glm::vec3> edgeTargets(const Scene& scene, int perEdge, std::uint32_t seed,
+                                   const glm::vec3* visibleFrom = nullptr);
+
+/// Rays from each origin through each target that find nothing: closest-hit
+/// misses plus any-hit misses (a closed mesh around or in front of the
+/// origins must stop every one). Adds the rays traced to *rayCount.
+std::uint64_t countLeaks(Tracer& tracer, const std::vector<glm::vec3>& origins, const std::vector<glm::vec3>& targets,
+                         std::uint64_t* rayCount);
 
 /// `wavetrace stress`: every row printed with its figure and criterion (or
 /// JSON); returns 1 when any row fails.

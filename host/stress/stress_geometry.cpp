@@ -19,11 +19,7 @@
 namespace wt {
 namespace {
 
-std::string format(const char* fmt, double v) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, fmt, v);
-  return buf;
-}
+std::string format(const char* fmt, double v) { return stressFormat(fmt, v); }
 
 glm::vec3 position(const Scene& scene, std::uint32_t v) {
   return glm::vec3(scene.positions[v].x, scene.positions[v].y, scene.positions[v].z);
@@ -49,11 +45,10 @@ std::vector<Placement> placements(bool quick) {
 // ---------------------------------------------------------------------------
 // cracks
 
-/// Every vertex, every edge midpoint and `perEdge` random points along every
-/// edge of the scene's triangles; with `visibleFrom`, only the edges whose
-/// two ends face that point (vertex normals), so no target is a silhouette.
+}  // namespace
+
 std::vector<glm::vec3> edgeTargets(const Scene& scene, int perEdge, std::uint32_t seed,
-                                   const glm::vec3* visibleFrom = nullptr) {
+                                   const glm::vec3* visibleFrom) {
   std::mt19937 rng(seed);
   std::uniform_real_distribution<float> u(0.0f, 1.0f);
   auto faces = [&](std::uint32_t v) {
@@ -80,9 +75,7 @@ std::vector<glm::vec3> edgeTargets(const Scene& scene, int perEdge, std::uint32_
   return targets;
 }
 
-/// Rays from each origin through each target that find nothing: closest-hit
-/// misses plus any-hit misses (a closed mesh around or in front of the
-/// origin must stop every one).
+
 std::uint64_t countLeaks(Tracer& tracer, const std::vector<glm::vec3>& origins, const std::vector<glm::vec3>& targets,
                          std::uint64_t* rayCount) {
   std::vector<Ray> rays;
@@ -100,8 +93,6 @@ std::uint64_t countLeaks(Tracer& tracer, const std::vector<glm::vec3>& origins, 
   *rayCount += 2 * rays.size();
   return leaks;
 }
-
-}  // namespace
 
 std::vector<StressRow> stressCracks(Context& context, const StressOptions& options) {
   std::vector<StressRow> rows;

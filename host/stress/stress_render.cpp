@@ -31,11 +31,7 @@ using gltf_doc::str;
 /// A false alarm in one row of statistical comparisons is this rare.
 constexpr double kFamilyAlpha = 1e-3;
 
-std::string format(const char* fmt, double v) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, fmt, v);
-  return buf;
-}
+std::string format(const char* fmt, double v) { return stressFormat(fmt, v); }
 
 struct Rendered {
   Image image;

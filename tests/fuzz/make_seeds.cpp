@@ -13,6 +13,8 @@
 #include <ImfTiledRgbaFile.h>
 #include <stb_image_write.h>
 
+#include "scene/gltf_doc.h"
+
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -26,7 +28,10 @@ namespace {
 
 namespace fs = std::filesystem;
 
-constexpr int kUByte = 5121, kUShort = 5123, kUInt = 5125, kFloat = 5126;
+using wt::gltf_doc::kFloat;
+using wt::gltf_doc::kUByte;
+using wt::gltf_doc::kUInt;
+using wt::gltf_doc::kUShort;
 
 void writeFile(const fs::path& path, const void* data, std::size_t size) {
   std::ofstream out(path, std::ios::binary | std::ios::trunc);
@@ -38,20 +43,7 @@ void writeFile(const fs::path& path, const void* data, std::size_t size) {
 }
 void writeFile(const fs::path& path, const std::string& text) { writeFile(path, text.data(), text.size()); }
 
-std::string base64(const std::vector<unsigned char>& bytes) {
-  static const char* kAlphabet = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-  std::string out;
-  for (std::size_t i = 0; i < bytes.size(); i += 3) {
-    std::uint32_t chunk = std::uint32_t(bytes[i]) << 16;
-    if (i + 1 < bytes.size()) chunk |= std::uint32_t(bytes[i + 1]) << 8;
-    if (i + 2 < bytes.size()) chunk |= bytes[i + 2];
-    out += kAlphabet[(chunk >> 18) & 63];
-    out += kAlphabet[(chunk >> 12) & 63];
-    out += i + 1 < bytes.size() ? kAlphabet[(chunk >> 6) & 63] : '=';
-    out += i + 2 < bytes.size() ? kAlphabet[chunk & 63] : '=';
-  }
-  return out;
-}
+using wt::gltf_doc::base64;
 
 // ---------------------------------------------------------------------------
 // glTF

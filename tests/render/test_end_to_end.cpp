@@ -57,16 +57,22 @@ TEST(EndToEnd, CornellIsFiniteAndLit) {
   EXPECT_GT(channelMean(43, 48, 1), 1.5 * channelMean(43, 48, 0));
 }
 
-TEST(EndToEnd, NonFiniteSamplesAreCountedNotAccumulated) {
-  // a floor whose albedo is NaN in red (the loader would refuse it), filling
-  // the lower half of the view: every path that bounces off it turns NaN
+/// A floor whose albedo is NaN in red (the loader would refuse it), filling
+/// the lower half of a 16x16 view under a grey sky: every path that bounces
+/// off it turns NaN.
+Scene nanFloor(RenderSettings* s) {
   Scene scene = test::makeFloor(50.0f, 0.0f, makeMaterial(glm::vec3(std::nanf(""), 0.5f, 0.5f)));
   CameraDesc cam;
   cam.cameraToWorld = glm::translate(glm::mat4(1.0f), glm::vec3(0.0f, 1.0f, 0.0f));
   scene.camera = cam;
+  s->width = 16, s->height = 16, s->maxBounces = 2;
+  s->background = glm::vec3(0.25f);
+  return scene;
+}
+
+TEST(EndToEnd, NonFiniteSamplesAreCountedNotAccumulated) {
   RenderSettings s;
-  s.width = 16, s.height = 16, s.maxBounces = 2;
-  s.background = glm::vec3(0.25f);
+  Scene scene = nanFloor(&s);
   s.stopOnNonFinite = false;  // counting is what is tested (debug builds stop by default)
   const int spp = 4;
   Renderer renderer(test::deviceContext(), scene, s);
@@ -87,15 +93,10 @@ TEST(EndToEnd, NonFiniteSamplesAreCountedNotAccumulated) {
 }
 
 TEST(EndToEnd, StopOnNonFiniteNamesThePixelSampleAndBounce) {
-  // the NaN floor again, seen only in the bottom rows: the first NaN is made
-  // at the camera ray's hit (bounce 0) of sample 0, in the bottom half
-  Scene scene = test::makeFloor(50.0f, 0.0f, makeMaterial(glm::vec3(std::nanf(""), 0.5f, 0.5f)));
-  CameraDesc cam;
-  cam.cameraToWorld = glm::translate(glm::mat4(1.0f), glm::vec3(0.0f, 1.0f, 0.0f));
-  scene.camera = cam;
+  // the NaN floor again: the first NaN is made at the camera ray's hit
+  // (bounce 0) of sample 0, in the bottom half
   RenderSettings s;
-  s.width = 16, s.height = 16, s.maxBounces = 2;
-  s.background = glm::vec3(0.25f);
+  Scene scene = nanFloor(&s);
   s.stopOnNonFinite = true;
   Renderer renderer(test::deviceContext(), scene, s);
   try {
