@@ -21,7 +21,6 @@ WtFrameParams frameParams(const RenderSettings& s, const LightList& lights, int 
   auto lobeLimit = [&](int limit) { return cl_uint(limit < 0 ? s.maxBounces : std::min(limit, s.maxBounces)); };
   p.max_diffuse_bounces = lobeLimit(s.maxDiffuseBounces);
   p.max_specular_bounces = lobeLimit(s.maxSpecularBounces);
-  p.max_transmission_bounces = lobeLimit(s.maxTransmissionBounces);
   p.seed = s.seed;
   p.exposure = std::exp2(s.exposureStops);
   p.light_count = lights.sampleable ? cl_uint(lights.alias.size()) : 0u;

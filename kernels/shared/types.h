@@ -91,7 +91,7 @@ typedef struct WtFrameParams {
   float env_pmf;           ///< probability that light selection picks the environment (0: not a light)
   wt_uint accumulate_mode; ///< WT_ACCUMULATE_*
   wt_uint max_specular_bounces;     ///< specular bounces a path may take (GGX and mirror directions)
-  wt_uint max_transmission_bounces; ///< transmission bounces (no transmitting material yet)
+  wt_uint pad3;
 } WtFrameParams;
 
 /// Precision of the per-pixel running mean (WtFrameParams::accumulate_mode).
