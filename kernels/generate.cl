@@ -6,7 +6,7 @@
 __kernel void generate(WtFrameParams frame, WtCamera camera, __global float4* ray_o,
                        __global float4* ray_d, __global float4* throughput,
                        __global float4* radiance, __global uint* queue,
-                       __global uint* counters, __global uint* bounce_counts, __global uint* ray_skip) {
+                       __global uint* counters, __global ushort4* bounce_counts, __global uint* ray_skip) {
   uint i = get_global_id(0);
   uint pixel_count = frame.width * frame.height;
   if (i >= pixel_count) return;
@@ -38,6 +38,6 @@ __kernel void generate(WtFrameParams frame, WtCamera camera, __global float4* ra
   throughput[i] = (float4)(1.0f, 1.0f, 1.0f, 0.0f);
   radiance[i] = (float4)(0.0f);
   queue[i] = i;
-  bounce_counts[i] = 0u;
+  bounce_counts[i] = (ushort4)(0);
   ray_skip[i] = WT_NO_HIT;
 }

@@ -40,7 +40,7 @@ __kernel void shade(WtFrameParams frame, WtEnvironment environment, __global con
                     __global const WtAliasSlot* alias, __global const float* emitter_pdf_area,
                     __global uint* shadow_queue, __global float4* shadow_o,
                     __global float4* shadow_d, __global float4* shadow_radiance,
-                    __global const float* pbr_table, __global uint* bounce_counts,
+                    __global const float* pbr_table, __global ushort4* bounce_counts,
                     __global uint* ray_skip, __global uint2* shadow_skip,
                     __global const WtLightNode* light_tree, __global const uint* emitter_leaf,
                     __global float4* prev_normal) {
@@ -74,10 +74,19 @@ __kernel void shade(WtFrameParams frame, WtEnvironment environment, __global con
   triangle_surface(p0, p1, p2, normals[tri.v0].xyz, normals[tri.v1].xyz, normals[tri.v2].xyz,
                    hit.y, hit.z, &p, &p_error, &ng, &ns);
   if (dot(ng, ng) == 0.0f) return;  // degenerate triangle: absorb
+  // ng is the winding's normal here: a ray meeting its back side comes from inside
+  bool inside = dot(ng, dir) > 0.0f;
+#if WT_HAS_TRANSMISSION
+  // the inside of a closed object of this material absorbs along the way (Beer-Lambert)
+  if (inside && material.volume.w != 0.0f && material.model == WT_MATERIAL_PBR && material.transmission > 0.0f) {
+    float3 sigma = vec4_xyz(material.volume);
+    if (sigma.x > 0.0f || sigma.y > 0.0f || sigma.z > 0.0f) beta *= exp(-sigma * (hit.x * length(dir)));
+  }
+#endif
 
   // emission: the front face only unless the material is double-sided
   float3 le = vec4_xyz(material.emission);
-  bool emits = material.emission.w != 0.0f || dot(ng, dir) < 0.0f;
+  bool emits = material.emission.w != 0.0f || !inside;
   if (emits && (le.x > 0.0f || le.y > 0.0f || le.z > 0.0f)) {
     // the probability that NEE at the previous vertex would have picked this
     // emitter: its selection probability over its area, by the light tree's
@@ -101,15 +110,21 @@ __kernel void shade(WtFrameParams frame, WtEnvironment environment, __global con
   float3 frame_t, frame_b;
   frame_from_normal(ns, &frame_t, &frame_b);
   float3 wo_local = (float3)(dot(wo, frame_t), dot(wo, frame_b), dot(wo, ns));
-  Bsdf bsdf = bsdf_make(material, pbr_table);
+  Bsdf bsdf = bsdf_make(material, pbr_table, inside);
   float3 origin = ray_offset_origin(p, p_error, ng);
 
-  // the lobes this path may still scatter by: diffuse bounces so far in the
-  // low 16 bits of its count, specular ones in the high 16
-  uint counts = bounce_counts[path];
-  uint lobes = ((counts & 0xffffu) < frame.max_diffuse_bounces ? WT_LOBE_DIFFUSE : 0u) |
-               ((counts >> 16) < frame.max_specular_bounces ? WT_LOBE_SPECULAR : 0u);
+  // the lobes this path may still scatter by: its diffuse, specular and
+  // transmission bounces so far (x, y, z) against their limits
+  ushort4 counts = bounce_counts[path];
+  uint lobes = ((uint)counts.x < frame.max_diffuse_bounces ? WT_LOBE_DIFFUSE : 0u) |
+               ((uint)counts.y < frame.max_specular_bounces ? WT_LOBE_SPECULAR : 0u) |
+               ((uint)counts.z < frame.max_transmission_bounces ? WT_LOBE_TRANSMISSION : 0u);
   if (lobes == 0u) return;
+  // light may come through the surface: lights behind it count, rays leave from its far side,
+  // and the light tree gives up its receiver-normal bound (a zero normal)
+  bool through = bsdf_transmits(bsdf) && (lobes & WT_LOBE_TRANSMISSION);
+  float3 origin_far = through ? ray_offset_origin(p, p_error, -ng) : origin;
+  float3 tree_normal = through ? (float3)(0.0f) : ng;
 
   // next-event estimation: the full light list by power (path), or one
   // uniformly chosen analytic light (minimal)
@@ -127,7 +142,7 @@ __kernel void shade(WtFrameParams frame, WtEnvironment environment, __global con
       // the light tree entry: an emitter by its importance here
       if (ls.lights[index].type == WT_LIGHT_TREE) {
         float pmf_tree;
-        index = light_tree_pick(light_tree, origin, ng, sampler_get(frame, path, 9u), &pmf_tree);
+        index = light_tree_pick(light_tree, origin, tree_normal, sampler_get(frame, path, 9u), &pmf_tree);
         pmf *= pmf_tree;
       }
     }
@@ -136,7 +151,7 @@ __kernel void shade(WtFrameParams frame, WtEnvironment environment, __global con
     float u2 = sampler_get(frame, path, 5u);
     float3 f_cos = (float3)(0.0f);
     float pdf_bsdf = 0.0f;
-    if (pmf > 0.0f && light_sample(ls, index, p, u1, u2, &s) && dot(ng, s.wi) > 0.0f) {
+    if (pmf > 0.0f && light_sample(ls, index, p, u1, u2, &s) && (dot(ng, s.wi) > 0.0f || through)) {
       float3 wi_local = (float3)(dot(s.wi, frame_t), dot(s.wi, frame_b), dot(s.wi, ns));
       f_cos = bsdf_eval(bsdf, wo_local, wi_local, lobes, &pdf_bsdf);
     }
@@ -154,10 +169,11 @@ __kernel void shade(WtFrameParams frame, WtEnvironment environment, __global con
         // the unoffset point raised the ray by the offset, which at grazing
         // angles crossed the light's plane before the margin: found by a
         // square emitter 0.1 above a plane.)
+        float3 shadow_origin = dot(ng, s.wi) > 0.0f ? origin : origin_far;
         float3 shadow_dir = s.wi;
         float tmax = INFINITY;
         if (!isinf(s.distance)) {
-          float3 to_target = s.target - origin;
+          float3 to_target = s.target - shadow_origin;
           float len = length(to_target);
           shadow_dir = to_target / len;
           tmax = len * (1.0f - WT_SHADOW_MARGIN);
@@ -166,7 +182,7 @@ __kernel void shade(WtFrameParams frame, WtEnvironment environment, __global con
         if (tmax > 0.0f) {
           uint slot = atomic_inc(&counters[WT_COUNTER_SHADOW]);
           shadow_queue[slot] = path;
-          shadow_o[path] = (float4)(origin, 0.0f);
+          shadow_o[path] = (float4)(shadow_origin, 0.0f);
           shadow_d[path] = (float4)(shadow_dir, tmax);
           shadow_radiance[path] = (float4)(contribution, 0.0f);
           shadow_skip[path] = (uint2)(prim, s.prim);
@@ -181,9 +197,12 @@ __kernel void shade(WtFrameParams frame, WtEnvironment environment, __global con
                    sampler_get(frame, path, 3u), &bs))
     return;
   float3 wi = bs.wi.x * frame_t + bs.wi.y * frame_b + bs.wi.z * ns;
-  if (dot(wi, ng) <= 0.0f) return;
+  bool crossed = (bs.lobe & WT_LOBE_TRANSMISSION) != 0u;
+  if (crossed ? dot(wi, ng) >= 0.0f : dot(wi, ng) <= 0.0f) return;
   beta *= bs.weight;
-  counts += (bs.lobe & WT_LOBE_DIFFUSE) ? 1u : 0x10000u;
+  if (bs.lobe & WT_LOBE_DIFFUSE) counts.x++;
+  else if (crossed) counts.z++;
+  else counts.y++;
 
   // Russian roulette: survive with probability from the throughput, reweight
   if (!WT_INTEGRATOR_MINIMAL && (frame.flags & WT_FLAG_RR) && frame.bounce >= frame.rr_min_depth) {
@@ -197,8 +216,8 @@ __kernel void shade(WtFrameParams frame, WtEnvironment environment, __global con
   throughput[path] = (float4)(beta, bs.pdf);
   bounce_counts[path] = counts;
   ray_skip[path] = prim;
-  prev_normal[path] = (float4)(ng, 0.0f);  // for the light tree's pmf if the ray finds an emitter
-  ray_o[path] = (float4)(origin, 0.0f);
+  prev_normal[path] = (float4)(tree_normal, 0.0f);  // for the light tree's pmf if the ray finds an emitter
+  ray_o[path] = (float4)(crossed ? origin_far : origin, 0.0f);
   ray_d[path] = (float4)(wi, INFINITY);
   uint slot = atomic_inc(&counters[out_slot]);
   queue_out[slot] = path;

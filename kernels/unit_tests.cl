@@ -94,12 +94,13 @@ __kernel void test_accumulate(uint count, uint samples, uint mode, uint distribu
 
 // bsdf_sample for `count` triples of uniforms (u_lobe, u1, u2): the local
 // direction and mixture pdf (w = -1: nothing sampled), the weight and lobe.
+// wo.w != 0: seen from inside (the back face).
 __kernel void test_bsdf_sample(uint count, WtMaterial material, float4 wo, uint lobes,
                                __global const float* table, __global const float4* u,
                                __global float4* wi_pdf, __global float4* weight_lobe) {
   uint i = get_global_id(0);
   if (i >= count) return;
-  Bsdf b = bsdf_make(material, table);
+  Bsdf b = bsdf_make(material, table, wo.w != 0.0f);
   BsdfSample s;
   if (bsdf_sample(b, wo.xyz, lobes, u[i].x, u[i].y, u[i].z, &s)) {
     wi_pdf[i] = (float4)(s.wi, s.pdf);
@@ -115,7 +116,7 @@ __kernel void test_bsdf_eval(uint count, WtMaterial material, float4 wo, uint lo
                              __global const float* table, __global const float4* wi, __global float4* out) {
   uint i = get_global_id(0);
   if (i >= count) return;
-  Bsdf b = bsdf_make(material, table);
+  Bsdf b = bsdf_make(material, table, wo.w != 0.0f);
   float pdf;
   float3 f = bsdf_eval(b, wo.xyz, wi[i].xyz, lobes, &pdf);
   out[i] = (float4)(f, pdf);

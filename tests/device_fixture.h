@@ -38,6 +38,7 @@ inline cl::Program testProgram(const std::string& root) {
   if (it == shared.programs.end()) {
     KernelFeatures features;
     features.pbr = true;  // the metallic-roughness BSDF's tests need it compiled in
+    features.transmission = true;
     it = shared.programs.emplace(root, buildProgram(deviceContext(), features, root)).first;
   }
   return it->second;

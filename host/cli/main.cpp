@@ -211,6 +211,9 @@ int main(int argc, char** argv) {
   renderCmd->add_option("--max-specular-bounces", render.settings.maxSpecularBounces,
                         "Specular (GGX and mirror) bounces a path may take (default: --max-bounces)")
       ->check(CLI::Range(0, 1024));
+  renderCmd->add_option("--max-transmission-bounces", render.settings.maxTransmissionBounces,
+                        "Transmission bounces (refraction, thin-walled transmission) a path may take (default: --max-bounces)")
+      ->check(CLI::Range(0, 1024));
   renderCmd->add_option("--seed", render.settings.seed, "Random seed")->capture_default_str();
   renderCmd->add_option("--exposure", render.settings.exposureStops, "Exposure in stops for PNG output")
       ->capture_default_str();

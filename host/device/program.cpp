@@ -92,6 +92,7 @@ std::vector<std::string> kernelDefines(const KernelFeatures& features) {
       "-D WT_INTEGRATOR_MINIMAL=" + std::string(features.integratorMinimal ? "1" : "0"),
       "-D WT_BVH_STACK_SIZE=" + std::to_string(features.bvhStackSize),
       "-D WT_HAS_PBR=" + std::string(features.pbr ? "1" : "0"),
+      "-D WT_HAS_TRANSMISSION=" + std::string(features.pbr && features.transmission ? "1" : "0"),
   };
 }
 

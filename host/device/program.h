@@ -17,6 +17,7 @@ struct KernelFeatures {
   bool integratorMinimal = true;  ///< the brute-force reference (the only integrator so far)
   int bvhStackSize = 64;          ///< traversal stack entries; >= BVH depth + 1, rounded up to 32
   bool pbr = false;               ///< a material uses the metallic-roughness model (else all are Lambertian)
+  bool transmission = false;      ///< a metallic-roughness material transmits (KHR_materials_transmission)
 };
 
 /// The build options for a feature set, e.g. "-D WT_INTEGRATOR_MINIMAL=1 ...".

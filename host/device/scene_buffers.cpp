@@ -89,7 +89,7 @@ static_assert(offsetof(WtBvhNode, hi_x) == 16);
 static_assert(sizeof(WtBvh4Node) == 128);
 static_assert(offsetof(WtBvh4Node, lo_y) == 32 && offsetof(WtBvh4Node, lo_z) == 64);
 static_assert(offsetof(WtBvh4Node, child) == 96 && offsetof(WtBvh4Node, count) == 112);
-static_assert(sizeof(WtMaterial) == 48);
+static_assert(sizeof(WtMaterial) == 64);
 static_assert(sizeof(WtCamera) == 64);
 static_assert(sizeof(WtFrameParams) == 64);
 static_assert(sizeof(WtLight) == 64);

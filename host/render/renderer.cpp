@@ -21,6 +21,7 @@ WtFrameParams frameParams(const RenderSettings& s, const LightList& lights, int 
   auto lobeLimit = [&](int limit) { return cl_uint(limit < 0 ? s.maxBounces : std::min(limit, s.maxBounces)); };
   p.max_diffuse_bounces = lobeLimit(s.maxDiffuseBounces);
   p.max_specular_bounces = lobeLimit(s.maxSpecularBounces);
+  p.max_transmission_bounces = lobeLimit(s.maxTransmissionBounces);
   p.seed = s.seed;
   p.exposure = std::exp2(s.exposureStops);
   p.light_count = lights.sampleable ? cl_uint(lights.alias.size()) : 0u;
@@ -58,6 +59,9 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
   features.bvhStackSize = m_scene->stackSize();
   features.pbr = std::any_of(scene.materials.begin(), scene.materials.end(),
                              [](const WtMaterial& m) { return m.model == WT_MATERIAL_PBR; });
+  features.transmission = std::any_of(scene.materials.begin(), scene.materials.end(), [](const WtMaterial& m) {
+    return m.model == WT_MATERIAL_PBR && m.transmission > 0.0f && m.base_color.w < 1.0f;
+  });
   m_program = buildProgram(context, features);
   m_generate = cl::Kernel(m_program, "generate");
   m_extend = cl::Kernel(m_program, "extend");
@@ -80,7 +84,7 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
   m_counters = cl::Buffer(ctx, CL_MEM_READ_WRITE, WT_COUNTER_COUNT * sizeof(cl_uint));
   m_state = make(64), m_mean = make(16), m_m2 = make(16), m_sampleCount = make(4), m_pixels = make(4);
   m_shadowQueue = make(4), m_shadowO = make(16), m_shadowD = make(16), m_shadowRadiance = make(16);
-  m_bounceCounts = make(4);
+  m_bounceCounts = make(8);  // ushort4: diffuse, specular, transmission bounces
   m_raySkip = make(4), m_shadowSkip = make(8), m_prevNormal = make(16);
   auto upload = [&](const auto& data) {
     using T = typename std::decay_t<decltype(data)>::value_type;

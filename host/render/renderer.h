@@ -32,6 +32,7 @@ struct RenderSettings {
   int maxBounces = 8;       ///< hits shaded after the camera hit (0: direct view of emitters only)
   int maxDiffuseBounces = -1;       ///< diffuse (cosine-sampled) bounces a path may take; -1: maxBounces
   int maxSpecularBounces = -1;      ///< specular (GGX, mirror) bounces; -1: maxBounces
+  int maxTransmissionBounces = -1;  ///< transmission (refraction, thin-walled) bounces; -1: maxBounces
   std::uint32_t seed = 0;
   float exposureStops = 0.0f;
   glm::vec3 background{0.0f};  ///< constant environment radiance seen by escaping paths (without environmentMap)

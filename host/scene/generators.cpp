@@ -19,6 +19,8 @@ WtMaterial makeMaterial(glm::vec3 albedo, glm::vec3 emission, bool twoSided) {
   m.emission = toVec4(emission, twoSided ? 1.0f : 0.0f);
   m.roughness = 1.0f;
   m.model = WT_MATERIAL_DIFFUSE;
+  m.ior = 1.5f;
+  m.volume = {0.0f, 0.0f, 0.0f, 0.0f};
   return m;
 }
 
@@ -27,6 +29,15 @@ WtMaterial makePbrMaterial(glm::vec3 baseColor, float metallic, float roughness,
   m.base_color.w = std::clamp(metallic, 0.0f, 1.0f);
   m.roughness = std::clamp(roughness, 0.0f, 1.0f);
   m.model = WT_MATERIAL_PBR;
+  return m;
+}
+
+WtMaterial withTransmission(WtMaterial m, float transmission, float ior, bool thinWalled, glm::vec3 absorption) {
+  m.model = WT_MATERIAL_PBR;
+  m.transmission = std::clamp(transmission, 0.0f, 1.0f);
+  m.ior = std::clamp(ior, 1.0f, 10.0f);
+  glm::vec3 sigma = glm::max(absorption, glm::vec3(0.0f));
+  m.volume = toVec4(thinWalled ? glm::vec3(0.0f) : sigma, thinWalled ? 0.0f : 1.0f);
   return m;
 }
 

@@ -39,4 +39,12 @@ WtMaterial makeMaterial(glm::vec3 albedo, glm::vec3 emission = glm::vec3(0.0f), 
 WtMaterial makePbrMaterial(glm::vec3 baseColor, float metallic, float roughness,
                            glm::vec3 emission = glm::vec3(0.0f), bool twoSided = false);
 
+/// The transmitting part of a glTF material (KHR_materials_transmission,
+/// _ior, _volume): `transmission` of the dielectric becomes an interface of
+/// index `ior`; a volume boundary (refracting, absorbing `absorption` per
+/// unit length inside) or, when `thinWalled`, a sheet light passes straight
+/// through. Values are clamped (transmission to [0,1], ior to [1, 10]).
+WtMaterial withTransmission(WtMaterial m, float transmission, float ior = 1.5f, bool thinWalled = false,
+                            glm::vec3 absorption = glm::vec3(0.0f));
+
 }  // namespace wt

@@ -35,6 +35,9 @@ namespace {
 
 constexpr const char* kEmissiveStrength = "KHR_materials_emissive_strength";
 constexpr const char* kLightsPunctual = "KHR_lights_punctual";
+constexpr const char* kTransmission = "KHR_materials_transmission";
+constexpr const char* kIor = "KHR_materials_ior";
+constexpr const char* kVolume = "KHR_materials_volume";
 /// Extensions whose absence changes where the geometry is or how its bytes
 /// read: a file that requires one cannot be drawn correctly without it.
 constexpr std::array<const char*, 3> kGeometryExtensions = {
@@ -292,7 +295,9 @@ class Converter {
         fail("requires extension " + ext + ", which is not supported");
     }
     for (const std::string& ext : m_model.extensionsUsed) {
-      if (ext == kEmissiveStrength || ext == kLightsPunctual) continue;
+      if (ext == kEmissiveStrength || ext == kLightsPunctual || ext == kTransmission || ext == kIor ||
+          ext == kVolume)
+        continue;
       bool required = std::find(m_model.extensionsRequired.begin(), m_model.extensionsRequired.end(),
                                 ext) != m_model.extensionsRequired.end();
       m_scene.addWarning(ext + " is not supported; ignored" +
@@ -362,9 +367,96 @@ class Converter {
 
       // glTF draws a single-sided material's back face not at all: it emits from the front only
       WtMaterial material = makePbrMaterial(clamped, metallic, roughness, emission, src.doubleSided);
+      material = withTransmissionExtensions(src, label, material);
       m_scene.materials.push_back(material);
       m_scene.materialNames.push_back(src.name.empty() ? "material " + std::to_string(i) : src.name);
     }
+  }
+
+  /// A number of an extension object: `fallback` when absent, an error when
+  /// present but not a finite number.
+  double extensionNumber(const tinygltf::Value& ext, const char* name, double fallback,
+                         const std::string& who) const {
+    if (!ext.Has(name)) return fallback;
+    const tinygltf::Value& v = ext.Get(name);
+    if (!v.IsNumber() || !std::isfinite(v.GetNumberAsDouble())) fail(who + ": " + name + " is not a finite number");
+    return v.GetNumberAsDouble();
+  }
+
+  /// KHR_materials_transmission, _ior and _volume on a converted material.
+  WtMaterial withTransmissionExtensions(const tinygltf::Material& src, const std::string& label, WtMaterial m) {
+    auto find = [&](const char* name) -> const tinygltf::Value* {
+      auto it = src.extensions.find(name);
+      if (it == src.extensions.end()) return nullptr;
+      if (!it->second.IsObject()) fail(label + ": " + name + " is not an object");
+      return &it->second;
+    };
+    const tinygltf::Value* transmission = find(kTransmission);
+    const tinygltf::Value* ior = find(kIor);
+    const tinygltf::Value* volume = find(kVolume);
+    const std::string who = label + ": ";
+
+    float factor = 0.0f;
+    if (transmission) {
+      double t = extensionNumber(*transmission, "transmissionFactor", 0.0, label + " " + kTransmission);
+      if (t < 0.0 || t > 1.0)
+        m_scene.addWarning(who + kTransmission + " transmissionFactor " + std::to_string(t) + " is outside [0,1]; clamped");
+      factor = float(std::clamp(t, 0.0, 1.0));
+      if (transmission->Has("transmissionTexture"))
+        m_scene.addWarning("material textures are not supported yet; ignored");
+    }
+    float eta = 1.5f;
+    if (ior) {
+      double v = extensionNumber(*ior, "ior", 1.5, label + " " + kIor);
+      if (v == 0.0) {
+        m_scene.addWarning(who + kIor + " ior 0 (reflection at full weight, for KHR_materials_specular) is not supported; 1.5 used");
+        v = 1.5;
+      } else if (v < 1.0 || v > 10.0) {
+        m_scene.addWarning(who + kIor + " ior " + std::to_string(v) + " is outside [1,10]; clamped");
+        v = std::clamp(v, 1.0, 10.0);
+      }
+      eta = float(v);
+      // the opaque dielectric's coat is tabulated for F0 = 0.04 (ior 1.5)
+      if (eta != 1.5f && factor < 1.0f && m.base_color.w < 1.0f)
+        m_scene.addWarning(who + kIor + " ior " + std::to_string(v) +
+                           " applies to transmission only; the opaque part's reflection keeps ior 1.5");
+    }
+    if (!(factor > 0.0f)) {
+      if (volume) m_scene.addWarning(who + kVolume + " without transmission has no effect; ignored");
+      return m;
+    }
+    bool thinWalled = true;
+    glm::vec3 absorption(0.0f);
+    if (volume) {
+      const std::string where = label + " " + kVolume;
+      double thickness = extensionNumber(*volume, "thicknessFactor", 0.0, where);
+      if (thickness < 0.0) fail(where + ": thicknessFactor " + std::to_string(thickness) + " is negative");
+      thinWalled = thickness == 0.0;
+      if (volume->Has("thicknessTexture")) m_scene.addWarning("material textures are not supported yet; ignored");
+      double distance = extensionNumber(*volume, "attenuationDistance", INFINITY, where);
+      if (volume->Has("attenuationDistance") && !(distance > 0.0))
+        fail(where + ": attenuationDistance " + std::to_string(distance) + " is not positive");
+      glm::dvec3 color(1.0);
+      if (volume->Has("attenuationColor")) {
+        const tinygltf::Value& c = volume->Get("attenuationColor");
+        if (!c.IsArray() || c.ArrayLen() != 3) fail(where + ": attenuationColor is not an array of 3 numbers");
+        for (int k = 0; k < 3; ++k) {
+          if (!c.Get(k).IsNumber() || !std::isfinite(c.Get(k).GetNumberAsDouble()))
+            fail(where + ": attenuationColor is not an array of 3 finite numbers");
+          color[k] = c.Get(k).GetNumberAsDouble();
+        }
+        if (glm::any(glm::lessThan(color, glm::dvec3(0.0))) || glm::any(glm::greaterThan(color, glm::dvec3(1.0))))
+          m_scene.addWarning(where + ": attenuationColor " + formatVec3(glm::vec3(color)) + " is outside [0,1]; clamped");
+        color = glm::clamp(color, glm::dvec3(0.0), glm::dvec3(1.0));
+      }
+      // a fraction `color` of the light is left after `distance`: sigma = -ln(color) / distance
+      if (std::isfinite(distance))
+        for (int k = 0; k < 3; ++k)
+          absorption[k] = float(std::min(-std::log(std::max(color[k], 1e-300)) / distance, 1e30));
+      if (thinWalled && glm::any(glm::greaterThan(absorption, glm::vec3(0.0f))))
+        m_scene.addWarning(where + ": attenuation of a thin-walled material (thicknessFactor 0) has no effect; ignored");
+    }
+    return withTransmission(m, factor, eta, thinWalled, absorption);
   }
 
   // buffers and accessors

@@ -418,12 +418,29 @@ std::vector<StressRow> stressMaterials(Context& context, const StressOptions& op
       make("black (base colour 0)", pbr("0,0,0,1", 0, 0.5)),
       make("base colour 1.5 in the file", pbr("1.5,1.5,1.5,1", 0, 1), "clamped"),
       make("metallic 1.5 and roughness -0.2 in the file", pbr(white, 1.5, -0.2), "metallicFactor 1.500000 is outside [0,1]; clamped"),
-      make("ior 1 (KHR_materials_ior)", pbr(white, 0, 0.5, ",\"extensions\":{\"KHR_materials_ior\":{\"ior\":1.0}}"),
-           "KHR_materials_ior is not supported"),
-      make("ior 3 (KHR_materials_ior)", pbr(white, 0, 0.5, ",\"extensions\":{\"KHR_materials_ior\":{\"ior\":3.0}}"),
-           "KHR_materials_ior is not supported"),
+      make("ior 1 on an opaque dielectric (KHR_materials_ior)",
+           pbr(white, 0, 0.5, ",\"extensions\":{\"KHR_materials_ior\":{\"ior\":1.0}}"), "applies to transmission only"),
+      make("ior 3 on an opaque dielectric (KHR_materials_ior)",
+           pbr(white, 0, 0.5, ",\"extensions\":{\"KHR_materials_ior\":{\"ior\":3.0}}"), "applies to transmission only"),
   };
   cases[9].extensions = cases[10].extensions = "[\"KHR_materials_ior\"]";
+  // transmitting spheres (KHR_materials_transmission, a volume of KHR_materials_volume, KHR_materials_ior)
+  auto glass = [&](std::string name, double roughness, double ior, bool thin) {
+    MaterialCase c = make(std::move(name),
+                          pbr(white, 0, roughness,
+                              ",\"extensions\":{\"KHR_materials_transmission\":{\"transmissionFactor\":1},"
+                              "\"KHR_materials_ior\":{\"ior\":" + num(float(ior)) + "}" +
+                                  (thin ? "" : ",\"KHR_materials_volume\":{\"thicknessFactor\":1}") + "}"));
+    c.extensions = "[\"KHR_materials_transmission\",\"KHR_materials_ior\",\"KHR_materials_volume\"]";
+    return c;
+  };
+  cases.insert(cases.end(), {glass("smooth glass sphere (ior 1.5, roughness 0)", 0, 1.5, false),
+                             glass("rough glass sphere (ior 1.5, roughness 0.5)", 0.5, 1.5, false),
+                             glass("rough glass sphere (ior 1.5, roughness 1)", 1, 1.5, false),
+                             glass("glass of ior 1 (an interface that bends nothing), roughness 0.5", 0.5, 1.0, false),
+                             glass("glass of ior 3, roughness 0.2", 0.2, 3.0, false),
+                             glass("glass of ior 1.0001 (bends almost nothing), roughness 0.5", 0.5, 1.0001, false),
+                             glass("thin-walled transmission (ior 1.5, roughness 0.3)", 0.3, 1.5, true)});
   MaterialCase backFacing = make("back-facing shading normals (glossy metal)", pbr(white, 1, 0.3));
   backFacing.normals = MaterialCase::kBackFacing;
   MaterialCase tangent = make("shading normals tangent to the surface (glossy metal)", pbr(white, 1, 0.3));

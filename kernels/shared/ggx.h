@@ -58,6 +58,19 @@ WT_GGX_INLINE float ggx_schlick(float f0, float cos_theta) {
   return f0 + (1.0f - f0) * m2 * m2 * m;
 }
 
+/// Fresnel reflectance of unpolarised light at a dielectric interface, for
+/// the cosine cos_i >= 0 of the angle on the incident side and eta =
+/// n(transmitted side) / n(incident side); 1 under total internal reflection.
+WT_GGX_INLINE float ggx_fresnel_dielectric(float cos_i, float eta) {
+  cos_i = fmin(fmax(cos_i, 0.0f), 1.0f);
+  float sin2_t = (1.0f - cos_i * cos_i) / (eta * eta);
+  if (sin2_t >= 1.0f) return 1.0f;
+  float cos_t = sqrt(1.0f - sin2_t);
+  float rs = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
+  float rp = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
+  return 0.5f * (rs * rs + rp * rp);
+}
+
 /// Hemispherical average of Schlick's Fresnel weighted by cos: F0 + (1 - F0) / 21.
 WT_GGX_INLINE float ggx_schlick_average(float f0) { return f0 + (1.0f - f0) / 21.0f; }
 

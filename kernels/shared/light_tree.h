@@ -42,7 +42,8 @@ WT_LT_INLINE float light_tree_importance(WT_LT_GLOBAL const WtLightNode* node, f
   float wx = tx / d, wy = ty / d, wz = tz / d;
   float cos_u = sqrt(fmax(0.0f, 1.0f - r2 / d2));
   // receiver: the smallest angle to its normal any point of the sphere has
-  float cos_i = light_tree_cos_minus(nx * wx + ny * wy + nz * wz, cos_u);
+  // (a zero normal: a receiver lit from both sides, which bounds nothing)
+  float cos_i = (nx == 0.0f && ny == 0.0f && nz == 0.0f) ? 1.0f : light_tree_cos_minus(nx * wx + ny * wy + nz * wz, cos_u);
   if (!(cos_i > 0.0f)) return 0.0f;
   // emitter: the smallest angle between -w and a normal in the cone, widened
   // by the sphere; Lambertian emitters send nothing beyond pi/2 of it

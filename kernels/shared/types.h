@@ -54,7 +54,9 @@ typedef struct WtMaterial {
   WtVec4 emission;    ///< emitted radiance (nits) per channel (factor x strength); w = 1: both faces emit (doubleSided), 0: the front face only (counter-clockwise winding)
   float roughness;    ///< perceptual roughness in [0,1], alpha = roughness^2 (PBR only)
   wt_uint model;      ///< WT_MATERIAL_*
-  wt_uint pad0, pad1;
+  float transmission; ///< KHR_materials_transmission factor in [0,1]: the share of the dielectric that is a transmitting interface (PBR only)
+  float ior;          ///< KHR_materials_ior: index of refraction of that interface (1.5 by default)
+  WtVec4 volume;      ///< KHR_materials_volume: xyz absorption coefficient per unit length inside (world units); w = 1: a volume boundary (refracts), 0: thin-walled (passes straight through)
 } WtMaterial;
 
 #define WT_MATERIAL_DIFFUSE 0u  ///< Lambertian: base_color / pi
@@ -90,8 +92,8 @@ typedef struct WtFrameParams {
   wt_uint rr_min_depth;    ///< Russian roulette starts at this bounce
   float env_pmf;           ///< probability that light selection picks the environment (0: not a light)
   wt_uint accumulate_mode; ///< WT_ACCUMULATE_*
-  wt_uint max_specular_bounces;     ///< specular bounces a path may take (GGX and mirror directions)
-  wt_uint pad3;
+  wt_uint max_specular_bounces;     ///< specular bounces a path may take (GGX and mirror reflection)
+  wt_uint max_transmission_bounces; ///< transmission bounces a path may take (refraction, thin-walled transmission)
 } WtFrameParams;
 
 /// Precision of the per-pixel running mean (WtFrameParams::accumulate_mode).

@@ -18,6 +18,8 @@ namespace wt {
 namespace {
 
 constexpr cl_uint kBothLobes = 3;  // WT_LOBE_DIFFUSE | WT_LOBE_SPECULAR
+constexpr cl_uint kSpecular = 2, kTransmission = 8;  // WT_LOBE_SPECULAR, WT_LOBE_TRANSMISSION
+constexpr cl_uint kAllLobes = 11;                    // diffuse, specular and transmission
 
 glm::vec3 localDirection(float mu, float phi = 0.0f) {
   float s = std::sqrt(std::max(0.0f, 1.0f - mu * mu));
@@ -29,7 +31,9 @@ struct Sampled {
 };
 
 /// bsdf_sample on the device for each (u_lobe, u1, u2).
-Sampled sampleOnDevice(const WtMaterial& m, glm::vec3 wo, cl_uint lobes, const std::vector<cl_float4>& u) {
+/// inside: the material seen from its back face (inside its volume).
+Sampled sampleOnDevice(const WtMaterial& m, glm::vec3 wo, cl_uint lobes, const std::vector<cl_float4>& u,
+                       bool inside = false) {
   Context& ctx = test::deviceContext();
   const std::vector<float>& table = pbrAlbedoTable();
   const cl_uint n = cl_uint(u.size());
@@ -37,7 +41,7 @@ Sampled sampleOnDevice(const WtMaterial& m, glm::vec3 wo, cl_uint lobes, const s
   cl::Buffer bu(ctx.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, n * 16, const_cast<cl_float4*>(u.data()));
   cl::Buffer b1(ctx.context(), CL_MEM_WRITE_ONLY, n * 16), b2(ctx.context(), CL_MEM_WRITE_ONLY, n * 16);
   cl::Kernel k(test::unitTestProgram(), "test_bsdf_sample");
-  k.setArg(0, n), k.setArg(1, m), k.setArg(2, cl_float4{{wo.x, wo.y, wo.z, 0}}), k.setArg(3, lobes);
+  k.setArg(0, n), k.setArg(1, m), k.setArg(2, cl_float4{{wo.x, wo.y, wo.z, inside ? 1.0f : 0.0f}}), k.setArg(3, lobes);
   k.setArg(4, bt), k.setArg(5, bu), k.setArg(6, b1), k.setArg(7, b2);
   ctx.launch("test_bsdf_sample", k, n);
   Sampled s;
@@ -48,7 +52,8 @@ Sampled sampleOnDevice(const WtMaterial& m, glm::vec3 wo, cl_uint lobes, const s
 }
 
 /// bsdf_eval on the device: (f cos, pdf) per direction.
-std::vector<cl_float4> evalOnDevice(const WtMaterial& m, glm::vec3 wo, cl_uint lobes, const std::vector<glm::vec3>& wi) {
+std::vector<cl_float4> evalOnDevice(const WtMaterial& m, glm::vec3 wo, cl_uint lobes, const std::vector<glm::vec3>& wi,
+                                    bool inside = false) {
   Context& ctx = test::deviceContext();
   const std::vector<float>& table = pbrAlbedoTable();
   const cl_uint n = cl_uint(wi.size());
@@ -58,7 +63,7 @@ std::vector<cl_float4> evalOnDevice(const WtMaterial& m, glm::vec3 wo, cl_uint l
   cl::Buffer bw(ctx.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, n * 16, in.data());
   cl::Buffer out(ctx.context(), CL_MEM_WRITE_ONLY, n * 16);
   cl::Kernel k(test::unitTestProgram(), "test_bsdf_eval");
-  k.setArg(0, n), k.setArg(1, m), k.setArg(2, cl_float4{{wo.x, wo.y, wo.z, 0}}), k.setArg(3, lobes);
+  k.setArg(0, n), k.setArg(1, m), k.setArg(2, cl_float4{{wo.x, wo.y, wo.z, inside ? 1.0f : 0.0f}}), k.setArg(3, lobes);
   k.setArg(4, bt), k.setArg(5, bw), k.setArg(6, out);
   ctx.launch("test_bsdf_eval", k, n);
   std::vector<cl_float4> got(n);
@@ -287,6 +292,286 @@ TEST(SharedTable, PbrAlbedoTableMatchesDirectIntegration) {
   RecordProperty("worst_interpolation_error", std::to_string(worst));
   EXPECT_LT(worst, 0.006);
   EXPECT_LT(worstGrazing, 0.025);
+}
+
+// ---------------------------------------------------------------------------
+// transmission (KHR_materials_transmission, _ior, _volume)
+
+cl_uint lobeOf(const cl_float4& weightLobe) {
+  cl_uint lobe;
+  std::memcpy(&lobe, &weightLobe.s[3], 4);
+  return lobe;
+}
+
+/// Fresnel reflectance of unpolarised light from the angles (the tangent
+/// form, independent of the kernel's cosine form); eta = n_t / n_i.
+double fresnelFromAngles(double cosI, double eta) {
+  double thetaI = std::acos(cosI), sinT = std::sin(thetaI) / eta;
+  if (sinT >= 1.0) return 1.0;
+  if (thetaI < 1e-6) return std::pow((eta - 1.0) / (eta + 1.0), 2.0);
+  double thetaT = std::asin(sinT);
+  double rs = std::sin(thetaI - thetaT) / std::sin(thetaI + thetaT);
+  double rp = std::tan(thetaI - thetaT) / std::tan(thetaI + thetaT);
+  return 0.5 * (rs * rs + rp * rp);
+}
+
+WtMaterial glass(float roughness, float ior, bool thin = false, glm::vec3 tint = glm::vec3(1.0f), float metallic = 0.0f,
+                 float transmission = 1.0f) {
+  return withTransmission(makePbrMaterial(tint, metallic, roughness), transmission, ior, thin);
+}
+
+// A smooth interface reflects with the probability Fresnel gives and
+// otherwise refracts by Snell's law (or passes straight through a thin
+// wall); a reflected sample weighs 1, a refracted one tint / eta^2 (the
+// radiance scaling), a delta has pdf 0. Inside at a steep angle all of it
+// reflects (total internal reflection).
+TEST(Bsdf, SmoothInterfaceFollowsFresnelAndSnell) {
+  struct Case {
+    float mu;
+    bool inside, thin;
+  };
+  const glm::vec3 tint(0.9f, 0.7f, 0.5f);
+  const float ior = 1.5f;
+  const int side = 64;  // 4096 samples
+  for (Case c : {Case{0.8f, false, false}, Case{0.15f, false, false}, Case{0.9f, true, false},
+                 Case{0.5f, true, false}, Case{0.6f, false, true}}) {
+    WtMaterial m = glass(0.0f, ior, c.thin, tint);
+    glm::vec3 wo = localDirection(c.mu, 0.7f);
+    Sampled s = sampleOnDevice(m, wo, kAllLobes, stratified(side, 23), c.inside);
+    double eta = c.thin ? ior : (c.inside ? 1.0 / ior : ior);
+    double f = fresnelFromAngles(c.mu, eta);
+    int reflected = 0, n = 0;
+    for (std::size_t i = 0; i < s.wiPdf.size(); ++i) {
+      const cl_float4& d = s.wiPdf[i];
+      const cl_float4& w = s.weightLobe[i];
+      ASSERT_GE(d.s[3], 0.0f) << "a smooth interface always scatters";
+      ASSERT_EQ(d.s[3], 0.0f) << "delta samples carry pdf 0";
+      ++n;
+      if (d.s[2] > 0.0f) {
+        ++reflected;
+        EXPECT_EQ(lobeOf(w), 2u | 4u);
+        EXPECT_NEAR(d.s[0], -wo.x, 1e-6f);
+        EXPECT_NEAR(d.s[1], -wo.y, 1e-6f);
+        EXPECT_NEAR(d.s[2], wo.z, 1e-6f);
+        for (int k = 0; k < 3; ++k) EXPECT_NEAR(w.s[k], 1.0f, 1e-5f);
+      } else {
+        EXPECT_EQ(lobeOf(w), 8u | 4u);
+        glm::dvec3 expected = c.thin ? glm::dvec3(-wo) : glm::dvec3(-wo.x / eta, -wo.y / eta, 0.0);
+        if (!c.thin) expected.z = -std::sqrt(std::max(0.0, 1.0 - expected.x * expected.x - expected.y * expected.y));
+        for (int k = 0; k < 3; ++k) EXPECT_NEAR(d.s[k], expected[k], 2e-6);
+        double scale = c.thin ? 1.0 : 1.0 / (eta * eta);
+        for (int k = 0; k < 3; ++k) EXPECT_NEAR(w.s[k], tint[k] * scale, 2e-5 * (1.0 + tint[k] * scale));
+      }
+    }
+    // the reflected fraction: binomial, within 5 standard errors (the samples are stratified, so less in fact)
+    double fraction = double(reflected) / n, se = std::sqrt(std::max(f * (1.0 - f), 1e-12) / n);
+    EXPECT_NEAR(fraction, f, 5.0 * se + 1.0 / n) << "mu " << c.mu << (c.inside ? " inside" : " outside")
+                                                  << (c.thin ? ", thin" : "");
+  }
+  // at mu 0.5 inside glass of 1.5 the refracted sine would be 1.3: all reflects
+  EXPECT_EQ(fresnelFromAngles(0.5, 1.0 / 1.5), 1.0);
+}
+
+/// Mean of the sampled weights of channel 0 and its standard error; the
+/// transmitted samples optionally multiplied by `transmittedScale`.
+std::pair<double, double> meanWeight(const Sampled& s, double transmittedScale = 1.0) {
+  double sum = 0.0, sum2 = 0.0;
+  for (std::size_t i = 0; i < s.wiPdf.size(); ++i) {
+    if (s.wiPdf[i].s[3] < 0.0f) continue;
+    double x = s.weightLobe[i].s[0] * (s.wiPdf[i].s[2] < 0.0f ? transmittedScale : 1.0);
+    sum += x, sum2 += x * x;
+  }
+  double n = double(s.wiPdf.size()), mean = sum / n;
+  return {mean, std::sqrt(std::max(0.0, sum2 / n - mean * mean) / n)};
+}
+
+/// f |cos| of channel 0 integrated over the whole sphere (midpoint rule,
+/// kTheta x kPhi cells in cos theta and phi).
+double integrateOverSphere(const WtMaterial& m, glm::vec3 wo, cl_uint lobes, bool inside, double transmittedScale) {
+  const int kTheta = 400, kPhi = 200;
+  std::vector<glm::vec3> grid;
+  for (int t = 0; t < kTheta; ++t)
+    for (int p = 0; p < kPhi; ++p)
+      grid.push_back(localDirection(-1.0f + 2.0f * (t + 0.5f) / kTheta, 2.0f * float(M_PI) * (p + 0.5f) / kPhi));
+  std::vector<cl_float4> ev = evalOnDevice(m, wo, lobes, grid, inside);
+  double sum = 0.0;
+  for (std::size_t g = 0; g < grid.size(); ++g) sum += ev[g].s[0] * (grid[g].z < 0.0f ? transmittedScale : 1.0);
+  return sum * (2.0 / kTheta) * (2.0 * M_PI / kPhi);
+}
+
+// White glass keeps every bit of energy when smooth: the weights average F +
+// (1 - F) / eta^2 (the refracted radiance scaled), that is 1 once the
+// scaling is undone. Rough glass (single scattering, no compensation) keeps
+// less: its sampled mean must equal the quadrature of bsdf_eval over the
+// sphere and stay at or below 1.
+TEST(Bsdf, WhiteGlassConservesEnergySmoothAndLosesOnlyWhatSingleScatteringLosesRough) {
+  std::vector<cl_float4> u = stratified(128, 31);
+  int failures = 0;
+  for (float ior : {1.33f, 1.5f, 2.4f})
+    for (bool inside : {false, true})
+      for (float mu : {0.2f, 0.6f, 0.95f}) {
+        double eta = inside ? 1.0 / ior : ior;
+        glm::vec3 wo = localDirection(mu, 0.2f);
+        // smooth
+        auto [smooth, smoothSe] = meanWeight(sampleOnDevice(glass(0.0f, ior), wo, kAllLobes, u, inside));
+        double f = fresnelFromAngles(mu, eta);
+        double expected = f + (1.0 - f) / (eta * eta);
+        if (std::abs(smooth - expected) > 5.0 * smoothSe + 1e-5 && ++failures <= 10)
+          ADD_FAILURE() << "smooth, ior " << ior << (inside ? " inside" : " outside") << ", mu " << mu << ": " << smooth
+                        << " +- " << smoothSe << ", expected " << expected;
+        // rough, with the radiance scaling undone (eta^2 on transmitted samples)
+        for (float roughness : {0.3f, 0.7f}) {
+          WtMaterial m = glass(roughness, ior);
+          auto [rough, roughSe] = meanWeight(sampleOnDevice(m, wo, kAllLobes, u, inside), eta * eta);
+          double quadrature = integrateOverSphere(m, wo, kAllLobes, inside, eta * eta);
+          // 5 standard errors plus 1% for the midpoint rule on the peaked lobes
+          bool ok = std::abs(rough - quadrature) < 5.0 * roughSe + 0.01 * quadrature && rough < 1.0 + 5.0 * roughSe;
+          if (!ok && ++failures <= 10)
+            ADD_FAILURE() << "roughness " << roughness << ", ior " << ior << (inside ? " inside" : " outside") << ", mu "
+                          << mu << ": sampled " << rough << " +- " << roughSe << ", quadrature " << quadrature;
+          // a white thin wall reflects F and passes 1 - F through the same
+          // microfacets: in all, GGX's single-scattering albedo with F = 1
+          if (inside) continue;
+          auto [thin, thinSe] = meanWeight(sampleOnDevice(glass(roughness, ior, true), wo, kAllLobes, u));
+          double e = ggxAlbedo(mu, roughness, 1.0).white;
+          if (std::abs(thin - e) > 5.0 * thinSe + 2e-3 && ++failures <= 10)
+            ADD_FAILURE() << "thin wall, roughness " << roughness << ", ior " << ior << ", mu " << mu << ": " << thin
+                          << " +- " << thinSe << ", GGX albedo " << e;
+        }
+      }
+  EXPECT_EQ(failures, 0);
+}
+
+// Histograms of sampled directions over the whole sphere, (cos theta in
+// [-1, 1], phi) bins, against the pdf integrated over each bin: rough
+// refraction from both sides, a thin wall, glass mixed with metal and an
+// opaque base, and a direction inside past the critical angle.
+TEST(Bsdf, TransmissionSamplingMatchesItsPdfChiSquare) {
+  struct Case {
+    WtMaterial m;
+    float mu;
+    bool inside;
+    const char* name;
+  };
+  const Case cases[] = {
+      {glass(0.35f, 1.5f), 0.6f, false, "rough glass from outside"},
+      {glass(0.5f, 1.5f), 0.7f, true, "rough glass from inside"},
+      // (mu 0.3 is past the critical angle, cos 0.745; rough enough that the
+      // lobe spans several bins, where the midpoint rule integrates the pdf well)
+      {glass(0.4f, 1.5f), 0.3f, true, "inside past the critical angle"},
+      {glass(0.3f, 1.5f, true, glm::vec3(0.8f, 0.6f, 0.4f)), 0.5f, false, "thin wall"},
+      {glass(0.4f, 1.33f, false, glm::vec3(0.7f), 0.3f, 0.5f), 0.4f, false, "glass mixed with metal and an opaque base"},
+  };
+  const int kTheta = 32, kPhi = 32, kSub = 6, kSide = 512;
+  for (const Case& c : cases) {
+    glm::vec3 wo = localDirection(c.mu, 0.4f);
+    Sampled s = sampleOnDevice(c.m, wo, kAllLobes, stratified(kSide, 41), c.inside);
+    std::vector<double> observed(kTheta * kPhi + 1, 0.0);
+    for (const cl_float4& d : s.wiPdf) {
+      if (d.s[3] < 0.0f) {
+        observed.back() += 1;
+        continue;
+      }
+      float phi = std::atan2(d.s[1], d.s[0]);
+      if (phi < 0.0f) phi += 2.0f * float(M_PI);
+      int ti = std::clamp(int((d.s[2] + 1.0f) * 0.5f * kTheta), 0, kTheta - 1);
+      int pi = std::min(kPhi - 1, int(phi / (2.0f * float(M_PI)) * kPhi));
+      observed[ti * kPhi + pi] += 1;
+    }
+    std::vector<glm::vec3> grid;
+    for (int ti = 0; ti < kTheta; ++ti)
+      for (int pi = 0; pi < kPhi; ++pi)
+        for (int a = 0; a < kSub; ++a)
+          for (int b = 0; b < kSub; ++b) {
+            float mu = -1.0f + 2.0f * (ti + (a + 0.5f) / kSub) / kTheta;
+            float phi = 2.0f * float(M_PI) * (pi + (b + 0.5f) / kSub) / kPhi;
+            grid.push_back(localDirection(mu, phi));
+          }
+    std::vector<cl_float4> pdf = evalOnDevice(c.m, wo, kAllLobes, grid, c.inside);
+    const double n = double(kSide) * kSide, cellArea = (2.0 / (kTheta * kSub)) * (2.0 * M_PI / (kPhi * kSub));
+    std::vector<double> expected(kTheta * kPhi + 1, 0.0);
+    double total = 0.0;
+    for (std::size_t g = 0; g < grid.size(); ++g) {
+      double p = pdf[g].s[3] * cellArea;
+      expected[g / (kSub * kSub)] += n * p;
+      total += p;
+    }
+    expected.back() = n * std::max(0.0, 1.0 - total);
+    double chi2 = 0.0, lowObserved = 0.0, lowExpected = 0.0;
+    int dof = -1;
+    for (std::size_t b = 0; b < expected.size(); ++b) {
+      if (expected[b] < 5.0) {
+        lowObserved += observed[b], lowExpected += expected[b];
+        continue;
+      }
+      chi2 += (observed[b] - expected[b]) * (observed[b] - expected[b]) / expected[b];
+      ++dof;
+    }
+    if (lowExpected > 0.0) chi2 += (lowObserved - lowExpected) * (lowObserved - lowExpected) / std::max(lowExpected, 1.0), ++dof;
+    double limit = dof + 4.5 * std::sqrt(2.0 * dof);  // P < 1e-4 (normal approximation)
+    if (getenv("WT_DEBUG_CHI2"))
+      for (std::size_t b = 0; b + 1 < expected.size(); ++b)
+        if (std::abs(observed[b] - expected[b]) > 4.0 * std::sqrt(expected[b] + 1.0))
+          printf("%s: bin theta %zu phi %zu: observed %.0f expected %.1f\n", c.name, b / kPhi, b % kPhi, observed[b], expected[b]);
+    EXPECT_LT(chi2, limit) << c.name << ": chi2 " << chi2 << " over " << dof << " dof; lost " << observed.back()
+                           << " vs " << expected.back();
+    EXPECT_NEAR(total, 1.0 - observed.back() / n, 0.01) << c.name << ": the pdf integrates to the fraction sampled";
+  }
+}
+
+// Refraction with radiance scaling satisfies f(wi, wo) = eta^2 f(wo, wi)
+// for eta = n(wi's side) / n(wo's side); reflection on either side is
+// symmetric. The reverse evaluation looks from the other side of the
+// surface, where the local frame's z is flipped.
+TEST(Bsdf, RoughRefractionObeysGeneralizedReciprocity) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  const float ior = 1.5f;
+  for (float roughness : {0.2f, 0.6f})
+    for (bool inside : {false, true}) {
+      WtMaterial m = glass(roughness, ior, false, glm::vec3(1.0f));
+      glm::vec3 wo = localDirection(0.7f, 0.5f);
+      double eta = inside ? 1.0 / ior : ior;
+      std::vector<glm::vec3> wis;
+      for (int i = 0; i < 256; ++i) wis.push_back(localDirection(-0.05f - 0.9f * u(rng), 6.28f * u(rng)));
+      std::vector<cl_float4> forward = evalOnDevice(m, wo, kAllLobes, wis, inside);
+      int compared = 0;
+      for (std::size_t i = 0; i < wis.size(); ++i) {
+        glm::vec3 flippedWi(wis[i].x, wis[i].y, -wis[i].z), flippedWo(wo.x, wo.y, -wo.z);
+        std::vector<cl_float4> back = evalOnDevice(m, flippedWi, kAllLobes, {flippedWo}, !inside);
+        double f1 = forward[i].s[0] / std::abs(wis[i].z), f2 = back[0].s[0] / std::abs(wo.z);
+        if (f1 < 1e-6 && f2 < 1e-6) continue;
+        ++compared;
+        ASSERT_NEAR(f2, eta * eta * f1, 2e-4 * std::max(f2, 1e-3))
+            << "roughness " << roughness << (inside ? " inside" : " outside") << ", direction " << i;
+      }
+      EXPECT_GT(compared, 16);  // directions where the refracted lobe is not negligible
+    }
+}
+
+// The lobe mask splits the interface: specular only reflects (with weight
+// 1 when smooth: nothing else was possible), transmission only refracts.
+TEST(Bsdf, TheLobeMaskSplitsReflectionFromTransmission) {
+  std::vector<cl_float4> u = stratified(32, 5);
+  glm::vec3 wo = localDirection(0.7f, 0.1f);
+  for (float roughness : {0.0f, 0.4f}) {
+    WtMaterial m = glass(roughness, 1.5f);
+    for (cl_uint lobes : {kSpecular, kTransmission}) {
+      Sampled s = sampleOnDevice(m, wo, lobes, u);
+      int sampled = 0;
+      for (std::size_t i = 0; i < u.size(); ++i) {
+        if (s.wiPdf[i].s[3] < 0.0f) continue;
+        ++sampled;
+        EXPECT_EQ(lobeOf(s.weightLobe[i]) & ~4u, lobes);
+        EXPECT_EQ(s.wiPdf[i].s[2] < 0.0f, lobes == kTransmission);
+        if (roughness == 0.0f) {
+          double f = fresnelFromAngles(0.7, 1.5);
+          EXPECT_NEAR(s.weightLobe[i].s[0], lobes == kSpecular ? f : (1.0 - f) / 2.25, 1e-5);
+        }
+      }
+      EXPECT_GT(sampled, int(u.size()) / 2);
+    }
+  }
 }
 
 }  // namespace
