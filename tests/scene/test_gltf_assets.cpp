@@ -299,5 +299,38 @@ TEST(GltfAssets, DamagedHelmet) {
   EXPECT_EQ(fractionFacingTheirNormals(s), 1.0);
 }
 
+// KHR_materials_transmission, _ior and _volume as two sample models write
+// them (values from their JSON): AttenuationTest's first material has
+// attenuationColor [0.1, 0.5, 0.9] over attenuationDistance 1 (sigma =
+// -ln(colour)), thicknessFactor 1; TransmissionRoughnessTest's
+// "Mat_IOR_1.33" has ior 1.33, base colour [0.5, 0.7, 0.9], thickness
+// 0.005 and no attenuation.
+TEST(GltfAssets, TransmissionMaterials) {
+  WT_REQUIRE_ASSET(attenuation, "gltf/AttenuationTest/glTF/AttenuationTest.gltf");
+  WT_REQUIRE_ASSET(roughness, "gltf/TransmissionRoughnessTest/glTF/TransmissionRoughnessTest.gltf");
+  Scene a = loadGltf(attenuation.string());
+  auto named = [](const Scene& s, const std::string& name) -> const WtMaterial& {
+    auto it = std::find(s.materialNames.begin(), s.materialNames.end(), name);
+    EXPECT_NE(it, s.materialNames.end()) << name;
+    return s.materials[std::size_t(it - s.materialNames.begin())];
+  };
+  const WtMaterial& r2 = named(a, "R2_and_R4_ThicknessFac_1.0");
+  EXPECT_EQ(r2.transmission, 1.0f);
+  EXPECT_EQ(r2.volume.w, 1.0f);
+  EXPECT_NEAR(r2.volume.x, 2.3025851f, 1e-5f);
+  EXPECT_NEAR(r2.volume.y, 0.6931472f, 1e-5f);
+  EXPECT_NEAR(r2.volume.z, 0.1053605f, 1e-5f);
+  EXPECT_FALSE(hasWarning(a, "KHR_materials_transmission is not supported"));
+  EXPECT_TRUE(hasWarning(a, "material textures are not supported yet"));  // thicknessTexture, label textures
+  Scene r = loadGltf(roughness.string());
+  const WtMaterial& water = named(r, "Mat_IOR_1.33");
+  EXPECT_FLOAT_EQ(water.ior, 1.33f);
+  EXPECT_EQ(water.transmission, 1.0f);
+  EXPECT_EQ(water.volume.w, 1.0f);
+  EXPECT_EQ(water.volume.x, 0.0f);
+  EXPECT_FLOAT_EQ(water.base_color.y, 0.7f);
+  EXPECT_EQ(named(r, "Mat_IOR_1.50").ior, 1.5f);  // no KHR_materials_ior: the default
+}
+
 }  // namespace
 }  // namespace wt
