@@ -185,6 +185,11 @@ Doc rich() {
       "\"roughnessFactor\":1},\"emissiveFactor\":[1,0.5,0.25],\"doubleSided\":true,"
       "\"extensions\":{\"KHR_materials_emissive_strength\":{\"emissiveStrength\":4}}}");
   d.materials.push_back("{\"alphaMode\":\"MASK\",\"alphaCutoff\":0.5}");
+  d.materials.push_back(
+      "{\"name\":\"glass\",\"pbrMetallicRoughness\":{\"metallicFactor\":0,\"roughnessFactor\":0.2},"
+      "\"extensions\":{\"KHR_materials_transmission\":{\"transmissionFactor\":0.9},"
+      "\"KHR_materials_ior\":{\"ior\":1.45},\"KHR_materials_volume\":{\"thicknessFactor\":1,"
+      "\"attenuationDistance\":0.5,\"attenuationColor\":[0.9,0.5,0.1]}}}");
   d.cameras.push_back(
       "{\"type\":\"perspective\",\"perspective\":{\"yfov\":0.7,\"znear\":0.1,\"zfar\":100,\"aspectRatio\":1.5}}");
   d.cameras.push_back("{\"type\":\"orthographic\",\"orthographic\":{\"xmag\":2,\"ymag\":1,\"znear\":0,\"zfar\":10}}");
@@ -202,7 +207,7 @@ Doc rich() {
   d.scenes.push_back("{\"nodes\":[0,6]}");
   d.scenes.push_back("{\"nodes\":[1]}");
   d.extras = ",\"scene\":0,\"extensionsUsed\":[\"KHR_lights_punctual\",\"KHR_materials_emissive_strength\","
-             "\"KHR_texture_transform\"]";
+             "\"KHR_texture_transform\",\"KHR_materials_transmission\",\"KHR_materials_ior\",\"KHR_materials_volume\"]";
   return d;
 }
 
