@@ -88,17 +88,16 @@ inline Hit bvh_closest(BvhScene scene, float3 org, float3 dir, float tmin, float
       if (!hit_child[k]) continue;
       uint first = n->child[k], count = n->count[k];
       if (count > 0) {
-        uint end = first + count;
-        for (uint i = first; i < end; ++i) {
+        // leaves hold at most four triangles (bvh4 layout): one vector test each four
+        for (uint i = first; i < first + count; i += 4u) {
           float t, b1, b2;
-          if (i == skip) continue;
-          if (triangle_intersect(org, shear, tmin, hit.t, scene.tri_verts[3 * i].xyz,
-                                 scene.tri_verts[3 * i + 1].xyz, scene.tri_verts[3 * i + 2].xyz,
-                                 &t, &b1, &b2)) {
+          uint prim = triangle_intersect4(org, shear, tmin, hit.t, scene.tri_verts, i, min(count - (i - first), 4u),
+                                          skip, skip, &t, &b1, &b2);
+          if (prim != WT_NO_HIT) {
             hit.t = t;
             hit.b1 = b1;
             hit.b2 = b2;
-            hit.prim = i;
+            hit.prim = prim;
           }
         }
       } else {
@@ -158,13 +157,10 @@ inline bool bvh_occluded(BvhScene scene, float3 org, float3 dir, float tmin, flo
       if (!hit_child[k]) continue;
       uint first = n->child[k], count = n->count[k];
       if (count > 0) {
-        uint end = first + count;
-        for (uint i = first; i < end; ++i) {
+        for (uint i = first; i < first + count; i += 4u) {
           float t, b1, b2;
-          if (i == skip_a || i == skip_b) continue;
-          if (triangle_intersect(org, shear, tmin, tmax, scene.tri_verts[3 * i].xyz,
-                                 scene.tri_verts[3 * i + 1].xyz, scene.tri_verts[3 * i + 2].xyz,
-                                 &t, &b1, &b2))
+          if (triangle_intersect4(org, shear, tmin, tmax, scene.tri_verts, i, min(count - (i - first), 4u), skip_a,
+                                  skip_b, &t, &b1, &b2) != WT_NO_HIT)
             return true;
         }
       } else if (next < 0) {

@@ -74,6 +74,78 @@ __attribute__((always_inline)) inline bool triangle_intersect(float3 org, RayShe
   return true;
 }
 
+/// One coordinate of four vertices by a run-time axis (0 x, 1 y, 2 z).
+inline float4 triangle4_axis(float4 x, float4 y, float4 z, int k) { return k == 0 ? x : (k == 1 ? y : z); }
+
+/// The nearest hit in (tmin, tmax) among the `count` (1 to 4) leaf-order
+/// triangles from `first` but skip_a and skip_b, tested at once: the
+/// watertight test of triangle_intersect on float4 lanes, one triangle per
+/// lane, with the same operations in the same order (so the same answers).
+/// Returns the lane's triangle or WT_NO_HIT; ties go to the lower index,
+/// as testing them one by one would.
+__attribute__((always_inline)) inline uint triangle_intersect4(float3 org, RayShear s, float tmin, float tmax,
+                                                               __global const float4* tri_verts, uint first,
+                                                               uint count, uint skip_a, uint skip_b, float* t_hit,
+                                                               float* b1, float* b2) {
+  uint4 index = (uint4)(first) + min((uint4)(0u, 1u, 2u, 3u), (uint4)(count - 1u));
+  // vertex k of the four triangles, relative to the origin, one lane each
+  float4 vx[3], vy[3], vz[3];
+  for (int k = 0; k < 3; ++k) {
+    float4 p0 = tri_verts[3 * index.s0 + k], p1 = tri_verts[3 * index.s1 + k];
+    float4 p2 = tri_verts[3 * index.s2 + k], p3 = tri_verts[3 * index.s3 + k];
+    vx[k] = (float4)(p0.x, p1.x, p2.x, p3.x) - org.x;
+    vy[k] = (float4)(p0.y, p1.y, p2.y, p3.y) - org.y;
+    vz[k] = (float4)(p0.z, p1.z, p2.z, p3.z) - org.z;
+  }
+  float4 az = triangle4_axis(vx[0], vy[0], vz[0], s.kz), bz = triangle4_axis(vx[1], vy[1], vz[1], s.kz),
+         cz = triangle4_axis(vx[2], vy[2], vz[2], s.kz);
+  float4 ax = triangle4_axis(vx[0], vy[0], vz[0], s.kx) - s.sx * az;
+  float4 ay = triangle4_axis(vx[0], vy[0], vz[0], s.ky) - s.sy * az;
+  float4 bx = triangle4_axis(vx[1], vy[1], vz[1], s.kx) - s.sx * bz;
+  float4 by = triangle4_axis(vx[1], vy[1], vz[1], s.ky) - s.sy * bz;
+  float4 cx = triangle4_axis(vx[2], vy[2], vz[2], s.kx) - s.sx * cz;
+  float4 cy = triangle4_axis(vx[2], vy[2], vz[2], s.ky) - s.sy * cz;
+
+  float4 u = cx * by - cy * bx;
+  float4 v = ax * cy - ay * cx;
+  float4 w = bx * ay - by * ax;
+#if WT_HAS_FP64
+  // exactly-zero edge functions decided in double, lane by lane (rare)
+  if (any((u == 0.0f) | (v == 0.0f) | (w == 0.0f))) {
+    float uu[4], vv[4], ww[4];
+    vstore4(u, 0, uu), vstore4(v, 0, vv), vstore4(w, 0, ww);
+    float axs[4], ays[4], bxs[4], bys[4], cxs[4], cys[4];
+    vstore4(ax, 0, axs), vstore4(ay, 0, ays), vstore4(bx, 0, bxs), vstore4(by, 0, bys);
+    vstore4(cx, 0, cxs), vstore4(cy, 0, cys);
+    for (int l = 0; l < 4; ++l) {
+      if (uu[l] != 0.0f && vv[l] != 0.0f && ww[l] != 0.0f) continue;
+      uu[l] = (float)((double)cxs[l] * (double)bys[l] - (double)cys[l] * (double)bxs[l]);
+      vv[l] = (float)((double)axs[l] * (double)cys[l] - (double)ays[l] * (double)cxs[l]);
+      ww[l] = (float)((double)bxs[l] * (double)ays[l] - (double)bys[l] * (double)axs[l]);
+    }
+    u = vload4(0, uu), v = vload4(0, vv), w = vload4(0, ww);
+  }
+#endif
+  int4 outside = ((u < 0.0f) | (v < 0.0f) | (w < 0.0f)) & ((u > 0.0f) | (v > 0.0f) | (w > 0.0f));
+  float4 det = u + v + w;
+  float4 t_scaled = u * s.sz * az + v * s.sz * bz + w * s.sz * cz;
+  float4 inv_det = 1.0f / det;
+  float4 t = t_scaled * inv_det;
+  int4 ok = ~outside & (det != 0.0f) & (t > tmin) & (t < tmax) & ((uint4)(0u, 1u, 2u, 3u) < (uint4)(count)) &
+            (index != (uint4)(skip_a)) & (index != (uint4)(skip_b));
+  if (!any(ok)) return WT_NO_HIT;
+  float4 tt = select((float4)(INFINITY), t, ok);
+  float best = fmin(fmin(tt.s0, tt.s1), fmin(tt.s2, tt.s3));
+  int lane = (ok.s0 && tt.s0 == best) ? 0 : (ok.s1 && tt.s1 == best) ? 1 : (ok.s2 && tt.s2 == best) ? 2 : 3;
+  float inv = lane == 0 ? inv_det.s0 : lane == 1 ? inv_det.s1 : lane == 2 ? inv_det.s2 : inv_det.s3;
+  float vl = lane == 0 ? v.s0 : lane == 1 ? v.s1 : lane == 2 ? v.s2 : v.s3;
+  float wl = lane == 0 ? w.s0 : lane == 1 ? w.s1 : lane == 2 ? w.s2 : w.s3;
+  *t_hit = best;
+  *b1 = vl * inv;
+  *b2 = wl * inv;
+  return first + (uint)lane;
+}
+
 /// Point with barycentrics (1 - b1 - b2, b1, b2) on triangle (p0, p1, p2),
 /// and the rounding error bound of each of its coordinates.
 inline float3 triangle_point(float3 p0, float3 p1, float3 p2, float b1, float b2, float3* error) {
