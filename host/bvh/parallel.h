@@ -2,9 +2,12 @@
 // reusable barrier, chunking of index ranges, cache-line padded slots.
 #pragma once
 
+#include <array>
 #include <atomic>
+#include <condition_variable>
 #include <cstddef>
 #include <cstdint>
+#include <mutex>
 #include <system_error>
 #include <thread>
 #include <vector>
@@ -80,5 +83,46 @@ template <class T>
 struct alignas(64) PerThread {
   T value{};
 };
+
+/// Work through a tree of tasks on up to `threads` threads: process(task,
+/// children) handles one task and fills up to two children, returning how
+/// many. Children for which big(child) holds go through a shared queue for
+/// any thread to take; the others are finished by the thread that made them.
+template <class Task, class Process, class Big>
+void runTaskTree(int threads, const Task& root, Process&& process, Big&& big) {
+  std::mutex mutex;
+  std::condition_variable wake;
+  std::vector<Task> queue{root};
+  int busy = 0;
+  runTeam(threads, [&](int, int, Barrier&) {
+    std::vector<Task> local;
+    std::array<Task, 2> children;
+    std::unique_lock lock(mutex);
+    for (;;) {
+      wake.wait(lock, [&] { return !queue.empty() || busy == 0; });
+      if (queue.empty()) break;  // and nobody busy: no task can appear any more
+      local.assign(1, queue.back());
+      queue.pop_back();
+      ++busy;
+      lock.unlock();
+      while (!local.empty()) {
+        const Task task = local.back();
+        local.pop_back();
+        const int count = process(task, children);
+        for (int c = count - 1; c >= 0; --c) {
+          if (!big(children[c])) {
+            local.push_back(children[c]);
+            continue;
+          }
+          std::lock_guard guard(mutex);
+          queue.push_back(children[c]);
+          wake.notify_one();
+        }
+      }
+      lock.lock();
+      if (--busy == 0 && queue.empty()) wake.notify_all();
+    }
+  });
+}
 
 }  // namespace wt::bvh_detail

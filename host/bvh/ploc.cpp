@@ -15,6 +15,7 @@
 #include "core/log.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <chrono>
 #include <cstdio>
@@ -92,18 +93,21 @@ double boxArea(const Aabb& box) {
 }
 
 /// Binned SAH (32 bins, three axes) top down over the clusters, weighted by
-/// their primitive counts; new internal nodes from nextNode on. Returns the root.
-std::uint32_t buildTopSah(std::vector<TopCluster>& clusters, std::vector<BuildNode>& nodes, std::uint32_t& nextNode) {
+/// their primitive counts, on the team. A subtree over m clusters owns m - 1
+/// consecutive node slots (its root, then its descendants'), so the numbering
+/// does not depend on which thread builds what. Returns the root: nodes[first]
+/// unless there is a single cluster.
+std::uint32_t buildTopSah(std::vector<TopCluster>& clusters, std::vector<BuildNode>& nodes, std::uint32_t first,
+                          int threads) {
   constexpr int kBins = 32;
+  constexpr std::uint32_t kSharedTask = 1024;  // clusters; smaller subtrees stay with one thread
   if (clusters.size() == 1) return clusters[0].node;
   struct Task {
-    std::uint32_t begin, end, node;
+    std::uint32_t begin, end;  ///< clusters
+    std::uint32_t node;        ///< this subtree's root
+    std::uint32_t free;        ///< first of the (end - begin - 2) slots of its descendants
   };
-  const std::uint32_t root = nextNode++;
-  std::vector<Task> stack{{0, std::uint32_t(clusters.size()), root}};
-  while (!stack.empty()) {
-    const Task task = stack.back();
-    stack.pop_back();
+  const auto process = [&](const Task& task, std::array<Task, 2>& children) {
     Aabb bounds, centroids;
     for (std::uint32_t k = task.begin; k < task.end; ++k) {
       const Aabb& b = clusters[k].box;
@@ -163,21 +167,31 @@ std::uint32_t buildTopSah(std::vector<TopCluster>& clusters, std::vector<BuildNo
       const std::uint32_t at = std::uint32_t(split - clusters.begin());
       if (at > task.begin && at < task.end) mid = at;
     }
-    const std::uint32_t ranges[2][2] = {{task.begin, mid}, {mid, task.end}};
+    // the left subtree's slots first, then the right's
+    const std::uint32_t leftSize = mid - task.begin, rightSize = task.end - mid;
+    int spawned = 0;
     std::uint32_t child[2];
-    for (int c = 0; c < 2; ++c) {
-      if (ranges[c][1] - ranges[c][0] == 1) {
-        child[c] = clusters[ranges[c][0]].node;
-      } else {
-        child[c] = nextNode++;
-        stack.push_back({ranges[c][0], ranges[c][1], child[c]});
-      }
+    if (leftSize == 1) {
+      child[0] = clusters[task.begin].node;
+    } else {
+      child[0] = task.free;
+      children[spawned++] = {task.begin, mid, task.free, task.free + 1};
+    }
+    const std::uint32_t rightFree = task.free + (leftSize - 1);
+    if (rightSize == 1) {
+      child[1] = clusters[mid].node;
+    } else {
+      child[1] = rightFree;
+      children[spawned++] = {mid, task.end, rightFree, rightFree + 1};
     }
     nodes[task.node].left = child[0];
     nodes[task.node].right = child[1];
     nodes[task.node].count = 0;
-  }
-  return root;
+    return spawned;
+  };
+  runTaskTree(threads, Task{0, std::uint32_t(clusters.size()), first, first + 1}, process,
+              [](const Task& task) { return task.end - task.begin > kSharedTask; });
+  return first;
 }
 
 }  // namespace
@@ -290,7 +304,7 @@ Bvh buildPlocBvh(std::span<const Aabb> primBounds, const BvhBuildOptions& option
     for (TopCluster& t : top) t.prims = prims[t.node];
   }
   const std::uint32_t topClusters = count;
-  const std::uint32_t root = buildTopSah(top, nodes, nextNode);
+  const std::uint32_t root = buildTopSah(top, nodes, nextNode, threads);
   const double topSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - topStart).count();
   Bvh bvh = layoutTree(nodes, root, order, maxLeaf);
   const auto end = std::chrono::steady_clock::now();

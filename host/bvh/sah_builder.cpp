@@ -13,10 +13,8 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
-#include <condition_variable>
 #include <cstdio>
 #include <limits>
-#include <mutex>
 #include <stdexcept>
 
 namespace wt {
@@ -169,42 +167,11 @@ Bvh buildSahBvh(std::span<const Aabb> primBounds, const BvhBuildOptions& options
   SahBuild build(items, maxLeaf);
   const std::uint32_t root = build.allocateRoot();
 
-  // a shared queue of big subtrees; small ones are finished by whoever takes them
-  std::mutex mutex;
-  std::condition_variable wake;
-  std::vector<Task> queue{{root, 0, std::uint32_t(n)}};
-  int busy = 0;
-  runTeam(threads, [&](int, int, Barrier&) {
-    std::vector<Task> local;
-    std::array<Task, 2> children;
-    std::unique_lock lock(mutex);
-    for (;;) {
-      wake.wait(lock, [&] { return !queue.empty() || busy == 0; });
-      if (queue.empty()) break;
-      Task task = queue.back();
-      queue.pop_back();
-      ++busy;
-      lock.unlock();
-      if (task.end - task.begin > kLocalTask) {
-        const int k = build.process(task, children);
-        lock.lock();
-        for (int c = 0; c < k; ++c) queue.push_back(children[c]);
-        --busy;
-        wake.notify_all();
-        continue;
-      }
-      local.assign(1, task);
-      while (!local.empty()) {
-        const Task t = local.back();
-        local.pop_back();
-        const int k = build.process(t, children);
-        for (int c = k - 1; c >= 0; --c) local.push_back(children[c]);
-      }
-      lock.lock();
-      --busy;
-      if (busy == 0 && queue.empty()) wake.notify_all();
-    }
-  });
+  // big subtrees through a shared queue; small ones finished by the thread that made them
+  runTaskTree(
+      threads, Task{root, 0, std::uint32_t(n)},
+      [&](const Task& task, std::array<Task, 2>& children) { return build.process(task, children); },
+      [](const Task& task) { return task.end - task.begin > kLocalTask; });
 
   std::vector<std::uint32_t> prims(n);
   for (std::size_t i = 0; i < n; ++i) prims[i] = items[i].index;
