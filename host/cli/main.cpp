@@ -99,7 +99,8 @@ int runRender(const RenderOptions& options) {
   wt::Renderer renderer(context, scene, settings);
   const wt::BvhBuildStats& bvh = renderer.sceneBuffers().bvh().stats;
   wt::log::info("scene " + scene.sourceName + ": " + std::to_string(scene.triangles.size()) +
-                " triangles, loaded in " + std::to_string(int(loadSeconds * 1e3)) + " ms; BVH " +
+                " triangles, loaded in " + std::to_string(int(loadSeconds * 1e3)) + " ms; BVH (" +
+                wt::bvhBuilderName(settings.bvhBuilder) + ") " +
                 std::to_string(bvh.nodeCount) + " nodes built in " +
                 std::to_string(bvh.buildSeconds * 1e3).substr(0, 6) + " ms; device " + device.name);
 
