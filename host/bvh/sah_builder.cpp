@@ -23,7 +23,7 @@ namespace {
 using namespace bvh_detail;
 
 constexpr int kBins = 32;
-// Nodes with fewer items are built to the end by the thread that takes them.
+// Subtrees of more items go through the shared queue; smaller ones stay with one thread.
 constexpr std::uint32_t kLocalTask = 4096;
 
 struct Item {
