@@ -1,6 +1,7 @@
 #include "bench/bench.h"
 
 #include "bench/embree_reference.h"
+#include "bvh/builders.h"
 #include "bvh/bvh4.h"
 #include "bvh/lbvh.h"
 #include "core/log.h"
@@ -12,6 +13,7 @@
 #include "scene/generators.h"
 
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <chrono>
 #include <cmath>
@@ -20,6 +22,8 @@
 #include <functional>
 #include <memory>
 #include <optional>
+#include <span>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -280,6 +284,17 @@ struct SetResult {
   Agreement agreement;
 };
 
+/// One builder's tree of a scene, traced on the same rays as the others.
+struct TreeResult {
+  BvhBuilder builder = BvhBuilder::Lbvh;
+  double buildSeconds = 0.0;  ///< median of the repetitions, whole build (PLOC: LBVH + PLOC)
+  std::size_t nodes = 0, nodes4 = 0;
+  double sah = 0.0, sah4 = 0.0;
+  double bytesPerTriangle = 0.0;
+  std::vector<double> kernelSeconds;  ///< per ray set, median, interleaved with the other trees
+  std::vector<double> hitFraction;    ///< per ray set
+};
+
 struct SceneResult {
   std::string name;
   std::size_t triangles = 0;
@@ -294,6 +309,7 @@ struct SceneResult {
   double embreeBuildSeconds = 0.0;
   std::vector<SetResult> sets;
   double pathMrays = 0.0;
+  std::vector<TreeResult> trees;  ///< --compare-bvh, in that order
 };
 
 template <typename Fn>
@@ -384,6 +400,71 @@ std::vector<RayHit> benchSet(const Scene& scene, Tracer& tracer, const Reference
   return hits;
 }
 
+/// Build each --compare-bvh tree (median of the repetitions), then trace
+/// the same ray sets through all of them, the trees taking turns within each
+/// repetition so that a change in the machine's load hits them alike.
+void compareTrees(Context& context, const Scene& scene, std::span<const Aabb> bounds, Tracer& defaultTracer,
+                  BvhBuilder defaultBuilder, std::array<const std::vector<Ray>*, 3> sets, const BenchOptions& options,
+                  std::vector<TreeResult>& trees) {
+  std::vector<std::unique_ptr<Tracer>> owned;
+  std::vector<Tracer*> tracers;
+  for (const std::string& name : options.compareBvh) {
+    if (name == "none") continue;
+    TreeResult tree;
+    tree.builder = *parseBvhBuilder(name);
+    BvhBuildOptions bvhOptions;
+    bvhOptions.builder = tree.builder;
+    bvhOptions.plocRadius = options.plocRadius;
+    bvhOptions.plocTopPrims = options.plocTopPrims;
+    std::vector<double> builds;
+    Bvh bvh;
+    for (int r = 0; r < options.repetitions + 1; ++r) {
+      bvh = buildBvh(bounds, bvhOptions);
+      if (r > 0) builds.push_back(bvh.stats.buildSeconds);
+    }
+    tree.buildSeconds = median(builds);
+    tree.nodes = bvh.stats.nodeCount;
+    tree.sah = bvh.stats.sahCost;
+    Bvh4 bvh4 = collapseToBvh4(bvh);
+    tree.nodes4 = bvh4.stats.nodeCount;
+    tree.sah4 = bvh4.stats.sahCost;
+    if (tree.builder == defaultBuilder) {
+      tracers.push_back(&defaultTracer);
+    } else {
+      owned.push_back(std::make_unique<Tracer>(context, scene, bvhOptions));
+      tracers.push_back(owned.back().get());
+    }
+    tree.bytesPerTriangle = scene.triangles.empty() ? 0.0
+                                                    : double(tracers.back()->sceneBuffers().uploadedBytes) /
+                                                          scene.triangles.size();
+    trees.push_back(tree);
+  }
+  for (std::size_t set = 0; set < sets.size(); ++set) {
+    const std::vector<Ray>& rays = *sets[set];
+    const bool occlusion = set == 2;
+    std::vector<std::vector<double>> kernel(tracers.size());
+    for (std::size_t t = 0; t < tracers.size(); ++t) {
+      // warm-up, and the answers
+      std::size_t hits = 0;
+      if (occlusion) {
+        for (std::uint8_t b : tracers[t]->traceOccluded(rays)) hits += b != 0;
+      } else {
+        for (const RayHit& h : tracers[t]->traceClosest(rays)) hits += h.triangle != RayHit::kNoHit;
+      }
+      trees[t].hitFraction.push_back(rays.empty() ? 0.0 : double(hits) / rays.size());
+    }
+    for (int r = 0; r < options.repetitions; ++r)
+      for (std::size_t t = 0; t < tracers.size(); ++t) {
+        if (occlusion)
+          tracers[t]->traceOccluded(rays);
+        else
+          tracers[t]->traceClosest(rays);
+        kernel[t].push_back(tracers[t]->lastKernelSeconds());
+      }
+    for (std::size_t t = 0; t < tracers.size(); ++t) trees[t].kernelSeconds.push_back(median(kernel[t]));
+  }
+}
+
 SceneResult benchScene(Context& context, const std::string& name, const Scene& scene,
                        const BenchOptions& options) {
   SceneResult result;
@@ -393,10 +474,14 @@ SceneResult benchScene(Context& context, const std::string& name, const Scene& s
   // BVH build, median of several
   std::vector<Aabb> bounds(scene.triangles.size());
   for (std::size_t i = 0; i < bounds.size(); ++i) bounds[i] = scene.triangleBounds(std::uint32_t(i));
+  BvhBuildOptions bvhOptions;
+  bvhOptions.builder = *parseBvhBuilder(options.bvh);
+  bvhOptions.plocRadius = options.plocRadius;
+  bvhOptions.plocTopPrims = options.plocTopPrims;
   std::vector<double> builds;
   Bvh bvh;
   for (int r = 0; r < options.repetitions + 1; ++r) {
-    bvh = buildLbvh(bounds);
+    bvh = buildBvh(bounds, bvhOptions);
     if (r > 0) builds.push_back(bvh.stats.buildSeconds);
   }
   result.buildSeconds = median(builds);
@@ -409,7 +494,7 @@ SceneResult benchScene(Context& context, const std::string& name, const Scene& s
   bvh = {};
   bvh4 = {};
 
-  Tracer tracer(context, scene);
+  Tracer tracer(context, scene, bvhOptions);
   result.bytesPerTriangle =
       scene.triangles.empty() ? 0.0 : double(tracer.sceneBuffers().uploadedBytes) / scene.triangles.size();
   std::unique_ptr<Reference> embree;
@@ -436,17 +521,20 @@ SceneResult benchScene(Context& context, const std::string& name, const Scene& s
                                              options, result.sets[0]);
   std::vector<Ray> diffuse = diffuseRays(scene, primary, primaryHits);
   std::vector<Ray> shadow = shadowRays(scene, primary, primaryHits, &result.shadowToEmitters);
-  primary = {};
   benchSet(scene, tracer, embree.get(), "diffuse", diffuse, false, false, options, result.sets[1]);
-  diffuse = {};
   benchSet(scene, tracer, embree.get(), "shadow", shadow, true, false, options, result.sets[2]);
-  shadow = {};
   embree.reset();
+  compareTrees(context, scene, bounds, tracer, bvhOptions.builder, {&primary, &diffuse, &shadow}, options,
+               result.trees);
+  primary = {};
+  diffuse = {};
+  shadow = {};
 
   // whole paths: the wavefront renderer, rays of every bounce
   RenderSettings settings;
   settings.width = settings.height = options.pathWidth;
   settings.samplesPerPixel = options.pathSamples;
+  settings.bvhBuilder = bvhOptions.builder;
   Renderer renderer(context, scene, settings);
   renderer.renderSample();  // warm-up
   std::uint64_t raysBefore = renderer.stats().raysTraced;
@@ -492,6 +580,9 @@ int runBench(const BenchOptions& options) {
 #ifdef WT_HAVE_EMBREE
   parseEmbreeApi(options.embreeApi);  // a bad name fails before any work
 #endif
+  for (const std::string& name : options.compareBvh)
+    if (name != "none" && !parseBvhBuilder(name)) throw std::invalid_argument("unknown BVH builder '" + name + "'");
+  if (!parseBvhBuilder(options.bvh)) throw std::invalid_argument("unknown BVH builder '" + options.bvh + "'");
 
   // scenes: loaded one at a time, so a 1M-triangle scene is freed before the next
   struct SceneSource {
@@ -549,6 +640,8 @@ int runBench(const BenchOptions& options) {
                 jsonString(embreeText).c_str(), kHaveEmbree ? "true" : "false");
     std::printf(" \"primary_width\": %d, \"repetitions\": %d, \"path_width\": %d, \"path_samples\": %d,\n",
                 options.primaryWidth, options.repetitions, options.pathWidth, options.pathSamples);
+    std::printf(" \"bvh\": \"%s\", \"ploc_radius\": %d, \"ploc_top_prims\": %d,\n", options.bvh.c_str(),
+                options.plocRadius, options.plocTopPrims);
     std::printf(" \"skipped\": [");
     for (std::size_t i = 0; i < skipped.size(); ++i)
       std::printf("%s{\"name\": %s, \"reason\": %s}", i ? ", " : "", jsonString(skipped[i].first).c_str(),
@@ -559,11 +652,34 @@ int runBench(const BenchOptions& options) {
       std::printf("  {\"name\": %s, \"triangles\": %zu, \"bvh_build_s\": %.6f, \"bvh_mtris_per_s\": %.3f, "
                   "\"bvh_nodes\": %zu, \"bvh_sah\": %.3f, \"bvh4_nodes\": %zu, \"bvh4_sah\": %.3f, \"bvh4_collapse_s\": %.6f, "
                   "\"bytes_per_triangle\": %.1f, "
-                  "\"embree_build_s\": %.6f, \"shadow_targets\": \"%s\", \"path_mrays\": %.3f,\n   \"ray_sets\": [\n",
+                  "\"embree_build_s\": %.6f, \"shadow_targets\": \"%s\", \"path_mrays\": %.3f,\n",
                   jsonString(r.name).c_str(), r.triangles, r.buildSeconds,
                   r.buildSeconds > 0 ? r.triangles / r.buildSeconds * 1e-6 : 0.0, r.nodes, r.sah,
                   r.nodes4, r.sah4, r.collapseSeconds, r.bytesPerTriangle, r.embreeBuildSeconds, r.shadowToEmitters ? "emitters" : "bounds",
                   r.pathMrays);
+      std::printf("   \"bvh_builder\": \"%s\", \"trees\": [", options.bvh.c_str());
+      const TreeResult* sahTree = nullptr;
+      for (const TreeResult& t : r.trees)
+        if (t.builder == BvhBuilder::Sah) sahTree = &t;
+      for (std::size_t t = 0; t < r.trees.size(); ++t) {
+        const TreeResult& tree = r.trees[t];
+        std::printf("%s\n    {\"builder\": \"%s\", \"build_s\": %.6f, \"mtris_per_s\": %.3f, \"nodes\": %zu, "
+                    "\"sah\": %.3f, \"bvh4_nodes\": %zu, \"bvh4_sah\": %.3f, \"bytes_per_triangle\": %.1f, "
+                    "\"ray_sets\": [",
+                    t ? "," : "", bvhBuilderName(tree.builder), tree.buildSeconds,
+                    tree.buildSeconds > 0 ? r.triangles / tree.buildSeconds * 1e-6 : 0.0, tree.nodes, tree.sah,
+                    tree.nodes4, tree.sah4, tree.bytesPerTriangle);
+        for (std::size_t k = 0; k < tree.kernelSeconds.size(); ++k) {
+          std::printf("%s{\"name\": \"%s\", \"kernel_s\": %.6f, \"mrays_kernel\": %.3f, \"hit_fraction\": %.6f",
+                      k ? ", " : "", r.sets[k].name.c_str(), tree.kernelSeconds[k],
+                      mrays(r.sets[k].rays, tree.kernelSeconds[k]), tree.hitFraction[k]);
+          if (sahTree && tree.kernelSeconds[k] > 0)
+            std::printf(", \"throughput_vs_sah\": %.4f", sahTree->kernelSeconds[k] / tree.kernelSeconds[k]);
+          std::printf("}");
+        }
+        std::printf("]}");
+      }
+      std::printf("],\n   \"ray_sets\": [\n");
       for (std::size_t k = 0; k < r.sets.size(); ++k) {
         const SetResult& s = r.sets[k];
         std::printf("    {\"name\": \"%s\", \"query\": \"%s\", \"rays\": %zu, \"hit_fraction\": %.6f, "
@@ -591,15 +707,15 @@ int runBench(const BenchOptions& options) {
     return 0;
   }
 
-  std::printf("device: %s (%s); reference: %s\n", device.name.c_str(), device.platformName.c_str(),
-              embreeText.c_str());
+  std::printf("device: %s (%s); reference: %s; bvh: %s\n", device.name.c_str(), device.platformName.c_str(),
+              embreeText.c_str(), options.bvh.c_str());
   std::printf("rays: primary %dx%d through pixel centres; diffuse and shadow rays from their hits; "
               "median of %d after a warm-up\npaths: %dx%d, %d spp, up to 8 bounces, extend rays counted\n",
               options.primaryWidth, options.primaryWidth, options.repetitions, options.pathWidth, options.pathWidth,
               options.pathSamples);
   for (const auto& [name, reason] : skipped) std::printf("skipped %s: %s\n", name.c_str(), reason.c_str());
 
-  // nodes and SAH: the binary LBVH, then the 4-wide tree collapsed from it (what the kernels traverse)
+  // nodes and SAH: the binary tree (--bvh), then the 4-wide tree collapsed from it (what the kernels traverse)
   std::printf("\n%-28s %10s %9s %8s %9s %7s %9s %7s %6s %10s %9s\n", "scene", "triangles", "build ms", "Mtris/s",
               "nodes", "SAH", "nodes4", "SAH4", "B/tri", "Embree ms", "path Mr/s");
   for (const SceneResult& r : results) {
@@ -608,6 +724,36 @@ int runBench(const BenchOptions& options) {
     std::printf("%-28s %10zu %9.2f %8.2f %9zu %7.2f %9zu %7.2f %6.1f %10s %9.2f\n", r.name.c_str(), r.triangles,
                 r.buildSeconds * 1e3, r.buildSeconds > 0 ? r.triangles / r.buildSeconds * 1e-6 : 0.0, r.nodes,
                 r.sah, r.nodes4, r.sah4, r.bytesPerTriangle, embreeMs, r.pathMrays);
+  }
+
+  // tree quality: each builder's tree on the same rays, throughput relative to the SAH tree's
+  bool anyTrees = false;
+  for (const SceneResult& r : results) anyTrees |= !r.trees.empty();
+  if (anyTrees) {
+    std::printf("\ntree quality: kernel Mrays/s per builder on the same rays, interleaved; (x) = throughput / the sah "
+                "tree's\n%-28s %-5s %9s %8s %9s %7s %9s %7s %6s %16s %16s %16s\n",
+                "scene", "bvh", "build ms", "Mtris/s", "nodes", "SAH", "nodes4", "SAH4", "B/tri", "primary", "diffuse",
+                "shadow");
+    for (const SceneResult& r : results) {
+      const TreeResult* sahTree = nullptr;
+      for (const TreeResult& t : r.trees)
+        if (t.builder == BvhBuilder::Sah) sahTree = &t;
+      for (const TreeResult& t : r.trees) {
+        std::printf("%-28s %-5s %9.2f %8.2f %9zu %7.2f %9zu %7.2f %6.1f", r.name.c_str(), bvhBuilderName(t.builder),
+                    t.buildSeconds * 1e3, t.buildSeconds > 0 ? r.triangles / t.buildSeconds * 1e-6 : 0.0, t.nodes,
+                    t.sah, t.nodes4, t.sah4, t.bytesPerTriangle);
+        for (std::size_t k = 0; k < t.kernelSeconds.size(); ++k) {
+          char cell[32];
+          if (sahTree && t.kernelSeconds[k] > 0)
+            std::snprintf(cell, sizeof cell, "%.2f (%.3f)", mrays(r.sets[k].rays, t.kernelSeconds[k]),
+                          sahTree->kernelSeconds[k] / t.kernelSeconds[k]);
+          else
+            std::snprintf(cell, sizeof cell, "%.2f", mrays(r.sets[k].rays, t.kernelSeconds[k]));
+          std::printf(" %16s", cell);
+        }
+        std::printf("\n");
+      }
+    }
   }
 
   // Mrays/s; ratio = wavetrace kernel throughput / Embree throughput

@@ -22,6 +22,12 @@ struct BenchOptions {
   std::string embreeApi = "packet16"; ///< single, packet8, packet16, stream (host/bench/embree_reference.h)
   int embreeQuality = 2;            ///< RTC_BUILD_QUALITY_: 0 low, 1 medium, 2 high
   bool embreeRobust = false;        ///< RTC_SCENE_FLAG_ROBUST
+  std::string bvh = "lbvh";         ///< the tree compared with Embree and rendering the path figure
+  /// Builders whose trees are built (median of repetitions) and traced on
+  /// the same rays, interleaved, for the tree-quality table; "none" skips it.
+  std::vector<std::string> compareBvh{"lbvh", "ploc", "sah"};
+  int plocRadius = 16;    ///< BvhBuildOptions::plocRadius for every ploc tree
+  int plocTopPrims = 16;  ///< BvhBuildOptions::plocTopPrims for every ploc tree
 };
 
 /// Run the benchmark and print the results to stdout. Returns an exit code.

@@ -5,6 +5,7 @@
 // over subtrees.
 #include "bvh/lbvh.h"
 
+#include "bvh/parallel.h"
 #include "core/log.h"
 
 #include <algorithm>
@@ -24,6 +25,8 @@
 
 namespace wt {
 namespace {
+
+using namespace bvh_detail;
 
 using Clock = std::chrono::steady_clock;
 
@@ -49,78 +52,6 @@ constexpr std::size_t kFlattenTasks = 64;
 double secondsSince(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
 }
-
-// ---- threads -----------------------------------------------------------------------
-
-/// Reusable barrier for a team whose size is fixed before any member waits.
-class Barrier {
- public:
-  void init(int count) { m_count = count; }
-
-  void arriveAndWait() {
-    // The generation cannot advance before this thread arrives, so reading it first is safe.
-    const std::uint32_t generation = m_generation.load(std::memory_order_acquire);
-    if (m_arrived.fetch_add(1, std::memory_order_acq_rel) + 1 == m_count) {
-      m_arrived.store(0, std::memory_order_relaxed);
-      m_generation.fetch_add(1, std::memory_order_release);
-      m_generation.notify_all();
-      return;
-    }
-    while (m_generation.load(std::memory_order_acquire) == generation)
-      m_generation.wait(generation, std::memory_order_acquire);
-  }
-
- private:
-  int m_count = 1;
-  std::atomic<int> m_arrived{0};
-  std::atomic<std::uint32_t> m_generation{0};
-};
-
-/// Run fn(rank, size, barrier) on up to `wanted` threads, the caller being rank 0.
-/// The team shrinks when a thread cannot be started, so a failed spawn never deadlocks.
-template <class Fn>
-void runTeam(int wanted, Fn&& fn) {
-  Barrier barrier;
-  if (wanted <= 1) {
-    fn(0, 1, barrier);
-    return;
-  }
-  std::atomic<int> teamSize{0};
-  std::vector<std::thread> workers;
-  workers.reserve(static_cast<std::size_t>(wanted - 1));
-  for (int rank = 1; rank < wanted; ++rank) {
-    try {
-      workers.emplace_back([&teamSize, &barrier, &fn, rank] {
-        teamSize.wait(0);
-        fn(rank, teamSize.load(), barrier);
-      });
-    } catch (const std::system_error&) {
-      break;
-    }
-  }
-  const int size = 1 + static_cast<int>(workers.size());
-  barrier.init(size);
-  teamSize.store(size);
-  teamSize.notify_all();
-  fn(0, size, barrier);
-  for (std::thread& worker : workers) worker.join();
-}
-
-struct Range {
-  std::size_t begin;
-  std::size_t end;
-};
-
-Range chunkOf(std::size_t n, int size, int rank) {
-  return {n * static_cast<std::size_t>(rank) / static_cast<std::size_t>(size),
-          n * static_cast<std::size_t>(rank + 1) / static_cast<std::size_t>(size)};
-}
-
-/// Per-thread slot padded to a cache line, so that neighbours do not share one.
-template <class T>
-struct alignas(64) PerThread {
-  T value{};
-};
 
 // ---- Morton codes ------------------------------------------------------------------
 
@@ -655,7 +586,49 @@ struct PhaseTimes {
   double morton = 0, sort = 0, hierarchy = 0, flatten = 0;
 };
 
+/// Morton keys of the centroids sorted ascending, with primIndices[k] the input
+/// index of the k-th; equal keys keep index order.
+std::unique_ptr<std::uint64_t[]> sortByMorton(std::span<const Aabb> primBounds, int threads,
+                                             std::vector<std::uint32_t>& primIndices, PhaseTimes& times) {
+  const std::size_t n = primBounds.size();
+  Clock::time_point phase = Clock::now();
+  MortonKeys morton = computeMortonKeys(primBounds, threads);
+  times.morton = secondsSince(phase);
+
+  // The pass count decides which buffers end up sorted; make that one primIndices.
+  phase = Clock::now();
+  const RadixPlan plan = planRadixSort(morton.bits.orBits, morton.bits.andBits);
+  std::unique_ptr<std::uint64_t[]> keys = std::move(morton.keys);
+  primIndices.resize(n);
+  if (plan.passes == 0) {
+    // Every key is equal: index order is already sorted.
+    for (std::size_t i = 0; i < n; ++i) primIndices[i] = static_cast<std::uint32_t>(i);
+  } else {
+    auto keys1 = std::make_unique_for_overwrite<std::uint64_t[]>(n);
+    std::unique_ptr<std::uint32_t[]> scratchVals;
+    if (plan.passes >= 2) scratchVals = std::make_unique_for_overwrite<std::uint32_t[]>(n);
+    const bool oddPasses = plan.passes % 2 == 1;
+    std::uint32_t* vals0 = oddPasses ? scratchVals.get() : primIndices.data();
+    std::uint32_t* vals1 = oddPasses ? primIndices.data() : scratchVals.get();
+    radixSort(threads, n, plan, keys.get(), keys1.get(), vals0, vals1);
+    if (oddPasses) keys = std::move(keys1);
+  }
+  times.sort = secondsSince(phase);
+  return keys;
+}
+
 }  // namespace
+
+namespace bvh_detail {
+
+std::vector<std::uint32_t> mortonOrder(std::span<const Aabb> primBounds, int threads) {
+  std::vector<std::uint32_t> order;
+  PhaseTimes times;
+  if (!primBounds.empty()) sortByMorton(primBounds, std::clamp(threads, 1, kMaxThreads), order, times);
+  return order;
+}
+
+}  // namespace bvh_detail
 
 Bvh buildLbvh(std::span<const Aabb> primBounds, const BvhBuildOptions& options) {
   const Clock::time_point start = Clock::now();
@@ -674,29 +647,7 @@ Bvh buildLbvh(std::span<const Aabb> primBounds, const BvhBuildOptions& options) 
   threads = static_cast<int>(std::min<std::size_t>(static_cast<std::size_t>(threads), n / kMinPrimsPerThread + 1));
   PhaseTimes times;
 
-  Clock::time_point phase = Clock::now();
-  MortonKeys morton = computeMortonKeys(primBounds, threads);
-  times.morton = secondsSince(phase);
-
-  // The pass count decides which buffers end up sorted; make that one primIndices.
-  phase = Clock::now();
-  const RadixPlan plan = planRadixSort(morton.bits.orBits, morton.bits.andBits);
-  std::unique_ptr<std::uint64_t[]> keys = std::move(morton.keys);
-  bvh.primIndices.resize(n);
-  if (plan.passes == 0) {
-    // Every key is equal: index order is already sorted.
-    for (std::size_t i = 0; i < n; ++i) bvh.primIndices[i] = static_cast<std::uint32_t>(i);
-  } else {
-    auto keys1 = std::make_unique_for_overwrite<std::uint64_t[]>(n);
-    std::unique_ptr<std::uint32_t[]> scratchVals;
-    if (plan.passes >= 2) scratchVals = std::make_unique_for_overwrite<std::uint32_t[]>(n);
-    const bool oddPasses = plan.passes % 2 == 1;
-    std::uint32_t* vals0 = oddPasses ? scratchVals.get() : bvh.primIndices.data();
-    std::uint32_t* vals1 = oddPasses ? bvh.primIndices.data() : scratchVals.get();
-    radixSort(threads, n, plan, keys.get(), keys1.get(), vals0, vals1);
-    if (oddPasses) keys = std::move(keys1);
-  }
-  times.sort = secondsSince(phase);
+  std::unique_ptr<std::uint64_t[]> keys = sortByMorton(primBounds, threads, bvh.primIndices, times);
 
   int maxDepth = 0;
   if (n <= maxLeaf) {
@@ -709,7 +660,7 @@ Bvh buildLbvh(std::span<const Aabb> primBounds, const BvhBuildOptions& options) 
     bvh.stats.leafCount = 1;
     bvh.stats.sahCost = sahCost(bvh);
   } else {
-    phase = Clock::now();
+    Clock::time_point phase = Clock::now();
     const Hierarchy tree = buildHierarchy(keys.get(), n, maxLeaf, threads);
     keys.reset();
     times.hierarchy = secondsSince(phase);

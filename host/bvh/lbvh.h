@@ -12,13 +12,25 @@
 
 namespace wt {
 
+/// Which tree buildBvh (host/bvh/builders.h) makes.
+enum class BvhBuilder {
+  Lbvh,  ///< buildLbvh: Morton codes and the Karras hierarchy; fastest
+  Ploc,  ///< buildPlocBvh: PLOC clustering in Morton order, binned SAH over the top
+  Sah,   ///< buildSahBvh: top-down binned SAH; slow, the quality yardstick
+};
+
 struct BvhBuildOptions {
   int maxLeafSize = 4;  ///< subtrees with at most this many primitives become one leaf
   int threads = 0;      ///< 0: std::thread::hardware_concurrency()
+  BvhBuilder builder = BvhBuilder::Lbvh;  ///< read by buildBvh, not by buildLbvh
+  int plocRadius = 16;  ///< Ploc: neighbours searched on each side in Morton order (1 to 64)
+  /// Ploc: clustering stops where clusters average this many primitives and a
+  /// binned SAH pass builds the tree above them; 0: PLOC up to the root.
+  int plocTopPrims = 16;
 };
 
 struct BvhBuildStats {
-  double buildSeconds = 0.0;  ///< wall time of buildLbvh
+  double buildSeconds = 0.0;  ///< wall time of the whole build (buildLbvh, or the builder that made the tree)
   std::size_t nodeCount = 0;
   std::size_t leafCount = 0;
   int maxDepth = 0;           ///< root = depth 0

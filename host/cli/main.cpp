@@ -1,6 +1,7 @@
 // wavetrace: the command line. `render` (the default scene when no file is
 // named), `devices`, `bench`.
 #include "bench/bench.h"
+#include "bvh/builders.h"
 #include "core/log.h"
 #include "device/context.h"
 #include "device/program.h"
@@ -39,6 +40,7 @@ struct RenderOptions {
   std::string lightSampler = "auto";
   std::string reference, errorLog;
   std::string accumulation = "kahan";
+  std::string bvh = "lbvh";
   int sceneIndex = -1;
   int camera = 0;
   bool noRecenter = false;
@@ -93,10 +95,12 @@ int runRender(const RenderOptions& options) {
   settings.accumulation = options.accumulation == "single"   ? WT_ACCUMULATE_SINGLE
                           : options.accumulation == "double" ? WT_ACCUMULATE_DOUBLE
                                                              : WT_ACCUMULATE_KAHAN;
+  settings.bvhBuilder = *wt::parseBvhBuilder(options.bvh);
   wt::Renderer renderer(context, scene, settings);
   const wt::BvhBuildStats& bvh = renderer.sceneBuffers().bvh().stats;
   wt::log::info("scene " + scene.sourceName + ": " + std::to_string(scene.triangles.size()) +
-                " triangles, loaded in " + std::to_string(int(loadSeconds * 1e3)) + " ms; BVH " +
+                " triangles, loaded in " + std::to_string(int(loadSeconds * 1e3)) + " ms; BVH (" +
+                wt::bvhBuilderName(settings.bvhBuilder) + ") " +
                 std::to_string(bvh.nodeCount) + " nodes built in " +
                 std::to_string(bvh.buildSeconds * 1e3).substr(0, 6) + " ms; device " + device.name);
 
@@ -239,6 +243,10 @@ int main(int argc, char** argv) {
   renderCmd->add_option("--accumulation", render.accumulation,
                         "Running-mean precision: single, kahan (compensated single) or double (fp64 devices)")
       ->check(CLI::IsMember({"single", "kahan", "double"}))->capture_default_str();
+  renderCmd->add_option("--bvh", render.bvh,
+                        "BVH builder: lbvh (Morton codes, fastest), ploc (PLOC clustering in Morton order, SAH on top) "
+                        "or sah (top-down binned SAH, slow)")
+      ->check(CLI::IsMember({"lbvh", "ploc", "sah"}))->capture_default_str();
   renderCmd->add_option("--reference", render.reference,
                         "EXR of the converged image: log the error at 1, 2, 4, ... samples (see --error-log)");
   renderCmd->add_option("--error-log", render.errorLog,
@@ -288,6 +296,18 @@ int main(int argc, char** argv) {
   benchCmd->add_option("--embree-quality", bench.embreeQuality, "Embree reference: build quality 0 low, 1 medium, 2 high")
       ->check(CLI::Range(0, 2))->capture_default_str();
   benchCmd->add_flag("--embree-robust", bench.embreeRobust, "Embree reference: RTC_SCENE_FLAG_ROBUST");
+  benchCmd->add_option("--bvh", bench.bvh,
+                       "The BVH builder whose tree is compared with Embree and renders the path figure")
+      ->check(CLI::IsMember({"lbvh", "ploc", "sah"}))->capture_default_str();
+  benchCmd->add_option("--compare-bvh", bench.compareBvh,
+                       "Builders whose trees are traced on the same rays (tree quality table); none: --compare-bvh none")
+      ->delimiter(',')->check(CLI::IsMember({"lbvh", "ploc", "sah", "none"}))->capture_default_str();
+  benchCmd->add_option("--ploc-radius", bench.plocRadius, "ploc trees: neighbours searched on each side")
+      ->check(CLI::Range(1, 64))->capture_default_str();
+  benchCmd->add_option("--ploc-top-prims", bench.plocTopPrims,
+                       "ploc trees: clustering stops at clusters of this many primitives on average, binned SAH "
+                       "builds the rest (0: PLOC to the root)")
+      ->check(CLI::Range(0, 1 << 20))->capture_default_str();
 
   wt::StressOptions stress;
   std::string stressDevice;

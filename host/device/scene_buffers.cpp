@@ -1,5 +1,6 @@
 #include "device/scene_buffers.h"
 
+#include "bvh/builders.h"
 #include "shared/lights.h"
 
 #include <algorithm>
@@ -45,7 +46,7 @@ SceneBuffers::SceneBuffers(Context& context, const Scene& scene, const BvhBuildO
     bounds.push_back(scene.triangleBounds(std::uint32_t(i)));
     m_bvhToScene.push_back(std::uint32_t(i));
   }
-  m_bvh = buildLbvh(bounds, options);
+  m_bvh = buildBvh(bounds, options);
   Bvh4 bvh4 = collapseToBvh4(m_bvh);
   m_bvh4Stats = bvh4.stats;
   nodeCount = std::uint32_t(bvh4.nodes.size());

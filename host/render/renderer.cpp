@@ -45,7 +45,9 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
     : m_context(context), m_settings(settings) {
   CameraDesc desc = scene.camera ? *scene.camera : defaultCamera(scene.bounds());
   m_camera = makeCamera(desc, settings.width, settings.height);
-  m_scene = std::make_unique<SceneBuffers>(context, scene);
+  BvhBuildOptions bvhOptions;
+  bvhOptions.builder = settings.bvhBuilder;
+  m_scene = std::make_unique<SceneBuffers>(context, scene, bvhOptions);
   m_environment = settings.environmentMap.empty()
                       ? constantEnvironment(settings.background)
                       : loadEnvironmentMap(settings.environmentMap, settings.environmentIntensity,

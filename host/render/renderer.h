@@ -49,6 +49,7 @@ struct RenderSettings {
   bool sobol = false;           ///< Owen-scrambled Sobol instead of independent random numbers
   LightSampler lightSampler = LightSampler::Auto;  ///< path: how NEE picks among emissive triangles
   std::uint32_t accumulation = WT_ACCUMULATE_KAHAN;  ///< WT_ACCUMULATE_* (double needs fp64)
+  BvhBuilder bvhBuilder = BvhBuilder::Lbvh;  ///< which tree the scene's BVH is (host/bvh/builders.h)
 #ifdef NDEBUG
   bool stopOnNonFinite = false;  ///< throw NonFiniteSampleError at the first NaN/Inf shade makes (on in debug builds)
 #else

@@ -1,6 +1,7 @@
 // The kernels' closest-hit and any-hit traversal against a brute-force loop
-// over every triangle, on random soups, for every BVH leaf size.
+// over every triangle, on random soups, for every BVH builder and leaf size.
 #include "brute_force.h"
+#include "bvh/builders.h"
 #include "device_fixture.h"
 #include "scene/generators.h"
 
@@ -9,6 +10,8 @@
 #include <cmath>
 #include <limits>
 #include <random>
+#include <string>
+#include <tuple>
 
 namespace wt {
 namespace {
@@ -65,11 +68,19 @@ void expectAgreement(const Scene& scene, const std::vector<Ray>& rays, const Bvh
   EXPECT_LT(hitCount, int(rays.size()));
 }
 
-class TraversalLeafSize : public ::testing::TestWithParam<int> {};
+/// Every builder's tree at several leaf sizes: the kernels must not depend on how the tree was made.
+class TraversalLeafSize : public ::testing::TestWithParam<std::tuple<BvhBuilder, int>> {
+ protected:
+  static BvhBuildOptions options() {
+    BvhBuildOptions options;
+    options.builder = std::get<0>(GetParam());
+    options.maxLeafSize = std::get<1>(GetParam());
+    return options;
+  }
+};
 
 TEST_P(TraversalLeafSize, RandomSoupMatchesBruteForce) {
-  BvhBuildOptions options;
-  options.maxLeafSize = GetParam();
+  const BvhBuildOptions options = this->options();
   for (std::uint32_t seed : {1u, 2u}) {
     Scene scene = makeTriangleSoup(3000, seed, 0.15f);
     expectAgreement(scene, randomRays(4000, seed + 100), options);
@@ -77,16 +88,14 @@ TEST_P(TraversalLeafSize, RandomSoupMatchesBruteForce) {
 }
 
 TEST_P(TraversalLeafSize, ClosedSphereMatchesBruteForce) {
-  BvhBuildOptions options;
-  options.maxLeafSize = GetParam();
+  const BvhBuildOptions options = this->options();
   Scene scene = makeIcosphere(3, glm::vec3(0.5f), 0.6f, makeMaterial(glm::vec3(0.5f)));
   expectAgreement(scene, randomRays(4000, 7), options);
 }
 
 TEST_P(TraversalLeafSize, TinySoupsMatchBruteForce) {
   // a root that is one leaf, and 4-wide nodes with empty slots
-  BvhBuildOptions options;
-  options.maxLeafSize = GetParam();
+  const BvhBuildOptions options = this->options();
   for (std::uint32_t count : {1u, 2u, 3u, 5u, 6u, 9u, 13u}) {
     Scene scene = makeTriangleSoup(count, count, 0.9f);
     Tracer tracer(test::deviceContext(), scene, options);
@@ -108,7 +117,15 @@ TEST_P(TraversalLeafSize, TinySoupsMatchBruteForce) {
 }
 
 // Leaf sizes 1 and 2 give 4-wide nodes over many small leaves, 8 few large ones.
-INSTANTIATE_TEST_SUITE_P(LeafSizes, TraversalLeafSize, ::testing::Values(1, 2, 4, 8));
+INSTANTIATE_TEST_SUITE_P(LeafSizes, TraversalLeafSize,
+                         ::testing::Combine(::testing::Values(BvhBuilder::Lbvh, BvhBuilder::Ploc, BvhBuilder::Sah),
+                                            ::testing::Values(1, 2, 4, 8)),
+                         [](const ::testing::TestParamInfo<std::tuple<BvhBuilder, int>>& param) {
+                           std::string name = bvhBuilderName(std::get<0>(param.param));
+                           name += "_leaf";
+                           name += std::to_string(std::get<1>(param.param));
+                           return name;
+                         });
 
 TEST(Traversal, DegenerateTrianglesAreNeverHit) {
   // zero-area triangles: a point and a segment, among ordinary ones

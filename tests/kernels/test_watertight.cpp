@@ -1,5 +1,7 @@
 // Watertightness: rays aimed exactly at the shared vertices and edges of
-// closed meshes must never pass between the triangles.
+// closed meshes must never pass between the triangles, whichever builder made
+// the BVH.
+#include "bvh/builders.h"
 #include "device_fixture.h"
 #include "device/tracer.h"
 #include "scene/generators.h"
@@ -14,12 +16,23 @@
 namespace wt {
 namespace {
 
-/// Shoot from each origin at each target; count rays that find no surface.
+constexpr BvhBuilder kBuilders[] = {BvhBuilder::Lbvh, BvhBuilder::Ploc, BvhBuilder::Sah};
+
+/// Shoot from each origin at each target through every builder's tree; count
+/// rays that find no surface, over all trees.
 std::uint64_t countLeaks(const Scene& scene, const std::vector<glm::vec3>& origins,
                          const std::vector<glm::vec3>& targets) {
-  Tracer tracer(test::deviceContext(), scene);
-  std::uint64_t rays = 0;
-  return wt::countLeaks(tracer, origins, targets, &rays);
+  std::uint64_t leaks = 0;
+  for (BvhBuilder builder : kBuilders) {
+    BvhBuildOptions options;
+    options.builder = builder;
+    Tracer tracer(test::deviceContext(), scene, options);
+    std::uint64_t rays = 0;
+    const std::uint64_t leaked = wt::countLeaks(tracer, origins, targets, &rays);
+    EXPECT_EQ(leaked, 0u) << bvhBuilderName(builder) << " tree: " << leaked << " of " << rays << " rays leaked";
+    leaks += leaked;
+  }
+  return leaks;
 }
 
 TEST(Watertight, IcosphereFromInside) {

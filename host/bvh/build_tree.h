@@ -1,0 +1,37 @@
+// The binary tree the SAH and PLOC builders make before it is laid out as the
+// Bvh that the 4-wide collapse and the kernels read.
+#pragma once
+
+#include "bvh/lbvh.h"
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+namespace wt::bvh_detail {
+
+struct BuildNode {
+  Aabb box;                 ///< exact union of the children's boxes, or of the leaf's primitives
+  std::uint32_t left = 0;   ///< internal: BuildNode index of a child
+  std::uint32_t right = 0;
+  std::uint32_t first = 0;  ///< leaf: prims[first .. first + count) of layoutTree's list
+  std::uint32_t count = 0;  ///< 0: internal
+};
+
+/// Lay the tree below `root` out depth first as Bvh nodes: a node's children
+/// are appended as a pair when it is opened and its left subtree is laid out
+/// next (as buildLbvh does). A subtree of at most maxLeaf primitives becomes
+/// one leaf, as in buildLbvh. primIndices list the leaves' primitives in
+/// layout order; stats are filled but buildSeconds.
+Bvh layoutTree(std::span<const BuildNode> nodes, std::uint32_t root, std::span<const std::uint32_t> prims,
+               std::uint32_t maxLeaf);
+
+/// Input indices sorted by the Morton code of their centroids, as buildLbvh
+/// sorts them (ties in index order).
+std::vector<std::uint32_t> mortonOrder(std::span<const Aabb> primBounds, int threads);
+
+/// options.threads resolved as buildLbvh does: 0 means every hardware thread,
+/// and no more threads than work for them.
+int builderThreads(const BvhBuildOptions& options, std::size_t prims);
+
+}  // namespace wt::bvh_detail
