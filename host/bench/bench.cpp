@@ -400,6 +400,26 @@ std::vector<RayHit> benchSet(const Scene& scene, Tracer& tracer, const Reference
   return hits;
 }
 
+BvhBuildOptions benchBvhOptions(BvhBuilder builder, const BenchOptions& options) {
+  BvhBuildOptions bvhOptions;
+  bvhOptions.builder = builder;
+  bvhOptions.plocRadius = options.plocRadius;
+  bvhOptions.plocTopPrims = options.plocTopPrims;
+  return bvhOptions;
+}
+
+/// The tree over `bounds` and the median wall time of `repetitions` builds
+/// after one warm-up.
+std::pair<Bvh, double> timedBuild(std::span<const Aabb> bounds, const BvhBuildOptions& bvhOptions, int repetitions) {
+  std::vector<double> builds;
+  Bvh bvh;
+  for (int r = 0; r < repetitions + 1; ++r) {
+    bvh = buildBvh(bounds, bvhOptions);
+    if (r > 0) builds.push_back(bvh.stats.buildSeconds);
+  }
+  return {std::move(bvh), median(builds)};
+}
+
 /// Build each --compare-bvh tree (median of the repetitions), then trace
 /// the same ray sets through all of them, the trees taking turns within each
 /// repetition so that a change in the machine's load hits them alike.
@@ -412,17 +432,9 @@ void compareTrees(Context& context, const Scene& scene, std::span<const Aabb> bo
     if (name == "none") continue;
     TreeResult tree;
     tree.builder = *parseBvhBuilder(name);
-    BvhBuildOptions bvhOptions;
-    bvhOptions.builder = tree.builder;
-    bvhOptions.plocRadius = options.plocRadius;
-    bvhOptions.plocTopPrims = options.plocTopPrims;
-    std::vector<double> builds;
-    Bvh bvh;
-    for (int r = 0; r < options.repetitions + 1; ++r) {
-      bvh = buildBvh(bounds, bvhOptions);
-      if (r > 0) builds.push_back(bvh.stats.buildSeconds);
-    }
-    tree.buildSeconds = median(builds);
+    BvhBuildOptions bvhOptions = benchBvhOptions(tree.builder, options);
+    auto [bvh, seconds] = timedBuild(bounds, bvhOptions, options.repetitions);
+    tree.buildSeconds = seconds;
     tree.nodes = bvh.stats.nodeCount;
     tree.sah = bvh.stats.sahCost;
     Bvh4 bvh4 = collapseToBvh4(bvh);
@@ -474,17 +486,9 @@ SceneResult benchScene(Context& context, const std::string& name, const Scene& s
   // BVH build, median of several
   std::vector<Aabb> bounds(scene.triangles.size());
   for (std::size_t i = 0; i < bounds.size(); ++i) bounds[i] = scene.triangleBounds(std::uint32_t(i));
-  BvhBuildOptions bvhOptions;
-  bvhOptions.builder = *parseBvhBuilder(options.bvh);
-  bvhOptions.plocRadius = options.plocRadius;
-  bvhOptions.plocTopPrims = options.plocTopPrims;
-  std::vector<double> builds;
-  Bvh bvh;
-  for (int r = 0; r < options.repetitions + 1; ++r) {
-    bvh = buildBvh(bounds, bvhOptions);
-    if (r > 0) builds.push_back(bvh.stats.buildSeconds);
-  }
-  result.buildSeconds = median(builds);
+  BvhBuildOptions bvhOptions = benchBvhOptions(*parseBvhBuilder(options.bvh), options);
+  auto [bvh, seconds] = timedBuild(bounds, bvhOptions, options.repetitions);
+  result.buildSeconds = seconds;
   result.nodes = bvh.stats.nodeCount;
   result.sah = bvh.stats.sahCost;
   Bvh4 bvh4 = collapseToBvh4(bvh);

@@ -82,6 +82,44 @@ std::vector<cl_float4> stratified(int side, std::uint32_t seed) {
   return out;
 }
 
+/// Expected sample counts per bin from the pdf at a grid of `perBin`
+/// points per bin (cell solid angle `cellArea`, n samples), and one last bin
+/// for what the pdf does not cover (samples lost); also the pdf's total.
+std::pair<std::vector<double>, double> expectedCounts(const std::vector<cl_float4>& pdf, double cellArea, double n,
+                                                      int perBin, int bins) {
+  std::vector<double> expected(std::size_t(bins) + 1, 0.0);
+  double total = 0.0;
+  for (std::size_t g = 0; g < pdf.size(); ++g) {
+    double p = pdf[g].s[3] * cellArea;
+    expected[g / std::size_t(perBin)] += n * p;
+    total += p;
+  }
+  expected.back() = n * std::max(0.0, 1.0 - total);
+  return {expected, total};
+}
+
+struct ChiSquare {
+  double chi2;
+  int dof;
+  double limit;  ///< P(chi2 > limit) < 1e-4: dof + 4.5 sqrt(2 dof) (normal approximation, conservative here)
+};
+
+/// Pearson's statistic, bins expected below 5 merged into one.
+ChiSquare chiSquare(const std::vector<double>& observed, const std::vector<double>& expected) {
+  double chi2 = 0.0, lowObserved = 0.0, lowExpected = 0.0;
+  int dof = -1;
+  for (std::size_t b = 0; b < expected.size(); ++b) {
+    if (expected[b] < 5.0) {
+      lowObserved += observed[b], lowExpected += expected[b];
+      continue;
+    }
+    chi2 += (observed[b] - expected[b]) * (observed[b] - expected[b]) / expected[b];
+    ++dof;
+  }
+  if (lowExpected > 0.0) chi2 += (lowObserved - lowExpected) * (lowObserved - lowExpected) / std::max(lowExpected, 1.0), ++dof;
+  return {chi2, dof, dof + 4.5 * std::sqrt(2.0 * dof)};
+}
+
 double roughnessAtNode(int j) { return pbr_table_roughness(j); }
 
 // A white surface (base colour 1) returns all the energy arriving from any
@@ -159,28 +197,8 @@ TEST(Bsdf, SamplingMatchesItsPdfChiSquare) {
           }
     std::vector<cl_float4> pdf = evalOnDevice(m, wo, kBothLobes, grid);
     const double n = double(kSide) * kSide, cellArea = (1.0 / (kTheta * kSub)) * (2.0 * M_PI / (kPhi * kSub));
-    std::vector<double> expected(kTheta * kPhi + 1, 0.0);
-    double total = 0.0;
-    for (std::size_t g = 0; g < grid.size(); ++g) {
-      double p = pdf[g].s[3] * cellArea;
-      expected[g / (kSub * kSub)] += n * p;
-      total += p;
-    }
-    expected.back() = n * std::max(0.0, 1.0 - total);
-    // merge bins expected below 5 into one
-    double chi2 = 0.0, lowObserved = 0.0, lowExpected = 0.0;
-    int dof = -1;
-    for (std::size_t b = 0; b < expected.size(); ++b) {
-      if (expected[b] < 5.0) {
-        lowObserved += observed[b], lowExpected += expected[b];
-        continue;
-      }
-      chi2 += (observed[b] - expected[b]) * (observed[b] - expected[b]) / expected[b];
-      ++dof;
-    }
-    if (lowExpected > 0.0) chi2 += (lowObserved - lowExpected) * (lowObserved - lowExpected) / std::max(lowExpected, 1.0), ++dof;
-    // P(chi2 > dof + 4.5 sqrt(2 dof)) < 1e-4 for these dof (normal approximation, conservative)
-    double limit = dof + 4.5 * std::sqrt(2.0 * dof);
+    auto [expected, total] = expectedCounts(pdf, cellArea, n, kSub * kSub, kTheta * kPhi);
+    auto [chi2, dof, limit] = chiSquare(observed, expected);
     EXPECT_LT(chi2, limit) << "metallic " << c.metallic << ", roughness " << c.roughness << ", mu " << c.mu
                            << ": chi2 " << chi2 << " over " << dof << " dof; below the surface " << observed.back()
                            << " vs " << expected.back();
@@ -494,30 +512,8 @@ TEST(Bsdf, TransmissionSamplingMatchesItsPdfChiSquare) {
           }
     std::vector<cl_float4> pdf = evalOnDevice(c.m, wo, kAllLobes, grid, c.inside);
     const double n = double(kSide) * kSide, cellArea = (2.0 / (kTheta * kSub)) * (2.0 * M_PI / (kPhi * kSub));
-    std::vector<double> expected(kTheta * kPhi + 1, 0.0);
-    double total = 0.0;
-    for (std::size_t g = 0; g < grid.size(); ++g) {
-      double p = pdf[g].s[3] * cellArea;
-      expected[g / (kSub * kSub)] += n * p;
-      total += p;
-    }
-    expected.back() = n * std::max(0.0, 1.0 - total);
-    double chi2 = 0.0, lowObserved = 0.0, lowExpected = 0.0;
-    int dof = -1;
-    for (std::size_t b = 0; b < expected.size(); ++b) {
-      if (expected[b] < 5.0) {
-        lowObserved += observed[b], lowExpected += expected[b];
-        continue;
-      }
-      chi2 += (observed[b] - expected[b]) * (observed[b] - expected[b]) / expected[b];
-      ++dof;
-    }
-    if (lowExpected > 0.0) chi2 += (lowObserved - lowExpected) * (lowObserved - lowExpected) / std::max(lowExpected, 1.0), ++dof;
-    double limit = dof + 4.5 * std::sqrt(2.0 * dof);  // P < 1e-4 (normal approximation)
-    if (getenv("WT_DEBUG_CHI2"))
-      for (std::size_t b = 0; b + 1 < expected.size(); ++b)
-        if (std::abs(observed[b] - expected[b]) > 4.0 * std::sqrt(expected[b] + 1.0))
-          printf("%s: bin theta %zu phi %zu: observed %.0f expected %.1f\n", c.name, b / kPhi, b % kPhi, observed[b], expected[b]);
+    auto [expected, total] = expectedCounts(pdf, cellArea, n, kSub * kSub, kTheta * kPhi);
+    auto [chi2, dof, limit] = chiSquare(observed, expected);
     EXPECT_LT(chi2, limit) << c.name << ": chi2 " << chi2 << " over " << dof << " dof; lost " << observed.back()
                            << " vs " << expected.back();
     EXPECT_NEAR(total, 1.0 - observed.back() / n, 0.01) << c.name << ": the pdf integrates to the fraction sampled";

@@ -73,6 +73,23 @@ inline BlockStat blockStat(const Image& img, int x0, int y0, int x1, int y1, int
   return s;
 }
 
+/// Every pixel's mean is `expected` within `zLimit` standard errors (from the
+/// pixel's own variance) plus a relative float allowance and 1e-7.
+inline void expectUniform(const Image& img, glm::dvec3 expected, double relFloat, double zLimit,
+                          const std::string& what) {
+  int bad = 0;
+  for (std::size_t p = 0; p < img.samples.size(); ++p)
+    for (int c = 0; c < 3; ++c) {
+      double mean = img.rgb[3 * p + c];
+      double se = std::sqrt(img.rgbVariance[3 * p + c] / img.samples[p]);
+      double tol = zLimit * se + relFloat * std::abs(expected[c]) + 1e-7;
+      if (std::abs(mean - expected[c]) > tol && ++bad <= 5)
+        ADD_FAILURE() << what << ": pixel " << p << " channel " << c << ": " << mean << " vs " << expected[c]
+                      << " (tolerance " << tol << ")";
+    }
+  EXPECT_EQ(bad, 0) << what;
+}
+
 /// Compare two renders of the same scene region by region: each block's
 /// channel means must agree within `zLimit` standard errors of their
 /// difference. Returns the largest |z| seen (for diagnostics).

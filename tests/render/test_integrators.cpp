@@ -16,6 +16,7 @@ namespace wt {
 namespace {
 
 using test::expectSameImage;
+using test::expectUniform;
 using test::render;
 
 RenderSettings small(Integrator integrator, int size = 16) {
@@ -26,21 +27,6 @@ RenderSettings small(Integrator integrator, int size = 16) {
   return s;
 }
 
-/// Every pixel's mean is `expected` within `zLimit` standard errors (from the
-/// pixel's own variance) plus a relative float allowance.
-void expectUniform(const Image& img, glm::vec3 expected, double relFloat, double zLimit, const std::string& what) {
-  int bad = 0;
-  for (std::size_t p = 0; p < img.samples.size(); ++p)
-    for (int c = 0; c < 3; ++c) {
-      double mean = img.rgb[3 * p + c];
-      double se = std::sqrt(img.rgbVariance[3 * p + c] / img.samples[p]);
-      double tol = zLimit * se + relFloat * std::abs(expected[c]);
-      if (std::abs(mean - expected[c]) > tol && ++bad <= 5)
-        ADD_FAILURE() << what << ": pixel " << p << " channel " << c << ": " << mean << " vs "
-                      << expected[c] << " (tolerance " << tol << ")";
-    }
-  EXPECT_EQ(bad, 0) << what;
-}
 
 // ---- analytic lights -------------------------------------------------------------
 

@@ -13,26 +13,12 @@
 namespace wt {
 namespace {
 
+using test::expectUniform;
 using test::render;
 
 /// Reflectance of a dielectric interface at normal incidence.
 double normalFresnel(double ior) { return std::pow((ior - 1.0) / (ior + 1.0), 2.0); }
 
-/// Every pixel's mean is `expected` within `zLimit` standard errors of its
-/// own samples plus a relative float allowance.
-void expectUniform(const Image& img, glm::dvec3 expected, double relFloat, double zLimit, const std::string& what) {
-  int bad = 0;
-  for (std::size_t p = 0; p < img.samples.size(); ++p)
-    for (int c = 0; c < 3; ++c) {
-      double mean = img.rgb[3 * p + c];
-      double se = std::sqrt(img.rgbVariance[3 * p + c] / img.samples[p]);
-      double tol = zLimit * se + relFloat * std::abs(expected[c]) + 1e-7;
-      if (std::abs(mean - expected[c]) > tol && ++bad <= 5)
-        ADD_FAILURE() << what << ": pixel " << p << " channel " << c << ": " << mean << " vs " << expected[c]
-                      << " (tolerance " << tol << ")";
-    }
-  EXPECT_EQ(bad, 0) << what;
-}
 
 const glm::vec3 kEmitted(1.0f, 2.0f, 4.0f);
 
