@@ -19,6 +19,33 @@ __kernel void test_lambert(uint count, float4 normal, __global const float2* u,
 
 #include "geometry/triangle.cl"
 
+// Ray i against triangles [first, first + count) of `verts` (leaf order),
+// skipping `skip`: out[2i] from triangle_intersect4, out[2i + 1] from
+// triangle_intersect one triangle after another; (t, b1, b2, prim).
+__kernel void test_intersect4(uint rays, __global const float4* ray_o, __global const float4* ray_d,
+                              __global const float4* verts, uint first, uint count, uint skip,
+                              __global float4* out) {
+  uint i = get_global_id(0);
+  if (i >= rays) return;
+  float3 org = ray_o[i].xyz, dir = ray_d[i].xyz;
+  float tmin = ray_o[i].w, tmax = ray_d[i].w;
+  RayShear shear = triangle_ray_shear(dir);
+  float t = 0.0f, b1 = 0.0f, b2 = 0.0f;
+  uint prim = triangle_intersect4(org, shear, tmin, tmax, verts, first, count, skip, skip, &t, &b1, &b2);
+  out[2 * i] = prim == WT_NO_HIT ? (float4)(0.0f, 0.0f, 0.0f, as_float(WT_NO_HIT)) : (float4)(t, b1, b2, as_float(prim));
+  float best = tmax, bb1 = 0.0f, bb2 = 0.0f;
+  uint best_prim = WT_NO_HIT;
+  for (uint k = first; k < first + count; ++k) {
+    if (k == skip) continue;
+    float tk, u, v;
+    if (triangle_intersect(org, shear, tmin, best, verts[3 * k].xyz, verts[3 * k + 1].xyz, verts[3 * k + 2].xyz, &tk,
+                           &u, &v))
+      best = tk, bb1 = u, bb2 = v, best_prim = k;
+  }
+  out[2 * i + 1] = best_prim == WT_NO_HIT ? (float4)(0.0f, 0.0f, 0.0f, as_float(WT_NO_HIT))
+                                          : (float4)(best, bb1, bb2, as_float(best_prim));
+}
+
 // The point at barycentrics bary[i] of triangle i, spawned off both faces:
 // out[2i] on the side of the winding normal, out[2i + 1] on the other.
 __kernel void test_offset(uint count, __global const float4* verts, __global const float2* bary,

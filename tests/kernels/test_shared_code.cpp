@@ -11,6 +11,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 #include <random>
 
 namespace wt {
@@ -131,6 +132,61 @@ TEST(SharedCode, RayOffsetLeavesTheSurfaceOnTheNormalSideAtEveryScale) {
     }
   }
   EXPECT_EQ(failures, 0);
+}
+
+// The four-lane leaf test gives what testing the triangles one by one gives,
+// bit for bit: every count from 1 to 4, with and without a skipped
+// triangle, on rays aimed at shared edges and vertices (exactly-zero edge
+// functions) and at random points, some stopping short. The four triangles:
+// two neighbours of a fan in z = 1, the second of them again nearer (z =
+// 0.6, so the nearer must win), and an exact copy of the first (a tie,
+// which the lower index must win).
+TEST(SharedCode, FourLaneTriangleTestMatchesOneByOne) {
+  Context& ctx = test::deviceContext();
+  // a fan of four triangles around (0, 0, 0) in the plane z = 1, and a fifth off to the side
+  const glm::vec3 c(0.0f, 0.0f, 1.0f), r[5] = {{1, 0, 1}, {0, 1, 1}, {-1, 0, 1}, {0, -1, 1}, {1, 0, 1}};
+  std::vector<cl_float4> verts;
+  const glm::vec3 nearer(0.0f, 0.0f, -0.4f);
+  const glm::vec3 tris[4][3] = {{c, r[0], r[1]}, {c, r[1], r[2]}, {c + nearer, r[1] + nearer, r[2] + nearer}, {c, r[0], r[1]}};
+  for (const auto& t : tris)
+    for (glm::vec3 v : t) verts.push_back({{v.x, v.y, v.z, 0}});
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> u(-1.2f, 1.2f);
+  std::vector<cl_float4> o, d;
+  auto aim = [&](glm::vec3 from, glm::vec3 at, float tmax = 1e30f) {
+    glm::vec3 dir = glm::normalize(at - from);
+    o.push_back({{from.x, from.y, from.z, 0.0f}});
+    d.push_back({{dir.x, dir.y, dir.z, tmax}});
+  };
+  for (glm::vec3 target : {c, r[0], r[1], r[2], r[3], 0.5f * (c + r[0]), 0.5f * (c + r[1]), 0.5f * (r[0] + r[1])})
+    for (glm::vec3 from : {glm::vec3(0.0f, 0.0f, -2.0f), glm::vec3(0.3f, -0.7f, 3.0f), glm::vec3(-2.0f, 1.0f, 0.5f)})
+      aim(from, target);
+  for (int i = 0; i < 2000; ++i) aim(glm::vec3(u(rng), u(rng), -1.5f), glm::vec3(u(rng), u(rng), 1.0f), i % 7 == 0 ? 1.0f : 1e30f);
+  const cl_uint n = cl_uint(o.size());
+  cl::Buffer bo(ctx.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, n * 16, o.data());
+  cl::Buffer bd(ctx.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, n * 16, d.data());
+  cl::Buffer bv(ctx.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, verts.size() * 16, verts.data());
+  cl::Buffer out(ctx.context(), CL_MEM_WRITE_ONLY, 2 * n * 16);
+  cl::Kernel k(test::unitTestProgram(), "test_intersect4");
+  int hits = 0;
+  for (cl_uint count = 1; count <= 4; ++count)
+    for (cl_uint skip : {0xffffffffu, 0u, 2u}) {
+      k.setArg(0, n), k.setArg(1, bo), k.setArg(2, bd), k.setArg(3, bv), k.setArg(4, cl_uint(0)), k.setArg(5, count);
+      k.setArg(6, skip), k.setArg(7, out);
+      ctx.launch("test_intersect4", k, n);
+      std::vector<cl_float4> got(2 * n);
+      ctx.queue().enqueueReadBuffer(out, CL_TRUE, 0, 2 * n * 16, got.data());
+      for (cl_uint i = 0; i < n; ++i) {
+        const cl_float4 &four = got[2 * i], &one = got[2 * i + 1];
+        for (int c4 = 0; c4 < 4; ++c4)
+          ASSERT_EQ(std::memcmp(&four.s[c4], &one.s[c4], 4), 0)
+              << "ray " << i << ", count " << count << ", skip " << skip << ", component " << c4;
+        std::uint32_t prim;
+        std::memcpy(&prim, &four.s[3], 4);
+        hits += prim != 0xffffffffu;
+      }
+    }
+  EXPECT_GT(hits, 1000);  // the comparison covered hits, not only misses
 }
 
 }  // namespace
