@@ -113,30 +113,31 @@ __attribute__((always_inline)) inline uint triangle_intersect4(float3 org, RaySh
   float4 w = bx * ay - by * ax;
 #if WT_HAS_FP64
   // exactly-zero edge functions decided in double, lane by lane (rare)
-  if (any((u == 0.0f) | (v == 0.0f) | (w == 0.0f))) {
-    float uu[4], vv[4], ww[4];
-    vstore4(u, 0, uu), vstore4(v, 0, vv), vstore4(w, 0, ww);
-    float axs[4], ays[4], bxs[4], bys[4], cxs[4], cys[4];
-    vstore4(ax, 0, axs), vstore4(ay, 0, ays), vstore4(bx, 0, bxs), vstore4(by, 0, bys);
-    vstore4(cx, 0, cxs), vstore4(cy, 0, cys);
-    for (int l = 0; l < 4; ++l) {
-      if (uu[l] != 0.0f && vv[l] != 0.0f && ww[l] != 0.0f) continue;
-      uu[l] = (float)((double)cxs[l] * (double)bys[l] - (double)cys[l] * (double)bxs[l]);
-      vv[l] = (float)((double)axs[l] * (double)cys[l] - (double)ays[l] * (double)cxs[l]);
-      ww[l] = (float)((double)bxs[l] * (double)ays[l] - (double)bys[l] * (double)axs[l]);
-    }
-    u = vload4(0, uu), v = vload4(0, vv), w = vload4(0, ww);
+  int4 zero = (u == 0.0f) | (v == 0.0f) | (w == 0.0f);
+  if (zero.s0 | zero.s1 | zero.s2 | zero.s3) {
+#define WT_EDGE_IN_DOUBLE(l)                                                                   \
+  if (u.l == 0.0f || v.l == 0.0f || w.l == 0.0f) {                                             \
+    u.l = (float)((double)cx.l * (double)by.l - (double)cy.l * (double)bx.l);                  \
+    v.l = (float)((double)ax.l * (double)cy.l - (double)ay.l * (double)cx.l);                  \
+    w.l = (float)((double)bx.l * (double)ay.l - (double)by.l * (double)ax.l);                  \
+  }
+    WT_EDGE_IN_DOUBLE(s0) WT_EDGE_IN_DOUBLE(s1) WT_EDGE_IN_DOUBLE(s2) WT_EDGE_IN_DOUBLE(s3)
+#undef WT_EDGE_IN_DOUBLE
   }
 #endif
-  int4 outside = ((u < 0.0f) | (v < 0.0f) | (w < 0.0f)) & ((u > 0.0f) | (v > 0.0f) | (w > 0.0f));
+  // inside: no edge function of either sign against another (as the one-triangle test)
+  int4 inside = ((u >= 0.0f) & (v >= 0.0f) & (w >= 0.0f)) | ((u <= 0.0f) & (v <= 0.0f) & (w <= 0.0f));
   float4 det = u + v + w;
   float4 t_scaled = u * s.sz * az + v * s.sz * bz + w * s.sz * cz;
   float4 inv_det = 1.0f / det;
   float4 t = t_scaled * inv_det;
-  int4 ok = ~outside & (det != 0.0f) & (t > tmin) & (t < tmax) & ((uint4)(0u, 1u, 2u, 3u) < (uint4)(count)) &
+  int4 ok = inside & (det != 0.0f) & (t > tmin) & (t < tmax) & ((uint4)(0u, 1u, 2u, 3u) < (uint4)(count)) &
             (index != (uint4)(skip_a)) & (index != (uint4)(skip_b));
-  if (!any(ok)) return WT_NO_HIT;
-  float4 tt = select((float4)(INFINITY), t, ok);
+  // Lanes are combined with & and | and tested for non-zero, never by their
+  // sign bit (any, select) or with ~: Oclgrind's optimised build makes some
+  // of these comparisons 1 instead of -1.
+  if (!(ok.s0 | ok.s1 | ok.s2 | ok.s3)) return WT_NO_HIT;
+  float4 tt = (float4)(ok.s0 ? t.s0 : INFINITY, ok.s1 ? t.s1 : INFINITY, ok.s2 ? t.s2 : INFINITY, ok.s3 ? t.s3 : INFINITY);
   float best = fmin(fmin(tt.s0, tt.s1), fmin(tt.s2, tt.s3));
   int lane = (ok.s0 && tt.s0 == best) ? 0 : (ok.s1 && tt.s1 == best) ? 1 : (ok.s2 && tt.s2 == best) ? 2 : 3;
   float inv = lane == 0 ? inv_det.s0 : lane == 1 ? inv_det.s1 : lane == 2 ? inv_det.s2 : inv_det.s3;

@@ -180,7 +180,7 @@ TEST(SharedCode, FourLaneTriangleTestMatchesOneByOne) {
         const cl_float4 &four = got[2 * i], &one = got[2 * i + 1];
         for (int c4 = 0; c4 < 4; ++c4)
           ASSERT_EQ(std::memcmp(&four.s[c4], &one.s[c4], 4), 0)
-              << "ray " << i << ", count " << count << ", skip " << skip << ", component " << c4;
+              << "ray " << i << ", count " << count << ", skip " << skip << ", component " << c4 << ": " << four.s[c4] << " vs " << one.s[c4] << " (" << four.s[0] << " " << four.s[1] << " " << four.s[2] << " | " << one.s[0] << " " << one.s[1] << " " << one.s[2] << ")";
         std::uint32_t prim;
         std::memcpy(&prim, &four.s[3], 4);
         hits += prim != 0xffffffffu;
