@@ -115,19 +115,19 @@ inline float pbr_coat_average(Bsdf b) {
 }
 
 /// Probabilities of the three sampling techniques -- GGX reflection (or the
-/// mirror), the cosine lobe, the interface -- from the lobes' albedos at wo,
-/// restricted to the lobes allowed; all 0 when no allowed lobe reflects.
+/// mirror), the cosine lobe, the interface -- from the lobes' albedos at wo
+/// (ao = pbr_albedo(b, mu_o); unused for Lambertian materials), restricted
+/// to the lobes allowed; all 0 when no allowed lobe reflects.
 typedef struct Techniques {
   float specular, diffuse, interface;
 } Techniques;
 
-inline Techniques bsdf_techniques(Bsdf b, float mu_o, uint lobes) {
+inline Techniques bsdf_techniques(Bsdf b, PbrAlbedo ao, uint lobes) {
   Techniques t = {0.0f, 0.0f, 0.0f};
   if (b.model != WT_MATERIAL_PBR) {
     t.diffuse = (lobes & WT_LOBE_DIFFUSE) ? 1.0f : 0.0f;
     return t;
   }
-  PbrAlbedo ao = pbr_albedo(b, mu_o);
   float metal = b.metallic, opaque = (1.0f - b.metallic) * (1.0f - b.transmission),
         clear = (1.0f - b.metallic) * b.transmission;
   if (lobes & WT_LOBE_SPECULAR) t.specular = metal * ao.e + opaque * ao.e_coat;
@@ -205,12 +205,13 @@ inline float3 interface_eval(Bsdf b, float3 wo, float3 wi, uint lobes, float* pd
 inline float3 pbr_eval(Bsdf b, float3 wo, float3 wi, uint lobes, float* pdf) {
   *pdf = 0.0f;
   if (wo.z <= 0.0f || wi.z == 0.0f) return (float3)(0.0f);
-  Techniques t = bsdf_techniques(b, wo.z, lobes);
+  PbrAlbedo ao = pbr_albedo(b, wo.z);
+  Techniques t = bsdf_techniques(b, ao, lobes);
   float3 f = (float3)(0.0f);
   float pdf_spec = 0.0f, pdf_diffuse = 0.0f, pdf_interface = 0.0f;
   float opaque = (1.0f - b.metallic) * (1.0f - b.transmission);
   if (wi.z > 0.0f) {
-    PbrAlbedo ao = pbr_albedo(b, wo.z), ai = pbr_albedo(b, wi.z);
+    PbrAlbedo ai = pbr_albedo(b, wi.z);
     if ((lobes & WT_LOBE_SPECULAR) && !b.mirror) {
       float alpha = b.roughness * b.roughness;
       float3 h = normalize(wo + wi);
@@ -285,7 +286,9 @@ inline bool interface_direction(Bsdf b, float3 wo, float3 h, float p_reflect, fl
 /// nothing is scattered (no allowed lobe, a direction on the wrong side).
 inline bool bsdf_sample(Bsdf b, float3 wo, uint lobes, float u_lobe, float u1, float u2, BsdfSample* s) {
   if (wo.z <= 0.0f || !(lobes & (WT_LOBE_DIFFUSE | WT_LOBE_SPECULAR | WT_LOBE_TRANSMISSION))) return false;
-  Techniques t = bsdf_techniques(b, wo.z, lobes);
+  PbrAlbedo ao = {1.0f, 1.0f};
+  if (b.model == WT_MATERIAL_PBR) ao = pbr_albedo(b, wo.z);
+  Techniques t = bsdf_techniques(b, ao, lobes);
   if (u_lobe < t.specular) {
     s->lobe = WT_LOBE_SPECULAR;
     if (b.mirror) {
