@@ -1,6 +1,6 @@
 // Stage 4 of a bounce: shadow rays queued by shade; an unblocked one adds
 // its precomputed contribution to its path's radiance.
-#include "bvh.cl"
+#include "bvh_packet.cl"
 
 __kernel void connect(__global const uint* counters, __global const uint* shadow_queue,
                       __global const float4* shadow_o, __global const float4* shadow_d,
@@ -15,4 +15,25 @@ __kernel void connect(__global const uint* counters, __global const uint* shadow
   BvhScene scene = {nodes, node_count, tri_verts};
   uint2 skip = shadow_skip[path];
   if (!bvh_occluded(scene, o.xyz, d.xyz, o.w, d.w, skip.x, skip.y)) radiance[path] += shadow_radiance[path];
+}
+
+/// connect for shadow-queue entries [n i, n i + n), n = WT_PACKET_WIDTH,
+/// traced as one packet (kernels/bvh_packet.cl): for the shadow rays of
+/// camera-ray hits, queued in pixel order. The same answers as connect.
+__kernel void connect_packet(__global const uint* counters, __global const uint* shadow_queue,
+                             __global const float4* shadow_o, __global const float4* shadow_d,
+                             __global const float4* shadow_radiance, __global const WtBvhNode* nodes,
+                             uint node_count, __global const float4* tri_verts,
+                             __global float4* radiance, __global const uint2* shadow_skip) {
+  uint first = get_global_id(0) * WT_PACKET;
+  uint count = counters[WT_COUNTER_SHADOW];
+  if (first >= count) return;
+  uint lanes = min(count - first, (uint)WT_PACKET);
+  uint index[WT_PACKET];
+  for (uint l = 0; l < WT_PACKET; ++l) index[l] = shadow_queue[first + min(l, lanes - 1u)];
+  BvhScene scene = {nodes, node_count, tri_verts};
+  int blocked[WT_PACKET];
+  packet_trace_occluded(scene, index, lanes, shadow_o, shadow_d, 0, shadow_skip, blocked);
+  for (uint l = 0; l < lanes; ++l)
+    if (!blocked[l]) radiance[index[l]] += shadow_radiance[index[l]];
 }

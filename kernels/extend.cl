@@ -1,5 +1,5 @@
 // Stage 2: closest hit for every path in the input queue.
-#include "bvh.cl"
+#include "bvh_packet.cl"
 
 __kernel void extend(__global const uint* counters, uint queue_slot, __global const uint* queue,
                      __global const float4* ray_o, __global const float4* ray_d,
@@ -14,4 +14,22 @@ __kernel void extend(__global const uint* counters, uint queue_slot, __global co
   BvhScene scene = {nodes, node_count, tri_verts};
   Hit hit = bvh_closest(scene, o.xyz, d.xyz, o.w, d.w, ray_skip[path]);
   hits[path] = (float4)(hit.t, hit.b1, hit.b2, as_float(hit.prim));
+}
+
+/// extend for queue entries [n i, n i + n), n = WT_PACKET_WIDTH, traced as
+/// one packet (kernels/bvh_packet.cl): for queues whose neighbouring entries
+/// are neighbouring pixels' camera rays. The same hits as extend.
+__kernel void extend_packet(__global const uint* counters, uint queue_slot, __global const uint* queue,
+                            __global const float4* ray_o, __global const float4* ray_d,
+                            __global const WtBvhNode* nodes, uint node_count,
+                            __global const float4* tri_verts, __global float4* hits,
+                            __global const uint* ray_skip) {
+  uint first = get_global_id(0) * WT_PACKET;
+  uint count = counters[queue_slot];
+  if (first >= count) return;
+  uint lanes = min(count - first, (uint)WT_PACKET);
+  uint index[WT_PACKET];
+  for (uint l = 0; l < WT_PACKET; ++l) index[l] = queue[first + min(l, lanes - 1u)];
+  BvhScene scene = {nodes, node_count, tri_verts};
+  packet_trace_closest(scene, index, lanes, ray_o, ray_d, ray_skip, hits);
 }

@@ -1,6 +1,7 @@
 // Ray batches outside the wavefront loop, for tests and benchmarks: rays in,
 // closest hits or occlusion flags out.
 #include "bvh.cl"
+#include "bvh_packet.cl"
 
 __kernel void trace_closest(uint count, __global const float4* ray_o, __global const float4* ray_d,
                             __global const WtBvhNode* nodes, uint node_count,
@@ -25,4 +26,33 @@ __kernel void trace_occluded(uint count, __global const float4* ray_o,
   float4 d = ray_d[i];
   BvhScene scene = {nodes, node_count, tri_verts};
   occluded[i] = bvh_occluded(scene, o.xyz, d.xyz, o.w, d.w, skip[i], WT_NO_HIT) ? 1u : 0u;
+}
+
+// The same queries, WT_PACKET_WIDTH consecutive rays per work-item
+// (kernels/bvh_packet.cl): work-item i traces rays [n i, n i + n).
+__kernel void trace_closest_packet(uint count, __global const float4* ray_o, __global const float4* ray_d,
+                                   __global const WtBvhNode* nodes, uint node_count,
+                                   __global const float4* tri_verts, __global float4* hits,
+                                   __global const uint* skip) {
+  uint first = get_global_id(0) * WT_PACKET;
+  if (first >= count) return;
+  BvhScene scene = {nodes, node_count, tri_verts};
+  uint index[WT_PACKET];
+  for (uint l = 0; l < WT_PACKET; ++l) index[l] = first + l;
+  packet_trace_closest(scene, index, min(count - first, (uint)WT_PACKET), ray_o, ray_d, skip, hits);
+}
+
+__kernel void trace_occluded_packet(uint count, __global const float4* ray_o, __global const float4* ray_d,
+                                    __global const WtBvhNode* nodes, uint node_count,
+                                    __global const float4* tri_verts, __global uint* occluded,
+                                    __global const uint* skip) {
+  uint first = get_global_id(0) * WT_PACKET;
+  if (first >= count) return;
+  BvhScene scene = {nodes, node_count, tri_verts};
+  uint index[WT_PACKET];
+  for (uint l = 0; l < WT_PACKET; ++l) index[l] = first + l;
+  uint lanes = min(count - first, (uint)WT_PACKET);
+  int blocked[WT_PACKET];
+  packet_trace_occluded(scene, index, lanes, ray_o, ray_d, skip, 0, blocked);
+  for (uint l = 0; l < lanes; ++l) occluded[first + l] = blocked[l] != 0 ? 1u : 0u;
 }

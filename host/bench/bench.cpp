@@ -282,6 +282,7 @@ struct SetResult {
   double embreeSeconds = 0.0;
   double embreeHitFraction = 0.0;
   Agreement agreement;
+  Traversal traversal = Traversal::kSingle;
 };
 
 /// One builder's tree of a scene, traced on the same rays as the others.
@@ -312,6 +313,16 @@ struct SceneResult {
   std::vector<TreeResult> trees;  ///< --compare-bvh, in that order
 };
 
+/// The traversal --traversal picks for a set (auto: packets for the primary
+/// and shadow sets, whose rays start from neighbouring pixels).
+Traversal setTraversal(const BenchOptions& options, const std::string& set) {
+  if (options.traversal == "single") return Traversal::kSingle;
+  if (options.traversal == "packet") return Traversal::kPacket;
+  return set == "diffuse" ? Traversal::kSingle : Traversal::kPacket;
+}
+
+const char* traversalName(Traversal t) { return t == Traversal::kPacket ? "packet" : "single"; }
+
 template <typename Fn>
 std::vector<double> timeRuns(int repetitions, Fn&& fn) {
   std::vector<double> seconds;
@@ -331,6 +342,7 @@ std::vector<RayHit> benchSet(const Scene& scene, Tracer& tracer, const Reference
   result.name = name;
   result.occlusion = occlusion;
   result.rays = rays.size();
+  const Traversal traversal = result.traversal = setTraversal(options, name);
   if (rays.empty()) return {};
   std::vector<RayHit> hits;
   std::vector<std::uint8_t> blocked;
@@ -338,15 +350,15 @@ std::vector<RayHit> benchSet(const Scene& scene, Tracer& tracer, const Reference
   std::vector<double> wall;
   // warm-up (and the first launch's compile), then timed runs
   if (occlusion) {
-    blocked = tracer.traceOccluded(rays);
+    blocked = tracer.traceOccluded(rays, traversal);
     wall = timeRuns(options.repetitions, [&] {
-      tracer.traceOccluded(rays);
+      tracer.traceOccluded(rays, traversal);
       kernel.push_back(tracer.lastKernelSeconds());
     });
   } else {
-    hits = tracer.traceClosest(rays);
+    hits = tracer.traceClosest(rays, traversal);
     wall = timeRuns(options.repetitions, [&] {
-      tracer.traceClosest(rays);
+      tracer.traceClosest(rays, traversal);
       kernel.push_back(tracer.lastKernelSeconds());
     });
   }
@@ -454,23 +466,24 @@ void compareTrees(Context& context, const Scene& scene, std::span<const Aabb> bo
   for (std::size_t set = 0; set < sets.size(); ++set) {
     const std::vector<Ray>& rays = *sets[set];
     const bool occlusion = set == 2;
+    const Traversal traversal = setTraversal(options, set == 0 ? "primary" : set == 1 ? "diffuse" : "shadow");
     std::vector<std::vector<double>> kernel(tracers.size());
     for (std::size_t t = 0; t < tracers.size(); ++t) {
       // warm-up, and the answers
       std::size_t hits = 0;
       if (occlusion) {
-        for (std::uint8_t b : tracers[t]->traceOccluded(rays)) hits += b != 0;
+        for (std::uint8_t b : tracers[t]->traceOccluded(rays, traversal)) hits += b != 0;
       } else {
-        for (const RayHit& h : tracers[t]->traceClosest(rays)) hits += h.triangle != RayHit::kNoHit;
+        for (const RayHit& h : tracers[t]->traceClosest(rays, traversal)) hits += h.triangle != RayHit::kNoHit;
       }
       trees[t].hitFraction.push_back(rays.empty() ? 0.0 : double(hits) / rays.size());
     }
     for (int r = 0; r < options.repetitions; ++r)
       for (std::size_t t = 0; t < tracers.size(); ++t) {
         if (occlusion)
-          tracers[t]->traceOccluded(rays);
+          tracers[t]->traceOccluded(rays, traversal);
         else
-          tracers[t]->traceClosest(rays);
+          tracers[t]->traceClosest(rays, traversal);
         kernel[t].push_back(tracers[t]->lastKernelSeconds());
       }
     for (std::size_t t = 0; t < tracers.size(); ++t) trees[t].kernelSeconds.push_back(median(kernel[t]));
@@ -644,8 +657,8 @@ int runBench(const BenchOptions& options) {
                 jsonString(embreeText).c_str(), kHaveEmbree ? "true" : "false");
     std::printf(" \"primary_width\": %d, \"repetitions\": %d, \"path_width\": %d, \"path_samples\": %d,\n",
                 options.primaryWidth, options.repetitions, options.pathWidth, options.pathSamples);
-    std::printf(" \"bvh\": \"%s\", \"ploc_radius\": %d, \"ploc_top_prims\": %d,\n", options.bvh.c_str(),
-                options.plocRadius, options.plocTopPrims);
+    std::printf(" \"bvh\": \"%s\", \"ploc_radius\": %d, \"ploc_top_prims\": %d, \"traversal\": \"%s\",\n",
+                options.bvh.c_str(), options.plocRadius, options.plocTopPrims, options.traversal.c_str());
     std::printf(" \"skipped\": [");
     for (std::size_t i = 0; i < skipped.size(); ++i)
       std::printf("%s{\"name\": %s, \"reason\": %s}", i ? ", " : "", jsonString(skipped[i].first).c_str(),
@@ -687,9 +700,9 @@ int runBench(const BenchOptions& options) {
       for (std::size_t k = 0; k < r.sets.size(); ++k) {
         const SetResult& s = r.sets[k];
         std::printf("    {\"name\": \"%s\", \"query\": \"%s\", \"rays\": %zu, \"hit_fraction\": %.6f, "
-                    "\"wall_s\": %.6f, \"kernel_s\": %.6f, \"mrays_wall\": %.3f, \"mrays_kernel\": %.3f",
-                    s.name.c_str(), s.occlusion ? "any_hit" : "closest_hit", s.rays, s.hitFraction, s.wallSeconds,
-                    s.kernelSeconds, mrays(s.rays, s.wallSeconds), mrays(s.rays, s.kernelSeconds));
+                    "\"traversal\": \"%s\", \"wall_s\": %.6f, \"kernel_s\": %.6f, \"mrays_wall\": %.3f, \"mrays_kernel\": %.3f",
+                    s.name.c_str(), s.occlusion ? "any_hit" : "closest_hit", s.rays, s.hitFraction,
+                    traversalName(s.traversal), s.wallSeconds, s.kernelSeconds, mrays(s.rays, s.wallSeconds), mrays(s.rays, s.kernelSeconds));
         if (s.embree) {
           std::printf(", \"embree_s\": %.6f, \"embree_mrays\": %.3f, \"embree_hit_fraction\": %.6f, "
                       "\"ratio_kernel\": %.4f, \"ratio_wall\": %.4f, \"agreement\": %.8f, \"disagreements\": %zu, "
@@ -761,11 +774,12 @@ int runBench(const BenchOptions& options) {
   }
 
   // Mrays/s; ratio = wavetrace kernel throughput / Embree throughput
-  std::printf("\n%-28s %-8s %8s %6s %9s %9s %9s %7s %10s %s\n", "scene", "rays", "count", "hit %", "wt wall",
+  std::printf("\n%-28s %-8s %-6s %8s %6s %9s %9s %9s %7s %10s %s\n", "scene", "rays", "trav", "count", "hit %", "wt wall",
               "wt kernel", "Embree", "ratio", "agree %", "disagreements (tie/edge/range/self/other)");
   for (const SceneResult& r : results)
     for (const SetResult& s : r.sets) {
-      std::printf("%-28s %-8s %8zu %6.1f %9.2f %9.2f", r.name.c_str(), s.name.c_str(), s.rays, 100.0 * s.hitFraction,
+      std::printf("%-28s %-8s %-6s %8zu %6.1f %9.2f %9.2f", r.name.c_str(), s.name.c_str(), traversalName(s.traversal),
+                  s.rays, 100.0 * s.hitFraction,
                   mrays(s.rays, s.wallSeconds), mrays(s.rays, s.kernelSeconds));
       if (s.embree) {
         const Agreement& a = s.agreement;

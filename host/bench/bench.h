@@ -26,6 +26,10 @@ struct BenchOptions {
   /// Builders whose trees are built (median of repetitions) and traced on
   /// the same rays, interleaved, for the tree-quality table; "none" skips it.
   std::vector<std::string> compareBvh{"lbvh", "ploc", "sah"};
+  /// single, packet, or auto: packets (Traversal::kPacket) for the sets
+  /// whose neighbouring rays start from neighbouring pixels (primary,
+  /// shadow), one ray per work-item for the diffuse set.
+  std::string traversal = "auto";
   int plocRadius = 16;    ///< BvhBuildOptions::plocRadius for every ploc tree
   int plocTopPrims = 16;  ///< BvhBuildOptions::plocTopPrims for every ploc tree
 };

@@ -41,6 +41,7 @@ struct RenderOptions {
   std::string reference, errorLog;
   std::string accumulation = "kahan";
   std::string bvh = "lbvh";
+  std::string traversal = "auto";
   int sceneIndex = -1;
   int camera = 0;
   bool noRecenter = false;
@@ -96,6 +97,7 @@ int runRender(const RenderOptions& options) {
                           : options.accumulation == "double" ? WT_ACCUMULATE_DOUBLE
                                                              : WT_ACCUMULATE_KAHAN;
   settings.bvhBuilder = *wt::parseBvhBuilder(options.bvh);
+  settings.packets = options.traversal == "auto";
   wt::Renderer renderer(context, scene, settings);
   const wt::BvhBuildStats& bvh = renderer.sceneBuffers().bvh().stats;
   wt::log::info("scene " + scene.sourceName + ": " + std::to_string(scene.triangles.size()) +
@@ -247,6 +249,10 @@ int main(int argc, char** argv) {
                         "BVH builder: lbvh (Morton codes, fastest), ploc (PLOC clustering in Morton order, SAH on top) "
                         "or sah (top-down binned SAH, slow)")
       ->check(CLI::IsMember({"lbvh", "ploc", "sah"}))->capture_default_str();
+  renderCmd->add_option("--traversal", render.traversal,
+                        "auto: camera rays and their shadow rays in packets of 8 neighbouring pixels, later bounces "
+                        "one ray per work-item; single: every ray alone")
+      ->check(CLI::IsMember({"auto", "single"}))->capture_default_str();
   renderCmd->add_option("--reference", render.reference,
                         "EXR of the converged image: log the error at 1, 2, 4, ... samples (see --error-log)");
   renderCmd->add_option("--error-log", render.errorLog,
@@ -302,6 +308,10 @@ int main(int argc, char** argv) {
   benchCmd->add_option("--compare-bvh", bench.compareBvh,
                        "Builders whose trees are traced on the same rays (tree quality table); none: --compare-bvh none")
       ->delimiter(',')->check(CLI::IsMember({"lbvh", "ploc", "sah", "none"}))->capture_default_str();
+  benchCmd->add_option("--traversal", bench.traversal,
+                       "single: one ray per work-item; packet: eight rays per work-item; auto: packets for the "
+                       "primary and shadow sets")
+      ->check(CLI::IsMember({"single", "packet", "auto"}));
   benchCmd->add_option("--ploc-radius", bench.plocRadius, "ploc trees: neighbours searched on each side")
       ->check(CLI::Range(1, 64))->capture_default_str();
   benchCmd->add_option("--ploc-top-prims", bench.plocTopPrims,

@@ -13,6 +13,8 @@ Tracer::Tracer(Context& context, const Scene& scene, const BvhBuildOptions& opti
   m_program = buildProgram(context, features);
   m_closest = cl::Kernel(m_program, "trace_closest");
   m_occluded = cl::Kernel(m_program, "trace_occluded");
+  m_closestPacket = cl::Kernel(m_program, "trace_closest_packet");
+  m_occludedPacket = cl::Kernel(m_program, "trace_occluded_packet");
 }
 
 Tracer::~Tracer() = default;
@@ -43,24 +45,31 @@ void Tracer::uploadRays(std::span<const Ray> rays) {
   }
 }
 
-std::vector<RayHit> Tracer::traceClosest(std::span<const Ray> rays) {
-  uploadRays(rays);
-  cl_uint count = cl_uint(rays.size());
+void Tracer::run(cl::Kernel& kernel, const char* name, std::size_t rays, Traversal traversal) {
   int a = 0;
-  m_closest.setArg(a++, count);
-  m_closest.setArg(a++, m_rayO);
-  m_closest.setArg(a++, m_rayD);
-  m_closest.setArg(a++, m_scene->nodes);
-  m_closest.setArg(a++, m_scene->nodeCount);
-  m_closest.setArg(a++, m_scene->triVerts);
-  m_closest.setArg(a++, m_out);
-  m_closest.setArg(a++, m_skip);
+  kernel.setArg(a++, cl_uint(rays));
+  kernel.setArg(a++, m_rayO);
+  kernel.setArg(a++, m_rayD);
+  kernel.setArg(a++, m_scene->nodes);
+  kernel.setArg(a++, m_scene->nodeCount);
+  kernel.setArg(a++, m_scene->triVerts);
+  kernel.setArg(a++, m_out);
+  kernel.setArg(a++, m_skip);
+  constexpr std::size_t kPacket = WT_PACKET_WIDTH;  // shared/types.h
+  std::size_t items = traversal == Traversal::kPacket ? (rays + kPacket - 1) / kPacket : rays;
   m_context.resetStageTimes();
-  m_context.launch("trace_closest", m_closest, rays.size());
+  m_context.launch(name, kernel, items);
   m_context.finish();
-  m_lastKernelSeconds = m_context.stageTimes().seconds.count("trace_closest")
-                            ? m_context.stageTimes().seconds.at("trace_closest")
-                            : 0.0;
+  m_lastKernelSeconds =
+      m_context.stageTimes().seconds.count(name) ? m_context.stageTimes().seconds.at(name) : 0.0;
+}
+
+std::vector<RayHit> Tracer::traceClosest(std::span<const Ray> rays, Traversal traversal) {
+  uploadRays(rays);
+  if (traversal == Traversal::kPacket)
+    run(m_closestPacket, "trace_closest_packet", rays.size(), traversal);
+  else
+    run(m_closest, "trace_closest", rays.size(), traversal);
   std::vector<float> raw(4 * rays.size());
   if (!rays.empty())
     m_context.queue().enqueueReadBuffer(m_out, CL_TRUE, 0, raw.size() * 4, raw.data());
@@ -76,24 +85,12 @@ std::vector<RayHit> Tracer::traceClosest(std::span<const Ray> rays) {
   return hits;
 }
 
-std::vector<std::uint8_t> Tracer::traceOccluded(std::span<const Ray> rays) {
+std::vector<std::uint8_t> Tracer::traceOccluded(std::span<const Ray> rays, Traversal traversal) {
   uploadRays(rays);
-  cl_uint count = cl_uint(rays.size());
-  int a = 0;
-  m_occluded.setArg(a++, count);
-  m_occluded.setArg(a++, m_rayO);
-  m_occluded.setArg(a++, m_rayD);
-  m_occluded.setArg(a++, m_scene->nodes);
-  m_occluded.setArg(a++, m_scene->nodeCount);
-  m_occluded.setArg(a++, m_scene->triVerts);
-  m_occluded.setArg(a++, m_out);
-  m_occluded.setArg(a++, m_skip);
-  m_context.resetStageTimes();
-  m_context.launch("trace_occluded", m_occluded, rays.size());
-  m_context.finish();
-  m_lastKernelSeconds = m_context.stageTimes().seconds.count("trace_occluded")
-                            ? m_context.stageTimes().seconds.at("trace_occluded")
-                            : 0.0;
+  if (traversal == Traversal::kPacket)
+    run(m_occludedPacket, "trace_occluded_packet", rays.size(), traversal);
+  else
+    run(m_occluded, "trace_occluded", rays.size(), traversal);
   std::vector<cl_uint> raw(rays.size());
   if (!rays.empty())
     m_context.queue().enqueueReadBuffer(m_out, CL_TRUE, 0, raw.size() * 4, raw.data());

@@ -30,13 +30,20 @@ struct RayHit {
   static constexpr std::uint32_t kNoHit = 0xffffffffu;
 };
 
+/// How a batch is traced: one ray per work-item, or packets of eight
+/// consecutive rays per work-item (kernels/bvh_packet.cl), which pays on
+/// coherent rays (camera rays, shadow rays from neighbouring pixels). Both
+/// give the same answers; of two hits at exactly the same distance, another
+/// may win.
+enum class Traversal { kSingle, kPacket };
+
 class Tracer {
  public:
   Tracer(Context& context, const Scene& scene, const BvhBuildOptions& options = {});
   ~Tracer();
 
-  std::vector<RayHit> traceClosest(std::span<const Ray> rays);
-  std::vector<std::uint8_t> traceOccluded(std::span<const Ray> rays);
+  std::vector<RayHit> traceClosest(std::span<const Ray> rays, Traversal traversal = Traversal::kSingle);
+  std::vector<std::uint8_t> traceOccluded(std::span<const Ray> rays, Traversal traversal = Traversal::kSingle);
 
   const SceneBuffers& sceneBuffers() const { return *m_scene; }
   /// Kernel time of the last trace call (profiling events), seconds.
@@ -44,11 +51,13 @@ class Tracer {
 
  private:
   void uploadRays(std::span<const Ray> rays);
+  /// Runs one of the four kernels over the uploaded rays; returns its kernel seconds.
+  void run(cl::Kernel& kernel, const char* name, std::size_t rays, Traversal traversal);
 
   Context& m_context;
   std::unique_ptr<SceneBuffers> m_scene;
   cl::Program m_program;
-  cl::Kernel m_closest, m_occluded;
+  cl::Kernel m_closest, m_occluded, m_closestPacket, m_occludedPacket;
   cl::Buffer m_rayO, m_rayD, m_skip, m_out;
   std::size_t m_capacity = 0;
   double m_lastKernelSeconds = 0.0;

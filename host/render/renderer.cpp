@@ -67,8 +67,10 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
   m_program = buildProgram(context, features);
   m_generate = cl::Kernel(m_program, "generate");
   m_extend = cl::Kernel(m_program, "extend");
+  m_extendPacket = cl::Kernel(m_program, "extend_packet");
   m_shade = cl::Kernel(m_program, "shade");
   m_connect = cl::Kernel(m_program, "connect");
+  m_connectPacket = cl::Kernel(m_program, "connect_packet");
   m_accumulate = cl::Kernel(m_program, "accumulate");
   m_resolve = cl::Kernel(m_program, "accumulate_resolve");
   if (settings.accumulation == WT_ACCUMULATE_DOUBLE && !context.info().fp64)
@@ -125,14 +127,16 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
                         &m_raySkip})
     m_generate.setArg(a++, *b);
 
-  m_extend.setArg(0, m_counters);
-  m_extend.setArg(3, m_rayO);
-  m_extend.setArg(4, m_rayD);
-  m_extend.setArg(5, m_scene->nodes);
-  m_extend.setArg(6, m_scene->nodeCount);
-  m_extend.setArg(7, m_scene->triVerts);
-  m_extend.setArg(8, m_hits);
-  m_extend.setArg(9, m_raySkip);
+  for (cl::Kernel* k : {&m_extend, &m_extendPacket}) {
+    k->setArg(0, m_counters);
+    k->setArg(3, m_rayO);
+    k->setArg(4, m_rayD);
+    k->setArg(5, m_scene->nodes);
+    k->setArg(6, m_scene->nodeCount);
+    k->setArg(7, m_scene->triVerts);
+    k->setArg(8, m_hits);
+    k->setArg(9, m_raySkip);
+  }
 
   // shade: 0 frame, 1 environment, 2-4 its arrays, 5 counters, 6-9 queues (per bounce), 10- fixed
   m_shade.setArg(1, m_environment.header);
@@ -148,13 +152,15 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
                         &m_lightTree, &m_emitterLeaf, &m_prevNormal})
     m_shade.setArg(a++, *b);
 
-  a = 0;
-  for (cl::Buffer* b : {&m_counters, &m_shadowQueue, &m_shadowO, &m_shadowD, &m_shadowRadiance, &m_scene->nodes})
-    m_connect.setArg(a++, *b);
-  m_connect.setArg(a++, m_scene->nodeCount);
-  m_connect.setArg(a++, m_scene->triVerts);
-  m_connect.setArg(a++, m_radiance);
-  m_connect.setArg(a++, m_shadowSkip);
+  for (cl::Kernel* k : {&m_connect, &m_connectPacket}) {
+    a = 0;
+    for (cl::Buffer* b : {&m_counters, &m_shadowQueue, &m_shadowO, &m_shadowD, &m_shadowRadiance, &m_scene->nodes})
+      k->setArg(a++, *b);
+    k->setArg(a++, m_scene->nodeCount);
+    k->setArg(a++, m_scene->triVerts);
+    k->setArg(a++, m_radiance);
+    k->setArg(a++, m_shadowSkip);
+  }
 
   a = 1;
   for (cl::Buffer* b : {&m_radiance, &m_state, &m_sampleCount, &m_counters})
@@ -189,10 +195,15 @@ void Renderer::renderSample() {
     m_context.fill(m_counters, 0u, outSlot * sizeof(cl_uint), sizeof(cl_uint));
     m_context.fill(m_counters, 0u, WT_COUNTER_SHADOW * sizeof(cl_uint), sizeof(cl_uint));
 
-    // extend: closest hit of every queued path
-    m_extend.setArg(1, inSlot);
-    m_extend.setArg(2, *queueIn);
-    m_context.launch("extend", m_extend, alive);
+    // extend: closest hit of every queued path; camera rays in packets
+    const bool packets = m_settings.packets && bounce == 0;
+    cl::Kernel& extend = packets ? m_extendPacket : m_extend;
+    extend.setArg(1, inSlot);
+    extend.setArg(2, *queueIn);
+    if (packets)
+      m_context.launch("extend_packet", extend, (alive + WT_PACKET_WIDTH - 1) / WT_PACKET_WIDTH);
+    else
+      m_context.launch("extend", extend, alive);
 
     // shade: emission and the next direction; survivors go to the other queue
     m_shade.setArg(0, frameParams(m_settings, m_lights, sample, bounce));
@@ -203,7 +214,12 @@ void Renderer::renderSample() {
     m_context.launch("shade", m_shade, alive);
 
     // connect: shadow rays of this bounce (count read on the device)
-    if (m_lights.sampleable) m_context.launch("connect", m_connect, alive);
+    if (m_lights.sampleable) {
+      if (packets)
+        m_context.launch("connect_packet", m_connectPacket, (alive + WT_PACKET_WIDTH - 1) / WT_PACKET_WIDTH);
+      else
+        m_context.launch("connect", m_connect, alive);
+    }
 
     // end of the bounce: the only point where the host reads a count back
     cl_uint counters[WT_COUNTER_COUNT];

@@ -50,6 +50,11 @@ struct RenderSettings {
   LightSampler lightSampler = LightSampler::Auto;  ///< path: how NEE picks among emissive triangles
   std::uint32_t accumulation = WT_ACCUMULATE_KAHAN;  ///< WT_ACCUMULATE_* (double needs fp64)
   BvhBuilder bvhBuilder = BvhBuilder::Lbvh;  ///< which tree the scene's BVH is (host/bvh/builders.h)
+  /// Camera rays and the shadow rays from their hits traced in packets of
+  /// WT_PACKET_WIDTH neighbouring pixels (kernels/bvh_packet.cl); later
+  /// bounces, incoherent, one ray per work-item. The same hits either way
+  /// (of two at exactly the same distance, another may win).
+  bool packets = true;
 #ifdef NDEBUG
   bool stopOnNonFinite = false;  ///< throw NonFiniteSampleError at the first NaN/Inf shade makes (on in debug builds)
 #else
@@ -105,7 +110,8 @@ class Renderer {
   WtCamera m_camera;
   std::unique_ptr<SceneBuffers> m_scene;
   cl::Program m_program;
-  cl::Kernel m_generate, m_extend, m_shade, m_connect, m_accumulate, m_resolve, m_tonemap;
+  cl::Kernel m_generate, m_extend, m_extendPacket, m_shade, m_connect, m_connectPacket, m_accumulate, m_resolve,
+      m_tonemap;
   LightList m_lights;
   Environment m_environment;
   cl::Buffer m_envTexels, m_envMarginal, m_envConditional;

@@ -51,7 +51,8 @@ std::vector<glm::vec3> edgeTargets(const Scene& scene, int perEdge, std::uint32_
 
 /// Rays from each origin through each target that find nothing: closest-hit
 /// misses plus any-hit misses (a closed mesh around or in front of the
-/// origins must stop every one). Adds the rays traced to *rayCount.
+/// origins must stop every one), traced one ray per work-item and again in
+/// packets. Adds the rays traced to *rayCount.
 std::uint64_t countLeaks(Tracer& tracer, const std::vector<glm::vec3>& origins, const std::vector<glm::vec3>& targets,
                          std::uint64_t* rayCount);
 

@@ -88,9 +88,11 @@ std::uint64_t countLeaks(Tracer& tracer, const std::vector<glm::vec3>& origins, 
       rays.push_back(r);
     }
   std::uint64_t leaks = 0;
-  for (const RayHit& h : tracer.traceClosest(rays)) leaks += h.triangle == RayHit::kNoHit;
-  for (std::uint8_t o : tracer.traceOccluded(rays)) leaks += o == 0;
-  *rayCount += 2 * rays.size();
+  for (Traversal traversal : {Traversal::kSingle, Traversal::kPacket}) {
+    for (const RayHit& h : tracer.traceClosest(rays, traversal)) leaks += h.triangle == RayHit::kNoHit;
+    for (std::uint8_t o : tracer.traceOccluded(rays, traversal)) leaks += o == 0;
+  }
+  *rayCount += 4 * rays.size();
   return leaks;
 }
 

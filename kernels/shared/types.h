@@ -47,6 +47,9 @@ typedef struct WtBvh4Node {
 } WtBvh4Node;
 #define WT_BVH4_EMPTY 0xffffffffu
 
+/// Rays per work-item of the packet traversal (kernels/bvh_packet.cl): 8 or 16.
+#define WT_PACKET_WIDTH 8
+
 /// A surface: Lambertian (scenes made in code, analytic tests) or glTF
 /// metallic-roughness (kernels/materials/bsdf.cl), with emission.
 typedef struct WtMaterial {

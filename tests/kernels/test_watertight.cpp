@@ -1,6 +1,6 @@
 // Watertightness: rays aimed exactly at the shared vertices and edges of
 // closed meshes must never pass between the triangles, whichever builder made
-// the BVH.
+// the BVH, traced one ray per work-item or in packets (wt::countLeaks).
 #include "bvh/builders.h"
 #include "device_fixture.h"
 #include "device/tracer.h"

@@ -1,0 +1,378 @@
+// Packet traversal: one work-item traces eight rays through the 4-wide BVH
+// together, one ray per pfloat lane. A node's child box is tested against the
+// eight rays at once, and a leaf triangle with the watertight test on the
+// eight lanes. Each lane makes the same decisions, with the same arithmetic,
+// as bvh_closest / bvh_occluded would for its ray alone (only the order in
+// which nodes are visited differs, so of two hits at exactly the same
+// distance another may win). PoCL vectorises inside a work-item, never
+// across the work-items of a loop like this one, so lanes are where coherent
+// rays (camera rays, shadow rays from neighbouring pixels) share the cost of
+// fetching and testing a node.
+//
+// Lanes are the watertight test's, so the packet must agree on its axis
+// permutation (the dominant axis and sign of every direction). A packet
+// whose rays do not agree is traced ray by ray with bvh_closest /
+// bvh_occluded, with the same answers.
+#ifndef WT_BVH_PACKET_CL
+#define WT_BVH_PACKET_CL
+
+#include "bvh.cl"
+
+#define WT_PACKET WT_PACKET_WIDTH
+#if WT_PACKET == 8
+#define pfloat float8
+#define pint int8
+#define puint uint8
+#define as_pfloat as_float8
+#define as_pint as_int8
+#define as_puint as_uint8
+#define packet_vload(a) vload8(0, a)
+#define packet_vstore(v, a) vstore8(v, 0, a)
+#elif WT_PACKET == 16
+#define pfloat float16
+#define pint int16
+#define puint uint16
+#define as_pfloat as_float16
+#define as_pint as_int16
+#define as_puint as_uint16
+#define packet_vload(a) vload16(0, a)
+#define packet_vstore(v, a) vstore16(v, 0, a)
+#else
+#error "WT_PACKET must be 8 or 16"
+#endif
+
+/// Lane masks normalised to all ones or zero. Comparisons are folded with
+/// this before any select or ~, never trusted for their sign bit:
+/// Oclgrind's optimised build makes some vector comparisons 1 instead of -1.
+inline pint packet_mask(pint c) { return (c | -c) >> 31; }
+#if WT_PACKET == 16
+inline int8 packet_fold_i(int16 m) { return m.lo | m.hi; }
+inline float8 packet_fold_min(float16 v) { return fmin(v.lo, v.hi); }
+inline float8 packet_fold_max(float16 v) { return fmax(v.lo, v.hi); }
+#else
+inline int8 packet_fold_i(int8 m) { return m; }
+inline float8 packet_fold_min(float8 v) { return v; }
+inline float8 packet_fold_max(float8 v) { return v; }
+#endif
+inline bool packet_any(pint m) {
+  int8 f = packet_fold_i(m);
+  int4 a = f.lo | f.hi;
+  int2 b = a.lo | a.hi;
+  return (b.x | b.y) != 0;
+}
+inline float packet_min(pfloat v) {
+  float8 f = packet_fold_min(v);
+  float4 a = fmin(f.lo, f.hi);
+  float2 b = fmin(a.lo, a.hi);
+  return fmin(b.x, b.y);
+}
+inline float packet_max(pfloat v) {
+  float8 f = packet_fold_max(v);
+  float4 a = fmax(f.lo, f.hi);
+  float2 b = fmax(a.lo, a.hi);
+  return fmax(b.x, b.y);
+}
+inline pfloat packet_pick(pint m, pfloat yes, pfloat no) { return as_pfloat((as_pint(yes) & m) | (as_pint(no) & ~m)); }
+inline puint packet_pick_u(pint m, puint yes, puint no) { return (yes & as_puint(m)) | (no & ~as_puint(m)); }
+
+/// The rays of one packet, lane by lane: origins and reciprocal directions
+/// per axis, the shared axis permutation with each lane's shear, and the
+/// interval each lane searches.
+typedef struct RayPacket {
+  pfloat o[3];       ///< origin per world axis
+  pfloat inv_d[3];   ///< bvh_safe_rcp of the direction per world axis
+  pfloat o_kx, o_ky, o_kz;  ///< the origin along the permuted axes
+  pfloat sx, sy, sz; ///< each lane's shear (RayShear)
+  int kx, ky, kz;    ///< the permutation every lane shares
+  pfloat tmin;
+  puint skip_a, skip_b;  ///< leaf-order triangles a lane never hits
+} RayPacket;
+
+/// Slab test of child k's box against every lane: a mask of the lanes whose
+/// (tmin, tmax) interval overlaps it, with their entry distances. The same
+/// products as bvh4_box_hit: min/max of the two planes' distances equal its
+/// sign-picked near and far distances (an empty slot is never tested).
+inline pint packet_box_hit(__global const WtBvh4Node* n, int k, const RayPacket* p, pfloat tmax, pfloat* enter) {
+  pfloat t0x = (n->lo_x[k] - p->o[0]) * p->inv_d[0], t1x = (n->hi_x[k] - p->o[0]) * p->inv_d[0];
+  pfloat t0y = (n->lo_y[k] - p->o[1]) * p->inv_d[1], t1y = (n->hi_y[k] - p->o[1]) * p->inv_d[1];
+  pfloat t0z = (n->lo_z[k] - p->o[2]) * p->inv_d[2], t1z = (n->hi_z[k] - p->o[2]) * p->inv_d[2];
+  pfloat tn = fmax(fmax(fmin(t0x, t1x), fmin(t0y, t1y)), fmax(fmin(t0z, t1z), p->tmin));
+  pfloat tf = fmin(fmin(fmax(t0x, t1x), fmax(t0y, t1y)), fmax(t0z, t1z)) * 1.00000036f;
+  tf = fmin(tf, tmax);
+  *enter = tn;
+  return packet_mask(tn <= tf);
+}
+
+/// The watertight test of triangle `prim` on every lane in `lanes`: the mask
+/// of lanes that hit it in (tmin, tmax), with distance and barycentrics.
+/// triangle_intersect's operations in its order, lane by lane.
+inline pint packet_triangle(const RayPacket* p, __global const float4* tri_verts, uint prim, pint lanes,
+                            pfloat tmax, pfloat* t_hit, pfloat* b1, pfloat* b2) {
+  float3 p0 = tri_verts[3 * prim + 0].xyz, p1 = tri_verts[3 * prim + 1].xyz, p2 = tri_verts[3 * prim + 2].xyz;
+  pfloat az = vec3_component(p0, p->kz) - p->o_kz;
+  pfloat bz = vec3_component(p1, p->kz) - p->o_kz;
+  pfloat cz = vec3_component(p2, p->kz) - p->o_kz;
+  pfloat ax = (vec3_component(p0, p->kx) - p->o_kx) - p->sx * az;
+  pfloat ay = (vec3_component(p0, p->ky) - p->o_ky) - p->sy * az;
+  pfloat bx = (vec3_component(p1, p->kx) - p->o_kx) - p->sx * bz;
+  pfloat by = (vec3_component(p1, p->ky) - p->o_ky) - p->sy * bz;
+  pfloat cx = (vec3_component(p2, p->kx) - p->o_kx) - p->sx * cz;
+  pfloat cy = (vec3_component(p2, p->ky) - p->o_ky) - p->sy * cz;
+
+  pfloat u = cx * by - cy * bx;
+  pfloat v = ax * cy - ay * cx;
+  pfloat w = bx * ay - by * ax;
+#if WT_HAS_FP64
+  pint zero = packet_mask((u == 0.0f) | (v == 0.0f) | (w == 0.0f)) & lanes;
+  if (packet_any(zero)) {
+    // exactly-zero edge functions decided in double, lane by lane (rare)
+    float lu[WT_PACKET], lv[WT_PACKET], lw[WT_PACKET], lax[WT_PACKET], lay[WT_PACKET], lbx[WT_PACKET], lby[WT_PACKET], lcx[WT_PACKET], lcy[WT_PACKET];
+    packet_vstore(u, lu), packet_vstore(v, lv), packet_vstore(w, lw);
+    packet_vstore(ax, lax), packet_vstore(ay, lay), packet_vstore(bx, lbx);
+    packet_vstore(by, lby), packet_vstore(cx, lcx), packet_vstore(cy, lcy);
+    for (int l = 0; l < WT_PACKET; ++l) {
+      if (lu[l] == 0.0f || lv[l] == 0.0f || lw[l] == 0.0f) {
+        lu[l] = (float)((double)lcx[l] * (double)lby[l] - (double)lcy[l] * (double)lbx[l]);
+        lv[l] = (float)((double)lax[l] * (double)lcy[l] - (double)lay[l] * (double)lcx[l]);
+        lw[l] = (float)((double)lbx[l] * (double)lay[l] - (double)lby[l] * (double)lax[l]);
+      }
+    }
+    u = packet_vload(lu), v = packet_vload(lv), w = packet_vload(lw);
+  }
+#endif
+  pint inside = packet_mask(((u >= 0.0f) & (v >= 0.0f) & (w >= 0.0f)) | ((u <= 0.0f) & (v <= 0.0f) & (w <= 0.0f)));
+  pfloat det = u + v + w;
+  pfloat t_scaled = u * p->sz * az + v * p->sz * bz + w * p->sz * cz;
+  pfloat inv_det = 1.0f / det;
+  pfloat t = t_scaled * inv_det;
+  pint ok = lanes & inside & packet_mask((det != 0.0f) & (t > p->tmin) & (t < tmax)) &
+            packet_mask(((puint)(prim) != p->skip_a) & ((puint)(prim) != p->skip_b));
+  *t_hit = t;
+  *b1 = v * inv_det;
+  *b2 = w * inv_det;
+  return ok;
+}
+
+/// Loads a packet: lane l takes ray index[l] of a batch (o.w = tmin,
+/// d.w = tmax) for l < lanes; the other lanes, and lanes whose ray is not
+/// finite, are left out of `valid`. Returns false when the valid lanes do
+/// not share one axis permutation.
+inline bool packet_load(RayPacket* p, pint* valid, pfloat* tmax, const uint* index, uint lanes,
+                        __global const float4* ray_o, __global const float4* ray_d) {
+  float ox[WT_PACKET], oy[WT_PACKET], oz[WT_PACKET], ix[WT_PACKET], iy[WT_PACKET], iz[WT_PACKET];
+  float sx[WT_PACKET], sy[WT_PACKET], sz[WT_PACKET], tn[WT_PACKET], tx[WT_PACKET];
+  int ok[WT_PACKET];
+  int kx = -1, ky = -1, kz = -1;
+  bool same = true;
+  for (uint l = 0; l < WT_PACKET; ++l) {
+    uint i = index[min(l, lanes - 1u)];
+    float4 o = ray_o[i], d = ray_d[i];
+    ok[l] = l < lanes && bvh_ray_is_finite(o.xyz, d.xyz) ? -1 : 0;
+    float3 dir = ok[l] ? d.xyz : (float3)(0.0f, 0.0f, 1.0f);
+    RayShear s = triangle_ray_shear(dir);
+    float3 inv = bvh_safe_rcp(dir);
+    if (ok[l]) {
+      if (kz < 0) kx = s.kx, ky = s.ky, kz = s.kz;
+      same = same && s.kx == kx && s.ky == ky && s.kz == kz;
+    }
+    ox[l] = o.x, oy[l] = o.y, oz[l] = o.z;
+    ix[l] = inv.x, iy[l] = inv.y, iz[l] = inv.z;
+    sx[l] = s.sx, sy[l] = s.sy, sz[l] = s.sz;
+    tn[l] = o.w, tx[l] = d.w;
+  }
+  if (kz < 0) kx = 0, ky = 1, kz = 2;
+  p->o[0] = packet_vload(ox), p->o[1] = packet_vload(oy), p->o[2] = packet_vload(oz);
+  p->inv_d[0] = packet_vload(ix), p->inv_d[1] = packet_vload(iy), p->inv_d[2] = packet_vload(iz);
+  p->sx = packet_vload(sx), p->sy = packet_vload(sy), p->sz = packet_vload(sz);
+  p->kx = kx, p->ky = ky, p->kz = kz;
+  p->o_kx = kx == 0 ? p->o[0] : (kx == 1 ? p->o[1] : p->o[2]);
+  p->o_ky = ky == 0 ? p->o[0] : (ky == 1 ? p->o[1] : p->o[2]);
+  p->o_kz = kz == 0 ? p->o[0] : (kz == 1 ? p->o[1] : p->o[2]);
+  p->tmin = packet_vload(tn);
+  p->skip_a = p->skip_b = (puint)(WT_NO_HIT);
+  *tmax = packet_vload(tx);
+  *valid = packet_vload(ok);
+  return same;
+}
+
+/// The triangles each lane never hits (the surface its ray leaves, the
+/// emitter a shadow ray aims at), lane l from skip[index[l]].
+inline void packet_set_skip(RayPacket* p, const uint* index, uint lanes, __global const uint* skip_a,
+                            __global const uint2* skip_ab) {
+  uint a[WT_PACKET], b[WT_PACKET];
+  for (uint l = 0; l < WT_PACKET; ++l) {
+    uint i = index[min(l, lanes - 1u)];
+    uint2 ab = skip_ab ? skip_ab[i] : (uint2)(skip_a[i], WT_NO_HIT);
+    a[l] = ab.x, b[l] = ab.y;
+  }
+  p->skip_a = packet_vload(a);
+  p->skip_b = packet_vload(b);
+}
+
+/// Closest hits of a packet's valid lanes: per lane the nearest t in
+/// (tmin, tmax) with its barycentrics and leaf-order triangle (WT_NO_HIT
+/// and tmax where none).
+inline void packet_closest(BvhScene scene, const RayPacket* p, pint valid, pfloat* t_best, pfloat* b1_best,
+                           pfloat* b2_best, puint* prim_best) {
+  *prim_best = (puint)(WT_NO_HIT);
+  *b1_best = *b2_best = (pfloat)(0.0f);
+  if (scene.node_count == 0 || !packet_any(valid)) return;
+  __global const WtBvh4Node* nodes = (__global const WtBvh4Node*)scene.nodes;
+  pfloat tmax = *t_best;
+  // the farthest any lane still searches: a box entered beyond it is skipped
+  float reach = packet_max(packet_pick(valid, tmax, (pfloat)(-INFINITY)));
+  uint stack_node[WT_BVH_STACK_SIZE];
+  float stack_t[WT_BVH_STACK_SIZE];
+  int sp = 0;
+  uint node = 0;
+  for (;;) {
+    __global const WtBvh4Node* n = &nodes[node];
+    uint inner[4];
+    float inner_t[4];
+    int inner_count = 0;
+    for (int k = 0; k < 4; ++k) {
+      uint first = n->child[k], count = n->count[k];
+      if (first == WT_BVH4_EMPTY) continue;
+      pfloat enter;
+      pint hit = packet_box_hit(n, k, p, tmax, &enter) & valid;
+      if (!packet_any(hit)) continue;
+      if (count > 0) {
+        for (uint prim = first; prim < first + count; ++prim) {
+          pfloat t, b1, b2;
+          pint won = packet_triangle(p, scene.tri_verts, prim, hit, tmax, &t, &b1, &b2);
+          if (!packet_any(won)) continue;
+          tmax = packet_pick(won, t, tmax);
+          *b1_best = packet_pick(won, b1, *b1_best);
+          *b2_best = packet_pick(won, b2, *b2_best);
+          *prim_best = packet_pick_u(won, (puint)(prim), *prim_best);
+          reach = packet_max(packet_pick(valid, tmax, (pfloat)(-INFINITY)));
+        }
+      } else {
+        // ordered by the nearest entry among the lanes that enter it
+        float key = packet_min(packet_pick(hit, enter, (pfloat)(INFINITY)));
+        int j = inner_count++;
+        for (; j > 0 && inner_t[j - 1] > key; --j) {
+          inner[j] = inner[j - 1];
+          inner_t[j] = inner_t[j - 1];
+        }
+        inner[j] = first;
+        inner_t[j] = key;
+      }
+    }
+    if (inner_count > 0 && inner_t[0] <= reach) {
+      for (int k = inner_count - 1; k >= 1; --k) {
+        if (inner_t[k] > reach) continue;
+        stack_node[sp] = inner[k];
+        stack_t[sp] = inner_t[k];
+        ++sp;
+      }
+      node = inner[0];
+      continue;
+    }
+    for (;;) {
+      if (sp == 0) {
+        *t_best = tmax;
+        return;
+      }
+      --sp;
+      if (stack_t[sp] <= reach) break;
+    }
+    node = stack_node[sp];
+  }
+}
+
+/// Occlusion of a packet's valid lanes: all ones in a lane whose segment
+/// (tmin, tmax) is blocked.
+inline pint packet_occluded(BvhScene scene, const RayPacket* p, pint valid, pfloat tmax) {
+  pint blocked = (pint)(0);
+  if (scene.node_count == 0 || !packet_any(valid)) return blocked;
+  __global const WtBvh4Node* nodes = (__global const WtBvh4Node*)scene.nodes;
+  pint open = valid;
+  uint stack_node[WT_BVH_STACK_SIZE];
+  int sp = 0;
+  uint node = 0;
+  for (;;) {
+    __global const WtBvh4Node* n = &nodes[node];
+    int next = -1;
+    for (int k = 0; k < 4; ++k) {
+      uint first = n->child[k], count = n->count[k];
+      if (first == WT_BVH4_EMPTY) continue;
+      pfloat enter;
+      pint hit = packet_box_hit(n, k, p, tmax, &enter) & open;
+      if (!packet_any(hit)) continue;
+      if (count > 0) {
+        for (uint prim = first; prim < first + count; ++prim) {
+          pfloat t, b1, b2;
+          pint won = packet_triangle(p, scene.tri_verts, prim, hit & open, tmax, &t, &b1, &b2);
+          blocked |= won;
+          open &= ~won;
+        }
+        if (!packet_any(open)) return blocked;
+      } else if (next < 0) {
+        next = (int)first;
+      } else {
+        stack_node[sp++] = first;
+      }
+    }
+    if (next >= 0) {
+      node = (uint)next;
+      continue;
+    }
+    if (sp == 0) return blocked;
+    node = stack_node[--sp];
+  }
+}
+
+/// Closest hits of rays index[0], ..., index[lanes - 1] of a batch, written
+/// to hits[index[l]] as (t, b1, b2, leaf-order triangle or WT_NO_HIT);
+/// skip[i] is the triangle ray i leaves. Packet traversal when the rays share
+/// the axis permutation, else ray by ray.
+inline void packet_trace_closest(BvhScene scene, const uint* index, uint lanes, __global const float4* ray_o,
+                                 __global const float4* ray_d, __global const uint* skip, __global float4* hits) {
+  RayPacket p;
+  pint valid;
+  pfloat tmax;
+  if (!packet_load(&p, &valid, &tmax, index, lanes, ray_o, ray_d)) {
+    for (uint l = 0; l < lanes; ++l) {
+      uint i = index[l];
+      float4 o = ray_o[i], d = ray_d[i];
+      Hit hit = bvh_closest(scene, o.xyz, d.xyz, o.w, d.w, skip[i]);
+      hits[i] = (float4)(hit.t, hit.b1, hit.b2, as_float(hit.prim));
+    }
+    return;
+  }
+  packet_set_skip(&p, index, lanes, skip, 0);
+  pfloat b1, b2;
+  puint prim;
+  packet_closest(scene, &p, valid, &tmax, &b1, &b2, &prim);
+  float lt[WT_PACKET], lb1[WT_PACKET], lb2[WT_PACKET];
+  uint lp[WT_PACKET];
+  packet_vstore(tmax, lt), packet_vstore(b1, lb1), packet_vstore(b2, lb2), packet_vstore(prim, lp);
+  for (uint l = 0; l < lanes; ++l) hits[index[l]] = (float4)(lt[l], lb1[l], lb2[l], as_float(lp[l]));
+}
+
+/// Occlusion of rays index[0], ..., index[lanes - 1]: blocked[l] non-zero
+/// when ray index[l]'s segment is blocked or the ray is not finite (as
+/// bvh_occluded). skip[i] (skip_ab == 0) or skip_ab[i] are the triangles
+/// ray i never hits.
+inline void packet_trace_occluded(BvhScene scene, const uint* index, uint lanes, __global const float4* ray_o,
+                                  __global const float4* ray_d, __global const uint* skip,
+                                  __global const uint2* skip_ab, int* blocked) {
+  RayPacket p;
+  pint valid;
+  pfloat tmax;
+  if (!packet_load(&p, &valid, &tmax, index, lanes, ray_o, ray_d)) {
+    for (uint l = 0; l < lanes; ++l) {
+      uint i = index[l];
+      float4 o = ray_o[i], d = ray_d[i];
+      uint2 ab = skip_ab ? skip_ab[i] : (uint2)(skip[i], WT_NO_HIT);
+      blocked[l] = bvh_occluded(scene, o.xyz, d.xyz, o.w, d.w, ab.x, ab.y) ? 1 : 0;
+    }
+    return;
+  }
+  packet_set_skip(&p, index, lanes, skip, skip_ab);
+  // a lane whose ray is not finite counts as blocked, as in bvh_occluded
+  packet_vstore(packet_occluded(scene, &p, valid, tmax) | ~valid, blocked);
+}
+
+#endif  // WT_BVH_PACKET_CL

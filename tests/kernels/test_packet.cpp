@@ -1,0 +1,212 @@
+// Packet traversal (kernels/bvh_packet.cl) against one ray per work-item:
+// every lane must make its ray's decisions, so both give the same closest
+// hits (distance, barycentrics, triangle) and the same occlusion, on coherent
+// rays that really go through the packet path, for every builder and leaf
+// size; and against brute force through the shared checks.
+#include "brute_force.h"
+#include "bvh/builders.h"
+#include "device_fixture.h"
+#include "scene/generators.h"
+#include "test_util.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <random>
+#include <string>
+#include <tuple>
+
+namespace wt {
+namespace {
+
+/// Camera-like fans: from each eye, a grid of directions through a small
+/// window around the scene's centre, in scanline order (neighbouring rays
+/// are neighbouring pixels). Some rays get a finite segment, a later tmin or
+/// a triangle to skip, so lanes of one packet differ in what they search.
+std::vector<Ray> cameraFans(const Scene& scene, int width, std::uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> t01(0.0f, 1.0f);
+  std::uniform_int_distribution<std::uint32_t> tri(0, std::uint32_t(scene.triangles.size() - 1));
+  std::vector<Ray> rays;
+  const glm::vec3 target(0.5f);
+  for (glm::vec3 eye : {glm::vec3(0.4f, 0.6f, 3.0f), glm::vec3(-2.0f, 1.5f, -1.0f), glm::vec3(2.5f, -1.2f, 0.7f)}) {
+    glm::vec3 w = glm::normalize(target - eye);
+    glm::vec3 u = glm::normalize(glm::cross(w, glm::vec3(0.0f, 1.0f, 0.0f)));
+    glm::vec3 v = glm::cross(u, w);
+    for (int y = 0; y < width; ++y)
+      for (int x = 0; x < width; ++x) {
+        Ray r;
+        r.origin = eye;
+        float sx = (x + 0.5f) / width - 0.5f, sy = (y + 0.5f) / width - 0.5f;
+        r.direction = glm::normalize(w + 0.6f * sx * u + 0.6f * sy * v);
+        std::size_t i = rays.size();
+        if (i % 7 == 3) r.tmax = 2.0f + 2.0f * t01(rng);
+        if (i % 11 == 5) r.tmin = 2.5f * t01(rng);
+        if (i % 13 == 2) r.skip = tri(rng);
+        rays.push_back(r);
+      }
+  }
+  return rays;
+}
+
+/// Whether the watertight test's axis permutation of two directions is the
+/// same (the dominant axis, and the swap for a negative dominant component),
+/// as triangle_ray_shear picks it.
+int permutation(glm::vec3 d) {
+  glm::vec3 a = glm::abs(d);
+  int kz = (a.x > a.y) ? (a.x > a.z ? 0 : 2) : (a.y > a.z ? 1 : 2);
+  return 2 * kz + (d[kz] < 0.0f ? 1 : 0);
+}
+
+/// The share of full packets (WT_PACKET_WIDTH consecutive rays) whose rays
+/// share one permutation, and so go through the packet path.
+double packetShare(const std::vector<Ray>& rays) {
+  std::size_t packets = 0, uniform = 0;
+  for (std::size_t i = 0; i + WT_PACKET_WIDTH <= rays.size(); i += WT_PACKET_WIDTH) {
+    ++packets;
+    bool same = true;
+    for (std::size_t l = 1; l < WT_PACKET_WIDTH; ++l)
+      same = same && permutation(rays[i + l].direction) == permutation(rays[i].direction);
+    uniform += same;
+  }
+  return packets ? double(uniform) / packets : 0.0;
+}
+
+bool sameBits(float a, float b) { return std::memcmp(&a, &b, sizeof a) == 0; }
+
+/// Packets against single rays on the same tree: identical answers, except
+/// that of two hits at exactly the same distance either may win.
+void expectPacketsMatchSingleRays(const Scene& scene, const std::vector<Ray>& rays, const BvhBuildOptions& options) {
+  Tracer tracer(test::deviceContext(), scene, options);
+  std::vector<RayHit> single = tracer.traceClosest(rays, Traversal::kSingle);
+  std::vector<RayHit> packet = tracer.traceClosest(rays, Traversal::kPacket);
+  std::vector<std::uint8_t> singleBlocked = tracer.traceOccluded(rays, Traversal::kSingle);
+  std::vector<std::uint8_t> packetBlocked = tracer.traceOccluded(rays, Traversal::kPacket);
+  ASSERT_EQ(packet.size(), rays.size());
+  int differ = 0, ties = 0, hits = 0;
+  for (std::size_t i = 0; i < rays.size(); ++i) {
+    const RayHit &a = single[i], &b = packet[i];
+    hits += a.triangle != RayHit::kNoHit;
+    if (a.triangle != b.triangle && a.triangle != RayHit::kNoHit && b.triangle != RayHit::kNoHit &&
+        sameBits(a.t, b.t)) {
+      ++ties;
+      continue;
+    }
+    bool same = a.triangle == b.triangle && sameBits(a.t, b.t) && sameBits(a.b1, b.b1) && sameBits(a.b2, b.b2);
+    if (!same && ++differ <= 5)
+      ADD_FAILURE() << "ray " << i << ": single triangle " << a.triangle << " t=" << a.t << " (" << a.b1 << ", "
+                    << a.b2 << "), packet triangle " << b.triangle << " t=" << b.t << " (" << b.b1 << ", " << b.b2
+                    << ")";
+    if (singleBlocked[i] != packetBlocked[i] && ++differ <= 5)
+      ADD_FAILURE() << "ray " << i << ": occluded " << int(singleBlocked[i]) << " alone, " << int(packetBlocked[i])
+                    << " in a packet";
+  }
+  EXPECT_EQ(differ, 0);
+  // ties are rays through a shared edge at exactly the same distance: rare
+  EXPECT_LE(ties, int(rays.size() / 1000) + 1);
+  EXPECT_GT(hits, int(rays.size() / 10));
+  EXPECT_LT(hits, int(rays.size()));
+}
+
+class PacketTraversal : public ::testing::TestWithParam<std::tuple<BvhBuilder, int>> {
+ protected:
+  static BvhBuildOptions options() {
+    BvhBuildOptions options;
+    options.builder = std::get<0>(GetParam());
+    options.maxLeafSize = std::get<1>(GetParam());
+    return options;
+  }
+};
+
+TEST_P(PacketTraversal, CoherentRaysMatchSingleRaysOnASoup) {
+  Scene scene = makeTriangleSoup(3000, 3, 0.15f);
+  std::vector<Ray> rays = cameraFans(scene, int(test::testSize(48, 8)), 1);
+  // the rays must really go through the packet path, not the ray-by-ray fallback
+  ASSERT_GT(packetShare(rays), 0.9);
+  expectPacketsMatchSingleRays(scene, rays, options());
+}
+
+TEST_P(PacketTraversal, CoherentRaysMatchSingleRaysOnAClosedSphere) {
+  Scene scene = makeIcosphere(3, glm::vec3(0.5f), 0.6f, makeMaterial(glm::vec3(0.5f)));
+  std::vector<Ray> rays = cameraFans(scene, int(test::testSize(48, 8)), 2);
+  ASSERT_GT(packetShare(rays), 0.9);
+  expectPacketsMatchSingleRays(scene, rays, options());
+}
+
+INSTANTIATE_TEST_SUITE_P(Trees, PacketTraversal,
+                         ::testing::Combine(::testing::Values(BvhBuilder::Lbvh, BvhBuilder::Ploc, BvhBuilder::Sah),
+                                            ::testing::Values(1, 4, 8)),
+                         [](const ::testing::TestParamInfo<std::tuple<BvhBuilder, int>>& param) {
+                           return std::string(bvhBuilderName(std::get<0>(param.param))) + "_leaf" +
+                                  std::to_string(std::get<1>(param.param));
+                         });
+
+TEST(PacketTraversalEdges, CoherentRaysMatchBruteForce) {
+  Scene scene = makeTriangleSoup(2000, 9, 0.2f);
+  std::vector<Ray> rays = cameraFans(scene, int(test::testSize(40, 8)), 3);
+  Tracer tracer(test::deviceContext(), scene);
+  std::vector<RayHit> hits = tracer.traceClosest(rays, Traversal::kPacket);
+  std::vector<std::uint8_t> blocked = tracer.traceOccluded(rays, Traversal::kPacket);
+  int disagreements = 0, occlusionErrors = 0;
+  for (std::size_t i = 0; i < rays.size(); ++i) {
+    test::BruteHit want = test::bruteClosest(scene, rays[i]);
+    if (!test::agrees(scene, rays[i], hits[i], want) && ++disagreements <= 5)
+      ADD_FAILURE() << "ray " << i << ": packet triangle " << hits[i].triangle << " t=" << hits[i].t
+                    << ", brute force triangle " << want.triangle << " t=" << want.t;
+    bool wantBlocked = want.triangle != RayHit::kNoHit;
+    if (bool(blocked[i]) != wantBlocked && !(wantBlocked && want.minBarycentric < 1e-5) &&
+        !(bool(blocked[i]) && hits[i].triangle != RayHit::kNoHit))
+      ++occlusionErrors;
+  }
+  EXPECT_EQ(disagreements, 0);
+  EXPECT_EQ(occlusionErrors, 0);
+}
+
+TEST(PacketTraversalEdges, PartialPacketsMixedLanesAndEmptyScenes) {
+  // batches that end inside a packet; packets holding rays that are not
+  // finite next to ordinary ones (those lanes miss and count as blocked, as
+  // alone); a packet whose rays disagree on the permutation (ray by ray)
+  Scene scene = makeTriangleSoup(500, 4, 0.2f);
+  std::vector<Ray> fan = cameraFans(scene, 8, 4);
+  const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
+  for (std::size_t i = 5; i < fan.size(); i += 29) fan[i].direction.y = (i % 2) ? nan : inf;
+  for (std::size_t i = 17; i < fan.size(); i += 37) fan[i].origin.x = nan;
+  for (int l = 0; l < 8; ++l) {  // one packet pointing along all six axis directions
+    Ray r;
+    r.origin = glm::vec3(0.5f);
+    r.direction = glm::vec3(0.0f);
+    r.direction[l % 3] = (l & 1) ? -1.0f : 1.0f;
+    fan.push_back(r);
+  }
+  Tracer tracer(test::deviceContext(), scene);
+  for (std::size_t count : {std::size_t(1), std::size_t(7), std::size_t(9), std::size_t(100), fan.size()}) {
+    std::vector<Ray> rays(fan.end() - std::ptrdiff_t(count), fan.end());
+    std::vector<RayHit> single = tracer.traceClosest(rays, Traversal::kSingle);
+    std::vector<RayHit> packet = tracer.traceClosest(rays, Traversal::kPacket);
+    std::vector<std::uint8_t> singleBlocked = tracer.traceOccluded(rays, Traversal::kSingle);
+    std::vector<std::uint8_t> packetBlocked = tracer.traceOccluded(rays, Traversal::kPacket);
+    ASSERT_EQ(packet.size(), count);
+    for (std::size_t i = 0; i < count; ++i) {
+      EXPECT_TRUE(single[i].triangle == packet[i].triangle && sameBits(single[i].t, packet[i].t))
+          << count << " rays, ray " << i << ": single " << single[i].triangle << ", packet " << packet[i].triangle;
+      EXPECT_EQ(singleBlocked[i], packetBlocked[i]) << count << " rays, ray " << i;
+      const Ray& r = rays[i];
+      if (!std::isfinite(r.origin.x) || !std::isfinite(r.direction.y)) {
+        EXPECT_EQ(packet[i].triangle, RayHit::kNoHit);
+        EXPECT_EQ(packetBlocked[i], 1);
+      }
+    }
+  }
+  Scene empty;
+  empty.materials.push_back(makeMaterial(glm::vec3(0.5f)));
+  Tracer none(test::deviceContext(), empty);
+  std::vector<Ray> rays(fan.begin(), fan.begin() + 20);
+  for (const RayHit& h : none.traceClosest(rays, Traversal::kPacket)) EXPECT_EQ(h.triangle, RayHit::kNoHit);
+  // nothing blocks, but a ray that is not finite carries no light
+  EXPECT_EQ(none.traceOccluded(rays, Traversal::kPacket), none.traceOccluded(rays, Traversal::kSingle));
+}
+
+}  // namespace
+}  // namespace wt
