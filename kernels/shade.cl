@@ -34,7 +34,7 @@ __kernel void shade(WtFrameParams frame, WtEnvironment environment, __global con
                     __global const uint* queue_in, __global uint* queue_out,
                     __global float4* ray_o, __global float4* ray_d,
                     __global const float4* hits, __global float4* throughput,
-                    __global float4* radiance, __global const WtTriangle* triangles,
+                    __global float4* radiance, __global const uint* triangle_materials,
                     __global const float4* tri_verts, __global const float4* normals,
                     __global const WtMaterial* materials, __global const WtLight* lights,
                     __global const WtAliasSlot* alias, __global const float* emitter_pdf_area,
@@ -67,12 +67,14 @@ __kernel void shade(WtFrameParams frame, WtEnvironment environment, __global con
     return;
   }
 
-  WtTriangle tri = triangles[prim];
-  WtMaterial material = materials[tri.material];
+  WtMaterial material = materials[triangle_materials[prim]];
   float3 p0 = tri_verts[3 * prim].xyz, p1 = tri_verts[3 * prim + 1].xyz, p2 = tri_verts[3 * prim + 2].xyz;
+  // each corner's w holds the bits of its vertex index (host/device/scene_buffers.cpp)
+  __global const uint4* corners = (__global const uint4*)tri_verts;
+  uint v0 = corners[3 * prim].w, v1 = corners[3 * prim + 1].w, v2 = corners[3 * prim + 2].w;
   float3 p, p_error, ng, ns;
-  triangle_surface(p0, p1, p2, normals[tri.v0].xyz, normals[tri.v1].xyz, normals[tri.v2].xyz,
-                   hit.y, hit.z, &p, &p_error, &ng, &ns);
+  triangle_surface(p0, p1, p2, normals[v0].xyz, normals[v1].xyz, normals[v2].xyz, hit.y, hit.z, &p, &p_error,
+                   &ng, &ns);
   if (dot(ng, ng) == 0.0f) return;  // degenerate triangle: absorb
   // ng is the winding's normal here: a ray meeting its back side comes from inside
   bool inside = dot(ng, dir) > 0.0f;

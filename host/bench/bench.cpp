@@ -416,6 +416,7 @@ BvhBuildOptions benchBvhOptions(BvhBuilder builder, const BenchOptions& options)
   BvhBuildOptions bvhOptions;
   bvhOptions.builder = builder;
   bvhOptions.plocRadius = options.plocRadius;
+  bvhOptions.maxLeafSize = options.maxLeafSize;
   bvhOptions.plocTopPrims = options.plocTopPrims;
   return bvhOptions;
 }
@@ -657,8 +658,10 @@ int runBench(const BenchOptions& options) {
                 jsonString(embreeText).c_str(), kHaveEmbree ? "true" : "false");
     std::printf(" \"primary_width\": %d, \"repetitions\": %d, \"path_width\": %d, \"path_samples\": %d,\n",
                 options.primaryWidth, options.repetitions, options.pathWidth, options.pathSamples);
-    std::printf(" \"bvh\": \"%s\", \"ploc_radius\": %d, \"ploc_top_prims\": %d, \"traversal\": \"%s\",\n",
-                options.bvh.c_str(), options.plocRadius, options.plocTopPrims, options.traversal.c_str());
+    std::printf(" \"bvh\": \"%s\", \"ploc_radius\": %d, \"ploc_top_prims\": %d, \"traversal\": \"%s\", "
+                "\"max_leaf_size\": %d,\n",
+                options.bvh.c_str(), options.plocRadius, options.plocTopPrims, options.traversal.c_str(),
+                options.maxLeafSize);
     std::printf(" \"skipped\": [");
     for (std::size_t i = 0; i < skipped.size(); ++i)
       std::printf("%s{\"name\": %s, \"reason\": %s}", i ? ", " : "", jsonString(skipped[i].first).c_str(),

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <cstring>
 
 namespace wt {
 namespace {
@@ -56,19 +57,24 @@ SceneBuffers::SceneBuffers(Context& context, const Scene& scene, const BvhBuildO
   for (std::size_t leaf = 0; leaf < m_bvh.primIndices.size(); ++leaf) m_sceneToLeaf[m_bvh.primIndices[leaf]] = std::uint32_t(leaf);
 
   // Reorder triangles to leaf order, so a leaf addresses a contiguous range.
+  // Each corner's w carries its vertex index (shading reads the normals by
+  // it), so a triangle costs 3 x 16 bytes of positions and 4 of material.
   std::vector<WtVec4> verts(3 * m_bvh.primIndices.size());
-  std::vector<WtTriangle> ordered(m_bvh.primIndices.size());
-  for (std::size_t i = 0; i < ordered.size(); ++i) {
+  std::vector<std::uint32_t> materialOf(m_bvh.primIndices.size());
+  for (std::size_t i = 0; i < materialOf.size(); ++i) {
     const WtTriangle& t = scene.triangles[m_bvh.primIndices[i]];
-    ordered[i] = t;
-    verts[3 * i + 0] = scene.positions[t.v0];
-    verts[3 * i + 1] = scene.positions[t.v1];
-    verts[3 * i + 2] = scene.positions[t.v2];
+    const std::uint32_t corner[3] = {t.v0, t.v1, t.v2};
+    for (int k = 0; k < 3; ++k) {
+      WtVec4 v = scene.positions[corner[k]];
+      std::memcpy(&v.w, &corner[k], sizeof v.w);
+      verts[3 * i + k] = v;
+    }
+    materialOf[i] = t.material;
   }
   std::size_t bytes = 0;
   nodes = upload(context, bvh4.nodes, bytes);
   triVerts = upload(context, verts, bytes);
-  triangles = upload(context, ordered, bytes);
+  triangleMaterials = upload(context, materialOf, bytes);
   uploadedBytes = bytes;
   std::size_t attributeBytes = 0;
   normals = upload(context, scene.normals, attributeBytes);

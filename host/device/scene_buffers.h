@@ -19,8 +19,10 @@ class SceneBuffers {
   SceneBuffers(Context& context, const Scene& scene, const BvhBuildOptions& options = {});
 
   cl::Buffer nodes;       ///< WtBvh4Node[nodeCount] (one dummy node when empty); kernels declare it WtBvhNode*
-  cl::Buffer triVerts;    ///< float4[3 * triangles], leaf order, world space
-  cl::Buffer triangles;   ///< WtTriangle[], leaf order
+  /// float4[3 * triangles], leaf order, world space; w of vertex k holds the
+  /// bits of the triangle's vertex index v_k (for the per-vertex normals)
+  cl::Buffer triVerts;
+  cl::Buffer triangleMaterials;  ///< uint[triangles], leaf order: the triangle's material
   cl::Buffer normals;     ///< float4 per vertex
   cl::Buffer materials;   ///< WtMaterial[]
   std::uint32_t nodeCount = 0;

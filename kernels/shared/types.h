@@ -16,7 +16,9 @@ typedef struct WtVec4 {
   float x, y, z, w;
 } WtVec4;
 
-/// A triangle of the scene, in BVH leaf order once uploaded.
+/// A triangle of the scene (host side). On the device a triangle is its three
+/// corners in tri_verts (position, w = the vertex index's bits) and its
+/// material in triangle_materials, both in BVH leaf order.
 typedef struct WtTriangle {
   wt_uint v0, v1, v2;  ///< indices into the vertex arrays
   wt_uint material;    ///< index into the material array
