@@ -320,7 +320,9 @@ Bvh buildPlocBvh(std::span<const Aabb> primBounds, const BvhBuildOptions& option
   return bvh;
 }
 
-Bvh buildBvh(std::span<const Aabb> primBounds, const BvhBuildOptions& options) {
+Bvh buildBvh(std::span<const Aabb> primBounds, const BvhBuildOptions& given) {
+  BvhBuildOptions options = given;
+  if (options.maxLeafSize <= 0) options.maxLeafSize = autoLeafSize(primBounds.size());
   switch (options.builder) {
     case BvhBuilder::Ploc: return buildPlocBvh(primBounds, options);
     case BvhBuilder::Sah: return buildSahBvh(primBounds, options);

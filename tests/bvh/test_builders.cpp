@@ -73,6 +73,28 @@ TEST_P(Builder, LeafSizes) {
   }
 }
 
+TEST_P(Builder, AutomaticLeafSizeFollowsTheSceneSize) {
+  // maxLeafSize 0: leaves of up to 4 below 65 536 primitives, up to 8 from
+  // there; the large tree must really use the larger leaves (its 4-wide node
+  // count about halves), which is what keeps nodes plus triangle data within
+  // 64 bytes per triangle (8 B/tri of 4-wide nodes here; 52 of triangle data)
+  const std::vector<Aabb> grid = triangleBounds(makeBumpyGrid(80000));
+  ASSERT_GT(grid.size(), 65536u);
+  for (std::size_t n : {std::size_t(65535), std::size_t(65536)}) {
+    const std::vector<Aabb> prims(grid.begin(), grid.begin() + std::ptrdiff_t(n));
+    const Bvh automatic = build(prims, 0), four = build(prims, 4);
+    const int expected = n >= 65536 ? 8 : 4;
+    EXPECT_TRUE(checkBvhInvariants(automatic, prims, expected)) << n;
+    const Bvh4 wide = collapseToBvh4(automatic), wideFour = collapseToBvh4(four);
+    if (n < 65536) {
+      EXPECT_EQ(wide.nodes.size(), wideFour.nodes.size());
+    } else {
+      EXPECT_LT(double(wide.nodes.size()), 0.7 * double(wideFour.nodes.size())) << wideFour.nodes.size();
+      EXPECT_LE(double(wide.nodes.size() * sizeof(WtBvh4Node)) / double(prims.size()), 12.0);
+    }
+  }
+}
+
 TEST_P(Builder, DegenerateInputs) {
   struct Case {
     const char* name;
