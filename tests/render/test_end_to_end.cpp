@@ -135,6 +135,7 @@ TEST(EndToEnd, PacketsGiveTheSameImageAsSingleRays) {
   for (std::size_t i = 0; i < packets.rgb.size(); i += 3)
     differ += packets.rgb[i] != single.rgb[i] || packets.rgb[i + 1] != single.rgb[i + 1] ||
               packets.rgb[i + 2] != single.rgb[i + 2];
+  RecordProperty("pixels_differing", differ);
   EXPECT_LE(differ, 2) << differ << " of " << packets.rgb.size() / 3 << " pixels differ";
 }
 
