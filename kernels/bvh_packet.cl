@@ -159,39 +159,73 @@ inline pint packet_triangle(const RayPacket* p, __global const float4* tri_verts
 /// not share one axis permutation.
 inline bool packet_load(RayPacket* p, pint* valid, pfloat* tmax, const uint* index, uint lanes,
                         __global const float4* ray_o, __global const float4* ray_d) {
-  float ox[WT_PACKET], oy[WT_PACKET], oz[WT_PACKET], ix[WT_PACKET], iy[WT_PACKET], iz[WT_PACKET];
-  float sx[WT_PACKET], sy[WT_PACKET], sz[WT_PACKET], tn[WT_PACKET], tx[WT_PACKET];
-  int ok[WT_PACKET];
-  int kx = -1, ky = -1, kz = -1;
-  bool same = true;
+  float ox[WT_PACKET], oy[WT_PACKET], oz[WT_PACKET], tn[WT_PACKET];
+  float dx[WT_PACKET], dy[WT_PACKET], dz[WT_PACKET], tx[WT_PACKET];
+  int in[WT_PACKET];
   for (uint l = 0; l < WT_PACKET; ++l) {
     uint i = index[min(l, lanes - 1u)];
     float4 o = ray_o[i], d = ray_d[i];
-    ok[l] = l < lanes && bvh_ray_is_finite(o.xyz, d.xyz) ? -1 : 0;
-    float3 dir = ok[l] ? d.xyz : (float3)(0.0f, 0.0f, 1.0f);
-    RayShear s = triangle_ray_shear(dir);
-    float3 inv = bvh_safe_rcp(dir);
-    if (ok[l]) {
-      if (kz < 0) kx = s.kx, ky = s.ky, kz = s.kz;
-      same = same && s.kx == kx && s.ky == ky && s.kz == kz;
-    }
-    ox[l] = o.x, oy[l] = o.y, oz[l] = o.z;
-    ix[l] = inv.x, iy[l] = inv.y, iz[l] = inv.z;
-    sx[l] = s.sx, sy[l] = s.sy, sz[l] = s.sz;
-    tn[l] = o.w, tx[l] = d.w;
+    ox[l] = o.x, oy[l] = o.y, oz[l] = o.z, tn[l] = o.w;
+    dx[l] = d.x, dy[l] = d.y, dz[l] = d.z, tx[l] = d.w;
+    in[l] = l < lanes ? -1 : 0;
   }
-  if (kz < 0) kx = 0, ky = 1, kz = 2;
   p->o[0] = packet_vload(ox), p->o[1] = packet_vload(oy), p->o[2] = packet_vload(oz);
-  p->inv_d[0] = packet_vload(ix), p->inv_d[1] = packet_vload(iy), p->inv_d[2] = packet_vload(iz);
-  p->sx = packet_vload(sx), p->sy = packet_vload(sy), p->sz = packet_vload(sz);
-  p->kx = kx, p->ky = ky, p->kz = kz;
-  p->o_kx = kx == 0 ? p->o[0] : (kx == 1 ? p->o[1] : p->o[2]);
-  p->o_ky = ky == 0 ? p->o[0] : (ky == 1 ? p->o[1] : p->o[2]);
-  p->o_kz = kz == 0 ? p->o[0] : (kz == 1 ? p->o[1] : p->o[2]);
   p->tmin = packet_vload(tn);
-  p->skip_a = p->skip_b = (puint)(WT_NO_HIT);
   *tmax = packet_vload(tx);
-  *valid = packet_vload(ok);
+  pfloat d[3] = {packet_vload(dx), packet_vload(dy), packet_vload(dz)};
+  pint ok = packet_vload(in) & packet_mask(isfinite(p->o[0]) & isfinite(p->o[1]) & isfinite(p->o[2]) &
+                                           isfinite(d[0]) & isfinite(d[1]) & isfinite(d[2]));
+  *valid = ok;
+  // a lane left out traces (0, 0, 1), as bvh_closest would never see it
+  d[0] = packet_pick(ok, d[0], (pfloat)(0.0f));
+  d[1] = packet_pick(ok, d[1], (pfloat)(0.0f));
+  d[2] = packet_pick(ok, d[2], (pfloat)(1.0f));
+
+  // bvh_safe_rcp, lane by lane
+  const float kTiny = 1e-30f;
+  for (int k = 0; k < 3; ++k)
+    p->inv_d[k] = 1.0f / packet_pick(packet_mask(fabs(d[k]) < kTiny), copysign((pfloat)(kTiny), d[k]), d[k]);
+
+  // triangle_ray_shear, lane by lane: the permutation of each lane as a
+  // number (2 kz + 1 where the dominant component is negative)
+  pfloat ax = fabs(d[0]), ay = fabs(d[1]), az = fabs(d[2]);
+  pint x_over_y = packet_mask(ax > ay), x_over_z = packet_mask(ax > az), y_over_z = packet_mask(ay > az);
+  pint kz = (x_over_y & ~x_over_z & (pint)(2)) | (~x_over_y & ((y_over_z & (pint)(1)) | (~y_over_z & (pint)(2))));
+  pint z_is_x = packet_mask(kz == 0), z_is_y = packet_mask(kz == 1), z_is_z = packet_mask(kz == 2);
+  pfloat dk_z = packet_pick(z_is_x, d[0], packet_pick(z_is_y, d[1], d[2]));
+  pint flip = packet_mask(dk_z < 0.0f);
+  // kx = kz + 1 and ky = kz + 2 (mod 3), swapped when flipped
+  pfloat d_next = packet_pick(z_is_x, d[1], packet_pick(z_is_y, d[2], d[0]));
+  pfloat d_after = packet_pick(z_is_x, d[2], packet_pick(z_is_y, d[0], d[1]));
+  pfloat dk_x = packet_pick(flip, d_after, d_next), dk_y = packet_pick(flip, d_next, d_after);
+  p->sx = dk_x / dk_z;
+  p->sy = dk_y / dk_z;
+  p->sz = 1.0f / dk_z;
+  (void)z_is_z;
+
+  int id[WT_PACKET];
+  packet_vstore(((kz << 1) | (flip & (pint)(1))) | ~ok, id);  // -1 for a lane left out
+  int first = -1;
+  bool same = true;
+  for (uint l = 0; l < WT_PACKET; ++l) {
+    if (id[l] < 0) continue;
+    if (first < 0) first = id[l];
+    same = same && id[l] == first;
+  }
+  if (first < 0) first = 4;  // no lane valid: +z, unused
+  int pkz = first >> 1;
+  int pkx = pkz == 2 ? 0 : pkz + 1;
+  int pky = pkx == 2 ? 0 : pkx + 1;
+  if (first & 1) {
+    int t = pkx;
+    pkx = pky;
+    pky = t;
+  }
+  p->kx = pkx, p->ky = pky, p->kz = pkz;
+  p->o_kx = pkx == 0 ? p->o[0] : (pkx == 1 ? p->o[1] : p->o[2]);
+  p->o_ky = pky == 0 ? p->o[0] : (pky == 1 ? p->o[1] : p->o[2]);
+  p->o_kz = pkz == 0 ? p->o[0] : (pkz == 1 ? p->o[1] : p->o[2]);
+  p->skip_a = p->skip_b = (puint)(WT_NO_HIT);
   return same;
 }
 
