@@ -6,6 +6,7 @@
 
 #include <cstdint>
 #include <span>
+#include <memory>
 #include <vector>
 
 namespace wt::bvh_detail {
@@ -29,6 +30,11 @@ Bvh layoutTree(std::span<const BuildNode> nodes, std::uint32_t root, std::span<c
 /// Input indices sorted by the Morton code of their centroids, as buildLbvh
 /// sorts them (ties in index order).
 std::vector<std::uint32_t> mortonOrder(std::span<const Aabb> primBounds, int threads);
+
+/// The LBVH's key sort, for tests: keys[0..n) ascending, primIndices[i] the
+/// input position of sorted key i, equal keys in input order (a stable sort).
+void sortKeysWithIndices(int threads, std::size_t n, std::unique_ptr<std::uint64_t[]>& keys,
+                         std::vector<std::uint32_t>& primIndices);
 
 /// options.threads resolved as buildLbvh does: 0 means every hardware thread,
 /// and no more threads than work for them.

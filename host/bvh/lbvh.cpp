@@ -180,36 +180,39 @@ struct RadixPlan {
   int passes = 0;
 };
 
+// The radix passes sort 64-bit items, a key's top 32 bits over the input
+// index, by those 32 bits (three 11-bit digits instead of six over the whole
+// key and its index in two arrays: half the passes, two thirds of the bytes
+// per pass); the full keys are then gathered in that order and a sequential
+// pass orders each run of equal top bits by the full key (insertion sort:
+// runs are short, most have one key). The result is the full sort's, key for
+// key and index for index.
+constexpr int kFixupBits = kKeyBits - 32;
+
 RadixPlan planRadixSort(std::uint64_t keysOr, std::uint64_t keysAnd) {
   RadixPlan plan;
-  for (int shift = 0; shift < kKeyBits; shift += kRadixBits)
-    if (((keysOr ^ keysAnd) >> shift) & kRadixMask) plan.shifts[plan.passes++] = shift;
+  const std::uint64_t differ = (keysOr ^ keysAnd) >> kFixupBits;  // the items' top 32 bits
+  for (int shift = 0; shift < 32; shift += kRadixBits)
+    if ((differ >> shift) & kRadixMask) plan.shifts[plan.passes++] = 32 + shift;
   return plan;
 }
 
-/// Sort keys ascending with the input indices of their primitives. LSD passes are stable,
-/// so equal keys stay in index order, which the hierarchy relies on to break ties by index.
-/// Pass p reads set p % 2 and writes the other; the first pass makes up the indices
-/// instead of reading vals0. Separate key and index arrays measured faster on two threads
-/// than 16-byte key-index items, as they move fewer bytes.
-void radixSort(int threads, std::size_t n, const RadixPlan& plan, std::uint64_t* keys0, std::uint64_t* keys1,
-               std::uint32_t* vals0, std::uint32_t* vals1) {
+/// LSD radix passes over items by the digits at plan.shifts; stable. Pass p
+/// reads set p % 2 and writes the other.
+void radixSortItems(int threads, std::size_t n, const RadixPlan& plan, std::uint64_t* items0,
+                    std::uint64_t* items1) {
   std::vector<std::uint32_t> histograms(static_cast<std::size_t>(threads) * kRadixBuckets);
   runTeam(threads, [&](int rank, int size, Barrier& barrier) {
     const Range chunk = chunkOf(n, size, rank);
     std::uint32_t* histogram = histograms.data() + static_cast<std::size_t>(rank) * kRadixBuckets;
     std::vector<std::uint32_t> offsets(kRadixBuckets);
     for (int pass = 0; pass < plan.passes; ++pass) {
-      const std::uint64_t* srcKeys = pass % 2 == 0 ? keys0 : keys1;
-      std::uint64_t* dstKeys = pass % 2 == 0 ? keys1 : keys0;
-      const std::uint32_t* srcVals = pass % 2 == 0 ? vals0 : vals1;
-      std::uint32_t* dstVals = pass % 2 == 0 ? vals1 : vals0;
+      const std::uint64_t* src = pass % 2 == 0 ? items0 : items1;
+      std::uint64_t* dst = pass % 2 == 0 ? items1 : items0;
       const int shift = plan.shifts[static_cast<std::size_t>(pass)];
-
       std::fill(histogram, histogram + kRadixBuckets, 0u);
-      for (std::size_t i = chunk.begin; i < chunk.end; ++i) ++histogram[(srcKeys[i] >> shift) & kRadixMask];
+      for (std::size_t i = chunk.begin; i < chunk.end; ++i) ++histogram[(src[i] >> shift) & kRadixMask];
       barrier.arriveAndWait();
-
       // A digit's slots follow all smaller digits, then the same digit of lower ranks.
       std::uint32_t running = 0;
       for (std::uint32_t digit = 0; digit < kRadixBuckets; ++digit) {
@@ -221,26 +224,47 @@ void radixSort(int threads, std::size_t n, const RadixPlan& plan, std::uint64_t*
         }
         offsets[digit] = mine;
       }
-
-      if (pass == 0) {
-        for (std::size_t i = chunk.begin; i < chunk.end; ++i) {
-          const std::uint64_t key = srcKeys[i];
-          const std::uint32_t slot = offsets[(key >> shift) & kRadixMask]++;
-          dstKeys[slot] = key;
-          dstVals[slot] = static_cast<std::uint32_t>(i);
-        }
-      } else {
-        for (std::size_t i = chunk.begin; i < chunk.end; ++i) {
-          const std::uint64_t key = srcKeys[i];
-          const std::uint32_t slot = offsets[(key >> shift) & kRadixMask]++;
-          dstKeys[slot] = key;
-          dstVals[slot] = srcVals[i];
-        }
+      for (std::size_t i = chunk.begin; i < chunk.end; ++i) {
+        const std::uint64_t item = src[i];
+        dst[offsets[(item >> shift) & kRadixMask]++] = item;
       }
       // The next pass reads what every rank wrote and rewrites the histograms.
       barrier.arriveAndWait();
     }
   });
+}
+
+/// Orders every run of keys equal above the low kFixupBits by the full key,
+/// keeping equal keys in index order (a stable insertion sort).
+void sortRunsByLowBits(std::size_t n, std::uint64_t* keys, std::uint32_t* vals) {
+  std::size_t i = 0;
+  while (i < n) {
+    const std::uint64_t top = keys[i] >> kFixupBits;
+    std::size_t end = i + 1;
+    while (end < n && (keys[end] >> kFixupBits) == top) ++end;
+    if (end - i > 32) {
+      // a long run (primitives crowded into one cell of the top bits): sort
+      // (key, index) pairs, which within a run are in index order already
+      std::vector<std::pair<std::uint64_t, std::uint32_t>> run(end - i);
+      for (std::size_t j = i; j < end; ++j) run[j - i] = {keys[j], vals[j]};
+      std::sort(run.begin(), run.end());
+      for (std::size_t j = i; j < end; ++j) keys[j] = run[j - i].first, vals[j] = run[j - i].second;
+      i = end;
+      continue;
+    }
+    for (std::size_t j = i + 1; j < end; ++j) {
+      const std::uint64_t key = keys[j];
+      const std::uint32_t val = vals[j];
+      std::size_t k = j;
+      for (; k > i && keys[k - 1] > key; --k) {
+        keys[k] = keys[k - 1];
+        vals[k] = vals[k - 1];
+      }
+      keys[k] = key;
+      vals[k] = val;
+    }
+    i = end;
+  }
 }
 
 // ---- hierarchy ---------------------------------------------------------------------
@@ -588,6 +612,30 @@ struct PhaseTimes {
 
 /// Morton keys of the centroids sorted ascending, with primIndices[k] the input
 /// index of the k-th; equal keys keep index order.
+void sortKeysWithPlan(int threads, std::size_t n, const RadixPlan& plan, std::unique_ptr<std::uint64_t[]>& keys,
+                      std::vector<std::uint32_t>& primIndices) {
+  primIndices.resize(n);
+  auto items0 = std::make_unique_for_overwrite<std::uint64_t[]>(n);
+  auto items1 = std::make_unique_for_overwrite<std::uint64_t[]>(plan.passes > 0 ? n : 1);
+  auto sorted = std::make_unique_for_overwrite<std::uint64_t[]>(n);
+  std::uint64_t* result = plan.passes % 2 == 1 ? items1.get() : items0.get();
+  runTeam(threads, [&](int rank, int size, Barrier&) {
+    const Range chunk = chunkOf(n, size, rank);
+    for (std::size_t i = chunk.begin; i < chunk.end; ++i) items0[i] = (keys[i] >> kFixupBits) << 32 | i;
+  });
+  radixSortItems(threads, n, plan, items0.get(), items1.get());
+  runTeam(threads, [&](int rank, int size, Barrier&) {
+    const Range chunk = chunkOf(n, size, rank);
+    for (std::size_t i = chunk.begin; i < chunk.end; ++i) {
+      const std::uint32_t index = static_cast<std::uint32_t>(result[i]);
+      primIndices[i] = index;
+      sorted[i] = keys[index];
+    }
+  });
+  keys = std::move(sorted);
+  sortRunsByLowBits(n, keys.get(), primIndices.data());
+}
+
 std::unique_ptr<std::uint64_t[]> sortByMorton(std::span<const Aabb> primBounds, int threads,
                                              std::vector<std::uint32_t>& primIndices, PhaseTimes& times) {
   const std::size_t n = primBounds.size();
@@ -599,25 +647,24 @@ std::unique_ptr<std::uint64_t[]> sortByMorton(std::span<const Aabb> primBounds, 
   phase = Clock::now();
   const RadixPlan plan = planRadixSort(morton.bits.orBits, morton.bits.andBits);
   std::unique_ptr<std::uint64_t[]> keys = std::move(morton.keys);
-  primIndices.resize(n);
-  if (plan.passes == 0) {
-    // Every key is equal: index order is already sorted.
-    for (std::size_t i = 0; i < n; ++i) primIndices[i] = static_cast<std::uint32_t>(i);
-  } else {
-    auto keys1 = std::make_unique_for_overwrite<std::uint64_t[]>(n);
-    std::unique_ptr<std::uint32_t[]> scratchVals;
-    if (plan.passes >= 2) scratchVals = std::make_unique_for_overwrite<std::uint32_t[]>(n);
-    const bool oddPasses = plan.passes % 2 == 1;
-    std::uint32_t* vals0 = oddPasses ? scratchVals.get() : primIndices.data();
-    std::uint32_t* vals1 = oddPasses ? primIndices.data() : scratchVals.get();
-    radixSort(threads, n, plan, keys.get(), keys1.get(), vals0, vals1);
-    if (oddPasses) keys = std::move(keys1);
-  }
+  sortKeysWithPlan(threads, n, plan, keys, primIndices);
   times.sort = secondsSince(phase);
   return keys;
 }
 
 }  // namespace
+
+namespace bvh_detail {
+
+void sortKeysWithIndices(int threads, std::size_t n, std::unique_ptr<std::uint64_t[]>& keys,
+                         std::vector<std::uint32_t>& primIndices) {
+  std::uint64_t orBits = 0, andBits = ~std::uint64_t{0};
+  for (std::size_t i = 0; i < n; ++i) orBits |= keys[i], andBits &= keys[i];
+  sortKeysWithPlan(std::clamp(threads, 1, kMaxThreads), n, planRadixSort(orBits, andBits), keys, primIndices);
+}
+
+}  // namespace bvh_detail
+
 
 namespace bvh_detail {
 
