@@ -633,7 +633,17 @@ void sortKeysWithPlan(int threads, std::size_t n, const RadixPlan& plan, std::un
     }
   });
   keys = std::move(sorted);
-  sortRunsByLowBits(n, keys.get(), primIndices.data());
+  // the runs, split between the threads at run boundaries
+  const std::uint64_t* k = keys.get();
+  runTeam(threads, [&](int rank, int size, Barrier&) {
+    auto boundary = [&](std::size_t i) {
+      while (i > 0 && i < n && (k[i] >> kFixupBits) == (k[i - 1] >> kFixupBits)) ++i;
+      return std::min(i, n);
+    };
+    const Range chunk = chunkOf(n, size, rank);
+    const std::size_t begin = boundary(chunk.begin), end = boundary(chunk.end);
+    if (begin < end) sortRunsByLowBits(end - begin, keys.get() + begin, primIndices.data() + begin);
+  });
 }
 
 std::unique_ptr<std::uint64_t[]> sortByMorton(std::span<const Aabb> primBounds, int threads,
