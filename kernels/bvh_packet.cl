@@ -357,6 +357,15 @@ inline pint packet_occluded(BvhScene scene, const RayPacket* p, pint valid, pflo
   }
 }
 
+/// Lanes of the packet at entries [first, first + WT_PACKET) of a queue of
+/// `count`: index[l] the queued ray of lane l (the last one repeated past the
+/// end); returns how many lanes are real.
+inline uint packet_from_queue(__global const uint* queue, uint first, uint count, uint* index) {
+  uint lanes = min(count - first, (uint)WT_PACKET);
+  for (uint l = 0; l < WT_PACKET; ++l) index[l] = queue[first + min(l, lanes - 1u)];
+  return lanes;
+}
+
 /// Closest hits of rays index[0], ..., index[lanes - 1] of a batch, written
 /// to hits[index[l]] as (t, b1, b2, leaf-order triangle or WT_NO_HIT);
 /// skip[i] is the triangle ray i leaves. Packet traversal when the rays share

@@ -28,9 +28,8 @@ __kernel void connect_packet(__global const uint* counters, __global const uint*
   uint first = get_global_id(0) * WT_PACKET;
   uint count = counters[WT_COUNTER_SHADOW];
   if (first >= count) return;
-  uint lanes = min(count - first, (uint)WT_PACKET);
   uint index[WT_PACKET];
-  for (uint l = 0; l < WT_PACKET; ++l) index[l] = shadow_queue[first + min(l, lanes - 1u)];
+  uint lanes = packet_from_queue(shadow_queue, first, count, index);
   BvhScene scene = {nodes, node_count, tri_verts};
   int blocked[WT_PACKET];
   packet_trace_occluded(scene, index, lanes, shadow_o, shadow_d, 0, shadow_skip, blocked);

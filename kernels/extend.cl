@@ -27,9 +27,8 @@ __kernel void extend_packet(__global const uint* counters, uint queue_slot, __gl
   uint first = get_global_id(0) * WT_PACKET;
   uint count = counters[queue_slot];
   if (first >= count) return;
-  uint lanes = min(count - first, (uint)WT_PACKET);
   uint index[WT_PACKET];
-  for (uint l = 0; l < WT_PACKET; ++l) index[l] = queue[first + min(l, lanes - 1u)];
+  uint lanes = packet_from_queue(queue, first, count, index);
   BvhScene scene = {nodes, node_count, tri_verts};
   packet_trace_closest(scene, index, lanes, ray_o, ray_d, ray_skip, hits);
 }

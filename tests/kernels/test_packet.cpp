@@ -8,6 +8,7 @@
 #include "device_fixture.h"
 #include "scene/generators.h"
 #include "test_util.h"
+#include "tree_param.h"
 
 #include <gtest/gtest.h>
 
@@ -110,15 +111,7 @@ void expectPacketsMatchSingleRays(const Scene& scene, const std::vector<Ray>& ra
   EXPECT_LT(hits, int(rays.size()));
 }
 
-class PacketTraversal : public ::testing::TestWithParam<std::tuple<BvhBuilder, int>> {
- protected:
-  static BvhBuildOptions options() {
-    BvhBuildOptions options;
-    options.builder = std::get<0>(GetParam());
-    options.maxLeafSize = std::get<1>(GetParam());
-    return options;
-  }
-};
+class PacketTraversal : public test::TreeParamTest {};
 
 TEST_P(PacketTraversal, CoherentRaysMatchSingleRaysOnASoup) {
   Scene scene = makeTriangleSoup(3000, 3, 0.15f);
@@ -138,10 +131,7 @@ TEST_P(PacketTraversal, CoherentRaysMatchSingleRaysOnAClosedSphere) {
 INSTANTIATE_TEST_SUITE_P(Trees, PacketTraversal,
                          ::testing::Combine(::testing::Values(BvhBuilder::Lbvh, BvhBuilder::Ploc, BvhBuilder::Sah),
                                             ::testing::Values(1, 4, 8)),
-                         [](const ::testing::TestParamInfo<std::tuple<BvhBuilder, int>>& param) {
-                           return std::string(bvhBuilderName(std::get<0>(param.param))) + "_leaf" +
-                                  std::to_string(std::get<1>(param.param));
-                         });
+                         test::treeParamName);
 
 TEST(PacketTraversalEdges, CoherentRaysMatchBruteForce) {
   Scene scene = makeTriangleSoup(2000, 9, 0.2f);

@@ -4,6 +4,7 @@
 #include "bvh/builders.h"
 #include "device_fixture.h"
 #include "scene/generators.h"
+#include "tree_param.h"
 
 #include <gtest/gtest.h>
 
@@ -69,15 +70,7 @@ void expectAgreement(const Scene& scene, const std::vector<Ray>& rays, const Bvh
 }
 
 /// Every builder's tree at several leaf sizes: the kernels must not depend on how the tree was made.
-class TraversalLeafSize : public ::testing::TestWithParam<std::tuple<BvhBuilder, int>> {
- protected:
-  static BvhBuildOptions options() {
-    BvhBuildOptions options;
-    options.builder = std::get<0>(GetParam());
-    options.maxLeafSize = std::get<1>(GetParam());
-    return options;
-  }
-};
+class TraversalLeafSize : public test::TreeParamTest {};
 
 TEST_P(TraversalLeafSize, RandomSoupMatchesBruteForce) {
   const BvhBuildOptions options = this->options();
@@ -120,12 +113,7 @@ TEST_P(TraversalLeafSize, TinySoupsMatchBruteForce) {
 INSTANTIATE_TEST_SUITE_P(LeafSizes, TraversalLeafSize,
                          ::testing::Combine(::testing::Values(BvhBuilder::Lbvh, BvhBuilder::Ploc, BvhBuilder::Sah),
                                             ::testing::Values(1, 2, 4, 8)),
-                         [](const ::testing::TestParamInfo<std::tuple<BvhBuilder, int>>& param) {
-                           std::string name = bvhBuilderName(std::get<0>(param.param));
-                           name += "_leaf";
-                           name += std::to_string(std::get<1>(param.param));
-                           return name;
-                         });
+                         test::treeParamName);
 
 TEST(Traversal, DegenerateTrianglesAreNeverHit) {
   // zero-area triangles: a point and a segment, among ordinary ones
