@@ -161,20 +161,31 @@ inline bool packet_load(RayPacket* p, pint* valid, pfloat* tmax, const uint* ind
                         __global const float4* ray_o, __global const float4* ray_d) {
   float ox[WT_PACKET], oy[WT_PACKET], oz[WT_PACKET], tn[WT_PACKET];
   float dx[WT_PACKET], dy[WT_PACKET], dz[WT_PACKET], tx[WT_PACKET];
-  int in[WT_PACKET];
+  // Per lane in scalar code: whether the ray is in, and its permutation
+  // (triangle_ray_shear's dominant axis kz, and whether that component is
+  // negative); the divisions below run in lanes. (The permutation computed
+  // in lanes came out wrong under Oclgrind's optimised build.)
+  int in[WT_PACKET], axis[WT_PACKET], negative[WT_PACKET], id[WT_PACKET];
   for (uint l = 0; l < WT_PACKET; ++l) {
     uint i = index[min(l, lanes - 1u)];
     float4 o = ray_o[i], d = ray_d[i];
     ox[l] = o.x, oy[l] = o.y, oz[l] = o.z, tn[l] = o.w;
     dx[l] = d.x, dy[l] = d.y, dz[l] = d.z, tx[l] = d.w;
-    in[l] = l < lanes ? -1 : 0;
+    bool ok = l < lanes && bvh_ray_is_finite(o.xyz, d.xyz);
+    float3 dir = ok ? d.xyz : (float3)(0.0f, 0.0f, 1.0f);
+    float3 ad = fabs(dir);
+    int kz = (ad.x > ad.y) ? (ad.x > ad.z ? 0 : 2) : (ad.y > ad.z ? 1 : 2);
+    int flip = vec3_component(dir, kz) < 0.0f;
+    in[l] = ok ? -1 : 0;
+    axis[l] = kz;
+    negative[l] = flip ? -1 : 0;
+    id[l] = ok ? 2 * kz + flip : -1;
   }
   p->o[0] = packet_vload(ox), p->o[1] = packet_vload(oy), p->o[2] = packet_vload(oz);
   p->tmin = packet_vload(tn);
   *tmax = packet_vload(tx);
   pfloat d[3] = {packet_vload(dx), packet_vload(dy), packet_vload(dz)};
-  pint ok = packet_vload(in) & packet_mask(isfinite(p->o[0]) & isfinite(p->o[1]) & isfinite(p->o[2]) &
-                                           isfinite(d[0]) & isfinite(d[1]) & isfinite(d[2]));
+  pint ok = packet_vload(in);
   *valid = ok;
   // a lane left out traces (0, 0, 1), as bvh_closest would never see it
   d[0] = packet_pick(ok, d[0], (pfloat)(0.0f));
@@ -186,14 +197,10 @@ inline bool packet_load(RayPacket* p, pint* valid, pfloat* tmax, const uint* ind
   for (int k = 0; k < 3; ++k)
     p->inv_d[k] = 1.0f / packet_pick(packet_mask(fabs(d[k]) < kTiny), copysign((pfloat)(kTiny), d[k]), d[k]);
 
-  // triangle_ray_shear, lane by lane: the permutation of each lane as a
-  // number (2 kz + 1 where the dominant component is negative)
-  pfloat ax = fabs(d[0]), ay = fabs(d[1]), az = fabs(d[2]);
-  pint x_over_y = packet_mask(ax > ay), x_over_z = packet_mask(ax > az), y_over_z = packet_mask(ay > az);
-  pint kz = (x_over_y & ~x_over_z & (pint)(2)) | (~x_over_y & ((y_over_z & (pint)(1)) | (~y_over_z & (pint)(2))));
-  pint z_is_x = packet_mask(kz == 0), z_is_y = packet_mask(kz == 1), z_is_z = packet_mask(kz == 2);
+  // triangle_ray_shear, lane by lane, with each lane's permutation
+  pint kz = packet_vload(axis), flip = packet_vload(negative);
+  pint z_is_x = packet_mask(kz == 0), z_is_y = packet_mask(kz == 1);
   pfloat dk_z = packet_pick(z_is_x, d[0], packet_pick(z_is_y, d[1], d[2]));
-  pint flip = packet_mask(dk_z < 0.0f);
   // kx = kz + 1 and ky = kz + 2 (mod 3), swapped when flipped
   pfloat d_next = packet_pick(z_is_x, d[1], packet_pick(z_is_y, d[2], d[0]));
   pfloat d_after = packet_pick(z_is_x, d[2], packet_pick(z_is_y, d[0], d[1]));
@@ -201,10 +208,7 @@ inline bool packet_load(RayPacket* p, pint* valid, pfloat* tmax, const uint* ind
   p->sx = dk_x / dk_z;
   p->sy = dk_y / dk_z;
   p->sz = 1.0f / dk_z;
-  (void)z_is_z;
 
-  int id[WT_PACKET];
-  packet_vstore(((kz << 1) | (flip & (pint)(1))) | ~ok, id);  // -1 for a lane left out
   int first = -1;
   bool same = true;
   for (uint l = 0; l < WT_PACKET; ++l) {
