@@ -1,5 +1,5 @@
 // Packet traversal: one work-item traces eight rays through the 4-wide BVH
-// together, one ray per pfloat lane. A node's child box is tested against the
+// together, one ray per float8 lane. A node's child box is tested against the
 // eight rays at once, and a leaf triangle with the watertight test on the
 // eight lanes. Each lane makes the same decisions, with the same arithmetic,
 // as bvh_closest / bvh_occluded would for its ray alone (only the order in
@@ -19,7 +19,9 @@
 #include "bvh.cl"
 
 #define WT_PACKET WT_PACKET_WIDTH
-#if WT_PACKET == 8
+#if WT_PACKET != 8
+#error "WT_PACKET_WIDTH must be 8: the lanes are float8 (16 was measured and not kept, docs/performance.md)"
+#endif
 #define pfloat float8
 #define pint int8
 #define puint uint8
@@ -28,47 +30,23 @@
 #define as_puint as_uint8
 #define packet_vload(a) vload8(0, a)
 #define packet_vstore(v, a) vstore8(v, 0, a)
-#elif WT_PACKET == 16
-#define pfloat float16
-#define pint int16
-#define puint uint16
-#define as_pfloat as_float16
-#define as_pint as_int16
-#define as_puint as_uint16
-#define packet_vload(a) vload16(0, a)
-#define packet_vstore(v, a) vstore16(v, 0, a)
-#else
-#error "WT_PACKET must be 8 or 16"
-#endif
 
 /// Lane masks normalised to all ones or zero. Comparisons are folded with
 /// this before any select or ~, never trusted for their sign bit:
 /// Oclgrind's optimised build makes some vector comparisons 1 instead of -1.
 inline pint packet_mask(pint c) { return (c | -c) >> 31; }
-#if WT_PACKET == 16
-inline int8 packet_fold_i(int16 m) { return m.lo | m.hi; }
-inline float8 packet_fold_min(float16 v) { return fmin(v.lo, v.hi); }
-inline float8 packet_fold_max(float16 v) { return fmax(v.lo, v.hi); }
-#else
-inline int8 packet_fold_i(int8 m) { return m; }
-inline float8 packet_fold_min(float8 v) { return v; }
-inline float8 packet_fold_max(float8 v) { return v; }
-#endif
 inline bool packet_any(pint m) {
-  int8 f = packet_fold_i(m);
-  int4 a = f.lo | f.hi;
+  int4 a = m.lo | m.hi;
   int2 b = a.lo | a.hi;
   return (b.x | b.y) != 0;
 }
 inline float packet_min(pfloat v) {
-  float8 f = packet_fold_min(v);
-  float4 a = fmin(f.lo, f.hi);
+  float4 a = fmin(v.lo, v.hi);
   float2 b = fmin(a.lo, a.hi);
   return fmin(b.x, b.y);
 }
 inline float packet_max(pfloat v) {
-  float8 f = packet_fold_max(v);
-  float4 a = fmax(f.lo, f.hi);
+  float4 a = fmax(v.lo, v.hi);
   float2 b = fmax(a.lo, a.hi);
   return fmax(b.x, b.y);
 }
@@ -165,7 +143,9 @@ inline bool packet_load(RayPacket* p, pint* valid, pfloat* tmax, const uint* ind
   // (triangle_ray_shear's dominant axis kz, and whether that component is
   // negative); the divisions below run in lanes. (The permutation computed
   // in lanes came out wrong under Oclgrind's optimised build.)
-  int in[WT_PACKET], axis[WT_PACKET], negative[WT_PACKET], id[WT_PACKET];
+  int in[WT_PACKET], axis[WT_PACKET], negative[WT_PACKET];
+  int first = -1;  // the permutation every valid lane must share: 2 kz + (negative)
+  bool same = true;
   for (uint l = 0; l < WT_PACKET; ++l) {
     uint i = index[min(l, lanes - 1u)];
     float4 o = ray_o[i], d = ray_d[i];
@@ -179,8 +159,13 @@ inline bool packet_load(RayPacket* p, pint* valid, pfloat* tmax, const uint* ind
     in[l] = ok ? -1 : 0;
     axis[l] = kz;
     negative[l] = flip ? -1 : 0;
-    id[l] = ok ? 2 * kz + flip : -1;
+    if (ok) {
+      if (first < 0) first = 2 * kz + flip;
+      same = same && 2 * kz + flip == first;
+    }
   }
+  // traced ray by ray: nothing below is needed
+  if (!same) return false;
   p->o[0] = packet_vload(ox), p->o[1] = packet_vload(oy), p->o[2] = packet_vload(oz);
   p->tmin = packet_vload(tn);
   *tmax = packet_vload(tx);
@@ -209,13 +194,6 @@ inline bool packet_load(RayPacket* p, pint* valid, pfloat* tmax, const uint* ind
   p->sy = dk_y / dk_z;
   p->sz = 1.0f / dk_z;
 
-  int first = -1;
-  bool same = true;
-  for (uint l = 0; l < WT_PACKET; ++l) {
-    if (id[l] < 0) continue;
-    if (first < 0) first = id[l];
-    same = same && id[l] == first;
-  }
   if (first < 0) first = 4;  // no lane valid: +z, unused
   int pkz = first >> 1;
   int pkx = pkz == 2 ? 0 : pkz + 1;
@@ -230,7 +208,7 @@ inline bool packet_load(RayPacket* p, pint* valid, pfloat* tmax, const uint* ind
   p->o_ky = pky == 0 ? p->o[0] : (pky == 1 ? p->o[1] : p->o[2]);
   p->o_kz = pkz == 0 ? p->o[0] : (pkz == 1 ? p->o[1] : p->o[2]);
   p->skip_a = p->skip_b = (puint)(WT_NO_HIT);
-  return same;
+  return true;
 }
 
 /// The triangles each lane never hits (the surface its ray leaves, the

@@ -49,7 +49,7 @@ typedef struct WtBvh4Node {
 } WtBvh4Node;
 #define WT_BVH4_EMPTY 0xffffffffu
 
-/// Rays per work-item of the packet traversal (kernels/bvh_packet.cl): 8 or 16.
+/// Rays per work-item of the packet traversal (kernels/bvh_packet.cl): one float8 lane each.
 #define WT_PACKET_WIDTH 8
 
 /// A surface: Lambertian (scenes made in code, analytic tests) or glTF
