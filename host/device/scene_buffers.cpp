@@ -7,6 +7,8 @@
 #include <cmath>
 #include <cstddef>
 #include <cstring>
+#include <stdexcept>
+#include <string>
 
 namespace wt {
 namespace {
@@ -57,8 +59,12 @@ SceneBuffers::SceneBuffers(Context& context, const Scene& scene, const BvhBuildO
   for (std::size_t leaf = 0; leaf < m_bvh.primIndices.size(); ++leaf) m_sceneToLeaf[m_bvh.primIndices[leaf]] = std::uint32_t(leaf);
 
   // Reorder triangles to leaf order, so a leaf addresses a contiguous range.
-  // Each corner's w carries its vertex index (shading reads the normals by
-  // it), so a triangle costs 3 x 16 bytes of positions and 4 of material.
+  // Each corner's w carries its vertex index, tagged (WT_VERTEX_TAG; shading
+  // reads the normals by it), so a triangle costs 3 x 16 bytes of positions
+  // and 4 of material.
+  if (scene.positions.size() > WT_MAX_VERTICES)
+    throw std::length_error("scene has " + std::to_string(scene.positions.size()) + " vertices; at most " +
+                            std::to_string(WT_MAX_VERTICES) + " are supported");
   std::vector<WtVec4> verts(3 * m_bvh.primIndices.size());
   std::vector<std::uint32_t> materialOf(m_bvh.primIndices.size());
   for (std::size_t i = 0; i < materialOf.size(); ++i) {
@@ -66,7 +72,8 @@ SceneBuffers::SceneBuffers(Context& context, const Scene& scene, const BvhBuildO
     const std::uint32_t corner[3] = {t.v0, t.v1, t.v2};
     for (int k = 0; k < 3; ++k) {
       WtVec4 v = scene.positions[corner[k]];
-      std::memcpy(&v.w, &corner[k], sizeof v.w);
+      const std::uint32_t tagged = corner[k] | WT_VERTEX_TAG;
+      std::memcpy(&v.w, &tagged, sizeof v.w);
       verts[3 * i + k] = v;
     }
     materialOf[i] = t.material;

@@ -17,12 +17,23 @@ typedef struct WtVec4 {
 } WtVec4;
 
 /// A triangle of the scene (host side). On the device a triangle is its three
-/// corners in tri_verts (position, w = the vertex index's bits) and its
-/// material in triangle_materials, both in BVH leaf order.
+/// corners in tri_verts (position; w = the vertex index, tagged as below) and
+/// its material in triangle_materials, both in BVH leaf order.
 typedef struct WtTriangle {
   wt_uint v0, v1, v2;  ///< indices into the vertex arrays
   wt_uint material;    ///< index into the material array
 } WtTriangle;
+
+/// tri_verts' w holds a corner's vertex index v as the bits v | WT_VERTEX_TAG:
+/// read back with & WT_VERTEX_INDEX. The tag keeps the lane a normal float.
+/// The bare index would be a subnormal one, and float3 arithmetic on a
+/// loaded corner carries the w lane along: on x86 each operation on a
+/// subnormal lane takes a microcode assist (whole paths traced 1.1-2.1x
+/// faster without them; docs/performance.md, "Subnormal lanes"). Indices stay below
+/// WT_MAX_VERTICES, where the tagged exponent could become all ones.
+#define WT_VERTEX_TAG 0x40000000u
+#define WT_VERTEX_INDEX 0x3fffffffu
+#define WT_MAX_VERTICES 0x3f800000u
 
 /// Binary BVH node, 32 bytes. Children of an internal node are adjacent:
 /// left = first, right = first + 1. Node 0 is the root.
