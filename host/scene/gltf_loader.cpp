@@ -215,6 +215,14 @@ T readElement(const unsigned char* p, int componentType, bool normalized) {
   return element;
 }
 
+/// Room for n elements, growing the capacity at least twofold: reserving
+/// exactly what one more instance needs reallocates (and copies) the whole
+/// scene for every instance, quadratic in the instance count.
+template <class T>
+void reserveGrowing(std::vector<T>& v, std::size_t n) {
+  if (n > v.capacity()) v.reserve(std::max(n, 2 * v.capacity()));
+}
+
 bool isFinite(const glm::vec3& v) {
   return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
 }
@@ -729,9 +737,9 @@ class Converter {
     // corners so the front face stays the front face.
     const bool flip = determinant < 0.0;
 
-    m_scene.positions.reserve(base + count);
-    m_scene.normals.reserve(base + count);
-    m_scene.texcoords.reserve(base + count);
+    reserveGrowing(m_scene.positions, base + count);
+    reserveGrowing(m_scene.normals, base + count);
+    reserveGrowing(m_scene.texcoords, base + count);
     for (std::size_t i = 0; i < count; ++i) {
       glm::vec3 p(world * glm::dvec4(glm::dvec3(prim.positions[i]), 1.0));
       if (!isFinite(p))
@@ -755,7 +763,7 @@ class Converter {
     }
 
     const auto offset = std::uint32_t(base);
-    m_scene.triangles.reserve(m_scene.triangles.size() + prim.corners.size() / 3);
+    reserveGrowing(m_scene.triangles, m_scene.triangles.size() + prim.corners.size() / 3);
     for (std::size_t t = 0; t + 2 < prim.corners.size(); t += 3) {
       WtTriangle tri;
       tri.v0 = offset + prim.corners[t];
