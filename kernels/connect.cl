@@ -1,5 +1,7 @@
-// Stage 4 of a bounce: shadow rays queued by shade; an unblocked one adds
-// its precomputed contribution to its path's radiance.
+// Stage 4 of a bounce: shadow rays queued by shade (entry i of the queue is
+// shade item i's path, or WT_NO_HIT where it made none; the count is the
+// bounce's path count); an unblocked one adds its precomputed contribution
+// to its path's radiance.
 #include "bvh_packet.cl"
 
 __kernel void connect(__global const uint* counters, __global const uint* shadow_queue,
@@ -10,6 +12,7 @@ __kernel void connect(__global const uint* counters, __global const uint* shadow
   uint i = get_global_id(0);
   if (i >= counters[WT_COUNTER_SHADOW]) return;
   uint path = shadow_queue[i];
+  if (path == WT_NO_HIT) return;
   float4 o = shadow_o[path];
   float4 d = shadow_d[path];
   BvhScene scene = {nodes, node_count, tri_verts};
@@ -17,9 +20,10 @@ __kernel void connect(__global const uint* counters, __global const uint* shadow
   if (!bvh_occluded(scene, o.xyz, d.xyz, o.w, d.w, skip.x, skip.y)) radiance[path] += shadow_radiance[path];
 }
 
-/// connect for shadow-queue entries [n i, n i + n), n = WT_PACKET_WIDTH,
-/// traced as one packet (kernels/bvh_packet.cl): for the shadow rays of
-/// camera-ray hits, queued in pixel order. The same answers as connect.
+/// connect for the shadow rays among shadow-queue entries [n i, n i + n),
+/// n = WT_PACKET_WIDTH, traced as one packet (kernels/bvh_packet.cl): for
+/// the shadow rays of camera-ray hits, queued in pixel order. The same
+/// answers as connect.
 __kernel void connect_packet(__global const uint* counters, __global const uint* shadow_queue,
                              __global const float4* shadow_o, __global const float4* shadow_d,
                              __global const float4* shadow_radiance, __global const WtBvhNode* nodes,
@@ -30,6 +34,7 @@ __kernel void connect_packet(__global const uint* counters, __global const uint*
   if (first >= count) return;
   uint index[WT_PACKET];
   uint lanes = packet_from_queue(shadow_queue, first, count, index);
+  if (lanes == 0u) return;
   BvhScene scene = {nodes, node_count, tri_verts};
   int blocked[WT_PACKET];
   packet_trace_occluded(scene, index, lanes, shadow_o, shadow_d, 0, shadow_skip, blocked);

@@ -46,6 +46,11 @@ __kernel void shade(WtFrameParams frame, WtEnvironment environment, __global con
                     __global float4* prev_normal) {
   uint i = get_global_id(0);
   if (i >= counters[in_slot]) return;
+  // Without WT_FLAG_COMPACT_SHADOWS entry i of the shadow queue is this
+  // item's shadow ray, if it makes one: no atomic counter, whose increments
+  // from the two threads contended (docs/performance.md, "Queue atomics").
+  const bool compact_shadows = (frame.flags & WT_FLAG_COMPACT_SHADOWS) != 0u;
+  if (!compact_shadows) shadow_queue[i] = WT_NO_HIT;
   uint path = queue_in[i];
   float4 hit = hits[path];
   uint prim = as_uint(hit.w);
@@ -183,8 +188,7 @@ __kernel void shade(WtFrameParams frame, WtEnvironment environment, __global con
         }
         // a zero-length connection (the light point is the origin) carries nothing
         if (tmax > 0.0f) {
-          uint slot = atomic_inc(&counters[WT_COUNTER_SHADOW]);
-          shadow_queue[slot] = path;
+          shadow_queue[compact_shadows ? atomic_inc(&counters[WT_COUNTER_SHADOW]) : i] = path;
           shadow_o[path] = (float4)(shadow_origin, 0.0f);
           shadow_d[path] = (float4)(shadow_dir, tmax);
           shadow_radiance[path] = (float4)(contribution, 0.0f);

@@ -194,10 +194,12 @@ void Renderer::renderSample() {
   for (int bounce = 0; bounce <= m_settings.maxBounces && alive > 0; ++bounce) {
     m_stats.raysTraced += alive;
     m_context.fill(m_counters, 0u, outSlot * sizeof(cl_uint), sizeof(cl_uint));
-    m_context.fill(m_counters, 0u, WT_COUNTER_SHADOW * sizeof(cl_uint), sizeof(cl_uint));
-
     // extend: closest hit of every queued path; camera rays in packets
     const bool packets = m_settings.packets && bounce == 0;
+    // Shadow rays traced in packets are appended to a dense queue (an atomic
+    // counter from 0); otherwise shade writes entry i for its item i
+    // (WT_NO_HIT: no shadow ray) and the queue has the bounce's path count.
+    m_context.fill(m_counters, packets ? 0u : cl_uint(alive), WT_COUNTER_SHADOW * sizeof(cl_uint), sizeof(cl_uint));
     cl::Kernel& extend = packets ? m_extendPacket : m_extend;
     extend.setArg(1, inSlot);
     extend.setArg(2, *queueIn);
@@ -207,7 +209,9 @@ void Renderer::renderSample() {
       m_context.launch("extend", extend, alive);
 
     // shade: emission and the next direction; survivors go to the other queue
-    m_shade.setArg(0, frameParams(m_settings, m_lights, sample, bounce));
+    WtFrameParams shadeParams = frameParams(m_settings, m_lights, sample, bounce);
+    if (packets) shadeParams.flags |= WT_FLAG_COMPACT_SHADOWS;
+    m_shade.setArg(0, shadeParams);
     m_shade.setArg(6, inSlot);
     m_shade.setArg(7, outSlot);
     m_shade.setArg(8, *queueIn);

@@ -125,12 +125,13 @@ typedef struct WtFrameParams {
 #define WT_FLAG_SOBOL 16u         ///< Owen-scrambled Sobol sampler instead of independent hashes
 #define WT_FLAG_ENV_HIDDEN 32u    ///< camera rays that escape see black; the environment still lights the scene
 #define WT_FLAG_CHECK_NONFINITE 64u ///< shade records the first NaN/Inf it makes (WT_COUNTER_FIRST_NONFINITE) so the host can stop there
+#define WT_FLAG_COMPACT_SHADOWS 128u ///< shade appends shadow rays to its queue with an atomic counter, dense for connect_packet; otherwise entry i is item i's (WT_NO_HIT: none) and no atomic is contended
 
 /// Slots of the queue-counter buffer.
 #define WT_COUNTER_QUEUE_A 0      ///< paths in queue A
 #define WT_COUNTER_QUEUE_B 1      ///< paths in queue B
 #define WT_COUNTER_NONFINITE 2    ///< samples discarded as NaN/Inf
-#define WT_COUNTER_SHADOW 3       ///< shadow rays queued by shade for connect
+#define WT_COUNTER_SHADOW 3       ///< entries of the shadow queue: shadow rays appended (WT_FLAG_COMPACT_SHADOWS), else the bounce's path count (set by the host)
 #define WT_COUNTER_FIRST_NONFINITE 4  ///< path (= pixel) of the first NaN/Inf shade made; 0xffffffff: none (WT_FLAG_CHECK_NONFINITE)
 #define WT_COUNTER_NONFINITE_WHERE 5  ///< its bounce (low 16 bits) and quantity (WT_NONFINITE_* << 16)
 #define WT_COUNTER_COUNT 6
