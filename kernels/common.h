@@ -29,6 +29,30 @@
 #define WT_NO_HIT 0xffffffffu
 #define WT_PI 3.14159265358979323846f
 
+/// atan2 for finite arguments, within 2 ulp of the true angle plus about
+/// 1e-7 rad (Cephes' atanf: reduction to |t| <= tan(pi/8), a degree-9 odd
+/// polynomial), without the library's handling of infinities: PoCL's atan2
+/// measured 13% of an environment-lit render. atan2(0, 0) is 0 (or pi for
+/// x = -0), as the library's; NaN in, NaN out.
+inline float wt_atan2(float y, float x) {
+  float ax = fabs(x), ay = fabs(y);
+  // atan(ay / ax) in [0, pi/2]
+  float t = ay / ax;  // inf for ax = 0 < ay; NaN for 0 / 0
+  float base = 0.0f;
+  if (t > 2.414213562373095f) {
+    base = 0.5f * WT_PI;
+    t = -1.0f / t;  // -0 for t = inf
+  } else if (t > 0.4142135623730950f) {
+    base = 0.25f * WT_PI;
+    t = (t - 1.0f) / (t + 1.0f);
+  }
+  float z = t * t;
+  float a = base + ((((8.05374449538e-2f * z - 1.38776856032e-1f) * z + 1.99777106478e-1f) * z - 3.33329491539e-1f) * z * t + t);
+  if (ax == 0.0f && ay == 0.0f) a = 0.0f;  // 0 / 0
+  if (signbit(x)) a = WT_PI - a;
+  return copysign(a, y);
+}
+
 inline float3 vec4_xyz(WtVec4 v) { return (float3)(v.x, v.y, v.z); }
 
 inline float vec3_component(float3 v, int k) { return k == 0 ? v.x : (k == 1 ? v.y : v.z); }

@@ -62,6 +62,12 @@ __kernel void test_offset(uint count, __global const float4* verts, __global con
 
 #include "lights/light_sampling.cl"
 
+__kernel void test_atan2(uint count, __global const float2* yx, __global float* out) {
+  uint i = get_global_id(0);
+  if (i >= count) return;
+  out[i] = wt_atan2(yx[i].x, yx[i].y);
+}
+
 __kernel void test_light_pick(uint count, __global const WtAliasSlot* alias, uint light_count,
                               __global uint* chosen, __global float* pmf) {
   uint i = get_global_id(0);

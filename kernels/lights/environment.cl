@@ -53,8 +53,8 @@ inline uint2 environment_texel(WtEnvironment env, float3 direction_world, float*
   float r = sqrt(m.x * m.x + m.z * m.z);
   *sin_theta = r / length(m);
   // atan2(r, y) rather than acos(y): accurate near the poles too
-  float u = clamp(0.5f - atan2(m.x, m.z) * (0.5f / WT_PI), 0.0f, 1.0f);
-  float v = clamp(atan2(r, m.y) * (1.0f / WT_PI), 0.0f, 1.0f);
+  float u = clamp(0.5f - wt_atan2(m.x, m.z) * (0.5f / WT_PI), 0.0f, 1.0f);
+  float v = clamp(wt_atan2(r, m.y) * (1.0f / WT_PI), 0.0f, 1.0f);
   return (uint2)(min((uint)(u * (float)env.width), env.width - 1u),
                  min((uint)(v * (float)env.height), env.height - 1u));
 }

@@ -43,7 +43,7 @@ inline float light_triangle_solid_angle(float3 p, float3 p0, float3 p1, float3 p
   float la = length(a), lb = length(b), lc = length(c);
   float numerator = fabs(dot(a, cross(b, c)));
   float denominator = la * lb * lc + dot(a, b) * lc + dot(a, c) * lb + dot(b, c) * la;
-  return fabs(2.0f * atan2(numerator, denominator));
+  return fabs(2.0f * wt_atan2(numerator, denominator));
 }
 
 inline bool light_use_spherical(float solid_angle) {

@@ -134,6 +134,55 @@ TEST(SharedCode, RayOffsetLeavesTheSurfaceOnTheNormalSideAtEveryScale) {
   EXPECT_EQ(failures, 0);
 }
 
+// wt_atan2 (kernels/common.h), the kernels' atan2 for finite arguments:
+// against the double-precision angle, within 2 ulp of the result plus
+// 2e-7 rad, over every octant, magnitudes from 1e-30 to 1e30, the axes and
+// the signed zeros (where it must give the library's exact values).
+TEST(SharedCode, Atan2IsAccurateOnEveryOctantAndAtTheAxes) {
+  Context& ctx = test::deviceContext();
+  std::mt19937 rng(17);
+  std::uniform_real_distribution<double> angle(-M_PI, M_PI), logScale(-30.0, 30.0);
+  std::vector<cl_float2> yx;
+  for (int i = 0; i < 200000; ++i) {
+    const double a = angle(rng), r = std::pow(10.0, logScale(rng) * (i % 4 == 0 ? 1.0 : 0.1));
+    yx.push_back({{float(r * std::sin(a)), float(r * std::cos(a))}});
+  }
+  // the octant boundaries and the reduction's thresholds, approached from both sides
+  for (double a : {0.0, M_PI / 8, M_PI / 4, 3 * M_PI / 8, M_PI / 2, 5 * M_PI / 8, 3 * M_PI / 4, 7 * M_PI / 8, M_PI})
+    for (double sign : {1.0, -1.0})
+      for (int k = -50; k <= 50; ++k) {
+        const double b = sign * (a + k * 1e-7);
+        yx.push_back({{float(std::sin(b)), float(std::cos(b))}});
+      }
+  const float zeros[] = {0.0f, -0.0f};
+  for (float y : zeros)
+    for (float x : {0.0f, -0.0f, 1.0f, -1.0f, 1e-30f, -1e-30f}) yx.push_back({{y, x}});
+  for (float y : {1.0f, -1.0f, 3e38f, -1e-38f})
+    for (float x : zeros) yx.push_back({{y, x}});
+  const cl_uint n = cl_uint(yx.size());
+  cl::Buffer in(ctx.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, n * sizeof(cl_float2), yx.data());
+  cl::Buffer out(ctx.context(), CL_MEM_WRITE_ONLY, n * sizeof(float));
+  cl::Kernel k(test::unitTestProgram(), "test_atan2");
+  k.setArg(0, n), k.setArg(1, in), k.setArg(2, out);
+  ctx.launch("test_atan2", k, n);
+  std::vector<float> got(n);
+  ctx.queue().enqueueReadBuffer(out, CL_TRUE, 0, n * sizeof(float), got.data());
+  int failures = 0;
+  double worst = 0.0;
+  for (cl_uint i = 0; i < n; ++i) {
+    const float y = yx[i].s[0], x = yx[i].s[1];
+    const double want = std::atan2(double(y), double(x));
+    const double err = std::fabs(double(got[i]) - want);
+    const double ulp = std::ldexp(1.0, std::ilogb(std::max(std::fabs(want), 1e-30)) - 23);
+    worst = std::max(worst, err / (ulp + 2e-7));
+    bool ok = err <= 2.0 * ulp + 2e-7;
+    if (y == 0.0f) ok = got[i] == std::atan2(y, x) && std::signbit(got[i]) == std::signbit(std::atan2(y, x));
+    if (!ok && ++failures <= 10)
+      ADD_FAILURE() << "atan2(" << y << ", " << x << ") = " << got[i] << ", want " << want;
+  }
+  EXPECT_EQ(failures, 0) << "worst error " << worst << " x (2 ulp + 2e-7)";
+}
+
 // The four-lane leaf test gives what testing the triangles one by one gives,
 // bit for bit: every count from 1 to 4, with and without a skipped
 // triangle, on rays aimed at shared edges and vertices (exactly-zero edge
