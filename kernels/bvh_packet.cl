@@ -340,16 +340,11 @@ inline pint packet_occluded(BvhScene scene, const RayPacket* p, pint valid, pflo
 }
 
 /// Lanes of the packet at entries [first, first + WT_PACKET) of a queue of
-/// `count`, entries WT_NO_HIT left out: index[l] the queued ray of lane l
-/// (the last one repeated past the real lanes); returns how many lanes are
-/// real (0: none, index untouched).
+/// `count`: index[l] the queued ray of lane l (the last one repeated past the
+/// end); returns how many lanes are real.
 inline uint packet_from_queue(__global const uint* queue, uint first, uint count, uint* index) {
-  uint end = min(count, first + (uint)WT_PACKET), lanes = 0;
-  for (uint e = first; e < end; ++e) {
-    uint q = queue[e];
-    if (q != WT_NO_HIT) index[lanes++] = q;
-  }
-  for (uint l = lanes; lanes > 0u && l < WT_PACKET; ++l) index[l] = index[lanes - 1u];
+  uint lanes = min(count - first, (uint)WT_PACKET);
+  for (uint l = 0; l < WT_PACKET; ++l) index[l] = queue[first + min(l, lanes - 1u)];
   return lanes;
 }
 

@@ -1,7 +1,8 @@
-// Stage 4 of a bounce: shadow rays queued by shade (entry i of the queue is
-// shade item i's path, or WT_NO_HIT where it made none; the count is the
-// bounce's path count); an unblocked one adds its precomputed contribution
-// to its path's radiance.
+// Stage 4 of a bounce: shadow rays queued by shade; an unblocked one adds
+// its precomputed contribution to its path's radiance. For connect, entry i
+// of the queue is shade item i's path or WT_NO_HIT (no shadow ray) and the
+// count is the bounce's path count; connect_packet's queue is dense
+// (WT_FLAG_COMPACT_SHADOWS).
 #include "bvh_packet.cl"
 
 __kernel void connect(__global const uint* counters, __global const uint* shadow_queue,
@@ -20,10 +21,9 @@ __kernel void connect(__global const uint* counters, __global const uint* shadow
   if (!bvh_occluded(scene, o.xyz, d.xyz, o.w, d.w, skip.x, skip.y)) radiance[path] += shadow_radiance[path];
 }
 
-/// connect for the shadow rays among shadow-queue entries [n i, n i + n),
-/// n = WT_PACKET_WIDTH, traced as one packet (kernels/bvh_packet.cl): for
-/// the shadow rays of camera-ray hits, queued in pixel order. The same
-/// answers as connect.
+/// connect for shadow-queue entries [n i, n i + n), n = WT_PACKET_WIDTH,
+/// traced as one packet (kernels/bvh_packet.cl): for the shadow rays of
+/// camera-ray hits, appended densely by shade. The same answers as connect.
 __kernel void connect_packet(__global const uint* counters, __global const uint* shadow_queue,
                              __global const float4* shadow_o, __global const float4* shadow_d,
                              __global const float4* shadow_radiance, __global const WtBvhNode* nodes,
@@ -34,7 +34,6 @@ __kernel void connect_packet(__global const uint* counters, __global const uint*
   if (first >= count) return;
   uint index[WT_PACKET];
   uint lanes = packet_from_queue(shadow_queue, first, count, index);
-  if (lanes == 0u) return;
   BvhScene scene = {nodes, node_count, tri_verts};
   int blocked[WT_PACKET];
   packet_trace_occluded(scene, index, lanes, shadow_o, shadow_d, 0, shadow_skip, blocked);

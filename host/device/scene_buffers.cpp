@@ -27,6 +27,10 @@ cl::Buffer upload(Context& context, const std::vector<T>& data, std::size_t& byt
 }  // namespace
 
 SceneBuffers::SceneBuffers(Context& context, const Scene& scene, const BvhBuildOptions& options) {
+  // the tagged vertex index of tri_verts (shared/types.h) has room for these
+  if (scene.positions.size() > WT_MAX_VERTICES)
+    throw std::length_error("scene has " + std::to_string(scene.positions.size()) + " vertices; at most " +
+                            std::to_string(WT_MAX_VERTICES) + " are supported");
   // Zero-area and non-finite triangles never enter the BVH: they cannot be
   // hit meaningfully, and in float a ray through a collinear triangle can
   // still produce a spurious hit.
@@ -62,9 +66,6 @@ SceneBuffers::SceneBuffers(Context& context, const Scene& scene, const BvhBuildO
   // Each corner's w carries its vertex index, tagged (WT_VERTEX_TAG; shading
   // reads the normals by it), so a triangle costs 3 x 16 bytes of positions
   // and 4 of material.
-  if (scene.positions.size() > WT_MAX_VERTICES)
-    throw std::length_error("scene has " + std::to_string(scene.positions.size()) + " vertices; at most " +
-                            std::to_string(WT_MAX_VERTICES) + " are supported");
   std::vector<WtVec4> verts(3 * m_bvh.primIndices.size());
   std::vector<std::uint32_t> materialOf(m_bvh.primIndices.size());
   for (std::size_t i = 0; i < materialOf.size(); ++i) {
