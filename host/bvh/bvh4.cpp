@@ -41,7 +41,7 @@ WtBvh4Node emptyNode() {
 Bvh4 collapseToBvh4(const Bvh& bvh) {
   auto start = std::chrono::steady_clock::now();
   Bvh4 out;
-  const std::vector<WtBvhNode>& in = bvh.nodes;
+  const BvhNodes& in = bvh.nodes;
   if (in.empty()) return out;
   out.nodes.reserve(in.size() / 2 + 1);
   out.nodes.push_back(emptyNode());

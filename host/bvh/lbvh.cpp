@@ -1,8 +1,8 @@
 // Linear BVH build: 63-bit Morton codes of the centroids, a parallel LSD
-// radix sort, the Karras 2012 hierarchy (every internal node finds its own
-// range and split), subtrees of at most maxLeafSize primitives collapsed into
-// one leaf, then a depth-first flatten with bottom-up boxes, both in parallel
-// over subtrees.
+// radix sort, the Karras 2012 radix tree found top down (each node kept in
+// the collapsed tree searches its split; subtrees of at most maxLeafSize
+// primitives become one leaf unsplit), then a depth-first flatten with
+// bottom-up boxes, both in parallel over subtrees.
 #include "bvh/lbvh.h"
 
 #include "bvh/parallel.h"
@@ -22,6 +22,7 @@
 #include <stdexcept>
 #include <system_error>
 #include <thread>
+#include <utility>
 
 namespace wt {
 namespace {
@@ -32,21 +33,17 @@ using Clock = std::chrono::steady_clock;
 
 constexpr int kMortonBitsPerAxis = 21;
 constexpr int kKeyBits = 3 * kMortonBitsPerAxis;
-// 11-bit digits: at most six passes over 63-bit keys. On two threads this measured faster
-// than eight 8-bit passes and than five 13-bit ones, whose scatter keeps too many lines open.
+// 11-bit digits: 2048 buckets, whose scatter keeps few enough lines open (LSD passes over
+// whole arrays measured faster with 11-bit digits than with 8 or 13 bits).
 constexpr int kRadixBits = 11;
 constexpr std::uint32_t kRadixBuckets = 1u << kRadixBits;
 constexpr std::uint32_t kRadixMask = kRadixBuckets - 1;
-constexpr int kMaxRadixPasses = (kKeyBits + kRadixBits - 1) / kRadixBits;
 // Below this many primitives per thread, starting a thread costs more than it saves.
 constexpr std::size_t kMinPrimsPerThread = 16384;
 constexpr int kMaxThreads = 64;
 // Node and primitive indices are 32-bit and a tree has up to 2n - 1 nodes.
 constexpr std::size_t kMaxPrims = std::size_t{1} << 31;
-// Leaf starts are also counted per block of sorted positions, to size big subtrees quickly.
-constexpr std::size_t kStartBlock = 4096;
-// The flatten hands out subtrees of at most n / kFlattenTasks primitives; many more tasks
-// than threads balance the load, and a task's nodes stay in the core's cache for its boxes.
+// The flatten hands out subtrees of at most n / kFlattenTasks primitives (subtreePrims).
 constexpr std::size_t kFlattenTasks = 64;
 
 double secondsSince(Clock::time_point start) {
@@ -174,64 +171,68 @@ MortonKeys computeMortonKeys(std::span<const Aabb> primBounds, int threads) {
 
 // ---- sort --------------------------------------------------------------------------
 
-/// Digit positions of the LSD passes: a digit that is the same in every key is skipped.
-struct RadixPlan {
-  std::array<int, kMaxRadixPasses> shifts{};
-  int passes = 0;
-};
-
-// The radix passes sort 64-bit items, a key's top 32 bits over the input
-// index, by those 32 bits (three 11-bit digits instead of six over the whole
-// key and its index in two arrays: half the passes, two thirds of the bytes
-// per pass); the full keys are then gathered in that order and a sequential
-// pass orders each run of equal top bits by the full key (insertion sort:
+// The sort orders 64-bit items, a key's top 32 bits over its input index, by
+// value, which is the stable sort of the keys by their top 32 bits: one
+// parallel MSD pass scatters the items into buckets by the most significant
+// 11-bit digit that varies, then each bucket, which fits in a core's cache,
+// is sorted alone (LSD passes over the digits below, insertion sort when
+// small) and its full keys gathered in that order; a pass over the bucket
+// then orders each run of equal top bits by the full key (insertion sort:
 // runs are short, most have one key). The result is the full sort's, key for
 // key and index for index.
 constexpr int kFixupBits = kKeyBits - 32;
+// Buckets of at most this many items are insertion-sorted instead of radix passes.
+constexpr std::size_t kInsertionSortItems = 64;
+
+/// The digits of the item sort, as bit positions within the items' top 32 bits.
+struct RadixPlan {
+  int msdShift = 0;  ///< the bucket digit: the highest 11-bit window holding a differing bit
+  std::array<int, 3> shifts{};  ///< the LSD digits below it that differ, lowest first
+  std::array<int, 3> widths{};
+  int passes = 0;
+};
 
 RadixPlan planRadixSort(std::uint64_t keysOr, std::uint64_t keysAnd) {
   RadixPlan plan;
-  const std::uint64_t differ = (keysOr ^ keysAnd) >> kFixupBits;  // the items' top 32 bits
-  for (int shift = 0; shift < 32; shift += kRadixBits)
-    if ((differ >> shift) & kRadixMask) plan.shifts[plan.passes++] = 32 + shift;
+  const std::uint32_t differ = static_cast<std::uint32_t>((keysOr ^ keysAnd) >> kFixupBits);
+  const int topBit = differ != 0 ? 31 - std::countl_zero(differ) : 0;
+  plan.msdShift = std::max(0, topBit + 1 - kRadixBits);
+  for (int shift = 0; shift < plan.msdShift; shift += kRadixBits) {
+    const int width = std::min(kRadixBits, plan.msdShift - shift);
+    if ((differ >> shift) & ((1u << width) - 1)) {
+      plan.shifts[static_cast<std::size_t>(plan.passes)] = shift;
+      plan.widths[static_cast<std::size_t>(plan.passes++)] = width;
+    }
+  }
   return plan;
 }
 
-/// LSD radix passes over items by the digits at plan.shifts; stable. Pass p
-/// reads set p % 2 and writes the other.
-void radixSortItems(int threads, std::size_t n, const RadixPlan& plan, std::uint64_t* items0,
-                    std::uint64_t* items1) {
-  std::vector<std::uint32_t> histograms(static_cast<std::size_t>(threads) * kRadixBuckets);
-  runTeam(threads, [&](int rank, int size, Barrier& barrier) {
-    const Range chunk = chunkOf(n, size, rank);
-    std::uint32_t* histogram = histograms.data() + static_cast<std::size_t>(rank) * kRadixBuckets;
-    std::vector<std::uint32_t> offsets(kRadixBuckets);
-    for (int pass = 0; pass < plan.passes; ++pass) {
-      const std::uint64_t* src = pass % 2 == 0 ? items0 : items1;
-      std::uint64_t* dst = pass % 2 == 0 ? items1 : items0;
-      const int shift = plan.shifts[static_cast<std::size_t>(pass)];
-      std::fill(histogram, histogram + kRadixBuckets, 0u);
-      for (std::size_t i = chunk.begin; i < chunk.end; ++i) ++histogram[(src[i] >> shift) & kRadixMask];
-      barrier.arriveAndWait();
-      // A digit's slots follow all smaller digits, then the same digit of lower ranks.
-      std::uint32_t running = 0;
-      for (std::uint32_t digit = 0; digit < kRadixBuckets; ++digit) {
-        std::uint32_t mine = running;
-        for (int r = 0; r < size; ++r) {
-          const std::uint32_t count = histograms[static_cast<std::size_t>(r) * kRadixBuckets + digit];
-          if (r < rank) mine += count;
-          running += count;
-        }
-        offsets[digit] = mine;
-      }
-      for (std::size_t i = chunk.begin; i < chunk.end; ++i) {
-        const std::uint64_t item = src[i];
-        dst[offsets[(item >> shift) & kRadixMask]++] = item;
-      }
-      // The next pass reads what every rank wrote and rewrites the histograms.
-      barrier.arriveAndWait();
+/// Sort the items of one bucket by value; returns where they ended, `items` or `scratch`.
+std::uint64_t* sortBucket(const RadixPlan& plan, std::uint64_t* items, std::uint64_t* scratch, std::size_t count) {
+  if (count <= kInsertionSortItems) {
+    for (std::size_t j = 1; j < count; ++j) {
+      const std::uint64_t item = items[j];
+      std::size_t k = j;
+      for (; k > 0 && items[k - 1] > item; --k) items[k] = items[k - 1];
+      items[k] = item;
     }
-  });
+    return items;
+  }
+  // Within a bucket the items are in index order (the bucket pass is stable), so stable
+  // passes over the lower digits order them by value.
+  std::array<std::uint32_t, kRadixBuckets> offsets;
+  for (int pass = 0; pass < plan.passes; ++pass) {
+    const int shift = 32 + plan.shifts[static_cast<std::size_t>(pass)];
+    const std::uint32_t digits = 1u << plan.widths[static_cast<std::size_t>(pass)];
+    const std::uint32_t mask = digits - 1;
+    std::fill(offsets.begin(), offsets.begin() + digits, 0u);
+    for (std::size_t i = 0; i < count; ++i) ++offsets[(items[i] >> shift) & mask];
+    std::uint32_t running = 0;
+    for (std::uint32_t d = 0; d < digits; ++d) running += std::exchange(offsets[d], running);
+    for (std::size_t i = 0; i < count; ++i) scratch[offsets[(items[i] >> shift) & mask]++] = items[i];
+    std::swap(items, scratch);
+  }
+  return items;
 }
 
 /// Orders every run of keys equal above the low kFixupBits by the full key,
@@ -279,98 +280,110 @@ int commonPrefix(const std::uint64_t* keys, std::int64_t n, std::int64_t i, std:
   return 64 + std::countl_zero(static_cast<std::uint32_t>(i ^ j));
 }
 
-/// The Karras tree reduced to what the flatten opens. Internal node i covers the sorted
-/// range [min(i, j), max(i, j)] for some j; a left child is the internal node numbered by
-/// the last position of its range, a right child the one numbered by its first.
-struct Hierarchy {
-  /// Last position of the left child of node i; written only where i covers more than
-  /// maxLeaf primitives, the only nodes the collapsed tree keeps as internal nodes.
-  std::unique_ptr<std::uint32_t[]> split;
-  /// 1 where a leaf of the collapsed tree begins: position 0 and split + 1 of every kept node.
-  std::unique_ptr<std::uint8_t[]> leafStart;
-  std::vector<std::uint32_t> blockStarts;  ///< leafStart summed over blocks of kStartBlock positions
-  std::size_t leafCount = 0;
+/// The split of the internal node covering sorted positions [first, last], first < last:
+/// the last position of its left child, the last one sharing more than the node's prefix
+/// with `first` (Karras's split search, from the node's first position).
+std::uint32_t findSplit(const std::uint64_t* keys, std::int64_t n, std::int64_t first, std::int64_t last) {
+  const int prefixNode = commonPrefix(keys, n, first, last);
+  std::int64_t offset = 0;
+  std::int64_t step = last - first;
+  do {
+    step = (step + 1) / 2;
+    if (commonPrefix(keys, n, first, first + offset + step) > prefixNode) offset += step;
+  } while (step > 1);
+  return static_cast<std::uint32_t>(first + offset);
+}
 
-  /// Leaves of the collapsed subtree of a kept node covering [first, last]. Its first
-  /// position is marked: it is 0 or follows the split of a kept ancestor.
-  std::size_t leavesIn(std::size_t first, std::size_t last) const {
-    std::size_t count = 0;
-    std::size_t k = first;
-    const std::size_t end = last + 1;
-    while (k < end && k % kStartBlock != 0) count += leafStart[k++];
-    while (k + kStartBlock <= end) {
-      count += blockStarts[k / kStartBlock];
-      k += kStartBlock;
-    }
-    while (k < end) count += leafStart[k++];
-    return count;
-  }
+/// Below this many primitives the flatten hands a subtree to one thread whole; many more
+/// subtrees than threads balance the load, and a subtree's nodes stay in the core's cache.
+std::size_t subtreePrims(std::size_t n) { return std::max<std::size_t>(n / kFlattenTasks, kMinPrimsPerThread / 4); }
+
+/// A subtree of at most subtreePrims primitives, and how many leaves the collapsed tree has there.
+struct Subtree {
+  std::uint32_t first;
+  std::uint32_t last;
+  std::uint32_t leaves;
 };
 
+/// The binary radix tree over the sorted keys (Karras 2012), reduced to what the flatten
+/// opens: only nodes covering more than maxLeaf primitives, the internal nodes of the
+/// collapsed tree, are split. Internal node ids follow Karras: the root is 0, a left child
+/// is numbered by the last position of its range, a right child by its first.
+struct Hierarchy {
+  /// Last position of the left child of internal node id; written for kept nodes only.
+  std::unique_ptr<std::uint32_t[]> split;
+  /// The subtrees the flatten gives to threads, in its depth-first order (left first).
+  std::vector<Subtree> subtrees;
+  std::size_t leafCount = 0;
+};
+
+/// A node of the radix tree: its sorted range and its id.
+struct RadixNode {
+  std::uint32_t first;
+  std::uint32_t last;
+  std::uint32_t id;
+};
+
+/// Split `node` and hand each child to leaf() (at most maxLeaf primitives) or inner(),
+/// right first, so that a stack opens the left subtree next.
+template <class Leaf, class Inner>
+void splitNode(const RadixNode& node, const std::uint64_t* keys, std::int64_t n, std::uint32_t maxLeaf,
+               std::uint32_t* split, Leaf&& leaf, Inner&& inner) {
+  const std::uint32_t gamma = findSplit(keys, n, node.first, node.last);
+  split[node.id] = gamma;
+  if (node.last - gamma > maxLeaf)
+    inner(RadixNode{gamma + 1, node.last, gamma + 1});
+  else
+    leaf();
+  if (gamma - node.first + 1 > maxLeaf)
+    inner(RadixNode{node.first, gamma, gamma});
+  else
+    leaf();
+}
+
+// Top down from the root, so only the kept nodes are searched (about one position in
+// four to eight with leaves of four to eight): the top sequentially down to subtrees of
+// at most subtreePrims primitives, the subtrees in parallel. The tree is the one every
+// internal node would find bottom up by its own range search.
 Hierarchy buildHierarchy(const std::uint64_t* keys, std::size_t n, std::uint32_t maxLeaf, int threads) {
   Hierarchy tree;
   tree.split = std::make_unique_for_overwrite<std::uint32_t[]>(n - 1);
-  tree.leafStart = std::make_unique_for_overwrite<std::uint8_t[]>(n);
-  tree.blockStarts.resize((n + kStartBlock - 1) / kStartBlock);
-  std::array<PerThread<std::size_t>, kMaxThreads> chunkKept{};
   const std::int64_t count = static_cast<std::int64_t>(n);
-  runTeam(threads, [&](int rank, int size, Barrier& barrier) {
-    const Range marks = chunkOf(n, size, rank);
-    std::memset(tree.leafStart.get() + marks.begin, 0, marks.end - marks.begin);
-    if (rank == 0) tree.leafStart[0] = 1;
-    // Any rank may mark any position below.
-    barrier.arriveAndWait();
+  const std::size_t taskPrims = subtreePrims(n);
+  std::uint32_t* const split = tree.split.get();
 
-    // Local copies: the byte stores below could alias anything reached through a reference.
-    std::uint32_t* const split = tree.split.get();
-    std::uint8_t* const leafStart = tree.leafStart.get();
-    const std::uint64_t* const sorted = keys;
-    const Range chunk = chunkOf(n - 1, size, rank);
-    std::size_t kept = 0;
-    for (std::int64_t i = static_cast<std::int64_t>(chunk.begin); i < static_cast<std::int64_t>(chunk.end); ++i) {
-      // The range grows towards the neighbour sharing the longer prefix.
-      const int prefixNext = commonPrefix(sorted, count, i, i + 1);
-      const int prefixPrev = commonPrefix(sorted, count, i, i - 1);
-      const std::int64_t dir = prefixNext > prefixPrev ? 1 : -1;
-      const int prefixMin = std::min(prefixNext, prefixPrev);
-      // Positions sharing more than prefixMin with i are exactly the range; a node of at most
-      // maxLeaf primitives lies inside a leaf and needs neither its length nor its split.
-      if (commonPrefix(sorted, count, i, i + static_cast<std::int64_t>(maxLeaf) * dir) <= prefixMin) continue;
-      std::int64_t lengthMax = 2 * static_cast<std::int64_t>(maxLeaf);
-      while (commonPrefix(sorted, count, i, i + lengthMax * dir) > prefixMin) lengthMax *= 2;
-      std::int64_t length = 0;
-      for (std::int64_t step = lengthMax / 2; step >= 1; step /= 2)
-        if (commonPrefix(sorted, count, i, i + (length + step) * dir) > prefixMin) length += step;
-
-      // Split where the prefix shared with i first shortens below the node's prefix.
-      const std::int64_t j = i + length * dir;
-      const int prefixNode = commonPrefix(sorted, count, i, j);
-      std::int64_t offset = 0;
-      std::int64_t step = length;
-      do {
-        step = (step + 1) / 2;
-        if (commonPrefix(sorted, count, i, i + (offset + step) * dir) > prefixNode) offset += step;
-      } while (step > 1);
-      const std::int64_t gamma = i + offset * dir + std::min<std::int64_t>(dir, 0);
-      split[i] = static_cast<std::uint32_t>(gamma);
-      // Each boundary between sorted positions is split by exactly one node: no two ranks write one mark.
-      leafStart[gamma + 1] = 1;
-      ++kept;
+  std::size_t topLeaves = 0;
+  std::vector<RadixNode> stack{{0, static_cast<std::uint32_t>(n - 1), 0}};
+  std::vector<RadixNode> roots;
+  while (!stack.empty()) {
+    const RadixNode node = stack.back();
+    stack.pop_back();
+    if (node.last - node.first + 1 <= taskPrims) {
+      roots.push_back(node);
+      continue;
     }
-    chunkKept[static_cast<std::size_t>(rank)].value = kept;
-    barrier.arriveAndWait();
+    splitNode(node, keys, count, maxLeaf, split, [&] { ++topLeaves; },
+              [&](const RadixNode& child) { stack.push_back(child); });
+  }
 
-    const Range blocks = chunkOf(tree.blockStarts.size(), size, rank);
-    for (std::size_t b = blocks.begin; b < blocks.end; ++b) {
-      const std::size_t end = std::min(n, (b + 1) * kStartBlock);
-      std::uint32_t starts = 0;
-      for (std::size_t k = b * kStartBlock; k < end; ++k) starts += tree.leafStart[k];
-      tree.blockStarts[b] = starts;
+  tree.subtrees.resize(roots.size());
+  std::atomic<std::size_t> nextRoot{0};
+  runTeam(threads, [&](int, int, Barrier&) {
+    std::vector<RadixNode> pending;
+    for (std::size_t r = nextRoot++; r < roots.size(); r = nextRoot++) {
+      std::uint32_t leaves = 0;
+      pending.assign(1, roots[r]);
+      while (!pending.empty()) {
+        const RadixNode node = pending.back();
+        pending.pop_back();
+        splitNode(node, keys, count, maxLeaf, split, [&] { ++leaves; },
+                  [&](const RadixNode& child) { pending.push_back(child); });
+      }
+      tree.subtrees[r] = {roots[r].first, roots[r].last, leaves};
     }
   });
-  // A binary tree with k internal nodes has k + 1 leaves.
-  tree.leafCount = 1;
-  for (const PerThread<std::size_t>& kept : chunkKept) tree.leafCount += kept.value;
+  tree.leafCount = topLeaves;
+  for (const Subtree& subtree : tree.subtrees) tree.leafCount += subtree.leaves;
   return tree;
 }
 
@@ -463,11 +476,12 @@ struct Pending {
 /// written, and internal ones to queue() (right first, so the left subtree is laid out next).
 template <class Leaf, class Queue>
 void openNode(const Pending& open, std::uint32_t next, const Hierarchy& tree, std::uint32_t maxLeaf,
-              std::vector<WtBvhNode>& nodes, Leaf&& leaf, Queue&& queue) {
+              BvhNodes& nodes, Leaf&& leaf, Queue&& queue) {
   const std::uint32_t gamma = tree.split[open.karras];
   const std::uint32_t leftSize = gamma - open.first + 1;
   const std::uint32_t rightSize = open.last - gamma;
   nodes[open.node].first = next;
+  nodes[open.node].count = 0;  // the nodes array is not zeroed (UninitialisedAllocator)
   WtBvhNode& left = nodes[next];
   WtBvhNode& right = nodes[next + 1];
   if (leftSize <= maxLeaf) {
@@ -507,7 +521,7 @@ struct FlattenScratch {
 /// written; then box internal nodes in reverse opening order, which sees children first.
 SubtreeResult flattenSubtree(const SubtreeTask& task, const Hierarchy& tree, std::uint32_t maxLeaf,
                              std::span<const Aabb> primBounds, const std::uint32_t* primIndices,
-                             std::vector<WtBvhNode>& nodes, FlattenScratch& scratch) {
+                             BvhNodes& nodes, FlattenScratch& scratch) {
   SubtreeResult result;
   result.maxDepth = task.depth;
   gatherBoxes(primBounds, primIndices, task.first, task.last, scratch.sorted);
@@ -548,10 +562,10 @@ struct FlatTree {
 /// taskPrims primitives go to the threads, each given the slots the sequential walk would
 /// reach them at: the subtree of a node with L leaves has 2L - 1 nodes.
 FlatTree flattenTree(const Hierarchy& tree, std::size_t n, std::uint32_t maxLeaf, std::span<const Aabb> primBounds,
-                     const std::uint32_t* primIndices, int threads, std::vector<WtBvhNode>& nodes) {
+                     const std::uint32_t* primIndices, int threads, BvhNodes& nodes) {
   FlatTree flat;
   nodes.resize(2 * tree.leafCount - 1);
-  const std::size_t taskPrims = std::max<std::size_t>(n / kFlattenTasks, kMinPrimsPerThread / 4);
+  const std::size_t taskPrims = subtreePrims(n);
 
   // Walk the top; its sums come last, so the total does not depend on the thread count.
   SahSums topSah;
@@ -569,7 +583,10 @@ FlatTree flattenTree(const Hierarchy& tree, std::size_t n, std::uint32_t maxLeaf
     const Pending open = stack.back();
     stack.pop_back();
     if (open.last - open.first + 1 <= taskPrims) {
-      const std::uint32_t end = next + static_cast<std::uint32_t>(2 * tree.leavesIn(open.first, open.last) - 2);
+      // the same depth-first order as buildHierarchy's walk, so its subtrees come in turn
+      const Subtree& subtree = tree.subtrees[tasks.size()];
+      assert(subtree.first == open.first && subtree.last == open.last);
+      const std::uint32_t end = next + 2 * subtree.leaves - 2;
       tasks.push_back({open.node, open.first, open.last, open.karras, next, end, open.depth});
       next = end;
       continue;
@@ -611,53 +628,76 @@ struct PhaseTimes {
 };
 
 /// Morton keys of the centroids sorted ascending, with primIndices[k] the input
-/// index of the k-th; equal keys keep index order.
+/// index of the k-th (n entries); equal keys keep index order.
 void sortKeysWithPlan(int threads, std::size_t n, const RadixPlan& plan, std::unique_ptr<std::uint64_t[]>& keys,
-                      std::vector<std::uint32_t>& primIndices) {
-  primIndices.resize(n);
+                      std::uint32_t* primIndices) {
   auto items0 = std::make_unique_for_overwrite<std::uint64_t[]>(n);
-  auto items1 = std::make_unique_for_overwrite<std::uint64_t[]>(plan.passes > 0 ? n : 1);
-  auto sorted = std::make_unique_for_overwrite<std::uint64_t[]>(n);
-  std::uint64_t* result = plan.passes % 2 == 1 ? items1.get() : items0.get();
-  runTeam(threads, [&](int rank, int size, Barrier&) {
+  // items1 ends up holding the sorted full keys
+  auto items1 = std::make_unique_for_overwrite<std::uint64_t[]>(n);
+  std::vector<std::uint32_t> histograms(static_cast<std::size_t>(threads) * kRadixBuckets);
+  std::vector<std::uint32_t> bucketStart(kRadixBuckets + 1);
+  std::atomic<std::uint32_t> nextBucket{0};
+  const int msdShift = 32 + plan.msdShift;
+  runTeam(threads, [&](int rank, int size, Barrier& barrier) {
     const Range chunk = chunkOf(n, size, rank);
-    for (std::size_t i = chunk.begin; i < chunk.end; ++i) items0[i] = (keys[i] >> kFixupBits) << 32 | i;
-  });
-  radixSortItems(threads, n, plan, items0.get(), items1.get());
-  runTeam(threads, [&](int rank, int size, Barrier&) {
-    const Range chunk = chunkOf(n, size, rank);
+    std::uint32_t* histogram = histograms.data() + static_cast<std::size_t>(rank) * kRadixBuckets;
     for (std::size_t i = chunk.begin; i < chunk.end; ++i) {
-      const std::uint32_t index = static_cast<std::uint32_t>(result[i]);
-      primIndices[i] = index;
-      sorted[i] = keys[index];
+      const std::uint64_t item = (keys[i] >> kFixupBits) << 32 | i;
+      items0[i] = item;
+      ++histogram[(item >> msdShift) & kRadixMask];
+    }
+    barrier.arriveAndWait();
+    // A digit's slots follow all smaller digits, then the same digit of lower ranks.
+    std::vector<std::uint32_t> offsets(kRadixBuckets);
+    std::uint32_t running = 0;
+    for (std::uint32_t digit = 0; digit < kRadixBuckets; ++digit) {
+      if (rank == 0) bucketStart[digit] = running;
+      std::uint32_t mine = running;
+      for (int r = 0; r < size; ++r) {
+        const std::uint32_t count = histograms[static_cast<std::size_t>(r) * kRadixBuckets + digit];
+        if (r < rank) mine += count;
+        running += count;
+      }
+      offsets[digit] = mine;
+    }
+    if (rank == 0) bucketStart[kRadixBuckets] = running;
+    for (std::size_t i = chunk.begin; i < chunk.end; ++i) {
+      const std::uint64_t item = items0[i];
+      items1[offsets[(item >> msdShift) & kRadixMask]++] = item;
+    }
+    // The buckets hold what every rank scattered.
+    barrier.arriveAndWait();
+    for (std::uint32_t b = nextBucket++; b < kRadixBuckets; b = nextBucket++) {
+      const std::size_t begin = bucketStart[b], count = bucketStart[b + 1] - begin;
+      if (count == 0) continue;
+      const std::uint64_t* items = sortBucket(plan, items1.get() + begin, items0.get() + begin, count);
+      // Each item's full key replaces it in items1 (in place when the items ended there).
+      std::uint64_t* sorted = items1.get() + begin;
+      for (std::size_t k = 0; k < count; ++k) {
+        const std::uint32_t index = static_cast<std::uint32_t>(items[k]);
+        primIndices[begin + k] = index;
+        sorted[k] = keys[index];
+      }
+      // Runs of equal top bits never cross buckets.
+      sortRunsByLowBits(count, sorted, primIndices + begin);
     }
   });
-  keys = std::move(sorted);
-  // the runs, split between the threads at run boundaries
-  const std::uint64_t* k = keys.get();
-  runTeam(threads, [&](int rank, int size, Barrier&) {
-    auto boundary = [&](std::size_t i) {
-      while (i > 0 && i < n && (k[i] >> kFixupBits) == (k[i - 1] >> kFixupBits)) ++i;
-      return std::min(i, n);
-    };
-    const Range chunk = chunkOf(n, size, rank);
-    const std::size_t begin = boundary(chunk.begin), end = boundary(chunk.end);
-    if (begin < end) sortRunsByLowBits(end - begin, keys.get() + begin, primIndices.data() + begin);
-  });
+  keys = std::move(items1);
 }
 
-std::unique_ptr<std::uint64_t[]> sortByMorton(std::span<const Aabb> primBounds, int threads,
-                                             std::vector<std::uint32_t>& primIndices, PhaseTimes& times) {
+template <class Indices>
+std::unique_ptr<std::uint64_t[]> sortByMorton(std::span<const Aabb> primBounds, int threads, Indices& primIndices,
+                                             PhaseTimes& times) {
   const std::size_t n = primBounds.size();
   Clock::time_point phase = Clock::now();
   MortonKeys morton = computeMortonKeys(primBounds, threads);
   times.morton = secondsSince(phase);
 
-  // The pass count decides which buffers end up sorted; make that one primIndices.
   phase = Clock::now();
   const RadixPlan plan = planRadixSort(morton.bits.orBits, morton.bits.andBits);
   std::unique_ptr<std::uint64_t[]> keys = std::move(morton.keys);
-  sortKeysWithPlan(threads, n, plan, keys, primIndices);
+  primIndices.resize(n);
+  sortKeysWithPlan(threads, n, plan, keys, primIndices.data());
   times.sort = secondsSince(phase);
   return keys;
 }
@@ -670,7 +710,8 @@ void sortKeysWithIndices(int threads, std::size_t n, std::unique_ptr<std::uint64
                          std::vector<std::uint32_t>& primIndices) {
   std::uint64_t orBits = 0, andBits = ~std::uint64_t{0};
   for (std::size_t i = 0; i < n; ++i) orBits |= keys[i], andBits &= keys[i];
-  sortKeysWithPlan(std::clamp(threads, 1, kMaxThreads), n, planRadixSort(orBits, andBits), keys, primIndices);
+  primIndices.resize(n);
+  sortKeysWithPlan(std::clamp(threads, 1, kMaxThreads), n, planRadixSort(orBits, andBits), keys, primIndices.data());
 }
 
 }  // namespace bvh_detail

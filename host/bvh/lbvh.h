@@ -7,7 +7,12 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
+#include <memory>
+#include <new>
 #include <span>
+#include <type_traits>
+#include <utility>
 #include <vector>
 
 namespace wt {
@@ -46,12 +51,44 @@ struct BvhBuildStats {
   double sahCost = 0.0;       ///< see sahCost()
 };
 
+/// std::allocator, except that resize() leaves new elements default-initialised
+/// (for the node and index types, unset) instead of zeroing them: the builders
+/// write every element, and zeroing a 1 M-triangle tree's 12 MB of nodes and
+/// 4 MB of indices measured 6 ms and 2.6 ms on one thread, first touch included.
+template <class T>
+struct UninitialisedAllocator : std::allocator<T> {
+  template <class U>
+  struct rebind {
+    using other = UninitialisedAllocator<U>;
+  };
+  UninitialisedAllocator() = default;
+  template <class U>
+  UninitialisedAllocator(const UninitialisedAllocator<U>&) noexcept {}
+  template <class U>
+  void construct(U* p) noexcept {
+    static_assert(std::is_trivially_default_constructible_v<U> && std::is_trivially_copyable_v<U>);
+    ::new (static_cast<void*>(p)) U;
+#ifndef NDEBUG
+    // Debug and sanitizer builds fill new elements with a pattern, so that an
+    // element a builder forgets to write fails the tests instead of reading as zero.
+    std::memset(static_cast<void*>(p), 0xa5, sizeof(U));
+#endif
+  }
+  template <class U, class... Args>
+  void construct(U* p, Args&&... args) {
+    ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
+  }
+};
+
+using BvhNodes = std::vector<WtBvhNode, UninitialisedAllocator<WtBvhNode>>;
+using PrimIndices = std::vector<std::uint32_t, UninitialisedAllocator<std::uint32_t>>;
+
 /// nodes[0] is the root. An internal node has count == 0 and children at
 /// first and first + 1; a leaf covers primIndices[first .. first+count).
 /// Empty input gives no nodes.
 struct Bvh {
-  std::vector<WtBvhNode> nodes;
-  std::vector<std::uint32_t> primIndices;  ///< leaf order -> input primitive index
+  BvhNodes nodes;
+  PrimIndices primIndices;  ///< leaf order -> input primitive index
   BvhBuildStats stats;
 };
 

@@ -37,7 +37,7 @@ inline std::string describe(const Aabb& box) {
 inline ::testing::AssertionResult checkBvhInvariants(const Bvh& bvh, std::span<const Aabb> prims, int maxLeafSize = 4,
                                               bool checkBoxes = true) {
   const std::size_t n = prims.size();
-  const std::vector<WtBvhNode>& nodes = bvh.nodes;
+  const BvhNodes& nodes = bvh.nodes;
   if (n == 0) {
     if (!nodes.empty() || !bvh.primIndices.empty()) return ::testing::AssertionFailure() << "empty input, non-empty tree";
     return ::testing::AssertionSuccess();

@@ -107,7 +107,8 @@ TEST(Lbvh, KeySortIsAStableSortOfTheFullKey) {
   // agree there by the low bits: the result must be a stable sort of the
   // whole 63-bit key. Key sets: random; clusters that agree in the top bits
   // and differ only in the low ones (long runs); many exact duplicates; all
-  // equal in the top bits; a few distinct values.
+  // equal in the top bits; a few distinct values; two huge buckets of the
+  // first digit whose lower digits vary (the radix passes inside a bucket).
   std::mt19937_64 rng(5);
   auto make = [&](int kind, std::size_t n) {
     std::vector<std::uint64_t> keys(n);
@@ -119,12 +120,13 @@ TEST(Lbvh, KeySortIsAStableSortOfTheFullKey) {
         case 1: keys[i] = ((r % 64) << 40) | (rng() & 0xfffffu); break;
         case 2: keys[i] = (r % 300) << 10; break;
         case 3: keys[i] = (std::uint64_t{123} << 50) | (rng() & 0x3ffffu); break;
-        default: keys[i] = r % 3; break;
+        case 4: keys[i] = r % 3; break;
+        default: keys[i] = (r & 1) << 62 | (rng() & 0xfffffu) << 31 | (rng() & 0x7fffffffu); break;
       }
     }
     return keys;
   };
-  for (int kind = 0; kind < 5; ++kind)
+  for (int kind = 0; kind < 6; ++kind)
     for (std::size_t n : {std::size_t(1), std::size_t(2), std::size_t(1000), std::size_t(70000)})
       for (int threads : {1, 2}) {
         std::vector<std::uint64_t> input = make(kind, n);
