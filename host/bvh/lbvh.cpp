@@ -199,6 +199,9 @@ MortonKeys computeMortonKeys(std::span<const Aabb> primBounds, int threads, Cell
 constexpr int kFixupBits = kKeyBits - 32;
 // Buckets of at most this many items are insertion-sorted instead of radix passes.
 constexpr std::size_t kInsertionSortItems = 64;
+// Buckets of more than this many items (or a quarter of one thread's share) are split
+// again by the whole team before they are shared out (sortKeysWithPlan).
+constexpr std::size_t kBigBucket = 65536;
 
 /// The digits of the item sort, as bit positions within the items' top 32 bits.
 struct RadixPlan {
@@ -223,8 +226,11 @@ RadixPlan planRadixSort(std::uint64_t keysOr, std::uint64_t keysAnd) {
   return plan;
 }
 
-/// Sort the items of one bucket by value; returns where they ended, `items` or `scratch`.
-std::uint64_t* sortBucket(const RadixPlan& plan, std::uint64_t* items, std::uint64_t* scratch, std::size_t count) {
+/// Sort the items of one bucket by value, which needs only the plan's lowest `passes`
+/// digits (the bucket's items agree above them); returns where they ended, `items` or
+/// `scratch`.
+std::uint64_t* sortBucket(const RadixPlan& plan, int passes, std::uint64_t* items, std::uint64_t* scratch,
+                          std::size_t count) {
   if (count <= kInsertionSortItems) {
     for (std::size_t j = 1; j < count; ++j) {
       const std::uint64_t item = items[j];
@@ -237,7 +243,7 @@ std::uint64_t* sortBucket(const RadixPlan& plan, std::uint64_t* items, std::uint
   // Within a bucket the items are in index order (the bucket pass is stable), so stable
   // passes over the lower digits order them by value.
   std::array<std::uint32_t, kRadixBuckets> offsets;
-  for (int pass = 0; pass < plan.passes; ++pass) {
+  for (int pass = 0; pass < passes; ++pass) {
     const int shift = 32 + plan.shifts[static_cast<std::size_t>(pass)];
     const std::uint32_t digits = 1u << plan.widths[static_cast<std::size_t>(pass)];
     const std::uint32_t mask = digits - 1;
@@ -643,6 +649,33 @@ struct PhaseTimes {
   double morton = 0, sort = 0, hierarchy = 0, flatten = 0;
 };
 
+/// The slots of a stable team-wide counting pass: offsets[d] is where this rank's
+/// first item of digit d goes (after all smaller digits, then the same digit of lower
+/// ranks); rank 0 also writes each digit's first slot to starts[d] and the total to
+/// starts[digits].
+void teamOffsets(const std::vector<std::uint32_t>& histograms, int rank, int size, std::uint32_t digits,
+                 std::vector<std::uint32_t>& offsets, std::vector<std::uint32_t>& starts) {
+  std::uint32_t running = 0;
+  for (std::uint32_t digit = 0; digit < digits; ++digit) {
+    if (rank == 0) starts[digit] = running;
+    std::uint32_t mine = running;
+    for (int r = 0; r < size; ++r) {
+      const std::uint32_t count = histograms[static_cast<std::size_t>(r) * kRadixBuckets + digit];
+      if (r < rank) mine += count;
+      running += count;
+    }
+    offsets[digit] = mine;
+  }
+  if (rank == 0) starts[digits] = running;
+}
+
+/// A range of items that agree above the plan's lowest `passes` digits.
+struct Bucket {
+  std::uint32_t begin;
+  std::uint32_t count;
+  int passes;
+};
+
 /// Morton keys of the centroids sorted ascending, with primIndices[k] the input
 /// index of the k-th (n entries); equal keys keep index order.
 void sortKeysWithPlan(int threads, std::size_t n, const RadixPlan& plan, std::unique_ptr<std::uint64_t[]>& keys,
@@ -651,8 +684,13 @@ void sortKeysWithPlan(int threads, std::size_t n, const RadixPlan& plan, std::un
   // items1 ends up holding the sorted full keys
   auto items1 = std::make_unique_for_overwrite<std::uint64_t[]>(n);
   std::vector<std::uint32_t> histograms(static_cast<std::size_t>(threads) * kRadixBuckets);
-  std::vector<std::uint32_t> bucketStart(kRadixBuckets + 1);
-  std::atomic<std::uint32_t> nextBucket{0};
+  std::vector<std::uint32_t> starts(kRadixBuckets + 1);
+  std::vector<Bucket> buckets;
+  std::atomic<std::size_t> nextBucket{0};
+  // A bucket bigger than this is split again by the team before the buckets are shared
+  // out: one core sorting a cluster that holds most of the scene (a far outlier
+  // shrinks the rest into one cell of the first digit) measured 3.6x the sort time.
+  const std::size_t bigBucket = std::max(kBigBucket, n / (4 * static_cast<std::size_t>(threads)));
   const int msdShift = 32 + plan.msdShift;
   runTeam(threads, [&](int rank, int size, Barrier& barrier) {
     const Range chunk = chunkOf(n, size, rank);
@@ -663,30 +701,52 @@ void sortKeysWithPlan(int threads, std::size_t n, const RadixPlan& plan, std::un
       ++histogram[(item >> msdShift) & kRadixMask];
     }
     barrier.arriveAndWait();
-    // A digit's slots follow all smaller digits, then the same digit of lower ranks.
     std::vector<std::uint32_t> offsets(kRadixBuckets);
-    std::uint32_t running = 0;
-    for (std::uint32_t digit = 0; digit < kRadixBuckets; ++digit) {
-      if (rank == 0) bucketStart[digit] = running;
-      std::uint32_t mine = running;
-      for (int r = 0; r < size; ++r) {
-        const std::uint32_t count = histograms[static_cast<std::size_t>(r) * kRadixBuckets + digit];
-        if (r < rank) mine += count;
-        running += count;
-      }
-      offsets[digit] = mine;
-    }
-    if (rank == 0) bucketStart[kRadixBuckets] = running;
+    teamOffsets(histograms, rank, size, kRadixBuckets, offsets, starts);
     for (std::size_t i = chunk.begin; i < chunk.end; ++i) {
       const std::uint64_t item = items0[i];
       items1[offsets[(item >> msdShift) & kRadixMask]++] = item;
     }
     // The buckets hold what every rank scattered.
     barrier.arriveAndWait();
-    for (std::uint32_t b = nextBucket++; b < kRadixBuckets; b = nextBucket++) {
-      const std::size_t begin = bucketStart[b], count = bucketStart[b + 1] - begin;
-      if (count == 0) continue;
-      const std::uint64_t* items = sortBucket(plan, items1.get() + begin, items0.get() + begin, count);
+    if (rank == 0)
+      for (std::uint32_t d = 0; d < kRadixBuckets; ++d)
+        if (starts[d + 1] > starts[d]) buckets.push_back({starts[d], starts[d + 1] - starts[d], plan.passes});
+    barrier.arriveAndWait();
+
+    // Big buckets, split by the team on their highest digit left. Every rank walks the
+    // same list: rank 0 changes it only while the others wait at the last barrier.
+    for (std::size_t k = 0; k < buckets.size(); ++k) {
+      const Bucket big = buckets[k];
+      if (big.count <= bigBucket || big.passes == 0) continue;
+      const std::size_t pass = static_cast<std::size_t>(big.passes - 1);
+      const int shift = 32 + plan.shifts[pass];
+      const std::uint32_t digits = 1u << plan.widths[pass], mask = digits - 1;
+      std::uint64_t* items = items1.get() + big.begin;
+      std::uint64_t* scratch = items0.get() + big.begin;
+      const Range part = chunkOf(big.count, size, rank);
+      std::fill(histogram, histogram + digits, 0u);
+      for (std::size_t i = part.begin; i < part.end; ++i) ++histogram[(items[i] >> shift) & mask];
+      barrier.arriveAndWait();
+      teamOffsets(histograms, rank, size, digits, offsets, starts);
+      for (std::size_t i = part.begin; i < part.end; ++i) scratch[offsets[(items[i] >> shift) & mask]++] = items[i];
+      barrier.arriveAndWait();
+      std::copy(scratch + part.begin, scratch + part.end, items + part.begin);
+      if (rank == 0) {
+        buckets[k].count = 0;
+        for (std::uint32_t d = 0; d < digits; ++d)
+          if (starts[d + 1] > starts[d])
+            buckets.push_back({big.begin + starts[d], starts[d + 1] - starts[d], big.passes - 1});
+      }
+      barrier.arriveAndWait();
+    }
+
+    for (std::size_t b = nextBucket++; b < buckets.size(); b = nextBucket++) {
+      const Bucket bucket = buckets[b];
+      if (bucket.count == 0) continue;
+      const std::size_t begin = bucket.begin, count = bucket.count;
+      const std::uint64_t* items =
+          sortBucket(plan, bucket.passes, items1.get() + begin, items0.get() + begin, count);
       // Each item's full key replaces it in items1 (in place when the items ended there).
       std::uint64_t* sorted = items1.get() + begin;
       for (std::size_t k = 0; k < count; ++k) {

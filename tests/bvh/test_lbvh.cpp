@@ -110,7 +110,9 @@ TEST(Lbvh, KeySortIsAStableSortOfTheFullKey) {
   // whole 63-bit key. Key sets: random; clusters that agree in the top bits
   // and differ only in the low ones (long runs); many exact duplicates; all
   // equal in the top bits; a few distinct values; two huge buckets of the
-  // first digit whose lower digits vary (the radix passes inside a bucket).
+  // first digit whose lower digits vary (the radix passes inside a bucket);
+  // a few outliers far above the rest, which all land in one bucket of the
+  // first digit, too big for one thread (split again by the team).
   std::mt19937_64 rng(5);
   auto make = [&](int kind, std::size_t n) {
     std::vector<std::uint64_t> keys(n);
@@ -123,12 +125,13 @@ TEST(Lbvh, KeySortIsAStableSortOfTheFullKey) {
         case 2: keys[i] = (r % 300) << 10; break;
         case 3: keys[i] = (std::uint64_t{123} << 50) | (rng() & 0x3ffffu); break;
         case 4: keys[i] = r % 3; break;
-        default: keys[i] = (r & 1) << 62 | (rng() & 0xfffffu) << 31 | (rng() & 0x7fffffffu); break;
+        case 5: keys[i] = (r & 1) << 62 | (rng() & 0xfffffu) << 31 | (rng() & 0x7fffffffu); break;
+        default: keys[i] = (r % 1000 == 0 ? std::uint64_t{1} << 62 : 0) | (rng() & 0xfffffffffffffu); break;
       }
     }
     return keys;
   };
-  for (int kind = 0; kind < 6; ++kind)
+  for (int kind = 0; kind < 7; ++kind)
     for (std::size_t n : {std::size_t(1), std::size_t(2), std::size_t(1000), std::size_t(70000)})
       for (int threads : {1, 2}) {
         std::vector<std::uint64_t> input = make(kind, n);
