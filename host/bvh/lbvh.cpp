@@ -1,8 +1,10 @@
-// Linear BVH build: 63-bit Morton codes of the centroids, a parallel LSD
-// radix sort, the Karras 2012 radix tree found top down (each node kept in
-// the collapsed tree searches its split; subtrees of at most maxLeafSize
-// primitives become one leaf unsplit), then a depth-first flatten with
-// bottom-up boxes, both in parallel over subtrees.
+// Linear BVH build: 63-bit Morton codes of the centroids in cubic cells
+// (per-axis cells too for small inputs, the lower SAH kept), a parallel radix
+// sort (one MSD pass, then buckets sorted alone in cache), the Karras 2012
+// radix tree found top down (each node kept in the collapsed tree searches
+// its split; subtrees of at most maxLeafSize primitives become one leaf
+// unsplit), then a depth-first flatten with bottom-up boxes, both in
+// parallel over subtrees.
 #include "bvh/lbvh.h"
 
 #include "bvh/parallel.h"
@@ -689,7 +691,7 @@ void sortKeysWithPlan(int threads, std::size_t n, const RadixPlan& plan, std::un
   std::atomic<std::size_t> nextBucket{0};
   // A bucket bigger than this is split again by the team before the buckets are shared
   // out: one core sorting a cluster that holds most of the scene (a far outlier
-  // shrinks the rest into one cell of the first digit) measured 3.6x the sort time.
+  // shrinks the rest into one cell of the first digit) measured nearly 4x the sort time.
   const std::size_t bigBucket = std::max(kBigBucket, n / (4 * static_cast<std::size_t>(threads)));
   const int msdShift = 32 + plan.msdShift;
   runTeam(threads, [&](int rank, int size, Barrier& barrier) {
