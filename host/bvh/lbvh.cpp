@@ -208,8 +208,9 @@ constexpr std::size_t kBigBucket = 65536;
 /// The digits of the item sort, as bit positions within the items' top 32 bits.
 struct RadixPlan {
   int msdShift = 0;  ///< the bucket digit: the highest 11-bit window holding a differing bit
-  std::array<int, 3> shifts{};  ///< the LSD digits below it that differ, lowest first
-  std::array<int, 3> widths{};
+  // below a bucket digit at bit 21 at most: two digits, of 11 and 10 bits
+  std::array<int, 2> shifts{};  ///< the LSD digits below it that differ, lowest first
+  std::array<int, 2> widths{};
   int passes = 0;
 };
 
