@@ -446,11 +446,11 @@ void compareTrees(Context& context, const Scene& scene, std::span<const Aabb> bo
     TreeResult tree;
     tree.builder = *parseBvhBuilder(name);
     BvhBuildOptions bvhOptions = benchBvhOptions(tree.builder, options);
-    auto [bvh, seconds] = timedBuild(bounds, bvhOptions, options.repetitions);
+    auto [bvh, seconds] = timedBuild(bounds, binaryBuildOptions(bvhOptions), options.repetitions);
     tree.buildSeconds = seconds;
     tree.nodes = bvh.stats.nodeCount;
     tree.sah = bvh.stats.sahCost;
-    Bvh4 bvh4 = collapseToBvh4(bvh);
+    Bvh4 bvh4 = collapseToBvh4(bvh, bvh4Options(bvhOptions));
     tree.nodes4 = bvh4.stats.nodeCount;
     tree.sah4 = bvh4.stats.sahCost;
     if (tree.builder == defaultBuilder) {
@@ -501,11 +501,11 @@ SceneResult benchScene(Context& context, const std::string& name, const Scene& s
   std::vector<Aabb> bounds(scene.triangles.size());
   for (std::size_t i = 0; i < bounds.size(); ++i) bounds[i] = scene.triangleBounds(std::uint32_t(i));
   BvhBuildOptions bvhOptions = benchBvhOptions(*parseBvhBuilder(options.bvh), options);
-  auto [bvh, seconds] = timedBuild(bounds, bvhOptions, options.repetitions);
+  auto [bvh, seconds] = timedBuild(bounds, binaryBuildOptions(bvhOptions), options.repetitions);
   result.buildSeconds = seconds;
   result.nodes = bvh.stats.nodeCount;
   result.sah = bvh.stats.sahCost;
-  Bvh4 bvh4 = collapseToBvh4(bvh);
+  Bvh4 bvh4 = collapseToBvh4(bvh, bvh4Options(bvhOptions));
   result.nodes4 = bvh4.stats.nodeCount;
   result.sah4 = bvh4.stats.sahCost;
   result.collapseSeconds = bvh4.stats.collapseSeconds;

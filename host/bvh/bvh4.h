@@ -1,15 +1,38 @@
-// 4-wide BVH collapsed from the binary LBVH: each 4-wide node takes the two
-// children of a binary node and repeatedly opens the inner child of largest
-// surface area until it holds four (or only leaves are left). Leaves and the
-// leaf order of the primitives are the binary tree's, unchanged.
+// 4-wide BVH collapsed from a binary tree. Which binary nodes become 4-wide
+// nodes, and which subtrees become leaves, is chosen by dynamic programming
+// over the number of child slots each binary subtree may fill: the collapse
+// of least cost (surface-area heuristic with the kernels' four-at-a-time
+// leaf test, plus a cost per node for its memory) among all collapses of
+// that binary tree (the formulation of Ylitie, Karras and Laine 2017, here
+// for four slots). Leaves are whole binary subtrees, so the binary tree's
+// leaf order of the primitives stays valid.
 #pragma once
 
 #include "bvh/lbvh.h"
 
+#include <algorithm>
 #include <cstddef>
 #include <vector>
 
 namespace wt {
+
+/// The 4-wide leaf limit for maxLeafSize 0 (every traversable tree unless
+/// the user asks otherwise).
+constexpr int kBvh4MaxLeafSize = 8;
+
+struct Bvh4Options {
+  /// A leaf holds at most this many primitives; a binary leaf that holds
+  /// more (built with larger leaves) stays whole.
+  int maxLeafSize = kBvh4MaxLeafSize;
+  /// Testing a leaf, per group of four primitives (one triangle_intersect4
+  /// call), in units of one node's four-box test.
+  double leafCost = 1.0;
+  /// The cost of a node in its own right, its 128 bytes, as a fraction of
+  /// one test at the root: a node is kept only where it saves more than a
+  /// test by that fraction of all rays. 1e-4 measured best (docs/performance.md,
+  /// "The 4-wide collapse").
+  double nodeCost = 1e-4;
+};
 
 struct Bvh4Stats {
   double collapseSeconds = 0.0;  ///< wall time of collapseToBvh4
@@ -17,6 +40,7 @@ struct Bvh4Stats {
   std::size_t leafCount = 0;
   int maxDepth = 0;              ///< root = depth 0
   double sahCost = 0.0;          ///< see sahCost(const Bvh4&)
+  double collapseCost = 0.0;     ///< the collapse's own objective, see collapseCost()
 };
 
 /// nodes[0] is the root; children slots as WtBvh4Node describes. A binary
@@ -27,14 +51,37 @@ struct Bvh4 {
   Bvh4Stats stats;
 };
 
-/// Collapse; bvh.primIndices stay valid for the result.
-Bvh4 collapseToBvh4(const Bvh& bvh);
+/// Collapse; bvh.primIndices stay valid for the result. The binary tree's
+/// nodes must hold their boxes, and a subtree's primitives must be
+/// contiguous in leaf order, left child first (every builder's flatten).
+Bvh4 collapseToBvh4(const Bvh& bvh, const Bvh4Options& options = {});
+
+/// The binary build options for a traversable tree whose leaves hold at most
+/// given.maxLeafSize primitives (0: kBvh4MaxLeafSize): binary leaves of at
+/// most four, which the collapse merges where a merged leaf is cheaper.
+inline BvhBuildOptions binaryBuildOptions(const BvhBuildOptions& given) {
+  BvhBuildOptions options = given;
+  options.maxLeafSize = std::min(given.maxLeafSize > 0 ? given.maxLeafSize : kBvh4MaxLeafSize, 4);
+  return options;
+}
+
+/// The collapse options that go with binaryBuildOptions(given).
+inline Bvh4Options bvh4Options(const BvhBuildOptions& given) {
+  Bvh4Options options;
+  options.maxLeafSize = given.maxLeafSize > 0 ? given.maxLeafSize : kBvh4MaxLeafSize;
+  return options;
+}
 
 /// Surface-area-heuristic cost: sum over inner nodes of area(node)/area(root)
 /// (one four-box test each) plus, over leaves, area(leaf)/area(root) * count.
 /// The binary tree's sahCost counts one per binary node instead, so compare
 /// the two with care: a 4-wide tree visits about half as many nodes.
 double sahCost(const Bvh4& bvh);
+
+/// The objective collapseToBvh4 minimises, for any 4-wide tree: over nodes,
+/// (area(node) / area(root) + options.nodeCost), plus over leaves
+/// area(leaf) / area(root) * options.leafCost * ceil(count / 4).
+double collapseCost(const Bvh4& bvh, const Bvh4Options& options);
 
 /// Traversal stack entries the tree can need: at most three pushes per level.
 int bvh4StackEntries(const Bvh4Stats& stats);

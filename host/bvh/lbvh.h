@@ -24,16 +24,11 @@ enum class BvhBuilder {
   Sah,   ///< buildSahBvh: top-down binned SAH; slow, the quality yardstick
 };
 
-/// The leaf size buildBvh takes for maxLeafSize 0: 4 primitives below
-/// 65 536, 8 from there on. Larger leaves halve the 4-wide node count, so
-/// nodes plus triangle data fit in 64 bytes per triangle, at about the same
-/// throughput on large scenes; on small ones memory is no concern and
-/// smaller leaves trace coherent rays faster (docs/performance.md, "Memory").
-inline int autoLeafSize(std::size_t primitives) { return primitives >= 65536 ? 8 : 4; }
-
 struct BvhBuildOptions {
-  /// subtrees with at most this many primitives become one leaf; 0: autoLeafSize
-  /// (buildBvh only; the builders themselves take it as given)
+  /// Subtrees with at most this many primitives become one leaf; 0: 4
+  /// (buildBvh only; the builders themselves take it as given). SceneBuffers
+  /// and the bench read it as the limit of the 4-wide tree's leaves instead
+  /// (binaryBuildOptions, host/bvh/bvh4.h).
   int maxLeafSize = 4;
   int threads = 0;      ///< 0: std::thread::hardware_concurrency()
   BvhBuilder builder = BvhBuilder::Lbvh;  ///< read by buildBvh, not by buildLbvh

@@ -322,7 +322,7 @@ Bvh buildPlocBvh(std::span<const Aabb> primBounds, const BvhBuildOptions& option
 
 Bvh buildBvh(std::span<const Aabb> primBounds, const BvhBuildOptions& given) {
   BvhBuildOptions options = given;
-  if (options.maxLeafSize <= 0) options.maxLeafSize = autoLeafSize(primBounds.size());
+  if (options.maxLeafSize <= 0) options.maxLeafSize = 4;
   switch (options.builder) {
     case BvhBuilder::Ploc: return buildPlocBvh(primBounds, options);
     case BvhBuilder::Sah: return buildSahBvh(primBounds, options);

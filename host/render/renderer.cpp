@@ -47,7 +47,7 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
   m_camera = makeCamera(desc, settings.width, settings.height);
   BvhBuildOptions bvhOptions;
   bvhOptions.builder = settings.bvhBuilder;
-  bvhOptions.maxLeafSize = 0;  // autoLeafSize
+  bvhOptions.maxLeafSize = 0;  // leaves of up to kBvh4MaxLeafSize, chosen by the collapse
   m_scene = std::make_unique<SceneBuffers>(context, scene, bvhOptions);
   m_environment = settings.environmentMap.empty()
                       ? constantEnvironment(settings.background)

@@ -73,24 +73,25 @@ TEST_P(Builder, LeafSizes) {
   }
 }
 
-TEST_P(Builder, AutomaticLeafSizeFollowsTheSceneSize) {
-  // maxLeafSize 0: leaves of up to 4 below 65 536 primitives, up to 8 from
-  // there; the large tree must really use the larger leaves (its 4-wide node
-  // count about halves), which is what keeps nodes plus triangle data within
-  // 64 bytes per triangle (8 B/tri of 4-wide nodes here; 52 of triangle data)
-  const std::vector<Aabb> grid = triangleBounds(makeBumpyGrid(80000));
-  ASSERT_GT(grid.size(), 65536u);
-  for (std::size_t n : {std::size_t(65535), std::size_t(65536)}) {
-    const std::vector<Aabb> prims(grid.begin(), grid.begin() + std::ptrdiff_t(n));
-    const Bvh automatic = build(prims, 0), four = build(prims, 4);
-    const int expected = n >= 65536 ? 8 : 4;
-    EXPECT_TRUE(checkBvhInvariants(automatic, prims, expected)) << n;
-    const Bvh4 wide = collapseToBvh4(automatic), wideFour = collapseToBvh4(four);
-    if (n < 65536) {
-      EXPECT_EQ(wide.nodes.size(), wideFour.nodes.size());
-    } else {
-      EXPECT_LT(double(wide.nodes.size()), 0.7 * double(wideFour.nodes.size())) << wideFour.nodes.size();
-      EXPECT_LE(double(wide.nodes.size() * sizeof(WtBvh4Node)) / double(prims.size()), 12.0);
+TEST_P(Builder, TraversableTreesTakeTheirLeafLimit) {
+  // SceneBuffers and the bench read maxLeafSize as the 4-wide tree's leaf
+  // limit (0: kBvh4MaxLeafSize): binary leaves of at most 4, merged by the
+  // collapse up to the limit, never beyond it
+  const std::vector<Aabb> prims = triangleBounds(makeBumpyGrid(20000));
+  for (int limit : {0, 1, 2, 4, 8, 16}) {
+    BvhBuildOptions given = optionsFor(GetParam(), limit);
+    const Bvh binary = buildBvh(prims, binaryBuildOptions(given));
+    const int wideLimit = limit > 0 ? limit : kBvh4MaxLeafSize;
+    EXPECT_TRUE(checkBvhInvariants(binary, prims, std::min(wideLimit, 4))) << limit;
+    const Bvh4 tree = collapseToBvh4(binary, bvh4Options(given));
+    std::uint32_t largest = 0;
+    for (const WtBvh4Node& node : tree.nodes)
+      for (int k = 0; k < 4; ++k)
+        if (node.child[k] != WT_BVH4_EMPTY) largest = std::max(largest, node.count[k]);
+    EXPECT_LE(largest, std::uint32_t(wideLimit)) << limit;
+    // merging pays here: leaves larger than the binary tree's are used
+    if (wideLimit > 4) {
+      EXPECT_GT(largest, 4u) << limit;
     }
   }
 }
@@ -179,7 +180,8 @@ TEST_P(Builder, CollapsesToBvh4) {
       if (node.child[k] != WT_BVH4_EMPTY && node.count[k] > 0)
         for (std::uint32_t p = node.child[k]; p < node.child[k] + node.count[k]; ++p) ++covered.at(p);
   for (std::size_t p = 0; p < covered.size(); ++p) ASSERT_EQ(covered[p], 1) << "slot " << p;
-  EXPECT_EQ(tree.stats.leafCount, binary.stats.leafCount);
+  // leaves are binary leaves or merged binary subtrees
+  EXPECT_LE(tree.stats.leafCount, binary.stats.leafCount);
 }
 
 INSTANTIATE_TEST_SUITE_P(All, Builder, ::testing::Values(BvhBuilder::Lbvh, BvhBuilder::Ploc, BvhBuilder::Sah),
@@ -189,12 +191,14 @@ INSTANTIATE_TEST_SUITE_P(All, Builder, ::testing::Values(BvhBuilder::Lbvh, BvhBu
 
 // ---- tree quality ----------------------------------------------------------------
 
-// Fixed meshes made here, fixed builds. Each builder's costs were measured
-// when it was written (2026-12-01); a change that makes a tree worse by more
-// than 2% fails, one that makes it better should lower the constant. Beside
-// those, PLOC's tree must stay within kPlocVsSah of the SAH tree of the same
-// mesh (measured: 1.005-1.110 binary, 0.977-1.079 4-wide, worst on the bumpy
-// grid; the LBVH is at 1.08-1.85 binary) and below the LBVH's cost.
+// Fixed meshes made here, fixed builds. Each builder's binary costs were
+// measured when it was written (2026-12-01), the 4-wide ones (the collapse's
+// own objective, collapseCost) when the optimal collapse was (2026-12-02); a
+// change that makes a tree worse by more than 2% fails, one that makes it
+// better should lower the constant. Beside those, PLOC's tree must stay
+// within kPlocVsSah of the SAH tree of the same mesh (measured: 1.005-1.110
+// binary, 1.03-1.05 4-wide, worst on the bumpy grid; the LBVH is at
+// 1.08-1.85 binary) and below the LBVH's cost.
 constexpr double kSlack = 1.02;
 constexpr double kPlocVsSah = 1.15;
 
@@ -205,7 +209,7 @@ struct Costs {
 Costs costOf(const std::vector<Aabb>& prims, BvhBuilder builder) {
   const Bvh binary = buildBvh(prims, optionsFor(builder));
   EXPECT_TRUE(checkBvhInvariants(binary, prims)) << bvhBuilderName(builder);
-  return {binary.stats.sahCost, collapseToBvh4(binary).stats.sahCost};
+  return {binary.stats.sahCost, collapseToBvh4(binary).stats.collapseCost};
 }
 
 struct Measured {
@@ -233,7 +237,7 @@ void expectQuality(const char* mesh, const std::vector<Aabb>& prims, const Measu
 
 TEST(BvhQuality, BumpyGrid) {
   const std::vector<Aabb> prims = triangleBounds(makeBumpyGrid(200000));
-  expectQuality("bumpy grid 200k", prims, {{44.95, 28.17}, {49.88, 30.40}});
+  expectQuality("bumpy grid 200k", prims, {{44.95, 21.49}, {49.88, 22.65}});
   // the bound discriminates: the plain LBVH is outside it here
   EXPECT_GT(costOf(prims, BvhBuilder::Lbvh).binary, kPlocVsSah * costOf(prims, BvhBuilder::Sah).binary);
 }
@@ -241,11 +245,11 @@ TEST(BvhQuality, BumpyGrid) {
 TEST(BvhQuality, Icosphere) {
   expectQuality("icosphere level 6",
                 triangleBounds(makeIcosphere(6, glm::vec3(0.0f), 1.0f, makeMaterial(glm::vec3(0.5f)))),
-                {{42.68, 26.67}, {44.70, 27.75}});
+                {{42.68, 20.20}, {44.70, 20.83}});
 }
 
 TEST(BvhQuality, TriangleSoup) {
-  expectQuality("soup 100k", triangleBounds(makeTriangleSoup(100000, 9, 0.05f)), {{627.07, 476.82}, {630.12, 465.66}});
+  expectQuality("soup 100k", triangleBounds(makeTriangleSoup(100000, 9, 0.05f)), {{627.07, 236.25}, {630.12, 244.61}});
 }
 
 }  // namespace
