@@ -446,7 +446,7 @@ void compareTrees(Context& context, const Scene& scene, std::span<const Aabb> bo
     TreeResult tree;
     tree.builder = *parseBvhBuilder(name);
     BvhBuildOptions bvhOptions = benchBvhOptions(tree.builder, options);
-    auto [bvh, seconds] = timedBuild(bounds, binaryBuildOptions(bvhOptions), options.repetitions);
+    auto [bvh, seconds] = timedBuild(bounds, binaryBuildOptions(bvhOptions, bounds.size()), options.repetitions);
     tree.buildSeconds = seconds;
     tree.nodes = bvh.stats.nodeCount;
     tree.sah = bvh.stats.sahCost;
@@ -501,7 +501,7 @@ SceneResult benchScene(Context& context, const std::string& name, const Scene& s
   std::vector<Aabb> bounds(scene.triangles.size());
   for (std::size_t i = 0; i < bounds.size(); ++i) bounds[i] = scene.triangleBounds(std::uint32_t(i));
   BvhBuildOptions bvhOptions = benchBvhOptions(*parseBvhBuilder(options.bvh), options);
-  auto [bvh, seconds] = timedBuild(bounds, binaryBuildOptions(bvhOptions), options.repetitions);
+  auto [bvh, seconds] = timedBuild(bounds, binaryBuildOptions(bvhOptions, bounds.size()), options.repetitions);
   result.buildSeconds = seconds;
   result.nodes = bvh.stats.nodeCount;
   result.sah = bvh.stats.sahCost;

@@ -242,8 +242,18 @@ class Collapse {
 Bvh4 collapseToBvh4(const Bvh& bvh, const Bvh4Options& options) {
   const auto start = std::chrono::steady_clock::now();
   Bvh4 out = Collapse(bvh, options).run();
+  // over the memory budget: nodes made dearer until the tree fits
+  const double prims = double(bvh.primIndices.size());
+  Bvh4Options dearer = options;
+  for (int round = 0; round < Bvh4Options::kBudgetRounds && options.nodeBytesPerPrimitive > 0.0 &&
+                      double(out.nodes.size() * sizeof(WtBvh4Node)) > options.nodeBytesPerPrimitive * prims;
+       ++round) {
+    dearer.nodeCost = std::max(2.0 * dearer.nodeCost, 1e-6);
+    out = Collapse(bvh, dearer).run();
+  }
   out.stats.sahCost = sahCost(out);
-  out.stats.collapseCost = collapseCost(out, options);
+  out.stats.nodeCost = dearer.nodeCost;
+  out.stats.collapseCost = collapseCost(out, dearer);
   out.stats.collapseSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return out;
 }

@@ -53,7 +53,7 @@ SceneBuffers::SceneBuffers(Context& context, const Scene& scene, const BvhBuildO
     bounds.push_back(scene.triangleBounds(std::uint32_t(i)));
     m_bvhToScene.push_back(std::uint32_t(i));
   }
-  m_bvh = buildBvh(bounds, binaryBuildOptions(options));
+  m_bvh = buildBvh(bounds, binaryBuildOptions(options, bounds.size()));
   Bvh4 bvh4 = collapseToBvh4(m_bvh, bvh4Options(options));
   m_bvh4Stats = bvh4.stats;
   nodeCount = std::uint32_t(bvh4.nodes.size());

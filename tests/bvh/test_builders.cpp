@@ -80,7 +80,7 @@ TEST_P(Builder, TraversableTreesTakeTheirLeafLimit) {
   const std::vector<Aabb> prims = triangleBounds(makeBumpyGrid(20000));
   for (int limit : {0, 1, 2, 4, 8, 16}) {
     BvhBuildOptions given = optionsFor(GetParam(), limit);
-    const Bvh binary = buildBvh(prims, binaryBuildOptions(given));
+    const Bvh binary = buildBvh(prims, binaryBuildOptions(given, prims.size()));
     const int wideLimit = limit > 0 ? limit : kBvh4MaxLeafSize;
     EXPECT_TRUE(checkBvhInvariants(binary, prims, std::min(wideLimit, 4))) << limit;
     const Bvh4 tree = collapseToBvh4(binary, bvh4Options(given));
@@ -209,7 +209,9 @@ struct Costs {
 Costs costOf(const std::vector<Aabb>& prims, BvhBuilder builder) {
   const Bvh binary = buildBvh(prims, optionsFor(builder));
   EXPECT_TRUE(checkBvhInvariants(binary, prims)) << bvhBuilderName(builder);
-  return {binary.stats.sahCost, collapseToBvh4(binary).stats.collapseCost};
+  Bvh4Options sameCosts;  // every tree at the same node cost, whatever its memory
+  sameCosts.nodeBytesPerPrimitive = 0.0;
+  return {binary.stats.sahCost, collapseToBvh4(binary, sameCosts).stats.collapseCost};
 }
 
 struct Measured {

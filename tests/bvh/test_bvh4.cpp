@@ -183,6 +183,7 @@ Bvh twoCubes(float gap) {
 TEST(Bvh4, NeighbouringLeavesMergeWhenOneTestIsCheaper) {
   Bvh4Options options;
   options.nodeCost = 0.0;
+  options.nodeBytesPerPrimitive = 0.0;  // one node for two triangles is over any budget
   Bvh4 tree = collapseToBvh4(twoCubes(0.0f), options);
   ASSERT_EQ(tree.nodes.size(), 1u);
   EXPECT_EQ(tree.nodes[0].count[0], 2u);
@@ -200,7 +201,9 @@ TEST(Bvh4, NeighbouringLeavesMergeWhenOneTestIsCheaper) {
 }
 
 TEST(Bvh4, DistantLeavesStaySeparate) {
-  Bvh4 tree = collapseToBvh4(twoCubes(8.0f));
+  Bvh4Options options;
+  options.nodeBytesPerPrimitive = 0.0;
+  Bvh4 tree = collapseToBvh4(twoCubes(8.0f), options);
   ASSERT_EQ(tree.nodes.size(), 1u);
   EXPECT_EQ(tree.nodes[0].count[0], 1u);
   EXPECT_EQ(tree.nodes[0].count[1], 1u);
@@ -298,6 +301,7 @@ TEST(Bvh4, CollapseIsTheCheapestOfAllCollapsesOnSmallTrees) {
             options.maxLeafSize = maxLeaf;
             options.leafCost = leafCost;
             options.nodeCost = nodeCost;
+            options.nodeBytesPerPrimitive = 0.0;  // no budget: the cost as given
             Bvh4 tree = collapseToBvh4(binary, options);
             ASSERT_TRUE(checkBvh4(tree, binary, prims, maxLeaf));
             const double best = bruteForceCollapseCost(binary, options);
@@ -376,24 +380,40 @@ TEST(Bvh4, CollapseCostsNoMoreThanTheGreedyCollapse) {
       Bvh4 tree = collapseToBvh4(binary);
       ASSERT_TRUE(checkBvh4(tree, binary, prims)) << name;
       // the stats hold the objective of the tree made, and the greedy tree is one of those it chose from
-      EXPECT_NEAR(tree.stats.collapseCost, collapseCost(tree, Bvh4Options{}), 1e-9 * tree.stats.collapseCost);
-      const double greedy = collapseCost(greedyCollapse(binary), Bvh4Options{});
+      Bvh4Options used;
+      used.nodeCost = tree.stats.nodeCost;
+      EXPECT_NEAR(tree.stats.collapseCost, collapseCost(tree, used), 1e-9 * tree.stats.collapseCost);
+      const double greedy = collapseCost(greedyCollapse(binary), used);
       EXPECT_LE(tree.stats.collapseCost, greedy * (1.0 + 1e-6)) << name << ", leaves of " << leafSize;
       RecordProperty(std::string(name) + " leaf " + std::to_string(leafSize), std::to_string(tree.stats.collapseCost) + " vs greedy " + std::to_string(greedy));
     }
 }
 
 TEST(Bvh4, TraversableTreesFitIn64BytesPerTriangle) {
-  // 52 bytes of triangle data (three float4 corners, a material index) leave 12 for nodes
-  for (const Scene& scene : {makeBumpyGrid(200000), makeIcosphere(6, glm::vec3(0.0f), 1.0f, makeMaterial(glm::vec3(0.5f)))}) {
+  // 52 bytes of triangle data (three float4 corners, a material index) leave
+  // 12 for nodes: the collapse's budget, met small and large
+  const auto nodeBytes = [](const Bvh4& tree, std::size_t prims) {
+    return double(tree.nodes.size() * sizeof(WtBvh4Node)) / double(prims);
+  };
+  BvhBuildOptions given;
+  given.maxLeafSize = 0;  // as the renderer passes it
+  for (const Scene& scene : {makeBumpyGrid(15000), makeIcosphere(5, glm::vec3(0.0f), 1.0f, makeMaterial(glm::vec3(0.5f))),
+                             makeBumpyGrid(200000), makeIcosphere(6, glm::vec3(0.0f), 1.0f, makeMaterial(glm::vec3(0.5f)))}) {
     std::vector<Aabb> prims = triangleBounds(scene);
-    BvhBuildOptions given;
-    given.maxLeafSize = 0;  // as the renderer passes it
-    Bvh binary = buildBvh(prims, binaryBuildOptions(given));
+    Bvh binary = buildBvh(prims, binaryBuildOptions(given, prims.size()));
     Bvh4 tree = collapseToBvh4(binary, bvh4Options(given));
     EXPECT_TRUE(checkBvh4(tree, binary, prims, kBvh4MaxLeafSize));
-    EXPECT_LE(double(tree.nodes.size() * sizeof(WtBvh4Node)) / double(prims.size()), 12.0) << prims.size();
+    EXPECT_LE(nodeBytes(tree, prims.size()), 12.0) << prims.size();
   }
+  // the budget is what keeps the small grid within it (13.7 B/tri without)
+  std::vector<Aabb> prims = triangleBounds(makeBumpyGrid(15000));
+  Bvh binary = buildBvh(prims, binaryBuildOptions(given, prims.size()));
+  Bvh4Options unbounded = bvh4Options(given);
+  unbounded.nodeBytesPerPrimitive = 0.0;
+  Bvh4 loose = collapseToBvh4(binary, unbounded), tight = collapseToBvh4(binary, bvh4Options(given));
+  EXPECT_GT(nodeBytes(loose, prims.size()), 12.0);
+  EXPECT_EQ(loose.stats.nodeCost, Bvh4Options{}.nodeCost);
+  EXPECT_GT(tight.stats.nodeCost, loose.stats.nodeCost);
 }
 
 // ---- SAH regression --------------------------------------------------------------
