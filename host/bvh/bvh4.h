@@ -29,8 +29,8 @@ struct Bvh4Options {
   double leafCost = 1.0;
   /// The cost of a node in its own right, its 128 bytes, as a fraction of
   /// one test at the root: a node is kept only where it saves more than a
-  /// test by that fraction of all rays. 1e-4 measured best (docs/performance.md,
-  /// "The 4-wide collapse").
+  /// test by that fraction of all rays (docs/performance.md, "The 4-wide
+  /// collapse", has what it measured).
   double nodeCost = 1e-4;
   /// Node memory allowed per primitive: a tree over budget is collapsed
   /// again with nodeCost doubled, up to kBudgetRounds times. 12 keeps a
