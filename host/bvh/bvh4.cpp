@@ -1,11 +1,15 @@
 #include "bvh/bvh4.h"
 
+#include "bvh/parallel.h"
+
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <limits>
 #include <ranges>
+#include <thread>
 #include <vector>
 
 namespace wt {
@@ -58,9 +62,18 @@ struct Decision {
   int nodeLeft() const { return bits >> 6; }
 };
 
+using bvh_detail::Barrier;
+using bvh_detail::runTeam;
+
 class Collapse {
  public:
-  Collapse(const Bvh& bvh, const Bvh4Options& options) : m_in(bvh.nodes), m_options(options) {}
+  Collapse(const Bvh& bvh, const Bvh4Options& options) : m_in(bvh.nodes), m_options(options) {
+    // in parts on one thread as on many, so that the layout never depends on the count
+    m_parts = bvh.primIndices.size() >= options.partsFromPrimitives;
+    const int threads = options.threads > 0 ? options.threads : int(std::thread::hardware_concurrency());
+    m_threads = m_parts ? std::clamp(threads, 1, 64) : 1;
+    m_partPrims = std::uint32_t(std::max<std::size_t>(bvh.primIndices.size() / kParts, 1));
+  }
 
   Bvh4 run() {
     Bvh4 out;
@@ -76,14 +89,20 @@ class Collapse {
     m_nodeCost = float(m_options.nodeCost * (m_unitAreas ? 1.0 : rootArea));
     m_maxLeaf = std::uint32_t(std::max(m_options.maxLeafSize, 1));
 
-    // children before parents: a flatten that lays children out after their
-    // parent (every builder here) is walked backwards, any other in post-order
-    bool childrenAfter = true;
-    for (std::uint32_t i = 0; i < n && childrenAfter; ++i) childrenAfter = m_in[i].count > 0 || m_in[i].first > i;
-    if (childrenAfter) {
-      for (std::size_t i = n; i-- > 0;) evaluate(std::uint32_t(i));
+    if (m_parts) {
+      evaluateInParts();
     } else {
-      for (std::uint32_t i : preorder() | std::views::reverse) evaluate(i);
+      // children before parents: a flatten that lays children out after their
+      // parent (every builder here) is walked backwards, any other in post-order
+      bool childrenAfter = true;
+      for (std::uint32_t i = 0; i < n && childrenAfter; ++i) childrenAfter = m_in[i].count > 0 || m_in[i].first > i;
+      if (childrenAfter) {
+        for (std::size_t i = n; i-- > 0;) evaluate(std::uint32_t(i));
+      } else {
+        std::vector<std::uint32_t> order;
+        preorder(0, order);
+        for (std::uint32_t i : order | std::views::reverse) evaluate(i);
+      }
     }
 
     out.nodes.reserve(n / 4 + 1);
@@ -91,29 +110,77 @@ class Collapse {
     if (m_rootIsLeaf) {
       setSlot(out.nodes[0], 0, m_in[0], m_firstPrim[0], m_prims[0]);
       out.stats.leafCount = 1;
+    } else if (m_parts) {
+      emitInParts(out);
     } else {
-      emit(out);
+      EmitStats stats;
+      emit({0, 0, 0}, out.nodes, nullptr, stats);
+      out.stats.leafCount = stats.leafCount;
+      out.stats.maxDepth = stats.maxDepth;
     }
     out.stats.nodeCount = out.nodes.size();
     return out;
   }
 
  private:
+  /// A large tree is evaluated as the binary subtrees from depth kSplitDepth,
+  /// then the nodes above them, and laid out as the 4-wide nodes over binary
+  /// subtrees of more than 1/kParts of the primitives, then the parts below
+  /// them one after another.
+  static constexpr int kSplitDepth = 8;
+  static constexpr std::size_t kParts = 256;
+
   struct Slot {
     std::uint32_t binary;
     bool leaf;
   };
 
-  std::vector<std::uint32_t> preorder() const {
-    std::vector<std::uint32_t> order, stack{0};
-    order.reserve(m_in.size());
+  /// A 4-wide node to fill: from the children of binary node `binary`.
+  struct Task {
+    std::uint32_t binary, node;
+    int depth;
+  };
+
+  struct EmitStats {
+    std::size_t leafCount = 0;
+    int maxDepth = 0;
+  };
+
+  /// Subtree `root` in pre-order (parents before children), appended to order.
+  void preorder(std::uint32_t root, std::vector<std::uint32_t>& order) const {
+    std::vector<std::uint32_t> stack{root};
     while (!stack.empty()) {
       std::uint32_t i = stack.back();
       stack.pop_back();
       order.push_back(i);
       if (m_in[i].count == 0) stack.push_back(m_in[i].first + 1), stack.push_back(m_in[i].first);
     }
-    return order;
+  }
+
+  void evaluateInParts() {
+    // the nodes above kSplitDepth in pre-order; the subtrees hanging from them
+    std::vector<std::uint32_t> top, roots;
+    std::vector<std::pair<std::uint32_t, int>> stack{{0u, 0}};
+    while (!stack.empty()) {
+      const auto [i, depth] = stack.back();
+      stack.pop_back();
+      if (depth == kSplitDepth) {
+        roots.push_back(i);
+        continue;
+      }
+      top.push_back(i);
+      if (m_in[i].count == 0) stack.push_back({m_in[i].first + 1, depth + 1}), stack.push_back({m_in[i].first, depth + 1});
+    }
+    std::atomic<std::size_t> next{0};
+    runTeam(std::min<int>(m_threads, int(roots.size()) + 1), [&](int, int, Barrier&) {
+      std::vector<std::uint32_t> order;
+      for (std::size_t k; (k = next.fetch_add(1, std::memory_order_relaxed)) < roots.size();) {
+        order.clear();
+        preorder(roots[k], order);
+        for (std::uint32_t i : order | std::views::reverse) evaluate(i);
+      }
+    });
+    for (std::uint32_t i : top | std::views::reverse) evaluate(i);
   }
 
   /// Node i's costs and decision, from its children's.
@@ -128,7 +195,7 @@ class Collapse {
       m_firstPrim[i] = node.first;
       s.cost[0] = s.cost[1] = s.cost[2] = s.cost[3] = leafTestCost(area, node.count);
       d.bits = 1;
-      m_rootIsLeaf = true;  // read only for i = 0
+      if (i == 0) m_rootIsLeaf = true;
       return;
     }
     const std::uint32_t l = node.first, r = l + 1;
@@ -160,7 +227,7 @@ class Collapse {
     }
     d.bits = std::uint8_t(bits | std::uint32_t(left[4]) << 6);
     // the root is a 4-wide node in any case: it is one leaf only when that beats its four slots
-    m_rootIsLeaf = asLeaf <= split[4];
+    if (i == 0) m_rootIsLeaf = asLeaf <= split[4];
   }
 
   float leafTestCost(float area, std::uint32_t prims) const {
@@ -191,18 +258,21 @@ class Collapse {
     }
   }
 
-  /// Lay the 4-wide nodes out depth first, so a node's first child sits right behind it.
-  void emit(Bvh4& out) const {
-    struct Task {
-      std::uint32_t binary, node;
-      int depth;
-    };
-    std::vector<Task> stack{{0, 0, 0}};
+  /// Fill nodes[root.node] from root.binary's children and lay the 4-wide
+  /// nodes below it out depth first, so that a node's first child sits right
+  /// behind it. With `deferred`, a node over a binary subtree of at most
+  /// m_partPrims primitives is left empty and its task appended there.
+  void emit(const Task& root, std::vector<WtBvh4Node>& nodes, std::vector<Task>* deferred, EmitStats& stats) const {
+    std::vector<Task> stack{root};
     std::vector<Slot> slots;
     while (!stack.empty()) {
       const Task task = stack.back();
       stack.pop_back();
-      out.stats.maxDepth = std::max(out.stats.maxDepth, task.depth);
+      if (deferred && task.node != root.node && m_prims[task.binary] <= m_partPrims) {
+        deferred->push_back(task);
+        continue;
+      }
+      stats.maxDepth = std::max(stats.maxDepth, task.depth);
       const std::uint32_t l = m_in[task.binary].first;
       const int left = m_decision[task.binary].nodeLeft();
       slots.clear();
@@ -213,17 +283,68 @@ class Collapse {
       for (std::size_t k = 0; k < slots.size(); ++k) {
         const std::uint32_t b = slots[k].binary;
         if (slots[k].leaf) {
-          setSlot(out.nodes[task.node], int(k), m_in[b], m_firstPrim[b], m_prims[b]);
-          ++out.stats.leafCount;
+          setSlot(nodes[task.node], int(k), m_in[b], m_firstPrim[b], m_prims[b]);
+          ++stats.leafCount;
         } else {
-          const std::uint32_t index = std::uint32_t(out.nodes.size());
-          out.nodes.push_back(emptyNode());
-          setSlot(out.nodes[task.node], int(k), m_in[b], index, 0);
+          const std::uint32_t index = std::uint32_t(nodes.size());
+          nodes.push_back(emptyNode());
+          setSlot(nodes[task.node], int(k), m_in[b], index, 0);
           pending[std::size_t(pendingCount++)] = {b, index, task.depth + 1};
         }
       }
       for (int k = pendingCount - 1; k >= 0; --k) stack.push_back(pending[std::size_t(k)]);
     }
+  }
+
+  /// The nodes over the large subtrees first, then each part's nodes (its
+  /// root in the slot the top left for it, the rest in one block), parts in
+  /// the order the top met them.
+  void emitInParts(Bvh4& out) const {
+    std::vector<Task> deferred;
+    EmitStats topStats;
+    emit({0, 0, 0}, out.nodes, &deferred, topStats);
+    std::vector<std::vector<WtBvh4Node>> parts(deferred.size());
+    std::vector<EmitStats> partStats(deferred.size());
+    std::atomic<std::size_t> next{0};
+    const int team = std::min<int>(m_threads, int(deferred.size()) + 1);
+    runTeam(team, [&](int, int, Barrier&) {
+      for (std::size_t k; (k = next.fetch_add(1, std::memory_order_relaxed)) < deferred.size();) {
+        // built in locals: neighbouring parts' vectors and counts share cache lines
+        std::vector<WtBvh4Node> nodes;
+        nodes.reserve(m_prims[deferred[k].binary] / 8 + 16);
+        nodes.push_back(emptyNode());
+        EmitStats stats;
+        emit({deferred[k].binary, 0, deferred[k].depth}, nodes, nullptr, stats);
+        parts[k] = std::move(nodes);
+        partStats[k] = stats;
+      }
+    });
+    // part k's node j > 0 goes to base[k] + j - 1
+    std::vector<std::size_t> base(deferred.size());
+    std::size_t total = out.nodes.size();
+    out.stats.leafCount = topStats.leafCount;
+    out.stats.maxDepth = topStats.maxDepth;
+    for (std::size_t k = 0; k < parts.size(); ++k) {
+      base[k] = total;
+      total += parts[k].size() - 1;
+      out.stats.leafCount += partStats[k].leafCount;
+      out.stats.maxDepth = std::max(out.stats.maxDepth, partStats[k].maxDepth);
+    }
+    out.nodes.reserve(total);
+    for (const std::vector<WtBvh4Node>& part : parts) out.nodes.insert(out.nodes.end(), part.begin() + 1, part.end());
+    runTeam(team, [&](int rank, int size, Barrier&) {
+      const bvh_detail::Range range = bvh_detail::chunkOf(parts.size(), size, rank);
+      for (std::size_t k = range.begin; k < range.end; ++k) {
+        const std::uint32_t offset = std::uint32_t(base[k] - 1);
+        const auto relocate = [offset](WtBvh4Node& node) {
+          for (int c = 0; c < 4; ++c)
+            if (node.count[c] == 0 && node.child[c] != WT_BVH4_EMPTY) node.child[c] += offset;
+        };
+        out.nodes[deferred[k].node] = parts[k][0];
+        relocate(out.nodes[deferred[k].node]);
+        for (std::size_t j = base[k]; j < base[k] + parts[k].size() - 1; ++j) relocate(out.nodes[j]);
+      }
+    });
   }
 
   const BvhNodes& m_in;
@@ -232,31 +353,15 @@ class Collapse {
   bool m_rootIsLeaf = false;
   float m_nodeCost = 0.0f;
   std::uint32_t m_maxLeaf = 1;
+  bool m_parts = false;
+  int m_threads = 1;
+  std::uint32_t m_partPrims = 1;
   std::vector<SubtreeCost, UninitialisedAllocator<SubtreeCost>> m_cost;
   std::vector<Decision> m_decision;
   std::vector<std::uint32_t, UninitialisedAllocator<std::uint32_t>> m_prims, m_firstPrim;
 };
 
 }  // namespace
-
-Bvh4 collapseToBvh4(const Bvh& bvh, const Bvh4Options& options) {
-  const auto start = std::chrono::steady_clock::now();
-  Bvh4 out = Collapse(bvh, options).run();
-  // over the memory budget: nodes made dearer until the tree fits
-  const double prims = double(bvh.primIndices.size());
-  Bvh4Options dearer = options;
-  for (int round = 0; round < Bvh4Options::kBudgetRounds && options.nodeBytesPerPrimitive > 0.0 &&
-                      double(out.nodes.size() * sizeof(WtBvh4Node)) > options.nodeBytesPerPrimitive * prims;
-       ++round) {
-    dearer.nodeCost = std::max(2.0 * dearer.nodeCost, 1e-6);
-    out = Collapse(bvh, dearer).run();
-  }
-  out.stats.sahCost = sahCost(out);
-  out.stats.nodeCost = dearer.nodeCost;
-  out.stats.collapseCost = collapseCost(out, dearer);
-  out.stats.collapseSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  return out;
-}
 
 namespace {
 
@@ -275,37 +380,86 @@ double slotArea(const WtBvh4Node& node, int k) {
   return boxArea(node.lo_x[k], node.lo_y[k], node.lo_z[k], node.hi_x[k], node.hi_y[k], node.hi_z[k]);
 }
 
-}  // namespace
+struct TreeCosts {
+  double sah = 0.0, collapse = 0.0;
+};
 
-double collapseCost(const Bvh4& bvh, const Bvh4Options& options) {
-  if (bvh.nodes.empty()) return 0.0;
+/// sahCost and collapseCost in one pass, over fixed chunks of nodes summed
+/// in order: the same figures on any number of threads.
+TreeCosts treeCosts(const Bvh4& bvh, const Bvh4Options& options, int threads) {
+  TreeCosts costs;
+  if (bvh.nodes.empty()) return costs;
   const double area = rootArea(bvh.nodes[0]);
   const bool unit = !(area > 0.0) || !std::isfinite(area);
-  double cost = 1.0 + options.nodeCost;  // the root's test
-  for (const WtBvh4Node& node : bvh.nodes)
-    for (int k = 0; k < 4; ++k) {
-      if (node.child[k] == WT_BVH4_EMPTY) continue;
-      const double a = unit ? 1.0 : slotArea(node, k) / area;
-      cost += node.count[k] > 0 ? a * options.leafCost * double((node.count[k] + 3) / 4) : a + options.nodeCost;
+  constexpr std::size_t kChunk = 4096;
+  const std::size_t chunks = (bvh.nodes.size() + kChunk - 1) / kChunk;
+  struct Sums {
+    double sahArea = 0.0, sahWeight = 0.0, collapse = 0.0;
+  };
+  std::vector<Sums> sums(chunks);
+  const auto sumChunk = [&](std::size_t c) {
+    Sums s;
+    const std::size_t end = std::min(bvh.nodes.size(), (c + 1) * kChunk);
+    for (std::size_t i = c * kChunk; i < end; ++i) {
+      const WtBvh4Node& node = bvh.nodes[i];
+      for (int k = 0; k < 4; ++k) {
+        if (node.child[k] == WT_BVH4_EMPTY) continue;
+        const double slot = slotArea(node, k);
+        const bool leaf = node.count[k] > 0;
+        const double w = leaf ? double(node.count[k]) : 1.0;
+        s.sahArea += w * slot;
+        s.sahWeight += w;
+        const double a = unit ? 1.0 : slot / area;
+        s.collapse += leaf ? a * options.leafCost * double((node.count[k] + 3) / 4) : a + options.nodeCost;
+      }
     }
-  return cost;
+    sums[c] = s;
+  };
+  if (threads > 1 && chunks > 1) {
+    std::atomic<std::size_t> next{0};
+    runTeam(std::min<int>(threads, int(chunks)), [&](int, int, Barrier&) {
+      for (std::size_t c; (c = next.fetch_add(1, std::memory_order_relaxed)) < chunks;) sumChunk(c);
+    });
+  } else {
+    for (std::size_t c = 0; c < chunks; ++c) sumChunk(c);
+  }
+  Sums total;
+  total.sahWeight = 1.0;  // the root's test
+  for (const Sums& s : sums) total.sahArea += s.sahArea, total.sahWeight += s.sahWeight, total.collapse += s.collapse;
+  // degenerate roots (a point or a segment) give no ratio: count every test
+  costs.sah = unit || !std::isfinite(total.sahArea) ? total.sahWeight : 1.0 + total.sahArea / area;
+  costs.collapse = 1.0 + options.nodeCost + total.collapse;  // the root's test and node
+  return costs;
 }
 
-double sahCost(const Bvh4& bvh) {
-  if (bvh.nodes.empty()) return 0.0;
-  const double area = rootArea(bvh.nodes[0]);
-  double cost = 0.0, weight = 1.0;  // the root's test
-  for (const WtBvh4Node& node : bvh.nodes)
-    for (int k = 0; k < 4; ++k) {
-      if (node.child[k] == WT_BVH4_EMPTY) continue;
-      const double w = node.count[k] > 0 ? double(node.count[k]) : 1.0;
-      cost += w * slotArea(node, k);
-      weight += w;
-    }
-  // degenerate roots (a point or a segment) give no ratio: count every test
-  if (!(area > 0.0) || !std::isfinite(area) || !std::isfinite(cost)) return weight;
-  return 1.0 + cost / area;
+}  // namespace
+
+Bvh4 collapseToBvh4(const Bvh& bvh, const Bvh4Options& options) {
+  const auto start = std::chrono::steady_clock::now();
+  Bvh4 out = Collapse(bvh, options).run();
+  // over the memory budget: nodes made dearer until the tree fits
+  const double prims = double(bvh.primIndices.size());
+  Bvh4Options dearer = options;
+  for (int round = 0; round < Bvh4Options::kBudgetRounds && options.nodeBytesPerPrimitive > 0.0 &&
+                      out.nodes.size() > 1 &&  // one node is the fewest a tree can have
+                      double(out.nodes.size() * sizeof(WtBvh4Node)) > options.nodeBytesPerPrimitive * prims;
+       ++round) {
+    dearer.nodeCost = std::max(2.0 * dearer.nodeCost, 1e-6);
+    out = Collapse(bvh, dearer).run();
+  }
+  const bool parallel = bvh.primIndices.size() >= options.partsFromPrimitives;
+  const int threads = options.threads > 0 ? options.threads : int(std::thread::hardware_concurrency());
+  const TreeCosts costs = treeCosts(out, dearer, parallel ? std::clamp(threads, 1, 64) : 1);
+  out.stats.sahCost = costs.sah;
+  out.stats.nodeCost = dearer.nodeCost;
+  out.stats.collapseCost = costs.collapse;
+  out.stats.collapseSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return out;
 }
+
+double collapseCost(const Bvh4& bvh, const Bvh4Options& options) { return treeCosts(bvh, options, 1).collapse; }
+
+double sahCost(const Bvh4& bvh) { return treeCosts(bvh, Bvh4Options{}, 1).sah; }
 
 int bvh4StackEntries(const Bvh4Stats& stats) { return 3 * (stats.maxDepth + 1); }
 

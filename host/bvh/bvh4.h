@@ -37,6 +37,12 @@ struct Bvh4Options {
   /// triangle scene within 64 bytes per triangle (52 of triangle data); 0: no budget.
   double nodeBytesPerPrimitive = 12.0;
   static constexpr int kBudgetRounds = 8;
+  /// Trees of at least this many primitives are collapsed in parts, on
+  /// `threads` threads (0: all the host has): the same tree for any thread
+  /// count, with its nodes laid out by part (the top nodes, then each part's
+  /// block) rather than depth first throughout.
+  std::size_t partsFromPrimitives = 65536;
+  int threads = 0;
 };
 
 struct Bvh4Stats {
@@ -79,6 +85,7 @@ inline BvhBuildOptions binaryBuildOptions(const BvhBuildOptions& given, std::siz
 inline Bvh4Options bvh4Options(const BvhBuildOptions& given) {
   Bvh4Options options;
   options.maxLeafSize = given.maxLeafSize > 0 ? given.maxLeafSize : kBvh4MaxLeafSize;
+  options.threads = given.threads;
   return options;
 }
 

@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstring>
 #include <functional>
 #include <limits>
 #include <map>
@@ -414,6 +415,69 @@ TEST(Bvh4, TraversableTreesFitIn64BytesPerTriangle) {
   EXPECT_GT(nodeBytes(loose, prims.size()), 12.0);
   EXPECT_EQ(loose.stats.nodeCost, Bvh4Options{}.nodeCost);
   EXPECT_GT(tight.stats.nodeCost, loose.stats.nodeCost);
+}
+
+/// The tree as its slots read depth first from the root, whatever the node order.
+std::vector<std::array<float, 8>> canonical(const Bvh4& tree) {
+  std::vector<std::array<float, 8>> slots;
+  std::vector<std::uint32_t> stack;
+  if (!tree.nodes.empty()) stack.push_back(0);
+  while (!stack.empty()) {
+    const WtBvh4Node& node = tree.nodes[stack.back()];
+    stack.pop_back();
+    for (int k = 3; k >= 0; --k)
+      if (node.child[k] != WT_BVH4_EMPTY && node.count[k] == 0) stack.push_back(node.child[k]);
+    for (int k = 0; k < 4; ++k) {
+      const bool leaf = node.count[k] > 0;
+      slots.push_back({node.lo_x[k], node.lo_y[k], node.lo_z[k], node.hi_x[k], node.hi_y[k], node.hi_z[k],
+                       leaf ? float(node.child[k]) : -1.0f, float(node.count[k])});
+    }
+  }
+  return slots;
+}
+
+TEST(Bvh4, PartsGiveTheSameTreeOnAnyThreadCount) {
+  // large trees are evaluated and laid out in parts on threads: the same
+  // nodes byte for byte on 1, 2 or 3 threads, and the same tree as the
+  // collapse in one piece, in another order
+  BvhBuildOptions given;
+  given.maxLeafSize = 0;
+  std::vector<Aabb> prims = triangleBounds(makeBumpyGrid(200000));
+  Bvh binary = buildBvh(prims, binaryBuildOptions(given, prims.size()));
+  Bvh4Options whole = bvh4Options(given);
+  whole.partsFromPrimitives = std::numeric_limits<std::size_t>::max();
+  const Bvh4 reference = collapseToBvh4(binary, whole);
+  ASSERT_TRUE(checkBvh4(reference, binary, prims));
+  std::vector<Bvh4> inParts;
+  for (int threads : {1, 2, 3}) {
+    Bvh4Options options = bvh4Options(given);
+    options.threads = threads;
+    ASSERT_LE(options.partsFromPrimitives, prims.size());
+    inParts.push_back(collapseToBvh4(binary, options));
+    const Bvh4& tree = inParts.back();
+    ASSERT_TRUE(checkBvh4(tree, binary, prims)) << threads << " threads";
+    EXPECT_EQ(tree.stats.nodeCount, reference.stats.nodeCount);
+    EXPECT_EQ(tree.stats.leafCount, reference.stats.leafCount);
+    EXPECT_EQ(tree.stats.maxDepth, reference.stats.maxDepth);
+    // summed in node order: equal but for rounding
+    EXPECT_NEAR(tree.stats.collapseCost, reference.stats.collapseCost, 1e-12 * reference.stats.collapseCost);
+    EXPECT_TRUE(canonical(tree) == canonical(reference)) << threads << " threads";
+  }
+  // the parts do reorder the nodes (or this test would not see them)
+  EXPECT_NE(std::memcmp(inParts[0].nodes.data(), reference.nodes.data(), reference.nodes.size() * sizeof(WtBvh4Node)), 0);
+  for (std::size_t t = 1; t < inParts.size(); ++t)
+    EXPECT_EQ(std::memcmp(inParts[t].nodes.data(), inParts[0].nodes.data(), inParts[0].nodes.size() * sizeof(WtBvh4Node)), 0);
+  // small and shallow trees in parts (fewer levels than the split depth, a root leaf)
+  for (std::size_t count : {1u, 2u, 5u, 40u, 3000u}) {
+    std::vector<Aabb> soup(prims.begin(), prims.begin() + std::ptrdiff_t(count));
+    Bvh small = buildBvh(soup, binaryBuildOptions(given, soup.size()));
+    Bvh4Options parts = bvh4Options(given), one = bvh4Options(given);
+    parts.partsFromPrimitives = 0;
+    one.partsFromPrimitives = std::numeric_limits<std::size_t>::max();
+    const Bvh4 a = collapseToBvh4(small, parts), b = collapseToBvh4(small, one);
+    EXPECT_TRUE(checkBvh4(a, small, soup)) << count;
+    EXPECT_TRUE(canonical(a) == canonical(b)) << count;
+  }
 }
 
 // ---- SAH regression --------------------------------------------------------------
