@@ -27,21 +27,39 @@ inline float3 bvh_safe_rcp(float3 d) {
   return 1.0f / ds;
 }
 
+/// Where a ray's near and far planes sit in a WtBvh4Node, per axis, as
+/// float offsets from the node's start: the lo planes when the direction
+/// is positive, the hi planes when it is negative. Picked once per ray, so
+/// the slab test loads the planes it needs instead of choosing per node.
+typedef struct RayPlanes {
+  int near_x, far_x, near_y, far_y, near_z, far_z;
+} RayPlanes;
+
+inline RayPlanes bvh_ray_planes(float3 inv_d) {
+  // lo_x at 0, hi_x at 4, lo_y at 8, hi_y at 12, lo_z at 16, hi_z at 20 (shared/types.h)
+  RayPlanes p;
+  p.near_x = inv_d.x < 0.0f ? 4 : 0;
+  p.far_x = 4 - p.near_x;
+  p.near_y = inv_d.y < 0.0f ? 12 : 8;
+  p.far_y = 20 - p.near_y;
+  p.near_z = inv_d.z < 0.0f ? 20 : 16;
+  p.far_z = 36 - p.near_z;
+  return p;
+}
+
 // Slab test of a node's four child boxes at once. The far distance is scaled
 // up by 1 + 2*gamma(3) (Ize 2013), so rounding never culls a box the ray truly
-// touches. Near and far planes are picked by the sign of the ray's direction,
-// so an empty slot's inverted box (lo = +inf, hi = -inf) is never entered.
-inline int4 bvh4_box_hit(__global const WtBvh4Node* n, float3 org, float3 inv_d, float tmin,
+// touches. Near and far planes are picked by the sign of the ray's direction
+// (RayPlanes), so an empty slot's inverted box (lo = +inf, hi = -inf) is never entered.
+inline int4 bvh4_box_hit(__global const WtBvh4Node* n, RayPlanes planes, float3 org, float3 inv_d, float tmin,
                          float tmax, float4* t_entry) {
-  float4 lo_x = vload4(0, n->lo_x), hi_x = vload4(0, n->hi_x);
-  float4 lo_y = vload4(0, n->lo_y), hi_y = vload4(0, n->hi_y);
-  float4 lo_z = vload4(0, n->lo_z), hi_z = vload4(0, n->hi_z);
-  float4 tn_x = ((inv_d.x < 0.0f ? hi_x : lo_x) - org.x) * inv_d.x;
-  float4 tf_x = ((inv_d.x < 0.0f ? lo_x : hi_x) - org.x) * inv_d.x;
-  float4 tn_y = ((inv_d.y < 0.0f ? hi_y : lo_y) - org.y) * inv_d.y;
-  float4 tf_y = ((inv_d.y < 0.0f ? lo_y : hi_y) - org.y) * inv_d.y;
-  float4 tn_z = ((inv_d.z < 0.0f ? hi_z : lo_z) - org.z) * inv_d.z;
-  float4 tf_z = ((inv_d.z < 0.0f ? lo_z : hi_z) - org.z) * inv_d.z;
+  __global const float* f = (__global const float*)n;
+  float4 tn_x = (vload4(0, f + planes.near_x) - org.x) * inv_d.x;
+  float4 tf_x = (vload4(0, f + planes.far_x) - org.x) * inv_d.x;
+  float4 tn_y = (vload4(0, f + planes.near_y) - org.y) * inv_d.y;
+  float4 tf_y = (vload4(0, f + planes.far_y) - org.y) * inv_d.y;
+  float4 tn_z = (vload4(0, f + planes.near_z) - org.z) * inv_d.z;
+  float4 tf_z = (vload4(0, f + planes.far_z) - org.z) * inv_d.z;
   float4 enter = fmax(fmax(tn_x, tn_y), fmax(tn_z, (float4)(tmin)));
   float4 exit = fmin(fmin(tf_x, tf_y), tf_z) * 1.00000036f;
   exit = fmin(exit, (float4)(tmax));
@@ -69,6 +87,7 @@ inline Hit bvh_closest(BvhScene scene, float3 org, float3 dir, float tmin, float
 
   RayShear shear = triangle_ray_shear(dir);
   float3 inv_d = bvh_safe_rcp(dir);
+  RayPlanes planes = bvh_ray_planes(inv_d);
   // at most three pushes per level: WT_BVH_STACK_SIZE comes from bvh4StackEntries
   uint stack_node[WT_BVH_STACK_SIZE];
   float stack_t[WT_BVH_STACK_SIZE];
@@ -77,7 +96,7 @@ inline Hit bvh_closest(BvhScene scene, float3 org, float3 dir, float tmin, float
   for (;;) {
     __global const WtBvh4Node* n = &nodes[node];
     float4 t4;
-    int4 hit4 = bvh4_box_hit(n, org, inv_d, tmin, hit.t, &t4);
+    int4 hit4 = bvh4_box_hit(n, planes, org, inv_d, tmin, hit.t, &t4);
     float t_child[4] = {t4.s0, t4.s1, t4.s2, t4.s3};
     int hit_child[4] = {hit4.s0, hit4.s1, hit4.s2, hit4.s3};
     // Leaves now (they shorten hit.t); inner children sorted nearest first.
@@ -143,6 +162,7 @@ inline bool bvh_occluded(BvhScene scene, float3 org, float3 dir, float tmin, flo
   __global const WtBvh4Node* nodes = (__global const WtBvh4Node*)scene.nodes;
   RayShear shear = triangle_ray_shear(dir);
   float3 inv_d = bvh_safe_rcp(dir);
+  RayPlanes planes = bvh_ray_planes(inv_d);
 
   uint stack_node[WT_BVH_STACK_SIZE];
   int sp = 0;
@@ -150,7 +170,7 @@ inline bool bvh_occluded(BvhScene scene, float3 org, float3 dir, float tmin, flo
   for (;;) {
     __global const WtBvh4Node* n = &nodes[node];
     float4 t4;
-    int4 hit4 = bvh4_box_hit(n, org, inv_d, tmin, tmax, &t4);
+    int4 hit4 = bvh4_box_hit(n, planes, org, inv_d, tmin, tmax, &t4);
     int hit_child[4] = {hit4.s0, hit4.s1, hit4.s2, hit4.s3};
     int next = -1;
     for (int k = 0; k < 4; ++k) {

@@ -103,6 +103,8 @@ static_assert(sizeof(WtBvhNode) == 32);
 static_assert(offsetof(WtBvhNode, hi_x) == 16);
 static_assert(sizeof(WtBvh4Node) == 128);
 static_assert(offsetof(WtBvh4Node, lo_y) == 32 && offsetof(WtBvh4Node, lo_z) == 64);
+// bvh_ray_planes (kernels/bvh.cl) addresses the planes by these float offsets
+static_assert(offsetof(WtBvh4Node, hi_x) == 16 && offsetof(WtBvh4Node, hi_y) == 48 && offsetof(WtBvh4Node, hi_z) == 80);
 static_assert(offsetof(WtBvh4Node, child) == 96 && offsetof(WtBvh4Node, count) == 112);
 static_assert(sizeof(WtMaterial) == 64);
 static_assert(sizeof(WtCamera) == 64);
