@@ -47,6 +47,12 @@ inline RayPlanes bvh_ray_planes(float3 inv_d) {
   return p;
 }
 
+// Larger and smaller of two distances. No NaN reaches the slab test (a
+// finite ray has finite reciprocal directions, bvh_safe_rcp), so these need
+// not be fmax and fmin, whose NaN rules cost two more instructions each.
+inline float4 bvh_max(float4 a, float4 b) { return a > b ? a : b; }
+inline float4 bvh_min(float4 a, float4 b) { return a < b ? a : b; }
+
 // Slab test of a node's four child boxes at once. The far distance is scaled
 // up by 1 + 2*gamma(3) (Ize 2013), so rounding never culls a box the ray truly
 // touches. Near and far planes are picked by the sign of the ray's direction
@@ -60,9 +66,9 @@ inline int4 bvh4_box_hit(__global const WtBvh4Node* n, RayPlanes planes, float3 
   float4 tf_y = (vload4(0, f + planes.far_y) - org.y) * inv_d.y;
   float4 tn_z = (vload4(0, f + planes.near_z) - org.z) * inv_d.z;
   float4 tf_z = (vload4(0, f + planes.far_z) - org.z) * inv_d.z;
-  float4 enter = fmax(fmax(tn_x, tn_y), fmax(tn_z, (float4)(tmin)));
-  float4 exit = fmin(fmin(tf_x, tf_y), tf_z) * 1.00000036f;
-  exit = fmin(exit, (float4)(tmax));
+  float4 enter = bvh_max(bvh_max(tn_x, tn_y), bvh_max(tn_z, (float4)(tmin)));
+  float4 exit = bvh_min(bvh_min(tf_x, tf_y), tf_z) * 1.00000036f;
+  exit = bvh_min(exit, (float4)(tmax));
   *t_entry = enter;
   return enter <= exit;
 }

@@ -50,6 +50,8 @@ inline float packet_max(pfloat v) {
   float2 b = fmax(a.lo, a.hi);
   return fmax(b.x, b.y);
 }
+inline pfloat packet_vmax(pfloat a, pfloat b) { return a > b ? a : b; }
+inline pfloat packet_vmin(pfloat a, pfloat b) { return a < b ? a : b; }
 inline pfloat packet_pick(pint m, pfloat yes, pfloat no) { return as_pfloat((as_pint(yes) & m) | (as_pint(no) & ~m)); }
 inline puint packet_pick_u(pint m, puint yes, puint no) { return (yes & as_puint(m)) | (no & ~as_puint(m)); }
 
@@ -74,9 +76,10 @@ inline pint packet_box_hit(__global const WtBvh4Node* n, int k, const RayPacket*
   pfloat t0x = (n->lo_x[k] - p->o[0]) * p->inv_d[0], t1x = (n->hi_x[k] - p->o[0]) * p->inv_d[0];
   pfloat t0y = (n->lo_y[k] - p->o[1]) * p->inv_d[1], t1y = (n->hi_y[k] - p->o[1]) * p->inv_d[1];
   pfloat t0z = (n->lo_z[k] - p->o[2]) * p->inv_d[2], t1z = (n->hi_z[k] - p->o[2]) * p->inv_d[2];
-  pfloat tn = fmax(fmax(fmin(t0x, t1x), fmin(t0y, t1y)), fmax(fmin(t0z, t1z), p->tmin));
-  pfloat tf = fmin(fmin(fmax(t0x, t1x), fmax(t0y, t1y)), fmax(t0z, t1z)) * 1.00000036f;
-  tf = fmin(tf, tmax);
+  // no NaN in a valid lane (see bvh_max); the others are masked out below
+  pfloat tn = packet_vmax(packet_vmax(packet_vmin(t0x, t1x), packet_vmin(t0y, t1y)), packet_vmax(packet_vmin(t0z, t1z), p->tmin));
+  pfloat tf = packet_vmin(packet_vmin(packet_vmax(t0x, t1x), packet_vmax(t0y, t1y)), packet_vmax(t0z, t1z)) * 1.00000036f;
+  tf = packet_vmin(tf, tmax);
   *enter = tn;
   return packet_mask(tn <= tf);
 }
