@@ -65,13 +65,20 @@ struct Decision {
 using bvh_detail::Barrier;
 using bvh_detail::runTeam;
 
+/// The threads a collapse of `bvh` runs on: options.threads (0: all the
+/// host has) for a tree collapsed in parts, else one.
+int collapseThreads(const Bvh& bvh, const Bvh4Options& options) {
+  if (bvh.primIndices.size() < options.partsFromPrimitives) return 1;
+  const int threads = options.threads > 0 ? options.threads : int(std::thread::hardware_concurrency());
+  return std::clamp(threads, 1, 64);
+}
+
 class Collapse {
  public:
   Collapse(const Bvh& bvh, const Bvh4Options& options) : m_in(bvh.nodes), m_options(options) {
     // in parts on one thread as on many, so that the layout never depends on the count
     m_parts = bvh.primIndices.size() >= options.partsFromPrimitives;
-    const int threads = options.threads > 0 ? options.threads : int(std::thread::hardware_concurrency());
-    m_threads = m_parts ? std::clamp(threads, 1, 64) : 1;
+    m_threads = collapseThreads(bvh, options);
     m_partPrims = std::uint32_t(std::max<std::size_t>(bvh.primIndices.size() / kParts, 1));
   }
 
@@ -447,9 +454,7 @@ Bvh4 collapseToBvh4(const Bvh& bvh, const Bvh4Options& options) {
     dearer.nodeCost = std::max(2.0 * dearer.nodeCost, 1e-6);
     out = Collapse(bvh, dearer).run();
   }
-  const bool parallel = bvh.primIndices.size() >= options.partsFromPrimitives;
-  const int threads = options.threads > 0 ? options.threads : int(std::thread::hardware_concurrency());
-  const TreeCosts costs = treeCosts(out, dearer, parallel ? std::clamp(threads, 1, 64) : 1);
+  const TreeCosts costs = treeCosts(out, dearer, collapseThreads(bvh, options));
   out.stats.sahCost = costs.sah;
   out.stats.nodeCost = dearer.nodeCost;
   out.stats.collapseCost = costs.collapse;
