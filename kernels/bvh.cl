@@ -115,11 +115,12 @@ inline Hit bvh_closest(BvhScene scene, float3 org, float3 dir, float tmin, float
       if (!hit_child[k]) continue;
       uint first = n->child[k], count = n->count[k];
       if (count > 0) {
-        // leaves hold at most four triangles (bvh4 layout): one vector test each four
-        for (uint i = first; i < first + count; i += 4u) {
+        // one vector test per block of four the leaf touches (WT_TRIANGLE_BLOCK)
+        uint last = first + count - 1u;
+        for (uint b = first >> 2; b <= last >> 2; ++b) {
           float t, b1, b2;
-          uint prim = triangle_intersect4(org, shear, tmin, hit.t, scene.tri_verts, i, min(count - (i - first), 4u),
-                                          skip, skip, &t, &b1, &b2);
+          uint prim = triangle_intersect4(org, shear, tmin, hit.t, scene.tri_verts, b, b == first >> 2 ? first & 3u : 0u,
+                                          b == last >> 2 ? (last & 3u) + 1u : 4u, skip, skip, &t, &b1, &b2);
           if (prim != WT_NO_HIT) {
             hit.t = t;
             hit.b1 = b1;
@@ -185,10 +186,11 @@ inline bool bvh_occluded(BvhScene scene, float3 org, float3 dir, float tmin, flo
       if (!hit_child[k]) continue;
       uint first = n->child[k], count = n->count[k];
       if (count > 0) {
-        for (uint i = first; i < first + count; i += 4u) {
+        uint last = first + count - 1u;
+        for (uint b = first >> 2; b <= last >> 2; ++b) {
           float t, b1, b2;
-          if (triangle_intersect4(org, shear, tmin, tmax, scene.tri_verts, i, min(count - (i - first), 4u), skip_a,
-                                  skip_b, &t, &b1, &b2) != WT_NO_HIT)
+          if (triangle_intersect4(org, shear, tmin, tmax, scene.tri_verts, b, b == first >> 2 ? first & 3u : 0u,
+                                  b == last >> 2 ? (last & 3u) + 1u : 4u, skip_a, skip_b, &t, &b1, &b2) != WT_NO_HIT)
             return true;
         }
       } else if (next < 0) {

@@ -89,16 +89,19 @@ inline pint packet_box_hit(__global const WtBvh4Node* n, int k, const RayPacket*
 /// triangle_intersect's operations in its order, lane by lane.
 inline pint packet_triangle(const RayPacket* p, __global const float4* tri_verts, uint prim, pint lanes,
                             pfloat tmax, pfloat* t_hit, pfloat* b1, pfloat* b2) {
-  float3 p0 = tri_verts[3 * prim + 0].xyz, p1 = tri_verts[3 * prim + 1].xyz, p2 = tri_verts[3 * prim + 2].xyz;
-  pfloat az = vec3_component(p0, p->kz) - p->o_kz;
-  pfloat bz = vec3_component(p1, p->kz) - p->o_kz;
-  pfloat cz = vec3_component(p2, p->kz) - p->o_kz;
-  pfloat ax = (vec3_component(p0, p->kx) - p->o_kx) - p->sx * az;
-  pfloat ay = (vec3_component(p0, p->ky) - p->o_ky) - p->sy * az;
-  pfloat bx = (vec3_component(p1, p->kx) - p->o_kx) - p->sx * bz;
-  pfloat by = (vec3_component(p1, p->ky) - p->o_ky) - p->sy * bz;
-  pfloat cx = (vec3_component(p2, p->kx) - p->o_kx) - p->sx * cz;
-  pfloat cy = (vec3_component(p2, p->ky) - p->o_ky) - p->sy * cz;
+  // the block layout (WT_TRIANGLE_BLOCK) gives each corner's coordinate on
+  // the packet's permuted axes by one load: row 4 k + axis of the block
+  __global const float* f = triangle_block_lane(tri_verts, prim);
+  const int ox = 4 * p->kx, oy = 4 * p->ky, oz = 4 * p->kz;
+  pfloat az = f[oz] - p->o_kz;
+  pfloat bz = f[16 + oz] - p->o_kz;
+  pfloat cz = f[32 + oz] - p->o_kz;
+  pfloat ax = (f[ox] - p->o_kx) - p->sx * az;
+  pfloat ay = (f[oy] - p->o_ky) - p->sy * az;
+  pfloat bx = (f[16 + ox] - p->o_kx) - p->sx * bz;
+  pfloat by = (f[16 + oy] - p->o_ky) - p->sy * bz;
+  pfloat cx = (f[32 + ox] - p->o_kx) - p->sx * cz;
+  pfloat cy = (f[32 + oy] - p->o_ky) - p->sy * cz;
 
   pfloat u = cx * by - cy * bx;
   pfloat v = ax * cy - ay * cx;

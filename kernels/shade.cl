@@ -73,11 +73,10 @@ __kernel void shade(WtFrameParams frame, WtEnvironment environment, __global con
   }
 
   WtMaterial material = materials[triangle_materials[prim]];
-  float3 p0 = tri_verts[3 * prim].xyz, p1 = tri_verts[3 * prim + 1].xyz, p2 = tri_verts[3 * prim + 2].xyz;
-  // each corner's w holds its tagged vertex index (WT_VERTEX_TAG, shared/types.h)
-  __global const uint4* corners = (__global const uint4*)tri_verts;
-  uint v0 = corners[3 * prim].w & WT_VERTEX_INDEX, v1 = corners[3 * prim + 1].w & WT_VERTEX_INDEX,
-       v2 = corners[3 * prim + 2].w & WT_VERTEX_INDEX;
+  float3 p0, p1, p2;
+  triangle_corners(tri_verts, prim, &p0, &p1, &p2);
+  uint3 corner = triangle_vertex_indices(tri_verts, prim);
+  uint v0 = corner.x, v1 = corner.y, v2 = corner.z;
   float3 p, p_error, ng, ns;
   triangle_surface(p0, p1, p2, normals[v0].xyz, normals[v1].xyz, normals[v2].xyz, hit.y, hit.z, &p, &p_error,
                    &ng, &ns);

@@ -19,11 +19,12 @@ __kernel void test_lambert(uint count, float4 normal, __global const float2* u,
 
 #include "geometry/triangle.cl"
 
-// Ray i against triangles [first, first + count) of `verts` (leaf order),
-// skipping `skip`: out[2i] from triangle_intersect4, out[2i + 1] from
-// triangle_intersect one triangle after another; (t, b1, b2, prim).
+// Ray i against the triangles in lanes [lane_lo, lane_hi) of block `block`
+// of `blocks` (WT_TRIANGLE_BLOCK), skipping `skip`: out[2i] from
+// triangle_intersect4, out[2i + 1] from triangle_intersect one triangle
+// after another; (t, b1, b2, prim).
 __kernel void test_intersect4(uint rays, __global const float4* ray_o, __global const float4* ray_d,
-                              __global const float4* verts, uint first, uint count, uint skip,
+                              __global const float4* blocks, uint block, uint lane_lo, uint lane_hi, uint skip,
                               __global float4* out) {
   uint i = get_global_id(0);
   if (i >= rays) return;
@@ -31,16 +32,16 @@ __kernel void test_intersect4(uint rays, __global const float4* ray_o, __global 
   float tmin = ray_o[i].w, tmax = ray_d[i].w;
   RayShear shear = triangle_ray_shear(dir);
   float t = 0.0f, b1 = 0.0f, b2 = 0.0f;
-  uint prim = triangle_intersect4(org, shear, tmin, tmax, verts, first, count, skip, skip, &t, &b1, &b2);
+  uint prim = triangle_intersect4(org, shear, tmin, tmax, blocks, block, lane_lo, lane_hi, skip, skip, &t, &b1, &b2);
   out[2 * i] = prim == WT_NO_HIT ? (float4)(0.0f, 0.0f, 0.0f, as_float(WT_NO_HIT)) : (float4)(t, b1, b2, as_float(prim));
   float best = tmax, bb1 = 0.0f, bb2 = 0.0f;
   uint best_prim = WT_NO_HIT;
-  for (uint k = first; k < first + count; ++k) {
+  for (uint k = 4u * block + lane_lo; k < 4u * block + lane_hi; ++k) {
     if (k == skip) continue;
+    float3 p0, p1, p2;
+    triangle_corners(blocks, k, &p0, &p1, &p2);
     float tk, u, v;
-    if (triangle_intersect(org, shear, tmin, best, verts[3 * k].xyz, verts[3 * k + 1].xyz, verts[3 * k + 2].xyz, &tk,
-                           &u, &v))
-      best = tk, bb1 = u, bb2 = v, best_prim = k;
+    if (triangle_intersect(org, shear, tmin, best, p0, p1, p2, &tk, &u, &v)) best = tk, bb1 = u, bb2 = v, best_prim = k;
   }
   out[2 * i + 1] = best_prim == WT_NO_HIT ? (float4)(0.0f, 0.0f, 0.0f, as_float(WT_NO_HIT))
                                           : (float4)(best, bb1, bb2, as_float(best_prim));

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <limits>
 #include <ranges>
+#include <stdexcept>
 #include <thread>
 #include <vector>
 
@@ -467,5 +468,98 @@ double collapseCost(const Bvh4& bvh, const Bvh4Options& options) { return treeCo
 double sahCost(const Bvh4& bvh) { return treeCosts(bvh, Bvh4Options{}, 1).sah; }
 
 int bvh4StackEntries(const Bvh4Stats& stats) { return 3 * (stats.maxDepth + 1); }
+
+LeafPacking packLeavesIntoBlocks(Bvh4& bvh, std::size_t primitives, std::size_t window) {
+  constexpr std::uint32_t kB = kTriangleBlock;
+  constexpr std::uint32_t kNone = 0xffffffffu;
+  struct Leaf {
+    std::uint32_t first = 0, count = 0, node = 0, slot = 0;
+  };
+  // The leaves in the order of their first primitive (the stream they are
+  // packed from): the collapse keeps the binary tree's order in its slots,
+  // so reading the slots depth first in order gives it; sorted otherwise.
+  std::vector<Leaf> stream;
+  stream.reserve(bvh.stats.leafCount);
+  bool sorted = true;
+  if (!bvh.nodes.empty()) {
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> slots{{0u, 0u}};  // (node, next slot)
+    while (!slots.empty()) {
+      auto& [n, k] = slots.back();
+      if (k == 4) {
+        slots.pop_back();
+        continue;
+      }
+      const std::uint32_t node = n, slot = k++;
+      const WtBvh4Node& w = bvh.nodes[node];
+      if (w.count[slot] > 0) {
+        sorted = sorted && (stream.empty() || stream.back().first < w.child[slot]);
+        stream.push_back({w.child[slot], w.count[slot], node, slot});
+      } else if (w.child[slot] != WT_BVH4_EMPTY) {
+        slots.push_back({w.child[slot], 0u});
+      }
+    }
+  }
+  if (!sorted) std::sort(stream.begin(), stream.end(), [](const Leaf& a, const Leaf& b) { return a.first < b.first; });
+  // each class (count % kB) as a queue of stream positions
+  std::array<std::vector<std::uint32_t>, kB> queue;
+  for (std::uint32_t i = 0; i < stream.size(); ++i) queue[stream[i].count % kB].push_back(i);
+  std::array<std::size_t, kB> head{};
+  std::vector<char> placed(stream.size(), 0);
+  std::size_t front = 0;  // the first stream position not laid out yet
+
+  LeafPacking packing;
+  packing.order.resize(primitives);
+  std::uint32_t* out = packing.order.data();
+  std::size_t placedPrims = 0;
+  // A leaf of `count` starting `offset` lanes into a block touches no more
+  // blocks than its size needs.
+  auto fits = [](std::uint32_t count, std::size_t offset) {
+    return offset == 0 || (count % kB != 0 && offset + count % kB <= kB);
+  };
+  // the oldest leaf of class c not laid out, if it is at most `window`
+  // positions behind the stream's front
+  auto candidate = [&](std::uint32_t c) -> std::uint32_t {
+    if (head[c] == queue[c].size() || queue[c][head[c]] > front + window) return kNone;
+    return queue[c][head[c]];
+  };
+  auto emit = [&](std::uint32_t position) {
+    const Leaf& leaf = stream[position];
+    const std::uint32_t c = leaf.count % kB;
+    // the class queue's head is the oldest of its class, which this is
+    ++head[c];
+    placed[position] = 1;
+    while (front < stream.size() && placed[front]) ++front;
+    if (leaf.count > primitives - placedPrims) throw std::logic_error("packLeavesIntoBlocks: leaves cover more than the primitives");
+    if (!fits(leaf.count, placedPrims % kB)) ++packing.misfits;
+    bvh.nodes[leaf.node].child[leaf.slot] = std::uint32_t(placedPrims);
+    for (std::uint32_t i = 0; i < leaf.count; ++i) out[placedPrims + i] = leaf.first + i;
+    placedPrims += leaf.count;
+  };
+  while (front < stream.size()) {
+    const std::size_t offset = placedPrims % kB;
+    if (offset == 0) {
+      emit(std::uint32_t(front));  // a block starts with the oldest leaf left
+      continue;
+    }
+    // the largest class that still fits the block (the exact one fills it)
+    std::uint32_t pick = kNone;
+    for (std::uint32_t c = std::uint32_t(kB - offset); c >= 1 && pick == kNone; --c) pick = candidate(c);
+    if (pick == kNone) {
+      // No leaf near enough fits: one goes that ends where a leaf near
+      // enough can fill the block after it (at its start if possible).
+      int best = 4;
+      for (std::uint32_t c = 0; c < kB; ++c) {
+        const std::uint32_t p = candidate(c);
+        if (p == kNone) continue;
+        const std::size_t end = (offset + c) % kB;
+        const int score = end == 0 ? 0 : candidate(std::uint32_t(kB - end)) != kNone ? 1 : 2;
+        if (score < best || (score == best && p < pick)) best = score, pick = p;
+      }
+    }
+    emit(pick);
+  }
+  if (placedPrims != primitives) throw std::logic_error("packLeavesIntoBlocks: leaves cover fewer than the primitives");
+  return packing;
+}
 
 }  // namespace wt

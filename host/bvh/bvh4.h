@@ -12,6 +12,7 @@
 
 #include <algorithm>
 #include <cstddef>
+#include <cstdint>
 #include <vector>
 
 namespace wt {
@@ -102,5 +103,29 @@ double collapseCost(const Bvh4& bvh, const Bvh4Options& options);
 
 /// Traversal stack entries the tree can need: at most three pushes per level.
 int bvh4StackEntries(const Bvh4Stats& stats);
+
+/// Triangles per block of the kernels' triangle layout (WT_TRIANGLE_BLOCK,
+/// shared/types.h): one four-lane test covers the lanes of one block.
+constexpr std::uint32_t kTriangleBlock = 4;
+
+struct LeafPacking {
+  /// position in the packed order -> position in the order the tree's
+  /// leaves addressed before (the binary tree's leaf order)
+  PrimIndices order;
+  /// leaves that touch more blocks than their size needs (one more four-lane
+  /// test each): where no leaf that would fit is near enough in the order
+  std::size_t misfits = 0;
+};
+
+/// Lay the leaves out again so that each touches as few blocks of
+/// kTriangleBlock as its size allows (a leaf of 1-4 one block, of 5-8 two),
+/// without padding: a leaf may start inside a block when it still ends in
+/// the block its size needs, so leaves whose sizes add up to a block share
+/// one (3 + 1, 6 + 2, 5 + 3, ...). Leaves keep their own primitives in
+/// their order, and the packed order follows the old one but for leaves
+/// held back a while (at most `window` per size class) until a leaf fits
+/// in front of them. Points the tree's leaf slots at the new positions.
+/// Deterministic. `primitives`: the number the leaves cover.
+LeafPacking packLeavesIntoBlocks(Bvh4& bvh, std::size_t primitives, std::size_t window = 256);
 
 }  // namespace wt

@@ -99,7 +99,7 @@ int runRender(const RenderOptions& options) {
   settings.bvhBuilder = *wt::parseBvhBuilder(options.bvh);
   settings.packets = options.traversal == "auto";
   wt::Renderer renderer(context, scene, settings);
-  const wt::BvhBuildStats& bvh = renderer.sceneBuffers().bvh().stats;
+  const wt::BvhBuildStats& bvh = renderer.sceneBuffers().bvhStats();
   wt::log::info("scene " + scene.sourceName + ": " + std::to_string(scene.triangles.size()) +
                 " triangles, loaded in " + std::to_string(int(loadSeconds * 1e3)) + " ms; BVH (" +
                 wt::bvhBuilderName(settings.bvhBuilder) + ") " +

@@ -7,8 +7,6 @@
 #include <cmath>
 #include <cstddef>
 #include <cstring>
-#include <stdexcept>
-#include <string>
 
 namespace wt {
 namespace {
@@ -27,16 +25,13 @@ cl::Buffer upload(Context& context, const std::vector<T>& data, std::size_t& byt
 }  // namespace
 
 SceneBuffers::SceneBuffers(Context& context, const Scene& scene, const BvhBuildOptions& options) {
-  // the tagged vertex index of tri_verts (shared/types.h) has room for these
-  if (scene.positions.size() > WT_MAX_VERTICES)
-    throw std::length_error("scene has " + std::to_string(scene.positions.size()) + " vertices; at most " +
-                            std::to_string(WT_MAX_VERTICES) + " are supported");
   // Zero-area and non-finite triangles never enter the BVH: they cannot be
   // hit meaningfully, and in float a ray through a collinear triangle can
   // still produce a spurious hit.
   std::vector<Aabb> bounds;
+  std::vector<std::uint32_t> bvhToScene;
   bounds.reserve(scene.triangles.size());
-  m_bvhToScene.reserve(scene.triangles.size());
+  bvhToScene.reserve(scene.triangles.size());
   for (std::size_t i = 0; i < scene.triangles.size(); ++i) {
     const WtTriangle& t = scene.triangles[i];
     auto pos = [&](std::uint32_t v) {
@@ -51,37 +46,45 @@ SceneBuffers::SceneBuffers(Context& context, const Scene& scene, const BvhBuildO
       continue;
     }
     bounds.push_back(scene.triangleBounds(std::uint32_t(i)));
-    m_bvhToScene.push_back(std::uint32_t(i));
+    bvhToScene.push_back(std::uint32_t(i));
   }
-  m_bvh = buildBvh(bounds, binaryBuildOptions(options, bounds.size()));
-  Bvh4 bvh4 = collapseToBvh4(m_bvh, bvh4Options(options));
+  const Bvh bvh = buildBvh(bounds, binaryBuildOptions(options, bounds.size()));
+  m_bvhStats = bvh.stats;
+  Bvh4 bvh4 = collapseToBvh4(bvh, bvh4Options(options));
   m_bvh4Stats = bvh4.stats;
   nodeCount = std::uint32_t(bvh4.nodes.size());
-  // From here on primIndices address the scene's triangles directly.
-  for (std::uint32_t& p : m_bvh.primIndices) p = m_bvhToScene[p];
+  // Leaves laid out in blocks of four (packLeavesIntoBlocks); from here on
+  // the leaf order addresses the scene's triangles directly.
+  const LeafPacking packing = packLeavesIntoBlocks(bvh4, bvh.primIndices.size());
+  m_leafMisfits = packing.misfits;
+  m_leafToScene.resize(packing.order.size());
+  for (std::size_t i = 0; i < packing.order.size(); ++i) m_leafToScene[i] = bvhToScene[bvh.primIndices[packing.order[i]]];
   m_sceneToLeaf.assign(scene.triangles.size(), 0xffffffffu);
-  for (std::size_t leaf = 0; leaf < m_bvh.primIndices.size(); ++leaf) m_sceneToLeaf[m_bvh.primIndices[leaf]] = std::uint32_t(leaf);
+  for (std::size_t leaf = 0; leaf < m_leafToScene.size(); ++leaf) m_sceneToLeaf[m_leafToScene[leaf]] = std::uint32_t(leaf);
 
-  // Reorder triangles to leaf order, so a leaf addresses a contiguous range.
-  // Each corner's w carries its vertex index, tagged (WT_VERTEX_TAG; shading
-  // reads the normals by it), so a triangle costs 3 x 16 bytes of positions
-  // and 4 of material.
-  std::vector<WtVec4> verts(3 * m_bvh.primIndices.size());
-  std::vector<std::uint32_t> materialOf(m_bvh.primIndices.size());
-  for (std::size_t i = 0; i < materialOf.size(); ++i) {
-    const WtTriangle& t = scene.triangles[m_bvh.primIndices[i]];
+  // The triangles in leaf order, in blocks of four (WT_TRIANGLE_BLOCK): per
+  // corner one row of x, of y, of z and of vertex indices (shading reads the
+  // normals by them), so a triangle costs 3 x 16 bytes and 4 of material. The last block's unused lanes stay zero;
+  // no leaf covers them.
+  const std::size_t triangles = m_leafToScene.size();
+  std::vector<float> blocks(48 * ((triangles + kTriangleBlock - 1) / kTriangleBlock), 0.0f);
+  std::vector<std::uint32_t> materialOf(triangles);
+  for (std::size_t i = 0; i < triangles; ++i) {
+    const WtTriangle& t = scene.triangles[m_leafToScene[i]];
     const std::uint32_t corner[3] = {t.v0, t.v1, t.v2};
+    float* lane = blocks.data() + 48 * (i / kTriangleBlock) + i % kTriangleBlock;
     for (int k = 0; k < 3; ++k) {
-      WtVec4 v = scene.positions[corner[k]];
-      const std::uint32_t tagged = corner[k] | WT_VERTEX_TAG;
-      std::memcpy(&v.w, &tagged, sizeof v.w);
-      verts[3 * i + k] = v;
+      const WtVec4& v = scene.positions[corner[k]];
+      lane[16 * k + 0] = v.x;
+      lane[16 * k + 4] = v.y;
+      lane[16 * k + 8] = v.z;
+      std::memcpy(&lane[16 * k + 12], &corner[k], sizeof(float));
     }
     materialOf[i] = t.material;
   }
   std::size_t bytes = 0;
   nodes = upload(context, bvh4.nodes, bytes);
-  triVerts = upload(context, verts, bytes);
+  triVerts = upload(context, blocks, bytes);
   triangleMaterials = upload(context, materialOf, bytes);
   uploadedBytes = bytes;
   std::size_t attributeBytes = 0;
@@ -99,6 +102,7 @@ int SceneBuffers::stackSize() const {
 // One definition, two compilers: the kernels see these exact sizes.
 static_assert(sizeof(WtVec4) == 16);
 static_assert(sizeof(WtTriangle) == 16);
+static_assert(wt::kTriangleBlock == WT_TRIANGLE_BLOCK);
 static_assert(sizeof(WtBvhNode) == 32);
 static_assert(offsetof(WtBvhNode, hi_x) == 16);
 static_assert(sizeof(WtBvh4Node) == 128);

@@ -19,8 +19,10 @@ class SceneBuffers {
   SceneBuffers(Context& context, const Scene& scene, const BvhBuildOptions& options = {});
 
   cl::Buffer nodes;       ///< WtBvh4Node[nodeCount] (one dummy node when empty); kernels declare it WtBvhNode*
-  /// float4[3 * triangles], leaf order, world space; w of vertex k holds the
-  /// bits of the triangle's vertex index v_k (for the per-vertex normals)
+  /// The triangles in leaf order, world space, in blocks of four
+  /// (WT_TRIANGLE_BLOCK, shared/types.h): float4[12 * blocks], per block and
+  /// corner k rows x, y, z of the four triangles and their vertex indices
+  /// (for the per-vertex normals)
   cl::Buffer triVerts;
   cl::Buffer triangleMaterials;  ///< uint[triangles], leaf order: the triangle's material
   cl::Buffer normals;     ///< float4 per vertex
@@ -28,11 +30,15 @@ class SceneBuffers {
   std::uint32_t nodeCount = 0;
   std::size_t uploadedBytes = 0;  ///< nodes + triangle data
 
-  /// The binary LBVH the 4-wide tree was collapsed from (its nodes are not uploaded).
-  const Bvh& bvh() const { return m_bvh; }
+  /// The build of the binary tree the 4-wide tree was collapsed from.
+  const BvhBuildStats& bvhStats() const { return m_bvhStats; }
   const Bvh4Stats& bvh4Stats() const { return m_bvh4Stats; }
-  /// Leaf-order triangle index -> the scene's triangle index.
-  std::uint32_t sceneTriangle(std::uint32_t leafIndex) const { return m_bvh.primIndices[leafIndex]; }
+  /// Leaves that take one more four-lane test than their size needs
+  /// (LeafPacking::misfits).
+  std::size_t leafMisfits() const { return m_leafMisfits; }
+  /// Leaf order (the kernels' triangle index) -> the scene's triangle index.
+  const std::vector<std::uint32_t>& leafOrder() const { return m_leafToScene; }
+  std::uint32_t sceneTriangle(std::uint32_t leafIndex) const { return m_leafToScene[leafIndex]; }
   /// The scene's triangle index -> its leaf-order index; 0xffffffff for one
   /// left out of the BVH or out of range.
   std::uint32_t leafTriangle(std::uint32_t sceneIndex) const {
@@ -44,9 +50,10 @@ class SceneBuffers {
   int stackSize() const;
 
  private:
-  Bvh m_bvh;  ///< primIndices hold scene triangle indices
+  BvhBuildStats m_bvhStats;
   Bvh4Stats m_bvh4Stats;
-  std::vector<std::uint32_t> m_bvhToScene;
+  std::size_t m_leafMisfits = 0;
+  std::vector<std::uint32_t> m_leafToScene;
   std::vector<std::uint32_t> m_sceneToLeaf;
   std::size_t m_skippedTriangles = 0;
 };

@@ -76,7 +76,7 @@ LightList buildLightList(const Scene& scene, const SceneBuffers& buffers, double
   list.analyticCount = std::uint32_t(list.lights.size());
 
   // emissive triangles, in leaf order (as the kernels index them)
-  const PrimIndices& order = buffers.bvh().primIndices;
+  const std::vector<std::uint32_t>& order = buffers.leafOrder();
   std::vector<std::uint32_t> lightOfLeaf(order.size(), ~0u);
   std::vector<double> areas;
   for (std::size_t leaf = 0; leaf < order.size(); ++leaf) {

@@ -76,31 +76,48 @@ __attribute__((always_inline)) inline bool triangle_intersect(float3 org, RayShe
   return true;
 }
 
-/// The nearest hit in (tmin, tmax) among the `count` (1 to 4) leaf-order
-/// triangles from `first` but skip_a and skip_b, tested at once: the
-/// watertight test of triangle_intersect on float4 lanes, one triangle per
-/// lane, with the same operations in the same order (so the same answers).
-/// Returns the lane's triangle or WT_NO_HIT; ties go to the lower index,
-/// as testing them one by one would.
+/// Leaf-order triangle `prim` in the block layout of tri_verts (shared/types.h,
+/// WT_TRIANGLE_BLOCK): float4 row 4k + a of block prim / 4 holds axis a of
+/// corner k for its four triangles, row 4k + 3 their vertex indices. This
+/// is the triangle's lane as floats: element 16 k + 4 a is axis a of corner k.
+inline __global const float* triangle_block_lane(__global const float4* tri_verts, uint prim) {
+  return (__global const float*)(tri_verts + 12u * (prim >> 2)) + (prim & 3u);
+}
+
+/// The three corners of leaf-order triangle `prim`.
+inline void triangle_corners(__global const float4* tri_verts, uint prim, float3* p0, float3* p1, float3* p2) {
+  __global const float* f = triangle_block_lane(tri_verts, prim);
+  *p0 = (float3)(f[0], f[4], f[8]);
+  *p1 = (float3)(f[16], f[20], f[24]);
+  *p2 = (float3)(f[32], f[36], f[40]);
+}
+
+/// The vertex indices of prim's corners (row 4k + 3 of its block).
+inline uint3 triangle_vertex_indices(__global const float4* tri_verts, uint prim) {
+  __global const uint* f = (__global const uint*)triangle_block_lane(tri_verts, prim);
+  return (uint3)(f[12], f[28], f[44]);
+}
+
+/// The nearest hit in (tmin, tmax) among the triangles of block `block`
+/// (leaf-order triangles 4 block + lane) whose lanes lie in [lane_lo,
+/// lane_hi), but skip_a and skip_b, tested at once: the watertight test of
+/// triangle_intersect on float4 lanes, one triangle per lane, with the same
+/// operations in the same order (so the same answers). The block's rows are
+/// already one axis of one corner for the four triangles: the ray's axes
+/// (kx, ky, kz) pick rows, no shuffle. Returns the lane's triangle or
+/// WT_NO_HIT; ties go to the lower index, as testing them one by one would.
 __attribute__((always_inline)) inline uint triangle_intersect4(float3 org, RayShear s, float tmin, float tmax,
-                                                               __global const float4* tri_verts, uint first,
-                                                               uint count, uint skip_a, uint skip_b, float* t_hit,
-                                                               float* b1, float* b2) {
-  uint4 index = (uint4)(first) + min((uint4)(0u, 1u, 2u, 3u), (uint4)(count - 1u));
-  // each vertex's coordinates in the ray's axis order (kx, ky, kz), relative
-  // to the origin in that order (the permutation triangle_intersect makes
-  // with vec3_component): one shuffle per vertex instead of a choice among
-  // x, y and z per coordinate, 1.06x on single-ray traversal (docs/performance.md)
-  uint4 order = (uint4)((uint)s.kx, (uint)s.ky, (uint)s.kz, 3u);
-  float4 o = shuffle((float4)(org, 0.0f), order);
+                                                               __global const float4* tri_verts, uint block,
+                                                               uint lane_lo, uint lane_hi, uint skip_a, uint skip_b,
+                                                               float* t_hit, float* b1, float* b2) {
+  __global const float4* r = tri_verts + 12u * block;
+  float ox = vec3_component(org, s.kx), oy = vec3_component(org, s.ky), oz = vec3_component(org, s.kz);
   float4 vx[3], vy[3], vz[3];
 #pragma unroll
   for (int k = 0; k < 3; ++k) {
-    float4 p0 = shuffle(tri_verts[3 * index.s0 + k], order), p1 = shuffle(tri_verts[3 * index.s1 + k], order);
-    float4 p2 = shuffle(tri_verts[3 * index.s2 + k], order), p3 = shuffle(tri_verts[3 * index.s3 + k], order);
-    vx[k] = (float4)(p0.x, p1.x, p2.x, p3.x) - o.x;
-    vy[k] = (float4)(p0.y, p1.y, p2.y, p3.y) - o.y;
-    vz[k] = (float4)(p0.z, p1.z, p2.z, p3.z) - o.z;
+    vx[k] = r[4 * k + s.kx] - ox;
+    vy[k] = r[4 * k + s.ky] - oy;
+    vz[k] = r[4 * k + s.kz] - oz;
   }
   float4 az = vz[0], bz = vz[1], cz = vz[2];
   float4 ax = vx[0] - s.sx * az;
@@ -133,7 +150,9 @@ __attribute__((always_inline)) inline uint triangle_intersect4(float3 org, RaySh
   float4 t_scaled = u * s.sz * az + v * s.sz * bz + w * s.sz * cz;
   float4 inv_det = 1.0f / det;
   float4 t = t_scaled * inv_det;
-  int4 ok = inside & (det != 0.0f) & (t > tmin) & (t < tmax) & ((uint4)(0u, 1u, 2u, 3u) < (uint4)(count)) &
+  uint4 lane = (uint4)(0u, 1u, 2u, 3u);
+  uint4 index = (uint4)(4u * block) + lane;
+  int4 ok = inside & (det != 0.0f) & (t > tmin) & (t < tmax) & (lane >= (uint4)(lane_lo)) & (lane < (uint4)(lane_hi)) &
             (index != (uint4)(skip_a)) & (index != (uint4)(skip_b));
   // Lanes are combined with & and | and tested for non-zero, never by their
   // sign bit (any, select) or with ~: Oclgrind's optimised build makes some
@@ -141,14 +160,14 @@ __attribute__((always_inline)) inline uint triangle_intersect4(float3 org, RaySh
   if (!(ok.s0 | ok.s1 | ok.s2 | ok.s3)) return WT_NO_HIT;
   float4 tt = (float4)(ok.s0 ? t.s0 : INFINITY, ok.s1 ? t.s1 : INFINITY, ok.s2 ? t.s2 : INFINITY, ok.s3 ? t.s3 : INFINITY);
   float best = fmin(fmin(tt.s0, tt.s1), fmin(tt.s2, tt.s3));
-  int lane = (ok.s0 && tt.s0 == best) ? 0 : (ok.s1 && tt.s1 == best) ? 1 : (ok.s2 && tt.s2 == best) ? 2 : 3;
-  float inv = lane == 0 ? inv_det.s0 : lane == 1 ? inv_det.s1 : lane == 2 ? inv_det.s2 : inv_det.s3;
-  float vl = lane == 0 ? v.s0 : lane == 1 ? v.s1 : lane == 2 ? v.s2 : v.s3;
-  float wl = lane == 0 ? w.s0 : lane == 1 ? w.s1 : lane == 2 ? w.s2 : w.s3;
+  int l = (ok.s0 && tt.s0 == best) ? 0 : (ok.s1 && tt.s1 == best) ? 1 : (ok.s2 && tt.s2 == best) ? 2 : 3;
+  float inv = l == 0 ? inv_det.s0 : l == 1 ? inv_det.s1 : l == 2 ? inv_det.s2 : inv_det.s3;
+  float vl = l == 0 ? v.s0 : l == 1 ? v.s1 : l == 2 ? v.s2 : v.s3;
+  float wl = l == 0 ? w.s0 : l == 1 ? w.s1 : l == 2 ? w.s2 : w.s3;
   *t_hit = best;
   *b1 = vl * inv;
   *b2 = wl * inv;
-  return first + (uint)lane;
+  return 4u * block + (uint)l;
 }
 
 /// Point with barycentrics (1 - b1 - b2, b1, b2) on triangle (p0, p1, p2),

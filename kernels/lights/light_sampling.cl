@@ -125,7 +125,8 @@ inline bool light_sample(LightScene ls, uint index, float3 p, float u1, float u2
   if (light.type == WT_LIGHT_TRIANGLE) {
     uint t = light.triangle;
     s->prim = t;
-    float3 p0 = ls.tri_verts[3 * t].xyz, p1 = ls.tri_verts[3 * t + 1].xyz, p2 = ls.tri_verts[3 * t + 2].xyz;
+    float3 p0, p1, p2;
+    triangle_corners(ls.tri_verts, t, &p0, &p1, &p2);
     float3 n = cross(p1 - p0, p2 - p0);
     float solid_angle = light_triangle_solid_angle(p, p0, p1, p2);
     if (light_use_spherical(solid_angle)) {

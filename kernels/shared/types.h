@@ -16,24 +16,23 @@ typedef struct WtVec4 {
   float x, y, z, w;
 } WtVec4;
 
-/// A triangle of the scene (host side). On the device a triangle is its three
-/// corners in tri_verts (position; w = the vertex index, tagged as below) and
-/// its material in triangle_materials, both in BVH leaf order.
+/// A triangle of the scene (host side). On the device a triangle is its
+/// corners in tri_verts (WT_TRIANGLE_BLOCK) and its material in
+/// triangle_materials, both in BVH leaf order.
 typedef struct WtTriangle {
   wt_uint v0, v1, v2;  ///< indices into the vertex arrays
   wt_uint material;    ///< index into the material array
 } WtTriangle;
 
-/// tri_verts' w holds a corner's vertex index v as the bits v | WT_VERTEX_TAG:
-/// read back with & WT_VERTEX_INDEX. The tag keeps the lane a normal float.
-/// The bare index would be a subnormal one, and float3 arithmetic on a
-/// loaded corner carries the w lane along: on x86 each operation on a
-/// subnormal lane takes a microcode assist (whole paths traced 1.1-2.1x
-/// faster without them; docs/performance.md, "Subnormal lanes"). Indices stay below
-/// WT_MAX_VERTICES, where the tagged exponent could become all ones.
-#define WT_VERTEX_TAG 0x40000000u
-#define WT_VERTEX_INDEX 0x3fffffffu
-#define WT_MAX_VERTICES 0x3f800000u
+/// tri_verts holds the leaf-order triangles in blocks of WT_TRIANGLE_BLOCK:
+/// block b covers triangles 4b .. 4b + 3, one per lane, as twelve float4
+/// rows (192 bytes: three cache lines, one per corner, in an aligned
+/// buffer). Row 4k + a is axis a (x, y, z) of corner k of the four
+/// triangles, row 4k + 3 their vertex indices (uint bits, for the normals).
+/// A four-lane leaf test loads the nine rows of the ray's axes as they are,
+/// with no gathering or shuffling, and each leaf is laid out to touch no
+/// more blocks than its size needs (packLeavesIntoBlocks, host/bvh/bvh4.h).
+#define WT_TRIANGLE_BLOCK 4
 
 /// Binary BVH node, 32 bytes. Children of an internal node are adjacent:
 /// left = first, right = first + 1. Node 0 is the root.

@@ -184,21 +184,25 @@ TEST(SharedCode, Atan2IsAccurateOnEveryOctantAndAtTheAxes) {
 }
 
 // The four-lane leaf test gives what testing the triangles one by one gives,
-// bit for bit: every count from 1 to 4, with and without a skipped
-// triangle, on rays aimed at shared edges and vertices (exactly-zero edge
-// functions) and at random points, some stopping short. The four triangles:
-// two neighbours of a fan in z = 1, the second of them again nearer (z =
-// 0.6, so the nearer must win), and an exact copy of the first (a tie,
-// which the lower index must win).
+// bit for bit: every range of lanes of a block (a leaf may start and end
+// inside one), with and without a skipped triangle, on rays aimed at shared
+// edges and vertices (exactly-zero edge functions) and at random points,
+// some stopping short. The block is the second of two (WT_TRIANGLE_BLOCK
+// layout); its four triangles: two neighbours of a fan in z = 1, the second
+// of them again nearer (z = 0.6, so the nearer must win), and an exact copy
+// of the first (a tie, which the lower index must win).
 TEST(SharedCode, FourLaneTriangleTestMatchesOneByOne) {
   Context& ctx = test::deviceContext();
   // a fan of four triangles around (0, 0, 0) in the plane z = 1, and a fifth off to the side
   const glm::vec3 c(0.0f, 0.0f, 1.0f), r[5] = {{1, 0, 1}, {0, 1, 1}, {-1, 0, 1}, {0, -1, 1}, {1, 0, 1}};
-  std::vector<cl_float4> verts;
   const glm::vec3 nearer(0.0f, 0.0f, -0.4f);
   const glm::vec3 tris[4][3] = {{c, r[0], r[1]}, {c, r[1], r[2]}, {c + nearer, r[1] + nearer, r[2] + nearer}, {c, r[0], r[1]}};
-  for (const auto& t : tris)
-    for (glm::vec3 v : t) verts.push_back({{v.x, v.y, v.z, 0}});
+  // block 0 far off (never tested), block 1 the four triangles: row 4k + a of
+  // a block holds axis a of corner k for its four lanes
+  std::vector<float> verts(2 * 48, 1e6f);
+  for (int lane = 0; lane < 4; ++lane)
+    for (int k = 0; k < 3; ++k)
+      for (int a = 0; a < 3; ++a) verts[48 + 16 * k + 4 * a + lane] = tris[lane][k][a];
   std::mt19937 rng(3);
   std::uniform_real_distribution<float> u(-1.2f, 1.2f);
   std::vector<cl_float4> o, d;
@@ -214,14 +218,15 @@ TEST(SharedCode, FourLaneTriangleTestMatchesOneByOne) {
   const cl_uint n = cl_uint(o.size());
   cl::Buffer bo(ctx.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, n * 16, o.data());
   cl::Buffer bd(ctx.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, n * 16, d.data());
-  cl::Buffer bv(ctx.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, verts.size() * 16, verts.data());
+  cl::Buffer bv(ctx.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, verts.size() * sizeof(float), verts.data());
   cl::Buffer out(ctx.context(), CL_MEM_WRITE_ONLY, 2 * n * 16);
   cl::Kernel k(test::unitTestProgram(), "test_intersect4");
   int hits = 0;
-  for (cl_uint count = 1; count <= 4; ++count)
-    for (cl_uint skip : {0xffffffffu, 0u, 2u}) {
-      k.setArg(0, n), k.setArg(1, bo), k.setArg(2, bd), k.setArg(3, bv), k.setArg(4, cl_uint(0)), k.setArg(5, count);
-      k.setArg(6, skip), k.setArg(7, out);
+  for (cl_uint lo = 0; lo < 4; ++lo)
+    for (cl_uint hi = lo + 1; hi <= 4; ++hi)
+    for (cl_uint skip : {0xffffffffu, 4u, 6u}) {
+      k.setArg(0, n), k.setArg(1, bo), k.setArg(2, bd), k.setArg(3, bv), k.setArg(4, cl_uint(1)), k.setArg(5, lo);
+      k.setArg(6, hi), k.setArg(7, skip), k.setArg(8, out);
       ctx.launch("test_intersect4", k, n);
       std::vector<cl_float4> got(2 * n);
       ctx.queue().enqueueReadBuffer(out, CL_TRUE, 0, 2 * n * 16, got.data());
@@ -229,7 +234,7 @@ TEST(SharedCode, FourLaneTriangleTestMatchesOneByOne) {
         const cl_float4 &four = got[2 * i], &one = got[2 * i + 1];
         for (int c4 = 0; c4 < 4; ++c4)
           ASSERT_EQ(std::memcmp(&four.s[c4], &one.s[c4], 4), 0)
-              << "ray " << i << ", count " << count << ", skip " << skip << ", component " << c4 << ": " << four.s[c4] << " vs " << one.s[c4] << " (" << four.s[0] << " " << four.s[1] << " " << four.s[2] << " | " << one.s[0] << " " << one.s[1] << " " << one.s[2] << ")";
+              << "ray " << i << ", lanes " << lo << "-" << hi << ", skip " << skip << ", component " << c4 << ": " << four.s[c4] << " vs " << one.s[c4] << " (" << four.s[0] << " " << four.s[1] << " " << four.s[2] << " | " << one.s[0] << " " << one.s[1] << " " << one.s[2] << ")";
         std::uint32_t prim;
         std::memcpy(&prim, &four.s[3], 4);
         hits += prim != 0xffffffffu;
