@@ -306,6 +306,7 @@ struct SceneResult {
   double collapseSeconds = 0.0;  ///< binary to 4-wide and the leaves packed in blocks (median), not in buildSeconds
   double sah4 = 0.0;
   double bytesPerTriangle = 0.0;
+  std::size_t leafMisfits = 0;  ///< leaves taking one more four-lane test than their size needs
   bool shadowToEmitters = false;
   double embreeBuildSeconds = 0.0;
   std::vector<SetResult> sets;
@@ -530,6 +531,7 @@ SceneResult benchScene(Context& context, const std::string& name, const Scene& s
   Tracer tracer(context, scene, bvhOptions);
   result.bytesPerTriangle =
       scene.triangles.empty() ? 0.0 : double(tracer.sceneBuffers().uploadedBytes) / scene.triangles.size();
+  result.leafMisfits = tracer.sceneBuffers().leafMisfits();
   std::unique_ptr<Reference> embree;
 #ifdef WT_HAVE_EMBREE
   EmbreeOptions embreeOptions;
@@ -686,12 +688,12 @@ int runBench(const BenchOptions& options) {
       const SceneResult& r = results[i];
       std::printf("  {\"name\": %s, \"triangles\": %zu, \"bvh_build_s\": %.6f, \"bvh_mtris_per_s\": %.3f, "
                   "\"bvh_nodes\": %zu, \"bvh_sah\": %.3f, \"bvh4_nodes\": %zu, \"bvh4_sah\": %.3f, \"bvh4_collapse_s\": %.6f, "
-                  "\"bvh4_mtris_per_s\": %.3f, \"bytes_per_triangle\": %.1f, "
+                  "\"bvh4_mtris_per_s\": %.3f, \"bytes_per_triangle\": %.1f, \"leaf_misfits\": %zu, "
                   "\"embree_build_s\": %.6f, \"shadow_targets\": \"%s\", \"path_mrays\": %.3f,\n",
                   jsonString(r.name).c_str(), r.triangles, r.buildSeconds,
                   r.buildSeconds > 0 ? r.triangles / r.buildSeconds * 1e-6 : 0.0, r.nodes, r.sah,
-                  r.nodes4, r.sah4, r.collapseSeconds, traversableRate(r), r.bytesPerTriangle, r.embreeBuildSeconds,
-                  r.shadowToEmitters ? "emitters" : "bounds", r.pathMrays);
+                  r.nodes4, r.sah4, r.collapseSeconds, traversableRate(r), r.bytesPerTriangle, r.leafMisfits,
+                  r.embreeBuildSeconds, r.shadowToEmitters ? "emitters" : "bounds", r.pathMrays);
       std::printf("   \"bvh_builder\": \"%s\", \"trees\": [", options.bvh.c_str());
       const TreeResult* sahTree = nullptr;
       for (const TreeResult& t : r.trees)
