@@ -1,5 +1,7 @@
 #include "bench/embree_reference.h"
 
+#include "bvh/parallel.h"
+
 #include <embree3/rtcore.h>
 
 #include <algorithm>
@@ -89,7 +91,7 @@ EmbreeReference::EmbreeReference(const Scene& scene, const EmbreeOptions& option
     : m_impl(std::make_unique<Impl>()) {
   Impl& im = *m_impl;
   im.options = options;
-  im.threads = options.threads > 0 ? options.threads : std::max(1u, std::thread::hardware_concurrency());
+  im.threads = bvh_detail::resolveThreads(options.threads, std::numeric_limits<int>::max());
   im.device = rtcNewDevice(nullptr);
   if (!im.device) throw std::runtime_error("Embree: rtcNewDevice failed");
 

@@ -1,7 +1,8 @@
 #include "bvh/build_tree.h"
 
+#include "bvh/parallel.h"
+
 #include <algorithm>
-#include <thread>
 
 namespace wt::bvh_detail {
 namespace {
@@ -81,9 +82,7 @@ Bvh layoutTree(std::span<const BuildNode> nodes, std::uint32_t root, std::span<c
 
 int builderThreads(const BvhBuildOptions& options, std::size_t prims) {
   // as buildLbvh: below 16384 primitives per thread a thread costs more than it saves
-  int threads = options.threads > 0 ? options.threads : int(std::thread::hardware_concurrency());
-  threads = std::clamp(threads, 1, 64);
-  return int(std::min<std::size_t>(std::size_t(threads), prims / 16384 + 1));
+  return int(std::min<std::size_t>(std::size_t(resolveThreads(options.threads)), prims / 16384 + 1));
 }
 
 }  // namespace wt::bvh_detail

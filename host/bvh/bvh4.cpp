@@ -10,7 +10,6 @@
 #include <limits>
 #include <ranges>
 #include <stdexcept>
-#include <thread>
 #include <vector>
 
 namespace wt {
@@ -70,8 +69,7 @@ using bvh_detail::runTeam;
 /// host has) for a tree collapsed in parts, else one.
 int collapseThreads(const Bvh& bvh, const Bvh4Options& options) {
   if (bvh.primIndices.size() < options.partsFromPrimitives) return 1;
-  const int threads = options.threads > 0 ? options.threads : int(std::thread::hardware_concurrency());
-  return std::clamp(threads, 1, 64);
+  return bvh_detail::resolveThreads(options.threads);
 }
 
 class Collapse {

@@ -23,7 +23,6 @@
 #include <memory>
 #include <stdexcept>
 #include <system_error>
-#include <thread>
 #include <utility>
 
 namespace wt {
@@ -42,7 +41,7 @@ constexpr std::uint32_t kRadixBuckets = 1u << kRadixBits;
 constexpr std::uint32_t kRadixMask = kRadixBuckets - 1;
 // Below this many primitives per thread, starting a thread costs more than it saves.
 constexpr std::size_t kMinPrimsPerThread = 16384;
-constexpr int kMaxThreads = 64;
+constexpr int kMaxThreads = kMaxBuildThreads;
 // Up to this many primitives the LBVH is built with both cell shapes (Cells) and the
 // tree of lower SAH kept.
 constexpr std::size_t kBothCellsBelow = 65536;
@@ -817,9 +816,8 @@ Bvh buildWithCells(std::span<const Aabb> primBounds, const BvhBuildOptions& opti
 
   const std::uint32_t maxLeaf =
       static_cast<std::uint32_t>(std::clamp(options.maxLeafSize, 1, std::numeric_limits<int>::max()));
-  int threads = options.threads > 0 ? options.threads : static_cast<int>(std::thread::hardware_concurrency());
-  threads = std::clamp(threads, 1, kMaxThreads);
-  threads = static_cast<int>(std::min<std::size_t>(static_cast<std::size_t>(threads), n / kMinPrimsPerThread + 1));
+  const int threads = static_cast<int>(
+      std::min<std::size_t>(static_cast<std::size_t>(resolveThreads(options.threads, kMaxThreads)), n / kMinPrimsPerThread + 1));
   PhaseTimes times;
 
   std::unique_ptr<std::uint64_t[]> keys = sortByMorton(primBounds, threads, cells, bvh.primIndices, times);

@@ -2,6 +2,7 @@
 // reusable barrier, chunking of index ranges, cache-line padded slots.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <atomic>
 #include <condition_variable>
@@ -13,6 +14,16 @@
 #include <vector>
 
 namespace wt::bvh_detail {
+
+/// The most threads a builder's team takes (per-thread tables are sized by it).
+constexpr int kMaxBuildThreads = 64;
+
+/// A requested thread count resolved: 0 means every hardware thread; at
+/// least one (hardware_concurrency may report none), at most `most`.
+inline int resolveThreads(int requested, int most = kMaxBuildThreads) {
+  const int threads = requested > 0 ? requested : int(std::thread::hardware_concurrency());
+  return std::clamp(threads, 1, most);
+}
 
 /// Reusable barrier for a team whose size is fixed before any member waits.
 class Barrier {
