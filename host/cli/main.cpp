@@ -312,7 +312,7 @@ int main(int argc, char** argv) {
                        "single: one ray per work-item; packet: eight rays per work-item; auto: packets for the "
                        "primary and shadow sets")
       ->check(CLI::IsMember({"single", "packet", "auto"}));
-  benchCmd->add_option("--max-leaf-size", bench.maxLeafSize, "Every tree: no leaf holds more triangles (0: 8, as render); the collapse to 4 wide chooses the leaves up to it")
+  benchCmd->add_option("--max-leaf-size", bench.maxLeafSize, "Every tree: no leaf holds more triangles (0: 16, as render); the collapse to 4 wide chooses the leaves up to it")
       ->check(CLI::Range(0, 64));
   benchCmd->add_option("--ploc-radius", bench.plocRadius, "ploc trees: neighbours searched on each side")
       ->check(CLI::Range(1, 64))->capture_default_str();
