@@ -121,14 +121,15 @@ struct LeafPacking {
 };
 
 /// Lay the leaves out again so that each touches as few blocks of
-/// kTriangleBlock as its size allows (a leaf of 1-4 one block, of 5-8 two),
+/// kTriangleBlock as its size allows (a leaf of 1-4 one block, of 5-8 two, ...),
 /// without padding: a leaf may start inside a block when it still ends in
 /// the block its size needs, so leaves whose sizes add up to a block share
 /// one (3 + 1, 6 + 2, 5 + 3, ...). Leaves keep their own primitives in
 /// their order, and the packed order follows the old one but for leaves
-/// held back a while (at most `window` per size class) until a leaf fits
-/// in front of them. Points the tree's leaf slots at the new positions.
-/// Deterministic. `primitives`: the number the leaves cover.
+/// taken early to fill a block: at most `window` leaves ahead of the oldest
+/// one not yet laid out. Points the tree's leaf slots at the new positions.
+/// Deterministic. `primitives`: the number the leaves cover (a leaf set
+/// that covers more or fewer throws std::logic_error).
 LeafPacking packLeavesIntoBlocks(Bvh4& bvh, std::size_t primitives, std::size_t window = 256);
 
 }  // namespace wt
