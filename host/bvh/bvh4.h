@@ -19,7 +19,7 @@ namespace wt {
 
 /// The 4-wide leaf limit for maxLeafSize 0 (every traversable tree unless
 /// the user asks otherwise): four blocks of four triangles (one four-lane
-/// test each). 16 against 8 measured 1.07x normalised by Embree and 58
+/// test each). 16 against 8 measured 1.04x normalised by Embree and 58
 /// instead of 61-62 bytes per triangle on the 1 M-triangle scenes
 /// (docs/performance.md, "Triangle blocks").
 constexpr int kBvh4MaxLeafSize = 16;
