@@ -81,8 +81,7 @@ Bvh layoutTree(std::span<const BuildNode> nodes, std::uint32_t root, std::span<c
 }
 
 int builderThreads(const BvhBuildOptions& options, std::size_t prims) {
-  // as buildLbvh: below 16384 primitives per thread a thread costs more than it saves
-  return int(std::min<std::size_t>(std::size_t(resolveThreads(options.threads)), prims / 16384 + 1));
+  return teamThreads(options.threads, prims);  // as buildLbvh
 }
 
 }  // namespace wt::bvh_detail

@@ -39,8 +39,7 @@ constexpr int kKeyBits = 3 * kMortonBitsPerAxis;
 constexpr int kRadixBits = 11;
 constexpr std::uint32_t kRadixBuckets = 1u << kRadixBits;
 constexpr std::uint32_t kRadixMask = kRadixBuckets - 1;
-// Below this many primitives per thread, starting a thread costs more than it saves.
-constexpr std::size_t kMinPrimsPerThread = 16384;
+constexpr std::size_t kMinPrimsPerThread = kMinItemsPerThread;
 constexpr int kMaxThreads = kMaxBuildThreads;
 // Up to this many primitives the LBVH is built with both cell shapes (Cells) and the
 // tree of lower SAH kept.
@@ -816,8 +815,7 @@ Bvh buildWithCells(std::span<const Aabb> primBounds, const BvhBuildOptions& opti
 
   const std::uint32_t maxLeaf =
       static_cast<std::uint32_t>(std::clamp(options.maxLeafSize, 1, std::numeric_limits<int>::max()));
-  const int threads = static_cast<int>(
-      std::min<std::size_t>(static_cast<std::size_t>(resolveThreads(options.threads, kMaxThreads)), n / kMinPrimsPerThread + 1));
+  const int threads = teamThreads(options.threads, n);
   PhaseTimes times;
 
   std::unique_ptr<std::uint64_t[]> keys = sortByMorton(primBounds, threads, cells, bvh.primIndices, times);

@@ -25,6 +25,14 @@ inline int resolveThreads(int requested, int most = kMaxBuildThreads) {
   return std::clamp(threads, 1, most);
 }
 
+/// Below this many items per thread, starting a thread costs more than it saves.
+constexpr std::size_t kMinItemsPerThread = 16384;
+
+/// resolveThreads(requested), but no more threads than `items` keep busy.
+inline int teamThreads(int requested, std::size_t items) {
+  return int(std::min<std::size_t>(std::size_t(resolveThreads(requested)), items / kMinItemsPerThread + 1));
+}
+
 /// Reusable barrier for a team whose size is fixed before any member waits.
 class Barrier {
  public:
