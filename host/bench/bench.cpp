@@ -283,6 +283,7 @@ struct SetResult {
   double embreeHitFraction = 0.0;
   Agreement agreement;
   Traversal traversal = Traversal::kSingle;
+  double coherence = 0.0;  ///< packetCoherence of the set's rays
 };
 
 /// One builder's tree of a scene, traced on the same rays as the others.
@@ -320,12 +321,19 @@ double traversableRate(const SceneResult& r) {
   return seconds > 0.0 ? double(r.triangles) / seconds * 1e-6 : 0.0;
 }
 
-/// The traversal --traversal picks for a set (auto: packets for the primary
-/// and shadow sets, whose rays start from neighbouring pixels).
-Traversal setTraversal(const BenchOptions& options, const std::string& set) {
+/// Below this packetCoherence, auto traces a set one ray per work-item. The
+/// bench's sets measure 1.0 (camera rays), 0.99 (shadow rays to the Cornell
+/// box's one small light), 0.68-0.74 (diffuse rays, and shadow rays to
+/// emitters or points spread over a big scene); packets paid only on the
+/// first two kinds (docs/performance.md, "Packets").
+constexpr double kPacketCoherence = 0.9;
+
+/// The traversal --traversal picks for a set of rays (auto: packets when
+/// the rays of a packet point nearly the same way).
+Traversal setTraversal(const BenchOptions& options, std::span<const Ray> rays) {
   if (options.traversal == "single") return Traversal::kSingle;
   if (options.traversal == "packet") return Traversal::kPacket;
-  return set == "diffuse" ? Traversal::kSingle : Traversal::kPacket;
+  return packetCoherence(rays) >= kPacketCoherence ? Traversal::kPacket : Traversal::kSingle;
 }
 
 const char* traversalName(Traversal t) { return t == Traversal::kPacket ? "packet" : "single"; }
@@ -349,7 +357,8 @@ std::vector<RayHit> benchSet(const Scene& scene, Tracer& tracer, const Reference
   result.name = name;
   result.occlusion = occlusion;
   result.rays = rays.size();
-  const Traversal traversal = result.traversal = setTraversal(options, name);
+  result.coherence = packetCoherence(rays);
+  const Traversal traversal = result.traversal = setTraversal(options, rays);
   if (rays.empty()) return {};
   std::vector<RayHit> hits;
   std::vector<std::uint8_t> blocked;
@@ -474,7 +483,7 @@ void compareTrees(Context& context, const Scene& scene, std::span<const Aabb> bo
   for (std::size_t set = 0; set < sets.size(); ++set) {
     const std::vector<Ray>& rays = *sets[set];
     const bool occlusion = set == 2;
-    const Traversal traversal = setTraversal(options, set == 0 ? "primary" : set == 1 ? "diffuse" : "shadow");
+    const Traversal traversal = setTraversal(options, rays);
     std::vector<std::vector<double>> kernel(tracers.size());
     for (std::size_t t = 0; t < tracers.size(); ++t) {
       // warm-up, and the answers
@@ -720,9 +729,9 @@ int runBench(const BenchOptions& options) {
       for (std::size_t k = 0; k < r.sets.size(); ++k) {
         const SetResult& s = r.sets[k];
         std::printf("    {\"name\": \"%s\", \"query\": \"%s\", \"rays\": %zu, \"hit_fraction\": %.6f, "
-                    "\"traversal\": \"%s\", \"wall_s\": %.6f, \"kernel_s\": %.6f, \"mrays_wall\": %.3f, \"mrays_kernel\": %.3f",
+                    "\"traversal\": \"%s\", \"coherence\": %.4f, \"wall_s\": %.6f, \"kernel_s\": %.6f, \"mrays_wall\": %.3f, \"mrays_kernel\": %.3f",
                     s.name.c_str(), s.occlusion ? "any_hit" : "closest_hit", s.rays, s.hitFraction,
-                    traversalName(s.traversal), s.wallSeconds, s.kernelSeconds, mrays(s.rays, s.wallSeconds), mrays(s.rays, s.kernelSeconds));
+                    traversalName(s.traversal), s.coherence, s.wallSeconds, s.kernelSeconds, mrays(s.rays, s.wallSeconds), mrays(s.rays, s.kernelSeconds));
         if (s.embree) {
           std::printf(", \"embree_s\": %.6f, \"embree_mrays\": %.3f, \"embree_hit_fraction\": %.6f, "
                       "\"ratio_kernel\": %.4f, \"ratio_wall\": %.4f, \"agreement\": %.8f, \"disagreements\": %zu, "

@@ -310,8 +310,8 @@ int main(int argc, char** argv) {
                        "Builders whose trees are traced on the same rays (tree quality table); none: --compare-bvh none")
       ->delimiter(',')->check(CLI::IsMember({"lbvh", "ploc", "sah", "none"}))->capture_default_str();
   benchCmd->add_option("--traversal", bench.traversal,
-                       "single: one ray per work-item; packet: eight rays per work-item; auto: packets for the "
-                       "primary and shadow sets")
+                       "single: one ray per work-item; packet: eight rays per work-item; auto: packets for a set "
+                       "whose packets' rays point nearly the same way (coherence >= 0.9 in --json)")
       ->check(CLI::IsMember({"single", "packet", "auto"}));
   benchCmd->add_option("--max-leaf-size", bench.maxLeafSize, "Every tree: no leaf holds more triangles (0: 16, as render); the collapse to 4 wide chooses the leaves up to it")
       ->check(CLI::Range(0, 64));

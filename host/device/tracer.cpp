@@ -2,6 +2,8 @@
 
 #include "device/program.h"
 
+#include <algorithm>
+#include <cmath>
 #include <cstring>
 
 namespace wt {
@@ -18,6 +20,28 @@ Tracer::Tracer(Context& context, const Scene& scene, const BvhBuildOptions& opti
 }
 
 Tracer::~Tracer() = default;
+
+double packetCoherence(std::span<const Ray> rays) {
+  constexpr std::size_t kPacket = WT_PACKET_WIDTH;
+  double total = 0.0;
+  std::size_t packets = 0;
+  for (std::size_t first = 0; first < rays.size(); first += kPacket) {
+    const std::size_t end = std::min(rays.size(), first + kPacket);
+    glm::dvec3 sum(0.0);
+    std::size_t count = 0;
+    for (std::size_t i = first; i < end; ++i) {
+      const glm::dvec3 d(rays[i].direction);
+      const double length = glm::length(d);
+      if (!(length > 0.0) || !std::isfinite(length)) continue;  // such rays never hit: no say in the choice
+      sum += d / length;
+      ++count;
+    }
+    if (count == 0) continue;
+    total += glm::length(sum) / double(count);
+    ++packets;
+  }
+  return packets > 0 ? total / double(packets) : 0.0;
+}
 
 void Tracer::uploadRays(std::span<const Ray> rays) {
   std::size_t n = std::max<std::size_t>(rays.size(), 1);

@@ -37,6 +37,12 @@ struct RayHit {
 /// may win.
 enum class Traversal { kSingle, kPacket };
 
+/// How alike the directions of each packet's rays are: the mean, over the
+/// packets of WT_PACKET_WIDTH consecutive rays, of the length of their unit
+/// directions' mean. 1 when every packet's rays are parallel; about 0.35 for
+/// directions drawn uniformly from the sphere; 0 for no rays.
+double packetCoherence(std::span<const Ray> rays);
+
 class Tracer {
  public:
   Tracer(Context& context, const Scene& scene, const BvhBuildOptions& options = {});
