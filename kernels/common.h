@@ -26,6 +26,16 @@
 #define WT_HAS_FP64 0
 #endif
 
+// Every kernel is declared WT_KERNEL: vec_type_hint(float4) says the
+// kernel's own float4 and float8 code is its vector width. Intel's CPU
+// runtime then compiles each work-item as written instead of vectorising
+// across work-items, which ran single-ray traversal at a fifth of its
+// scalar speed (rays in lock step) and gave wrong shading: every lane but
+// the first read garbage in bsdf_sample and in next-event estimation
+// (docs/performance.md, "A second OpenCL implementation"). PoCL's
+// kernels and answers are the same with or without the hint.
+#define WT_KERNEL __kernel __attribute__((vec_type_hint(float4)))
+
 #define WT_NO_HIT 0xffffffffu
 #define WT_PI 3.14159265358979323846f
 

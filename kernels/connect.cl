@@ -5,7 +5,7 @@
 // (WT_FLAG_COMPACT_SHADOWS).
 #include "bvh_packet.cl"
 
-__kernel void connect(__global const uint* counters, __global const uint* shadow_queue,
+WT_KERNEL void connect(__global const uint* counters, __global const uint* shadow_queue,
                       __global const float4* shadow_o, __global const float4* shadow_d,
                       __global const float4* shadow_radiance, __global const WtBvhNode* nodes,
                       uint node_count, __global const float4* tri_verts,
@@ -24,7 +24,7 @@ __kernel void connect(__global const uint* counters, __global const uint* shadow
 /// connect for shadow-queue entries [n i, n i + n), n = WT_PACKET_WIDTH,
 /// traced as one packet (kernels/bvh_packet.cl): for the shadow rays of
 /// camera-ray hits, appended densely by shade. The same answers as connect.
-__kernel void connect_packet(__global const uint* counters, __global const uint* shadow_queue,
+WT_KERNEL void connect_packet(__global const uint* counters, __global const uint* shadow_queue,
                              __global const float4* shadow_o, __global const float4* shadow_d,
                              __global const float4* shadow_radiance, __global const WtBvhNode* nodes,
                              uint node_count, __global const float4* tri_verts,

@@ -5,7 +5,7 @@
 #include "shared/lights.h"
 
 /// Per direction: (radiance, pdf_solid_angle).
-__kernel void test_env_eval_pdf(uint count, WtEnvironment env, __global const float4* texels,
+WT_KERNEL void test_env_eval_pdf(uint count, WtEnvironment env, __global const float4* texels,
                                 __global const float* marginal_cdf,
                                 __global const float* conditional_cdf,
                                 __global const float4* directions, __global float4* out) {
@@ -18,7 +18,7 @@ __kernel void test_env_eval_pdf(uint count, WtEnvironment env, __global const fl
 
 /// Sample i with uniforms rng_uniform(i, 0, 0, {0,1}, seed): (direction, pdf),
 /// (radiance, 0), and what eval and pdf say about the returned direction.
-__kernel void test_env_sample(uint count, uint seed, WtEnvironment env,
+WT_KERNEL void test_env_sample(uint count, uint seed, WtEnvironment env,
                               __global const float4* texels, __global const float* marginal_cdf,
                               __global const float* conditional_cdf, __global float4* direction_pdf,
                               __global float4* radiance, __global float4* eval_pdf) {

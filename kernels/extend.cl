@@ -1,7 +1,7 @@
 // Stage 2: closest hit for every path in the input queue.
 #include "bvh_packet.cl"
 
-__kernel void extend(__global const uint* counters, uint queue_slot, __global const uint* queue,
+WT_KERNEL void extend(__global const uint* counters, uint queue_slot, __global const uint* queue,
                      __global const float4* ray_o, __global const float4* ray_d,
                      __global const WtBvhNode* nodes, uint node_count,
                      __global const float4* tri_verts, __global float4* hits,
@@ -19,7 +19,7 @@ __kernel void extend(__global const uint* counters, uint queue_slot, __global co
 /// extend for queue entries [n i, n i + n), n = WT_PACKET_WIDTH, traced as
 /// one packet (kernels/bvh_packet.cl): for queues whose neighbouring entries
 /// are neighbouring pixels' camera rays. The same hits as extend.
-__kernel void extend_packet(__global const uint* counters, uint queue_slot, __global const uint* queue,
+WT_KERNEL void extend_packet(__global const uint* counters, uint queue_slot, __global const uint* queue,
                             __global const float4* ray_o, __global const float4* ray_d,
                             __global const WtBvhNode* nodes, uint node_count,
                             __global const float4* tri_verts, __global float4* hits,

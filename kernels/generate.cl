@@ -3,7 +3,7 @@
 #include "common.h"
 #include "sampler.cl"
 
-__kernel void generate(WtFrameParams frame, WtCamera camera, __global float4* ray_o,
+WT_KERNEL void generate(WtFrameParams frame, WtCamera camera, __global float4* ray_o,
                        __global float4* ray_d, __global float4* throughput,
                        __global float4* radiance, __global uint* queue,
                        __global uint* counters, __global ushort4* bounce_counts, __global uint* ray_skip) {

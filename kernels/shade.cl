@@ -28,7 +28,7 @@ inline void shade_check_finite(WtFrameParams frame, __global uint* counters, uin
     counters[WT_COUNTER_NONFINITE_WHERE] = frame.bounce | (what << 16);
 }
 
-__kernel void shade(WtFrameParams frame, WtEnvironment environment, __global const float4* env_texels,
+WT_KERNEL void shade(WtFrameParams frame, WtEnvironment environment, __global const float4* env_texels,
                     __global const float* env_marginal_cdf, __global const float* env_conditional_cdf,
                     __global uint* counters, uint in_slot, uint out_slot,
                     __global const uint* queue_in, __global uint* queue_out,

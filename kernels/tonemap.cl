@@ -6,7 +6,7 @@ inline float tonemap_srgb(float linear) {
   return c <= 0.0031308f ? 12.92f * c : 1.055f * pow(c, 1.0f / 2.4f) - 0.055f;
 }
 
-__kernel void tonemap(WtFrameParams frame, __global const float4* mean, __global uchar4* pixels) {
+WT_KERNEL void tonemap(WtFrameParams frame, __global const float4* mean, __global uchar4* pixels) {
   uint i = get_global_id(0);
   if (i >= frame.width * frame.height) return;
   float3 c = mean[i].xyz * frame.exposure;

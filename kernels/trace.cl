@@ -3,7 +3,7 @@
 #include "bvh.cl"
 #include "bvh_packet.cl"
 
-__kernel void trace_closest(uint count, __global const float4* ray_o, __global const float4* ray_d,
+WT_KERNEL void trace_closest(uint count, __global const float4* ray_o, __global const float4* ray_d,
                             __global const WtBvhNode* nodes, uint node_count,
                             __global const float4* tri_verts, __global float4* hits,
                             __global const uint* skip) {
@@ -16,7 +16,7 @@ __kernel void trace_closest(uint count, __global const float4* ray_o, __global c
   hits[i] = (float4)(hit.t, hit.b1, hit.b2, as_float(hit.prim));
 }
 
-__kernel void trace_occluded(uint count, __global const float4* ray_o,
+WT_KERNEL void trace_occluded(uint count, __global const float4* ray_o,
                              __global const float4* ray_d, __global const WtBvhNode* nodes,
                              uint node_count, __global const float4* tri_verts,
                              __global uint* occluded, __global const uint* skip) {
@@ -30,7 +30,7 @@ __kernel void trace_occluded(uint count, __global const float4* ray_o,
 
 // The same queries, WT_PACKET_WIDTH consecutive rays per work-item
 // (kernels/bvh_packet.cl): work-item i traces rays [n i, n i + n).
-__kernel void trace_closest_packet(uint count, __global const float4* ray_o, __global const float4* ray_d,
+WT_KERNEL void trace_closest_packet(uint count, __global const float4* ray_o, __global const float4* ray_d,
                                    __global const WtBvhNode* nodes, uint node_count,
                                    __global const float4* tri_verts, __global float4* hits,
                                    __global const uint* skip) {
@@ -42,7 +42,7 @@ __kernel void trace_closest_packet(uint count, __global const float4* ray_o, __g
   packet_trace_closest(scene, index, min(count - first, (uint)WT_PACKET), ray_o, ray_d, skip, hits);
 }
 
-__kernel void trace_occluded_packet(uint count, __global const float4* ray_o, __global const float4* ray_d,
+WT_KERNEL void trace_occluded_packet(uint count, __global const float4* ray_o, __global const float4* ray_d,
                                     __global const WtBvhNode* nodes, uint node_count,
                                     __global const float4* tri_verts, __global uint* occluded,
                                     __global const uint* skip) {

@@ -3,14 +3,14 @@
 #include "common.h"
 #include "materials/lambert.cl"
 
-__kernel void test_rng(uint count, uint sample, uint bounce, uint dim, uint seed,
+WT_KERNEL void test_rng(uint count, uint sample, uint bounce, uint dim, uint seed,
                        __global float* out) {
   uint i = get_global_id(0);
   if (i >= count) return;
   out[i] = rng_uniform(i, sample, bounce, dim, seed);
 }
 
-__kernel void test_lambert(uint count, float4 normal, __global const float2* u,
+WT_KERNEL void test_lambert(uint count, float4 normal, __global const float2* u,
                            __global float4* out) {
   uint i = get_global_id(0);
   if (i >= count) return;
@@ -23,7 +23,7 @@ __kernel void test_lambert(uint count, float4 normal, __global const float2* u,
 // of `blocks` (WT_TRIANGLE_BLOCK), skipping `skip`: out[2i] from
 // triangle_intersect4, out[2i + 1] from triangle_intersect one triangle
 // after another; (t, b1, b2, prim).
-__kernel void test_intersect4(uint rays, __global const float4* ray_o, __global const float4* ray_d,
+WT_KERNEL void test_intersect4(uint rays, __global const float4* ray_o, __global const float4* ray_d,
                               __global const float4* blocks, uint block, uint lane_lo, uint lane_hi, uint skip,
                               __global float4* out) {
   uint i = get_global_id(0);
@@ -49,7 +49,7 @@ __kernel void test_intersect4(uint rays, __global const float4* ray_o, __global 
 
 // The point at barycentrics bary[i] of triangle i, spawned off both faces:
 // out[2i] on the side of the winding normal, out[2i + 1] on the other.
-__kernel void test_offset(uint count, __global const float4* verts, __global const float2* bary,
+WT_KERNEL void test_offset(uint count, __global const float4* verts, __global const float2* bary,
                           __global float4* out) {
   uint i = get_global_id(0);
   if (i >= count) return;
@@ -63,13 +63,13 @@ __kernel void test_offset(uint count, __global const float4* verts, __global con
 
 #include "lights/light_sampling.cl"
 
-__kernel void test_atan2(uint count, __global const float2* yx, __global float* out) {
+WT_KERNEL void test_atan2(uint count, __global const float2* yx, __global float* out) {
   uint i = get_global_id(0);
   if (i >= count) return;
   out[i] = wt_atan2(yx[i].x, yx[i].y);
 }
 
-__kernel void test_light_pick(uint count, __global const WtAliasSlot* alias, uint light_count,
+WT_KERNEL void test_light_pick(uint count, __global const WtAliasSlot* alias, uint light_count,
                               __global uint* chosen, __global float* pmf) {
   uint i = get_global_id(0);
   if (i >= count) return;
@@ -81,7 +81,7 @@ __kernel void test_light_pick(uint count, __global const WtAliasSlot* alias, uin
   pmf[i] = p;
 }
 
-__kernel void test_mis(uint count, __global const float2* pdfs, uint flags, __global float2* weights) {
+WT_KERNEL void test_mis(uint count, __global const float2* pdfs, uint flags, __global float2* weights) {
   uint i = get_global_id(0);
   if (i >= count) return;
   float2 p = pdfs[i];
@@ -90,7 +90,7 @@ __kernel void test_mis(uint count, __global const float2* pdfs, uint flags, __gl
 
 #include "shared/sampler.h"
 
-__kernel void test_sobol(uint count, uint pixel, uint bounce, uint dim, uint seed, __global float* out) {
+WT_KERNEL void test_sobol(uint count, uint pixel, uint bounce, uint dim, uint seed, __global float* out) {
   uint i = get_global_id(0);
   if (i >= count) return;
   out[i] = sampler_sobol(pixel, i, bounce, dim, seed);
@@ -100,7 +100,7 @@ __kernel void test_sobol(uint count, uint pixel, uint bounce, uint dim, uint see
 
 // `samples` running-mean updates per work-item of values keyed like the
 // renderer's samples; distribution 0: the constant 0.7, 1: 0.5 + uniform.
-__kernel void test_accumulate(uint count, uint samples, uint mode, uint distribution,
+WT_KERNEL void test_accumulate(uint count, uint samples, uint mode, uint distribution,
                               __global float* out_mean) {
   uint i = get_global_id(0);
   if (i >= count) return;
@@ -129,7 +129,7 @@ __kernel void test_accumulate(uint count, uint samples, uint mode, uint distribu
 // bsdf_sample for `count` triples of uniforms (u_lobe, u1, u2): the local
 // direction and mixture pdf (w = -1: nothing sampled), the weight and lobe.
 // wo.w != 0: seen from inside (the back face).
-__kernel void test_bsdf_sample(uint count, WtMaterial material, float4 wo, uint lobes,
+WT_KERNEL void test_bsdf_sample(uint count, WtMaterial material, float4 wo, uint lobes,
                                __global const float* table, __global const float4* u,
                                __global float4* wi_pdf, __global float4* weight_lobe) {
   uint i = get_global_id(0);
@@ -146,7 +146,7 @@ __kernel void test_bsdf_sample(uint count, WtMaterial material, float4 wo, uint 
 }
 
 // bsdf_eval for `count` local directions: f cos and the mixture pdf.
-__kernel void test_bsdf_eval(uint count, WtMaterial material, float4 wo, uint lobes,
+WT_KERNEL void test_bsdf_eval(uint count, WtMaterial material, float4 wo, uint lobes,
                              __global const float* table, __global const float4* wi, __global float4* out) {
   uint i = get_global_id(0);
   if (i >= count) return;
@@ -159,7 +159,7 @@ __kernel void test_bsdf_eval(uint count, WtMaterial material, float4 wo, uint lo
 #include "lights/light_tree.cl"
 
 // light_tree_pick at (p, n) for `count` uniforms: the light index and pmf.
-__kernel void test_light_tree_pick(uint count, __global const WtLightNode* nodes, float4 p, float4 n,
+WT_KERNEL void test_light_tree_pick(uint count, __global const WtLightNode* nodes, float4 p, float4 n,
                                    __global const float* u, __global uint* chosen, __global float* pmf) {
   uint i = get_global_id(0);
   if (i >= count) return;
@@ -169,7 +169,7 @@ __kernel void test_light_tree_pick(uint count, __global const WtLightNode* nodes
 }
 
 // light_tree_pmf at (p, n) for `count` leaves.
-__kernel void test_light_tree_pmf(uint count, __global const WtLightNode* nodes, __global const uint* leaves,
+WT_KERNEL void test_light_tree_pmf(uint count, __global const WtLightNode* nodes, __global const uint* leaves,
                                   float4 p, float4 n, __global float* pmf) {
   uint i = get_global_id(0);
   if (i >= count) return;

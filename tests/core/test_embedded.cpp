@@ -23,7 +23,7 @@ TEST(Embedded, IncludesExpandOnceWithLineMarkers) {
   ASSERT_NE(first, std::string::npos);
   EXPECT_EQ(source.find("typedef struct WtBvhNode", first + 1), std::string::npos);
   EXPECT_NE(source.find("#line 1 \"geometry/triangle.cl\""), std::string::npos);
-  EXPECT_NE(source.find("__kernel void shade"), std::string::npos);
+  EXPECT_NE(source.find("WT_KERNEL void shade("), std::string::npos);
 }
 
 TEST(Embedded, MissingKernelFileIsAClearError) {
