@@ -30,10 +30,12 @@
 // kernel's own float4 and float8 code is its vector width. Intel's CPU
 // runtime then compiles each work-item as written instead of vectorising
 // across work-items, which ran single-ray traversal at a fifth of its
-// scalar speed (rays in lock step) and gave wrong shading: every lane but
-// the first read garbage in bsdf_sample and in next-event estimation
-// (docs/performance.md, "A second OpenCL implementation"). PoCL's
-// kernels and answers are the same with or without the hint.
+// scalar speed (rays in lock step) and got shading wrong: bsdf_sample's
+// answers were right in the first of every eight work-items only, and
+// renders with next-event estimation changed from run to run
+// (docs/performance.md, "A second OpenCL implementation"). PoCL's code
+// is the same with or without the hint. Embedded.EveryKernelIsWtKernel
+// keeps a plain __kernel from coming back.
 #define WT_KERNEL __kernel __attribute__((vec_type_hint(float4)))
 
 #define WT_NO_HIT 0xffffffffu

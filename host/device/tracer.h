@@ -39,7 +39,7 @@ enum class Traversal { kSingle, kPacket };
 
 /// How alike the directions of each packet's rays are: the mean, over the
 /// packets of WT_PACKET_WIDTH consecutive rays, of the length of their unit
-/// directions' mean. 1 when every packet's rays are parallel; about 0.35 for
+/// directions' mean. 1 when every packet's rays are parallel; about 0.33 for
 /// directions drawn uniformly from the sphere; 0 for no rays.
 double packetCoherence(std::span<const Ray> rays);
 
