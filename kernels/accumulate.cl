@@ -45,8 +45,8 @@ inline void accumulate_double(float4 x, double n, double4* mean, double4* m2) {
 #endif
 
 WT_KERNEL void accumulate(WtFrameParams frame, __global const float4* radiance,
-                         __global float4* state, __global uint* sample_count,
-                         __global uint* counters) {
+                          __global float4* state, __global uint* sample_count,
+                          __global uint* counters) {
   uint i = get_global_id(0);
   if (i >= frame.width * frame.height) return;
   float4 value = radiance[i];
@@ -83,7 +83,7 @@ WT_KERNEL void accumulate(WtFrameParams frame, __global const float4* radiance,
 
 /// Float mean and second moment from the accumulation state of any mode.
 WT_KERNEL void accumulate_resolve(WtFrameParams frame, __global const float4* state,
-                                 __global float4* mean, __global float4* m2) {
+                                  __global float4* mean, __global float4* m2) {
   uint i = get_global_id(0);
   if (i >= frame.width * frame.height) return;
   __global const float4* s = state + 4u * i;

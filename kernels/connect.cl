@@ -6,10 +6,10 @@
 #include "bvh_packet.cl"
 
 WT_KERNEL void connect(__global const uint* counters, __global const uint* shadow_queue,
-                      __global const float4* shadow_o, __global const float4* shadow_d,
-                      __global const float4* shadow_radiance, __global const WtBvhNode* nodes,
-                      uint node_count, __global const float4* tri_verts,
-                      __global float4* radiance, __global const uint2* shadow_skip) {
+                       __global const float4* shadow_o, __global const float4* shadow_d,
+                       __global const float4* shadow_radiance, __global const WtBvhNode* nodes,
+                       uint node_count, __global const float4* tri_verts,
+                       __global float4* radiance, __global const uint2* shadow_skip) {
   uint i = get_global_id(0);
   if (i >= counters[WT_COUNTER_SHADOW]) return;
   uint path = shadow_queue[i];
@@ -25,10 +25,10 @@ WT_KERNEL void connect(__global const uint* counters, __global const uint* shado
 /// traced as one packet (kernels/bvh_packet.cl): for the shadow rays of
 /// camera-ray hits, appended densely by shade. The same answers as connect.
 WT_KERNEL void connect_packet(__global const uint* counters, __global const uint* shadow_queue,
-                             __global const float4* shadow_o, __global const float4* shadow_d,
-                             __global const float4* shadow_radiance, __global const WtBvhNode* nodes,
-                             uint node_count, __global const float4* tri_verts,
-                             __global float4* radiance, __global const uint2* shadow_skip) {
+                              __global const float4* shadow_o, __global const float4* shadow_d,
+                              __global const float4* shadow_radiance, __global const WtBvhNode* nodes,
+                              uint node_count, __global const float4* tri_verts,
+                              __global float4* radiance, __global const uint2* shadow_skip) {
   uint first = get_global_id(0) * WT_PACKET;
   uint count = counters[WT_COUNTER_SHADOW];
   if (first >= count) return;

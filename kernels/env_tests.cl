@@ -6,9 +6,9 @@
 
 /// Per direction: (radiance, pdf_solid_angle).
 WT_KERNEL void test_env_eval_pdf(uint count, WtEnvironment env, __global const float4* texels,
-                                __global const float* marginal_cdf,
-                                __global const float* conditional_cdf,
-                                __global const float4* directions, __global float4* out) {
+                                 __global const float* marginal_cdf,
+                                 __global const float* conditional_cdf,
+                                 __global const float4* directions, __global float4* out) {
   uint i = get_global_id(0);
   if (i >= count) return;
   float3 d = directions[i].xyz;
@@ -19,9 +19,9 @@ WT_KERNEL void test_env_eval_pdf(uint count, WtEnvironment env, __global const f
 /// Sample i with uniforms rng_uniform(i, 0, 0, {0,1}, seed): (direction, pdf),
 /// (radiance, 0), and what eval and pdf say about the returned direction.
 WT_KERNEL void test_env_sample(uint count, uint seed, WtEnvironment env,
-                              __global const float4* texels, __global const float* marginal_cdf,
-                              __global const float* conditional_cdf, __global float4* direction_pdf,
-                              __global float4* radiance, __global float4* eval_pdf) {
+                               __global const float4* texels, __global const float* marginal_cdf,
+                               __global const float* conditional_cdf, __global float4* direction_pdf,
+                               __global float4* radiance, __global float4* eval_pdf) {
   uint i = get_global_id(0);
   if (i >= count) return;
   float u1 = rng_uniform(i, 0u, 0u, 0u, seed), u2 = rng_uniform(i, 0u, 0u, 1u, seed);

@@ -2,10 +2,10 @@
 #include "bvh_packet.cl"
 
 WT_KERNEL void extend(__global const uint* counters, uint queue_slot, __global const uint* queue,
-                     __global const float4* ray_o, __global const float4* ray_d,
-                     __global const WtBvhNode* nodes, uint node_count,
-                     __global const float4* tri_verts, __global float4* hits,
-                     __global const uint* ray_skip) {
+                      __global const float4* ray_o, __global const float4* ray_d,
+                      __global const WtBvhNode* nodes, uint node_count,
+                      __global const float4* tri_verts, __global float4* hits,
+                      __global const uint* ray_skip) {
   uint i = get_global_id(0);
   if (i >= counters[queue_slot]) return;
   uint path = queue[i];
@@ -20,10 +20,10 @@ WT_KERNEL void extend(__global const uint* counters, uint queue_slot, __global c
 /// one packet (kernels/bvh_packet.cl): for queues whose neighbouring entries
 /// are neighbouring pixels' camera rays. The same hits as extend.
 WT_KERNEL void extend_packet(__global const uint* counters, uint queue_slot, __global const uint* queue,
-                            __global const float4* ray_o, __global const float4* ray_d,
-                            __global const WtBvhNode* nodes, uint node_count,
-                            __global const float4* tri_verts, __global float4* hits,
-                            __global const uint* ray_skip) {
+                             __global const float4* ray_o, __global const float4* ray_d,
+                             __global const WtBvhNode* nodes, uint node_count,
+                             __global const float4* tri_verts, __global float4* hits,
+                             __global const uint* ray_skip) {
   uint first = get_global_id(0) * WT_PACKET;
   uint count = counters[queue_slot];
   if (first >= count) return;

@@ -4,9 +4,9 @@
 #include "sampler.cl"
 
 WT_KERNEL void generate(WtFrameParams frame, WtCamera camera, __global float4* ray_o,
-                       __global float4* ray_d, __global float4* throughput,
-                       __global float4* radiance, __global uint* queue,
-                       __global uint* counters, __global ushort4* bounce_counts, __global uint* ray_skip) {
+                        __global float4* ray_d, __global float4* throughput,
+                        __global float4* radiance, __global uint* queue,
+                        __global uint* counters, __global ushort4* bounce_counts, __global uint* ray_skip) {
   uint i = get_global_id(0);
   uint pixel_count = frame.width * frame.height;
   if (i >= pixel_count) return;

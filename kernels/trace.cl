@@ -4,9 +4,9 @@
 #include "bvh_packet.cl"
 
 WT_KERNEL void trace_closest(uint count, __global const float4* ray_o, __global const float4* ray_d,
-                            __global const WtBvhNode* nodes, uint node_count,
-                            __global const float4* tri_verts, __global float4* hits,
-                            __global const uint* skip) {
+                             __global const WtBvhNode* nodes, uint node_count,
+                             __global const float4* tri_verts, __global float4* hits,
+                             __global const uint* skip) {
   uint i = get_global_id(0);
   if (i >= count) return;
   float4 o = ray_o[i];
@@ -17,9 +17,9 @@ WT_KERNEL void trace_closest(uint count, __global const float4* ray_o, __global 
 }
 
 WT_KERNEL void trace_occluded(uint count, __global const float4* ray_o,
-                             __global const float4* ray_d, __global const WtBvhNode* nodes,
-                             uint node_count, __global const float4* tri_verts,
-                             __global uint* occluded, __global const uint* skip) {
+                              __global const float4* ray_d, __global const WtBvhNode* nodes,
+                              uint node_count, __global const float4* tri_verts,
+                              __global uint* occluded, __global const uint* skip) {
   uint i = get_global_id(0);
   if (i >= count) return;
   float4 o = ray_o[i];
@@ -31,9 +31,9 @@ WT_KERNEL void trace_occluded(uint count, __global const float4* ray_o,
 // The same queries, WT_PACKET_WIDTH consecutive rays per work-item
 // (kernels/bvh_packet.cl): work-item i traces rays [n i, n i + n).
 WT_KERNEL void trace_closest_packet(uint count, __global const float4* ray_o, __global const float4* ray_d,
-                                   __global const WtBvhNode* nodes, uint node_count,
-                                   __global const float4* tri_verts, __global float4* hits,
-                                   __global const uint* skip) {
+                                    __global const WtBvhNode* nodes, uint node_count,
+                                    __global const float4* tri_verts, __global float4* hits,
+                                    __global const uint* skip) {
   uint first = get_global_id(0) * WT_PACKET;
   if (first >= count) return;
   BvhScene scene = {nodes, node_count, tri_verts};
@@ -43,9 +43,9 @@ WT_KERNEL void trace_closest_packet(uint count, __global const float4* ray_o, __
 }
 
 WT_KERNEL void trace_occluded_packet(uint count, __global const float4* ray_o, __global const float4* ray_d,
-                                    __global const WtBvhNode* nodes, uint node_count,
-                                    __global const float4* tri_verts, __global uint* occluded,
-                                    __global const uint* skip) {
+                                     __global const WtBvhNode* nodes, uint node_count,
+                                     __global const float4* tri_verts, __global uint* occluded,
+                                     __global const uint* skip) {
   uint first = get_global_id(0) * WT_PACKET;
   if (first >= count) return;
   BvhScene scene = {nodes, node_count, tri_verts};

@@ -4,14 +4,14 @@
 #include "materials/lambert.cl"
 
 WT_KERNEL void test_rng(uint count, uint sample, uint bounce, uint dim, uint seed,
-                       __global float* out) {
+                        __global float* out) {
   uint i = get_global_id(0);
   if (i >= count) return;
   out[i] = rng_uniform(i, sample, bounce, dim, seed);
 }
 
 WT_KERNEL void test_lambert(uint count, float4 normal, __global const float2* u,
-                           __global float4* out) {
+                            __global float4* out) {
   uint i = get_global_id(0);
   if (i >= count) return;
   out[i] = (float4)(lambert_sample(normal.xyz, u[i].x, u[i].y), 0.0f);
@@ -24,8 +24,8 @@ WT_KERNEL void test_lambert(uint count, float4 normal, __global const float2* u,
 // triangle_intersect4, out[2i + 1] from triangle_intersect one triangle
 // after another; (t, b1, b2, prim).
 WT_KERNEL void test_intersect4(uint rays, __global const float4* ray_o, __global const float4* ray_d,
-                              __global const float4* blocks, uint block, uint lane_lo, uint lane_hi, uint skip,
-                              __global float4* out) {
+                               __global const float4* blocks, uint block, uint lane_lo, uint lane_hi, uint skip,
+                               __global float4* out) {
   uint i = get_global_id(0);
   if (i >= rays) return;
   float3 org = ray_o[i].xyz, dir = ray_d[i].xyz;
@@ -50,7 +50,7 @@ WT_KERNEL void test_intersect4(uint rays, __global const float4* ray_o, __global
 // The point at barycentrics bary[i] of triangle i, spawned off both faces:
 // out[2i] on the side of the winding normal, out[2i + 1] on the other.
 WT_KERNEL void test_offset(uint count, __global const float4* verts, __global const float2* bary,
-                          __global float4* out) {
+                           __global float4* out) {
   uint i = get_global_id(0);
   if (i >= count) return;
   float3 p0 = verts[3 * i].xyz, p1 = verts[3 * i + 1].xyz, p2 = verts[3 * i + 2].xyz;
@@ -70,7 +70,7 @@ WT_KERNEL void test_atan2(uint count, __global const float2* yx, __global float*
 }
 
 WT_KERNEL void test_light_pick(uint count, __global const WtAliasSlot* alias, uint light_count,
-                              __global uint* chosen, __global float* pmf) {
+                               __global uint* chosen, __global float* pmf) {
   uint i = get_global_id(0);
   if (i >= count) return;
   LightScene ls;
@@ -101,7 +101,7 @@ WT_KERNEL void test_sobol(uint count, uint pixel, uint bounce, uint dim, uint se
 // `samples` running-mean updates per work-item of values keyed like the
 // renderer's samples; distribution 0: the constant 0.7, 1: 0.5 + uniform.
 WT_KERNEL void test_accumulate(uint count, uint samples, uint mode, uint distribution,
-                              __global float* out_mean) {
+                               __global float* out_mean) {
   uint i = get_global_id(0);
   if (i >= count) return;
   float4 mean = (float4)(0.0f), m2 = (float4)(0.0f), c_mean = (float4)(0.0f), c_m2 = (float4)(0.0f);
@@ -130,8 +130,8 @@ WT_KERNEL void test_accumulate(uint count, uint samples, uint mode, uint distrib
 // direction and mixture pdf (w = -1: nothing sampled), the weight and lobe.
 // wo.w != 0: seen from inside (the back face).
 WT_KERNEL void test_bsdf_sample(uint count, WtMaterial material, float4 wo, uint lobes,
-                               __global const float* table, __global const float4* u,
-                               __global float4* wi_pdf, __global float4* weight_lobe) {
+                                __global const float* table, __global const float4* u,
+                                __global float4* wi_pdf, __global float4* weight_lobe) {
   uint i = get_global_id(0);
   if (i >= count) return;
   Bsdf b = bsdf_make(material, table, wo.w != 0.0f);
@@ -147,7 +147,7 @@ WT_KERNEL void test_bsdf_sample(uint count, WtMaterial material, float4 wo, uint
 
 // bsdf_eval for `count` local directions: f cos and the mixture pdf.
 WT_KERNEL void test_bsdf_eval(uint count, WtMaterial material, float4 wo, uint lobes,
-                             __global const float* table, __global const float4* wi, __global float4* out) {
+                              __global const float* table, __global const float4* wi, __global float4* out) {
   uint i = get_global_id(0);
   if (i >= count) return;
   Bsdf b = bsdf_make(material, table, wo.w != 0.0f);
@@ -160,7 +160,7 @@ WT_KERNEL void test_bsdf_eval(uint count, WtMaterial material, float4 wo, uint l
 
 // light_tree_pick at (p, n) for `count` uniforms: the light index and pmf.
 WT_KERNEL void test_light_tree_pick(uint count, __global const WtLightNode* nodes, float4 p, float4 n,
-                                   __global const float* u, __global uint* chosen, __global float* pmf) {
+                                    __global const float* u, __global uint* chosen, __global float* pmf) {
   uint i = get_global_id(0);
   if (i >= count) return;
   float q;
@@ -170,7 +170,7 @@ WT_KERNEL void test_light_tree_pick(uint count, __global const WtLightNode* node
 
 // light_tree_pmf at (p, n) for `count` leaves.
 WT_KERNEL void test_light_tree_pmf(uint count, __global const WtLightNode* nodes, __global const uint* leaves,
-                                  float4 p, float4 n, __global float* pmf) {
+                                   float4 p, float4 n, __global float* pmf) {
   uint i = get_global_id(0);
   if (i >= count) return;
   pmf[i] = light_tree_pmf(nodes, leaves[i], p.xyz, n.xyz);

@@ -328,12 +328,12 @@ double traversableRate(const SceneResult& r) {
 /// first two kinds (docs/performance.md, "Packets").
 constexpr double kPacketCoherence = 0.9;
 
-/// The traversal --traversal picks for a set of rays (auto: packets when
-/// the rays of a packet point nearly the same way).
-Traversal setTraversal(const BenchOptions& options, std::span<const Ray> rays) {
+/// The traversal --traversal picks for a set of rays of this packetCoherence
+/// (auto: packets when the rays of a packet point nearly the same way).
+Traversal setTraversal(const BenchOptions& options, double coherence) {
   if (options.traversal == "single") return Traversal::kSingle;
   if (options.traversal == "packet") return Traversal::kPacket;
-  return packetCoherence(rays) >= kPacketCoherence ? Traversal::kPacket : Traversal::kSingle;
+  return coherence >= kPacketCoherence ? Traversal::kPacket : Traversal::kSingle;
 }
 
 const char* traversalName(Traversal t) { return t == Traversal::kPacket ? "packet" : "single"; }
@@ -358,7 +358,7 @@ std::vector<RayHit> benchSet(const Scene& scene, Tracer& tracer, const Reference
   result.occlusion = occlusion;
   result.rays = rays.size();
   result.coherence = packetCoherence(rays);
-  const Traversal traversal = result.traversal = setTraversal(options, rays);
+  const Traversal traversal = result.traversal = setTraversal(options, result.coherence);
   if (rays.empty()) return {};
   std::vector<RayHit> hits;
   std::vector<std::uint8_t> blocked;
@@ -453,8 +453,8 @@ std::pair<Bvh, double> timedBuild(std::span<const Aabb> bounds, const BvhBuildOp
 /// the same ray sets through all of them, the trees taking turns within each
 /// repetition so that a change in the machine's load hits them alike.
 void compareTrees(Context& context, const Scene& scene, std::span<const Aabb> bounds, Tracer& defaultTracer,
-                  BvhBuilder defaultBuilder, std::array<const std::vector<Ray>*, 3> sets, const BenchOptions& options,
-                  std::vector<TreeResult>& trees) {
+                  BvhBuilder defaultBuilder, std::array<const std::vector<Ray>*, 3> sets,
+                  std::array<Traversal, 3> traversals, const BenchOptions& options, std::vector<TreeResult>& trees) {
   std::vector<std::unique_ptr<Tracer>> owned;
   std::vector<Tracer*> tracers;
   for (const std::string& name : options.compareBvh) {
@@ -483,7 +483,7 @@ void compareTrees(Context& context, const Scene& scene, std::span<const Aabb> bo
   for (std::size_t set = 0; set < sets.size(); ++set) {
     const std::vector<Ray>& rays = *sets[set];
     const bool occlusion = set == 2;
-    const Traversal traversal = setTraversal(options, rays);
+    const Traversal traversal = traversals[set];  // as benchSet chose for that set
     std::vector<std::vector<double>> kernel(tracers.size());
     for (std::size_t t = 0; t < tracers.size(); ++t) {
       // warm-up, and the answers
@@ -568,8 +568,8 @@ SceneResult benchScene(Context& context, const std::string& name, const Scene& s
   benchSet(scene, tracer, embree.get(), "diffuse", diffuse, false, false, options, result.sets[1]);
   benchSet(scene, tracer, embree.get(), "shadow", shadow, true, false, options, result.sets[2]);
   embree.reset();
-  compareTrees(context, scene, bounds, tracer, bvhOptions.builder, {&primary, &diffuse, &shadow}, options,
-               result.trees);
+  compareTrees(context, scene, bounds, tracer, bvhOptions.builder, {&primary, &diffuse, &shadow},
+               {result.sets[0].traversal, result.sets[1].traversal, result.sets[2].traversal}, options, result.trees);
   primary = {};
   diffuse = {};
   shadow = {};
