@@ -1,7 +1,9 @@
-// Packet traversal: one work-item traces eight rays through the 4-wide BVH
-// together, one ray per float8 lane. A node's child box is tested against the
-// eight rays at once, and a leaf triangle with the watertight test on the
-// eight lanes. Each lane makes the same decisions, with the same arithmetic,
+// Packet traversal: one work-item traces WT_PACKET_WIDTH rays (8 or 16, the
+// device's native float vector width: packetWidthFor in host/device/program.h)
+// through the 4-wide BVH together, one ray per lane of a float8 or float16.
+// A node's child box is tested against all the rays at once, and a leaf
+// triangle with the watertight test on all the lanes. Each lane makes the
+// same decisions, with the same arithmetic,
 // as bvh_closest / bvh_occluded would for its ray alone (only the order in
 // which nodes are visited differs, so of two hits at exactly the same
 // distance another may win). PoCL vectorises inside a work-item, never
@@ -19,9 +21,7 @@
 #include "bvh.cl"
 
 #define WT_PACKET WT_PACKET_WIDTH
-#if WT_PACKET != 8
-#error "WT_PACKET_WIDTH must be 8: the lanes are float8 (16 was measured and not kept, docs/performance.md)"
-#endif
+#if WT_PACKET == 8
 #define pfloat float8
 #define pint int8
 #define puint uint8
@@ -30,23 +30,48 @@
 #define as_puint as_uint8
 #define packet_vload(a) vload8(0, a)
 #define packet_vstore(v, a) vstore8(v, 0, a)
+#elif WT_PACKET == 16
+#define pfloat float16
+#define pint int16
+#define puint uint16
+#define as_pfloat as_float16
+#define as_pint as_int16
+#define as_puint as_uint16
+#define packet_vload(a) vload16(0, a)
+#define packet_vstore(v, a) vstore16(v, 0, a)
+#else
+#error "WT_PACKET_WIDTH must be 8 or 16 (packetWidthFor, host/device/program.h)"
+#endif
 
 /// Lane masks normalised to all ones or zero. Comparisons are folded with
 /// this before any select or ~, never trusted for their sign bit:
 /// Oclgrind's optimised build makes some vector comparisons 1 instead of -1.
 inline pint packet_mask(pint c) { return (c | -c) >> 31; }
+// Reductions over the lanes: halves folded down to one float8 / int8 first.
+#if WT_PACKET == 16
+#define packet_fold8_i(m) ((m).lo | (m).hi)
+#define packet_fold8_min(v) fmin((v).lo, (v).hi)
+#define packet_fold8_max(v) fmax((v).lo, (v).hi)
+#else
+#define packet_fold8_i(m) (m)
+#define packet_fold8_min(v) (v)
+#define packet_fold8_max(v) (v)
+#endif
 inline bool packet_any(pint m) {
-  int4 a = m.lo | m.hi;
+  int8 m8 = packet_fold8_i(m);
+  int4 a = m8.lo | m8.hi;
   int2 b = a.lo | a.hi;
   return (b.x | b.y) != 0;
 }
 inline float packet_min(pfloat v) {
-  float4 a = fmin(v.lo, v.hi);
+  float8 v8 = packet_fold8_min(v);
+  float4 a = fmin(v8.lo, v8.hi);
   float2 b = fmin(a.lo, a.hi);
   return fmin(b.x, b.y);
 }
 inline float packet_max(pfloat v) {
-  float4 a = fmax(v.lo, v.hi);
+  float8 v8 = packet_fold8_max(v);
+  float4 a = fmax(v8.lo, v8.hi);
   float2 b = fmax(a.lo, a.hi);
   return fmax(b.x, b.y);
 }

@@ -7,6 +7,7 @@
 #include "core/log.h"
 #include "core/spawn.h"
 #include "device/context.h"
+#include "device/program.h"
 #include "device/tracer.h"
 #include "render/renderer.h"
 #include "scene/default_scene.h"
@@ -357,7 +358,7 @@ std::vector<RayHit> benchSet(const Scene& scene, Tracer& tracer, const Reference
   result.name = name;
   result.occlusion = occlusion;
   result.rays = rays.size();
-  result.coherence = packetCoherence(rays);
+  result.coherence = packetCoherence(rays, std::size_t(tracer.packetWidth()));
   const Traversal traversal = result.traversal = setTraversal(options, result.coherence);
   if (rays.empty()) return {};
   std::vector<RayHit> hits;
@@ -472,7 +473,7 @@ void compareTrees(Context& context, const Scene& scene, std::span<const Aabb> bo
     if (tree.builder == defaultBuilder) {
       tracers.push_back(&defaultTracer);
     } else {
-      owned.push_back(std::make_unique<Tracer>(context, scene, bvhOptions));
+      owned.push_back(std::make_unique<Tracer>(context, scene, bvhOptions, options.packetWidth));
       tracers.push_back(owned.back().get());
     }
     tree.bytesPerTriangle = scene.triangles.empty() ? 0.0
@@ -537,7 +538,7 @@ SceneResult benchScene(Context& context, const std::string& name, const Scene& s
   bvh = {};
   bvh4 = {};
 
-  Tracer tracer(context, scene, bvhOptions);
+  Tracer tracer(context, scene, bvhOptions, options.packetWidth);
   result.bytesPerTriangle =
       scene.triangles.empty() ? 0.0 : double(tracer.sceneBuffers().uploadedBytes) / scene.triangles.size();
   result.leafMisfits = tracer.sceneBuffers().leafMisfits();
@@ -579,6 +580,7 @@ SceneResult benchScene(Context& context, const std::string& name, const Scene& s
   settings.width = settings.height = options.pathWidth;
   settings.samplesPerPixel = options.pathSamples;
   settings.bvhBuilder = bvhOptions.builder;
+  settings.packetWidth = options.packetWidth;
   Renderer renderer(context, scene, settings);
   renderer.renderSample();  // warm-up
   std::uint64_t raysBefore = renderer.stats().raysTraced;
@@ -621,6 +623,7 @@ double mrays(std::size_t rays, double seconds) { return seconds > 0.0 ? rays / s
 int runBench(const BenchOptions& options) {
   DeviceInfo device = selectDevice(options.device);
   Context context(device, /*profiling=*/true);
+  const int packetWidth = packetWidthFor(device, options.packetWidth);
 #ifdef WT_HAVE_EMBREE
   parseEmbreeApi(options.embreeApi);  // a bad name fails before any work
 #endif
@@ -685,9 +688,9 @@ int runBench(const BenchOptions& options) {
     std::printf(" \"primary_width\": %d, \"repetitions\": %d, \"path_width\": %d, \"path_samples\": %d,\n",
                 options.primaryWidth, options.repetitions, options.pathWidth, options.pathSamples);
     std::printf(" \"bvh\": \"%s\", \"ploc_radius\": %d, \"ploc_top_prims\": %d, \"traversal\": \"%s\", "
-                "\"max_leaf_size\": %d,\n",
+                "\"packet_width\": %d, \"max_leaf_size\": %d,\n",
                 options.bvh.c_str(), options.plocRadius, options.plocTopPrims, options.traversal.c_str(),
-                options.maxLeafSize);
+                packetWidth, options.maxLeafSize);
     std::printf(" \"skipped\": [");
     for (std::size_t i = 0; i < skipped.size(); ++i)
       std::printf("%s{\"name\": %s, \"reason\": %s}", i ? ", " : "", jsonString(skipped[i].first).c_str(),
@@ -753,8 +756,8 @@ int runBench(const BenchOptions& options) {
     return 0;
   }
 
-  std::printf("device: %s (%s); reference: %s; bvh: %s\n", device.name.c_str(), device.platformName.c_str(),
-              embreeText.c_str(), options.bvh.c_str());
+  std::printf("device: %s (%s); reference: %s; bvh: %s; packets of %d rays\n", device.name.c_str(),
+              device.platformName.c_str(), embreeText.c_str(), options.bvh.c_str(), packetWidth);
   std::printf("rays: primary %dx%d through pixel centres; diffuse and shadow rays from their hits; "
               "median of %d after a warm-up\npaths: %dx%d, %d spp, up to 8 bounces, extend rays counted\n",
               options.primaryWidth, options.primaryWidth, options.repetitions, options.pathWidth, options.pathWidth,

@@ -30,6 +30,7 @@ struct BenchOptions {
   /// whose neighbouring rays start from neighbouring pixels (primary,
   /// shadow), one ray per work-item for the diffuse set.
   std::string traversal = "auto";
+  int packetWidth = 0;    ///< rays per packet, 8 or 16; 0: by the device (packetWidthFor)
   int maxLeafSize = 0;    ///< the 4-wide leaf limit of every tree (0: kBvh4MaxLeafSize, as the renderer; bvh4Options)
   int plocRadius = 16;    ///< BvhBuildOptions::plocRadius for every ploc tree
   int plocTopPrims = 16;  ///< BvhBuildOptions::plocTopPrims for every ploc tree

@@ -43,6 +43,7 @@ struct RenderOptions {
   std::string accumulation = "kahan";
   std::string bvh = "lbvh";
   std::string traversal = "auto";
+  int packetWidth = 0;
   int sceneIndex = -1;
   int camera = 0;
   bool noRecenter = false;
@@ -99,6 +100,7 @@ int runRender(const RenderOptions& options) {
                                                              : WT_ACCUMULATE_KAHAN;
   settings.bvhBuilder = *wt::parseBvhBuilder(options.bvh);
   settings.packets = options.traversal == "auto";
+  settings.packetWidth = options.packetWidth;
   wt::Renderer renderer(context, scene, settings);
   const wt::BvhBuildStats& bvh = renderer.sceneBuffers().bvhStats();
   wt::log::info("scene " + scene.sourceName + ": " + std::to_string(scene.triangles.size()) +
@@ -251,9 +253,13 @@ int main(int argc, char** argv) {
                         "or sah (top-down binned SAH, slow)")
       ->check(CLI::IsMember({"lbvh", "ploc", "sah"}))->capture_default_str();
   renderCmd->add_option("--traversal", render.traversal,
-                        "auto: camera rays and their shadow rays in packets of 8 neighbouring pixels, later bounces "
+                        "auto: camera rays and their shadow rays in packets of neighbouring pixels, later bounces "
                         "one ray per work-item; single: every ray alone")
       ->check(CLI::IsMember({"auto", "single"}))->capture_default_str();
+  renderCmd->add_option("--packet-width", render.packetWidth,
+                        "Pixels per packet with --traversal auto: 8 or 16; 0 picks by the device (16 where its native "
+                        "float vector is 16 wide)")
+      ->check(CLI::IsMember({0, 8, 16}))->capture_default_str();
   renderCmd->add_option("--reference", render.reference,
                         "EXR of the converged image: log the error at 1, 2, 4, ... samples (see --error-log)");
   renderCmd->add_option("--error-log", render.errorLog,
@@ -310,9 +316,12 @@ int main(int argc, char** argv) {
                        "Builders whose trees are traced on the same rays (tree quality table); none: --compare-bvh none")
       ->delimiter(',')->check(CLI::IsMember({"lbvh", "ploc", "sah", "none"}))->capture_default_str();
   benchCmd->add_option("--traversal", bench.traversal,
-                       "single: one ray per work-item; packet: eight rays per work-item; auto: packets for a set "
+                       "single: one ray per work-item; packet: a packet of rays per work-item; auto: packets for a set "
                        "whose packets' rays point nearly the same way (coherence >= 0.9 in --json)")
       ->check(CLI::IsMember({"single", "packet", "auto"}));
+  benchCmd->add_option("--packet-width", bench.packetWidth,
+                       "Rays per packet: 8 or 16; 0 picks by the device (16 where its native float vector is 16 wide)")
+      ->check(CLI::IsMember({0, 8, 16}))->capture_default_str();
   benchCmd->add_option("--max-leaf-size", bench.maxLeafSize, "Every tree: no leaf holds more triangles (0: 16, as render); the collapse to 4 wide chooses the leaves up to it")
       ->check(CLI::Range(0, 64));
   benchCmd->add_option("--ploc-radius", bench.plocRadius, "ploc trees: neighbours searched on each side")

@@ -24,6 +24,7 @@ struct DeviceInfo {
   std::string version;        ///< CL_DEVICE_VERSION
   bool isGpu = false;
   bool fp64 = false;
+  int nativeFloatWidth = 1;   ///< CL_DEVICE_NATIVE_VECTOR_WIDTH_FLOAT
   cl::Platform platform;
   cl::Device device;
 };

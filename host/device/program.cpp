@@ -93,7 +93,15 @@ std::vector<std::string> kernelDefines(const KernelFeatures& features) {
       "-D WT_BVH_STACK_SIZE=" + std::to_string(features.bvhStackSize),
       "-D WT_HAS_PBR=" + std::string(features.pbr ? "1" : "0"),
       "-D WT_HAS_TRANSMISSION=" + std::string(features.pbr && features.transmission ? "1" : "0"),
+      "-D WT_PACKET_WIDTH=" + std::to_string(features.packetWidth),
   };
+}
+
+int packetWidthFor(const DeviceInfo& device, int requested) {
+  if (requested == 8 || requested == 16) return requested;
+  if (requested != 0)
+    throw DeviceError("packet width " + std::to_string(requested) + " is not supported (8 or 16)");
+  return device.nativeFloatWidth >= 16 ? 16 : 8;
 }
 
 cl::Program buildProgram(Context& context, const KernelFeatures& features, const std::string& root) {

@@ -18,7 +18,13 @@ struct KernelFeatures {
   int bvhStackSize = 64;          ///< traversal stack entries; >= BVH depth + 1, rounded up to 32
   bool pbr = false;               ///< a material uses the metallic-roughness model (else all are Lambertian)
   bool transmission = false;      ///< a metallic-roughness material transmits (KHR_materials_transmission)
+  int packetWidth = 8;            ///< rays per packet (WT_PACKET_WIDTH): 8 or 16, packetWidthFor
 };
+
+/// Rays per packet for a device: `requested` (8 or 16) when non-zero, else
+/// 16 where the device's native float vector is 16 wide (AVX-512 CPUs),
+/// else 8. Throws DeviceError for any other request.
+int packetWidthFor(const DeviceInfo& device, int requested = 0);
 
 /// The build options for a feature set, e.g. "-D WT_INTEGRATOR_MINIMAL=1 ...".
 std::vector<std::string> kernelDefines(const KernelFeatures& features);

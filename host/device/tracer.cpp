@@ -8,10 +8,12 @@
 
 namespace wt {
 
-Tracer::Tracer(Context& context, const Scene& scene, const BvhBuildOptions& options)
-    : m_context(context), m_scene(std::make_unique<SceneBuffers>(context, scene, options)) {
+Tracer::Tracer(Context& context, const Scene& scene, const BvhBuildOptions& options, int packetWidth)
+    : m_context(context), m_scene(std::make_unique<SceneBuffers>(context, scene, options)),
+      m_packetWidth(packetWidthFor(context.info(), packetWidth)) {
   KernelFeatures features;
   features.bvhStackSize = m_scene->stackSize();
+  features.packetWidth = m_packetWidth;
   m_program = buildProgram(context, features);
   m_closest = cl::Kernel(m_program, "trace_closest");
   m_occluded = cl::Kernel(m_program, "trace_occluded");
@@ -21,8 +23,8 @@ Tracer::Tracer(Context& context, const Scene& scene, const BvhBuildOptions& opti
 
 Tracer::~Tracer() = default;
 
-double packetCoherence(std::span<const Ray> rays) {
-  constexpr std::size_t kPacket = WT_PACKET_WIDTH;
+double packetCoherence(std::span<const Ray> rays, std::size_t width) {
+  const std::size_t kPacket = std::max<std::size_t>(width, 1);
   double total = 0.0;
   std::size_t packets = 0;
   for (std::size_t first = 0; first < rays.size(); first += kPacket) {
@@ -79,7 +81,7 @@ void Tracer::run(cl::Kernel& kernel, const char* name, std::size_t rays, Travers
   kernel.setArg(a++, m_scene->triVerts);
   kernel.setArg(a++, m_out);
   kernel.setArg(a++, m_skip);
-  constexpr std::size_t kPacket = WT_PACKET_WIDTH;  // shared/types.h
+  const std::size_t kPacket = std::size_t(m_packetWidth);
   std::size_t items = traversal == Traversal::kPacket ? (rays + kPacket - 1) / kPacket : rays;
   m_context.resetStageTimes();
   m_context.launch(name, kernel, items);

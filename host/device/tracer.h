@@ -30,28 +30,31 @@ struct RayHit {
   static constexpr std::uint32_t kNoHit = 0xffffffffu;
 };
 
-/// How a batch is traced: one ray per work-item, or packets of eight
-/// consecutive rays per work-item (kernels/bvh_packet.cl), which pays on
+/// How a batch is traced: one ray per work-item, or packets of 8 or 16
+/// consecutive rays per work-item (Tracer::packetWidth) (kernels/bvh_packet.cl), which pays on
 /// coherent rays (camera rays, shadow rays from neighbouring pixels). Both
 /// give the same answers; of two hits at exactly the same distance, another
 /// may win.
 enum class Traversal { kSingle, kPacket };
 
 /// How alike the directions of each packet's rays are: the mean, over the
-/// packets of WT_PACKET_WIDTH consecutive rays, of the length of their unit
+/// packets of `width` consecutive rays, of the length of their unit
 /// directions' mean. 1 when every packet's rays are parallel; about 0.33 for
-/// directions drawn uniformly from the sphere; 0 for no rays.
-double packetCoherence(std::span<const Ray> rays);
+/// directions drawn uniformly from the sphere (for packets of 8); 0 for no rays.
+double packetCoherence(std::span<const Ray> rays, std::size_t width = WT_PACKET_WIDTH);
 
 class Tracer {
  public:
-  Tracer(Context& context, const Scene& scene, const BvhBuildOptions& options = {});
+  /// packetWidth: rays per packet, 8 or 16; 0 picks by the device (packetWidthFor).
+  Tracer(Context& context, const Scene& scene, const BvhBuildOptions& options = {}, int packetWidth = 0);
   ~Tracer();
 
   std::vector<RayHit> traceClosest(std::span<const Ray> rays, Traversal traversal = Traversal::kSingle);
   std::vector<std::uint8_t> traceOccluded(std::span<const Ray> rays, Traversal traversal = Traversal::kSingle);
 
   const SceneBuffers& sceneBuffers() const { return *m_scene; }
+  /// Rays per packet of Traversal::kPacket on this device.
+  int packetWidth() const { return m_packetWidth; }
   /// Kernel time of the last trace call (profiling events), seconds.
   double lastKernelSeconds() const { return m_lastKernelSeconds; }
 
@@ -62,6 +65,7 @@ class Tracer {
 
   Context& m_context;
   std::unique_ptr<SceneBuffers> m_scene;
+  int m_packetWidth = WT_PACKET_WIDTH;
   cl::Program m_program;
   cl::Kernel m_closest, m_occluded, m_closestPacket, m_occludedPacket;
   cl::Buffer m_rayO, m_rayD, m_skip, m_out;

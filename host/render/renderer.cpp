@@ -60,6 +60,8 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
   KernelFeatures features;
   features.integratorMinimal = settings.integrator == Integrator::Minimal;
   features.bvhStackSize = m_scene->stackSize();
+  m_packetWidth = packetWidthFor(context.info(), settings.packetWidth);
+  features.packetWidth = m_packetWidth;
   features.pbr = std::any_of(scene.materials.begin(), scene.materials.end(),
                              [](const WtMaterial& m) { return m.model == WT_MATERIAL_PBR; });
   features.transmission = std::any_of(scene.materials.begin(), scene.materials.end(), [](const WtMaterial& m) {
@@ -204,7 +206,7 @@ void Renderer::renderSample() {
     extend.setArg(1, inSlot);
     extend.setArg(2, *queueIn);
     if (packets)
-      m_context.launch("extend_packet", extend, (alive + WT_PACKET_WIDTH - 1) / WT_PACKET_WIDTH);
+      m_context.launch("extend_packet", extend, (alive + m_packetWidth - 1) / m_packetWidth);
     else
       m_context.launch("extend", extend, alive);
 
@@ -221,7 +223,7 @@ void Renderer::renderSample() {
     // connect: shadow rays of this bounce (count read on the device)
     if (m_lights.sampleable) {
       if (packets)
-        m_context.launch("connect_packet", m_connectPacket, (alive + WT_PACKET_WIDTH - 1) / WT_PACKET_WIDTH);
+        m_context.launch("connect_packet", m_connectPacket, (alive + m_packetWidth - 1) / m_packetWidth);
       else
         m_context.launch("connect", m_connect, alive);
     }

@@ -51,10 +51,11 @@ struct RenderSettings {
   std::uint32_t accumulation = WT_ACCUMULATE_KAHAN;  ///< WT_ACCUMULATE_* (double needs fp64)
   BvhBuilder bvhBuilder = BvhBuilder::Lbvh;  ///< which tree the scene's BVH is (host/bvh/builders.h)
   /// Camera rays and the shadow rays from their hits traced in packets of
-  /// WT_PACKET_WIDTH neighbouring pixels (kernels/bvh_packet.cl); later
+  /// packetWidth neighbouring pixels (kernels/bvh_packet.cl); later
   /// bounces, incoherent, one ray per work-item. The same hits either way
   /// (of two at exactly the same distance, another may win).
   bool packets = true;
+  int packetWidth = 0;  ///< rays per packet, 8 or 16; 0: by the device (packetWidthFor)
 #ifdef NDEBUG
   bool stopOnNonFinite = false;  ///< throw NonFiniteSampleError at the first NaN/Inf shade makes (on in debug builds)
 #else
@@ -107,6 +108,7 @@ class Renderer {
   [[noreturn]] void throwNonFinite(int sample, std::uint32_t path, std::uint32_t where);
   Context& m_context;
   RenderSettings m_settings;
+  int m_packetWidth = WT_PACKET_WIDTH;  ///< rays per packet (packetWidthFor)
   WtCamera m_camera;
   std::unique_ptr<SceneBuffers> m_scene;
   cl::Program m_program;

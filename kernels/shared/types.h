@@ -59,8 +59,12 @@ typedef struct WtBvh4Node {
 } WtBvh4Node;
 #define WT_BVH4_EMPTY 0xffffffffu
 
-/// Rays per work-item of the packet traversal (kernels/bvh_packet.cl): one float8 lane each.
+/// Rays per work-item of the packet traversal (kernels/bvh_packet.cl), one
+/// vector lane each: 8 or 16, set per device by the program build
+/// (KernelFeatures::packetWidth); 8 where nothing sets it.
+#ifndef WT_PACKET_WIDTH
 #define WT_PACKET_WIDTH 8
+#endif
 
 /// A surface: Lambertian (scenes made in code, analytic tests) or glTF
 /// metallic-roughness (kernels/materials/bsdf.cl), with emission.

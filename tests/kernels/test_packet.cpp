@@ -2,9 +2,11 @@
 // every lane must make its ray's decisions, so both give the same closest
 // hits (distance, barycentrics, triangle) and the same occlusion, on coherent
 // rays that really go through the packet path, for every builder and leaf
-// size; and against brute force through the shared checks.
+// size and both packet widths (8 and 16 rays); and against brute force
+// through the shared checks.
 #include "brute_force.h"
 #include "bvh/builders.h"
+#include "device/program.h"
 #include "device_fixture.h"
 #include "scene/generators.h"
 #include "test_util.h"
@@ -61,14 +63,17 @@ int permutation(glm::vec3 d) {
   return 2 * kz + (d[kz] < 0.0f ? 1 : 0);
 }
 
-/// The share of full packets (WT_PACKET_WIDTH consecutive rays) whose rays
-/// share one permutation, and so go through the packet path.
-double packetShare(const std::vector<Ray>& rays) {
+/// Both packet widths a device may be given (packetWidthFor).
+constexpr int kPacketWidths[] = {8, 16};
+
+/// The share of full packets (`width` consecutive rays) whose rays share one
+/// permutation, and so go through the packet path.
+double packetShare(const std::vector<Ray>& rays, std::size_t width) {
   std::size_t packets = 0, uniform = 0;
-  for (std::size_t i = 0; i + WT_PACKET_WIDTH <= rays.size(); i += WT_PACKET_WIDTH) {
+  for (std::size_t i = 0; i + width <= rays.size(); i += width) {
     ++packets;
     bool same = true;
-    for (std::size_t l = 1; l < WT_PACKET_WIDTH; ++l)
+    for (std::size_t l = 1; l < width; ++l)
       same = same && permutation(rays[i + l].direction) == permutation(rays[i].direction);
     uniform += same;
   }
@@ -79,8 +84,13 @@ bool sameBits(float a, float b) { return std::memcmp(&a, &b, sizeof a) == 0; }
 
 /// Packets against single rays on the same tree: identical answers, except
 /// that of two hits at exactly the same distance either may win.
-void expectPacketsMatchSingleRays(const Scene& scene, const std::vector<Ray>& rays, const BvhBuildOptions& options) {
-  Tracer tracer(test::deviceContext(), scene, options);
+void expectPacketsMatchSingleRays(const Scene& scene, const std::vector<Ray>& rays, const BvhBuildOptions& options,
+                                  int width) {
+  SCOPED_TRACE("packets of " + std::to_string(width));
+  // the rays must really go through the packet path, not the ray-by-ray fallback
+  ASSERT_GT(packetShare(rays, std::size_t(width)), 0.8);
+  Tracer tracer(test::deviceContext(), scene, options, width);
+  ASSERT_EQ(tracer.packetWidth(), width);
   std::vector<RayHit> single = tracer.traceClosest(rays, Traversal::kSingle);
   std::vector<RayHit> packet = tracer.traceClosest(rays, Traversal::kPacket);
   std::vector<std::uint8_t> singleBlocked = tracer.traceOccluded(rays, Traversal::kSingle);
@@ -115,17 +125,14 @@ class PacketTraversal : public test::TreeParamTest {};
 
 TEST_P(PacketTraversal, CoherentRaysMatchSingleRaysOnASoup) {
   Scene scene = makeTriangleSoup(3000, 3, 0.15f);
-  std::vector<Ray> rays = cameraFans(scene, int(test::testSize(48, 8)), 1);
-  // the rays must really go through the packet path, not the ray-by-ray fallback
-  ASSERT_GT(packetShare(rays), 0.9);
-  expectPacketsMatchSingleRays(scene, rays, options());
+  std::vector<Ray> rays = cameraFans(scene, int(test::testSize(48, 16)), 1);
+  for (int width : kPacketWidths) expectPacketsMatchSingleRays(scene, rays, options(), width);
 }
 
 TEST_P(PacketTraversal, CoherentRaysMatchSingleRaysOnAClosedSphere) {
   Scene scene = makeIcosphere(3, glm::vec3(0.5f), 0.6f, makeMaterial(glm::vec3(0.5f)));
-  std::vector<Ray> rays = cameraFans(scene, int(test::testSize(48, 8)), 2);
-  ASSERT_GT(packetShare(rays), 0.9);
-  expectPacketsMatchSingleRays(scene, rays, options());
+  std::vector<Ray> rays = cameraFans(scene, int(test::testSize(48, 16)), 2);
+  for (int width : kPacketWidths) expectPacketsMatchSingleRays(scene, rays, options(), width);
 }
 
 INSTANTIATE_TEST_SUITE_P(Trees, PacketTraversal,
@@ -135,23 +142,28 @@ INSTANTIATE_TEST_SUITE_P(Trees, PacketTraversal,
 
 TEST(PacketTraversalEdges, CoherentRaysMatchBruteForce) {
   Scene scene = makeTriangleSoup(2000, 9, 0.2f);
-  std::vector<Ray> rays = cameraFans(scene, int(test::testSize(40, 8)), 3);
-  Tracer tracer(test::deviceContext(), scene);
-  std::vector<RayHit> hits = tracer.traceClosest(rays, Traversal::kPacket);
-  std::vector<std::uint8_t> blocked = tracer.traceOccluded(rays, Traversal::kPacket);
-  int disagreements = 0, occlusionErrors = 0;
-  for (std::size_t i = 0; i < rays.size(); ++i) {
-    test::BruteHit want = test::bruteClosest(scene, rays[i]);
-    if (!test::agrees(scene, rays[i], hits[i], want) && ++disagreements <= 5)
-      ADD_FAILURE() << "ray " << i << ": packet triangle " << hits[i].triangle << " t=" << hits[i].t
-                    << ", brute force triangle " << want.triangle << " t=" << want.t;
-    bool wantBlocked = want.triangle != RayHit::kNoHit;
-    if (bool(blocked[i]) != wantBlocked && !(wantBlocked && want.minBarycentric < 1e-5) &&
-        !(bool(blocked[i]) && hits[i].triangle != RayHit::kNoHit))
-      ++occlusionErrors;
+  std::vector<Ray> rays = cameraFans(scene, int(test::testSize(48, 16)), 3);
+  std::vector<test::BruteHit> want(rays.size());
+  for (std::size_t i = 0; i < rays.size(); ++i) want[i] = test::bruteClosest(scene, rays[i]);
+  for (int width : kPacketWidths) {
+    SCOPED_TRACE("packets of " + std::to_string(width));
+    ASSERT_GT(packetShare(rays, std::size_t(width)), 0.8);
+    Tracer tracer(test::deviceContext(), scene, {}, width);
+    std::vector<RayHit> hits = tracer.traceClosest(rays, Traversal::kPacket);
+    std::vector<std::uint8_t> blocked = tracer.traceOccluded(rays, Traversal::kPacket);
+    int disagreements = 0, occlusionErrors = 0;
+    for (std::size_t i = 0; i < rays.size(); ++i) {
+      if (!test::agrees(scene, rays[i], hits[i], want[i]) && ++disagreements <= 5)
+        ADD_FAILURE() << "ray " << i << ": packet triangle " << hits[i].triangle << " t=" << hits[i].t
+                      << ", brute force triangle " << want[i].triangle << " t=" << want[i].t;
+      bool wantBlocked = want[i].triangle != RayHit::kNoHit;
+      if (bool(blocked[i]) != wantBlocked && !(wantBlocked && want[i].minBarycentric < 1e-5) &&
+          !(bool(blocked[i]) && hits[i].triangle != RayHit::kNoHit))
+        ++occlusionErrors;
+    }
+    EXPECT_EQ(disagreements, 0);
+    EXPECT_EQ(occlusionErrors, 0);
   }
-  EXPECT_EQ(disagreements, 0);
-  EXPECT_EQ(occlusionErrors, 0);
 }
 
 TEST(PacketTraversalEdges, PartialPacketsMixedLanesAndEmptyScenes) {
@@ -170,33 +182,55 @@ TEST(PacketTraversalEdges, PartialPacketsMixedLanesAndEmptyScenes) {
     r.direction[l % 3] = (l & 1) ? -1.0f : 1.0f;
     fan.push_back(r);
   }
-  Tracer tracer(test::deviceContext(), scene);
-  for (std::size_t count : {std::size_t(1), std::size_t(7), std::size_t(9), std::size_t(100), fan.size()}) {
-    std::vector<Ray> rays(fan.end() - std::ptrdiff_t(count), fan.end());
-    std::vector<RayHit> single = tracer.traceClosest(rays, Traversal::kSingle);
-    std::vector<RayHit> packet = tracer.traceClosest(rays, Traversal::kPacket);
-    std::vector<std::uint8_t> singleBlocked = tracer.traceOccluded(rays, Traversal::kSingle);
-    std::vector<std::uint8_t> packetBlocked = tracer.traceOccluded(rays, Traversal::kPacket);
-    ASSERT_EQ(packet.size(), count);
-    for (std::size_t i = 0; i < count; ++i) {
-      EXPECT_TRUE(single[i].triangle == packet[i].triangle && sameBits(single[i].t, packet[i].t))
-          << count << " rays, ray " << i << ": single " << single[i].triangle << ", packet " << packet[i].triangle;
-      EXPECT_EQ(singleBlocked[i], packetBlocked[i]) << count << " rays, ray " << i;
-      const Ray& r = rays[i];
-      if (!std::isfinite(r.origin.x) || !std::isfinite(r.direction.y)) {
-        EXPECT_EQ(packet[i].triangle, RayHit::kNoHit);
-        EXPECT_EQ(packetBlocked[i], 1);
+  for (int width : kPacketWidths) {
+    SCOPED_TRACE("packets of " + std::to_string(width));
+    Tracer tracer(test::deviceContext(), scene, {}, width);
+    for (std::size_t count : {std::size_t(1), std::size_t(7), std::size_t(9), std::size_t(15), std::size_t(17),
+                              std::size_t(100), fan.size()}) {
+      std::vector<Ray> rays(fan.end() - std::ptrdiff_t(count), fan.end());
+      std::vector<RayHit> single = tracer.traceClosest(rays, Traversal::kSingle);
+      std::vector<RayHit> packet = tracer.traceClosest(rays, Traversal::kPacket);
+      std::vector<std::uint8_t> singleBlocked = tracer.traceOccluded(rays, Traversal::kSingle);
+      std::vector<std::uint8_t> packetBlocked = tracer.traceOccluded(rays, Traversal::kPacket);
+      ASSERT_EQ(packet.size(), count);
+      for (std::size_t i = 0; i < count; ++i) {
+        EXPECT_TRUE(single[i].triangle == packet[i].triangle && sameBits(single[i].t, packet[i].t))
+            << count << " rays, ray " << i << ": single " << single[i].triangle << ", packet " << packet[i].triangle;
+        EXPECT_EQ(singleBlocked[i], packetBlocked[i]) << count << " rays, ray " << i;
+        const Ray& r = rays[i];
+        if (!std::isfinite(r.origin.x) || !std::isfinite(r.direction.y)) {
+          EXPECT_EQ(packet[i].triangle, RayHit::kNoHit);
+          EXPECT_EQ(packetBlocked[i], 1);
+        }
       }
     }
+    Scene empty;
+    empty.materials.push_back(makeMaterial(glm::vec3(0.5f)));
+    Tracer none(test::deviceContext(), empty, {}, width);
+    std::vector<Ray> rays(fan.begin(), fan.begin() + 20);
+    for (const RayHit& h : none.traceClosest(rays, Traversal::kPacket)) EXPECT_EQ(h.triangle, RayHit::kNoHit);
+    // nothing blocks, but a ray that is not finite carries no light
+    EXPECT_EQ(none.traceOccluded(rays, Traversal::kPacket), none.traceOccluded(rays, Traversal::kSingle));
   }
-  Scene empty;
-  empty.materials.push_back(makeMaterial(glm::vec3(0.5f)));
-  Tracer none(test::deviceContext(), empty);
-  std::vector<Ray> rays(fan.begin(), fan.begin() + 20);
-  for (const RayHit& h : none.traceClosest(rays, Traversal::kPacket)) EXPECT_EQ(h.triangle, RayHit::kNoHit);
-  // nothing blocks, but a ray that is not finite carries no light
-  EXPECT_EQ(none.traceOccluded(rays, Traversal::kPacket), none.traceOccluded(rays, Traversal::kSingle));
 }
+
+TEST(PacketTraversalEdges, WidthByDevice) {
+  // 16 lanes where the device's float vector is 16 wide, 8 elsewhere; an
+  // explicit 8 or 16 wins; anything else is refused
+  DeviceInfo device = test::deviceContext().info();
+  device.nativeFloatWidth = 16;
+  EXPECT_EQ(packetWidthFor(device), 16);
+  EXPECT_EQ(packetWidthFor(device, 8), 8);
+  device.nativeFloatWidth = 8;
+  EXPECT_EQ(packetWidthFor(device), 8);
+  device.nativeFloatWidth = 4;
+  EXPECT_EQ(packetWidthFor(device), 8);
+  EXPECT_EQ(packetWidthFor(device, 16), 16);
+  EXPECT_THROW(packetWidthFor(device, 4), DeviceError);
+  EXPECT_THROW(packetWidthFor(device, 32), DeviceError);
+}
+
+
 
 TEST(PacketCoherence, ParallelRandomOpposedAndDegenerateDirections) {
   // packets of parallel rays measure 1, and packets of four opposed pairs 0;
@@ -225,6 +259,9 @@ TEST(PacketCoherence, ParallelRandomOpposedAndDegenerateDirections) {
   // 10 000 packets: the mean's standard error is about 0.0015
   const double expected = std::sqrt(8.0 / (3.0 * M_PI * 8.0));
   EXPECT_NEAR(packetCoherence(random), expected, 0.02);
+  // packets of 16: sqrt(8 / (3 pi 16)) = 0.23, 5 000 packets
+  EXPECT_NEAR(packetCoherence(random, 16), std::sqrt(8.0 / (3.0 * M_PI * 16.0)), 0.02);
+  EXPECT_GT(packetCoherence(cameraFans(scene, 32, 1), 16), 0.99);
 }
 
 }  // namespace

@@ -26,11 +26,14 @@ std::uint64_t countLeaks(const Scene& scene, const std::vector<glm::vec3>& origi
   for (BvhBuilder builder : kBuilders) {
     BvhBuildOptions options;
     options.builder = builder;
-    Tracer tracer(test::deviceContext(), scene, options);
-    std::uint64_t rays = 0;
-    const std::uint64_t leaked = wt::countLeaks(tracer, origins, targets, &rays);
-    EXPECT_EQ(leaked, 0u) << bvhBuilderName(builder) << " tree: " << leaked << " of " << rays << " rays leaked";
-    leaks += leaked;
+    for (int width : {8, 16}) {  // packets of either width (packetWidthFor)
+      Tracer tracer(test::deviceContext(), scene, options, width);
+      std::uint64_t rays = 0;
+      const std::uint64_t leaked = wt::countLeaks(tracer, origins, targets, &rays);
+      EXPECT_EQ(leaked, 0u) << bvhBuilderName(builder) << " tree, packets of " << width << ": " << leaked << " of "
+                            << rays << " rays leaked";
+      leaks += leaked;
+    }
   }
   return leaks;
 }
