@@ -48,10 +48,26 @@
 /// Oclgrind's optimised build makes some vector comparisons 1 instead of -1.
 inline pint packet_mask(pint c) { return (c | -c) >> 31; }
 // Reductions over the lanes: halves folded down to one float8 / int8 first.
+// The 16 lanes go through private memory rather than .hi: Oclgrind 21.10
+// loses the upper half's initialisation on .hi of a 16-wide vector in an
+// unoptimised build (tests/oclgrind/upper_half.cl); PoCL's optimiser makes
+// the same shuffles of either.
 #if WT_PACKET == 16
-#define packet_fold8_i(m) ((m).lo | (m).hi)
-#define packet_fold8_min(v) fmin((v).lo, (v).hi)
-#define packet_fold8_max(v) fmax((v).lo, (v).hi)
+inline int8 packet_fold8_i(int16 m) {
+  int t[16];
+  vstore16(m, 0, t);
+  return vload8(0, t) | vload8(1, t);
+}
+inline float8 packet_fold8_min(float16 v) {
+  float t[16];
+  vstore16(v, 0, t);
+  return fmin(vload8(0, t), vload8(1, t));
+}
+inline float8 packet_fold8_max(float16 v) {
+  float t[16];
+  vstore16(v, 0, t);
+  return fmax(vload8(0, t), vload8(1, t));
+}
 #else
 #define packet_fold8_i(m) (m)
 #define packet_fold8_min(v) (v)
