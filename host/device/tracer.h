@@ -31,8 +31,9 @@ struct RayHit {
 };
 
 /// How a batch is traced: one ray per work-item, or packets of 8 or 16
-/// consecutive rays per work-item (Tracer::packetWidth) (kernels/bvh_packet.cl), which pays on
-/// coherent rays (camera rays, shadow rays from neighbouring pixels). Both
+/// consecutive rays per work-item (Tracer::packetWidth; kernels/bvh_packet.cl),
+/// which pays on coherent rays (camera rays, shadow rays from neighbouring
+/// pixels). Both
 /// give the same answers; of two hits at exactly the same distance, another
 /// may win.
 enum class Traversal { kSingle, kPacket };
