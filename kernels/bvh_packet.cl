@@ -48,11 +48,12 @@
 /// Oclgrind's optimised build makes some vector comparisons 1 instead of -1.
 inline pint packet_mask(pint c) { return (c | -c) >> 31; }
 // Reductions over the lanes: halves folded down to one float8 / int8 first.
-// The 16 lanes go through private memory rather than .hi: Oclgrind 21.10
-// loses the upper half's initialisation on .hi of a 16-wide vector in an
-// unoptimised build (tests/oclgrind/upper_half.cl); PoCL's optimiser makes
-// the same shuffles of either.
-#if WT_PACKET == 16
+// Under Oclgrind (WT_FOLD_THROUGH_MEMORY, set by the host) the 16 lanes go
+// through private memory instead of .hi: Oclgrind 21.10 loses the upper
+// half's initialisation on .hi of a 16-wide vector in an unoptimised build
+// (tests/oclgrind/upper_half.cl). On PoCL .hi is the faster of the two
+// (primaries 1.02-1.05x, docs/performance.md, "Sixteen lanes").
+#if WT_PACKET == 16 && defined(WT_FOLD_THROUGH_MEMORY) && WT_FOLD_THROUGH_MEMORY
 inline int8 packet_fold8_i(int16 m) {
   int t[16];
   vstore16(m, 0, t);
@@ -68,6 +69,10 @@ inline float8 packet_fold8_max(float16 v) {
   vstore16(v, 0, t);
   return fmax(vload8(0, t), vload8(1, t));
 }
+#elif WT_PACKET == 16
+#define packet_fold8_i(m) ((m).lo | (m).hi)
+#define packet_fold8_min(v) fmin((v).lo, (v).hi)
+#define packet_fold8_max(v) fmax((v).lo, (v).hi)
 #else
 #define packet_fold8_i(m) (m)
 #define packet_fold8_min(v) (v)
