@@ -66,6 +66,11 @@ int permutation(glm::vec3 d) {
 /// Both packet widths a device may be given (packetWidthFor).
 constexpr int kPacketWidths[] = {8, 16};
 
+/// The least share of whole packets a test's fans must have at `width`, so
+/// the packet path is what is tested. Measured: 0.82 (8) and 0.65 (16) on
+/// the small fans Oclgrind runs (rows of 16), above 0.9 and 0.88 at full size.
+double minPacketShare(int width) { return width == 8 ? 0.8 : 0.6; }
+
 /// The share of full packets (`width` consecutive rays) whose rays share one
 /// permutation, and so go through the packet path.
 double packetShare(const std::vector<Ray>& rays, std::size_t width) {
@@ -88,7 +93,7 @@ void expectPacketsMatchSingleRays(const Scene& scene, const std::vector<Ray>& ra
                                   int width) {
   SCOPED_TRACE("packets of " + std::to_string(width));
   // the rays must really go through the packet path, not the ray-by-ray fallback
-  ASSERT_GT(packetShare(rays, std::size_t(width)), 0.6);
+  ASSERT_GT(packetShare(rays, std::size_t(width)), minPacketShare(width));
   Tracer tracer(test::deviceContext(), scene, options, width);
   ASSERT_EQ(tracer.packetWidth(), width);
   std::vector<RayHit> single = tracer.traceClosest(rays, Traversal::kSingle);
@@ -147,7 +152,7 @@ TEST(PacketTraversalEdges, CoherentRaysMatchBruteForce) {
   for (std::size_t i = 0; i < rays.size(); ++i) want[i] = test::bruteClosest(scene, rays[i]);
   for (int width : kPacketWidths) {
     SCOPED_TRACE("packets of " + std::to_string(width));
-    ASSERT_GT(packetShare(rays, std::size_t(width)), 0.6);
+    ASSERT_GT(packetShare(rays, std::size_t(width)), minPacketShare(width));
     Tracer tracer(test::deviceContext(), scene, {}, width);
     std::vector<RayHit> hits = tracer.traceClosest(rays, Traversal::kPacket);
     std::vector<std::uint8_t> blocked = tracer.traceOccluded(rays, Traversal::kPacket);
