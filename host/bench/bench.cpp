@@ -289,7 +289,7 @@ struct SetResult {
 
 /// One builder's tree of a scene, traced on the same rays as the others.
 struct TreeResult {
-  BvhBuilder builder = BvhBuilder::Lbvh;
+  BvhBuilder builder = BvhBuilder::Auto;
   double buildSeconds = 0.0;  ///< median of the repetitions, whole build (PLOC: LBVH + PLOC)
   std::size_t nodes = 0, nodes4 = 0;
   double sah = 0.0, sah4 = 0.0;
@@ -440,11 +440,12 @@ BvhBuildOptions benchBvhOptions(BvhBuilder builder, const BenchOptions& options)
 
 /// The tree over `bounds` and the median wall time of `repetitions` builds
 /// after one warm-up.
-std::pair<Bvh, double> timedBuild(std::span<const Aabb> bounds, const BvhBuildOptions& bvhOptions, int repetitions) {
+std::pair<Bvh, double> timedBuild(std::span<const Aabb> bounds, std::span<const BvhInstance> instances,
+                                  const BvhBuildOptions& bvhOptions, int repetitions) {
   std::vector<double> builds;
   Bvh bvh;
   for (int r = 0; r < repetitions + 1; ++r) {
-    bvh = buildBvh(bounds, bvhOptions);
+    bvh = buildBvh(bounds, bvhOptions, instances);
     if (r > 0) builds.push_back(bvh.stats.buildSeconds);
   }
   return {std::move(bvh), median(builds)};
@@ -453,7 +454,8 @@ std::pair<Bvh, double> timedBuild(std::span<const Aabb> bounds, const BvhBuildOp
 /// Build each --compare-bvh tree (median of the repetitions), then trace
 /// the same ray sets through all of them, the trees taking turns within each
 /// repetition so that a change in the machine's load hits them alike.
-void compareTrees(Context& context, const Scene& scene, std::span<const Aabb> bounds, Tracer& defaultTracer,
+void compareTrees(Context& context, const Scene& scene, std::span<const Aabb> bounds,
+                  std::span<const BvhInstance> instances, Tracer& defaultTracer,
                   BvhBuilder defaultBuilder, std::array<const std::vector<Ray>*, 3> sets,
                   std::array<Traversal, 3> traversals, const BenchOptions& options, std::vector<TreeResult>& trees) {
   std::vector<std::unique_ptr<Tracer>> owned;
@@ -463,7 +465,8 @@ void compareTrees(Context& context, const Scene& scene, std::span<const Aabb> bo
     TreeResult tree;
     tree.builder = *parseBvhBuilder(name);
     BvhBuildOptions bvhOptions = benchBvhOptions(tree.builder, options);
-    auto [bvh, seconds] = timedBuild(bounds, binaryBuildOptions(bvhOptions, bounds.size()), options.repetitions);
+    auto [bvh, seconds] =
+        timedBuild(bounds, instances, binaryBuildOptions(bvhOptions, bounds.size()), options.repetitions);
     tree.buildSeconds = seconds;
     tree.nodes = bvh.stats.nodeCount;
     tree.sah = bvh.stats.sahCost;
@@ -517,8 +520,12 @@ SceneResult benchScene(Context& context, const std::string& name, const Scene& s
   // BVH build, median of several
   std::vector<Aabb> bounds(scene.triangles.size());
   for (std::size_t i = 0; i < bounds.size(); ++i) bounds[i] = scene.triangleBounds(std::uint32_t(i));
+  std::vector<BvhInstance> instances;  // the scene's placed copies, for --bvh auto
+  for (const GeometryInstance& copy : scene.instances)
+    instances.push_back({copy.firstTriangle, copy.triangleCount, copy.geometry});
   BvhBuildOptions bvhOptions = benchBvhOptions(*parseBvhBuilder(options.bvh), options);
-  auto [bvh, seconds] = timedBuild(bounds, binaryBuildOptions(bvhOptions, bounds.size()), options.repetitions);
+  auto [bvh, seconds] =
+      timedBuild(bounds, instances, binaryBuildOptions(bvhOptions, bounds.size()), options.repetitions);
   result.buildSeconds = seconds;
   result.nodes = bvh.stats.nodeCount;
   result.sah = bvh.stats.sahCost;
@@ -569,7 +576,7 @@ SceneResult benchScene(Context& context, const std::string& name, const Scene& s
   benchSet(scene, tracer, embree.get(), "diffuse", diffuse, false, false, options, result.sets[1]);
   benchSet(scene, tracer, embree.get(), "shadow", shadow, true, false, options, result.sets[2]);
   embree.reset();
-  compareTrees(context, scene, bounds, tracer, bvhOptions.builder, {&primary, &diffuse, &shadow},
+  compareTrees(context, scene, bounds, instances, tracer, bvhOptions.builder, {&primary, &diffuse, &shadow},
                {result.sets[0].traversal, result.sets[1].traversal, result.sets[2].traversal}, options, result.trees);
   primary = {};
   diffuse = {};

@@ -22,10 +22,10 @@ struct BenchOptions {
   std::string embreeApi = "packet16"; ///< single, packet8, packet16, stream (host/bench/embree_reference.h)
   int embreeQuality = 2;            ///< RTC_BUILD_QUALITY_: 0 low, 1 medium, 2 high
   bool embreeRobust = false;        ///< RTC_SCENE_FLAG_ROBUST
-  std::string bvh = "lbvh";         ///< the tree compared with Embree and rendering the path figure
+  std::string bvh = "auto";         ///< the tree compared with Embree and rendering the path figure
   /// Builders whose trees are built (median of repetitions) and traced on
   /// the same rays, interleaved, for the tree-quality table; "none" skips it.
-  std::vector<std::string> compareBvh{"lbvh", "ploc", "sah"};
+  std::vector<std::string> compareBvh{"auto", "lbvh", "ploc", "sah"};
   /// single, packet, or auto: packets (Traversal::kPacket) for the sets
   /// whose neighbouring rays start from neighbouring pixels (primary,
   /// shadow), one ray per work-item for the diffuse set.

@@ -27,6 +27,23 @@ struct BuildNode {
 Bvh layoutTree(std::span<const BuildNode> nodes, std::uint32_t root, std::span<const std::uint32_t> prims,
                std::uint32_t maxLeaf);
 
+/// A subtree the top SAH pass treats as one item.
+struct TopCluster {
+  Aabb box;
+  std::uint32_t node;   ///< BuildNode index
+  std::uint32_t prims;  ///< primitives below: the SAH weight
+};
+
+/// Binned SAH (32 bins, three axes) top down over the clusters, weighted by
+/// their primitive counts, on up to `threads` threads. The inner nodes go to
+/// nodes[first .. first + clusters.size() - 1): a subtree over m clusters owns
+/// m - 1 consecutive slots (its root, then its descendants'), so the numbering
+/// does not depend on which thread builds what; their children are the other
+/// slots or the clusters' nodes. Returns the root: nodes[first] unless there
+/// is a single cluster. Reorders `clusters`.
+std::uint32_t buildTopSah(std::vector<TopCluster>& clusters, std::vector<BuildNode>& nodes, std::uint32_t first,
+                          int threads);
+
 /// Input indices sorted by the Morton code of their centroids, as buildLbvh
 /// sorts them (ties in index order).
 std::vector<std::uint32_t> mortonOrder(std::span<const Aabb> primBounds, int threads);

@@ -25,10 +25,23 @@ Bvh buildSahBvh(std::span<const Aabb> primBounds, const BvhBuildOptions& options
 /// leaves, as in buildLbvh. Several times slower than buildLbvh.
 Bvh buildPlocBvh(std::span<const Aabb> primBounds, const BvhBuildOptions& options = {});
 
-/// The builder options.builder names.
-Bvh buildBvh(std::span<const Aabb> primBounds, const BvhBuildOptions& options = {});
+/// The default: a geometry placed at least twice (instances) gets one tree,
+/// built over its first copy and refitted to every copy; the other
+/// primitives, together, get one tree; both by PLOC up to 65 536 primitives
+/// and by the LBVH above; a binned SAH pass over the copies and the others'
+/// subtrees builds the levels above. Without repeated geometry: PLOC or the
+/// LBVH over everything, by the same limit. Throws std::invalid_argument for
+/// instances out of range, overlapping, or of one geometry with different
+/// counts.
+Bvh buildAutoBvh(std::span<const Aabb> primBounds, const BvhBuildOptions& options = {},
+                 std::span<const BvhInstance> instances = {});
 
-const char* bvhBuilderName(BvhBuilder builder);  ///< "lbvh", "ploc", "sah"
+/// The builder options.builder names. Only Auto reads `instances`; the
+/// others build over all primitives alike.
+Bvh buildBvh(std::span<const Aabb> primBounds, const BvhBuildOptions& options = {},
+             std::span<const BvhInstance> instances = {});
+
+const char* bvhBuilderName(BvhBuilder builder);  ///< "auto", "lbvh", "ploc", "sah"
 std::optional<BvhBuilder> parseBvhBuilder(std::string_view name);
 
 /// The name, for test output and logs.

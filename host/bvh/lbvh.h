@@ -19,6 +19,7 @@ namespace wt {
 
 /// Which tree buildBvh (host/bvh/builders.h) makes.
 enum class BvhBuilder {
+  Auto,  ///< buildAutoBvh: PLOC for small parts, the LBVH for large ones, one tree per repeated geometry
   Lbvh,  ///< buildLbvh: Morton codes and the Karras hierarchy; fastest
   Ploc,  ///< buildPlocBvh: PLOC clustering in Morton order, binned SAH over the top
   Sah,   ///< buildSahBvh: top-down binned SAH; slow, the quality yardstick
@@ -31,11 +32,21 @@ struct BvhBuildOptions {
   /// (binaryBuildOptions, host/bvh/bvh4.h).
   int maxLeafSize = 4;
   int threads = 0;      ///< 0: std::thread::hardware_concurrency()
-  BvhBuilder builder = BvhBuilder::Lbvh;  ///< read by buildBvh, not by buildLbvh
+  BvhBuilder builder = BvhBuilder::Auto;  ///< read by buildBvh, not by buildLbvh
   int plocRadius = 16;  ///< Ploc: neighbours searched on each side in Morton order (1 to 64)
   /// Ploc: clustering stops where clusters average this many primitives and a
   /// binned SAH pass builds the tree above them; 0: PLOC up to the root.
   int plocTopPrims = 16;
+};
+
+/// Primitives [first, first + count) are a placed copy of `geometry`: the
+/// same primitives in the same order as every other copy with that id, each
+/// moved by the copy's transform (BvhBuilder::Auto builds one tree per
+/// geometry and refits it to every copy). Copies must not overlap.
+struct BvhInstance {
+  std::uint32_t first = 0;
+  std::uint32_t count = 0;
+  std::uint32_t geometry = 0;
 };
 
 struct BvhBuildStats {
@@ -44,6 +55,7 @@ struct BvhBuildStats {
   std::size_t leafCount = 0;
   int maxDepth = 0;           ///< root = depth 0
   double sahCost = 0.0;       ///< see sahCost()
+  std::size_t copiesPlaced = 0;  ///< BvhBuilder::Auto: copies given their geometry's shared tree
 };
 
 /// std::allocator, except that resize() leaves new elements default-initialised

@@ -80,23 +80,16 @@ std::uint32_t nearestNeighbour(const ClusterBoxes& c, std::uint32_t i, std::uint
 }
 
 /// A finished subtree that the top-down SAH pass treats as one primitive.
-struct TopCluster {
-  Aabb box;
-  std::uint32_t node;   ///< BuildNode index
-  std::uint32_t prims;  ///< primitives below: the SAH weight
-};
-
 double boxArea(const Aabb& box) {
   const double ex = double(box.hi.x) - box.lo.x, ey = double(box.hi.y) - box.lo.y, ez = double(box.hi.z) - box.lo.z;
   if (!(ex >= 0.0 && ey >= 0.0 && ez >= 0.0)) return 0.0;
   return 2.0 * (ex * ey + ey * ez + ez * ex);
 }
 
-/// Binned SAH (32 bins, three axes) top down over the clusters, weighted by
-/// their primitive counts, on the team. A subtree over m clusters owns m - 1
-/// consecutive node slots (its root, then its descendants'), so the numbering
-/// does not depend on which thread builds what. Returns the root: nodes[first]
-/// unless there is a single cluster.
+}  // namespace
+
+namespace bvh_detail {
+
 std::uint32_t buildTopSah(std::vector<TopCluster>& clusters, std::vector<BuildNode>& nodes, std::uint32_t first,
                           int threads) {
   constexpr int kBins = 32;
@@ -194,7 +187,7 @@ std::uint32_t buildTopSah(std::vector<TopCluster>& clusters, std::vector<BuildNo
   return first;
 }
 
-}  // namespace
+}  // namespace bvh_detail
 
 Bvh buildPlocBvh(std::span<const Aabb> primBounds, const BvhBuildOptions& options) {
   const auto start = std::chrono::steady_clock::now();
@@ -320,10 +313,11 @@ Bvh buildPlocBvh(std::span<const Aabb> primBounds, const BvhBuildOptions& option
   return bvh;
 }
 
-Bvh buildBvh(std::span<const Aabb> primBounds, const BvhBuildOptions& given) {
+Bvh buildBvh(std::span<const Aabb> primBounds, const BvhBuildOptions& given, std::span<const BvhInstance> instances) {
   BvhBuildOptions options = given;
   if (options.maxLeafSize <= 0) options.maxLeafSize = 4;
   switch (options.builder) {
+    case BvhBuilder::Auto: return buildAutoBvh(primBounds, options, instances);
     case BvhBuilder::Ploc: return buildPlocBvh(primBounds, options);
     case BvhBuilder::Sah: return buildSahBvh(primBounds, options);
     case BvhBuilder::Lbvh: break;
@@ -333,6 +327,7 @@ Bvh buildBvh(std::span<const Aabb> primBounds, const BvhBuildOptions& given) {
 
 const char* bvhBuilderName(BvhBuilder builder) {
   switch (builder) {
+    case BvhBuilder::Auto: return "auto";
     case BvhBuilder::Ploc: return "ploc";
     case BvhBuilder::Sah: return "sah";
     case BvhBuilder::Lbvh: break;
@@ -341,7 +336,7 @@ const char* bvhBuilderName(BvhBuilder builder) {
 }
 
 std::optional<BvhBuilder> parseBvhBuilder(std::string_view name) {
-  for (BvhBuilder b : {BvhBuilder::Lbvh, BvhBuilder::Ploc, BvhBuilder::Sah})
+  for (BvhBuilder b : {BvhBuilder::Auto, BvhBuilder::Lbvh, BvhBuilder::Ploc, BvhBuilder::Sah})
     if (name == bvhBuilderName(b)) return b;
   return std::nullopt;
 }

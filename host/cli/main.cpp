@@ -41,7 +41,7 @@ struct RenderOptions {
   std::string lightSampler = "auto";
   std::string reference, errorLog;
   std::string accumulation = "kahan";
-  std::string bvh = "lbvh";
+  std::string bvh = "auto";
   std::string traversal = "auto";
   int packetWidth = 0;
   int sceneIndex = -1;
@@ -249,9 +249,10 @@ int main(int argc, char** argv) {
                         "Running-mean precision: single, kahan (compensated single) or double (fp64 devices)")
       ->check(CLI::IsMember({"single", "kahan", "double"}))->capture_default_str();
   renderCmd->add_option("--bvh", render.bvh,
-                        "BVH builder: lbvh (Morton codes, fastest), ploc (PLOC clustering in Morton order, SAH on top) "
-                        "or sah (top-down binned SAH, slow)")
-      ->check(CLI::IsMember({"lbvh", "ploc", "sah"}))->capture_default_str();
+                        "BVH builder: auto (one tree per geometry placed more than once; ploc up to 65536 "
+                        "triangles, lbvh above), lbvh (Morton codes, fastest), ploc (PLOC clustering in Morton order, "
+                        "SAH on top) or sah (top-down binned SAH, slow)")
+      ->check(CLI::IsMember({"auto", "lbvh", "ploc", "sah"}))->capture_default_str();
   renderCmd->add_option("--traversal", render.traversal,
                         "auto: camera rays and their shadow rays in packets of neighbouring pixels, later bounces "
                         "one ray per work-item; single: every ray alone")
@@ -311,10 +312,10 @@ int main(int argc, char** argv) {
   benchCmd->add_flag("--embree-robust", bench.embreeRobust, "Embree reference: RTC_SCENE_FLAG_ROBUST");
   benchCmd->add_option("--bvh", bench.bvh,
                        "The BVH builder whose tree is compared with Embree and renders the path figure")
-      ->check(CLI::IsMember({"lbvh", "ploc", "sah"}))->capture_default_str();
+      ->check(CLI::IsMember({"auto", "lbvh", "ploc", "sah"}))->capture_default_str();
   benchCmd->add_option("--compare-bvh", bench.compareBvh,
                        "Builders whose trees are traced on the same rays (tree quality table); none: --compare-bvh none")
-      ->delimiter(',')->check(CLI::IsMember({"lbvh", "ploc", "sah", "none"}))->capture_default_str();
+      ->delimiter(',')->check(CLI::IsMember({"auto", "lbvh", "ploc", "sah", "none"}))->capture_default_str();
   benchCmd->add_option("--traversal", bench.traversal,
                        "single: one ray per work-item; packet: a packet of rays per work-item; auto: packets for a set "
                        "whose packets' rays point nearly the same way (coherence >= 0.9 in --json)")

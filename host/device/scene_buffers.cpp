@@ -4,6 +4,8 @@
 #include "shared/lights.h"
 
 #include <algorithm>
+#include <map>
+#include <tuple>
 #include <cmath>
 #include <cstddef>
 #include <cstring>
@@ -24,6 +26,37 @@ cl::Buffer upload(Context& context, const Array& data, std::size_t& bytes) {
 }
 
 }  // namespace
+
+std::vector<BvhInstance> bvhInstances(const Scene& scene, std::span<const std::uint32_t> bvhToScene) {
+  // A copy's triangles that enter the BVH are consecutive inputs (bvhToScene
+  // is ascending). Copies that lost the same triangles (zero area in mesh
+  // space, as at a sphere's poles) still share a geometry: the id is
+  // renumbered by which of its triangles a copy kept. Should two patterns
+  // ever share a hash, the tree stays correct (the builder refits every box
+  // to the copy's own triangles), only less tight.
+  std::vector<BvhInstance> out;
+  out.reserve(scene.instances.size());
+  std::map<std::tuple<std::uint32_t, std::uint32_t, std::uint64_t>, std::uint32_t> ids;
+  std::size_t at = 0;
+  for (const GeometryInstance& copy : scene.instances) {
+    const std::size_t end = std::size_t(copy.firstTriangle) + copy.triangleCount;
+    if (end > scene.triangles.size()) continue;
+    while (at < bvhToScene.size() && bvhToScene[at] < copy.firstTriangle) ++at;
+    std::size_t last = at;
+    std::uint64_t pattern = 0xcbf29ce484222325ull;  // FNV-1a over the kept triangles' local indices
+    for (; last < bvhToScene.size() && bvhToScene[last] < end; ++last) {
+      pattern ^= bvhToScene[last] - copy.firstTriangle;
+      pattern *= 0x100000001b3ull;
+    }
+    const std::uint32_t kept = std::uint32_t(last - at);
+    if (kept == 0) continue;
+    const auto key = std::make_tuple(copy.geometry, kept, kept == copy.triangleCount ? 0 : pattern);
+    const std::uint32_t id = ids.emplace(key, std::uint32_t(ids.size())).first->second;
+    out.push_back({std::uint32_t(at), kept, id});
+    at = last;
+  }
+  return out;
+}
 
 SceneBuffers::SceneBuffers(Context& context, const Scene& scene, const BvhBuildOptions& options) {
   // Zero-area and non-finite triangles never enter the BVH: they cannot be
@@ -49,7 +82,7 @@ SceneBuffers::SceneBuffers(Context& context, const Scene& scene, const BvhBuildO
     bounds.push_back(scene.triangleBounds(std::uint32_t(i)));
     bvhToScene.push_back(std::uint32_t(i));
   }
-  const Bvh bvh = buildBvh(bounds, binaryBuildOptions(options, bounds.size()));
+  const Bvh bvh = buildBvh(bounds, binaryBuildOptions(options, bounds.size()), bvhInstances(scene, bvhToScene));
   m_bvhStats = bvh.stats;
   Bvh4 bvh4 = collapseToBvh4(bvh, bvh4Options(options));
   m_bvh4Stats = bvh4.stats;

@@ -8,9 +8,16 @@
 #include "scene/scene.h"
 
 #include <cstdint>
+#include <span>
 #include <vector>
 
 namespace wt {
+
+/// The scene's placed copies (Scene::instances) as BVH instances over the
+/// BVH's input, where input primitive i is scene triangle bvhToScene[i]
+/// (ascending). A copy that lost a triangle (zero area, non-finite corners)
+/// is left out: its triangles are built as the others are.
+std::vector<BvhInstance> bvhInstances(const Scene& scene, std::span<const std::uint32_t> bvhToScene);
 
 class SceneBuffers {
  public:

@@ -49,7 +49,7 @@ struct RenderSettings {
   bool sobol = false;           ///< Owen-scrambled Sobol instead of independent random numbers
   LightSampler lightSampler = LightSampler::Auto;  ///< path: how NEE picks among emissive triangles
   std::uint32_t accumulation = WT_ACCUMULATE_KAHAN;  ///< WT_ACCUMULATE_* (double needs fp64)
-  BvhBuilder bvhBuilder = BvhBuilder::Lbvh;  ///< which tree the scene's BVH is (host/bvh/builders.h)
+  BvhBuilder bvhBuilder = BvhBuilder::Auto;  ///< which tree the scene's BVH is (host/bvh/builders.h)
   /// Camera rays and the shadow rays from their hits traced in packets of
   /// packetWidth neighbouring pixels (kernels/bvh_packet.cl); later
   /// bounces, incoherent, one ray per work-item. The same hits either way

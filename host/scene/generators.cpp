@@ -181,6 +181,14 @@ Scene makeBumpyGrid(std::uint32_t triangleCount) {
 void appendScene(Scene& dst, const Scene& src) {
   std::uint32_t vertexBase = std::uint32_t(dst.positions.size());
   std::uint32_t materialBase = std::uint32_t(dst.materials.size());
+  std::uint32_t triangleBase = std::uint32_t(dst.triangles.size());
+  std::uint32_t geometryBase = 0;
+  for (const GeometryInstance& copy : dst.instances) geometryBase = std::max(geometryBase, copy.geometry + 1);
+  for (GeometryInstance copy : src.instances) {
+    copy.firstTriangle += triangleBase;
+    copy.geometry += geometryBase;
+    dst.instances.push_back(copy);
+  }
   dst.positions.insert(dst.positions.end(), src.positions.begin(), src.positions.end());
   dst.normals.insert(dst.normals.end(), src.normals.begin(), src.normals.end());
   dst.texcoords.insert(dst.texcoords.end(), src.texcoords.begin(), src.texcoords.end());
@@ -190,6 +198,33 @@ void appendScene(Scene& dst, const Scene& src) {
   }
   dst.materials.insert(dst.materials.end(), src.materials.begin(), src.materials.end());
   dst.materialNames.insert(dst.materialNames.end(), src.materialNames.begin(), src.materialNames.end());
+}
+
+Scene placeCopies(const Scene& mesh, std::span<const glm::mat4> transforms) {
+  Scene scene;
+  scene.sourceName = mesh.sourceName + " copies";
+  scene.materials = mesh.materials;
+  scene.materialNames = mesh.materialNames;
+  for (const glm::mat4& transform : transforms) {
+    const std::uint32_t vertexBase = std::uint32_t(scene.positions.size());
+    const glm::mat3 normalMatrix = glm::transpose(glm::inverse(glm::mat3(transform)));
+    for (std::size_t v = 0; v < mesh.positions.size(); ++v) {
+      const WtVec4& p = mesh.positions[v];
+      const glm::vec3 moved(transform * glm::vec4(p.x, p.y, p.z, 1.0f));
+      scene.positions.push_back({moved.x, moved.y, moved.z, 0.0f});
+      const WtVec4& n = mesh.normals[v];
+      glm::vec3 normal = normalMatrix * glm::vec3(n.x, n.y, n.z);
+      if (glm::dot(normal, normal) > 0.0f) normal = glm::normalize(normal);
+      scene.normals.push_back({normal.x, normal.y, normal.z, 0.0f});
+      scene.texcoords.push_back(v < mesh.texcoords.size() ? mesh.texcoords[v] : glm::vec2(0.0f));
+    }
+    scene.instances.push_back({std::uint32_t(scene.triangles.size()), std::uint32_t(mesh.triangles.size()), 0});
+    for (WtTriangle t : mesh.triangles) {
+      t.v0 += vertexBase, t.v1 += vertexBase, t.v2 += vertexBase;
+      scene.triangles.push_back(t);
+    }
+  }
+  return scene;
 }
 
 }  // namespace wt

@@ -5,6 +5,7 @@
 #include "scene/scene.h"
 
 #include <cstdint>
+#include <span>
 
 namespace wt {
 
@@ -29,8 +30,14 @@ Scene makeTriangleSoup(std::uint32_t count, std::uint32_t seed, float maxEdge = 
 /// bumps, as a stand-in for a large scanned mesh.
 Scene makeBumpyGrid(std::uint32_t triangleCount);
 
-/// Append `src` to `dst` (vertices, triangles, materials re-indexed).
+/// Append `src` to `dst` (vertices, triangles, materials re-indexed; src's
+/// placed copies kept, its geometry ids renumbered past dst's).
 void appendScene(Scene& dst, const Scene& src);
+
+/// One copy of `mesh`'s triangles per transform (points by the matrix,
+/// normals by its inverse transpose), each recorded in Scene::instances as a
+/// copy of one geometry; the materials once.
+Scene placeCopies(const Scene& mesh, std::span<const glm::mat4> transforms);
 
 /// A Lambertian material; emission from the front face only unless twoSided.
 WtMaterial makeMaterial(glm::vec3 albedo, glm::vec3 emission = glm::vec3(0.0f), bool twoSided = false);

@@ -22,6 +22,7 @@
 #include <fstream>
 #include <iterator>
 #include <limits>
+#include <map>
 #include <memory>
 #include <new>
 #include <optional>
@@ -252,6 +253,7 @@ struct DecodedPrimitive {
   std::vector<std::uint32_t> corners; ///< 3 per triangle, indices into positions
   std::uint32_t material = 0;
   glm::dvec3 lo{0.0}, hi{0.0};        ///< bounds of positions, mesh space
+  std::uint32_t geometry = 0;         ///< the same for primitives of the same positions, indices and mode
 };
 
 /// A node's mesh in the world (before the origin is subtracted).
@@ -631,6 +633,10 @@ class Converter {
       out.skipped = true;
       return out;
     }
+    // meshes that share their accessors share one geometry (GeometryInstance)
+    out.geometry = m_geometries.emplace(std::array<int, 3>{positionAccessor, prim.indices, mode},
+                                        std::uint32_t(m_geometries.size()))
+                       .first->second;
     const std::vector<int> kFloat = {TINYGLTF_COMPONENT_TYPE_FLOAT};
     out.positions = readAccessor<glm::vec3>(positionAccessor, {where, "POSITION", kFloat});
     if (!out.positions.empty()) {
@@ -763,6 +769,9 @@ class Converter {
     }
 
     const auto offset = std::uint32_t(base);
+    if (prim.corners.size() >= 3)
+      m_scene.instances.push_back({std::uint32_t(m_scene.triangles.size()), std::uint32_t(prim.corners.size() / 3),
+                                   prim.geometry});
     reserveGrowing(m_scene.triangles, m_scene.triangles.size() + prim.corners.size() / 3);
     for (std::size_t t = 0; t + 2 < prim.corners.size(); t += 3) {
       WtTriangle tri;
@@ -1124,6 +1133,7 @@ class Converter {
   std::vector<glm::dmat4> m_local;
   std::vector<bool> m_localDone;
   std::vector<std::vector<std::unique_ptr<DecodedPrimitive>>> m_decoded;
+  std::map<std::array<int, 3>, std::uint32_t> m_geometries;  ///< (POSITION, indices, mode) -> GeometryInstance::geometry
   std::vector<std::pair<std::size_t, glm::dmat4>> m_cameraNodes;
   std::vector<MeshInstance> m_meshInstances;  ///< in traversal order
   std::vector<LightInstance> m_lightInstances;

@@ -46,11 +46,23 @@ struct PunctualLight {
   std::string name;
 };
 
+/// A placed copy of a mesh primitive: triangles[firstTriangle ..
+/// firstTriangle + triangleCount) are the primitive's triangles, in its own
+/// order, moved by the copy's transform. Copies of one primitive's geometry
+/// (the same positions and indices) share `geometry`, so that a BVH can be
+/// built once per geometry (BvhInstance, host/bvh/lbvh.h).
+struct GeometryInstance {
+  std::uint32_t firstTriangle = 0;
+  std::uint32_t triangleCount = 0;
+  std::uint32_t geometry = 0;
+};
+
 struct Scene {
   std::vector<WtVec4> positions;   ///< world space, w = 0
   std::vector<WtVec4> normals;     ///< world space, unit; (0,0,0) = none, use the geometric normal. Same size as positions.
   std::vector<glm::vec2> texcoords;///< TEXCOORD_0, same size as positions ((0,0) where absent)
   std::vector<WtTriangle> triangles;
+  std::vector<GeometryInstance> instances; ///< placed copies, in triangle order; may be empty (no copies known)
   std::vector<WtMaterial> materials;      ///< never empty after loading (a default grey is added when needed)
   std::vector<std::string> materialNames; ///< same size as materials
   std::optional<CameraDesc> camera;       ///< absent: frame the bounds (defaultCamera)

@@ -6,6 +6,7 @@
 #include "scene/generators.h"
 
 #include <gtest/gtest.h>
+#include <glm/gtc/matrix_transform.hpp>
 
 #include <cstring>
 #include <vector>
@@ -44,6 +45,36 @@ TEST(SceneBuffers, BlocksHoldEachLeafTriangleCornersAndVertexIndices) {
     }
   }
   for (std::size_t i = 0; i < seen.size(); ++i) EXPECT_LE(seen[i], 1) << "scene triangle " << i;
+}
+
+TEST(SceneBuffers, CopiesThatLostTheSameTrianglesShareAGeometry) {
+  // a mesh with a zero-area triangle (a sphere's pole, say): every copy
+  // loses it and the copies still share a geometry; a copy flattened by a
+  // zero scale loses all of its triangles and is no instance at all; a copy
+  // that lost another triangle gets a geometry of its own
+  Scene mesh = makeTriangleSoup(6, 2, 0.2f);
+  mesh.triangles[2].v2 = mesh.triangles[2].v1;  // zero area
+  const std::vector<glm::mat4> transforms = {glm::mat4(1.0f), glm::translate(glm::mat4(1.0f), glm::vec3(2, 0, 0)),
+                                             glm::scale(glm::mat4(1.0f), glm::vec3(0.0f)),
+                                             glm::translate(glm::mat4(1.0f), glm::vec3(0, 2, 0))};
+  Scene scene = makeTriangleSoup(5, 9, 0.2f);
+  appendScene(scene, placeCopies(mesh, transforms));
+  scene.triangles[5 + 3 * 6 + 4].v0 = scene.triangles[5 + 3 * 6 + 4].v1;  // the last copy's fifth triangle
+  std::vector<std::uint32_t> bvhToScene;
+  for (std::uint32_t i = 0; i < scene.triangles.size(); ++i) {
+    const bool lost = i == 5 + 2 || i == 5 + 6 + 2 || (i >= 5 + 12 && i < 5 + 18) || i == 5 + 18 + 2 || i == 5 + 18 + 4;
+    if (!lost) bvhToScene.push_back(i);
+  }
+  const std::vector<BvhInstance> instances = bvhInstances(scene, bvhToScene);
+  ASSERT_EQ(instances.size(), 3u);
+  EXPECT_EQ(instances[0].first, 5u);
+  EXPECT_EQ(instances[0].count, 5u);
+  EXPECT_EQ(instances[1].first, 10u);
+  EXPECT_EQ(instances[1].count, 5u);
+  EXPECT_EQ(instances[0].geometry, instances[1].geometry);
+  EXPECT_EQ(instances[2].first, 15u);
+  EXPECT_EQ(instances[2].count, 4u);
+  EXPECT_NE(instances[2].geometry, instances[0].geometry);
 }
 
 }  // namespace

@@ -7,6 +7,7 @@
 #include "tree_param.h"
 
 #include <gtest/gtest.h>
+#include <glm/gtc/matrix_transform.hpp>
 
 #include <cmath>
 #include <limits>
@@ -114,6 +115,34 @@ INSTANTIATE_TEST_SUITE_P(LeafSizes, TraversalLeafSize,
                          ::testing::Combine(::testing::Values(BvhBuilder::Lbvh, BvhBuilder::Ploc, BvhBuilder::Sah),
                                             ::testing::Values(1, 2, 4, 8)),
                          test::treeParamName);
+
+/// The auto builder's tree over placed copies (one tree per geometry,
+/// refitted per copy): icospheres turned, scaled and moved, one flattened by
+/// a zero scale, among a soup; the mesh has a zero-area triangle each copy
+/// loses. The same answers as brute force at every leaf size.
+TEST(Traversal, PlacedCopiesMatchBruteForce) {
+  Scene mesh = makeIcosphere(2, glm::vec3(0.0f), 1.0f, makeMaterial(glm::vec3(0.5f)));
+  mesh.triangles[7].v2 = mesh.triangles[7].v0;
+  std::mt19937 rng(17);
+  std::uniform_real_distribution<float> at(-0.2f, 1.2f), turn(-3.0f, 3.0f), size(0.05f, 0.3f);
+  std::vector<glm::mat4> transforms;
+  for (int c = 0; c < 24; ++c) {
+    glm::mat4 m = glm::translate(glm::mat4(1.0f), glm::vec3(at(rng), at(rng), at(rng)));
+    m = glm::rotate(m, turn(rng), glm::normalize(glm::vec3(turn(rng), turn(rng), 1.0f)));
+    transforms.push_back(glm::scale(m, c == 5 ? glm::vec3(0.0f) : glm::vec3(size(rng), size(rng), size(rng))));
+  }
+  Scene scene = makeTriangleSoup(600, 4, 0.15f);
+  appendScene(scene, placeCopies(mesh, transforms));
+  for (int leaf : {1, 4, 8}) {
+    SCOPED_TRACE("leaf size " + std::to_string(leaf));
+    BvhBuildOptions options;
+    options.builder = BvhBuilder::Auto;
+    options.maxLeafSize = leaf;
+    expectAgreement(scene, randomRays(4000, 31 + leaf), options);
+    // the copies' shared tree is what was traced (all but the flattened one)
+    EXPECT_EQ(Tracer(test::deviceContext(), scene, options).sceneBuffers().bvhStats().copiesPlaced, 23u);
+  }
+}
 
 TEST(Traversal, DegenerateTrianglesAreNeverHit) {
   // zero-area triangles: a point and a segment, among ordinary ones

@@ -452,6 +452,34 @@ TEST(GltfLoader, SharedMeshIsInstancedPerNode) {
   expectNear(pos(s, s.triangles[1].v1), {11, 0, 0});
 }
 
+TEST(GltfLoader, PlacedCopiesShareAGeometry) {
+  // nodes 0 and 1 place mesh 0; mesh 1 reads mesh 0's accessors (as
+  // MetalRoughSpheres' 98 spheres do); mesh 2 has its own positions
+  GltfDoc doc = triangleDoc();
+  doc.addNode("{\"mesh\":0,\"translation\":[10,0,0]}");
+  doc.addMesh("{\"attributes\":{\"POSITION\":0},\"indices\":1}");
+  doc.addNode("{\"mesh\":1,\"translation\":[0,10,0]}");
+  const int other = doc.addVec3({{0, 0, 0}, {2, 0, 0}, {0, 2, 0}, {2, 2, 0}});
+  doc.addMesh("{\"attributes\":{\"POSITION\":" + str(std::size_t(other)) + "},\"indices\":" +
+              str(std::size_t(doc.addIndices<std::uint16_t>({0, 1, 2, 1, 3, 2}))) + "}");
+  doc.addNode("{\"mesh\":2}");
+  doc.scenes[0] = "{\"nodes\":[0,1,2,3]}";
+  Scene s = loadDoc(doc);
+  expectConsistent(s);
+  ASSERT_EQ(s.triangles.size(), 5u);
+  ASSERT_EQ(s.instances.size(), 4u);
+  std::uint32_t covered = 0;
+  for (const GeometryInstance& copy : s.instances) {
+    EXPECT_EQ(copy.firstTriangle, covered);  // in triangle order, no gaps
+    covered += copy.triangleCount;
+  }
+  EXPECT_EQ(covered, 5u);
+  EXPECT_EQ(s.instances[0].geometry, s.instances[1].geometry);
+  EXPECT_EQ(s.instances[0].geometry, s.instances[2].geometry);
+  EXPECT_NE(s.instances[0].geometry, s.instances[3].geometry);
+  EXPECT_EQ(s.instances[3].triangleCount, 2u);
+}
+
 TEST(GltfLoader, DeepHierarchyDoesNotOverflowTheStack) {
   GltfDoc doc = triangleDoc();
   const std::size_t depth = 50000;
