@@ -17,6 +17,7 @@
 #include "core/log.h"
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cstdio>
 #include <stdexcept>
@@ -156,12 +157,18 @@ Bvh buildAutoBvh(std::span<const Aabb> primBounds, const BvhBuildOptions& option
   std::vector<TopCluster> clusters;
   for (std::size_t g = 0; g < repeated.size(); ++g)
     for (std::uint32_t c : repeated[g]) {
-      const BvhInstance& copy = instances[c];
-      Aabb box;
-      for (std::uint32_t k = copy.first; k < copy.first + copy.count; ++k) grow(box, primBounds[k]);
-      clusters.push_back({box, std::uint32_t(sources.size()), copy.count});
-      sources.push_back({&geometryTrees[g], 0, copy.first, nullptr});
+      clusters.push_back({Aabb{}, std::uint32_t(sources.size()), instances[c].count});
+      sources.push_back({&geometryTrees[g], 0, instances[c].first, nullptr});
     }
+  runTeam(builderThreads(options, placedPrims), [&](int rank, int size, Barrier&) {
+    const Range chunk = chunkOf(clusters.size(), size, rank);
+    for (std::size_t c = chunk.begin; c < chunk.end; ++c) {
+      Aabb box;
+      const std::uint32_t first = sources[c].primBase;
+      for (std::uint32_t k = first; k < first + clusters[c].prims; ++k) grow(box, primBounds[k]);
+      clusters[c].box = box;
+    }
+  });
   if (!restTree.nodes.empty()) {
     const std::vector<std::uint32_t> prims = subtreePrims(restTree);
     const std::uint32_t cut = std::uint32_t(std::max<std::size_t>(restIndex.size() / kRestClusters, 1));
@@ -187,91 +194,97 @@ Bvh buildAutoBvh(std::span<const Aabb> primBounds, const BvhBuildOptions& option
   for (const TopCluster& cluster : clusters) topPrims[cluster.node] = cluster.prims;
   for (std::size_t b = top.size(); b-- > clusterCount;) topPrims[b] = topPrims[top[b].left] + topPrims[top[b].right];
 
-  // lay the whole tree out: top nodes, then each cluster's subtree copied in
+  // Lay the tree out: the top nodes first (one thread; small copies the top
+  // pass paired below the leaf size become one leaf there), then every
+  // cluster's subtree copied into a range of its own and refitted, the
+  // clusters shared among the threads; last the top nodes' boxes.
   Bvh bvh;
-  bvh.nodes.reserve(2 * n / std::max<std::uint32_t>(maxLeaf / 2, 1) + 1);
   bvh.primIndices.reserve(n);
-  struct Open {
-    bool top;           ///< a top slot (or cluster) of `top`; else a node of `source`
-    std::uint32_t node;
-    std::uint32_t source;
-    std::uint32_t out;
+  const auto mapPrim = [&](const ClusterSource& s, std::uint32_t local) {
+    return s.primMap ? (*s.primMap)[local] : s.primBase + local;
+  };
+  struct Job {
+    std::uint32_t source;  ///< cluster
+    std::uint32_t slot;    ///< the output node its root fills
     int depth;
+    std::uint32_t nodeBase = 0, primBase = 0;  ///< where its other nodes and its primitives go
   };
-  const auto pushPrim = [&](const ClusterSource& s, std::uint32_t local) {
-    bvh.primIndices.push_back(s.primMap ? (*s.primMap)[local] : s.primBase + local);
-  };
-  // every primitive below source node `node`, left to right
-  std::vector<std::uint32_t> gather;
-  const auto gatherSource = [&](const ClusterSource& s, std::uint32_t node) {
-    gather.assign(1, node);
-    while (!gather.empty()) {
-      const WtBvhNode& g = s.tree->nodes[gather.back()];
-      gather.pop_back();
-      if (g.count > 0) {
-        for (std::uint32_t k = g.first; k < g.first + g.count; ++k) pushPrim(s, s.tree->primIndices[k]);
-      } else {
-        gather.push_back(g.first + 1), gather.push_back(g.first);
+  std::vector<Job> jobs;
+  jobs.reserve(clusterCount);
+  {
+    struct Open {
+      std::uint32_t node;  ///< top slot or cluster
+      std::uint32_t out;
+      int depth;
+    };
+    std::vector<Open> open{{topRoot, 0, 0}};
+    std::vector<std::uint32_t> topGather, gather;
+    bvh.nodes.emplace_back();
+    while (!open.empty()) {
+      const Open o = open.back();
+      open.pop_back();
+      if (o.node < clusterCount) {
+        jobs.push_back({o.node, o.out, o.depth});
+        continue;
       }
-    }
-  };
-  std::vector<std::uint32_t> topGather;
-  std::vector<Open> open{{true, topRoot, 0, 0, 0}};
-  bvh.nodes.emplace_back();
-  while (!open.empty()) {
-    const Open o = open.back();
-    open.pop_back();
-    bvh.stats.maxDepth = std::max(bvh.stats.maxDepth, o.depth);
-    WtBvhNode& out = bvh.nodes[o.out];
-    if (o.top && o.node >= clusterCount) {
+      bvh.stats.maxDepth = std::max(bvh.stats.maxDepth, o.depth);
       if (topPrims[o.node] <= maxLeaf) {
-        // small copies the top pass paired: one leaf, as every builder makes
-        out.first = std::uint32_t(bvh.primIndices.size());
-        out.count = topPrims[o.node];
+        bvh.nodes[o.out].first = std::uint32_t(bvh.primIndices.size());
+        bvh.nodes[o.out].count = topPrims[o.node];
         topGather.assign(1, o.node);
         while (!topGather.empty()) {
           const std::uint32_t t = topGather.back();
           topGather.pop_back();
-          if (t < clusterCount) {
-            gatherSource(sources[t], sources[t].node);
-          } else {
+          if (t >= clusterCount) {
             topGather.push_back(top[t].right), topGather.push_back(top[t].left);
+            continue;
+          }
+          const ClusterSource& s = sources[t];
+          gather.assign(1, s.node);
+          while (!gather.empty()) {
+            const WtBvhNode& g = s.tree->nodes[gather.back()];
+            gather.pop_back();
+            if (g.count > 0) {
+              for (std::uint32_t k = g.first; k < g.first + g.count; ++k)
+                bvh.primIndices.push_back(mapPrim(s, s.tree->primIndices[k]));
+            } else {
+              gather.push_back(g.first + 1), gather.push_back(g.first);
+            }
           }
         }
         ++bvh.stats.leafCount;
         continue;
       }
       const std::uint32_t pair = std::uint32_t(bvh.nodes.size());
-      out.first = pair;
-      out.count = 0;
+      bvh.nodes[o.out].first = pair;
+      bvh.nodes[o.out].count = 0;
       bvh.nodes.emplace_back();
       bvh.nodes.emplace_back();
-      open.push_back({true, top[o.node].right, 0, pair + 1, o.depth + 1});
-      open.push_back({true, top[o.node].left, 0, pair, o.depth + 1});
-      continue;
+      open.push_back({top[o.node].right, pair + 1, o.depth + 1});
+      open.push_back({top[o.node].left, pair, o.depth + 1});
     }
-    const std::uint32_t source = o.top ? o.node : o.source;
-    const std::uint32_t node = o.top ? sources[source].node : o.node;
-    const ClusterSource& s = sources[source];
-    const WtBvhNode& in = s.tree->nodes[node];
-    if (in.count > 0) {
-      out.first = std::uint32_t(bvh.primIndices.size());
-      out.count = in.count;
-      for (std::uint32_t k = in.first; k < in.first + in.count; ++k) pushPrim(s, s.tree->primIndices[k]);
-      ++bvh.stats.leafCount;
-      continue;
-    }
-    const std::uint32_t pair = std::uint32_t(bvh.nodes.size());
-    out.first = pair;
-    out.count = 0;
-    bvh.nodes.emplace_back();
-    bvh.nodes.emplace_back();
-    open.push_back({false, in.first + 1, source, pair + 1, o.depth + 1});
-    open.push_back({false, in.first, source, pair, o.depth + 1});
   }
+  const std::size_t topNodes = bvh.nodes.size();
+  const std::vector<std::uint32_t> restNodes = [&] {  // nodes below each rest node, itself included
+    std::vector<std::uint32_t> below(restTree.nodes.size(), 1);
+    for (std::size_t i = restTree.nodes.size(); i-- > 0;)
+      if (restTree.nodes[i].count == 0) below[i] = 1 + below[restTree.nodes[i].first] + below[restTree.nodes[i].first + 1];
+    return below;
+  }();
+  std::vector<std::uint32_t> primsOf(clusterCount, 0);
+  for (const TopCluster& cluster : clusters) primsOf[cluster.node] = cluster.prims;
+  std::size_t nodeCursor = topNodes, primCursor = bvh.primIndices.size();
+  for (Job& job : jobs) {
+    const ClusterSource& s = sources[job.source];
+    job.nodeBase = std::uint32_t(nodeCursor);
+    job.primBase = std::uint32_t(primCursor);
+    nodeCursor += (s.primMap ? restNodes[s.node] : std::uint32_t(s.tree->nodes.size())) - 1;
+    primCursor += primsOf[job.source];
+  }
+  bvh.nodes.resize(nodeCursor);
+  bvh.primIndices.resize(primCursor);
 
-  // boxes bottom up: a copy's primitives are not its geometry tree's
-  for (std::size_t i = bvh.nodes.size(); i-- > 0;) {
+  const auto refit = [&](std::uint32_t i) {
     WtBvhNode& node = bvh.nodes[i];
     Aabb box;
     if (node.count > 0) {
@@ -281,7 +294,57 @@ Bvh buildAutoBvh(std::span<const Aabb> primBounds, const BvhBuildOptions& option
       grow(box, boxOf(bvh.nodes[node.first + 1]));
     }
     setBox(node, box);
+  };
+  std::atomic<std::size_t> nextJob{0};
+  std::vector<PerThread<std::size_t>> leaves(kMaxBuildThreads);
+  std::vector<PerThread<int>> depths(kMaxBuildThreads);
+  runTeam(builderThreads(options, n), [&](int rank, int, Barrier&) {
+    struct Open {
+      std::uint32_t node, out;
+      int depth;
+    };
+    std::vector<Open> open;
+    std::size_t myLeaves = 0;
+    int myDepth = 0;
+    for (std::size_t j; (j = nextJob.fetch_add(1, std::memory_order_relaxed)) < jobs.size();) {
+      const Job& job = jobs[j];
+      const ClusterSource& s = sources[job.source];
+      std::uint32_t nodeNext = job.nodeBase, primNext = job.primBase;
+      open.assign(1, {s.node, job.slot, job.depth});
+      while (!open.empty()) {
+        const Open o = open.back();
+        open.pop_back();
+        myDepth = std::max(myDepth, o.depth);
+        const WtBvhNode& in = s.tree->nodes[o.node];
+        WtBvhNode& out = bvh.nodes[o.out];
+        if (in.count > 0) {
+          out.first = primNext;
+          out.count = in.count;
+          for (std::uint32_t k = in.first; k < in.first + in.count; ++k)
+            bvh.primIndices[primNext++] = mapPrim(s, s.tree->primIndices[k]);
+          ++myLeaves;
+          continue;
+        }
+        const std::uint32_t pair = nodeNext;
+        nodeNext += 2;
+        out.first = pair;
+        out.count = 0;
+        open.push_back({in.first + 1, pair + 1, o.depth + 1});
+        open.push_back({in.first, pair, o.depth + 1});
+      }
+      // children come after their parents: bottom up is backwards, the root last
+      for (std::uint32_t i = nodeNext; i-- > job.nodeBase;) refit(i);
+      refit(job.slot);
+    }
+    leaves[std::size_t(rank)].value = myLeaves;
+    depths[std::size_t(rank)].value = myDepth;
+  });
+  for (std::size_t r = 0; r < leaves.size(); ++r) {
+    bvh.stats.leafCount += leaves[r].value;
+    bvh.stats.maxDepth = std::max(bvh.stats.maxDepth, depths[r].value);
   }
+  // the top nodes' boxes, bottom up (the job roots among them are done)
+  for (std::size_t i = topNodes; i-- > 0;) refit(std::uint32_t(i));
   bvh.stats.nodeCount = bvh.nodes.size();
   bvh.stats.sahCost = sahCost(bvh);
   bvh.stats.copiesPlaced = copiesPlaced;
