@@ -9,6 +9,7 @@
 #include "test_util.h"
 
 #include <gtest/gtest.h>
+#include <glm/gtc/matrix_transform.hpp>
 
 #include <random>
 #include <set>
@@ -16,7 +17,7 @@
 namespace wt {
 namespace {
 
-constexpr BvhBuilder kBuilders[] = {BvhBuilder::Lbvh, BvhBuilder::Ploc, BvhBuilder::Sah};
+constexpr BvhBuilder kBuilders[] = {BvhBuilder::Auto, BvhBuilder::Lbvh, BvhBuilder::Ploc, BvhBuilder::Sah};
 
 /// Shoot from each origin at each target through every builder's tree; count
 /// rays that find no surface, over all trees.
@@ -45,6 +46,23 @@ TEST(Watertight, IcosphereFromInside) {
                                       center + glm::vec3(-0.6f, 0.5f, 0.2f)};
     EXPECT_EQ(countLeaks(scene, origins, edgeTargets(scene, 2, 1)), 0u);
   }
+}
+
+TEST(Watertight, PlacedCopiesFromInside) {
+  // three turned, scaled and moved copies of one closed mesh: the auto
+  // builder gives them one refitted tree (the other builders the whole)
+  Scene mesh = makeIcosphere(3, glm::vec3(0.0f), 1.0f, makeMaterial(glm::vec3(0.5f)));
+  const glm::vec3 centers[] = {glm::vec3(0.0f), glm::vec3(2.5f, 0.3f, -0.4f), glm::vec3(-0.7f, 2.8f, 1.1f)};
+  std::vector<glm::mat4> transforms;
+  for (int c = 0; c < 3; ++c) {
+    glm::mat4 m = glm::translate(glm::mat4(1.0f), centers[c]);
+    m = glm::rotate(m, 0.7f * float(c), glm::normalize(glm::vec3(1.0f, 2.0f, 0.5f + float(c))));
+    transforms.push_back(glm::scale(m, glm::vec3(1.0f, 0.8f + 0.1f * float(c), 1.1f)));
+  }
+  Scene scene = placeCopies(mesh, transforms);
+  std::vector<glm::vec3> origins;
+  for (const glm::vec3& c : centers) origins.push_back(c + glm::vec3(0.1f, -0.15f, 0.05f));
+  EXPECT_EQ(countLeaks(scene, origins, edgeTargets(scene, 1, 1)), 0u);
 }
 
 TEST(Watertight, BoxFromInsideAndOutside) {
