@@ -55,8 +55,12 @@ Aabb unionBox(const Aabb& a, const Aabb& b) {
 constexpr std::uint32_t kMaxRadius = 64;
 
 /// Nearest neighbour of cluster i among [i - r, i + r]: the smallest union
-/// area, ties to the lowest position, so that the globally smallest pair is
-/// always mutual and every round merges at least one pair.
+/// area. Equal areas (duplicated or coincident primitives) go to the nearer
+/// position, then to the pair whose lower position is even, then to the
+/// lower pair: a strict order on pairs, so the globally smallest pair is
+/// always mutual and every round merges at least one pair, and equal
+/// clusters pair off two by two. (Ties to the lowest position in the window
+/// merged one pair per window and round: 60 000 equal boxes took 63 s.)
 std::uint32_t nearestNeighbour(const ClusterBoxes& c, std::uint32_t i, std::uint32_t count, std::uint32_t r) {
   const std::uint32_t lo = i > r ? i - r : 0, hi = std::min(count - 1, i + r);
   const float lx = c.lx[i], ly = c.ly[i], lz = c.lz[i], hx = c.hx[i], hy = c.hy[i], hz = c.hz[i];
@@ -70,13 +74,21 @@ std::uint32_t nearestNeighbour(const ClusterBoxes& c, std::uint32_t i, std::uint
     const float ez = std::max(hz, c.hz[j]) - std::min(lz, c.lz[j]);
     area[k] = ex * ey + ey * ez + ez * ex;  // half the area: the order is the same
   }
+  const auto tieKey = [i](std::uint32_t j) {
+    const std::uint32_t low = std::min(i, j), distance = i > j ? i - j : j - i;
+    return std::uint64_t(distance) << 33 | std::uint64_t(low & 1u) << 32 | low;
+  };
   float best = std::numeric_limits<float>::infinity();
-  std::uint32_t bestK = lo == i ? 1 : 0;
+  std::uint64_t bestKey = ~std::uint64_t{0};
+  std::uint32_t bestJ = lo == i ? lo + 1 : lo;
   for (std::uint32_t k = 0; k < width; ++k) {
-    // NaN (infinite bounds) ranks with +inf, last
-    if (lo + k != i && area[k] < best) best = area[k], bestK = k;
+    const std::uint32_t j = lo + k;
+    // NaN (infinite bounds) is never chosen: it ranks last
+    if (j == i || !(area[k] <= best)) continue;
+    const std::uint64_t key = tieKey(j);
+    if (area[k] < best || key < bestKey) best = area[k], bestKey = key, bestJ = j;
   }
-  return lo + bestK;
+  return bestJ;
 }
 
 /// A finished subtree that the top-down SAH pass treats as one primitive.
