@@ -56,6 +56,7 @@ struct BvhBuildStats {
   int maxDepth = 0;           ///< root = depth 0
   double sahCost = 0.0;       ///< see sahCost()
   std::size_t copiesPlaced = 0;  ///< BvhBuilder::Auto: copies given their geometry's shared tree
+  int clusterRounds = 0;         ///< BvhBuilder::Ploc: clustering rounds before the SAH pass
 };
 
 /// std::allocator, except that resize() leaves new elements default-initialised
