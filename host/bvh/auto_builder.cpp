@@ -2,10 +2,11 @@
 // costs little, the LBVH's speed where the input is large, and one build per
 // geometry that a scene places several times.
 //
-// - A geometry placed at least twice (BvhInstance) gets one tree, built over
-//   its first copy's boxes, and every copy gets that tree's topology with its
-//   boxes refitted to its own primitives. Its build cost is paid once, so it
-//   can afford PLOC up to kQualityBuildPrims primitives.
+// - A geometry of at least kMinCopyPrims primitives placed at least twice
+//   (BvhInstance) gets one tree, built over its first copy's boxes, and
+//   every copy gets that tree's topology with its boxes refitted to its own
+//   primitives. Its build cost is paid once, so it can afford PLOC up to
+//   kQualityBuildPrims primitives.
 // - Everything else, taken together so that overlapping objects still share
 //   one tree, is built by PLOC up to kQualityBuildPrims primitives and by the
 //   LBVH above.
@@ -33,6 +34,9 @@ using namespace bvh_detail;
 /// 64 Ki primitives on the 2-core VM, where its tree traced at 0.91-1.0x the
 /// SAH tree's throughput against the LBVH's 0.87-0.95x), above it by the LBVH.
 constexpr std::size_t kQualityBuildPrims = 65536;
+/// Copies of fewer primitives are built with the rest: a million copies of
+/// one triangle would make the top pass a full SAH build.
+constexpr std::uint32_t kMinCopyPrims = 64;
 /// The rest's tree is cut into about this many subtrees for the top pass.
 constexpr std::size_t kRestClusters = 64;
 
@@ -118,7 +122,7 @@ Bvh buildAutoBvh(std::span<const Aabb> primBounds, const BvhBuildOptions& option
     if (instances[i].count > 0) copiesOf[instances[i].geometry].push_back(i);
   std::vector<std::vector<std::uint32_t>> repeated;
   for (auto& [geometry, copies] : copiesOf)
-    if (copies.size() >= 2) repeated.push_back(std::move(copies));
+    if (copies.size() >= 2 && instances[copies[0]].count >= kMinCopyPrims) repeated.push_back(std::move(copies));
   if (repeated.empty()) {
     Bvh bvh = buildPart(primBounds, options);
     bvh.stats.buildSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -25,7 +25,8 @@ Bvh buildSahBvh(std::span<const Aabb> primBounds, const BvhBuildOptions& options
 /// leaves, as in buildLbvh. Several times slower than buildLbvh.
 Bvh buildPlocBvh(std::span<const Aabb> primBounds, const BvhBuildOptions& options = {});
 
-/// The default: a geometry placed at least twice (instances) gets one tree,
+/// The default: a geometry of 64 or more primitives placed at least twice
+/// (instances) gets one tree,
 /// built over its first copy and refitted to every copy; the other
 /// primitives, together, get one tree; both by PLOC up to 65 536 primitives
 /// and by the LBVH above; a binned SAH pass over the copies and the others'

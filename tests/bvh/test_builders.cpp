@@ -271,17 +271,32 @@ TEST(AutoBuilder, EveryCopyGetsTheGeometryTree) {
   EXPECT_EQ(bvh.nodes.size(), 12 * one.nodes.size() + 11);
 }
 
-TEST(AutoBuilder, TinyCopiesPairedIntoLeaves) {
-  // copies of one or two triangles: the top pass pairs copies below the leaf
-  // size, which must become one leaf as every builder makes them
-  for (std::uint32_t size : {1u, 2u, 3u}) {
+TEST(AutoBuilder, SmallPartsPairedIntoLeaves) {
+  // copies of 64 primitives and a few others: the others' subtrees are
+  // single primitives, which the top pass pairs below the leaf size; such a
+  // pair must become one leaf, as every builder makes them
+  for (std::uint32_t others : {5u, 40u, 300u}) {
+    const std::vector<Aabb> prims = randomBoxes(64 * 6 + others, others);
+    std::vector<BvhInstance> instances;
+    for (std::uint32_t c = 0; c < 6; ++c) instances.push_back({others + c * 64, 64, 0});
+    for (int leaf : {2, 4, 8}) {
+      const Bvh bvh = buildBvh(prims, optionsFor(BvhBuilder::Auto, leaf), instances);
+      EXPECT_TRUE(checkBvhInvariants(bvh, prims, leaf)) << others << " others, leaf " << leaf;
+      EXPECT_EQ(bvh.stats.copiesPlaced, 6u);
+    }
+  }
+}
+
+TEST(AutoBuilder, CopiesOfFewPrimitivesAreBuiltWithTheRest) {
+  // 3 000 copies of one or two boxes: a top pass over them would be a full
+  // SAH build; below 64 primitives a copy is built with the others
+  for (std::uint32_t size : {1u, 2u, 63u}) {
     const std::vector<Aabb> prims = randomBoxes(size * 3000, size);
     std::vector<BvhInstance> instances;
     for (std::uint32_t c = 0; c < 3000; ++c) instances.push_back({c * size, size, c % 7});
-    for (int leaf : {2, 4, 8}) {
-      const Bvh bvh = buildBvh(prims, optionsFor(BvhBuilder::Auto, leaf), instances);
-      EXPECT_TRUE(checkBvhInvariants(bvh, prims, leaf)) << size << " per copy, leaf " << leaf;
-    }
+    const Bvh bvh = buildBvh(prims, optionsFor(BvhBuilder::Auto, 4), instances);
+    EXPECT_TRUE(checkBvhInvariants(bvh, prims, 4)) << size << " per copy";
+    EXPECT_EQ(bvh.stats.copiesPlaced, 0u) << size << " per copy";
   }
 }
 
@@ -297,14 +312,17 @@ TEST(AutoBuilder, ThreadCountDoesNotChangeTheTree) {
 }
 
 TEST(AutoBuilder, BadInstancesAreRejected) {
-  const std::vector<Aabb> prims = randomBoxes(100, 1);
+  const std::vector<Aabb> prims = randomBoxes(400, 1);
   const auto build = [&](std::vector<BvhInstance> instances) {
     return buildBvh(prims, optionsFor(BvhBuilder::Auto), instances);
   };
-  EXPECT_THROW(build({{0, 10, 0}, {95, 10, 0}}), std::invalid_argument);  // past the end
-  EXPECT_THROW(build({{0, 10, 0}, {5, 10, 0}}), std::invalid_argument);   // overlapping
-  EXPECT_THROW(build({{0, 10, 0}, {10, 9, 0}}), std::invalid_argument);   // one geometry, two sizes
-  EXPECT_TRUE(checkBvhInvariants(build({{0, 10, 0}, {10, 10, 0}, {50, 5, 1}}), prims));  // one copy alone: built with the rest
+  EXPECT_THROW(build({{0, 10, 0}, {395, 10, 0}}), std::invalid_argument);  // past the end
+  EXPECT_THROW(build({{0, 10, 0}, {5, 10, 0}}), std::invalid_argument);    // overlapping
+  EXPECT_THROW(build({{0, 10, 0}, {10, 9, 0}}), std::invalid_argument);    // one geometry, two sizes
+  // two copies of 100 and one copy alone (built with the rest)
+  const Bvh bvh = build({{0, 100, 0}, {100, 100, 0}, {250, 80, 1}});
+  EXPECT_TRUE(checkBvhInvariants(bvh, prims));
+  EXPECT_EQ(bvh.stats.copiesPlaced, 2u);
 }
 
 // ---- tree quality ----------------------------------------------------------------
