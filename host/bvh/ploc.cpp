@@ -76,19 +76,29 @@ std::uint32_t nearestNeighbour(const ClusterBoxes& c, std::uint32_t i, std::uint
     const float ez = std::max(hz, c.hz[j]) - std::min(lz, c.lz[j]);
     area[k] = ex * ey + ey * ez + ez * ex;  // half the area: the order is the same
   }
+  // the smallest area, ties to the lowest position (as fast as it was before
+  // ties were ordered: this loop is most of the build); then, only where
+  // another slot has the same area, the tie order among those slots
+  float best = std::numeric_limits<float>::infinity();
+  std::uint32_t bestK = lo == i ? 1 : 0;
+  for (std::uint32_t k = 0; k < width; ++k) {
+    // NaN (infinite bounds) ranks with +inf, last
+    if (lo + k != i && area[k] < best) best = area[k], bestK = k;
+  }
+  std::uint32_t equal = 0;  // a loop the compiler vectorises; i's own slot may count
+  for (std::uint32_t k = 0; k < width; ++k) equal += area[k] == best;
+  std::uint32_t bestJ = lo + bestK;
+  if (equal <= 1) return bestJ;
   const auto tieKey = [i](std::uint32_t j) {
     const std::uint32_t low = std::min(i, j), distance = i > j ? i - j : j - i;
     return std::uint64_t(distance) << 33 | std::uint64_t(low & 1u) << 32 | low;
   };
-  float best = std::numeric_limits<float>::infinity();
   std::uint64_t bestKey = ~std::uint64_t{0};
-  std::uint32_t bestJ = lo == i ? lo + 1 : lo;
   for (std::uint32_t k = 0; k < width; ++k) {
     const std::uint32_t j = lo + k;
-    // NaN (infinite bounds) is never chosen: it ranks last
-    if (j == i || !(area[k] <= best)) continue;
+    if (j == i || area[k] != best) continue;
     const std::uint64_t key = tieKey(j);
-    if (area[k] < best || key < bestKey) best = area[k], bestKey = key, bestJ = j;
+    if (key < bestKey) bestKey = key, bestJ = j;
   }
   return bestJ;
 }
