@@ -25,15 +25,15 @@ Bvh buildSahBvh(std::span<const Aabb> primBounds, const BvhBuildOptions& options
 /// leaves, as in buildLbvh. Several times slower than buildLbvh.
 Bvh buildPlocBvh(std::span<const Aabb> primBounds, const BvhBuildOptions& options = {});
 
-/// The default: a geometry of 64 or more primitives placed at least twice
-/// (instances) gets one tree,
-/// built over its first copy and refitted to every copy; the other
-/// primitives, together, get one tree; both by PLOC up to 65 536 primitives
-/// and by the LBVH above; a binned SAH pass over the copies and the others'
-/// subtrees builds the levels above. Without repeated geometry: PLOC or the
-/// LBVH over everything, by the same limit. Throws std::invalid_argument for
-/// instances out of range, overlapping, or of one geometry with different
-/// counts.
+/// The default. A geometry of 64 or more primitives placed at least twice
+/// (instances) gets one tree, built over its first copy and refitted to
+/// every copy: by the binned SAH builder while such geometries hold at most
+/// 32 768 primitives in all (one copy of each), else by PLOC up to 65 536
+/// primitives each and by the LBVH above. The other primitives, together,
+/// get one tree: PLOC up to 65 536, the LBVH above. A binned SAH pass over
+/// the copies and the others' subtrees builds the levels above. Throws
+/// std::invalid_argument for instances out of range, overlapping, or of one
+/// geometry with different counts.
 Bvh buildAutoBvh(std::span<const Aabb> primBounds, const BvhBuildOptions& options = {},
                  std::span<const BvhInstance> instances = {});
 

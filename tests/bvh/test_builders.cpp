@@ -261,12 +261,13 @@ TEST(AutoBuilder, CopiesKeepTheInvariants) {
 }
 
 TEST(AutoBuilder, EveryCopyGetsTheGeometryTree) {
-  // each copy's subtree has the shape of the tree over the first copy alone
+  // each copy's subtree has the shape of the SAH tree over the first copy
+  // alone (the copies hold few primitives in all: kSahGeometryPrims)
   const Scene scene = copiesScene(12, 0, 8);
   const std::vector<Aabb> prims = triangleBounds(scene);
   const Bvh bvh = buildBvh(prims, optionsFor(BvhBuilder::Auto), instancesOf(scene));
   const std::uint32_t perCopy = scene.instances[0].triangleCount;
-  const Bvh one = buildBvh(std::span(prims).subspan(0, perCopy), optionsFor(BvhBuilder::Auto));
+  const Bvh one = buildBvh(std::span(prims).subspan(0, perCopy), optionsFor(BvhBuilder::Sah));
   EXPECT_EQ(bvh.stats.leafCount, 12 * one.stats.leafCount);
   EXPECT_EQ(bvh.nodes.size(), 12 * one.nodes.size() + 11);
 }
@@ -387,12 +388,13 @@ TEST(BvhQuality, Icosphere) {
 }
 
 TEST(BvhQuality, PlacedCopies) {
-  // 200 turned and scaled icospheres and a soup: the auto tree (one PLOC tree
-  // per geometry, refitted per copy) must stay within kPlocVsSah of the SAH
-  // tree over all of it and below the LBVH's. Measured when written
-  // (2026-12-04), binary / 4-wide: auto 104.87 / 46.07, lbvh 108.94 / 47.92,
-  // sah 94.58 / 42.11. The copies overlap one another, which the top pass
-  // over whole copies cannot split: the gap to the SAH tree is that.
+  // 200 turned and scaled icospheres and a soup: the auto tree (one SAH tree
+  // for the icosphere, refitted per copy) must stay within kPlocVsSah of the
+  // SAH tree over all of it and below the LBVH's. Measured when written
+  // (2026-12-04), binary / 4-wide: auto 103.39 / 45.71 (104.87 / 46.07 with
+  // a PLOC tree per geometry), lbvh 108.94 / 47.92, sah 94.58 / 42.11. The
+  // copies overlap one another, which the top pass over whole copies cannot
+  // split: the gap to the SAH tree is that.
   const Scene scene = copiesScene(200, 20000, 11);
   const std::vector<Aabb> prims = triangleBounds(scene);
   const Bvh binary = buildBvh(prims, optionsFor(BvhBuilder::Auto), instancesOf(scene));
@@ -407,8 +409,8 @@ TEST(BvhQuality, PlacedCopies) {
   EXPECT_LE(autoCost.binary, kPlocVsSah * sah.binary);
   EXPECT_LE(autoCost.bvh4, kPlocVsSah * sah.bvh4);
   EXPECT_LT(autoCost.bvh4, lbvh.bvh4);
-  EXPECT_LE(autoCost.binary, 104.87 * kSlack);
-  EXPECT_LE(autoCost.bvh4, 46.07 * kSlack);
+  EXPECT_LE(autoCost.binary, 103.39 * kSlack);
+  EXPECT_LE(autoCost.bvh4, 45.71 * kSlack);
 }
 
 TEST(BvhQuality, TriangleSoup) {
