@@ -67,11 +67,7 @@ Bvh layoutTree(std::span<const BuildNode> nodes, std::uint32_t root, std::span<c
       ++bvh.stats.leafCount;
       continue;
     }
-    const std::uint32_t pair = std::uint32_t(bvh.nodes.size());
-    bvh.nodes[o.out].first = pair;
-    bvh.nodes[o.out].count = 0;
-    bvh.nodes.emplace_back();
-    bvh.nodes.emplace_back();
+    const std::uint32_t pair = appendChildPair(bvh.nodes, o.out);
     open.push_back({b.right, pair + 1, o.depth + 1});
     open.push_back({b.left, pair, o.depth + 1});
   }

@@ -19,6 +19,17 @@ struct BuildNode {
   std::uint32_t count = 0;  ///< 0: internal
 };
 
+/// Make nodes[parent] an inner node whose two children are appended to
+/// `nodes` as a pair (the layout every builder gives); returns the first.
+inline std::uint32_t appendChildPair(BvhNodes& nodes, std::uint32_t parent) {
+  const std::uint32_t pair = std::uint32_t(nodes.size());
+  nodes[parent].first = pair;
+  nodes[parent].count = 0;
+  nodes.emplace_back();
+  nodes.emplace_back();
+  return pair;
+}
+
 /// Lay the tree below `root` out depth first as Bvh nodes: a node's children
 /// are appended as a pair when it is opened and its left subtree is laid out
 /// next (as buildLbvh does). A subtree of at most maxLeaf primitives becomes
