@@ -560,4 +560,32 @@ LeafPacking packLeavesIntoBlocks(Bvh4& bvh, std::size_t primitives, std::size_t 
   return packing;
 }
 
+void orderChildSlots(Bvh4& bvh) {
+  for (WtBvh4Node& node : bvh.nodes) {
+    // leaves rank above every area, empty slots below (stable: leaves keep their order)
+    float rank[4];
+    for (int k = 0; k < 4; ++k) {
+      if (node.child[k] == WT_BVH4_EMPTY) {
+        rank[k] = -1.0f;
+      } else if (node.count[k] > 0) {
+        rank[k] = std::numeric_limits<float>::infinity();
+      } else {
+        const float ex = node.hi_x[k] - node.lo_x[k], ey = node.hi_y[k] - node.lo_y[k], ez = node.hi_z[k] - node.lo_z[k];
+        const float area = ex * ey + ey * ez + ez * ex;
+        rank[k] = area == area ? std::min(area, std::numeric_limits<float>::max()) : 0.0f;  // NaN: after the others
+      }
+    }
+    int slot[4] = {0, 1, 2, 3};
+    std::stable_sort(slot, slot + 4, [&](int a, int b) { return rank[a] > rank[b]; });
+    const WtBvh4Node old = node;
+    for (int k = 0; k < 4; ++k) {
+      const int j = slot[k];
+      node.lo_x[k] = old.lo_x[j], node.hi_x[k] = old.hi_x[j];
+      node.lo_y[k] = old.lo_y[j], node.hi_y[k] = old.hi_y[j];
+      node.lo_z[k] = old.lo_z[j], node.hi_z[k] = old.hi_z[j];
+      node.child[k] = old.child[j], node.count[k] = old.count[j];
+    }
+  }
+}
+
 }  // namespace wt

@@ -132,4 +132,14 @@ struct LeafPacking {
 /// that covers more or fewer throws std::logic_error).
 LeafPacking packLeavesIntoBlocks(Bvh4& bvh, std::size_t primitives, std::size_t window = 256);
 
+/// Order every node's child slots: leaves first, in their order; then the
+/// inner children by the surface area of their boxes, largest first; empty
+/// slots last. Closest-hit traversal sorts the children it enters by
+/// distance, so only the any-hit loops (which descend into the first inner
+/// child they enter and push the others) see the order: the largest box,
+/// likeliest to hold a blocker, is searched first (shadow rays 1.07-1.10x
+/// on the 1 M-triangle scenes, docs/performance.md). Boxes, children and
+/// leaf ranges are unchanged, only their slots.
+void orderChildSlots(Bvh4& bvh);
+
 }  // namespace wt

@@ -90,6 +90,7 @@ SceneBuffers::SceneBuffers(Context& context, const Scene& scene, const BvhBuildO
   // Leaves laid out in blocks of four (packLeavesIntoBlocks); from here on
   // the leaf order addresses the scene's triangles directly.
   const LeafPacking packing = packLeavesIntoBlocks(bvh4, bvh.primIndices.size());
+  orderChildSlots(bvh4);  // after the packing, which lays the leaves out in slot order
   m_leafMisfits = packing.misfits;
   m_leafToScene.resize(packing.order.size());
   for (std::size_t i = 0; i < packing.order.size(); ++i) m_leafToScene[i] = bvhToScene[bvh.primIndices[packing.order[i]]];

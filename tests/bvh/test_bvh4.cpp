@@ -557,6 +557,54 @@ TEST(Bvh4, LeavesPackIntoBlocksWithTheirPrimitives) {
   }
 }
 
+TEST(Bvh4, ChildSlotsLeavesFirstThenTheLargestBox) {
+  BvhBuildOptions given;
+  given.maxLeafSize = 0;
+  for (const Scene& scene : {makeBumpyGrid(15000), makeTriangleSoup(5000, 3)}) {
+    const std::vector<Aabb> prims = triangleBounds(scene);
+    Bvh4 before = collapseToBvh4(buildBvh(prims, binaryBuildOptions(given, prims.size())), bvh4Options(given));
+    packLeavesIntoBlocks(before, prims.size());
+    Bvh4 after = before;
+    orderChildSlots(after);
+    ASSERT_EQ(after.nodes.size(), before.nodes.size());
+    std::size_t moved = 0;
+    for (std::size_t i = 0; i < after.nodes.size(); ++i) {
+      const WtBvh4Node& a = after.nodes[i];
+      const WtBvh4Node& b = before.nodes[i];
+      // the same children with the same boxes, each once
+      std::vector<std::array<float, 8>> was, is;
+      for (int k = 0; k < 4; ++k) {
+        was.push_back({b.lo_x[k], b.hi_x[k], b.lo_y[k], b.hi_y[k], b.lo_z[k], b.hi_z[k], float(b.child[k]), float(b.count[k])});
+        is.push_back({a.lo_x[k], a.hi_x[k], a.lo_y[k], a.hi_y[k], a.lo_z[k], a.hi_z[k], float(a.child[k]), float(a.count[k])});
+      }
+      std::vector<std::array<float, 8>> sortedWas = was, sortedIs = is;
+      std::sort(sortedWas.begin(), sortedWas.end());
+      std::sort(sortedIs.begin(), sortedIs.end());
+      EXPECT_EQ(sortedWas, sortedIs) << "node " << i;
+      moved += was != is;
+      // leaves (in their order), inner children by area, largest first, empty slots
+      int phase = 0;  // 0 leaves, 1 inner, 2 empty
+      float lastArea = std::numeric_limits<float>::infinity();
+      std::vector<std::uint32_t> leavesWas, leavesIs;
+      for (int k = 0; k < 4; ++k) {
+        if (b.child[k] != WT_BVH4_EMPTY && b.count[k] > 0) leavesWas.push_back(b.child[k]);
+        const int kind = a.child[k] == WT_BVH4_EMPTY ? 2 : a.count[k] > 0 ? 0 : 1;
+        EXPECT_GE(kind, phase) << "node " << i << " slot " << k;
+        phase = kind;
+        if (kind == 0) leavesIs.push_back(a.child[k]);
+        if (kind == 1) {
+          const float ex = a.hi_x[k] - a.lo_x[k], ey = a.hi_y[k] - a.lo_y[k], ez = a.hi_z[k] - a.lo_z[k];
+          const float area = ex * ey + ey * ez + ez * ex;
+          EXPECT_LE(area, lastArea) << "node " << i << " slot " << k;
+          lastArea = area;
+        }
+      }
+      EXPECT_EQ(leavesIs, leavesWas) << "node " << i;
+    }
+    EXPECT_GT(moved, after.nodes.size() / 10);  // the order was not already so
+  }
+}
+
 TEST(Bvh4, LeavesWhoseSizesAddUpToBlocksShareThem) {
   // leaves of 3, 2, 1, 2 | 6, 2 | 5, 4, 3 | 4, 8 | 7, 1 in this order pack
   // into whole blocks when the 2 waits for the 1 and the second 4 for the 3
