@@ -52,25 +52,6 @@ Bvh buildPart(std::span<const Aabb> bounds, const BvhBuildOptions& options) {
   return buildBvh(bounds, part);
 }
 
-void grow(Aabb& box, const Aabb& other) {
-  box.lo.x = std::min(box.lo.x, other.lo.x), box.lo.y = std::min(box.lo.y, other.lo.y);
-  box.lo.z = std::min(box.lo.z, other.lo.z);
-  box.hi.x = std::max(box.hi.x, other.hi.x), box.hi.y = std::max(box.hi.y, other.hi.y);
-  box.hi.z = std::max(box.hi.z, other.hi.z);
-}
-
-Aabb boxOf(const WtBvhNode& node) {
-  Aabb box;
-  box.lo = {node.lo_x, node.lo_y, node.lo_z};
-  box.hi = {node.hi_x, node.hi_y, node.hi_z};
-  return box;
-}
-
-void setBox(WtBvhNode& node, const Aabb& box) {
-  node.lo_x = box.lo.x, node.lo_y = box.lo.y, node.lo_z = box.lo.z;
-  node.hi_x = box.hi.x, node.hi_y = box.hi.y, node.hi_z = box.hi.z;
-}
-
 /// Primitives below each node of a tree (children come after their parents).
 std::vector<std::uint32_t> subtreePrims(const Bvh& bvh) {
   std::vector<std::uint32_t> prims(bvh.nodes.size(), 0);
@@ -181,7 +162,7 @@ Bvh buildAutoBvh(std::span<const Aabb> primBounds, const BvhBuildOptions& option
     for (std::size_t c = chunk.begin; c < chunk.end; ++c) {
       Aabb box;
       const std::uint32_t first = sources[c].primBase;
-      for (std::uint32_t k = first; k < first + clusters[c].prims; ++k) grow(box, primBounds[k]);
+      for (std::uint32_t k = first; k < first + clusters[c].prims; ++k) box.extend(primBounds[k]);
       clusters[c].box = box;
     }
   });
@@ -198,7 +179,7 @@ Bvh buildAutoBvh(std::span<const Aabb> primBounds, const BvhBuildOptions& option
         stack.push_back(rn.first);
         continue;
       }
-      clusters.push_back({boxOf(rn), std::uint32_t(sources.size()), prims[node]});
+      clusters.push_back({nodeBox(rn), std::uint32_t(sources.size()), prims[node]});
       sources.push_back({&restTree, node, 0, &restIndex});
     }
   }
@@ -283,15 +264,13 @@ Bvh buildAutoBvh(std::span<const Aabb> primBounds, const BvhBuildOptions& option
       if (restTree.nodes[i].count == 0) below[i] = 1 + below[restTree.nodes[i].first] + below[restTree.nodes[i].first + 1];
     return below;
   }();
-  std::vector<std::uint32_t> primsOf(clusterCount, 0);
-  for (const TopCluster& cluster : clusters) primsOf[cluster.node] = cluster.prims;
   std::size_t nodeCursor = topNodes, primCursor = bvh.primIndices.size();
   for (Job& job : jobs) {
     const ClusterSource& s = sources[job.source];
     job.nodeBase = std::uint32_t(nodeCursor);
     job.primBase = std::uint32_t(primCursor);
     nodeCursor += (s.primMap ? restNodes[s.node] : std::uint32_t(s.tree->nodes.size())) - 1;
-    primCursor += primsOf[job.source];
+    primCursor += topPrims[job.source];  // a cluster's primitives
   }
   bvh.nodes.resize(nodeCursor);
   bvh.primIndices.resize(primCursor);
@@ -300,10 +279,10 @@ Bvh buildAutoBvh(std::span<const Aabb> primBounds, const BvhBuildOptions& option
     WtBvhNode& node = bvh.nodes[i];
     Aabb box;
     if (node.count > 0) {
-      for (std::uint32_t k = node.first; k < node.first + node.count; ++k) grow(box, primBounds[bvh.primIndices[k]]);
+      for (std::uint32_t k = node.first; k < node.first + node.count; ++k) box.extend(primBounds[bvh.primIndices[k]]);
     } else {
-      box = boxOf(bvh.nodes[node.first]);
-      grow(box, boxOf(bvh.nodes[node.first + 1]));
+      box = nodeBox(bvh.nodes[node.first]);
+      box.extend(nodeBox(bvh.nodes[node.first + 1]));
     }
     setBox(node, box);
   };

@@ -5,14 +5,6 @@
 #include <algorithm>
 
 namespace wt::bvh_detail {
-namespace {
-
-void setBox(WtBvhNode& node, const Aabb& box) {
-  node.lo_x = box.lo.x, node.lo_y = box.lo.y, node.lo_z = box.lo.z;
-  node.hi_x = box.hi.x, node.hi_y = box.hi.y, node.hi_z = box.hi.z;
-}
-
-}  // namespace
 
 Bvh layoutTree(std::span<const BuildNode> nodes, std::uint32_t root, std::span<const std::uint32_t> prims,
                std::uint32_t maxLeaf) {

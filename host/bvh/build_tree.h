@@ -19,6 +19,18 @@ struct BuildNode {
   std::uint32_t count = 0;  ///< 0: internal
 };
 
+/// A node's box, and the box written into a node.
+inline Aabb nodeBox(const WtBvhNode& node) {
+  Aabb box;
+  box.lo = {node.lo_x, node.lo_y, node.lo_z};
+  box.hi = {node.hi_x, node.hi_y, node.hi_z};
+  return box;
+}
+inline void setBox(WtBvhNode& node, const Aabb& box) {
+  node.lo_x = box.lo.x, node.lo_y = box.lo.y, node.lo_z = box.lo.z;
+  node.hi_x = box.hi.x, node.hi_y = box.hi.y, node.hi_z = box.hi.z;
+}
+
 /// Make nodes[parent] an inner node whose two children are appended to
 /// `nodes` as a pair (the layout every builder gives); returns the first.
 inline std::uint32_t appendChildPair(BvhNodes& nodes, std::uint32_t parent) {
