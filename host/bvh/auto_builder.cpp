@@ -339,6 +339,8 @@ Bvh buildAutoBvh(std::span<const Aabb> primBounds, const BvhBuildOptions& option
   bvh.stats.nodeCount = bvh.nodes.size();
   bvh.stats.sahCost = sahCost(bvh);
   bvh.stats.copiesPlaced = copiesPlaced;
+  bvh.stats.flatRegions = restTree.stats.flatRegions;
+  for (const Bvh& tree : geometryTrees) bvh.stats.flatRegions += tree.stats.flatRegions;
   bvh.stats.buildSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   char line[256];
   std::snprintf(line, sizeof line,

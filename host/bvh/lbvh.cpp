@@ -1,5 +1,6 @@
 // Linear BVH build: 63-bit Morton codes of the centroids in cubic cells
-// (per-axis cells too for small inputs, the lower SAH kept), a parallel radix
+// (per-axis cells too for small inputs, the lower SAH kept; in large inputs,
+// regions that form one sheet keyed with their thin axis last), a parallel radix
 // sort (one MSD pass, then buckets sorted alone in cache), the Karras 2012
 // radix tree found top down (each node kept in the collapsed tree searches
 // its split; subtrees of at most maxLeafSize primitives become one leaf
@@ -21,6 +22,7 @@
 #include <cstring>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <system_error>
 #include <utility>
@@ -101,13 +103,18 @@ std::uint32_t quantise(float c, double origin, double scale) {
   return q > 0.0 ? static_cast<std::uint32_t>(q) : 0u;
 }
 
-std::uint64_t mortonCode(const Aabb& box, const MortonFrame& frame) {
+/// The Morton code of the box's centroid, its cells in q.
+std::uint64_t mortonCells(const Aabb& box, const MortonFrame& frame, std::uint32_t q[3]) {
   const Centroid c = centroidOf(box);
-  // Non-finite centroids (NaN or infinite bounds) all share code 0.
-  if (!c.finite) return 0;
-  return expandBits21(quantise(c.x, frame.origin[0], frame.scale[0])) |
-         expandBits21(quantise(c.y, frame.origin[1], frame.scale[1])) << 1 |
-         expandBits21(quantise(c.z, frame.origin[2], frame.scale[2])) << 2;
+  // Non-finite centroids (NaN or infinite bounds) all share cell 0 and code 0.
+  if (!c.finite) {
+    q[0] = q[1] = q[2] = 0;
+    return 0;
+  }
+  q[0] = quantise(c.x, frame.origin[0], frame.scale[0]);
+  q[1] = quantise(c.y, frame.origin[1], frame.scale[1]);
+  q[2] = quantise(c.z, frame.origin[2], frame.scale[2]);
+  return expandBits21(q[0]) | expandBits21(q[1]) << 1 | expandBits21(q[2]) << 2;
 }
 
 struct KeyBits {
@@ -118,18 +125,304 @@ struct KeyBits {
 struct MortonKeys {
   std::unique_ptr<std::uint64_t[]> keys;  ///< in input order
   KeyBits bits;
+  std::size_t flatRegions = 0;  ///< regions keyed with an axis last (flat patches, below)
+  std::size_t flatTested = 0;   ///< sample subtrees tried for that
 };
+
+// ---- flat patches ------------------------------------------------------------------
+//
+// The Morton order splits the three axes in turn. Where the primitives form one
+// sheet over two axes (a terrain, a height field, a patch of a large smooth surface),
+// a split across the third cuts the sheet along a contour line: a ridge's crest goes
+// to one child and both its flanks to the other, whose box then holds the first's.
+// A SAH build never splits so. On the bumpy grid such splits left the LBVH's 4-wide
+// SAH 9% above the binned SAH tree's (51.3 against 47.0) and its diffuse rays at
+// 0.88-0.91x that tree's throughput. So the key of a region whose primitives form
+// such a sheet puts the bits of the region's shortest axis below the other two
+// axes' bits: the region's subtree splits only the sheet's two axes, down to the
+// primitives that share a cell in them.
+//
+// Which regions: a sample of the primitives, sorted by key, is cut into subtrees of
+// at most kFlatRegionSamples; each is built both ways over its sampled boxes, and
+// where the reordered tree is no dearer it becomes a candidate region (the range of
+// keys sharing the subtree's prefix). A sample is too sparse to show what the
+// reordering costs at the finest levels, where a closed object's front and back,
+// now sorted together, would share every node (MetalRoughSpheres' rows of spheres
+// sample at 0.99-1.16 and measured twice the 4-wide SAH when reordered), so the
+// keys are made in the Morton order first, every primitive of one column of each
+// candidate (all of it along the shortest axis, about kFlatWindowPrims primitives)
+// is kept aside, and both trees are built again over that column at full density.
+// Regions whose column tree costs kFlatCostRatio of the Morton one or less are
+// re-keyed. A region's keys keep its prefix, so the order of regions and of
+// everything around them stays the Morton order.
+
+// About this many primitives are sampled (every n / kFlatSamples-th, in input order).
+constexpr std::size_t kFlatSamples = 16384;
+// A region holds at most this many samples: 1/16 of the scene, the size of the subtrees
+// where the bumpy grid's first splits across its height fall.
+constexpr std::size_t kFlatRegionSamples = 1024;
+// Sample subtrees smaller than this (the ends of an uneven split) are not tested.
+constexpr std::size_t kFlatMinSamples = 64;
+// A candidate's sampled tree, reordered, costs at most this much of the Morton one.
+constexpr double kFlatSampleRatio = 1.0;
+// A column holds about this many primitives, and is thinned to at most kFlatWindowMax.
+constexpr std::size_t kFlatWindowPrims = 1024;
+constexpr std::size_t kFlatWindowMax = 8192;
+// A column of fewer primitives says too little: the region stays in Morton order.
+constexpr std::size_t kFlatMinWindow = 64;
+// A region is re-keyed when its column's reordered tree costs at most this much of its
+// Morton tree. Measured (2026-12-04): the bumpy grid's columns 0.83-0.91; a level-6
+// icosphere's 0.87-1.17 (16 of 25 re-keyed); MetalRoughSpheres' 1.13-6.9 and a
+// random soup's 1.46-1.60 (none).
+constexpr double kFlatCostRatio = 0.97;
+
+/// A range of keys (those sharing the bits from lowBits up) whose low lowBits bits
+/// are reordered: the other two axes' bits first, still interleaved in their order,
+/// then `axis`'s bits; and the column of it whose primitives test that order.
+struct FlatRegion {
+  std::uint64_t first;
+  std::uint64_t last;
+  int axis;
+  int low;                    ///< the lower of the other two axes (its bits come first in a level)
+  int high;                   ///< the higher one
+  int pairShift;              ///< where the other two axes' bits go: above axis's bits
+  std::uint32_t cellMask[3];  ///< each axis's cell bits below lowBits
+  // The column: the cells of `low` and `high` shifted right by columnShift[0] and [1]
+  // are columnCell[0] and [1].
+  int columnShift[2] = {0, 0};
+  std::uint32_t columnCell[2] = {0, 0};
+};
+
+FlatRegion makeFlatRegion(std::uint64_t key, int lowBits, int axis) {
+  FlatRegion region;
+  const std::uint64_t lowMask = (std::uint64_t{1} << lowBits) - 1;
+  region.first = key & ~lowMask;
+  region.last = region.first | lowMask;
+  region.axis = axis;
+  region.low = axis == 0 ? 1 : 0;
+  region.high = axis == 2 ? 1 : 2;
+  // Axis k holds key bits 3i + k, so below lowBits it has (lowBits - k + 2) / 3 of them
+  // (of the other two, the lower axis never has fewer).
+  for (int k = 0; k < 3; ++k) region.cellMask[k] = (std::uint32_t{1} << (std::max(0, lowBits - k + 2) / 3)) - 1;
+  region.pairShift = std::popcount(region.cellMask[axis]);
+  return region;
+}
+
+/// Bits 0, 3, 6, ... of v packed into bits 0, 1, 2, ... (21 bits): one axis's cells
+/// from a key.
+std::uint32_t compactBits21(std::uint64_t v) {
+  v &= 0x1249249249249249ull;
+  v = (v ^ (v >> 2)) & 0x10c30c30c30c30c3ull;
+  v = (v ^ (v >> 4)) & 0x100f00f00f00f00full;
+  v = (v ^ (v >> 8)) & 0x001f0000ff0000ffull;
+  v = (v ^ (v >> 16)) & 0x001f00000000ffffull;
+  v = (v ^ (v >> 32)) & 0x00000000001fffffull;
+  return static_cast<std::uint32_t>(v);
+}
+
+/// Bit k of the index moved to bit 2k, for every byte.
+constexpr std::array<std::uint32_t, 256> kSpreadByte2 = [] {
+  std::array<std::uint32_t, 256> table{};
+  for (std::uint32_t v = 0; v < 256; ++v)
+    for (int bit = 0; bit < 8; ++bit) table[v] |= ((v >> bit) & 1u) << (2 * bit);
+  return table;
+}();
+
+/// The low 21 bits of v spread so that bit k moves to bit 2k.
+std::uint64_t expandBits2(std::uint32_t v) {
+  return std::uint64_t{kSpreadByte2[v & 0xffu]} | std::uint64_t{kSpreadByte2[(v >> 8) & 0xffu]} << 16 |
+         std::uint64_t{kSpreadByte2[(v >> 16) & 0x1fu]} << 32;
+}
+
+/// The key of cells q[0..2] in the region, reordered (the prefix is the region's).
+std::uint64_t keyWithAxisLast(const std::uint32_t q[3], const FlatRegion& region) {
+  const std::uint64_t pair = expandBits2(q[region.low] & region.cellMask[region.low]) |
+                             expandBits2(q[region.high] & region.cellMask[region.high]) << 1;
+  return region.first | pair << region.pairShift | (q[region.axis] & region.cellMask[region.axis]);
+}
+
+bool inColumn(const std::uint32_t q[3], const FlatRegion& region) {
+  return ((q[region.low] & region.cellMask[region.low]) >> region.columnShift[0]) == region.columnCell[0] &&
+         ((q[region.high] & region.cellMask[region.high]) >> region.columnShift[1]) == region.columnCell[1];
+}
+
+/// The region (sorted, disjoint) holding `key`, or none; `last` is tried first.
+const FlatRegion* regionOf(std::uint64_t key, std::span<const FlatRegion> regions, const FlatRegion*& last) {
+  if (key >= last->first && key <= last->last) return last;
+  const auto after = std::upper_bound(regions.begin(), regions.end(), key,
+                                      [](std::uint64_t k, const FlatRegion& region) { return k < region.first; });
+  if (after == regions.begin() || key > (after - 1)->last) return nullptr;
+  last = &*(after - 1);
+  return last;
+}
+
+/// SAH cost (in area units, not divided by the root's) of the radix tree over `count`
+/// sorted keys with their boxes in the same order, one primitive to a leaf (the middle
+/// splits a run of equal keys).
+double radixTreeCost(const std::uint64_t* keys, const Aabb* boxes, std::size_t count, Aabb& box) {
+  if (count == 1) {
+    box = boxes[0];
+    return double(box.surfaceArea());
+  }
+  const std::uint64_t diff = keys[0] ^ keys[count - 1];
+  std::size_t half = count / 2;
+  if (diff != 0) {
+    const std::uint64_t bit = std::uint64_t{1} << (63 - std::countl_zero(diff));
+    half = static_cast<std::size_t>(
+        std::partition_point(keys, keys + count, [bit](std::uint64_t key) { return (key & bit) == 0; }) - keys);
+  }
+  Aabb right;
+  const double cost =
+      radixTreeCost(keys, boxes, half, box) + radixTreeCost(keys + half, boxes + half, count - half, right);
+  box.extend(right);
+  return cost + double(box.surfaceArea());
+}
+
+/// A primitive of a test: its Morton key, its key reordered, its cells, its box and,
+/// in a column, the candidate region's index.
+struct FlatPrim {
+  std::uint64_t key;
+  std::uint64_t reordered;
+  std::uint32_t q[3];
+  Aabb box;
+  std::uint32_t region = 0;
+};
+
+/// The reordered tree's cost over the Morton tree's, for prims in Morton order
+/// (their reordered keys set).
+double reorderedCostRatio(std::span<const FlatPrim> prims) {
+  const std::size_t count = prims.size();
+  std::vector<std::uint64_t> keys(count);
+  std::vector<Aabb> boxes(count);
+  for (std::size_t i = 0; i < count; ++i) keys[i] = prims[i].key, boxes[i] = prims[i].box;
+  Aabb box;
+  const double mortonCost = radixTreeCost(keys.data(), boxes.data(), count, box);
+  std::vector<std::uint32_t> order(count);
+  for (std::uint32_t i = 0; i < count; ++i) order[i] = i;
+  std::stable_sort(order.begin(), order.end(),
+                   [&](std::uint32_t a, std::uint32_t b) { return prims[a].reordered < prims[b].reordered; });
+  for (std::size_t i = 0; i < count; ++i) keys[i] = prims[order[i]].reordered, boxes[i] = prims[order[i]].box;
+  return radixTreeCost(keys.data(), boxes.data(), count, box) / mortonCost;
+}
+
+/// The candidate for samples (sorted by key, a subtree sharing the key bits from
+/// lowBits up, their reordered keys unset) that would be keyed with their shortest
+/// axis last, or none; `regionPrims` is about how many primitives its range holds.
+std::optional<FlatRegion> candidateRegion(std::span<FlatPrim> samples, int lowBits, std::size_t regionPrims) {
+  std::uint32_t lo[3], hi[3];
+  for (int axis = 0; axis < 3; ++axis) lo[axis] = std::numeric_limits<std::uint32_t>::max(), hi[axis] = 0;
+  for (const FlatPrim& sample : samples)
+    for (int axis = 0; axis < 3; ++axis)
+      lo[axis] = std::min(lo[axis], sample.q[axis]), hi[axis] = std::max(hi[axis], sample.q[axis]);
+  int axis = 0;
+  for (int k = 1; k < 3; ++k)
+    if (hi[k] - lo[k] < hi[axis] - lo[axis]) axis = k;
+
+  FlatRegion region = makeFlatRegion(samples[0].key, lowBits, axis);
+  for (FlatPrim& sample : samples) sample.reordered = keyWithAxisLast(sample.q, region);
+  if (!(reorderedCostRatio(samples) <= kFlatSampleRatio)) return std::nullopt;
+
+  // The column: 4^levels columns of the two other axes' cells hold about
+  // kFlatWindowPrims each; the one of the middle sample in the reordered order.
+  const int lowCells = std::popcount(region.cellMask[region.low]);
+  const int highCells = std::popcount(region.cellMask[region.high]);
+  int levels = 0;
+  while (levels < highCells && (regionPrims >> (2 * levels)) > 2 * kFlatWindowPrims) ++levels;
+  region.columnShift[0] = lowCells - levels;
+  region.columnShift[1] = highCells - levels;
+  std::vector<std::uint64_t> reordered(samples.size());
+  for (std::size_t i = 0; i < samples.size(); ++i) reordered[i] = samples[i].reordered;
+  std::nth_element(reordered.begin(), reordered.begin() + static_cast<std::ptrdiff_t>(reordered.size() / 2),
+                   reordered.end());
+  const std::uint64_t middle = reordered[reordered.size() / 2];
+  for (const FlatPrim& sample : samples)
+    if (sample.reordered == middle) {
+      region.columnCell[0] = (sample.q[region.low] & region.cellMask[region.low]) >> region.columnShift[0];
+      region.columnCell[1] = (sample.q[region.high] & region.cellMask[region.high]) >> region.columnShift[1];
+      break;
+    }
+  return region;
+}
+
+/// The candidate regions (sorted by key), from a sample of the primitives; `tested`
+/// gets how many sample subtrees were tried.
+std::vector<FlatRegion> findCandidateRegions(std::span<const Aabb> primBounds, const MortonFrame& frame,
+                                             std::size_t& tested) {
+  const std::size_t stride = std::max<std::size_t>(1, primBounds.size() / kFlatSamples);
+  std::vector<FlatPrim> samples;
+  samples.reserve(primBounds.size() / stride + 1);
+  for (std::size_t i = 0; i < primBounds.size(); i += stride) {
+    FlatPrim sample;
+    sample.key = mortonCells(primBounds[i], frame, sample.q);
+    sample.box = primBounds[i];
+    // Boxes with a non-finite corner would make every cost infinite.
+    if (std::isfinite(sample.box.surfaceArea())) samples.push_back(sample);
+  }
+  std::stable_sort(samples.begin(), samples.end(),
+                   [](const FlatPrim& a, const FlatPrim& b) { return a.key < b.key; });
+
+  std::vector<FlatRegion> regions;
+  tested = 0;
+  std::vector<Range> stack{{0, samples.size()}};
+  while (!stack.empty()) {
+    const Range range = stack.back();
+    stack.pop_back();
+    const std::size_t count = range.end - range.begin;
+    if (count < kFlatMinSamples) continue;
+    const std::uint64_t diff = samples[range.begin].key ^ samples[range.end - 1].key;
+    if (diff == 0) continue;
+    const int lowBits = 64 - std::countl_zero(diff);
+    if (count <= kFlatRegionSamples) {
+      ++tested;
+      if (const auto region = candidateRegion(std::span(samples).subspan(range.begin, count), lowBits, count * stride))
+        regions.push_back(*region);
+      continue;
+    }
+    const std::uint64_t bit = std::uint64_t{1} << (lowBits - 1);
+    const std::size_t split = static_cast<std::size_t>(
+        std::partition_point(samples.begin() + static_cast<std::ptrdiff_t>(range.begin),
+                             samples.begin() + static_cast<std::ptrdiff_t>(range.end),
+                             [bit](const FlatPrim& s) { return (s.key & bit) == 0; }) -
+        samples.begin());
+    // Right first, so that the left subtree is tried next and the regions come out sorted.
+    stack.push_back({split, range.end});
+    stack.push_back({range.begin, split});
+  }
+  return regions;
+}
+
+/// Whether a candidate's column (its primitives in input order, as gathered) is
+/// cheaper reordered.
+bool columnIsFlat(std::vector<FlatPrim>& column) {
+  if (column.size() > kFlatWindowMax) {
+    // thinned by input position, so that the test does not depend on the thread count
+    const std::size_t stride = (column.size() + kFlatWindowMax - 1) / kFlatWindowMax;
+    std::size_t kept = 0;
+    for (std::size_t i = 0; i < column.size(); i += stride) column[kept++] = column[i];
+    column.resize(kept);
+  }
+  if (column.size() < kFlatMinWindow) return false;
+  std::stable_sort(column.begin(), column.end(), [](const FlatPrim& a, const FlatPrim& b) { return a.key < b.key; });
+  return reorderedCostRatio(column) <= kFlatCostRatio;
+}
 
 /// How centroids are quantised: cells of one size on every axis (that of the longest
 /// extent), or every axis scaled to its own extent.
 enum class Cells { Cubic, PerAxis };
 
-MortonKeys computeMortonKeys(std::span<const Aabb> primBounds, int threads, Cells cells) {
+/// The keys in input order; with findFlat, those of flat patches reordered (above).
+MortonKeys computeMortonKeys(std::span<const Aabb> primBounds, int threads, Cells cells, bool findFlat) {
   const std::size_t n = primBounds.size();
   MortonKeys result;
   result.keys = std::make_unique_for_overwrite<std::uint64_t[]>(n);
   std::array<PerThread<CentroidBounds>, kMaxThreads> chunkBounds{};
   std::array<PerThread<KeyBits>, kMaxThreads> chunkBits{};
+  // the flat patches' candidate regions, their columns, and which are re-keyed
+  std::vector<FlatRegion> candidates;
+  std::array<PerThread<std::vector<FlatPrim>>, kMaxThreads> rankColumns{};
+  std::vector<std::vector<FlatPrim>> columns;
+  std::vector<char> accepted;
+  std::atomic<std::size_t> nextColumn{0};
   runTeam(threads, [&](int rank, int size, Barrier& barrier) {
     const Range chunk = chunkOf(n, size, rank);
     // A local copy stays in registers; the shared slot might alias primBounds.
@@ -168,15 +461,68 @@ MortonKeys computeMortonKeys(std::span<const Aabb> primBounds, int threads, Cell
                               ? double(1u << kMortonBitsPerAxis) / (cells == Cells::Cubic ? longest : extent[axis])
                               : 0.0;
 
+    if (findFlat) {
+      if (rank == 0) {
+        candidates = findCandidateRegions(primBounds, frame, result.flatTested);
+        if (!candidates.empty()) {
+          columns.resize(candidates.size());
+          accepted.assign(candidates.size(), 0);
+        }
+      }
+      barrier.arriveAndWait();
+    }
+
     KeyBits bits;
+    std::uint32_t q[3];
+    if (candidates.empty()) {
+      for (std::size_t i = chunk.begin; i < chunk.end; ++i) {
+        const std::uint64_t key = mortonCells(primBounds[i], frame, q);
+        result.keys[i] = key;
+        bits.orBits |= key;
+        bits.andBits &= key;
+      }
+      chunkBits[static_cast<std::size_t>(rank)].value = bits;
+      return;
+    }
+
+    // Morton keys, and the primitives of every candidate's column set aside with their
+    // reordered keys (in input order: the ranks' chunks are in order). Neighbours in
+    // input order are mostly neighbours in space: the last region is tried first.
+    std::vector<FlatPrim>& mine = rankColumns[static_cast<std::size_t>(rank)].value;
+    const std::span<const FlatRegion> regions(candidates);
+    std::uint64_t* const keys = result.keys.get();
+    const FlatRegion* last = regions.data();
     for (std::size_t i = chunk.begin; i < chunk.end; ++i) {
-      const std::uint64_t key = mortonCode(primBounds[i], frame);
-      result.keys[i] = key;
+      const std::uint64_t key = mortonCells(primBounds[i], frame, q);
+      keys[i] = key;
+      const FlatRegion* region = regionOf(key, regions, last);
+      if (region && inColumn(q, *region) && std::isfinite(primBounds[i].surfaceArea()))
+        mine.push_back({key, keyWithAxisLast(q, *region), {q[0], q[1], q[2]}, primBounds[i],
+                        static_cast<std::uint32_t>(region - regions.data())});
+    }
+    barrier.arriveAndWait();
+    if (rank == 0)
+      for (int r = 0; r < size; ++r)
+        for (const FlatPrim& prim : rankColumns[static_cast<std::size_t>(r)].value) columns[prim.region].push_back(prim);
+    barrier.arriveAndWait();
+    for (std::size_t c = nextColumn++; c < columns.size(); c = nextColumn++) accepted[c] = columnIsFlat(columns[c]);
+    barrier.arriveAndWait();
+
+    // The accepted regions' keys reordered, their cells read back from the keys.
+    last = regions.data();
+    for (std::size_t i = chunk.begin; i < chunk.end; ++i) {
+      std::uint64_t key = keys[i];
+      const FlatRegion* region = regionOf(key, regions, last);
+      if (region && accepted[static_cast<std::size_t>(region - regions.data())]) {
+        for (int axis = 0; axis < 3; ++axis) q[axis] = compactBits21(key >> axis);
+        key = keys[i] = keyWithAxisLast(q, *region);
+      }
       bits.orBits |= key;
       bits.andBits &= key;
     }
     chunkBits[static_cast<std::size_t>(rank)].value = bits;
   });
+  result.flatRegions = static_cast<std::size_t>(std::count(accepted.begin(), accepted.end(), 1));
   // Ranks a short team never ran keep the neutral OR 0 and AND ~0.
   for (const PerThread<KeyBits>& chunk : chunkBits) {
     result.bits.orBits |= chunk.value.orBits;
@@ -645,9 +991,10 @@ FlatTree flattenTree(const Hierarchy& tree, std::size_t n, std::uint32_t maxLeaf
   return flat;
 }
 
-/// Wall times of the phases of one build, for the log line.
+/// Wall times of the phases of one build, and the flat patches found, for the log line.
 struct PhaseTimes {
   double morton = 0, sort = 0, hierarchy = 0, flatten = 0;
+  std::size_t flatRegions = 0, flatTested = 0;
 };
 
 /// The slots of a stable team-wide counting pass: offsets[d] is where this rank's
@@ -764,11 +1111,13 @@ void sortKeysWithPlan(int threads, std::size_t n, const RadixPlan& plan, std::un
 
 template <class Indices>
 std::unique_ptr<std::uint64_t[]> sortByMorton(std::span<const Aabb> primBounds, int threads, Cells cells,
-                                             Indices& primIndices, PhaseTimes& times) {
+                                             bool findFlat, Indices& primIndices, PhaseTimes& times) {
   const std::size_t n = primBounds.size();
   Clock::time_point phase = Clock::now();
-  MortonKeys morton = computeMortonKeys(primBounds, threads, cells);
+  MortonKeys morton = computeMortonKeys(primBounds, threads, cells, findFlat);
   times.morton = secondsSince(phase);
+  times.flatRegions = morton.flatRegions;
+  times.flatTested = morton.flatTested;
 
   phase = Clock::now();
   const RadixPlan plan = planRadixSort(morton.bits.orBits, morton.bits.andBits);
@@ -799,7 +1148,7 @@ namespace bvh_detail {
 std::vector<std::uint32_t> mortonOrder(std::span<const Aabb> primBounds, int threads) {
   std::vector<std::uint32_t> order;
   PhaseTimes times;
-  if (!primBounds.empty()) sortByMorton(primBounds, std::clamp(threads, 1, kMaxThreads), Cells::Cubic, order, times);
+  if (!primBounds.empty()) sortByMorton(primBounds, std::clamp(threads, 1, kMaxThreads), Cells::Cubic, false, order, times);
   return order;
 }
 
@@ -818,7 +1167,9 @@ Bvh buildWithCells(std::span<const Aabb> primBounds, const BvhBuildOptions& opti
   const int threads = teamThreads(options.threads, n);
   PhaseTimes times;
 
-  std::unique_ptr<std::uint64_t[]> keys = sortByMorton(primBounds, threads, cells, bvh.primIndices, times);
+  // Large inputs are built one way only, so flat patches are looked for there.
+  const bool findFlat = cells == Cells::Cubic && n > kBothCellsBelow;
+  std::unique_ptr<std::uint64_t[]> keys = sortByMorton(primBounds, threads, cells, findFlat, bvh.primIndices, times);
 
   int maxDepth = 0;
   if (n <= maxLeaf) {
@@ -845,14 +1196,15 @@ Bvh buildWithCells(std::span<const Aabb> primBounds, const BvhBuildOptions& opti
   }
   bvh.stats.nodeCount = bvh.nodes.size();
   bvh.stats.maxDepth = maxDepth;
+  bvh.stats.flatRegions = times.flatRegions;
   bvh.stats.buildSeconds = secondsSince(start);
 
-  char line[256];
+  char line[320];
   std::snprintf(line, sizeof line,
-                "bvh: %zu primitives, %zu nodes, depth %d, SAH %.2f, %.1f ms on %d threads, %s cells "
-                "(morton %.1f, sort %.1f, hierarchy %.1f, flatten+bounds %.1f)",
+                "bvh: %zu primitives, %zu nodes, depth %d, SAH %.2f, %.1f ms on %d threads, %s cells, "
+                "%zu of %zu sampled regions flat (morton %.1f, sort %.1f, hierarchy %.1f, flatten+bounds %.1f)",
                 n, bvh.nodes.size(), maxDepth, bvh.stats.sahCost, 1e3 * bvh.stats.buildSeconds, threads,
-                cells == Cells::Cubic ? "cubic" : "per-axis",
+                cells == Cells::Cubic ? "cubic" : "per-axis", times.flatRegions, times.flatTested,
                 1e3 * times.morton, 1e3 * times.sort, 1e3 * times.hierarchy, 1e3 * times.flatten);
   log::debug(line);
   return bvh;

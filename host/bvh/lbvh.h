@@ -57,6 +57,9 @@ struct BvhBuildStats {
   double sahCost = 0.0;       ///< see sahCost()
   std::size_t copiesPlaced = 0;  ///< BvhBuilder::Auto: copies given their geometry's shared tree
   int clusterRounds = 0;         ///< BvhBuilder::Ploc: clustering rounds before the SAH pass
+  /// The LBVH (and Auto, where it builds with it): regions of the scene found to be
+  /// sheets across one axis (a height field) and keyed with that axis last.
+  std::size_t flatRegions = 0;
 };
 
 /// std::allocator, except that resize() leaves new elements default-initialised

@@ -3,6 +3,7 @@
 #pragma once
 
 #include "bvh/lbvh.h"
+#include "scene/scene.h"
 
 #include <gtest/gtest.h>
 
@@ -156,6 +157,13 @@ inline Aabb boxAround(const glm::vec3& center, const glm::vec3& halfSize) {
   box.lo = center - halfSize;
   box.hi = center + halfSize;
   return box;
+}
+
+/// The bounds of the scene's triangles, in triangle order.
+inline std::vector<Aabb> triangleBounds(const Scene& scene) {
+  std::vector<Aabb> bounds(scene.triangles.size());
+  for (std::size_t i = 0; i < bounds.size(); ++i) bounds[i] = scene.triangleBounds(std::uint32_t(i));
+  return bounds;
 }
 
 /// Boxes with centres uniform in [0,1)^3 and half-sizes up to maxHalf, then mapped by offset + scale * p.

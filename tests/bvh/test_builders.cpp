@@ -33,12 +33,6 @@ BvhBuildOptions optionsFor(BvhBuilder builder, int maxLeafSize = 4, int threads 
   return options;
 }
 
-std::vector<Aabb> triangleBounds(const Scene& scene) {
-  std::vector<Aabb> bounds(scene.triangles.size());
-  for (std::size_t i = 0; i < bounds.size(); ++i) bounds[i] = scene.triangleBounds(std::uint32_t(i));
-  return bounds;
-}
-
 class Builder : public ::testing::TestWithParam<BvhBuilder> {
  protected:
   Bvh build(std::span<const Aabb> prims, int maxLeafSize = 4, int threads = 0) {
@@ -338,6 +332,8 @@ TEST(AutoBuilder, BadInstancesAreRejected) {
 // 1.08-1.85 binary) and below the LBVH's cost.
 constexpr double kSlack = 1.02;
 constexpr double kPlocVsSah = 1.15;
+// The LBVH's 4-wide tree on a height field, against the SAH tree's (BvhQuality.BumpyGrid).
+constexpr double kFlatVsSah = 1.05;
 
 struct Costs {
   double binary, bvh4;
@@ -355,7 +351,15 @@ struct Measured {
   Costs sah, ploc;
 };
 
-void expectQuality(const char* mesh, const std::vector<Aabb>& prims, const Measured& measured) {
+struct AllCosts {
+  Costs lbvh, ploc, sah;
+};
+
+/// The checks above; with plocBelowLbvh also that PLOC's tree costs less than
+/// the LBVH's (not on a height field, whose regions the LBVH keys with their
+/// height last while PLOC clusters in the plain Morton order).
+AllCosts expectQuality(const char* mesh, const std::vector<Aabb>& prims, const Measured& measured,
+                       bool plocBelowLbvh = true) {
   const Costs lbvh = costOf(prims, BvhBuilder::Lbvh), ploc = costOf(prims, BvhBuilder::Ploc),
               sah = costOf(prims, BvhBuilder::Sah);
   ::testing::Test::RecordProperty("lbvh_sah", std::to_string(lbvh.binary));
@@ -370,15 +374,22 @@ void expectQuality(const char* mesh, const std::vector<Aabb>& prims, const Measu
   EXPECT_LE(ploc.bvh4, measured.ploc.bvh4 * kSlack);
   EXPECT_LE(ploc.binary, kPlocVsSah * sah.binary);
   EXPECT_LE(ploc.bvh4, kPlocVsSah * sah.bvh4);
-  EXPECT_LT(ploc.binary, lbvh.binary);
-  EXPECT_LT(ploc.bvh4, lbvh.bvh4);
+  if (plocBelowLbvh) {
+    EXPECT_LT(ploc.binary, lbvh.binary);
+    EXPECT_LT(ploc.bvh4, lbvh.bvh4);
+  }
+  return {lbvh, ploc, sah};
 }
 
 TEST(BvhQuality, BumpyGrid) {
   const std::vector<Aabb> prims = triangleBounds(makeBumpyGrid(200000));
-  expectQuality("bumpy grid 200k", prims, {{44.95, 21.49}, {49.88, 22.65}});
-  // the bound discriminates: the plain LBVH is outside it here
-  EXPECT_GT(costOf(prims, BvhBuilder::Lbvh).binary, kPlocVsSah * costOf(prims, BvhBuilder::Sah).binary);
+  const AllCosts costs = expectQuality("bumpy grid 200k", prims, {{44.95, 21.49}, {49.88, 22.65}}, false);
+  // The LBVH keys the grid's regions with their height last (flat regions,
+  // host/bvh/lbvh.cpp): measured 2026-12-04, binary / 4-wide, 48.24 / 21.93
+  // (1.07 / 1.02 times the SAH tree's; PLOC 47.18 / 22.64); in the plain
+  // Morton order 52.65 / 24.68, 1.15 times the SAH tree's 4-wide cost.
+  EXPECT_LE(costs.lbvh.bvh4, kFlatVsSah * costs.sah.bvh4);
+  EXPECT_LE(costs.lbvh.binary, kPlocVsSah * costs.sah.binary);
 }
 
 TEST(BvhQuality, Icosphere) {

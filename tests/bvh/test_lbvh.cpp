@@ -7,6 +7,7 @@
 #include "scene/generators.h"
 
 #include <gtest/gtest.h>
+#include <glm/gtc/matrix_transform.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -345,6 +346,65 @@ TEST(Lbvh, ThreadCountDoesNotChangeTheTree) {
     EXPECT_EQ(one.stats.maxDepth, many.stats.maxDepth);
     EXPECT_EQ(one.stats.leafCount, many.stats.leafCount);
     EXPECT_EQ(one.stats.sahCost, many.stats.sahCost);
+  }
+}
+
+TEST(Lbvh, FlatRegionsGiveTheSameTreeOnAnyThreadCount) {
+  const std::vector<Aabb> prims = triangleBounds(makeBumpyGrid(200000));
+  const Bvh one = buildLbvh(prims, withLeafSize(4, 1));
+  ASSERT_TRUE(checkBvhInvariants(one, prims));
+  ASSERT_GT(one.stats.flatRegions, 0u);
+  for (int threads : {2, 3}) {
+    SCOPED_TRACE("threads = " + std::to_string(threads));
+    const Bvh many = buildLbvh(prims, withLeafSize(4, threads));
+    ASSERT_EQ(one.nodes.size(), many.nodes.size());
+    EXPECT_EQ(0, std::memcmp(one.nodes.data(), many.nodes.data(), one.nodes.size() * sizeof(WtBvhNode)));
+    EXPECT_EQ(one.primIndices, many.primIndices);
+    EXPECT_EQ(one.stats.flatRegions, many.stats.flatRegions);
+  }
+}
+
+// ---- flat regions ------------------------------------------------------------------
+
+// Above 65 536 primitives, regions of the scene whose primitives form one sheet
+// across an axis (a height field, a patch of a large smooth surface) are keyed with
+// that axis last (flat patches, host/bvh/lbvh.cpp); the costs this buys are held in
+// BvhQuality.BumpyGrid and Bvh4.SahRegression*. Here: which scenes are sheets.
+
+TEST(Lbvh, HeightFieldIsFoundFlat) {
+  const std::vector<Aabb> prims = triangleBounds(makeBumpyGrid(200000));
+  const Bvh bvh = buildLbvh(prims, withLeafSize(4));
+  ASSERT_TRUE(checkBvhInvariants(bvh, prims));
+  // every sampled region of the grid is a sheet (measured 2026-12-04: 32 of 32)
+  EXPECT_GE(bvh.stats.flatRegions, 16u);
+}
+
+TEST(Lbvh, SmallInputsAreNotTestedForFlatRegions) {
+  const std::vector<Aabb> prims = triangleBounds(makeBumpyGrid(60000));
+  EXPECT_EQ(buildLbvh(prims, withLeafSize(4)).stats.flatRegions, 0u);
+}
+
+TEST(Lbvh, VolumesAndClosedObjectsAreNotFlat) {
+  // a soup and random boxes fill a volume; a plane of closed spheres (as
+  // MetalRoughSpheres) is thin across one axis, but keying that axis last
+  // would mix every sphere's front with its back
+  std::vector<glm::mat4> transforms;
+  for (int row = 0; row < 7; ++row)
+    for (int column = 0; column < 8; ++column)
+      transforms.push_back(glm::translate(glm::mat4(1.0f), glm::vec3(2.2f * float(column), 2.2f * float(row), 0.0f)));
+  const Scene spheres =
+      placeCopies(makeIcosphere(3, glm::vec3(0.0f), 1.0f, makeMaterial(glm::vec3(0.5f))), transforms);
+  const std::pair<const char*, std::vector<Aabb>> inputs[] = {
+      {"soup", triangleBounds(makeTriangleSoup(100000, 9, 0.05f))},
+      {"random boxes", randomBoxes(200000, 51)},
+      {"a plane of spheres", triangleBounds(spheres)},
+  };
+  for (const auto& [name, prims] : inputs) {
+    SCOPED_TRACE(name);
+    ASSERT_GT(prims.size(), 65536u);
+    const Bvh bvh = buildLbvh(prims, withLeafSize(4));
+    ASSERT_TRUE(checkBvhInvariants(bvh, prims));
+    EXPECT_EQ(bvh.stats.flatRegions, 0u);
   }
 }
 

@@ -144,6 +144,23 @@ TEST(Traversal, PlacedCopiesMatchBruteForce) {
   }
 }
 
+/// A height field large enough for the LBVH's flat regions (keys with the
+/// height last, host/bvh/lbvh.cpp), through the LBVH and the auto builder (which
+/// builds it with the LBVH) at leaf sizes 1 and 8.
+TEST(Traversal, FlatRegionsMatchBruteForce) {
+  const Scene scene = makeBumpyGrid(70000);
+  ASSERT_GT(scene.triangles.size(), 65536u);
+  for (BvhBuilder builder : {BvhBuilder::Lbvh, BvhBuilder::Auto})
+    for (int leaf : {1, 8}) {
+      SCOPED_TRACE(std::string(bvhBuilderName(builder)) + ", leaf size " + std::to_string(leaf));
+      BvhBuildOptions options;
+      options.builder = builder;
+      options.maxLeafSize = leaf;
+      expectAgreement(scene, randomRays(1000, 57 + leaf), options);
+      EXPECT_GT(Tracer(test::deviceContext(), scene, options).sceneBuffers().bvhStats().flatRegions, 0u);
+    }
+}
+
 TEST(Traversal, DegenerateTrianglesAreNeverHit) {
   // zero-area triangles: a point and a segment, among ordinary ones
   Scene scene = makeTriangleSoup(50, 3, 0.2f);

@@ -65,6 +65,21 @@ TEST(Watertight, PlacedCopiesFromInside) {
   EXPECT_EQ(countLeaks(scene, origins, edgeTargets(scene, 1, 1)), 0u);
 }
 
+TEST(Watertight, HeightFieldFromAbove) {
+  // Large enough for the LBVH's flat regions (the auto builder builds it with
+  // the LBVH). From high above, rays steeper than any of the field's slopes
+  // (at most about 2) see no silhouette: every one aimed at an inner vertex or
+  // edge crosses the field.
+  const Scene scene = makeBumpyGrid(70000);
+  std::vector<glm::vec3> targets;
+  const std::size_t stride = test::testSize(7, 61);
+  std::size_t k = 0;
+  for (const glm::vec3& t : edgeTargets(scene, 0, 4))
+    if (std::abs(t.x) < 0.99f && std::abs(t.z) < 0.99f && k++ % stride == 0) targets.push_back(t);
+  const std::vector<glm::vec3> origins = {glm::vec3(0.1f, 20.0f, 0.2f), glm::vec3(-0.4f, 15.0f, 0.3f)};
+  EXPECT_EQ(countLeaks(scene, origins, targets), 0u);
+}
+
 TEST(Watertight, BoxFromInsideAndOutside) {
   Scene scene = makeBox(glm::vec3(-1.0f), glm::vec3(1.0f), makeMaterial(glm::vec3(0.5f)));
   // inside, and outside on a diagonal so that every target is in front of a face
