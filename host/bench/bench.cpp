@@ -310,6 +310,7 @@ struct SceneResult {
   double bytesPerTriangle = 0.0;
   std::size_t leafMisfits = 0;  ///< leaves taking one more four-lane test than their size needs
   std::size_t copiesPlaced = 0;  ///< copies given their geometry's shared tree (--bvh auto)
+  std::size_t flatRegions = 0;   ///< regions the LBVH keyed with their thin axis last
   bool shadowToEmitters = false;
   double embreeBuildSeconds = 0.0;
   std::vector<SetResult> sets;
@@ -531,6 +532,7 @@ SceneResult benchScene(Context& context, const std::string& name, const Scene& s
   result.nodes = bvh.stats.nodeCount;
   result.sah = bvh.stats.sahCost;
   result.copiesPlaced = bvh.stats.copiesPlaced;
+  result.flatRegions = bvh.stats.flatRegions;
   // the collapse and the leaves' layout in blocks as the build: median of
   // the repetitions after a warm-up
   Bvh4 bvh4;
@@ -711,11 +713,11 @@ int runBench(const BenchOptions& options) {
       std::printf("  {\"name\": %s, \"triangles\": %zu, \"bvh_build_s\": %.6f, \"bvh_mtris_per_s\": %.3f, "
                   "\"bvh_nodes\": %zu, \"bvh_sah\": %.3f, \"bvh4_nodes\": %zu, \"bvh4_sah\": %.3f, \"bvh4_collapse_s\": %.6f, "
                   "\"bvh4_mtris_per_s\": %.3f, \"bytes_per_triangle\": %.1f, \"leaf_misfits\": %zu, \"bvh_copies_placed\": %zu, "
-                  "\"embree_build_s\": %.6f, \"shadow_targets\": \"%s\", \"path_mrays\": %.3f,\n",
+                  "\"bvh_flat_regions\": %zu, \"embree_build_s\": %.6f, \"shadow_targets\": \"%s\", \"path_mrays\": %.3f,\n",
                   jsonString(r.name).c_str(), r.triangles, r.buildSeconds,
                   r.buildSeconds > 0 ? r.triangles / r.buildSeconds * 1e-6 : 0.0, r.nodes, r.sah,
                   r.nodes4, r.sah4, r.collapseSeconds, traversableRate(r), r.bytesPerTriangle, r.leafMisfits, r.copiesPlaced,
-                  r.embreeBuildSeconds, r.shadowToEmitters ? "emitters" : "bounds", r.pathMrays);
+                  r.flatRegions, r.embreeBuildSeconds, r.shadowToEmitters ? "emitters" : "bounds", r.pathMrays);
       std::printf("   \"bvh_builder\": \"%s\", \"trees\": [", options.bvh.c_str());
       const TreeResult* sahTree = nullptr;
       for (const TreeResult& t : r.trees)
