@@ -8,6 +8,7 @@
 #include "core/spawn.h"
 #include "device/context.h"
 #include "device/program.h"
+#include "device/scene_buffers.h"
 #include "device/tracer.h"
 #include "render/renderer.h"
 #include "scene/default_scene.h"
@@ -522,9 +523,11 @@ SceneResult benchScene(Context& context, const std::string& name, const Scene& s
   // BVH build, median of several
   std::vector<Aabb> bounds(scene.triangles.size());
   for (std::size_t i = 0; i < bounds.size(); ++i) bounds[i] = scene.triangleBounds(std::uint32_t(i));
-  std::vector<BvhInstance> instances;  // the scene's placed copies, for --bvh auto
-  for (const GeometryInstance& copy : scene.instances)
-    instances.push_back({copy.firstTriangle, copy.triangleCount, copy.geometry});
+  // The scene's placed copies, for --bvh auto. The bench keeps every triangle in
+  // its build (degenerate ones too), so the BVH's input is the scene's triangles.
+  std::vector<std::uint32_t> allTriangles(scene.triangles.size());
+  for (std::size_t i = 0; i < allTriangles.size(); ++i) allTriangles[i] = std::uint32_t(i);
+  const std::vector<BvhInstance> instances = bvhInstances(scene, allTriangles);
   BvhBuildOptions bvhOptions = benchBvhOptions(*parseBvhBuilder(options.bvh), options);
   auto [bvh, seconds] =
       timedBuild(bounds, instances, binaryBuildOptions(bvhOptions, bounds.size()), options.repetitions);

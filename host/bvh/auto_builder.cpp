@@ -52,14 +52,26 @@ Bvh buildPart(std::span<const Aabb> bounds, const BvhBuildOptions& options) {
   return buildBvh(bounds, part);
 }
 
-/// Primitives below each node of a tree (children come after their parents).
-std::vector<std::uint32_t> subtreePrims(const Bvh& bvh) {
-  std::vector<std::uint32_t> prims(bvh.nodes.size(), 0);
+/// Primitives and nodes below each node of a tree, itself included (children
+/// come after their parents).
+struct SubtreeSize {
+  std::uint32_t prims = 0;
+  std::uint32_t nodes = 1;
+};
+
+std::vector<SubtreeSize> subtreeSizes(const Bvh& bvh) {
+  std::vector<SubtreeSize> sizes(bvh.nodes.size());
   for (std::size_t i = bvh.nodes.size(); i-- > 0;) {
     const WtBvhNode& node = bvh.nodes[i];
-    prims[i] = node.count > 0 ? node.count : prims[node.first] + prims[node.first + 1];
+    if (node.count > 0) {
+      sizes[i].prims = node.count;
+      continue;
+    }
+    const SubtreeSize& left = sizes[node.first];
+    const SubtreeSize& right = sizes[node.first + 1];
+    sizes[i] = {left.prims + right.prims, 1 + left.nodes + right.nodes};
   }
-  return prims;
+  return sizes;
 }
 
 /// Where a top-pass cluster's subtree comes from: node `node` of `tree`, whose
@@ -166,20 +178,20 @@ Bvh buildAutoBvh(std::span<const Aabb> primBounds, const BvhBuildOptions& option
       clusters[c].box = box;
     }
   });
+  const std::vector<SubtreeSize> restSizes = subtreeSizes(restTree);
   if (!restTree.nodes.empty()) {
-    const std::vector<std::uint32_t> prims = subtreePrims(restTree);
     const std::uint32_t cut = std::uint32_t(std::max<std::size_t>(restIndex.size() / kRestClusters, 1));
     std::vector<std::uint32_t> stack{0};
     while (!stack.empty()) {
       const std::uint32_t node = stack.back();
       stack.pop_back();
       const WtBvhNode& rn = restTree.nodes[node];
-      if (rn.count == 0 && prims[node] > cut) {
+      if (rn.count == 0 && restSizes[node].prims > cut) {
         stack.push_back(rn.first + 1);
         stack.push_back(rn.first);
         continue;
       }
-      clusters.push_back({nodeBox(rn), std::uint32_t(sources.size()), prims[node]});
+      clusters.push_back({nodeBox(rn), std::uint32_t(sources.size()), restSizes[node].prims});
       sources.push_back({&restTree, node, 0, &restIndex});
     }
   }
@@ -258,18 +270,12 @@ Bvh buildAutoBvh(std::span<const Aabb> primBounds, const BvhBuildOptions& option
     }
   }
   const std::size_t topNodes = bvh.nodes.size();
-  const std::vector<std::uint32_t> restNodes = [&] {  // nodes below each rest node, itself included
-    std::vector<std::uint32_t> below(restTree.nodes.size(), 1);
-    for (std::size_t i = restTree.nodes.size(); i-- > 0;)
-      if (restTree.nodes[i].count == 0) below[i] = 1 + below[restTree.nodes[i].first] + below[restTree.nodes[i].first + 1];
-    return below;
-  }();
   std::size_t nodeCursor = topNodes, primCursor = bvh.primIndices.size();
   for (Job& job : jobs) {
     const ClusterSource& s = sources[job.source];
     job.nodeBase = std::uint32_t(nodeCursor);
     job.primBase = std::uint32_t(primCursor);
-    nodeCursor += (s.primMap ? restNodes[s.node] : std::uint32_t(s.tree->nodes.size())) - 1;
+    nodeCursor += (s.primMap ? restSizes[s.node].nodes : std::uint32_t(s.tree->nodes.size())) - 1;
     primCursor += topPrims[job.source];  // a cluster's primitives
   }
   bvh.nodes.resize(nodeCursor);

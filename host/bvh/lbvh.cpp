@@ -8,6 +8,7 @@
 // parallel over subtrees.
 #include "bvh/lbvh.h"
 
+#include "bvh/build_tree.h"
 #include "bvh/parallel.h"
 #include "core/log.h"
 
@@ -757,11 +758,6 @@ Hierarchy buildHierarchy(const std::uint64_t* keys, std::size_t n, std::uint32_t
 }
 
 // ---- flatten and boxes -------------------------------------------------------------
-
-void setBox(WtBvhNode& node, const Aabb& box) {
-  node.lo_x = box.lo.x, node.lo_y = box.lo.y, node.lo_z = box.lo.z;
-  node.hi_x = box.hi.x, node.hi_y = box.hi.y, node.hi_z = box.hi.z;
-}
 
 /// Union of boxes[0 .. leaf.count).
 void setLeafBox(WtBvhNode& leaf, const Aabb* boxes) {

@@ -45,11 +45,9 @@ struct ClusterBoxes {
   }
 };
 
-Aabb unionBox(const Aabb& a, const Aabb& b) {
-  Aabb u;
-  u.lo.x = std::min(a.lo.x, b.lo.x), u.lo.y = std::min(a.lo.y, b.lo.y), u.lo.z = std::min(a.lo.z, b.lo.z);
-  u.hi.x = std::max(a.hi.x, b.hi.x), u.hi.y = std::max(a.hi.y, b.hi.y), u.hi.z = std::max(a.hi.z, b.hi.z);
-  return u;
+Aabb unionBox(Aabb a, const Aabb& b) {
+  a.extend(b);
+  return a;
 }
 
 constexpr std::uint32_t kMaxRadius = 64;

@@ -37,14 +37,6 @@ double area(const Aabb& box) {
   return 2.0 * (ex * ey + ey * ez + ez * ex);
 }
 
-void grow(Aabb& box, const Aabb& other) {
-  // std::min/max as buildLbvh does, so NaN bounds behave alike
-  box.lo.x = std::min(box.lo.x, other.lo.x), box.lo.y = std::min(box.lo.y, other.lo.y);
-  box.lo.z = std::min(box.lo.z, other.lo.z);
-  box.hi.x = std::max(box.hi.x, other.hi.x), box.hi.y = std::max(box.hi.y, other.hi.y);
-  box.hi.z = std::max(box.hi.z, other.hi.z);
-}
-
 float centroid(const Item& item, int axis) { return 0.5f * item.box.lo[axis] + 0.5f * item.box.hi[axis]; }
 
 struct Task {
@@ -64,7 +56,7 @@ class SahBuild {
     Aabb bounds, centroids;
     for (std::uint32_t k = task.begin; k < task.end; ++k) {
       const Item& item = m_items[k];
-      grow(bounds, item.box);
+      bounds.extend(item.box);
       for (int a = 0; a < 3; ++a) {
         const float c = centroid(item, a);
         if (!std::isfinite(c)) continue;
@@ -95,7 +87,7 @@ class SahBuild {
       std::array<Bin, kBins> bins{};
       for (std::uint32_t k = task.begin; k < task.end; ++k) {
         const int b = binOf(m_items[k], a, centroids.lo[a], scale[a]);
-        grow(bins[b].box, m_items[k].box);
+        bins[b].box.extend(m_items[k].box);
         ++bins[b].count;
       }
       // areas and counts right of each plane, then sweep from the left
@@ -103,14 +95,14 @@ class SahBuild {
       Aabb right;
       std::uint32_t rightCount = 0;
       for (int b = kBins - 1; b > 0; --b) {
-        grow(right, bins[b].box);
+        right.extend(bins[b].box);
         rightCount += bins[b].count;
         rightCost[b] = area(right) * rightCount;
       }
       Aabb left;
       std::uint32_t leftCount = 0;
       for (int plane = 1; plane < kBins; ++plane) {
-        grow(left, bins[plane - 1].box);
+        left.extend(bins[plane - 1].box);
         leftCount += bins[plane - 1].count;
         if (leftCount == 0 || leftCount == count) continue;
         const double cost = area(left) * leftCount + rightCost[plane];
