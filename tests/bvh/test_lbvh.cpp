@@ -379,6 +379,21 @@ TEST(Lbvh, HeightFieldIsFoundFlat) {
   EXPECT_GE(bvh.stats.flatRegions, 16u);
 }
 
+TEST(Lbvh, FlatRegionsWithNonFiniteBounds) {
+  // NaN, empty and infinite boxes among a height field's: left out of the
+  // samples and columns, keyed as in Morton order (code 0, or their clamped
+  // cells); the tree still holds every primitive once
+  std::vector<Aabb> prims = triangleBounds(makeBumpyGrid(200000));
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const float inf = std::numeric_limits<float>::infinity();
+  for (std::size_t i = 0; i < prims.size(); i += 97) prims[i].lo.y = nan;
+  for (std::size_t i = 3; i < prims.size(); i += 101) prims[i] = Aabb{};
+  for (std::size_t i = 5; i < prims.size(); i += 103) prims[i].hi.x = inf;
+  const Bvh bvh = buildLbvh(prims, withLeafSize(4, 2));
+  EXPECT_TRUE(checkBvhInvariants(bvh, prims, 4, /*checkBoxes=*/false));
+  EXPECT_GT(bvh.stats.flatRegions, 0u);
+}
+
 TEST(Lbvh, SmallInputsAreNotTestedForFlatRegions) {
   const std::vector<Aabb> prims = triangleBounds(makeBumpyGrid(60000));
   EXPECT_EQ(buildLbvh(prims, withLeafSize(4)).stats.flatRegions, 0u);
