@@ -219,6 +219,52 @@ TEST(PacketTraversalEdges, PartialPacketsMixedLanesAndEmptyScenes) {
   }
 }
 
+TEST(PacketTraversalEdges, MixedPacketsMatchSingleRays) {
+  // Every packet holds a few rays of another axis permutation: the any-hit
+  // query traces the others as a packet and those alone; the closest-hit
+  // query traces the whole packet ray by ray. The same answers as single rays.
+  Scene scene = makeTriangleSoup(2000, 6, 0.15f);
+  std::vector<Ray> fan = cameraFans(scene, 32, 9);
+  for (int width : kPacketWidths) {
+    SCOPED_TRACE("packets of " + std::to_string(width));
+    std::vector<Ray> rays = fan;
+    std::size_t mixed = 0, packets = 0;
+    for (std::size_t i = 0; i + std::size_t(width) <= rays.size(); i += std::size_t(width), ++packets) {
+      // lanes 3 and, in packets of 16, 11 aimed from their origin at the scene's
+      // centre along another dominant axis
+      for (std::size_t l : {std::size_t(3), std::size_t(11)}) {
+        if (l >= std::size_t(width)) continue;
+        Ray& r = rays[i + l];
+        const glm::vec3 d = r.direction;
+        r.origin = glm::vec3(0.5f) - 2.0f * glm::vec3(d.y, d.z, d.x);
+        r.direction = glm::vec3(d.y, d.z, d.x);
+      }
+      bool same = true;
+      for (std::size_t l = 1; l < std::size_t(width); ++l)
+        same = same && permutation(rays[i + l].direction) == permutation(rays[i].direction);
+      mixed += !same;
+    }
+    ASSERT_GT(mixed, packets * 9 / 10);
+    Tracer tracer(test::deviceContext(), scene, {}, width);
+    std::vector<RayHit> single = tracer.traceClosest(rays, Traversal::kSingle);
+    std::vector<RayHit> packet = tracer.traceClosest(rays, Traversal::kPacket);
+    std::vector<std::uint8_t> singleBlocked = tracer.traceOccluded(rays, Traversal::kSingle);
+    std::vector<std::uint8_t> packetBlocked = tracer.traceOccluded(rays, Traversal::kPacket);
+    int differ = 0, blocked = 0;
+    for (std::size_t i = 0; i < rays.size(); ++i) {
+      blocked += singleBlocked[i] != 0;
+      if ((single[i].triangle != packet[i].triangle || !sameBits(single[i].t, packet[i].t) ||
+           singleBlocked[i] != packetBlocked[i]) &&
+          ++differ <= 5)
+        ADD_FAILURE() << "ray " << i << ": single " << single[i].triangle << " blocked " << int(singleBlocked[i])
+                      << ", packet " << packet[i].triangle << " blocked " << int(packetBlocked[i]);
+    }
+    EXPECT_EQ(differ, 0);
+    EXPECT_GT(blocked, int(rays.size() / 10));
+    EXPECT_LT(blocked, int(rays.size()));
+  }
+}
+
 TEST(PacketTraversalEdges, WidthByDevice) {
   // 16 lanes where the device's float vector is 16 wide, 8 elsewhere; an
   // explicit 8 or 16 wins; anything else is refused
