@@ -58,13 +58,16 @@ double secondsSince(Clock::time_point start) {
 
 // ---- Morton codes ------------------------------------------------------------------
 
-/// Bit k of the index moved to bit 3k, for every byte.
-constexpr std::array<std::uint64_t, 256> kSpreadByte = [] {
-  std::array<std::uint64_t, 256> table{};
-  for (std::uint64_t v = 0; v < 256; ++v)
-    for (int bit = 0; bit < 8; ++bit) table[v] |= ((v >> bit) & 1u) << (3 * bit);
+/// Bit k of the index moved to bit spacing * k, for every byte.
+template <class T, int kSpacing>
+constexpr std::array<T, 256> spreadByteTable() {
+  std::array<T, 256> table{};
+  for (T v = 0; v < 256; ++v)
+    for (int bit = 0; bit < 8; ++bit) table[v] |= ((v >> bit) & 1u) << (kSpacing * bit);
   return table;
-}();
+}
+
+constexpr std::array<std::uint64_t, 256> kSpreadByte = spreadByteTable<std::uint64_t, 3>();
 
 /// Spread the low 21 bits of v so that bit k moves to bit 3k (table lookups measured
 /// faster than the shift-and-mask sequence).
@@ -221,13 +224,7 @@ std::uint32_t compactBits21(std::uint64_t v) {
   return static_cast<std::uint32_t>(v);
 }
 
-/// Bit k of the index moved to bit 2k, for every byte.
-constexpr std::array<std::uint32_t, 256> kSpreadByte2 = [] {
-  std::array<std::uint32_t, 256> table{};
-  for (std::uint32_t v = 0; v < 256; ++v)
-    for (int bit = 0; bit < 8; ++bit) table[v] |= ((v >> bit) & 1u) << (2 * bit);
-  return table;
-}();
+constexpr std::array<std::uint32_t, 256> kSpreadByte2 = spreadByteTable<std::uint32_t, 2>();
 
 /// The low 21 bits of v spread so that bit k moves to bit 2k.
 std::uint64_t expandBits2(std::uint32_t v) {
