@@ -295,6 +295,9 @@ struct TreeResult {
   std::size_t nodes = 0, nodes4 = 0;
   double sah = 0.0, sah4 = 0.0;
   double bytesPerTriangle = 0.0;
+  std::string kernelDir;  ///< --ab-kernel-dir for that row; empty: the kernels every other row traces
+  int packetWidth = 0;    ///< --ab-packet-width for that row; 0: the width every other row traces
+  bool ab() const { return !kernelDir.empty() || packetWidth != 0; }
   std::vector<double> kernelSeconds;  ///< per ray set, median, interleaved with the other trees
   std::vector<double> hitFraction;    ///< per ray set
 };
@@ -313,6 +316,7 @@ struct SceneResult {
   std::size_t copiesPlaced = 0;  ///< copies given their geometry's shared tree (--bvh auto)
   std::size_t flatRegions = 0;   ///< regions the LBVH keyed with their thin axis last
   bool shadowToEmitters = false;
+  int packetWidth = 0;  ///< rays per packet for this scene (packetWidthFor, by camera rays per triangle)
   double embreeBuildSeconds = 0.0;
   std::vector<SetResult> sets;
   double pathMrays = 0.0;
@@ -454,6 +458,15 @@ std::pair<Bvh, double> timedBuild(std::span<const Aabb> bounds, std::span<const 
   return {std::move(bvh), median(builds)};
 }
 
+/// The row an --ab-kernel-dir row is compared with: the same builder's tree
+/// traced by the built-in kernels; null for any other row.
+const TreeResult* abBaseline(const std::vector<TreeResult>& trees, const TreeResult& tree) {
+  if (!tree.ab()) return nullptr;
+  for (const TreeResult& t : trees)
+    if (t.builder == tree.builder && !t.ab()) return &t;
+  return nullptr;
+}
+
 /// Build each --compare-bvh tree (median of the repetitions), then trace
 /// the same ray sets through all of them, the trees taking turns within each
 /// repetition so that a change in the machine's load hits them alike.
@@ -463,7 +476,13 @@ void compareTrees(Context& context, const Scene& scene, std::span<const Aabb> bo
                   std::array<Traversal, 3> traversals, const BenchOptions& options, std::vector<TreeResult>& trees) {
   std::vector<std::unique_ptr<Tracer>> owned;
   std::vector<Tracer*> tracers;
-  for (const std::string& name : options.compareBvh) {
+  std::vector<std::string> names = options.compareBvh;
+  // --ab-kernel-dir's row is compared with the same tree and the built-in kernels
+  const bool ab = !options.abKernelDir.empty() || options.abPacketWidth != 0;
+  if (ab &&
+      std::find(names.begin(), names.end(), std::string(bvhBuilderName(defaultBuilder))) == names.end())
+    names.insert(names.begin(), bvhBuilderName(defaultBuilder));
+  for (const std::string& name : names) {
     if (name == "none") continue;
     TreeResult tree;
     tree.builder = *parseBvhBuilder(name);
@@ -479,12 +498,34 @@ void compareTrees(Context& context, const Scene& scene, std::span<const Aabb> bo
     if (tree.builder == defaultBuilder) {
       tracers.push_back(&defaultTracer);
     } else {
-      owned.push_back(std::make_unique<Tracer>(context, scene, bvhOptions, options.packetWidth));
+      owned.push_back(std::make_unique<Tracer>(context, scene, bvhOptions, defaultTracer.packetWidth()));
       tracers.push_back(owned.back().get());
     }
     tree.bytesPerTriangle = scene.triangles.empty() ? 0.0
                                                     : double(tracers.back()->sceneBuffers().uploadedBytes) /
                                                           scene.triangles.size();
+    trees.push_back(tree);
+  }
+  if (ab) {
+    // the --bvh tree once more, traced by the kernels from that folder or in packets of that width
+    const std::optional<std::filesystem::path> before = kernelDirectory();
+    if (!options.abKernelDir.empty()) setKernelDirectory(std::filesystem::path(options.abKernelDir));
+    TreeResult tree;
+    tree.builder = defaultBuilder;
+    tree.kernelDir = options.abKernelDir;
+    tree.packetWidth = options.abPacketWidth;
+    try {
+      owned.push_back(std::make_unique<Tracer>(context, scene, benchBvhOptions(defaultBuilder, options),
+                                               options.abPacketWidth ? options.abPacketWidth
+                                                                     : defaultTracer.packetWidth()));
+    } catch (...) {
+      setKernelDirectory(before);
+      throw;
+    }
+    setKernelDirectory(before);
+    tracers.push_back(owned.back().get());
+    tree.nodes4 = tracers.back()->sceneBuffers().nodeCount;
+    tree.bytesPerTriangle = defaultTracer.sceneBuffers().uploadedBytes / std::max<double>(1.0, scene.triangles.size());
     trees.push_back(tree);
   }
   for (std::size_t set = 0; set < sets.size(); ++set) {
@@ -553,7 +594,11 @@ SceneResult benchScene(Context& context, const std::string& name, const Scene& s
   bvh = {};
   bvh4 = {};
 
-  Tracer tracer(context, scene, bvhOptions, options.packetWidth);
+  // packets of 16 only where the camera rays are dense enough on the triangles (as the renderer)
+  result.packetWidth =
+      packetWidthFor(context.info(), options.packetWidth,
+                     std::size_t(options.primaryWidth) * std::size_t(options.primaryWidth), scene.triangles.size());
+  Tracer tracer(context, scene, bvhOptions, result.packetWidth);
   result.bytesPerTriangle =
       scene.triangles.empty() ? 0.0 : double(tracer.sceneBuffers().uploadedBytes) / scene.triangles.size();
   result.leafMisfits = tracer.sceneBuffers().leafMisfits();
@@ -716,29 +761,35 @@ int runBench(const BenchOptions& options) {
       std::printf("  {\"name\": %s, \"triangles\": %zu, \"bvh_build_s\": %.6f, \"bvh_mtris_per_s\": %.3f, "
                   "\"bvh_nodes\": %zu, \"bvh_sah\": %.3f, \"bvh4_nodes\": %zu, \"bvh4_sah\": %.3f, \"bvh4_collapse_s\": %.6f, "
                   "\"bvh4_mtris_per_s\": %.3f, \"bytes_per_triangle\": %.1f, \"leaf_misfits\": %zu, \"bvh_copies_placed\": %zu, "
-                  "\"bvh_flat_regions\": %zu, \"embree_build_s\": %.6f, \"shadow_targets\": \"%s\", \"path_mrays\": %.3f,\n",
+                  "\"bvh_flat_regions\": %zu, \"packet_width\": %d, \"embree_build_s\": %.6f, \"shadow_targets\": \"%s\", "
+                  "\"path_mrays\": %.3f,\n",
                   jsonString(r.name).c_str(), r.triangles, r.buildSeconds,
                   r.buildSeconds > 0 ? r.triangles / r.buildSeconds * 1e-6 : 0.0, r.nodes, r.sah,
                   r.nodes4, r.sah4, r.collapseSeconds, traversableRate(r), r.bytesPerTriangle, r.leafMisfits, r.copiesPlaced,
-                  r.flatRegions, r.embreeBuildSeconds, r.shadowToEmitters ? "emitters" : "bounds", r.pathMrays);
+                  r.flatRegions, r.packetWidth, r.embreeBuildSeconds, r.shadowToEmitters ? "emitters" : "bounds", r.pathMrays);
       std::printf("   \"bvh_builder\": \"%s\", \"trees\": [", options.bvh.c_str());
       const TreeResult* sahTree = nullptr;
       for (const TreeResult& t : r.trees)
-        if (t.builder == BvhBuilder::Sah) sahTree = &t;
+        if (t.builder == BvhBuilder::Sah && !t.ab()) sahTree = &t;
       for (std::size_t t = 0; t < r.trees.size(); ++t) {
         const TreeResult& tree = r.trees[t];
         std::printf("%s\n    {\"builder\": \"%s\", \"build_s\": %.6f, \"mtris_per_s\": %.3f, \"nodes\": %zu, "
-                    "\"sah\": %.3f, \"bvh4_nodes\": %zu, \"bvh4_sah\": %.3f, \"bytes_per_triangle\": %.1f, "
-                    "\"ray_sets\": [",
+                    "\"sah\": %.3f, \"bvh4_nodes\": %zu, \"bvh4_sah\": %.3f, \"bytes_per_triangle\": %.1f, ",
                     t ? "," : "", bvhBuilderName(tree.builder), tree.buildSeconds,
                     tree.buildSeconds > 0 ? r.triangles / tree.buildSeconds * 1e-6 : 0.0, tree.nodes, tree.sah,
                     tree.nodes4, tree.sah4, tree.bytesPerTriangle);
+        if (!tree.kernelDir.empty()) std::printf("\"kernel_dir\": %s, ", jsonString(tree.kernelDir).c_str());
+        if (tree.packetWidth) std::printf("\"packet_width\": %d, ", tree.packetWidth);
+        std::printf("\"ray_sets\": [");
+        const TreeResult* builtIn = abBaseline(r.trees, tree);
         for (std::size_t k = 0; k < tree.kernelSeconds.size(); ++k) {
           std::printf("%s{\"name\": \"%s\", \"kernel_s\": %.6f, \"mrays_kernel\": %.3f, \"hit_fraction\": %.6f",
                       k ? ", " : "", r.sets[k].name.c_str(), tree.kernelSeconds[k],
                       mrays(r.sets[k].rays, tree.kernelSeconds[k]), tree.hitFraction[k]);
-          if (sahTree && tree.kernelSeconds[k] > 0)
+          if (sahTree && tree.kernelSeconds[k] > 0 && !tree.ab())
             std::printf(", \"throughput_vs_sah\": %.4f", sahTree->kernelSeconds[k] / tree.kernelSeconds[k]);
+          if (builtIn && tree.kernelSeconds[k] > 0)
+            std::printf(", \"throughput_vs_baseline\": %.4f", builtIn->kernelSeconds[k] / tree.kernelSeconds[k]);
           std::printf("}");
         }
         std::printf("]}");
@@ -771,8 +822,13 @@ int runBench(const BenchOptions& options) {
     return 0;
   }
 
-  std::printf("device: %s (%s); reference: %s; bvh: %s; packets of %d rays\n", device.name.c_str(),
-              device.platformName.c_str(), embreeText.c_str(), options.bvh.c_str(), packetWidth);
+  char rule[96];
+  std::snprintf(rule, sizeof rule, " (8 for a scene with fewer than %g camera rays per triangle)",
+                kWidePacketRaysPerTriangle);
+  const std::string widePacketRule = rule;
+  std::printf("device: %s (%s); reference: %s; bvh: %s; packets of %d rays%s\n", device.name.c_str(),
+              device.platformName.c_str(), embreeText.c_str(), options.bvh.c_str(), packetWidth,
+              options.packetWidth == 0 && packetWidth == 16 ? widePacketRule.c_str() : "");
   std::printf("rays: primary %dx%d through pixel centres; diffuse and shadow rays from their hits; "
               "median of %d after a warm-up\npaths: %dx%d, %d spp, up to 8 bounces, extend rays counted\n",
               options.primaryWidth, options.primaryWidth, options.repetitions, options.pathWidth, options.pathWidth,
@@ -796,6 +852,11 @@ int runBench(const BenchOptions& options) {
   bool anyTrees = false;
   for (const SceneResult& r : results) anyTrees |= !r.trees.empty();
   if (anyTrees) {
+    if (!options.abKernelDir.empty() || options.abPacketWidth)
+      std::printf("\n*: %s%s%s; (x) = throughput / the same tree's without", 
+                  options.abKernelDir.empty() ? "" : ("the kernels in " + options.abKernelDir).c_str(),
+                  !options.abKernelDir.empty() && options.abPacketWidth ? ", " : "",
+                  options.abPacketWidth ? ("packets of " + std::to_string(options.abPacketWidth)).c_str() : "");
     std::printf("\ntree quality: kernel Mrays/s per builder on the same rays, interleaved; (x) = throughput / the sah "
                 "tree's\n%-28s %-5s %9s %8s %9s %7s %9s %7s %6s %16s %16s %16s\n",
                 "scene", "bvh", "build ms", "Mtris/s", "nodes", "SAH", "nodes4", "SAH4", "B/tri", "primary", "diffuse",
@@ -803,16 +864,18 @@ int runBench(const BenchOptions& options) {
     for (const SceneResult& r : results) {
       const TreeResult* sahTree = nullptr;
       for (const TreeResult& t : r.trees)
-        if (t.builder == BvhBuilder::Sah) sahTree = &t;
+        if (t.builder == BvhBuilder::Sah && !t.ab()) sahTree = &t;
       for (const TreeResult& t : r.trees) {
-        std::printf("%-28s %-5s %9.2f %8.2f %9zu %7.2f %9zu %7.2f %6.1f", r.name.c_str(), bvhBuilderName(t.builder),
+        const TreeResult* reference = t.ab() ? abBaseline(r.trees, t) : sahTree;
+        std::printf("%-28s %-5s %9.2f %8.2f %9zu %7.2f %9zu %7.2f %6.1f", r.name.c_str(),
+                    (std::string(bvhBuilderName(t.builder)) + (t.ab() ? "*" : "")).c_str(),
                     t.buildSeconds * 1e3, t.buildSeconds > 0 ? r.triangles / t.buildSeconds * 1e-6 : 0.0, t.nodes,
                     t.sah, t.nodes4, t.sah4, t.bytesPerTriangle);
         for (std::size_t k = 0; k < t.kernelSeconds.size(); ++k) {
           char cell[32];
-          if (sahTree && t.kernelSeconds[k] > 0)
+          if (reference && t.kernelSeconds[k] > 0)
             std::snprintf(cell, sizeof cell, "%.2f (%.3f)", mrays(r.sets[k].rays, t.kernelSeconds[k]),
-                          sahTree->kernelSeconds[k] / t.kernelSeconds[k]);
+                          reference->kernelSeconds[k] / t.kernelSeconds[k]);
           else
             std::snprintf(cell, sizeof cell, "%.2f", mrays(r.sets[k].rays, t.kernelSeconds[k]));
           std::printf(" %16s", cell);
@@ -823,11 +886,12 @@ int runBench(const BenchOptions& options) {
   }
 
   // Mrays/s; ratio = wavetrace kernel throughput / Embree throughput
-  std::printf("\n%-28s %-8s %-6s %8s %6s %9s %9s %9s %7s %10s %s\n", "scene", "rays", "trav", "count", "hit %", "wt wall",
+  std::printf("\n%-28s %-8s %-8s %8s %6s %9s %9s %9s %7s %10s %s\n", "scene", "rays", "trav", "count", "hit %", "wt wall",
               "wt kernel", "Embree", "ratio", "agree %", "disagreements (tie/edge/range/self/other)");
   for (const SceneResult& r : results)
     for (const SetResult& s : r.sets) {
-      std::printf("%-28s %-8s %-6s %8zu %6.1f %9.2f %9.2f", r.name.c_str(), s.name.c_str(), traversalName(s.traversal),
+      const std::string trav = s.traversal == Traversal::kPacket ? "packet" + std::to_string(r.packetWidth) : "single";
+      std::printf("%-28s %-8s %-8s %8zu %6.1f %9.2f %9.2f", r.name.c_str(), s.name.c_str(), trav.c_str(),
                   s.rays, 100.0 * s.hitFraction,
                   mrays(s.rays, s.wallSeconds), mrays(s.rays, s.kernelSeconds));
       if (s.embree) {

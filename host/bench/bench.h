@@ -34,6 +34,14 @@ struct BenchOptions {
   int maxLeafSize = 0;    ///< the 4-wide leaf limit of every tree (0: kBvh4MaxLeafSize, as the renderer; bvh4Options)
   int plocRadius = 16;    ///< BvhBuildOptions::plocRadius for every ploc tree
   int plocTopPrims = 16;  ///< BvhBuildOptions::plocTopPrims for every ploc tree
+  /// Kernel development: one more row in the tree comparison, the --bvh tree
+  /// traced by the kernels in this folder (as --kernel-dir), taking turns
+  /// with the others in one process; empty: none.
+  std::string abKernelDir;
+  /// Kernel development: one more row in the tree comparison, the --bvh tree
+  /// traced in packets of this many rays (8 or 16) instead of packetWidth,
+  /// with --ab-kernel-dir's kernels if given; 0: none.
+  int abPacketWidth = 0;
 };
 
 /// Run the benchmark and print the results to stdout. Returns an exit code.

@@ -325,6 +325,13 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({0, 8, 16}))->capture_default_str();
   benchCmd->add_option("--max-leaf-size", bench.maxLeafSize, "Every tree: no leaf holds more triangles (0: 16, as render); the collapse to 4 wide chooses the leaves up to it")
       ->check(CLI::Range(0, 64));
+  benchCmd->add_option("--ab-kernel-dir", bench.abKernelDir,
+                       "Kernel development: the tree comparison gains a row, the --bvh tree traced by the kernels in "
+                       "this folder, interleaved with the built-in kernels' row in one process");
+  benchCmd->add_option("--ab-packet-width", bench.abPacketWidth,
+                       "Kernel development: the tree comparison gains a row, the --bvh tree traced in packets of "
+                       "this many rays, interleaved with the --packet-width row in one process")
+      ->check(CLI::IsMember({8, 16}));
   benchCmd->add_option("--ploc-radius", bench.plocRadius, "ploc trees: neighbours searched on each side")
       ->check(CLI::Range(1, 64))->capture_default_str();
   benchCmd->add_option("--ploc-top-prims", bench.plocTopPrims,

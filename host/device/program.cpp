@@ -13,6 +13,8 @@ namespace {
 std::optional<std::filesystem::path> g_kernelDir;
 bool g_kernelDirFromEnv = false;
 
+}  // namespace
+
 std::optional<std::filesystem::path> kernelDirectory() {
   if (!g_kernelDirFromEnv) {
     g_kernelDirFromEnv = true;
@@ -22,6 +24,8 @@ std::optional<std::filesystem::path> kernelDirectory() {
   }
   return g_kernelDir;
 }
+
+namespace {
 
 /// A kernel file by its path relative to kernels/, from disk or embedded.
 std::optional<std::string> readKernelFile(const std::string& rel) {
@@ -97,11 +101,13 @@ std::vector<std::string> kernelDefines(const KernelFeatures& features) {
   };
 }
 
-int packetWidthFor(const DeviceInfo& device, int requested) {
+int packetWidthFor(const DeviceInfo& device, int requested, std::size_t cameraRays, std::size_t triangles) {
   if (requested == 8 || requested == 16) return requested;
   if (requested != 0)
     throw DeviceError("packet width " + std::to_string(requested) + " is not supported (8 or 16)");
-  return device.nativeFloatWidth >= 16 ? 16 : 8;
+  if (device.nativeFloatWidth < 16) return 8;
+  const bool sparse = triangles > 0 && double(cameraRays) < kWidePacketRaysPerTriangle * double(triangles);
+  return sparse ? 8 : 16;
 }
 
 cl::Program buildProgram(Context& context, const KernelFeatures& features, const std::string& root) {

@@ -21,10 +21,21 @@ struct KernelFeatures {
   int packetWidth = 8;            ///< rays per packet (WT_PACKET_WIDTH): 8 or 16, packetWidthFor
 };
 
+/// Camera rays per triangle below which a 16-wide device still gets packets
+/// of 8: a packet's rays then spread over several leaves, and 16 lanes pay
+/// for the union (1024x1024 camera rays on the 1 M-triangle scenes traced
+/// 1.10-1.25x faster in packets of 8 on an AVX-512 Zen 4, and at 0.98-1.00x
+/// on a Zen 5; 4 rays per triangle or more, 16 was the faster:
+/// docs/performance.md, "Packet width by rays per triangle").
+constexpr double kWidePacketRaysPerTriangle = 3.0;
+
 /// Rays per packet for a device: `requested` (8 or 16) when non-zero, else
-/// 16 where the device's native float vector is 16 wide (AVX-512 CPUs),
-/// else 8. Throws DeviceError for any other request.
-int packetWidthFor(const DeviceInfo& device, int requested = 0);
+/// 16 where the device's native float vector is 16 wide (AVX-512 CPUs) and
+/// a sample's `cameraRays` are at least kWidePacketRaysPerTriangle per
+/// triangle of the scene (`triangles`; 0: not known, 16), else 8. Throws
+/// DeviceError for any other request.
+int packetWidthFor(const DeviceInfo& device, int requested = 0, std::size_t cameraRays = 0,
+                   std::size_t triangles = 0);
 
 /// The build options for a feature set, e.g. "-D WT_INTEGRATOR_MINIMAL=1 ...".
 std::vector<std::string> kernelDefines(const KernelFeatures& features);
@@ -32,6 +43,9 @@ std::vector<std::string> kernelDefines(const KernelFeatures& features);
 /// Read kernels from this folder instead of the embedded copies (developer
 /// option, --kernel-dir; also the WT_KERNEL_DIR environment variable).
 void setKernelDirectory(const std::optional<std::filesystem::path>& dir);
+/// The folder kernels are read from (setKernelDirectory, else WT_KERNEL_DIR);
+/// none: the embedded copies.
+std::optional<std::filesystem::path> kernelDirectory();
 
 /// The source of `file` (relative to kernels/) with every `#include "..."`
 /// expanded once, resolved against the including file's folder and then the

@@ -60,7 +60,8 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
   KernelFeatures features;
   features.integratorMinimal = settings.integrator == Integrator::Minimal;
   features.bvhStackSize = m_scene->stackSize();
-  m_packetWidth = packetWidthFor(context.info(), settings.packetWidth);
+  m_packetWidth = packetWidthFor(context.info(), settings.packetWidth,
+                                 std::size_t(settings.width) * std::size_t(settings.height), scene.triangles.size());
   features.packetWidth = m_packetWidth;
   features.pbr = std::any_of(scene.materials.begin(), scene.materials.end(),
                              [](const WtMaterial& m) { return m.model == WT_MATERIAL_PBR; });
