@@ -2,6 +2,7 @@
 // closest hits or occlusion flags out.
 #include "bvh.cl"
 #include "bvh_packet.cl"
+#include "bvh_stream.cl"
 
 WT_KERNEL void trace_closest(uint count, __global const float4* ray_o, __global const float4* ray_d,
                              __global const WtBvhNode* nodes, uint node_count,
@@ -26,6 +27,19 @@ WT_KERNEL void trace_occluded(uint count, __global const float4* ray_o,
   float4 d = ray_d[i];
   BvhScene scene = {nodes, node_count, tri_verts};
   occluded[i] = bvh_occluded(scene, o.xyz, d.xyz, o.w, d.w, skip[i], WT_NO_HIT) ? 1u : 0u;
+}
+
+// Any hit for incoherent rays as streams (kernels/bvh_stream.cl): work-item
+// i takes rays [WT_STREAM_WINDOW i, WT_STREAM_WINDOW (i + 1)).
+WT_KERNEL void trace_occluded_stream(uint count, __global const float4* ray_o,
+                                     __global const float4* ray_d, __global const WtBvhNode* nodes,
+                                     uint node_count, __global const float4* tri_verts,
+                                     __global uint* occluded, __global const uint* skip) {
+  uint i = get_global_id(0);
+  if (i >= (count + WT_STREAM_WINDOW - 1u) / WT_STREAM_WINDOW) return;
+  BvhScene scene = {nodes, node_count, tri_verts};
+  uint first = i * WT_STREAM_WINDOW;
+  bvh_occluded_window(scene, first, min(first + WT_STREAM_WINDOW, count), ray_o, ray_d, skip, occluded);
 }
 
 // The same queries, WT_PACKET_WIDTH consecutive rays per work-item

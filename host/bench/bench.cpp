@@ -272,6 +272,10 @@ struct Agreement {
 struct Reference {
   std::function<std::vector<RayHit>(std::span<const Ray>, bool coherent)> closest;
   std::function<std::vector<std::uint8_t>(std::span<const Ray>, bool coherent)> occluded;
+  /// The ways of handing rays over that a set is timed with (the fastest is
+  /// compared), and the one later calls use.
+  std::vector<std::string> apis;
+  std::function<void(const std::string&)> setApi;
 };
 
 struct SetResult {
@@ -282,6 +286,7 @@ struct SetResult {
   double wallSeconds = 0.0, kernelSeconds = 0.0;
   bool embree = false;
   double embreeSeconds = 0.0;
+  std::string embreeApi;  ///< the API embreeSeconds was measured with (the fastest of Reference::apis)
   double embreeHitFraction = 0.0;
   Agreement agreement;
   Traversal traversal = Traversal::kSingle;
@@ -297,7 +302,8 @@ struct TreeResult {
   double bytesPerTriangle = 0.0;
   std::string kernelDir;  ///< --ab-kernel-dir for that row; empty: the kernels every other row traces
   int packetWidth = 0;    ///< --ab-packet-width for that row; 0: the width every other row traces
-  bool ab() const { return !kernelDir.empty() || packetWidth != 0; }
+  std::string traversal;  ///< --ab-traversal for that row; empty: each set's own (benchSet's choice)
+  bool ab() const { return !kernelDir.empty() || packetWidth != 0 || !traversal.empty(); }
   std::vector<double> kernelSeconds;  ///< per ray set, median, interleaved with the other trees
   std::vector<double> hitFraction;    ///< per ray set
 };
@@ -337,14 +343,21 @@ double traversableRate(const SceneResult& r) {
 constexpr double kPacketCoherence = 0.9;
 
 /// The traversal --traversal picks for a set of rays of this packetCoherence
-/// (auto: packets when the rays of a packet point nearly the same way).
-Traversal setTraversal(const BenchOptions& options, double coherence) {
+/// (auto: packets when the rays of a packet point nearly the same way; else,
+/// for any-hit queries on a CPU, streams; else one ray per work-item).
+/// Streams are for any hit only: a closest-hit set given "stream" is traced
+/// one ray per work-item.
+Traversal setTraversal(const BenchOptions& options, double coherence, bool occlusion, bool gpu) {
   if (options.traversal == "single") return Traversal::kSingle;
   if (options.traversal == "packet") return Traversal::kPacket;
-  return coherence >= kPacketCoherence ? Traversal::kPacket : Traversal::kSingle;
+  if (options.traversal == "stream") return occlusion ? Traversal::kStream : Traversal::kSingle;
+  if (coherence >= kPacketCoherence) return Traversal::kPacket;
+  return occlusion && !gpu ? Traversal::kStream : Traversal::kSingle;
 }
 
-const char* traversalName(Traversal t) { return t == Traversal::kPacket ? "packet" : "single"; }
+const char* traversalName(Traversal t) {
+  return t == Traversal::kPacket ? "packet" : t == Traversal::kStream ? "stream" : "single";
+}
 
 template <typename Fn>
 std::vector<double> timeRuns(int repetitions, Fn&& fn) {
@@ -366,7 +379,8 @@ std::vector<RayHit> benchSet(const Scene& scene, Tracer& tracer, const Reference
   result.occlusion = occlusion;
   result.rays = rays.size();
   result.coherence = packetCoherence(rays, std::size_t(tracer.packetWidth()));
-  const Traversal traversal = result.traversal = setTraversal(options, result.coherence);
+  const Traversal traversal = result.traversal =
+      setTraversal(options, result.coherence, occlusion, tracer.context().info().isGpu);
   if (rays.empty()) return {};
   std::vector<RayHit> hits;
   std::vector<std::uint8_t> blocked;
@@ -397,12 +411,24 @@ std::vector<RayHit> benchSet(const Scene& scene, Tracer& tracer, const Reference
   result.embree = true;
   std::vector<RayHit> refHits;
   std::vector<std::uint8_t> refBlocked;
-  if (occlusion) {
-    refBlocked = embree->occluded(rays, coherent);
-    result.embreeSeconds = median(timeRuns(options.repetitions, [&] { embree->occluded(rays, coherent); }));
-  } else {
-    refHits = embree->closest(rays, coherent);
-    result.embreeSeconds = median(timeRuns(options.repetitions, [&] { embree->closest(rays, coherent); }));
+  // every API in turn (a warm-up, which gives the answers, then the timed
+  // runs); the fastest median is the one compared
+  for (const std::string& api : embree->apis) {
+    embree->setApi(api);
+    double seconds = 0.0;
+    if (occlusion) {
+      std::vector<std::uint8_t> answers = embree->occluded(rays, coherent);
+      seconds = median(timeRuns(options.repetitions, [&] { embree->occluded(rays, coherent); }));
+      if (result.embreeApi.empty() || seconds < result.embreeSeconds) refBlocked = std::move(answers);
+    } else {
+      std::vector<RayHit> answers = embree->closest(rays, coherent);
+      seconds = median(timeRuns(options.repetitions, [&] { embree->closest(rays, coherent); }));
+      if (result.embreeApi.empty() || seconds < result.embreeSeconds) refHits = std::move(answers);
+    }
+    if (result.embreeApi.empty() || seconds < result.embreeSeconds) {
+      result.embreeSeconds = seconds;
+      result.embreeApi = api;
+    }
   }
 
   // agreement: closest hits by triangle; occlusion by flag, classified
@@ -478,7 +504,7 @@ void compareTrees(Context& context, const Scene& scene, std::span<const Aabb> bo
   std::vector<Tracer*> tracers;
   std::vector<std::string> names = options.compareBvh;
   // --ab-kernel-dir's row is compared with the same tree and the built-in kernels
-  const bool ab = !options.abKernelDir.empty() || options.abPacketWidth != 0;
+  const bool ab = !options.abKernelDir.empty() || options.abPacketWidth != 0 || !options.abTraversal.empty();
   if (ab &&
       std::find(names.begin(), names.end(), std::string(bvhBuilderName(defaultBuilder))) == names.end())
     names.insert(names.begin(), bvhBuilderName(defaultBuilder));
@@ -514,6 +540,7 @@ void compareTrees(Context& context, const Scene& scene, std::span<const Aabb> bo
     tree.builder = defaultBuilder;
     tree.kernelDir = options.abKernelDir;
     tree.packetWidth = options.abPacketWidth;
+    tree.traversal = options.abTraversal;
     try {
       owned.push_back(std::make_unique<Tracer>(context, scene, benchBvhOptions(defaultBuilder, options),
                                                options.abPacketWidth ? options.abPacketWidth
@@ -531,24 +558,31 @@ void compareTrees(Context& context, const Scene& scene, std::span<const Aabb> bo
   for (std::size_t set = 0; set < sets.size(); ++set) {
     const std::vector<Ray>& rays = *sets[set];
     const bool occlusion = set == 2;
-    const Traversal traversal = traversals[set];  // as benchSet chose for that set
     std::vector<std::vector<double>> kernel(tracers.size());
+    // as benchSet chose for that set, but on an --ab-traversal row
+    std::vector<Traversal> traversal(tracers.size(), traversals[set]);
+    for (std::size_t t = 0; t < tracers.size(); ++t)
+      if (!trees[t].traversal.empty()) {
+        BenchOptions forced = options;
+        forced.traversal = trees[t].traversal;
+        traversal[t] = setTraversal(forced, 0.0, occlusion, false);
+      }
     for (std::size_t t = 0; t < tracers.size(); ++t) {
       // warm-up, and the answers
       std::size_t hits = 0;
       if (occlusion) {
-        for (std::uint8_t b : tracers[t]->traceOccluded(rays, traversal)) hits += b != 0;
+        for (std::uint8_t b : tracers[t]->traceOccluded(rays, traversal[t])) hits += b != 0;
       } else {
-        for (const RayHit& h : tracers[t]->traceClosest(rays, traversal)) hits += h.triangle != RayHit::kNoHit;
+        for (const RayHit& h : tracers[t]->traceClosest(rays, traversal[t])) hits += h.triangle != RayHit::kNoHit;
       }
       trees[t].hitFraction.push_back(rays.empty() ? 0.0 : double(hits) / rays.size());
     }
     for (int r = 0; r < options.repetitions; ++r)
       for (std::size_t t = 0; t < tracers.size(); ++t) {
         if (occlusion)
-          tracers[t]->traceOccluded(rays, traversal);
+          tracers[t]->traceOccluded(rays, traversal[t]);
         else
-          tracers[t]->traceClosest(rays, traversal);
+          tracers[t]->traceClosest(rays, traversal[t]);
         kernel[t].push_back(tracers[t]->lastKernelSeconds());
       }
     for (std::size_t t = 0; t < tracers.size(); ++t) trees[t].kernelSeconds.push_back(median(kernel[t]));
@@ -605,7 +639,8 @@ SceneResult benchScene(Context& context, const std::string& name, const Scene& s
   std::unique_ptr<Reference> embree;
 #ifdef WT_HAVE_EMBREE
   EmbreeOptions embreeOptions;
-  embreeOptions.api = parseEmbreeApi(options.embreeApi);
+  const bool fastest = options.embreeApi == "fastest";
+  if (!fastest) embreeOptions.api = parseEmbreeApi(options.embreeApi);
   embreeOptions.quality = options.embreeQuality;
   embreeOptions.robust = options.embreeRobust;
   auto reference = std::make_shared<EmbreeReference>(scene, embreeOptions);
@@ -617,6 +652,11 @@ SceneResult benchScene(Context& context, const std::string& name, const Scene& s
   embree->occluded = [reference](std::span<const Ray> rays, bool coherent) {
     return reference->traceOccluded(rays, coherent);
   };
+  if (fastest)
+    for (EmbreeApi api : kEmbreeApis) embree->apis.push_back(embreeApiName(api));
+  else
+    embree->apis.push_back(options.embreeApi);
+  embree->setApi = [reference](const std::string& api) { reference->setApi(parseEmbreeApi(api)); };
 #endif
 
   // the three ray sets, made once from the camera rays' hits
@@ -685,7 +725,7 @@ int runBench(const BenchOptions& options) {
   Context context(device, /*profiling=*/true);
   const int packetWidth = packetWidthFor(device, options.packetWidth);
 #ifdef WT_HAVE_EMBREE
-  parseEmbreeApi(options.embreeApi);  // a bad name fails before any work
+  if (options.embreeApi != "fastest") parseEmbreeApi(options.embreeApi);  // a bad name fails before any work
 #endif
   for (const std::string& name : options.compareBvh)
     if (name != "none" && !parseBvhBuilder(name)) throw std::invalid_argument("unknown BVH builder '" + name + "'");
@@ -734,7 +774,8 @@ int runBench(const BenchOptions& options) {
 #ifdef WT_HAVE_EMBREE
   {
     EmbreeOptions o;
-    o.api = parseEmbreeApi(options.embreeApi);
+    o.fastestPerSet = options.embreeApi == "fastest";
+    if (!o.fastestPerSet) o.api = parseEmbreeApi(options.embreeApi);
     o.quality = options.embreeQuality;
     o.robust = options.embreeRobust;
     embreeText = EmbreeReference(Scene{}, o).description();
@@ -780,6 +821,7 @@ int runBench(const BenchOptions& options) {
                     tree.nodes4, tree.sah4, tree.bytesPerTriangle);
         if (!tree.kernelDir.empty()) std::printf("\"kernel_dir\": %s, ", jsonString(tree.kernelDir).c_str());
         if (tree.packetWidth) std::printf("\"packet_width\": %d, ", tree.packetWidth);
+        if (!tree.traversal.empty()) std::printf("\"traversal\": \"%s\", ", tree.traversal.c_str());
         std::printf("\"ray_sets\": [");
         const TreeResult* builtIn = abBaseline(r.trees, tree);
         for (std::size_t k = 0; k < tree.kernelSeconds.size(); ++k) {
@@ -802,10 +844,10 @@ int runBench(const BenchOptions& options) {
                     s.name.c_str(), s.occlusion ? "any_hit" : "closest_hit", s.rays, s.hitFraction,
                     traversalName(s.traversal), s.coherence, s.wallSeconds, s.kernelSeconds, mrays(s.rays, s.wallSeconds), mrays(s.rays, s.kernelSeconds));
         if (s.embree) {
-          std::printf(", \"embree_s\": %.6f, \"embree_mrays\": %.3f, \"embree_hit_fraction\": %.6f, "
+          std::printf(", \"embree_api\": \"%s\", \"embree_s\": %.6f, \"embree_mrays\": %.3f, \"embree_hit_fraction\": %.6f, "
                       "\"ratio_kernel\": %.4f, \"ratio_wall\": %.4f, \"agreement\": %.8f, \"disagreements\": %zu, "
                       "\"disagreements_explained\": %zu, \"disagreement_classes\": {",
-                      s.embreeSeconds, mrays(s.rays, s.embreeSeconds), s.embreeHitFraction,
+                      s.embreeApi.c_str(), s.embreeSeconds, mrays(s.rays, s.embreeSeconds), s.embreeHitFraction,
                       s.kernelSeconds > 0 ? s.embreeSeconds / s.kernelSeconds : 0.0,
                       s.wallSeconds > 0 ? s.embreeSeconds / s.wallSeconds : 0.0,
                       s.rays ? 1.0 - double(s.agreement.disagreements) / s.rays : 1.0, s.agreement.disagreements,
@@ -852,11 +894,13 @@ int runBench(const BenchOptions& options) {
   bool anyTrees = false;
   for (const SceneResult& r : results) anyTrees |= !r.trees.empty();
   if (anyTrees) {
-    if (!options.abKernelDir.empty() || options.abPacketWidth)
-      std::printf("\n*: %s%s%s; (x) = throughput / the same tree's without", 
-                  options.abKernelDir.empty() ? "" : ("the kernels in " + options.abKernelDir).c_str(),
-                  !options.abKernelDir.empty() && options.abPacketWidth ? ", " : "",
-                  options.abPacketWidth ? ("packets of " + std::to_string(options.abPacketWidth)).c_str() : "");
+    if (!options.abKernelDir.empty() || options.abPacketWidth || !options.abTraversal.empty()) {
+      std::string what;
+      if (!options.abKernelDir.empty()) what += "the kernels in " + options.abKernelDir;
+      if (options.abPacketWidth) what += (what.empty() ? "" : ", ") + std::string("packets of ") + std::to_string(options.abPacketWidth);
+      if (!options.abTraversal.empty()) what += (what.empty() ? "" : ", ") + std::string("--traversal ") + options.abTraversal;
+      std::printf("\n*: %s; (x) = throughput / the same tree's without", what.c_str());
+    }
     std::printf("\ntree quality: kernel Mrays/s per builder on the same rays, interleaved; (x) = throughput / the sah "
                 "tree's\n%-28s %-5s %9s %8s %9s %7s %9s %7s %6s %16s %16s %16s\n",
                 "scene", "bvh", "build ms", "Mtris/s", "nodes", "SAH", "nodes4", "SAH4", "B/tri", "primary", "diffuse",
@@ -886,19 +930,20 @@ int runBench(const BenchOptions& options) {
   }
 
   // Mrays/s; ratio = wavetrace kernel throughput / Embree throughput
-  std::printf("\n%-28s %-8s %-8s %8s %6s %9s %9s %9s %7s %10s %s\n", "scene", "rays", "trav", "count", "hit %", "wt wall",
-              "wt kernel", "Embree", "ratio", "agree %", "disagreements (tie/edge/range/self/other)");
+  std::printf("\n%-28s %-8s %-8s %8s %6s %9s %9s %9s %-8s %7s %10s %s\n", "scene", "rays", "trav", "count", "hit %",
+              "wt wall", "wt kernel", "Embree", "API", "ratio", "agree %", "disagreements (tie/edge/range/self/other)");
   for (const SceneResult& r : results)
     for (const SetResult& s : r.sets) {
-      const std::string trav = s.traversal == Traversal::kPacket ? "packet" + std::to_string(r.packetWidth) : "single";
+      const std::string trav = s.traversal == Traversal::kPacket ? "packet" + std::to_string(r.packetWidth)
+                                                                 : traversalName(s.traversal);
       std::printf("%-28s %-8s %-8s %8zu %6.1f %9.2f %9.2f", r.name.c_str(), s.name.c_str(), trav.c_str(),
                   s.rays, 100.0 * s.hitFraction,
                   mrays(s.rays, s.wallSeconds), mrays(s.rays, s.kernelSeconds));
       if (s.embree) {
         const Agreement& a = s.agreement;
         std::size_t other = a.disagreements - a.explained();
-        std::printf(" %9.2f %7.3f %10.4f %zu (%zu/%zu/%zu/%zu/%zu)", mrays(s.rays, s.embreeSeconds),
-                    s.kernelSeconds > 0 ? s.embreeSeconds / s.kernelSeconds : 0.0,
+        std::printf(" %9.2f %-8s %7.3f %10.4f %zu (%zu/%zu/%zu/%zu/%zu)", mrays(s.rays, s.embreeSeconds),
+                    s.embreeApi.c_str(), s.kernelSeconds > 0 ? s.embreeSeconds / s.kernelSeconds : 0.0,
                     s.rays ? 100.0 * (1.0 - double(a.disagreements) / s.rays) : 100.0, a.disagreements,
                     a.byClass[std::size_t(Disagreement::kTie)], a.byClass[std::size_t(Disagreement::kEdge)],
                     a.byClass[std::size_t(Disagreement::kRange)], a.byClass[std::size_t(Disagreement::kSelf)], other);

@@ -19,16 +19,19 @@ struct BenchOptions {
   int pathSamples = 4;
   int repetitions = 5;              ///< median of this many timed runs after a warm-up
   int meshTriangles = 1000000;      ///< size of the generated mesh
-  std::string embreeApi = "packet16"; ///< single, packet8, packet16, stream (host/bench/embree_reference.h)
+  /// single, packet8, packet16, stream (host/bench/embree_reference.h), or
+  /// fastest: every set traced with all four, compared with the fastest
+  std::string embreeApi = "fastest";
   int embreeQuality = 2;            ///< RTC_BUILD_QUALITY_: 0 low, 1 medium, 2 high
   bool embreeRobust = false;        ///< RTC_SCENE_FLAG_ROBUST
   std::string bvh = "auto";         ///< the tree compared with Embree and rendering the path figure
   /// Builders whose trees are built (median of repetitions) and traced on
   /// the same rays, interleaved, for the tree-quality table; "none" skips it.
   std::vector<std::string> compareBvh{"auto", "lbvh", "ploc", "sah"};
-  /// single, packet, or auto: packets (Traversal::kPacket) for the sets
-  /// whose neighbouring rays start from neighbouring pixels (primary,
-  /// shadow), one ray per work-item for the diffuse set.
+  /// single, packet, stream or auto: packets (Traversal::kPacket) for the
+  /// sets whose packets' rays point nearly the same way (camera rays, shadow
+  /// rays to one small light), streams (Traversal::kStream) for the other
+  /// any-hit sets on a CPU, one ray per work-item for the rest.
   std::string traversal = "auto";
   int packetWidth = 0;    ///< rays per packet, 8 or 16; 0: by the device (packetWidthFor)
   int maxLeafSize = 0;    ///< the 4-wide leaf limit of every tree (0: kBvh4MaxLeafSize, as the renderer; bvh4Options)
@@ -42,6 +45,10 @@ struct BenchOptions {
   /// traced in packets of this many rays (8 or 16) instead of packetWidth,
   /// with --ab-kernel-dir's kernels if given; 0: none.
   int abPacketWidth = 0;
+  /// Kernel development: one more row in the tree comparison, the --bvh tree
+  /// with every set traced this way (single, packet, stream; as --traversal);
+  /// empty: none.
+  std::string abTraversal;
 };
 
 /// Run the benchmark and print the results to stdout. Returns an exit code.

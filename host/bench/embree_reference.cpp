@@ -127,10 +127,15 @@ std::string EmbreeReference::description() const {
   const Impl& im = *m_impl;
   static const char* kQuality[] = {"low", "medium", "high"};
   return "Embree " + std::to_string(RTC_VERSION_MAJOR) + "." + std::to_string(RTC_VERSION_MINOR) + "." +
-         std::to_string(RTC_VERSION_PATCH) + ", " + embreeApiName(im.options.api) + " API, " +
+         std::to_string(RTC_VERSION_PATCH) + ", " +
+         (im.options.fastestPerSet ? std::string("the fastest API of each set")
+                                   : embreeApiName(im.options.api) + std::string(" API")) +
+         ", " +
          kQuality[std::clamp(im.options.quality, 0, 2)] + " quality" + (im.options.robust ? ", robust" : "") +
          ", " + std::to_string(im.threads) + " threads";
 }
+
+void EmbreeReference::setApi(EmbreeApi api) { m_impl->options.api = api; }
 
 std::vector<RayHit> EmbreeReference::traceClosest(std::span<const Ray> rays, bool coherent) {
   Impl& im = *m_impl;

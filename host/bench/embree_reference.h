@@ -15,10 +15,12 @@
 
 namespace wt {
 
-/// How a thread hands its chunk of rays to Embree. Measured on the 2-core
-/// AVX-512 development VM (docs/performance.md), relative to kStream: kSingle
-/// 0.72x, kPacket8 1.00x, kPacket16 1.09x (geometric mean over the bench's
-/// twelve ray sets), so kPacket16 is the default.
+/// How a thread hands its chunk of rays to Embree. Which is fastest depends
+/// on the rays and the machine (docs/performance.md, "Embree settings": on a
+/// Zen 4 VM the stream traced DamagedHelmet's shadow rays 1.3-1.45x faster
+/// than packets of 16, packets of 8 the 1 M-triangle scenes' camera rays
+/// 1.1-1.15x), so the bench times all four per ray set by default and
+/// compares with the fastest (BenchOptions::embreeApi "fastest").
 enum class EmbreeApi {
   kSingle,    ///< rtcIntersect1 / rtcOccluded1 per ray
   kPacket8,   ///< rtcIntersect8 / rtcOccluded8
@@ -43,8 +45,13 @@ inline EmbreeApi parseEmbreeApi(const std::string& name) {
   throw std::invalid_argument("--embree-api " + name + ": expected single, packet8, packet16 or stream");
 }
 
+/// Every API, in the order the bench times them.
+constexpr EmbreeApi kEmbreeApis[] = {EmbreeApi::kSingle, EmbreeApi::kPacket8, EmbreeApi::kPacket16,
+                                     EmbreeApi::kStream};
+
 struct EmbreeOptions {
-  EmbreeApi api = EmbreeApi::kPacket16;
+  EmbreeApi api = EmbreeApi::kPacket16;  ///< the API traces use until setApi
+  bool fastestPerSet = false;            ///< only for description(): the caller picks the API per set
   int quality = 2;      ///< RTC_BUILD_QUALITY_: 0 low, 1 medium, 2 high
   bool robust = false;  ///< RTC_SCENE_FLAG_ROBUST
   int threads = 0;      ///< tracing threads; 0: std::thread::hardware_concurrency()
@@ -65,8 +72,12 @@ class EmbreeReference {
   /// 1 where something blocks [tmin, tmax].
   std::vector<std::uint8_t> traceOccluded(std::span<const Ray> rays, bool coherent = false);
 
+  /// The API later traces use.
+  void setApi(EmbreeApi api);
+
   double buildSeconds() const { return m_buildSeconds; }
-  /// "Embree 3.13.5, packet16 API, high quality, 2 threads".
+  /// "Embree 3.13.5, packet16 API, high quality, 2 threads" (with
+  /// fastestPerSet: "the fastest API of each set" instead of "packet16 API").
   std::string description() const;
 
  private:

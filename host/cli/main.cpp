@@ -305,8 +305,10 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(2, 1 << 26))->capture_default_str();
   benchCmd->add_option("--repetitions", bench.repetitions, "Timed runs per figure (median)")
       ->check(CLI::Range(1, 1000))->capture_default_str();
-  benchCmd->add_option("--embree-api", bench.embreeApi, "Embree reference: how rays are handed over")
-      ->check(CLI::IsMember({"single", "packet8", "packet16", "stream"}))->capture_default_str();
+  benchCmd->add_option("--embree-api", bench.embreeApi,
+                       "Embree reference: how rays are handed over; fastest: each set with every API, "
+                       "compared with the fastest")
+      ->check(CLI::IsMember({"fastest", "single", "packet8", "packet16", "stream"}))->capture_default_str();
   benchCmd->add_option("--embree-quality", bench.embreeQuality, "Embree reference: build quality 0 low, 1 medium, 2 high")
       ->check(CLI::Range(0, 2))->capture_default_str();
   benchCmd->add_flag("--embree-robust", bench.embreeRobust, "Embree reference: RTC_SCENE_FLAG_ROBUST");
@@ -317,9 +319,11 @@ int main(int argc, char** argv) {
                        "Builders whose trees are traced on the same rays (tree quality table); none: --compare-bvh none")
       ->delimiter(',')->check(CLI::IsMember({"auto", "lbvh", "ploc", "sah", "none"}))->capture_default_str();
   benchCmd->add_option("--traversal", bench.traversal,
-                       "single: one ray per work-item; packet: a packet of rays per work-item; auto: packets for a set "
-                       "whose packets' rays point nearly the same way (coherence >= 0.9 in --json)")
-      ->check(CLI::IsMember({"single", "packet", "auto"}));
+                       "single: one ray per work-item; packet: a packet of rays per work-item; stream: shadow rays "
+                       "as streams of 64 that walk the tree together; auto: packets for a set whose packets' rays "
+                       "point nearly the same way (coherence >= 0.9 in --json), else streams for shadow rays on a CPU, "
+                       "else single")
+      ->check(CLI::IsMember({"single", "packet", "stream", "auto"}));
   benchCmd->add_option("--packet-width", bench.packetWidth,
                        "Rays per packet: 8 or 16; 0 picks by the device (16 where its native float vector is 16 wide)")
       ->check(CLI::IsMember({0, 8, 16}))->capture_default_str();
@@ -332,6 +336,10 @@ int main(int argc, char** argv) {
                        "Kernel development: the tree comparison gains a row, the --bvh tree traced in packets of "
                        "this many rays, interleaved with the --packet-width row in one process")
       ->check(CLI::IsMember({8, 16}));
+  benchCmd->add_option("--ab-traversal", bench.abTraversal,
+                       "Kernel development: the tree comparison gains a row, the --bvh tree with every set traced "
+                       "this way, interleaved with the row traced as --traversal chose")
+      ->check(CLI::IsMember({"single", "packet", "stream"}));
   benchCmd->add_option("--ploc-radius", bench.plocRadius, "ploc trees: neighbours searched on each side")
       ->check(CLI::Range(1, 64))->capture_default_str();
   benchCmd->add_option("--ploc-top-prims", bench.plocTopPrims,

@@ -7,6 +7,13 @@
 #include <cstring>
 
 namespace wt {
+namespace {
+
+// Work-items per group of the stream kernel: each takes WT_STREAM_WINDOW
+// rays, so groups of 64 would leave a 200 000-ray batch 13 groups to share.
+constexpr std::size_t kStreamLocalSize = 4;
+
+}  // namespace
 
 Tracer::Tracer(Context& context, const Scene& scene, const BvhBuildOptions& options, int packetWidth)
     : m_context(context), m_scene(std::make_unique<SceneBuffers>(context, scene, options)),
@@ -19,6 +26,7 @@ Tracer::Tracer(Context& context, const Scene& scene, const BvhBuildOptions& opti
   m_occluded = cl::Kernel(m_program, "trace_occluded");
   m_closestPacket = cl::Kernel(m_program, "trace_closest_packet");
   m_occludedPacket = cl::Kernel(m_program, "trace_occluded_packet");
+  m_occludedStream = cl::Kernel(m_program, "trace_occluded_stream");
 }
 
 Tracer::~Tracer() = default;
@@ -82,9 +90,16 @@ void Tracer::run(cl::Kernel& kernel, const char* name, std::size_t rays, Travers
   kernel.setArg(a++, m_out);
   kernel.setArg(a++, m_skip);
   const std::size_t kPacket = std::size_t(m_packetWidth);
-  std::size_t items = traversal == Traversal::kPacket ? (rays + kPacket - 1) / kPacket : rays;
+  std::size_t items = rays, localSize = Context::kLocalSize;
+  if (traversal == Traversal::kPacket) {
+    items = (rays + kPacket - 1) / kPacket;
+  } else if (traversal == Traversal::kStream) {
+    // a window of rays per work-item: small groups, so that every thread gets some
+    items = (rays + WT_STREAM_WINDOW - 1) / WT_STREAM_WINDOW;
+    localSize = kStreamLocalSize;
+  }
   m_context.resetStageTimes();
-  m_context.launch(name, kernel, items);
+  m_context.launch(name, kernel, items, localSize);
   m_context.finish();
   m_lastKernelSeconds =
       m_context.stageTimes().seconds.count(name) ? m_context.stageTimes().seconds.at(name) : 0.0;
@@ -95,7 +110,7 @@ std::vector<RayHit> Tracer::traceClosest(std::span<const Ray> rays, Traversal tr
   if (traversal == Traversal::kPacket)
     run(m_closestPacket, "trace_closest_packet", rays.size(), traversal);
   else
-    run(m_closest, "trace_closest", rays.size(), traversal);
+    run(m_closest, "trace_closest", rays.size(), Traversal::kSingle);  // kStream: any hit only
   std::vector<float> raw(4 * rays.size());
   if (!rays.empty())
     m_context.queue().enqueueReadBuffer(m_out, CL_TRUE, 0, raw.size() * 4, raw.data());
@@ -115,6 +130,8 @@ std::vector<std::uint8_t> Tracer::traceOccluded(std::span<const Ray> rays, Trave
   uploadRays(rays);
   if (traversal == Traversal::kPacket)
     run(m_occludedPacket, "trace_occluded_packet", rays.size(), traversal);
+  else if (traversal == Traversal::kStream)
+    run(m_occludedStream, "trace_occluded_stream", rays.size(), traversal);
   else
     run(m_occluded, "trace_occluded", rays.size(), traversal);
   std::vector<cl_uint> raw(rays.size());

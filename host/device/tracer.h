@@ -30,13 +30,15 @@ struct RayHit {
   static constexpr std::uint32_t kNoHit = 0xffffffffu;
 };
 
-/// How a batch is traced: one ray per work-item, or packets of 8 or 16
+/// How a batch is traced: one ray per work-item; packets of 8 or 16
 /// consecutive rays per work-item (Tracer::packetWidth; kernels/bvh_packet.cl),
 /// which pays on coherent rays (camera rays, shadow rays from neighbouring
-/// pixels). Both
-/// give the same answers; of two hits at exactly the same distance, another
-/// may win.
-enum class Traversal { kSingle, kPacket };
+/// pixels); or, for any-hit queries, streams of up to 64 rays that walk the
+/// tree together (kernels/bvh_stream.cl), which pays on incoherent shadow
+/// rays on CPUs (closest-hit queries given kStream are traced one by one).
+/// All give the same answers; of two hits at exactly the same distance,
+/// another may win.
+enum class Traversal { kSingle, kPacket, kStream };
 
 /// How alike the directions of each packet's rays are: the mean, over the
 /// packets of `width` consecutive rays, of the length of their unit
@@ -54,6 +56,7 @@ class Tracer {
   std::vector<std::uint8_t> traceOccluded(std::span<const Ray> rays, Traversal traversal = Traversal::kSingle);
 
   const SceneBuffers& sceneBuffers() const { return *m_scene; }
+  Context& context() const { return m_context; }
   /// Rays per packet of Traversal::kPacket on this device.
   int packetWidth() const { return m_packetWidth; }
   /// Kernel time of the last trace call (profiling events), seconds.
@@ -61,14 +64,14 @@ class Tracer {
 
  private:
   void uploadRays(std::span<const Ray> rays);
-  /// Runs one of the four kernels over the uploaded rays; returns its kernel seconds.
+  /// Runs one of the five kernels over the uploaded rays; returns its kernel seconds.
   void run(cl::Kernel& kernel, const char* name, std::size_t rays, Traversal traversal);
 
   Context& m_context;
   std::unique_ptr<SceneBuffers> m_scene;
   int m_packetWidth = WT_PACKET_WIDTH;
   cl::Program m_program;
-  cl::Kernel m_closest, m_occluded, m_closestPacket, m_occludedPacket;
+  cl::Kernel m_closest, m_occluded, m_closestPacket, m_occludedPacket, m_occludedStream;
   cl::Buffer m_rayO, m_rayD, m_skip, m_out;
   std::size_t m_capacity = 0;
   double m_lastKernelSeconds = 0.0;

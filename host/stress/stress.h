@@ -51,8 +51,9 @@ std::vector<glm::vec3> edgeTargets(const Scene& scene, int perEdge, std::uint32_
 
 /// Rays from each origin through each target that find nothing: closest-hit
 /// misses plus any-hit misses (a closed mesh around or in front of the
-/// origins must stop every one), traced one ray per work-item and again in
-/// packets. Adds the rays traced to *rayCount.
+/// origins must stop every one), traced one ray per work-item, again in
+/// packets, and the any-hit queries once more as streams. Adds the rays
+/// traced to *rayCount.
 std::uint64_t countLeaks(Tracer& tracer, const std::vector<glm::vec3>& origins, const std::vector<glm::vec3>& targets,
                          std::uint64_t* rayCount);
 

@@ -92,7 +92,9 @@ std::uint64_t countLeaks(Tracer& tracer, const std::vector<glm::vec3>& origins, 
     for (const RayHit& h : tracer.traceClosest(rays, traversal)) leaks += h.triangle == RayHit::kNoHit;
     for (std::uint8_t o : tracer.traceOccluded(rays, traversal)) leaks += o == 0;
   }
-  *rayCount += 4 * rays.size();
+  // streams answer any-hit queries only
+  for (std::uint8_t o : tracer.traceOccluded(rays, Traversal::kStream)) leaks += o == 0;
+  *rayCount += 5 * rays.size();
   return leaks;
 }
 

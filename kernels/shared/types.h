@@ -66,6 +66,13 @@ typedef struct WtBvh4Node {
 #define WT_PACKET_WIDTH 8
 #endif
 
+/// Stream traversal of any-hit queries (kernels/bvh_stream.cl): a work-item
+/// takes WT_STREAM_WINDOW consecutive rays, groups them by the octant of
+/// their direction and walks the tree once per WT_STREAM_RAYS of them (one
+/// bit each in a 64-bit mask).
+#define WT_STREAM_RAYS 64
+#define WT_STREAM_WINDOW 256
+
 /// A surface: Lambertian (scenes made in code, analytic tests) or glTF
 /// metallic-roughness (kernels/materials/bsdf.cl), with emission.
 typedef struct WtMaterial {

@@ -1,6 +1,7 @@
 // Watertightness: rays aimed exactly at the shared vertices and edges of
 // closed meshes must never pass between the triangles, whichever builder made
-// the BVH, traced one ray per work-item or in packets (wt::countLeaks).
+// the BVH, traced one ray per work-item, in packets or, any hit, in streams
+// (wt::countLeaks).
 #include "bvh/builders.h"
 #include "device_fixture.h"
 #include "device/tracer.h"

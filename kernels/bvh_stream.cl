@@ -1,0 +1,145 @@
+// Stream traversal of any-hit queries: many incoherent shadow rays walk the
+// tree together. One work-item holds up to WT_STREAM_RAYS rays as bits of a
+// mask; a node is fetched once for all the rays that entered it, and each of
+// them tests the node's four boxes in a loop with no branch per ray, so the
+// slot branches that single-ray traversal mispredicts are paid per node
+// rather than per ray. A ray leaves the stream when blocked. Every ray tests
+// the boxes and triangles bvh_occluded would test, in the same order, so the
+// answers are the same.
+#ifndef WT_BVH_STREAM_CL
+#define WT_BVH_STREAM_CL
+
+#include "bvh.cl"
+
+/// The lowest set bit's position (m != 0).
+inline uint stream_lowest(ulong m) { return (uint)popcount((m & (0ul - m)) - 1ul); }
+
+/// Occlusion of rays index[0 .. n) of a batch (n <= WT_STREAM_RAYS), written
+/// to occluded[index[r]]: 1 where (tmin, tmax) is blocked by a triangle other
+/// than skip[index[r]], and for a ray that is not finite.
+inline void bvh_occluded_stream(BvhScene scene, const uint* index, uint n, __global const float4* ray_o,
+                                __global const float4* ray_d, __global const uint* skip,
+                                __global uint* occluded) {
+  __global const WtBvh4Node* nodes = (__global const WtBvh4Node*)scene.nodes;
+  // per-ray constants, set up once (bvh_occluded's)
+  float3 org[WT_STREAM_RAYS], inv_d[WT_STREAM_RAYS];
+  float tmin[WT_STREAM_RAYS], tmax[WT_STREAM_RAYS];
+  RayPlanes planes[WT_STREAM_RAYS];
+  RayShear shear[WT_STREAM_RAYS];
+  uint skip_prim[WT_STREAM_RAYS];
+  ulong open = 0ul;  // rays still searching
+  for (uint r = 0; r < n; ++r) {
+    float4 o = ray_o[index[r]], d = ray_d[index[r]];
+    bool finite = bvh_ray_is_finite(o.xyz, d.xyz);
+    occluded[index[r]] = finite ? 0u : 1u;
+    if (!finite || scene.node_count == 0) continue;
+    org[r] = o.xyz;
+    tmin[r] = o.w;
+    tmax[r] = d.w;
+    inv_d[r] = bvh_safe_rcp(d.xyz);
+    planes[r] = bvh_ray_planes(inv_d[r]);
+    shear[r] = triangle_ray_shear(d.xyz);
+    skip_prim[r] = skip[index[r]];
+    open |= 1ul << r;
+  }
+
+  // a node and the rays that entered its box; at most three pushes per level
+  uint stack_node[WT_BVH_STACK_SIZE];
+  ulong stack_rays[WT_BVH_STACK_SIZE];
+  int sp = 0;
+  uint node = 0;
+  ulong rays = open;
+  for (;;) {
+    rays &= open;  // rays blocked since the push are done
+    if (rays != 0ul) {
+      __global const WtBvh4Node* n = &nodes[node];
+      // which rays enter which child
+      ulong enter0 = 0ul, enter1 = 0ul, enter2 = 0ul, enter3 = 0ul;
+      for (ulong m = rays; m != 0ul; m &= m - 1ul) {
+        uint r = stream_lowest(m);
+        float4 t4;
+        int4 hit4 = bvh4_box_hit(n, planes[r], org[r], inv_d[r], tmin[r], tmax[r], &t4);
+        ulong bit = 1ul << r;
+        enter0 |= hit4.s0 ? bit : 0ul;
+        enter1 |= hit4.s1 ? bit : 0ul;
+        enter2 |= hit4.s2 ? bit : 0ul;
+        enter3 |= hit4.s3 ? bit : 0ul;
+      }
+      ulong enter[4] = {enter0, enter1, enter2, enter3};
+      // leaves now, by every ray that entered them (leaves come first in slot order)
+      for (int k = 0; k < 4; ++k) {
+        uint count = n->count[k];
+        if (count == 0u || enter[k] == 0ul) continue;
+        uint first = n->child[k], last = first + count - 1u;
+        for (ulong m = enter[k] & open; m != 0ul; m &= m - 1ul) {
+          uint r = stream_lowest(m);
+          for (uint b = first >> 2; b <= last >> 2; ++b) {
+            float t, b1, b2;
+            if (triangle_intersect4(org[r], shear[r], tmin[r], tmax[r], scene.tri_verts, b,
+                                    b == first >> 2 ? first & 3u : 0u, b == last >> 2 ? (last & 3u) + 1u : 4u,
+                                    skip_prim[r], WT_NO_HIT, &t, &b1, &b2) != WT_NO_HIT) {
+              open &= ~(1ul << r);
+              occluded[index[r]] = 1u;
+              break;
+            }
+          }
+        }
+      }
+      // the first inner child entered next, the others pushed in slot order
+      // (bvh_occluded's order, so each ray visits its nodes in that order)
+      int next = -1;
+      ulong next_rays = 0ul;
+      for (int k = 0; k < 4; ++k) {
+        if (n->count[k] != 0u || enter[k] == 0ul) continue;
+        if (next < 0) {
+          next = (int)n->child[k];
+          next_rays = enter[k];
+        } else {
+          stack_node[sp] = n->child[k];
+          stack_rays[sp] = enter[k];
+          ++sp;
+        }
+      }
+      if (next >= 0) {
+        node = (uint)next;
+        rays = next_rays;
+        continue;
+      }
+    }
+    if (sp == 0 || open == 0ul) return;
+    --sp;
+    node = stack_node[sp];
+    rays = stack_rays[sp];
+  }
+}
+
+/// Occlusion of rays [first, end) of a batch (at most WT_STREAM_WINDOW):
+/// grouped by the octant of their direction (rays that leave neighbouring
+/// points the same way share more of the tree), then traced as streams of
+/// WT_STREAM_RAYS.
+inline void bvh_occluded_window(BvhScene scene, uint first, uint end, __global const float4* ray_o,
+                                __global const float4* ray_d, __global const uint* skip,
+                                __global uint* occluded) {
+  uint n = end - first;
+  uchar octant[WT_STREAM_WINDOW];
+  uint start[8] = {0u, 0u, 0u, 0u, 0u, 0u, 0u, 0u};
+  for (uint i = 0; i < n; ++i) {
+    float4 d = ray_d[first + i];
+    uint o = (d.x < 0.0f ? 1u : 0u) | (d.y < 0.0f ? 2u : 0u) | (d.z < 0.0f ? 4u : 0u);
+    octant[i] = (uchar)o;
+    ++start[o];
+  }
+  // counts to starts
+  uint at = 0u;
+  for (int o = 0; o < 8; ++o) {
+    uint count = start[o];
+    start[o] = at;
+    at += count;
+  }
+  uint order[WT_STREAM_WINDOW];
+  for (uint i = 0; i < n; ++i) order[start[octant[i]]++] = first + i;
+  for (uint s = 0; s < n; s += WT_STREAM_RAYS)
+    bvh_occluded_stream(scene, order + s, min(n - s, (uint)WT_STREAM_RAYS), ray_o, ray_d, skip, occluded);
+}
+
+#endif  // WT_BVH_STREAM_CL
