@@ -14,12 +14,12 @@
 /// The lowest set bit's position (m != 0).
 inline uint stream_lowest(ulong m) { return (uint)popcount((m & (0ul - m)) - 1ul); }
 
-/// Occlusion of rays index[0 .. n) of a batch (n <= WT_STREAM_RAYS), written
-/// to occluded[index[r]]: 1 where (tmin, tmax) is blocked by a triangle other
-/// than skip[index[r]], and for a ray that is not finite.
-inline void bvh_occluded_stream(BvhScene scene, const uint* index, uint n, __global const float4* ray_o,
-                                __global const float4* ray_d, __global const uint* skip,
-                                __global uint* occluded) {
+/// Occlusion of rays index[0 .. n) of a batch (n <= WT_STREAM_RAYS): bit r
+/// of the result is set where ray index[r]'s (tmin, tmax) is blocked by a
+/// triangle other than skip[index[r]], or where the ray is not finite
+/// (bvh_occluded's answers).
+inline ulong bvh_occluded_stream(BvhScene scene, const uint* index, uint n, __global const float4* ray_o,
+                                 __global const float4* ray_d, __global const uint* skip) {
   __global const WtBvh4Node* nodes = (__global const WtBvh4Node*)scene.nodes;
   // per-ray constants, set up once (bvh_occluded's)
   float3 org[WT_STREAM_RAYS], inv_d[WT_STREAM_RAYS];
@@ -27,12 +27,15 @@ inline void bvh_occluded_stream(BvhScene scene, const uint* index, uint n, __glo
   RayPlanes planes[WT_STREAM_RAYS];
   RayShear shear[WT_STREAM_RAYS];
   uint skip_prim[WT_STREAM_RAYS];
+  ulong blocked = 0ul;
   ulong open = 0ul;  // rays still searching
   for (uint r = 0; r < n; ++r) {
     float4 o = ray_o[index[r]], d = ray_d[index[r]];
-    bool finite = bvh_ray_is_finite(o.xyz, d.xyz);
-    occluded[index[r]] = finite ? 0u : 1u;
-    if (!finite || scene.node_count == 0) continue;
+    if (!bvh_ray_is_finite(o.xyz, d.xyz)) {
+      blocked |= 1ul << r;
+      continue;
+    }
+    if (scene.node_count == 0) continue;
     org[r] = o.xyz;
     tmin[r] = o.w;
     tmax[r] = d.w;
@@ -79,7 +82,7 @@ inline void bvh_occluded_stream(BvhScene scene, const uint* index, uint n, __glo
                                     b == first >> 2 ? first & 3u : 0u, b == last >> 2 ? (last & 3u) + 1u : 4u,
                                     skip_prim[r], WT_NO_HIT, &t, &b1, &b2) != WT_NO_HIT) {
               open &= ~(1ul << r);
-              occluded[index[r]] = 1u;
+              blocked |= 1ul << r;
               break;
             }
           }
@@ -106,25 +109,21 @@ inline void bvh_occluded_stream(BvhScene scene, const uint* index, uint n, __glo
         continue;
       }
     }
-    if (sp == 0 || open == 0ul) return;
+    if (sp == 0 || open == 0ul) return blocked;
     --sp;
     node = stack_node[sp];
     rays = stack_rays[sp];
   }
 }
 
-/// Occlusion of rays [first, end) of a batch (at most WT_STREAM_WINDOW):
-/// grouped by the octant of their direction (rays that leave neighbouring
-/// points the same way share more of the tree), then traced as streams of
-/// WT_STREAM_RAYS.
-inline void bvh_occluded_window(BvhScene scene, uint first, uint end, __global const float4* ray_o,
-                                __global const float4* ray_d, __global const uint* skip,
-                                __global uint* occluded) {
-  uint n = end - first;
+/// Order rays[0 .. n) (batch indices, n <= WT_STREAM_WINDOW) by the octant
+/// of their direction into sorted: rays that leave neighbouring points the
+/// same way share more of the tree.
+inline void stream_sort_by_octant(const uint* rays, uint n, __global const float4* ray_d, uint* sorted) {
   uchar octant[WT_STREAM_WINDOW];
   uint start[8] = {0u, 0u, 0u, 0u, 0u, 0u, 0u, 0u};
   for (uint i = 0; i < n; ++i) {
-    float4 d = ray_d[first + i];
+    float4 d = ray_d[rays[i]];
     uint o = (d.x < 0.0f ? 1u : 0u) | (d.y < 0.0f ? 2u : 0u) | (d.z < 0.0f ? 4u : 0u);
     octant[i] = (uchar)o;
     ++start[o];
@@ -136,10 +135,24 @@ inline void bvh_occluded_window(BvhScene scene, uint first, uint end, __global c
     start[o] = at;
     at += count;
   }
-  uint order[WT_STREAM_WINDOW];
-  for (uint i = 0; i < n; ++i) order[start[octant[i]]++] = first + i;
-  for (uint s = 0; s < n; s += WT_STREAM_RAYS)
-    bvh_occluded_stream(scene, order + s, min(n - s, (uint)WT_STREAM_RAYS), ray_o, ray_d, skip, occluded);
+  for (uint i = 0; i < n; ++i) sorted[start[octant[i]]++] = rays[i];
+}
+
+/// Occlusion of rays [first, end) of a batch (at most WT_STREAM_WINDOW),
+/// written to occluded[]: grouped by octant, then traced as streams of
+/// WT_STREAM_RAYS.
+inline void bvh_occluded_window(BvhScene scene, uint first, uint end, __global const float4* ray_o,
+                                __global const float4* ray_d, __global const uint* skip,
+                                __global uint* occluded) {
+  uint n = end - first;
+  uint rays[WT_STREAM_WINDOW], order[WT_STREAM_WINDOW];
+  for (uint i = 0; i < n; ++i) rays[i] = first + i;
+  stream_sort_by_octant(rays, n, ray_d, order);
+  for (uint s = 0; s < n; s += WT_STREAM_RAYS) {
+    uint m = min(n - s, (uint)WT_STREAM_RAYS);
+    ulong blocked = bvh_occluded_stream(scene, order + s, m, ray_o, ray_d, skip);
+    for (uint r = 0; r < m; ++r) occluded[order[s + r]] = (uint)((blocked >> r) & 1ul);
+  }
 }
 
 #endif  // WT_BVH_STREAM_CL

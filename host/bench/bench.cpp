@@ -347,12 +347,12 @@ constexpr double kPacketCoherence = 0.9;
 /// for any-hit queries on a CPU, streams; else one ray per work-item).
 /// Streams are for any hit only: a closest-hit set given "stream" is traced
 /// one ray per work-item.
-Traversal setTraversal(const BenchOptions& options, double coherence, bool occlusion, bool gpu) {
+Traversal setTraversal(const BenchOptions& options, double coherence, bool occlusion, bool cpu) {
   if (options.traversal == "single") return Traversal::kSingle;
   if (options.traversal == "packet") return Traversal::kPacket;
   if (options.traversal == "stream") return occlusion ? Traversal::kStream : Traversal::kSingle;
   if (coherence >= kPacketCoherence) return Traversal::kPacket;
-  return occlusion && !gpu ? Traversal::kStream : Traversal::kSingle;
+  return occlusion && cpu ? Traversal::kStream : Traversal::kSingle;
 }
 
 const char* traversalName(Traversal t) {
@@ -380,7 +380,7 @@ std::vector<RayHit> benchSet(const Scene& scene, Tracer& tracer, const Reference
   result.rays = rays.size();
   result.coherence = packetCoherence(rays, std::size_t(tracer.packetWidth()));
   const Traversal traversal = result.traversal =
-      setTraversal(options, result.coherence, occlusion, tracer.context().info().isGpu);
+      setTraversal(options, result.coherence, occlusion, tracer.context().info().isCpu);
   if (rays.empty()) return {};
   std::vector<RayHit> hits;
   std::vector<std::uint8_t> blocked;
@@ -565,7 +565,7 @@ void compareTrees(Context& context, const Scene& scene, std::span<const Aabb> bo
       if (!trees[t].traversal.empty()) {
         BenchOptions forced = options;
         forced.traversal = trees[t].traversal;
-        traversal[t] = setTraversal(forced, 0.0, occlusion, false);
+        traversal[t] = setTraversal(forced, 0.0, occlusion, true);
       }
     for (std::size_t t = 0; t < tracers.size(); ++t) {
       // warm-up, and the answers

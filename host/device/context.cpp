@@ -27,6 +27,7 @@ std::vector<DeviceInfo> listDevices() {
       info.name = device.getInfo<CL_DEVICE_NAME>();
       info.version = device.getInfo<CL_DEVICE_VERSION>();
       info.isGpu = (device.getInfo<CL_DEVICE_TYPE>() & CL_DEVICE_TYPE_GPU) != 0;
+      info.isCpu = (device.getInfo<CL_DEVICE_TYPE>() & CL_DEVICE_TYPE_CPU) != 0;
       info.fp64 = device.getInfo<CL_DEVICE_EXTENSIONS>().find("cl_khr_fp64") != std::string::npos;
       info.nativeFloatWidth = int(device.getInfo<CL_DEVICE_NATIVE_VECTOR_WIDTH_FLOAT>());
       info.platform = platform;

@@ -23,6 +23,7 @@ struct DeviceInfo {
   std::string name;
   std::string version;        ///< CL_DEVICE_VERSION
   bool isGpu = false;
+  bool isCpu = false;         ///< CL_DEVICE_TYPE_CPU (Oclgrind's simulator claims GPU and CPU)
   bool fp64 = false;
   int nativeFloatWidth = 1;   ///< CL_DEVICE_NATIVE_VECTOR_WIDTH_FLOAT
   cl::Platform platform;
@@ -73,6 +74,10 @@ class Context {
   void resetStageTimes() { m_times = {}; }
 
   static constexpr std::size_t kLocalSize = 64;
+  /// Work-items per group of the stream kernels (kernels/bvh_stream.cl):
+  /// each takes WT_STREAM_WINDOW rays, so groups of 64 would leave a
+  /// 200 000-ray batch 13 groups to share among the threads.
+  static constexpr std::size_t kStreamLocalSize = 4;
 
  private:
   DeviceInfo m_info;

@@ -7,14 +7,6 @@
 #include <cstring>
 
 namespace wt {
-namespace {
-
-// Work-items per group of the stream kernel: each takes WT_STREAM_WINDOW
-// rays, so groups of 64 would leave a 200 000-ray batch 13 groups to share.
-constexpr std::size_t kStreamLocalSize = 4;
-
-}  // namespace
-
 Tracer::Tracer(Context& context, const Scene& scene, const BvhBuildOptions& options, int packetWidth)
     : m_context(context), m_scene(std::make_unique<SceneBuffers>(context, scene, options)),
       m_packetWidth(packetWidthFor(context.info(), packetWidth)) {
@@ -96,7 +88,7 @@ void Tracer::run(cl::Kernel& kernel, const char* name, std::size_t rays, Travers
   } else if (traversal == Traversal::kStream) {
     // a window of rays per work-item: small groups, so that every thread gets some
     items = (rays + WT_STREAM_WINDOW - 1) / WT_STREAM_WINDOW;
-    localSize = kStreamLocalSize;
+    localSize = Context::kStreamLocalSize;
   }
   m_context.resetStageTimes();
   m_context.launch(name, kernel, items, localSize);
