@@ -415,20 +415,21 @@ std::vector<RayHit> benchSet(const Scene& scene, Tracer& tracer, const Reference
   // runs); the fastest median is the one compared
   for (const std::string& api : embree->apis) {
     embree->setApi(api);
+    std::vector<std::uint8_t> blockedBy;
+    std::vector<RayHit> hitsBy;
     double seconds = 0.0;
     if (occlusion) {
-      std::vector<std::uint8_t> answers = embree->occluded(rays, coherent);
+      blockedBy = embree->occluded(rays, coherent);
       seconds = median(timeRuns(options.repetitions, [&] { embree->occluded(rays, coherent); }));
-      if (result.embreeApi.empty() || seconds < result.embreeSeconds) refBlocked = std::move(answers);
     } else {
-      std::vector<RayHit> answers = embree->closest(rays, coherent);
+      hitsBy = embree->closest(rays, coherent);
       seconds = median(timeRuns(options.repetitions, [&] { embree->closest(rays, coherent); }));
-      if (result.embreeApi.empty() || seconds < result.embreeSeconds) refHits = std::move(answers);
     }
-    if (result.embreeApi.empty() || seconds < result.embreeSeconds) {
-      result.embreeSeconds = seconds;
-      result.embreeApi = api;
-    }
+    if (!result.embreeApi.empty() && seconds >= result.embreeSeconds) continue;
+    result.embreeSeconds = seconds;
+    result.embreeApi = api;
+    refBlocked = std::move(blockedBy);
+    refHits = std::move(hitsBy);
   }
 
   // agreement: closest hits by triangle; occlusion by flag, classified
@@ -484,8 +485,8 @@ std::pair<Bvh, double> timedBuild(std::span<const Aabb> bounds, std::span<const 
   return {std::move(bvh), median(builds)};
 }
 
-/// The row an --ab-kernel-dir row is compared with: the same builder's tree
-/// traced by the built-in kernels; null for any other row.
+/// The row an --ab-* row is compared with: the same builder's tree traced
+/// without the change; null for any other row.
 const TreeResult* abBaseline(const std::vector<TreeResult>& trees, const TreeResult& tree) {
   if (!tree.ab()) return nullptr;
   for (const TreeResult& t : trees)
@@ -503,7 +504,7 @@ void compareTrees(Context& context, const Scene& scene, std::span<const Aabb> bo
   std::vector<std::unique_ptr<Tracer>> owned;
   std::vector<Tracer*> tracers;
   std::vector<std::string> names = options.compareBvh;
-  // --ab-kernel-dir's row is compared with the same tree and the built-in kernels
+  // an --ab-* row is compared with the same tree traced without the change
   const bool ab = !options.abKernelDir.empty() || options.abPacketWidth != 0 || !options.abTraversal.empty();
   if (ab &&
       std::find(names.begin(), names.end(), std::string(bvhBuilderName(defaultBuilder))) == names.end())
@@ -533,7 +534,8 @@ void compareTrees(Context& context, const Scene& scene, std::span<const Aabb> bo
     trees.push_back(tree);
   }
   if (ab) {
-    // the --bvh tree once more, traced by the kernels from that folder or in packets of that width
+    // the --bvh tree once more, traced by the kernels from that folder, in
+    // packets of that width or with that traversal
     const std::optional<std::filesystem::path> before = kernelDirectory();
     if (!options.abKernelDir.empty()) setKernelDirectory(std::filesystem::path(options.abKernelDir));
     TreeResult tree;
