@@ -7,6 +7,7 @@
 #include <cstring>
 
 namespace wt {
+
 Tracer::Tracer(Context& context, const Scene& scene, const BvhBuildOptions& options, int packetWidth)
     : m_context(context), m_scene(std::make_unique<SceneBuffers>(context, scene, options)),
       m_packetWidth(packetWidthFor(context.info(), packetWidth)) {
