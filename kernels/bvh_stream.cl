@@ -11,6 +11,10 @@
 
 #include "bvh.cl"
 
+#if WT_STREAM_RAYS > 64
+#error "WT_STREAM_RAYS: a stream's rays are the bits of one ulong"
+#endif
+
 /// The lowest set bit's position (m != 0).
 inline uint stream_lowest(ulong m) { return (uint)popcount((m & (0ul - m)) - 1ul); }
 
