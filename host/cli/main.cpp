@@ -259,7 +259,7 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"auto", "single"}))->capture_default_str();
   renderCmd->add_option("--packet-width", render.packetWidth,
                         "Pixels per packet with --traversal auto: 8 or 16; 0 picks by the device (16 where its native "
-                        "float vector is 16 wide)")
+                        "float vector is 16 wide and the image has at least 3 pixels per triangle)")
       ->check(CLI::IsMember({0, 8, 16}))->capture_default_str();
   renderCmd->add_option("--reference", render.reference,
                         "EXR of the converged image: log the error at 1, 2, 4, ... samples (see --error-log)");
@@ -325,7 +325,8 @@ int main(int argc, char** argv) {
                        "else single")
       ->check(CLI::IsMember({"single", "packet", "stream", "auto"}));
   benchCmd->add_option("--packet-width", bench.packetWidth,
-                       "Rays per packet: 8 or 16; 0 picks by the device (16 where its native float vector is 16 wide)")
+                       "Rays per packet: 8 or 16; 0 picks by the device (16 where its native float vector is 16 wide and "
+                       "the camera rays are at least 3 per triangle)")
       ->check(CLI::IsMember({0, 8, 16}))->capture_default_str();
   benchCmd->add_option("--max-leaf-size", bench.maxLeafSize, "Every tree: no leaf holds more triangles (0: 16, as render); the collapse to 4 wide chooses the leaves up to it")
       ->check(CLI::Range(0, 64));

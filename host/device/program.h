@@ -26,7 +26,7 @@ struct KernelFeatures {
 /// for the union (1024x1024 camera rays on the 1 M-triangle scenes traced
 /// 1.10-1.25x faster in packets of 8 on an AVX-512 Zen 4, and at 0.98-1.00x
 /// on a Zen 5; 4 rays per triangle or more, 16 was the faster:
-/// docs/performance.md, "Packet width by rays per triangle").
+/// docs/performance.md, "Packet width by camera rays per triangle").
 constexpr double kWidePacketRaysPerTriangle = 3.0;
 
 /// Rays per packet for a device: `requested` (8 or 16) when non-zero, else
