@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <span>
 #include <memory>
+#include <utility>
 #include <vector>
 
 namespace wt::bvh_detail {
@@ -70,6 +71,15 @@ std::uint32_t buildTopSah(std::vector<TopCluster>& clusters, std::vector<BuildNo
 /// Input indices sorted by the Morton code of their centroids, as buildLbvh
 /// sorts them (ties in index order).
 std::vector<std::uint32_t> mortonOrder(std::span<const Aabb> primBounds, int threads);
+
+/// The LBVH's keys of large inputs, for tests: each primitive's Morton key,
+/// its key with flat patches reordered (host/bvh/lbvh.cpp), and the key
+/// ranges of the candidate regions that were re-keyed or kept in Morton order.
+struct FlatPatchKeys {
+  std::vector<std::uint64_t> morton, keys;
+  std::vector<std::pair<std::uint64_t, std::uint64_t>> accepted, rejected;
+};
+FlatPatchKeys flatPatchKeys(std::span<const Aabb> primBounds, int threads);
 
 /// The LBVH's key sort, for tests: keys[0..n) ascending, primIndices[i] the
 /// input position of sorted key i, equal keys in input order (a stable sort).

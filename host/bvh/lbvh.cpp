@@ -131,6 +131,8 @@ struct MortonKeys {
   KeyBits bits;
   std::size_t flatRegions = 0;  ///< regions keyed with an axis last (flat patches, below)
   std::size_t flatTested = 0;   ///< sample subtrees tried for that
+  /// The candidate regions' key ranges [first, last], re-keyed or kept in Morton order.
+  std::vector<std::pair<std::uint64_t, std::uint64_t>> acceptedRanges, rejectedRanges;
 };
 
 // ---- flat patches ------------------------------------------------------------------
@@ -153,12 +155,14 @@ struct MortonKeys {
 // reordering costs at the finest levels, where a closed object's front and back,
 // now sorted together, would share every node (MetalRoughSpheres' rows of spheres
 // sample at 0.99-1.16 and measured twice the 4-wide SAH when reordered), so the
-// keys are made in the Morton order first, every primitive of one column of each
-// candidate (all of it along the shortest axis, about kFlatWindowPrims primitives)
-// is kept aside, and both trees are built again over that column at full density.
-// Regions whose column tree costs kFlatCostRatio of the Morton one or less are
-// re-keyed. A region's keys keep its prefix, so the order of regions and of
-// everything around them stays the Morton order.
+// key pass keeps every primitive of one column of each candidate aside (all of it
+// along the shortest axis, about kFlatWindowPrims primitives), and both trees are
+// built again over that column at full density. Regions whose column tree costs
+// kFlatCostRatio of the Morton one or less keep their reordered keys; the key pass
+// wrote a candidate's keys reordered, and a second pass puts a rejected one's back
+// (re-keying the accepted ones in a second pass instead took 6 ms of the 1 M-triangle
+// grid's 25 ms of keys on the Zen 4 VM). A region's keys keep its prefix, so the
+// order of regions and of everything around them stays the Morton order.
 
 // About this many primitives are sampled (every n / kFlatSamples-th, in input order).
 constexpr std::size_t kFlatSamples = 16384;
@@ -210,18 +214,6 @@ FlatRegion makeFlatRegion(std::uint64_t key, int lowBits, int axis) {
   for (int k = 0; k < 3; ++k) region.cellMask[k] = (std::uint32_t{1} << (std::max(0, lowBits - k + 2) / 3)) - 1;
   region.pairShift = std::popcount(region.cellMask[axis]);
   return region;
-}
-
-/// Bits 0, 3, 6, ... of v packed into bits 0, 1, 2, ... (21 bits): one axis's cells
-/// from a key.
-std::uint32_t compactBits21(std::uint64_t v) {
-  v &= 0x1249249249249249ull;
-  v = (v ^ (v >> 2)) & 0x10c30c30c30c30c3ull;
-  v = (v ^ (v >> 4)) & 0x100f00f00f00f00full;
-  v = (v ^ (v >> 8)) & 0x001f0000ff0000ffull;
-  v = (v ^ (v >> 16)) & 0x001f00000000ffffull;
-  v = (v ^ (v >> 32)) & 0x00000000001fffffull;
-  return static_cast<std::uint32_t>(v);
 }
 
 constexpr std::array<std::uint32_t, 256> kSpreadByte2 = spreadByteTable<std::uint32_t, 2>();
@@ -418,6 +410,11 @@ MortonKeys computeMortonKeys(std::span<const Aabb> primBounds, int threads, Cell
   // the flat patches' candidate regions, their columns, and which are re-keyed
   std::vector<FlatRegion> candidates;
   std::array<PerThread<std::vector<FlatPrim>>, kMaxThreads> rankColumns{};
+  // each rank's key bits in each candidate region, in Morton order and reordered
+  struct RegionBits {
+    std::vector<KeyBits> morton, reordered;
+  };
+  std::array<PerThread<RegionBits>, kMaxThreads> rankRegionBits{};
   std::vector<std::vector<FlatPrim>> columns;
   std::vector<char> accepted;
   std::atomic<std::size_t> nextColumn{0};
@@ -483,20 +480,35 @@ MortonKeys computeMortonKeys(std::span<const Aabb> primBounds, int threads, Cell
       return;
     }
 
-    // Morton keys, and the primitives of every candidate's column set aside with their
-    // reordered keys (in input order: the ranks' chunks are in order). Neighbours in
-    // input order are mostly neighbours in space: the last region is tried first.
+    // Keys, the reordered ones in every candidate region (most are accepted), and the
+    // primitives of every candidate's column set aside with both keys (in input order:
+    // the ranks' chunks are in order). The key bits are summed apart for each region,
+    // both ways, so that only a rejected region's keys need a second pass. Neighbours
+    // in input order are mostly neighbours in space: the last region is tried first.
     std::vector<FlatPrim>& mine = rankColumns[static_cast<std::size_t>(rank)].value;
     const std::span<const FlatRegion> regions(candidates);
+    std::vector<KeyBits>& mortonBits = rankRegionBits[static_cast<std::size_t>(rank)].value.morton;
+    std::vector<KeyBits>& reorderedBits = rankRegionBits[static_cast<std::size_t>(rank)].value.reordered;
+    mortonBits.assign(regions.size(), KeyBits{});
+    reorderedBits.assign(regions.size(), KeyBits{});
     std::uint64_t* const keys = result.keys.get();
     const FlatRegion* last = regions.data();
     for (std::size_t i = chunk.begin; i < chunk.end; ++i) {
       const std::uint64_t key = mortonCells(primBounds[i], frame, q);
-      keys[i] = key;
       const FlatRegion* region = regionOf(key, regions, last);
-      if (region && inColumn(q, *region) && std::isfinite(primBounds[i].surfaceArea()))
-        mine.push_back({key, keyWithAxisLast(q, *region), {q[0], q[1], q[2]}, primBounds[i],
-                        static_cast<std::uint32_t>(region - regions.data())});
+      if (!region) {
+        keys[i] = key;
+        bits.orBits |= key;
+        bits.andBits &= key;
+        continue;
+      }
+      const std::size_t r = static_cast<std::size_t>(region - regions.data());
+      const std::uint64_t reordered = keyWithAxisLast(q, *region);
+      if (inColumn(q, *region) && std::isfinite(primBounds[i].surfaceArea()))
+        mine.push_back({key, reordered, {q[0], q[1], q[2]}, primBounds[i], static_cast<std::uint32_t>(r)});
+      mortonBits[r].orBits |= key, mortonBits[r].andBits &= key;
+      reorderedBits[r].orBits |= reordered, reorderedBits[r].andBits &= reordered;
+      keys[i] = reordered;
     }
     barrier.arriveAndWait();
     if (rank == 0)
@@ -506,21 +518,26 @@ MortonKeys computeMortonKeys(std::span<const Aabb> primBounds, int threads, Cell
     for (std::size_t c = nextColumn++; c < columns.size(); c = nextColumn++) accepted[c] = columnIsFlat(columns[c]);
     barrier.arriveAndWait();
 
-    // The accepted regions' keys reordered, their cells read back from the keys.
-    last = regions.data();
-    for (std::size_t i = chunk.begin; i < chunk.end; ++i) {
-      std::uint64_t key = keys[i];
-      const FlatRegion* region = regionOf(key, regions, last);
-      if (region && accepted[static_cast<std::size_t>(region - regions.data())]) {
-        for (int axis = 0; axis < 3; ++axis) q[axis] = compactBits21(key >> axis);
-        key = keys[i] = keyWithAxisLast(q, *region);
-      }
-      bits.orBits |= key;
-      bits.andBits &= key;
+    // This rank's key bits, each region's as it is keyed in the end.
+    for (std::size_t r = 0; r < regions.size(); ++r) {
+      const KeyBits& regionBits = accepted[r] ? reorderedBits[r] : mortonBits[r];
+      bits.orBits |= regionBits.orBits;
+      bits.andBits &= regionBits.andBits;
     }
     chunkBits[static_cast<std::size_t>(rank)].value = bits;
+    // The rejected regions' keys back in Morton order. A reordered key keeps its
+    // region's prefix, so it still finds its region.
+    if (std::count(accepted.begin(), accepted.end(), 0) == 0) return;
+    last = regions.data();
+    for (std::size_t i = chunk.begin; i < chunk.end; ++i) {
+      const FlatRegion* region = regionOf(keys[i], regions, last);
+      if (region && !accepted[static_cast<std::size_t>(region - regions.data())])
+        keys[i] = mortonCells(primBounds[i], frame, q);
+    }
   });
   result.flatRegions = static_cast<std::size_t>(std::count(accepted.begin(), accepted.end(), 1));
+  for (std::size_t r = 0; r < candidates.size(); ++r)
+    (accepted[r] ? result.acceptedRanges : result.rejectedRanges).emplace_back(candidates[r].first, candidates[r].last);
   // Ranks a short team never ran keep the neutral OR 0 and AND ~0.
   for (const PerThread<KeyBits>& chunk : chunkBits) {
     result.bits.orBits |= chunk.value.orBits;
@@ -1137,6 +1154,19 @@ void sortKeysWithIndices(int threads, std::size_t n, std::unique_ptr<std::uint64
 
 
 namespace bvh_detail {
+
+FlatPatchKeys flatPatchKeys(std::span<const Aabb> primBounds, int threads) {
+  const std::size_t n = primBounds.size();
+  threads = std::clamp(threads, 1, kMaxThreads);
+  FlatPatchKeys result;
+  const MortonKeys plain = computeMortonKeys(primBounds, threads, Cells::Cubic, false);
+  MortonKeys flat = computeMortonKeys(primBounds, threads, Cells::Cubic, true);
+  result.morton.assign(plain.keys.get(), plain.keys.get() + n);
+  result.keys.assign(flat.keys.get(), flat.keys.get() + n);
+  result.accepted = std::move(flat.acceptedRanges);
+  result.rejected = std::move(flat.rejectedRanges);
+  return result;
+}
 
 std::vector<std::uint32_t> mortonOrder(std::span<const Aabb> primBounds, int threads) {
   std::vector<std::uint32_t> order;

@@ -394,6 +394,40 @@ TEST(Lbvh, SmallInputsAreNotTestedForFlatRegions) {
   EXPECT_EQ(buildLbvh(prims, withLeafSize(4)).stats.flatRegions, 0u);
 }
 
+TEST(Lbvh, OnlyAcceptedFlatRegionsAreReKeyed) {
+  // A level-6 icosphere: some of the sampled regions of its surface test as
+  // sheets and others curve too much (measured 2026-12-04: 16 of 18 candidates
+  // re-keyed). The key pass reorders every candidate's keys and puts a
+  // rejected one's back: only an accepted region's keys may differ from the
+  // Morton keys, and they keep the region's prefix.
+  const std::vector<Aabb> prims =
+      triangleBounds(makeIcosphere(6, glm::vec3(0.0f), 1.0f, makeMaterial(glm::vec3(0.5f))));
+  ASSERT_GT(prims.size(), 65536u);
+  for (int threads : {1, 2, 3}) {
+    SCOPED_TRACE(threads);
+    const bvh_detail::FlatPatchKeys k = bvh_detail::flatPatchKeys(prims, threads);
+    ASSERT_FALSE(k.accepted.empty());
+    ASSERT_FALSE(k.rejected.empty());
+    const auto rangeOf = [&](std::uint64_t key) -> const std::pair<std::uint64_t, std::uint64_t>* {
+      for (const auto& range : k.accepted)
+        if (key >= range.first && key <= range.second) return &range;
+      return nullptr;
+    };
+    std::size_t reordered = 0, inRejected = 0;
+    for (std::size_t i = 0; i < prims.size(); ++i) {
+      for (const auto& range : k.rejected) inRejected += k.morton[i] >= range.first && k.morton[i] <= range.second;
+      if (const auto* range = rangeOf(k.morton[i])) {
+        ASSERT_TRUE(k.keys[i] >= range->first && k.keys[i] <= range->second) << "primitive " << i;
+        reordered += k.keys[i] != k.morton[i];
+      } else {
+        ASSERT_EQ(k.keys[i], k.morton[i]) << "primitive " << i;
+      }
+    }
+    EXPECT_GT(reordered, 0u);
+    EXPECT_GT(inRejected, 0u);
+  }
+}
+
 TEST(Lbvh, VolumesAndClosedObjectsAreNotFlat) {
   // a soup and random boxes fill a volume; a plane of closed spheres (as
   // MetalRoughSpheres) is thin across one axis, but keying that axis last

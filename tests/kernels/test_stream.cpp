@@ -130,7 +130,9 @@ TEST(StreamTraversalEdges, PartialWindowsRaysNotFiniteAndEmptyScenes) {
     for (std::size_t i = 0; i < count; ++i) {
       EXPECT_EQ(stream[i], single[i]) << "ray " << i;
       const Ray& r = batch[i];
-      if (!std::isfinite(r.origin.y) || !std::isfinite(r.direction.z)) EXPECT_EQ(stream[i], 1) << "ray " << i;
+      if (!std::isfinite(r.origin.y) || !std::isfinite(r.direction.z)) {
+        EXPECT_EQ(stream[i], 1) << "ray " << i;
+      }
     }
   }
   // closest-hit queries given streams are traced one ray per work-item
