@@ -42,15 +42,16 @@
 #else
 #error "WT_PACKET_WIDTH must be 8 or 16 (packetWidthFor, host/device/program.h)"
 #endif
-// Closest hit: a leaf that at most this many lanes enter is tested lane by
-// lane, four triangles at a time (bvh_closest's leaf test), instead of one
-// triangle at a time on every lane. Packets of 8 only: they are the width
-// where a sample has fewer than 3 camera rays per triangle (packetWidthFor),
-// so leaves are small against the packet's footprint. Measured 2026-12-04
-// (in-process A/B, 7 rounds): camera rays 1.04-1.14x on the bumpy grid and
-// 0.97-1.07x on MetalRoughSpheres; packets of 16 with 4 or 2 lanes alone
-// 0.85-1.04x on DamagedHelmet ("Leaves that few lanes enter" in
-// docs/performance.md).
+// A leaf that at most this many lanes enter is tested lane by lane, four
+// triangles at a time (bvh_closest's and bvh_occluded's leaf test), instead
+// of one triangle at a time on every lane. Packets of 8 only: they are the
+// width where a sample has fewer than 3 camera rays per triangle
+// (packetWidthFor), so leaves are small against a packet's footprint.
+// Measured 2026-12-04 (in-process A/B): camera rays 1.03-1.09x on the bumpy
+// grid and 1.00-1.05x on MetalRoughSpheres (5 rounds), shadow rays in
+// packets 1.12-1.17x and 1.08-1.10x (3 rounds); with packets of 16, 4 lanes
+// alone measured 0.85-1.04x on DamagedHelmet's camera rays ("Leaves that
+// few lanes enter" in docs/performance.md).
 #ifndef WT_PACKET_LEAF_LANES
 #define WT_PACKET_LEAF_LANES (WT_PACKET == 8 ? 2 : 0)
 #endif
@@ -334,6 +335,44 @@ inline void packet_set_skip(RayPacket* p, const uint* index, uint lanes, __globa
   p->skip_b = packet_vload(b);
 }
 
+#if WT_PACKET_LEAF_LANES > 0
+/// Each lane's ray as scalars, for the leaves that few lanes enter.
+typedef struct PacketLanes {
+  float ox[WT_PACKET], oy[WT_PACKET], oz[WT_PACKET];
+  float sx[WT_PACKET], sy[WT_PACKET], sz[WT_PACKET];
+  float tmin[WT_PACKET];
+  uint skip_a[WT_PACKET], skip_b[WT_PACKET];
+} PacketLanes;
+
+inline void packet_lanes(const RayPacket* p, PacketLanes* lanes) {
+  packet_vstore(p->o[0], lanes->ox), packet_vstore(p->o[1], lanes->oy), packet_vstore(p->o[2], lanes->oz);
+  packet_vstore(p->sx, lanes->sx), packet_vstore(p->sy, lanes->sy), packet_vstore(p->sz, lanes->sz);
+  packet_vstore(p->tmin, lanes->tmin);
+  packet_vstore(p->skip_a, lanes->skip_a), packet_vstore(p->skip_b, lanes->skip_b);
+}
+
+/// Lane l's ray against the leaf [first, first + count), four triangles at a
+/// time, as bvh_closest and bvh_occluded test a leaf (the same operations,
+/// so the same answers): the nearest hit in (tmin, tmax), or with `any` the
+/// first found; WT_NO_HIT when none, t, b1 and b2 set only on a hit.
+inline uint packet_lane_leaf(__global const float4* tri_verts, const RayPacket* p, const PacketLanes* lanes, int l,
+                             uint first, uint count, float tmax, bool any, float* t, float* b1, float* b2) {
+  RayShear shear = {p->kx, p->ky, p->kz, lanes->sx[l], lanes->sy[l], lanes->sz[l]};
+  float3 org = (float3)(lanes->ox[l], lanes->oy[l], lanes->oz[l]);
+  uint last = first + count - 1u, found = WT_NO_HIT;
+  for (uint b = first >> 2; b <= last >> 2; ++b) {
+    uint prim = triangle_intersect4(org, shear, lanes->tmin[l], tmax, tri_verts, b, b == first >> 2 ? first & 3u : 0u,
+                                    b == last >> 2 ? (last & 3u) + 1u : 4u, lanes->skip_a[l], lanes->skip_b[l], t, b1,
+                                    b2);
+    if (prim == WT_NO_HIT) continue;
+    found = prim;
+    tmax = *t;
+    if (any) break;
+  }
+  return found;
+}
+#endif
+
 /// Closest hits of a packet's valid lanes: per lane the nearest t in
 /// (tmin, tmax) with its barycentrics and leaf-order triangle (WT_NO_HIT
 /// and tmax where none).
@@ -347,14 +386,8 @@ inline void packet_closest(BvhScene scene, const RayPacket* p, pint valid, pfloa
   // the farthest any lane still searches: a box entered beyond it is skipped
   float reach = packet_max(packet_pick(valid, tmax, (pfloat)(-INFINITY)));
 #if WT_PACKET_LEAF_LANES > 0
-  // each lane's ray as scalars, for leaves that few lanes enter
-  float lane_ox[WT_PACKET], lane_oy[WT_PACKET], lane_oz[WT_PACKET], lane_sx[WT_PACKET], lane_sy[WT_PACKET],
-      lane_sz[WT_PACKET], lane_tmin[WT_PACKET];
-  uint lane_skip_a[WT_PACKET], lane_skip_b[WT_PACKET];
-  packet_vstore(p->o[0], lane_ox), packet_vstore(p->o[1], lane_oy), packet_vstore(p->o[2], lane_oz);
-  packet_vstore(p->sx, lane_sx), packet_vstore(p->sy, lane_sy), packet_vstore(p->sz, lane_sz);
-  packet_vstore(p->tmin, lane_tmin);
-  packet_vstore(p->skip_a, lane_skip_a), packet_vstore(p->skip_b, lane_skip_b);
+  PacketLanes lanes;
+  packet_lanes(p, &lanes);
 #endif
   uint stack_node[WT_BVH_STACK_SIZE];
   float stack_t[WT_BVH_STACK_SIZE];
@@ -373,28 +406,20 @@ inline void packet_closest(BvhScene scene, const RayPacket* p, pint valid, pfloa
       if (!packet_any(hit)) continue;
 #if WT_PACKET_LEAF_LANES > 0
       if (count > 0 && packet_count(hit) <= WT_PACKET_LEAF_LANES) {
-        // Few lanes entered: each tests the leaf's blocks four triangles at a
-        // time, as bvh_closest would (the same operations, so the same answers).
+        // few lanes entered: each tests the leaf alone
         int lane_hit[WT_PACKET];
         float lane_t[WT_PACKET], lane_b1[WT_PACKET], lane_b2[WT_PACKET];
         uint lane_prim[WT_PACKET];
         packet_vstore(hit, lane_hit), packet_vstore(tmax, lane_t);
         packet_vstore(*b1_best, lane_b1), packet_vstore(*b2_best, lane_b2), packet_vstore(*prim_best, lane_prim);
-        uint last = first + count - 1u;
         bool won = false;
         for (int l = 0; l < WT_PACKET; ++l) {
           if (!lane_hit[l]) continue;
-          RayShear shear = {p->kx, p->ky, p->kz, lane_sx[l], lane_sy[l], lane_sz[l]};
-          float3 org = (float3)(lane_ox[l], lane_oy[l], lane_oz[l]);
-          for (uint b = first >> 2; b <= last >> 2; ++b) {
-            float t, b1, b2;
-            uint prim = triangle_intersect4(org, shear, lane_tmin[l], lane_t[l], scene.tri_verts, b,
-                                            b == first >> 2 ? first & 3u : 0u, b == last >> 2 ? (last & 3u) + 1u : 4u,
-                                            lane_skip_a[l], lane_skip_b[l], &t, &b1, &b2);
-            if (prim == WT_NO_HIT) continue;
-            lane_t[l] = t, lane_b1[l] = b1, lane_b2[l] = b2, lane_prim[l] = prim;
-            won = true;
-          }
+          float t, b1, b2;
+          uint prim = packet_lane_leaf(scene.tri_verts, p, &lanes, l, first, count, lane_t[l], false, &t, &b1, &b2);
+          if (prim == WT_NO_HIT) continue;
+          lane_t[l] = t, lane_b1[l] = b1, lane_b2[l] = b2, lane_prim[l] = prim;
+          won = true;
         }
         if (won) {
           tmax = packet_vload(lane_t);
@@ -456,6 +481,12 @@ inline pint packet_occluded(BvhScene scene, const RayPacket* p, pint valid, pflo
   if (scene.node_count == 0 || !packet_any(valid)) return blocked;
   __global const WtBvh4Node* nodes = (__global const WtBvh4Node*)scene.nodes;
   pint open = valid;
+#if WT_PACKET_LEAF_LANES > 0
+  PacketLanes lanes;
+  packet_lanes(p, &lanes);
+  float lane_tmax[WT_PACKET];
+  packet_vstore(tmax, lane_tmax);
+#endif
   uint stack_node[WT_BVH_STACK_SIZE];
   int sp = 0;
   uint node = 0;
@@ -468,6 +499,29 @@ inline pint packet_occluded(BvhScene scene, const RayPacket* p, pint valid, pflo
       pfloat enter;
       pint hit = packet_box_hit(n, k, p, tmax, &enter) & open;
       if (!packet_any(hit)) continue;
+#if WT_PACKET_LEAF_LANES > 0
+      if (count > 0 && packet_count(hit) <= WT_PACKET_LEAF_LANES) {
+        // few lanes entered: each tests the leaf alone
+        int lane_hit[WT_PACKET], lane_won[WT_PACKET];
+        packet_vstore(hit, lane_hit);
+        bool won = false;
+        for (int l = 0; l < WT_PACKET; ++l) {
+          float t, b1, b2;
+          lane_won[l] = lane_hit[l] && packet_lane_leaf(scene.tri_verts, p, &lanes, l, first, count, lane_tmax[l], true,
+                                                        &t, &b1, &b2) != WT_NO_HIT
+                            ? -1
+                            : 0;
+          won = won || lane_won[l];
+        }
+        if (won) {
+          pint blocked_now = packet_vload(lane_won);
+          blocked |= blocked_now;
+          open &= ~blocked_now;
+          if (!packet_any(open)) return blocked;
+        }
+        continue;
+      }
+#endif
       if (count > 0) {
         for (uint prim = first; prim < first + count; ++prim) {
           pfloat t, b1, b2;
