@@ -15,12 +15,14 @@
 #error "WT_STREAM_RAYS: a stream's rays are the bits of one ulong"
 #endif
 
-/// A request to bring the cache line at p in for reading; nothing under
-/// Oclgrind, which lacks the intrinsic (tests/oclgrind/prefetch.cl).
-#if defined(WT_NO_PREFETCH) && WT_NO_PREFETCH
-#define stream_prefetch(p) ((void)(p))
+// Whether a node's children are asked for as it arrives (below): where the
+// host asks for it (WT_STREAM_PREFETCH: the scene does not fit in the
+// device's cache, streamPrefetchFor), never under Oclgrind, which lacks the
+// intrinsic (WT_NO_PREFETCH, tests/oclgrind/prefetch.cl).
+#if defined(WT_STREAM_PREFETCH) && WT_STREAM_PREFETCH && !(defined(WT_NO_PREFETCH) && WT_NO_PREFETCH)
+#define WT_STREAM_REQUESTS 1
 #else
-#define stream_prefetch(p) __builtin_prefetch((p), 0, 3)
+#define WT_STREAM_REQUESTS 0
 #endif
 
 /// The lowest set bit's position (m != 0).
@@ -68,11 +70,12 @@ inline ulong bvh_occluded_stream(BvhScene scene, const uint* index, uint n, __gl
     rays &= open;  // rays blocked since the push are done
     if (rays != 0ul) {
       __global const WtBvh4Node* n = &nodes[node];
+#if WT_STREAM_REQUESTS
       // Every child's data is asked for as the node arrives (a leaf's first
       // block, an inner node's two cache lines): the box tests of all the
       // stream's rays come first, and the misses overlap. On the 1 M-triangle
       // scenes half the stream's time was spent waiting on the first load of
-      // a node or of a leaf block; this measured 1.15-1.23x there and
+      // a node or of a leaf block; this measured 1.14-1.23x there and
       // 0.95-1.05x on DamagedHelmet, whose tree fits in the caches
       // (docs/performance.md, "Streams: the children's data asked for early").
       for (int k = 0; k < 4; ++k) {
@@ -80,14 +83,15 @@ inline ulong bvh_occluded_stream(BvhScene scene, const uint* index, uint n, __gl
         if (child == WT_BVH4_EMPTY) continue;
         if (n->count[k] > 0u) {
           __global const float4* block = scene.tri_verts + 12u * (child >> 2);
-          stream_prefetch(block);
-          stream_prefetch(block + 4);
-          stream_prefetch(block + 8);
+          __builtin_prefetch(block, 0, 3);
+          __builtin_prefetch(block + 4, 0, 3);
+          __builtin_prefetch(block + 8, 0, 3);
         } else {
-          stream_prefetch(&nodes[child]);
-          stream_prefetch((__global const char*)&nodes[child] + 64);
+          __builtin_prefetch(&nodes[child], 0, 3);
+          __builtin_prefetch((__global const char*)&nodes[child] + 64, 0, 3);
         }
       }
+#endif
       // which rays enter which child
       ulong enter0 = 0ul, enter1 = 0ul, enter2 = 0ul, enter3 = 0ul;
       for (ulong m = rays; m != 0ul; m &= m - 1ul) {

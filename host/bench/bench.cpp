@@ -323,6 +323,7 @@ struct SceneResult {
   std::size_t flatRegions = 0;   ///< regions the LBVH keyed with their thin axis last
   bool shadowToEmitters = false;
   int packetWidth = 0;  ///< rays per packet for this scene (packetWidthFor, by camera rays per triangle)
+  bool streamPrefetch = false;  ///< the streams ask for a node's children early (streamPrefetchFor)
   double embreeBuildSeconds = 0.0;
   std::vector<SetResult> sets;
   double pathMrays = 0.0;
@@ -635,6 +636,7 @@ SceneResult benchScene(Context& context, const std::string& name, const Scene& s
       packetWidthFor(context.info(), options.packetWidth,
                      std::size_t(options.primaryWidth) * std::size_t(options.primaryWidth), scene.triangles.size());
   Tracer tracer(context, scene, bvhOptions, result.packetWidth);
+  result.streamPrefetch = tracer.streamPrefetch();
   result.bytesPerTriangle =
       scene.triangles.empty() ? 0.0 : double(tracer.sceneBuffers().uploadedBytes) / scene.triangles.size();
   result.leafMisfits = tracer.sceneBuffers().leafMisfits();
@@ -804,12 +806,12 @@ int runBench(const BenchOptions& options) {
       std::printf("  {\"name\": %s, \"triangles\": %zu, \"bvh_build_s\": %.6f, \"bvh_mtris_per_s\": %.3f, "
                   "\"bvh_nodes\": %zu, \"bvh_sah\": %.3f, \"bvh4_nodes\": %zu, \"bvh4_sah\": %.3f, \"bvh4_collapse_s\": %.6f, "
                   "\"bvh4_mtris_per_s\": %.3f, \"bytes_per_triangle\": %.1f, \"leaf_misfits\": %zu, \"bvh_copies_placed\": %zu, "
-                  "\"bvh_flat_regions\": %zu, \"packet_width\": %d, \"embree_build_s\": %.6f, \"shadow_targets\": \"%s\", "
-                  "\"path_mrays\": %.3f,\n",
+                  "\"bvh_flat_regions\": %zu, \"packet_width\": %d, \"stream_prefetch\": %s, \"embree_build_s\": %.6f, "
+                  "\"shadow_targets\": \"%s\", \"path_mrays\": %.3f,\n",
                   jsonString(r.name).c_str(), r.triangles, r.buildSeconds,
                   r.buildSeconds > 0 ? r.triangles / r.buildSeconds * 1e-6 : 0.0, r.nodes, r.sah,
                   r.nodes4, r.sah4, r.collapseSeconds, traversableRate(r), r.bytesPerTriangle, r.leafMisfits, r.copiesPlaced,
-                  r.flatRegions, r.packetWidth, r.embreeBuildSeconds, r.shadowToEmitters ? "emitters" : "bounds", r.pathMrays);
+                  r.flatRegions, r.packetWidth, r.streamPrefetch ? "true" : "false", r.embreeBuildSeconds, r.shadowToEmitters ? "emitters" : "bounds", r.pathMrays);
       std::printf("   \"bvh_builder\": \"%s\", \"trees\": [", options.bvh.c_str());
       const TreeResult* sahTree = nullptr;
       for (const TreeResult& t : r.trees)

@@ -30,6 +30,7 @@ std::vector<DeviceInfo> listDevices() {
       info.isCpu = (device.getInfo<CL_DEVICE_TYPE>() & CL_DEVICE_TYPE_CPU) != 0;
       info.fp64 = device.getInfo<CL_DEVICE_EXTENSIONS>().find("cl_khr_fp64") != std::string::npos;
       info.nativeFloatWidth = int(device.getInfo<CL_DEVICE_NATIVE_VECTOR_WIDTH_FLOAT>());
+      info.globalCacheBytes = device.getInfo<CL_DEVICE_GLOBAL_MEM_CACHE_SIZE>();
       info.platform = platform;
       info.device = device;
       result.push_back(std::move(info));

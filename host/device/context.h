@@ -26,6 +26,7 @@ struct DeviceInfo {
   bool isCpu = false;         ///< CL_DEVICE_TYPE_CPU (Oclgrind's simulator claims GPU and CPU)
   bool fp64 = false;
   int nativeFloatWidth = 1;   ///< CL_DEVICE_NATIVE_VECTOR_WIDTH_FLOAT
+  std::uint64_t globalCacheBytes = 0;  ///< CL_DEVICE_GLOBAL_MEM_CACHE_SIZE (0: not reported)
   cl::Platform platform;
   cl::Device device;
 };

@@ -98,7 +98,12 @@ std::vector<std::string> kernelDefines(const KernelFeatures& features) {
       "-D WT_HAS_PBR=" + std::string(features.pbr ? "1" : "0"),
       "-D WT_HAS_TRANSMISSION=" + std::string(features.pbr && features.transmission ? "1" : "0"),
       "-D WT_PACKET_WIDTH=" + std::to_string(features.packetWidth),
+      "-D WT_STREAM_PREFETCH=" + std::string(features.streamPrefetch ? "1" : "0"),
   };
+}
+
+bool streamPrefetchFor(const DeviceInfo& device, std::size_t sceneBytes) {
+  return device.globalCacheBytes == 0 || sceneBytes > device.globalCacheBytes;
 }
 
 int packetWidthFor(const DeviceInfo& device, int requested, std::size_t cameraRays, std::size_t triangles) {

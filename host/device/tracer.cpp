@@ -8,12 +8,16 @@
 
 namespace wt {
 
-Tracer::Tracer(Context& context, const Scene& scene, const BvhBuildOptions& options, int packetWidth)
+Tracer::Tracer(Context& context, const Scene& scene, const BvhBuildOptions& options, int packetWidth,
+               StreamPrefetch prefetch)
     : m_context(context), m_scene(std::make_unique<SceneBuffers>(context, scene, options)),
-      m_packetWidth(packetWidthFor(context.info(), packetWidth)) {
+      m_packetWidth(packetWidthFor(context.info(), packetWidth)),
+      m_streamPrefetch(prefetch == StreamPrefetch::kAuto ? streamPrefetchFor(context.info(), m_scene->uploadedBytes)
+                                                         : prefetch == StreamPrefetch::kOn) {
   KernelFeatures features;
   features.bvhStackSize = m_scene->stackSize();
   features.packetWidth = m_packetWidth;
+  features.streamPrefetch = m_streamPrefetch;
   m_program = buildProgram(context, features);
   m_closest = cl::Kernel(m_program, "trace_closest");
   m_occluded = cl::Kernel(m_program, "trace_occluded");

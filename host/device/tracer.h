@@ -40,6 +40,10 @@ struct RayHit {
 /// another may win.
 enum class Traversal { kSingle, kPacket, kStream };
 
+/// Whether streams ask for a node's children as it arrives: by the scene's
+/// size against the device's cache (streamPrefetchFor), or always, or never.
+enum class StreamPrefetch { kAuto, kOn, kOff };
+
 /// How alike the directions of each packet's rays are: the mean, over the
 /// packets of `width` consecutive rays, of the length of their unit
 /// directions' mean. 1 when every packet's rays are parallel; about 0.33 for
@@ -49,7 +53,8 @@ double packetCoherence(std::span<const Ray> rays, std::size_t width = WT_PACKET_
 class Tracer {
  public:
   /// packetWidth: rays per packet, 8 or 16; 0 picks by the device (packetWidthFor).
-  Tracer(Context& context, const Scene& scene, const BvhBuildOptions& options = {}, int packetWidth = 0);
+  Tracer(Context& context, const Scene& scene, const BvhBuildOptions& options = {}, int packetWidth = 0,
+         StreamPrefetch prefetch = StreamPrefetch::kAuto);
   ~Tracer();
 
   std::vector<RayHit> traceClosest(std::span<const Ray> rays, Traversal traversal = Traversal::kSingle);
@@ -59,6 +64,8 @@ class Tracer {
   Context& context() const { return m_context; }
   /// Rays per packet of Traversal::kPacket on this device.
   int packetWidth() const { return m_packetWidth; }
+  /// Whether this tracer's streams ask for a node's children early.
+  bool streamPrefetch() const { return m_streamPrefetch; }
   /// Kernel time of the last trace call (profiling events), seconds.
   double lastKernelSeconds() const { return m_lastKernelSeconds; }
 
@@ -70,6 +77,7 @@ class Tracer {
   Context& m_context;
   std::unique_ptr<SceneBuffers> m_scene;
   int m_packetWidth = WT_PACKET_WIDTH;
+  bool m_streamPrefetch = false;
   cl::Program m_program;
   cl::Kernel m_closest, m_occluded, m_closestPacket, m_occludedPacket, m_occludedStream;
   cl::Buffer m_rayO, m_rayD, m_skip, m_out;

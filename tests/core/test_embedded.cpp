@@ -53,6 +53,10 @@ TEST(Embedded, DefinesCarryEveryFeature) {
   auto has = [&](const std::string& d) { return std::find(defines.begin(), defines.end(), d) != defines.end(); };
   EXPECT_TRUE(has("-D WT_INTEGRATOR_MINIMAL=1"));
   EXPECT_TRUE(has("-D WT_BVH_STACK_SIZE=96"));
+  EXPECT_TRUE(has("-D WT_STREAM_PREFETCH=0"));
+  features.streamPrefetch = true;
+  defines = kernelDefines(features);
+  EXPECT_TRUE(has("-D WT_STREAM_PREFETCH=1"));
 }
 
 }  // namespace

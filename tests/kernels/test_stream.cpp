@@ -60,8 +60,12 @@ std::vector<Ray> shadowRays(const Scene& scene, std::size_t count, std::uint32_t
 
 /// Stream answers equal single-ray answers ray by ray; rays that skip no
 /// triangle also agree with brute force (but for float-precision grazes).
+/// The streams ask for each node's children early (WT_STREAM_PREFETCH), which
+/// these small scenes would not get by their size; the edge test below runs
+/// without.
 void expectStreamsMatch(const Scene& scene, const std::vector<Ray>& rays, const BvhBuildOptions& options) {
-  Tracer tracer(test::deviceContext(), scene, options);
+  Tracer tracer(test::deviceContext(), scene, options, 0, StreamPrefetch::kOn);
+  ASSERT_TRUE(tracer.streamPrefetch());
   const std::vector<std::uint8_t> single = tracer.traceOccluded(rays, Traversal::kSingle);
   tracer.traceClosest(rays);  // leaves hits, not flags, in the output a ray left unwritten would show
   const std::vector<std::uint8_t> stream = tracer.traceOccluded(rays, Traversal::kStream);
@@ -118,7 +122,8 @@ TEST(StreamTraversalEdges, PartialWindowsRaysNotFiniteAndEmptyScenes) {
       if ((i >> axis) & 1) d[axis] = -d[axis];
     rays[i].direction = glm::normalize(d);
   }
-  Tracer tracer(test::deviceContext(), scene);
+  Tracer tracer(test::deviceContext(), scene, {}, 0, StreamPrefetch::kOff);
+  ASSERT_FALSE(tracer.streamPrefetch());
   for (std::size_t count : {std::size_t(1), std::size_t(63), std::size_t(64), std::size_t(65), std::size_t(255),
                             std::size_t(256), std::size_t(257), rays.size()}) {
     SCOPED_TRACE(std::to_string(count) + " rays");
@@ -150,6 +155,26 @@ TEST(StreamTraversalEdges, PartialWindowsRaysNotFiniteAndEmptyScenes) {
   for (std::uint8_t o : single) blocked += o;
   EXPECT_GT(blocked, 0u);
   EXPECT_LT(blocked, rays.size() / 10);
+}
+
+TEST(StreamTraversalEdges, ChildrenAskedForWhereTheSceneOutgrowsTheCache) {
+  // streamPrefetchFor: by the scene's bytes against the device's cache (a
+  // device that reports no cache gets the requests); a tracer's own choice
+  // follows its scene's uploaded bytes unless told
+  DeviceInfo device = test::deviceContext().info();
+  device.globalCacheBytes = std::uint64_t{32} << 20;
+  EXPECT_FALSE(streamPrefetchFor(device, 1u << 20));       // DamagedHelmet, about 1 MB
+  EXPECT_FALSE(streamPrefetchFor(device, std::size_t{32} << 20));
+  EXPECT_TRUE(streamPrefetchFor(device, (std::size_t{32} << 20) + 1));
+  EXPECT_TRUE(streamPrefetchFor(device, 57u * 1000000u));  // the 1 M-triangle scenes
+  device.globalCacheBytes = 0;
+  EXPECT_TRUE(streamPrefetchFor(device, 1024));
+
+  Scene scene = makeTriangleSoup(200, 3, 0.2f);
+  Tracer automatic(test::deviceContext(), scene);
+  EXPECT_EQ(automatic.streamPrefetch(),
+            streamPrefetchFor(test::deviceContext().info(), automatic.sceneBuffers().uploadedBytes));
+  EXPECT_TRUE(Tracer(test::deviceContext(), scene, {}, 0, StreamPrefetch::kOn).streamPrefetch());
 }
 
 }  // namespace
