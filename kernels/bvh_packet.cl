@@ -155,6 +155,26 @@ inline pint packet_box_hit(__global const WtBvh4Node* n, int k, const RayPacket*
   return packet_mask(tn <= tf);
 }
 
+/// Slab test of the box around the root's four children against every lane:
+/// a lane that misses it misses each of them (the planes' distances are
+/// monotonic in the plane, so the union's interval holds each child's).
+inline pint packet_scene_hit(__global const WtBvh4Node* root, const RayPacket* p, pfloat tmax) {
+  float4 lx = vload4(0, root->lo_x), hx = vload4(0, root->hi_x);
+  float4 ly = vload4(0, root->lo_y), hy = vload4(0, root->hi_y);
+  float4 lz = vload4(0, root->lo_z), hz = vload4(0, root->hi_z);
+  // an empty slot's inverted box (lo +inf, hi -inf) drops out of both
+  float lo_x = min(min(lx.s0, lx.s1), min(lx.s2, lx.s3)), hi_x = max(max(hx.s0, hx.s1), max(hx.s2, hx.s3));
+  float lo_y = min(min(ly.s0, ly.s1), min(ly.s2, ly.s3)), hi_y = max(max(hy.s0, hy.s1), max(hy.s2, hy.s3));
+  float lo_z = min(min(lz.s0, lz.s1), min(lz.s2, lz.s3)), hi_z = max(max(hz.s0, hz.s1), max(hz.s2, hz.s3));
+  pfloat t0x = (lo_x - p->o[0]) * p->inv_d[0], t1x = (hi_x - p->o[0]) * p->inv_d[0];
+  pfloat t0y = (lo_y - p->o[1]) * p->inv_d[1], t1y = (hi_y - p->o[1]) * p->inv_d[1];
+  pfloat t0z = (lo_z - p->o[2]) * p->inv_d[2], t1z = (hi_z - p->o[2]) * p->inv_d[2];
+  pfloat tn = packet_vmax(packet_vmax(packet_vmin(t0x, t1x), packet_vmin(t0y, t1y)), packet_vmax(packet_vmin(t0z, t1z), p->tmin));
+  pfloat tf = packet_vmin(packet_vmin(packet_vmax(t0x, t1x), packet_vmax(t0y, t1y)), packet_vmax(t0z, t1z)) * 1.00000036f;
+  tf = packet_vmin(tf, tmax);
+  return packet_mask(tn <= tf);
+}
+
 /// The watertight test of triangle `prim` on every lane in `lanes`: the mask
 /// of lanes that hit it in (tmin, tmax), with distance and barycentrics.
 /// triangle_intersect's operations in its order, lane by lane.
@@ -208,17 +228,28 @@ inline pint packet_triangle(const RayPacket* p, __global const float4* tri_verts
   return ok;
 }
 
+/// What packet_load found: a packet to trace, rays of more than one axis
+/// permutation, or (where the caller asks) rays that all miss the scene.
+#define WT_PACKET_TRACE 0
+#define WT_PACKET_MIXED 1
+#define WT_PACKET_MISSES 2
+
 /// Loads a packet: lane l takes ray index[l] of a batch (o.w = tmin,
 /// d.w = tmax) for l < lanes; the other lanes, and lanes whose ray is not
-/// finite, are left out of `valid`. Returns true when the finite rays do not
-/// all share one axis permutation; then, with `alone` null, nothing else is
-/// set (the caller traces ray by ray), and otherwise the packet takes the
-/// permutation most of them have, and a finite ray with another one is left
-/// out of `valid` too and flagged in alone[l] (set only then), for the
-/// caller to trace by itself.
-__attribute__((always_inline)) inline bool packet_load(RayPacket* p, pint* valid, pfloat* tmax, int* alone,
-                                                      const uint* index, uint lanes, __global const float4* ray_o,
-                                                      __global const float4* ray_d) {
+/// finite, are left out of `valid`. Returns WT_PACKET_MIXED when the finite
+/// rays do not all share one axis permutation; then, with `alone` null,
+/// the packet is not set up (the caller traces ray by ray), and otherwise
+/// the packet takes the permutation most of them have, and a finite ray
+/// with another one is left out of `valid` too and flagged in alone[l] (set
+/// only then), for the caller to trace by itself. With `root` (the scene,
+/// closest hits only, `alone` null), first returns WT_PACKET_MISSES when no
+/// valid lane enters the box around the root's children, with only the
+/// rays' origins, intervals (tmax the misses' distances) and reciprocal
+/// directions set: no hit is possible, and the triangle test's set-up is
+/// skipped.
+__attribute__((always_inline)) inline int packet_load(RayPacket* p, pint* valid, pfloat* tmax, int* alone,
+                                                     const uint* index, uint lanes, __global const float4* ray_o,
+                                                     __global const float4* ray_d, const BvhScene* root) {
   float ox[WT_PACKET], oy[WT_PACKET], oz[WT_PACKET], tn[WT_PACKET];
   float dx[WT_PACKET], dy[WT_PACKET], dz[WT_PACKET], tx[WT_PACKET];
   // Per lane in scalar code: whether the ray is in, and its permutation
@@ -234,7 +265,9 @@ __attribute__((always_inline)) inline bool packet_load(RayPacket* p, pint* valid
     float4 o = ray_o[i], d = ray_d[i];
     ox[l] = o.x, oy[l] = o.y, oz[l] = o.z, tn[l] = o.w;
     dx[l] = d.x, dy[l] = d.y, dz[l] = d.z, tx[l] = d.w;
-    bool ok = l < lanes && bvh_ray_is_finite(o.xyz, d.xyz);
+    // bvh_ray_is_finite without its branches
+    int4 finite = isfinite(o) & isfinite(d);
+    bool ok = l < lanes && (finite.x & finite.y & finite.z) != 0;
     float3 dir = ok ? d.xyz : (float3)(0.0f, 0.0f, 1.0f);
     float3 ad = fabs(dir);
     int kz = (ad.x > ad.y) ? (ad.x > ad.z ? 0 : 2) : (ad.y > ad.z ? 1 : 2);
@@ -248,9 +281,29 @@ __attribute__((always_inline)) inline bool packet_load(RayPacket* p, pint* valid
       same = same && code[l] == first;
     }
   }
+  pfloat d[3];
+  const float kTiny = 1e-30f;
+  if (root) {
+    // Camera rays that miss the scene's box (most of the view of a small
+    // object) end here, before the triangle test's set-up: with the rays'
+    // origins, intervals and reciprocal directions in lanes.
+    pint finite = packet_vload(in);
+    p->o[0] = packet_vload(ox), p->o[1] = packet_vload(oy), p->o[2] = packet_vload(oz);
+    p->tmin = packet_vload(tn);
+    *tmax = packet_vload(tx);
+    *valid = finite;
+    if (root->node_count == 0) return WT_PACKET_MISSES;
+    d[0] = packet_pick(finite, packet_vload(dx), (pfloat)(0.0f));
+    d[1] = packet_pick(finite, packet_vload(dy), (pfloat)(0.0f));
+    d[2] = packet_pick(finite, packet_vload(dz), (pfloat)(1.0f));
+    for (int k = 0; k < 3; ++k)
+      p->inv_d[k] = 1.0f / packet_pick(packet_mask(fabs(d[k]) < kTiny), copysign((pfloat)(kTiny), d[k]), d[k]);
+    if (!packet_any(packet_scene_hit((__global const WtBvh4Node*)root->nodes, p, *tmax) & finite))
+      return WT_PACKET_MISSES;
+  }
   if (!same) {
     // traced ray by ray: nothing below is needed
-    if (!alone) return true;
+    if (!alone) return WT_PACKET_MIXED;
     // the permutation of most finite lanes (the lowest of a tie); the others alone
     int votes[6] = {0, 0, 0, 0, 0, 0};
     for (uint l = 0; l < WT_PACKET; ++l)
@@ -266,21 +319,20 @@ __attribute__((always_inline)) inline bool packet_load(RayPacket* p, pint* valid
       in[l] = code[l] >= 0 && code[l] == first ? -1 : 0;
     }
   }
-  p->o[0] = packet_vload(ox), p->o[1] = packet_vload(oy), p->o[2] = packet_vload(oz);
-  p->tmin = packet_vload(tn);
-  *tmax = packet_vload(tx);
-  pfloat d[3] = {packet_vload(dx), packet_vload(dy), packet_vload(dz)};
-  pint ok = packet_vload(in);
-  *valid = ok;
-  // a lane left out traces (0, 0, 1), as bvh_closest would never see it
-  d[0] = packet_pick(ok, d[0], (pfloat)(0.0f));
-  d[1] = packet_pick(ok, d[1], (pfloat)(0.0f));
-  d[2] = packet_pick(ok, d[2], (pfloat)(1.0f));
-
-  // bvh_safe_rcp, lane by lane
-  const float kTiny = 1e-30f;
-  for (int k = 0; k < 3; ++k)
-    p->inv_d[k] = 1.0f / packet_pick(packet_mask(fabs(d[k]) < kTiny), copysign((pfloat)(kTiny), d[k]), d[k]);
+  if (!root) {
+    p->o[0] = packet_vload(ox), p->o[1] = packet_vload(oy), p->o[2] = packet_vload(oz);
+    p->tmin = packet_vload(tn);
+    *tmax = packet_vload(tx);
+    pint ok = packet_vload(in);
+    *valid = ok;
+    // a lane left out traces (0, 0, 1), as bvh_closest would never see it
+    d[0] = packet_pick(ok, packet_vload(dx), (pfloat)(0.0f));
+    d[1] = packet_pick(ok, packet_vload(dy), (pfloat)(0.0f));
+    d[2] = packet_pick(ok, packet_vload(dz), (pfloat)(1.0f));
+    // bvh_safe_rcp, lane by lane
+    for (int k = 0; k < 3; ++k)
+      p->inv_d[k] = 1.0f / packet_pick(packet_mask(fabs(d[k]) < kTiny), copysign((pfloat)(kTiny), d[k]), d[k]);
+  }
 
   // triangle_ray_shear, lane by lane, with each lane's permutation
   pint kz = packet_vload(axis), flip = packet_vload(negative);
@@ -308,7 +360,7 @@ __attribute__((always_inline)) inline bool packet_load(RayPacket* p, pint* valid
   p->o_ky = pky == 0 ? p->o[0] : (pky == 1 ? p->o[1] : p->o[2]);
   p->o_kz = pkz == 0 ? p->o[0] : (pkz == 1 ? p->o[1] : p->o[2]);
   p->skip_a = p->skip_b = (puint)(WT_NO_HIT);
-  return !same;
+  return same ? WT_PACKET_TRACE : WT_PACKET_MIXED;
 }
 
 /// packet_load with `alone`, kept out of line: inlined into the any-hit
@@ -318,7 +370,7 @@ __attribute__((always_inline)) inline bool packet_load(RayPacket* p, pint* valid
 __attribute__((noinline)) bool packet_load_split(RayPacket* p, pint* valid, pfloat* tmax, int* alone,
                                                  const uint* index, uint lanes, __global const float4* ray_o,
                                                  __global const float4* ray_d) {
-  return packet_load(p, valid, tmax, alone, index, lanes, ray_o, ray_d);
+  return packet_load(p, valid, tmax, alone, index, lanes, ray_o, ray_d, 0) != WT_PACKET_TRACE;
 }
 
 /// The triangles each lane never hits (the surface its ray leaves, the
@@ -563,9 +615,16 @@ inline void packet_trace_closest(BvhScene scene, const uint* index, uint lanes, 
   RayPacket p;
   pint valid;
   pfloat tmax;
+  int loaded = packet_load(&p, &valid, &tmax, 0, index, lanes, ray_o, ray_d, &scene);
+  if (loaded == WT_PACKET_MISSES) {
+    float lt[WT_PACKET];
+    packet_vstore(tmax, lt);
+    for (uint l = 0; l < lanes; ++l) hits[index[l]] = (float4)(lt[l], 0.0f, 0.0f, as_float(WT_NO_HIT));
+    return;
+  }
   // Rays of more than one permutation: all traced ray by ray (camera rays'
   // packets never mix; the any-hit query below splits such packets).
-  if (packet_load(&p, &valid, &tmax, 0, index, lanes, ray_o, ray_d)) {
+  if (loaded == WT_PACKET_MIXED) {
     for (uint l = 0; l < lanes; ++l) {
       uint i = index[l];
       float4 o = ray_o[i], d = ray_d[i];
