@@ -17,6 +17,7 @@ namespace {
 // Rays per work unit handed to a thread: large enough that the atomic counter
 // costs nothing, small enough that two threads finish together.
 constexpr std::size_t kChunk = 4096;
+static_assert(kChunk % 16 == 0, "a chunk holds whole packets");
 
 void setRay(const Ray& r, RTCRay& ray) {
   ray.org_x = r.origin.x, ray.org_y = r.origin.y, ray.org_z = r.origin.z;
@@ -58,11 +59,26 @@ void setPacket(const Ray* rays, int n, int lanes, Packet& p, int* valid) {
 
 }  // namespace
 
+/// Lane masks of one packet, in the alignment rtcIntersect16 wants.
+struct alignas(64) PacketValid {
+  int lanes[16];
+};
+
 struct EmbreeReference::Impl {
   RTCDevice device = nullptr;
   RTCScene scene = nullptr;
   EmbreeOptions options;
   int threads = 1;
+  // The rays of the last call in the API's layout, kept between calls so
+  // that a repeated trace touches no fresh memory.
+  std::vector<RTCRayHit> rayHits;  ///< single, stream (closest)
+  std::vector<RTCRay> rays1;       ///< single, stream (any hit)
+  std::vector<RTCRayHit8> rayHits8;
+  std::vector<RTCRayHit16> rayHits16;
+  std::vector<RTCRay8> rays8;
+  std::vector<RTCRay16> rays16;
+  std::vector<PacketValid> valid;
+  double lastTraceSeconds = 0.0;
 
   ~Impl() {
     if (scene) rtcReleaseScene(scene);
@@ -137,63 +153,83 @@ std::string EmbreeReference::description() const {
 
 void EmbreeReference::setApi(EmbreeApi api) { m_impl->options.api = api; }
 
+double EmbreeReference::lastTraceSeconds() const { return m_impl->lastTraceSeconds; }
+
+// Each call has three passes over the rays on every thread: the rays put in
+// the API's layout, then the trace alone (timed: lastTraceSeconds, as
+// wavetrace's kernel time leaves out its upload and read-back), then the
+// answers read out.
+
 std::vector<RayHit> EmbreeReference::traceClosest(std::span<const Ray> rays, bool coherent) {
   Impl& im = *m_impl;
-  std::vector<RayHit> hits(rays.size());
-  im.parallelChunks(rays.size(), [&](std::size_t begin, std::size_t end) {
+  const std::size_t n = rays.size();
+  const EmbreeApi api = im.options.api;
+  const int lanes = api == EmbreeApi::kPacket8 ? 8 : api == EmbreeApi::kPacket16 ? 16 : 1;
+  const std::size_t packets = (n + std::size_t(lanes) - 1) / std::size_t(lanes);
+  if (lanes == 1 && im.rayHits.size() < n) im.rayHits.resize(n);
+  if (lanes == 8 && im.rayHits8.size() < packets) im.rayHits8.resize(packets);
+  if (lanes == 16 && im.rayHits16.size() < packets) im.rayHits16.resize(packets);
+  if (lanes > 1 && im.valid.size() < packets) im.valid.resize(packets);
+  // chunks start at multiples of kChunk, so of the packet width
+  im.parallelChunks(n, [&](std::size_t begin, std::size_t end) {
+    if (lanes == 1) {
+      for (std::size_t i = begin; i < end; ++i) {
+        RTCRayHit& rh = im.rayHits[i];
+        setRay(rays[i], rh.ray);
+        rh.hit.geomID = rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+      }
+      return;
+    }
+    for (std::size_t i = begin; i < end; i += std::size_t(lanes)) {
+      const int count = int(std::min<std::size_t>(std::size_t(lanes), end - i));
+      const std::size_t p = i / std::size_t(lanes);
+      if (lanes == 8) {
+        setPacket(&rays[i], count, 8, im.rayHits8[p].ray, im.valid[p].lanes);
+        std::fill(im.rayHits8[p].hit.geomID, im.rayHits8[p].hit.geomID + 8, RTC_INVALID_GEOMETRY_ID);
+      } else {
+        setPacket(&rays[i], count, 16, im.rayHits16[p].ray, im.valid[p].lanes);
+        std::fill(im.rayHits16[p].hit.geomID, im.rayHits16[p].hit.geomID + 16, RTC_INVALID_GEOMETRY_ID);
+      }
+    }
+  });
+  const auto start = std::chrono::steady_clock::now();
+  im.parallelChunks(n, [&](std::size_t begin, std::size_t end) {
     RTCIntersectContext context;
     rtcInitIntersectContext(&context);
     if (coherent) context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
-    switch (im.options.api) {
+    switch (api) {
       case EmbreeApi::kSingle:
-        for (std::size_t i = begin; i < end; ++i) {
-          RTCRayHit rh;
-          setRay(rays[i], rh.ray);
-          rh.hit.geomID = rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-          rtcIntersect1(im.scene, &context, &rh);
-          hits[i] = toHit(rh);
-        }
+        for (std::size_t i = begin; i < end; ++i) rtcIntersect1(im.scene, &context, &im.rayHits[i]);
         break;
       case EmbreeApi::kPacket8:
-      case EmbreeApi::kPacket16: {
-        const int lanes = im.options.api == EmbreeApi::kPacket8 ? 8 : 16;
-        alignas(64) RTCRayHit16 p16;
-        alignas(32) RTCRayHit8 p8;
-        alignas(64) int valid[16];
-        for (std::size_t i = begin; i < end; i += lanes) {
-          int n = int(std::min<std::size_t>(lanes, end - i));
-          if (lanes == 8) {
-            setPacket(&rays[i], n, 8, p8.ray, valid);
-            std::fill(p8.hit.geomID, p8.hit.geomID + 8, RTC_INVALID_GEOMETRY_ID);
-            rtcIntersect8(valid, im.scene, &context, &p8);
-          } else {
-            setPacket(&rays[i], n, 16, p16.ray, valid);
-            std::fill(p16.hit.geomID, p16.hit.geomID + 16, RTC_INVALID_GEOMETRY_ID);
-            rtcIntersect16(valid, im.scene, &context, &p16);
-          }
-          for (int k = 0; k < n; ++k) {
-            RayHit& h = hits[i + k];
-            unsigned geom = lanes == 8 ? p8.hit.geomID[k] : p16.hit.geomID[k];
-            if (geom == RTC_INVALID_GEOMETRY_ID) continue;
-            h.t = lanes == 8 ? p8.ray.tfar[k] : p16.ray.tfar[k];
-            h.b1 = lanes == 8 ? p8.hit.u[k] : p16.hit.u[k];
-            h.b2 = lanes == 8 ? p8.hit.v[k] : p16.hit.v[k];
-            h.triangle = lanes == 8 ? p8.hit.primID[k] : p16.hit.primID[k];
-          }
-        }
+        for (std::size_t i = begin; i < end; i += 8)
+          rtcIntersect8(im.valid[i / 8].lanes, im.scene, &context, &im.rayHits8[i / 8]);
         break;
-      }
-      case EmbreeApi::kStream: {
-        std::vector<RTCRayHit> stream(end - begin);
-        for (std::size_t i = begin; i < end; ++i) {
-          RTCRayHit& rh = stream[i - begin];
-          setRay(rays[i], rh.ray);
-          rh.hit.geomID = rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-        }
-        rtcIntersect1M(im.scene, &context, stream.data(), unsigned(stream.size()), sizeof(RTCRayHit));
-        for (std::size_t i = begin; i < end; ++i) hits[i] = toHit(stream[i - begin]);
+      case EmbreeApi::kPacket16:
+        for (std::size_t i = begin; i < end; i += 16)
+          rtcIntersect16(im.valid[i / 16].lanes, im.scene, &context, &im.rayHits16[i / 16]);
         break;
+      case EmbreeApi::kStream:
+        rtcIntersect1M(im.scene, &context, im.rayHits.data() + begin, unsigned(end - begin), sizeof(RTCRayHit));
+        break;
+    }
+  });
+  im.lastTraceSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  std::vector<RayHit> hits(n);
+  im.parallelChunks(n, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) {
+      if (lanes == 1) {
+        hits[i] = toHit(im.rayHits[i]);
+        continue;
       }
+      const std::size_t p = i / std::size_t(lanes), k = i % std::size_t(lanes);
+      const unsigned geom = lanes == 8 ? im.rayHits8[p].hit.geomID[k] : im.rayHits16[p].hit.geomID[k];
+      if (geom == RTC_INVALID_GEOMETRY_ID) continue;
+      RayHit& h = hits[i];
+      h.t = lanes == 8 ? im.rayHits8[p].ray.tfar[k] : im.rayHits16[p].ray.tfar[k];
+      h.b1 = lanes == 8 ? im.rayHits8[p].hit.u[k] : im.rayHits16[p].hit.u[k];
+      h.b2 = lanes == 8 ? im.rayHits8[p].hit.v[k] : im.rayHits16[p].hit.v[k];
+      h.triangle = lanes == 8 ? im.rayHits8[p].hit.primID[k] : im.rayHits16[p].hit.primID[k];
     }
   });
   return hits;
@@ -201,48 +237,58 @@ std::vector<RayHit> EmbreeReference::traceClosest(std::span<const Ray> rays, boo
 
 std::vector<std::uint8_t> EmbreeReference::traceOccluded(std::span<const Ray> rays, bool coherent) {
   Impl& im = *m_impl;
-  std::vector<std::uint8_t> occluded(rays.size(), 0);
-  // Embree marks an occluded ray by setting tfar to -inf.
-  auto blocked = [](float tfar) { return tfar < 0.0f && std::isinf(tfar); };
-  im.parallelChunks(rays.size(), [&](std::size_t begin, std::size_t end) {
+  const std::size_t n = rays.size();
+  const EmbreeApi api = im.options.api;
+  const int lanes = api == EmbreeApi::kPacket8 ? 8 : api == EmbreeApi::kPacket16 ? 16 : 1;
+  const std::size_t packets = (n + std::size_t(lanes) - 1) / std::size_t(lanes);
+  if (lanes == 1 && im.rays1.size() < n) im.rays1.resize(n);
+  if (lanes == 8 && im.rays8.size() < packets) im.rays8.resize(packets);
+  if (lanes == 16 && im.rays16.size() < packets) im.rays16.resize(packets);
+  if (lanes > 1 && im.valid.size() < packets) im.valid.resize(packets);
+  im.parallelChunks(n, [&](std::size_t begin, std::size_t end) {
+    if (lanes == 1) {
+      for (std::size_t i = begin; i < end; ++i) setRay(rays[i], im.rays1[i]);
+      return;
+    }
+    for (std::size_t i = begin; i < end; i += std::size_t(lanes)) {
+      const int count = int(std::min<std::size_t>(std::size_t(lanes), end - i));
+      const std::size_t p = i / std::size_t(lanes);
+      if (lanes == 8)
+        setPacket(&rays[i], count, 8, im.rays8[p], im.valid[p].lanes);
+      else
+        setPacket(&rays[i], count, 16, im.rays16[p], im.valid[p].lanes);
+    }
+  });
+  const auto start = std::chrono::steady_clock::now();
+  im.parallelChunks(n, [&](std::size_t begin, std::size_t end) {
     RTCIntersectContext context;
     rtcInitIntersectContext(&context);
     if (coherent) context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
-    switch (im.options.api) {
+    switch (api) {
       case EmbreeApi::kSingle:
-        for (std::size_t i = begin; i < end; ++i) {
-          RTCRay ray;
-          setRay(rays[i], ray);
-          rtcOccluded1(im.scene, &context, &ray);
-          occluded[i] = blocked(ray.tfar);
-        }
+        for (std::size_t i = begin; i < end; ++i) rtcOccluded1(im.scene, &context, &im.rays1[i]);
         break;
       case EmbreeApi::kPacket8:
-      case EmbreeApi::kPacket16: {
-        const int lanes = im.options.api == EmbreeApi::kPacket8 ? 8 : 16;
-        alignas(64) RTCRay16 p16;
-        alignas(32) RTCRay8 p8;
-        alignas(64) int valid[16];
-        for (std::size_t i = begin; i < end; i += lanes) {
-          int n = int(std::min<std::size_t>(lanes, end - i));
-          if (lanes == 8) {
-            setPacket(&rays[i], n, 8, p8, valid);
-            rtcOccluded8(valid, im.scene, &context, &p8);
-          } else {
-            setPacket(&rays[i], n, 16, p16, valid);
-            rtcOccluded16(valid, im.scene, &context, &p16);
-          }
-          for (int k = 0; k < n; ++k) occluded[i + k] = blocked(lanes == 8 ? p8.tfar[k] : p16.tfar[k]);
-        }
+        for (std::size_t i = begin; i < end; i += 8)
+          rtcOccluded8(im.valid[i / 8].lanes, im.scene, &context, &im.rays8[i / 8]);
         break;
-      }
-      case EmbreeApi::kStream: {
-        std::vector<RTCRay> stream(end - begin);
-        for (std::size_t i = begin; i < end; ++i) setRay(rays[i], stream[i - begin]);
-        rtcOccluded1M(im.scene, &context, stream.data(), unsigned(stream.size()), sizeof(RTCRay));
-        for (std::size_t i = begin; i < end; ++i) occluded[i] = blocked(stream[i - begin].tfar);
+      case EmbreeApi::kPacket16:
+        for (std::size_t i = begin; i < end; i += 16)
+          rtcOccluded16(im.valid[i / 16].lanes, im.scene, &context, &im.rays16[i / 16]);
         break;
-      }
+      case EmbreeApi::kStream:
+        rtcOccluded1M(im.scene, &context, im.rays1.data() + begin, unsigned(end - begin), sizeof(RTCRay));
+        break;
+    }
+  });
+  im.lastTraceSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  // Embree marks an occluded ray by setting tfar to -inf.
+  auto blocked = [](float tfar) { return tfar < 0.0f && std::isinf(tfar); };
+  std::vector<std::uint8_t> occluded(n, 0);
+  im.parallelChunks(n, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) {
+      const std::size_t p = i / std::size_t(lanes), k = i % std::size_t(lanes);
+      occluded[i] = blocked(lanes == 1 ? im.rays1[i].tfar : lanes == 8 ? im.rays8[p].tfar[k] : im.rays16[p].tfar[k]);
     }
   });
   return occluded;

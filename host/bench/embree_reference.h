@@ -74,6 +74,10 @@ class EmbreeReference {
 
   /// The API later traces use.
   void setApi(EmbreeApi api);
+  /// Wall time of the last call's tracing alone, on every thread: without
+  /// putting the rays in the API's layout before or reading the answers
+  /// after (as wavetrace's kernel time leaves out its upload and read-back).
+  double lastTraceSeconds() const;
 
   double buildSeconds() const { return m_buildSeconds; }
   /// "Embree 3.13.5, packet16 API, high quality, 2 threads" (with
