@@ -252,14 +252,8 @@ __attribute__((always_inline)) inline int packet_load(RayPacket* p, pint* valid,
                                                      __global const float4* ray_d, const BvhScene* root) {
   float ox[WT_PACKET], oy[WT_PACKET], oz[WT_PACKET], tn[WT_PACKET];
   float dx[WT_PACKET], dy[WT_PACKET], dz[WT_PACKET], tx[WT_PACKET];
-  // Per lane in scalar code: whether the ray is in, and its permutation
-  // (triangle_ray_shear's dominant axis kz, and whether that component is
-  // negative); the divisions below run in lanes. (The permutation computed
-  // in lanes came out wrong under Oclgrind's optimised build.)
-  int in[WT_PACKET], axis[WT_PACKET], negative[WT_PACKET];
-  int code[WT_PACKET];  // a finite lane's permutation, 2 kz + (negative); -1 for the others
-  int first = -1;       // the first finite lane's
-  bool same = true;
+  // Per lane: its ray gathered, and whether it is in (finite, and a real lane)
+  int in[WT_PACKET];
   for (uint l = 0; l < WT_PACKET; ++l) {
     uint i = index[min(l, lanes - 1u)];
     float4 o = ray_o[i], d = ray_d[i];
@@ -267,20 +261,25 @@ __attribute__((always_inline)) inline int packet_load(RayPacket* p, pint* valid,
     dx[l] = d.x, dy[l] = d.y, dz[l] = d.z, tx[l] = d.w;
     // bvh_ray_is_finite without its branches
     int4 finite = isfinite(o) & isfinite(d);
-    bool ok = l < lanes && (finite.x & finite.y & finite.z) != 0;
-    float3 dir = ok ? d.xyz : (float3)(0.0f, 0.0f, 1.0f);
-    float3 ad = fabs(dir);
-    int kz = (ad.x > ad.y) ? (ad.x > ad.z ? 0 : 2) : (ad.y > ad.z ? 1 : 2);
-    int flip = vec3_component(dir, kz) < 0.0f;
-    in[l] = ok ? -1 : 0;
-    axis[l] = kz;
-    negative[l] = flip ? -1 : 0;
-    code[l] = ok ? 2 * kz + flip : -1;
-    if (ok) {
-      if (first < 0) first = code[l];
-      same = same && code[l] == first;
-    }
+    in[l] = l < lanes && (finite.x & finite.y & finite.z) != 0 ? -1 : 0;
   }
+  // Each lane's permutation, in lanes: triangle_ray_shear's dominant axis
+  // kz (x over y over z on ties, as there) and whether that component is
+  // negative, as a code 2 kz + negative
+  pint in_v = packet_vload(in);
+  pfloat ux = packet_pick(in_v, packet_vload(dx), (pfloat)(0.0f));
+  pfloat uy = packet_pick(in_v, packet_vload(dy), (pfloat)(0.0f));
+  pfloat uz = packet_pick(in_v, packet_vload(dz), (pfloat)(1.0f));
+  pfloat adx = fabs(ux), ady = fabs(uy), adz = fabs(uz);
+  pint kz_is_x = packet_mask(adx > ady) & packet_mask(adx > adz);
+  pint kz_is_y = packet_mask(adx <= ady) & packet_mask(ady > adz);
+  pint flip_v = packet_mask(packet_pick(kz_is_x, ux, packet_pick(kz_is_y, uy, uz)) < 0.0f);
+  pfloat codef = packet_pick(kz_is_x, (pfloat)(0.0f), packet_pick(kz_is_y, (pfloat)(2.0f), (pfloat)(4.0f))) +
+                 packet_pick(flip_v, (pfloat)(1.0f), (pfloat)(0.0f));
+  float code_lo = packet_min(packet_pick(in_v, codef, (pfloat)(99.0f)));
+  float code_hi = packet_max(packet_pick(in_v, codef, (pfloat)(-1.0f)));
+  int first = (int)code_hi;  // -1: no lane in
+  bool same = code_hi < 0.0f || code_lo == code_hi;
   pfloat d[3];
   const float kTiny = 1e-30f;
   if (root) {
@@ -304,6 +303,10 @@ __attribute__((always_inline)) inline int packet_load(RayPacket* p, pint* valid,
   if (!same) {
     // traced ray by ray: nothing below is needed
     if (!alone) return WT_PACKET_MIXED;
+    float codes[WT_PACKET];
+    packet_vstore(packet_pick(in_v, codef, (pfloat)(-1.0f)), codes);
+    int code[WT_PACKET];
+    for (uint l = 0; l < WT_PACKET; ++l) code[l] = (int)codes[l];
     // the permutation of most finite lanes (the lowest of a tie); the others alone
     int votes[6] = {0, 0, 0, 0, 0, 0};
     for (uint l = 0; l < WT_PACKET; ++l)
@@ -335,8 +338,9 @@ __attribute__((always_inline)) inline int packet_load(RayPacket* p, pint* valid,
   }
 
   // triangle_ray_shear, lane by lane, with each lane's permutation
-  pint kz = packet_vload(axis), flip = packet_vload(negative);
-  pint z_is_x = packet_mask(kz == 0), z_is_y = packet_mask(kz == 1);
+  // (the axis masks used as they are: integer arithmetic on them came out
+  // wrong under Oclgrind's optimised build, tests/oclgrind/mask_arithmetic.cl)
+  pint flip = flip_v, z_is_x = kz_is_x, z_is_y = kz_is_y;
   pfloat dk_z = packet_pick(z_is_x, d[0], packet_pick(z_is_y, d[1], d[2]));
   // kx = kz + 1 and ky = kz + 2 (mod 3), swapped when flipped
   pfloat d_next = packet_pick(z_is_x, d[1], packet_pick(z_is_y, d[2], d[0]));
