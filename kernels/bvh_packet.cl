@@ -250,26 +250,63 @@ inline pint packet_triangle(const RayPacket* p, __global const float4* tri_verts
 __attribute__((always_inline)) inline int packet_load(RayPacket* p, pint* valid, pfloat* tmax, int* alone,
                                                      const uint* index, uint lanes, __global const float4* ray_o,
                                                      __global const float4* ray_d, const BvhScene* root) {
-  float ox[WT_PACKET], oy[WT_PACKET], oz[WT_PACKET], tn[WT_PACKET];
-  float dx[WT_PACKET], dy[WT_PACKET], dz[WT_PACKET], tx[WT_PACKET];
-  // Per lane: its ray gathered, and whether it is in (finite, and a real lane)
+  // The rays in lanes: origin, tmin, direction, tmax, and whether each lane
+  // is in (a real lane with a finite ray)
+  pfloat vox, voy, voz, vtn, vdx, vdy, vdz, vtx;
+  pint in_v;
   int in[WT_PACKET];
-  for (uint l = 0; l < WT_PACKET; ++l) {
-    uint i = index[min(l, lanes - 1u)];
-    float4 o = ray_o[i], d = ray_d[i];
-    ox[l] = o.x, oy[l] = o.y, oz[l] = o.z, tn[l] = o.w;
-    dx[l] = d.x, dy[l] = d.y, dz[l] = d.z, tx[l] = d.w;
-    // bvh_ray_is_finite without its branches
-    int4 finite = isfinite(o) & isfinite(d);
-    in[l] = l < lanes && (finite.x & finite.y & finite.z) != 0 ? -1 : 0;
+  bool contiguous = lanes == WT_PACKET;
+  for (uint l = 1; l < WT_PACKET; ++l) contiguous = contiguous && index[l] == index[0] + l;
+  if (contiguous) {
+    // consecutive rays: whole vectors loaded and transposed
+    __global const float* fo = (__global const float*)(ray_o + index[0]);
+    __global const float* fd = (__global const float*)(ray_d + index[0]);
+#if WT_PACKET == 16
+    const pint kLowHalf = (pint)(-1, -1, -1, -1, -1, -1, -1, -1, 0, 0, 0, 0, 0, 0, 0, 0);
+#endif
+#if WT_PACKET == 8
+#define WT_TRANSPOSE(f, c, out)                                                            \
+  {                                                                                        \
+    float16 a = vload16(0, f), b = vload16(1, f);                                          \
+    out = shuffle2(a, b, (uint8)(c, c + 4, c + 8, c + 12, c + 16, c + 20, c + 24, c + 28)); \
+  }
+#else
+// (two halves blended rather than joined as (float16)(lo, hi): the join
+// crashes Oclgrind's unoptimised build, tests/oclgrind/join_halves.cl)
+#define WT_TRANSPOSE(f, c, out)                                                                                 \
+  {                                                                                                             \
+    const uint16 m = (uint16)(c, c + 4, c + 8, c + 12, c + 16, c + 20, c + 24, c + 28, c, c + 4, c + 8, c + 12, \
+                              c + 16, c + 20, c + 24, c + 28);                                                  \
+    out = packet_pick(kLowHalf, shuffle2(vload16(0, f), vload16(1, f), m), shuffle2(vload16(2, f), vload16(3, f), m)); \
+  }
+#endif
+    WT_TRANSPOSE(fo, 0u, vox) WT_TRANSPOSE(fo, 1u, voy) WT_TRANSPOSE(fo, 2u, voz) WT_TRANSPOSE(fo, 3u, vtn)
+    WT_TRANSPOSE(fd, 0u, vdx) WT_TRANSPOSE(fd, 1u, vdy) WT_TRANSPOSE(fd, 2u, vdz) WT_TRANSPOSE(fd, 3u, vtx)
+#undef WT_TRANSPOSE
+    in_v = packet_mask(isfinite(vox)) & packet_mask(isfinite(voy)) & packet_mask(isfinite(voz)) &
+           packet_mask(isfinite(vdx)) & packet_mask(isfinite(vdy)) & packet_mask(isfinite(vdz));
+  } else {
+    float ox[WT_PACKET], oy[WT_PACKET], oz[WT_PACKET], tn[WT_PACKET];
+    float dx[WT_PACKET], dy[WT_PACKET], dz[WT_PACKET], tx[WT_PACKET];
+    for (uint l = 0; l < WT_PACKET; ++l) {
+      uint i = index[min(l, lanes - 1u)];
+      float4 o = ray_o[i], d = ray_d[i];
+      ox[l] = o.x, oy[l] = o.y, oz[l] = o.z, tn[l] = o.w;
+      dx[l] = d.x, dy[l] = d.y, dz[l] = d.z, tx[l] = d.w;
+      // bvh_ray_is_finite without its branches
+      int4 finite = isfinite(o) & isfinite(d);
+      in[l] = l < lanes && (finite.x & finite.y & finite.z) != 0 ? -1 : 0;
+    }
+    vox = packet_vload(ox), voy = packet_vload(oy), voz = packet_vload(oz), vtn = packet_vload(tn);
+    vdx = packet_vload(dx), vdy = packet_vload(dy), vdz = packet_vload(dz), vtx = packet_vload(tx);
+    in_v = packet_vload(in);
   }
   // Each lane's permutation, in lanes: triangle_ray_shear's dominant axis
   // kz (x over y over z on ties, as there) and whether that component is
   // negative, as a code 2 kz + negative
-  pint in_v = packet_vload(in);
-  pfloat ux = packet_pick(in_v, packet_vload(dx), (pfloat)(0.0f));
-  pfloat uy = packet_pick(in_v, packet_vload(dy), (pfloat)(0.0f));
-  pfloat uz = packet_pick(in_v, packet_vload(dz), (pfloat)(1.0f));
+  pfloat ux = packet_pick(in_v, vdx, (pfloat)(0.0f));
+  pfloat uy = packet_pick(in_v, vdy, (pfloat)(0.0f));
+  pfloat uz = packet_pick(in_v, vdz, (pfloat)(1.0f));
   pfloat adx = fabs(ux), ady = fabs(uy), adz = fabs(uz);
   pint kz_is_x = packet_mask(adx > ady) & packet_mask(adx > adz);
   pint kz_is_y = packet_mask(adx <= ady) & packet_mask(ady > adz);
@@ -286,15 +323,13 @@ __attribute__((always_inline)) inline int packet_load(RayPacket* p, pint* valid,
     // Camera rays that miss the scene's box (most of the view of a small
     // object) end here, before the triangle test's set-up: with the rays'
     // origins, intervals and reciprocal directions in lanes.
-    pint finite = packet_vload(in);
-    p->o[0] = packet_vload(ox), p->o[1] = packet_vload(oy), p->o[2] = packet_vload(oz);
-    p->tmin = packet_vload(tn);
-    *tmax = packet_vload(tx);
+    pint finite = in_v;
+    p->o[0] = vox, p->o[1] = voy, p->o[2] = voz;
+    p->tmin = vtn;
+    *tmax = vtx;
     *valid = finite;
     if (root->node_count == 0) return WT_PACKET_MISSES;
-    d[0] = packet_pick(finite, packet_vload(dx), (pfloat)(0.0f));
-    d[1] = packet_pick(finite, packet_vload(dy), (pfloat)(0.0f));
-    d[2] = packet_pick(finite, packet_vload(dz), (pfloat)(1.0f));
+    d[0] = ux, d[1] = uy, d[2] = uz;
     for (int k = 0; k < 3; ++k)
       p->inv_d[k] = 1.0f / packet_pick(packet_mask(fabs(d[k]) < kTiny), copysign((pfloat)(kTiny), d[k]), d[k]);
     if (!packet_any(packet_scene_hit((__global const WtBvh4Node*)root->nodes, p, *tmax) & finite))
@@ -321,17 +356,18 @@ __attribute__((always_inline)) inline int packet_load(RayPacket* p, pint* valid,
       alone[l] = code[l] >= 0 && code[l] != first;
       in[l] = code[l] >= 0 && code[l] == first ? -1 : 0;
     }
+    in_v = packet_vload(in);
   }
   if (!root) {
-    p->o[0] = packet_vload(ox), p->o[1] = packet_vload(oy), p->o[2] = packet_vload(oz);
-    p->tmin = packet_vload(tn);
-    *tmax = packet_vload(tx);
-    pint ok = packet_vload(in);
+    p->o[0] = vox, p->o[1] = voy, p->o[2] = voz;
+    p->tmin = vtn;
+    *tmax = vtx;
+    pint ok = in_v;
     *valid = ok;
     // a lane left out traces (0, 0, 1), as bvh_closest would never see it
-    d[0] = packet_pick(ok, packet_vload(dx), (pfloat)(0.0f));
-    d[1] = packet_pick(ok, packet_vload(dy), (pfloat)(0.0f));
-    d[2] = packet_pick(ok, packet_vload(dz), (pfloat)(1.0f));
+    d[0] = packet_pick(ok, vdx, (pfloat)(0.0f));
+    d[1] = packet_pick(ok, vdy, (pfloat)(0.0f));
+    d[2] = packet_pick(ok, vdz, (pfloat)(1.0f));
     // bvh_safe_rcp, lane by lane
     for (int k = 0; k < 3; ++k)
       p->inv_d[k] = 1.0f / packet_pick(packet_mask(fabs(d[k]) < kTiny), copysign((pfloat)(kTiny), d[k]), d[k]);
