@@ -261,27 +261,30 @@ __attribute__((always_inline)) inline int packet_load(RayPacket* p, pint* valid,
     // consecutive rays: whole vectors loaded and transposed
     __global const float* fo = (__global const float*)(ray_o + index[0]);
     __global const float* fd = (__global const float*)(ray_d + index[0]);
-#if WT_PACKET == 16
-    const pint kLowHalf = (pint)(-1, -1, -1, -1, -1, -1, -1, -1, 0, 0, 0, 0, 0, 0, 0, 0);
-#endif
+    // each row of four floats one ray: component c of the rays is every
+    // fourth float from c
 #if WT_PACKET == 8
-#define WT_TRANSPOSE(f, c, out)                                                            \
-  {                                                                                        \
-    float16 a = vload16(0, f), b = vload16(1, f);                                          \
-    out = shuffle2(a, b, (uint8)(c, c + 4, c + 8, c + 12, c + 16, c + 20, c + 24, c + 28)); \
-  }
+    const float16 o0 = vload16(0, fo), o1 = vload16(1, fo), d0 = vload16(0, fd), d1 = vload16(1, fd);
+#define WT_TRANSPOSE(v0, v1, c, out) out = shuffle2(v0, v1, (uint8)(c, c + 4, c + 8, c + 12, c + 16, c + 20, c + 24, c + 28));
+    WT_TRANSPOSE(o0, o1, 0u, vox) WT_TRANSPOSE(o0, o1, 1u, voy) WT_TRANSPOSE(o0, o1, 2u, voz) WT_TRANSPOSE(o0, o1, 3u, vtn)
+    WT_TRANSPOSE(d0, d1, 0u, vdx) WT_TRANSPOSE(d0, d1, 1u, vdy) WT_TRANSPOSE(d0, d1, 2u, vdz) WT_TRANSPOSE(d0, d1, 3u, vtx)
 #else
-// (two halves blended rather than joined as (float16)(lo, hi): the join
-// crashes Oclgrind's unoptimised build, tests/oclgrind/join_halves.cl)
-#define WT_TRANSPOSE(f, c, out)                                                                                 \
+    // two halves blended rather than joined as (float16)(lo, hi): the join
+    // crashes Oclgrind's unoptimised build (tests/oclgrind/join_halves.cl)
+    const float16 o0 = vload16(0, fo), o1 = vload16(1, fo), o2 = vload16(2, fo), o3 = vload16(3, fo);
+    const float16 d0 = vload16(0, fd), d1 = vload16(1, fd), d2 = vload16(2, fd), d3 = vload16(3, fd);
+    const pint kLowHalf = (pint)(-1, -1, -1, -1, -1, -1, -1, -1, 0, 0, 0, 0, 0, 0, 0, 0);
+#define WT_TRANSPOSE(v0, v1, v2, v3, c, out)                                                                    \
   {                                                                                                             \
     const uint16 m = (uint16)(c, c + 4, c + 8, c + 12, c + 16, c + 20, c + 24, c + 28, c, c + 4, c + 8, c + 12, \
                               c + 16, c + 20, c + 24, c + 28);                                                  \
-    out = packet_pick(kLowHalf, shuffle2(vload16(0, f), vload16(1, f), m), shuffle2(vload16(2, f), vload16(3, f), m)); \
+    out = packet_pick(kLowHalf, shuffle2(v0, v1, m), shuffle2(v2, v3, m));                                      \
   }
+    WT_TRANSPOSE(o0, o1, o2, o3, 0u, vox) WT_TRANSPOSE(o0, o1, o2, o3, 1u, voy)
+    WT_TRANSPOSE(o0, o1, o2, o3, 2u, voz) WT_TRANSPOSE(o0, o1, o2, o3, 3u, vtn)
+    WT_TRANSPOSE(d0, d1, d2, d3, 0u, vdx) WT_TRANSPOSE(d0, d1, d2, d3, 1u, vdy)
+    WT_TRANSPOSE(d0, d1, d2, d3, 2u, vdz) WT_TRANSPOSE(d0, d1, d2, d3, 3u, vtx)
 #endif
-    WT_TRANSPOSE(fo, 0u, vox) WT_TRANSPOSE(fo, 1u, voy) WT_TRANSPOSE(fo, 2u, voz) WT_TRANSPOSE(fo, 3u, vtn)
-    WT_TRANSPOSE(fd, 0u, vdx) WT_TRANSPOSE(fd, 1u, vdy) WT_TRANSPOSE(fd, 2u, vdz) WT_TRANSPOSE(fd, 3u, vtx)
 #undef WT_TRANSPOSE
     in_v = packet_mask(isfinite(vox)) & packet_mask(isfinite(voy)) & packet_mask(isfinite(voz)) &
            packet_mask(isfinite(vdx)) & packet_mask(isfinite(vdy)) & packet_mask(isfinite(vdz));
