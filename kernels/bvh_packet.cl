@@ -420,6 +420,13 @@ __attribute__((noinline)) bool packet_load_split(RayPacket* p, pint* valid, pflo
 /// emitter a shadow ray aims at), lane l from skip[index[l]].
 inline void packet_set_skip(RayPacket* p, const uint* index, uint lanes, __global const uint* skip_a,
                             __global const uint2* skip_ab) {
+  bool contiguous = lanes == WT_PACKET;
+  for (uint l = 1; l < WT_PACKET; ++l) contiguous = contiguous && index[l] == index[0] + l;
+  if (contiguous && !skip_ab) {
+    p->skip_a = packet_vload(skip_a + index[0]);
+    p->skip_b = (puint)(WT_NO_HIT);
+    return;
+  }
   uint a[WT_PACKET], b[WT_PACKET];
   for (uint l = 0; l < WT_PACKET; ++l) {
     uint i = index[min(l, lanes - 1u)];
