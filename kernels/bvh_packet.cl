@@ -11,10 +11,14 @@
 // rays (camera rays, shadow rays from neighbouring pixels) share the cost of
 // fetching and testing a node.
 //
-// Lanes are the watertight test's, so the packet must agree on its axis
-// permutation (the dominant axis and sign of every direction). A packet
-// whose rays do not agree is traced ray by ray with bvh_closest /
-// bvh_occluded, with the same answers.
+// Lanes are the watertight test's, so a packet's triangle tests need one
+// axis permutation (the dominant axis and sign of the directions). A packet
+// whose rays do not agree is traced in passes, one per permutation, each a
+// packet of the lanes that have it (packet_next_pass): with the same
+// answers. Before 2026-12-04 such a packet was traced ray by ray, or for
+// any-hit queries the most common permutation's lanes as a packet and the
+// others ray by ray; passes measured 1.16-1.17x on the Cornell box's shadow
+// rays (docs/performance.md, "Mixed packets in passes").
 #ifndef WT_BVH_PACKET_CL
 #define WT_BVH_PACKET_CL
 
@@ -241,29 +245,50 @@ inline pint packet_triangle(const RayPacket* p, __global const float4* tri_verts
 #define WT_PACKET_MIXED 1
 #define WT_PACKET_MISSES 2
 
+/// Whether a packet's lanes are rays index[0], index[0] + 1, ... of a batch,
+/// every lane real: loaded and stored as whole vectors then.
+inline bool packet_contiguous(const uint* index, uint lanes) {
+  bool contiguous = lanes == WT_PACKET;
+  for (uint l = 1; l < WT_PACKET; ++l) contiguous = contiguous && index[l] == index[0] + l;
+  return contiguous;
+}
+
+/// The axis permutation the packet's triangle tests use: code 2 kz + flip
+/// (packet_load's codes; a negative code, no lane, takes +z).
+inline void packet_permute(RayPacket* p, int code) {
+  if (code < 0) code = 4;
+  int pkz = code >> 1;
+  int pkx = pkz == 2 ? 0 : pkz + 1;
+  int pky = pkx == 2 ? 0 : pkx + 1;
+  if (code & 1) {
+    int t = pkx;
+    pkx = pky;
+    pky = t;
+  }
+  p->kx = pkx, p->ky = pky, p->kz = pkz;
+  p->o_kx = pkx == 0 ? p->o[0] : (pkx == 1 ? p->o[1] : p->o[2]);
+  p->o_ky = pky == 0 ? p->o[0] : (pky == 1 ? p->o[1] : p->o[2]);
+  p->o_kz = pkz == 0 ? p->o[0] : (pkz == 1 ? p->o[1] : p->o[2]);
+}
+
 /// Loads a packet: lane l takes ray index[l] of a batch (o.w = tmin,
 /// d.w = tmax) for l < lanes; the other lanes, and lanes whose ray is not
-/// finite, are left out of `valid`. Returns WT_PACKET_MIXED when the finite
-/// rays do not all share one axis permutation; then, with `alone` null,
-/// the packet is not set up (the caller traces ray by ray), and otherwise
-/// the packet takes the permutation most of them have, and a finite ray
-/// with another one is left out of `valid` too and flagged in alone[l] (set
-/// only then), for the caller to trace by itself. With `root` (the scene,
-/// closest hits only, `alone` null), first returns WT_PACKET_MISSES when no
-/// valid lane enters the box around the root's children, with only the
-/// rays' origins, intervals (tmax the misses' distances) and reciprocal
-/// directions set: no hit is possible, and the triangle test's set-up is
-/// skipped.
-__attribute__((always_inline)) inline int packet_load(RayPacket* p, pint* valid, pfloat* tmax, int* alone,
-                                                     const uint* index, uint lanes, __global const float4* ray_o,
-                                                     __global const float4* ray_d, const BvhScene* root) {
+/// finite, are left out of `valid`. Each lane's shear is its own ray's
+/// (triangle_ray_shear), and codes[l] its permutation's code (2 kz + flip;
+/// -1 for a lane left out). Returns WT_PACKET_TRACE with the permutation set
+/// when every valid lane shares one, else WT_PACKET_MIXED: the caller then
+/// traces one pass per permutation (packet_next_pass). With `root` (the
+/// scene; closest hits), first returns WT_PACKET_MISSES when no valid lane
+/// enters the box around the root's children, with only the rays' origins,
+/// intervals (tmax the misses' distances) and reciprocal directions set.
+__attribute__((always_inline)) inline int packet_load(RayPacket* p, pint* valid, pfloat* tmax, pfloat* codes,
+                                                     const uint* index, uint lanes, bool contiguous,
+                                                     __global const float4* ray_o, __global const float4* ray_d,
+                                                     const BvhScene* root) {
   // The rays in lanes: origin, tmin, direction, tmax, and whether each lane
   // is in (a real lane with a finite ray)
   pfloat vox, voy, voz, vtn, vdx, vdy, vdz, vtx;
   pint in_v;
-  int in[WT_PACKET];
-  bool contiguous = lanes == WT_PACKET;
-  for (uint l = 1; l < WT_PACKET; ++l) contiguous = contiguous && index[l] == index[0] + l;
   if (contiguous) {
     // consecutive rays: whole vectors loaded and transposed
     __global const float* fo = (__global const float*)(ray_o + index[0]);
@@ -296,6 +321,7 @@ __attribute__((always_inline)) inline int packet_load(RayPacket* p, pint* valid,
     in_v = packet_mask(isfinite(vox)) & packet_mask(isfinite(voy)) & packet_mask(isfinite(voz)) &
            packet_mask(isfinite(vdx)) & packet_mask(isfinite(vdy)) & packet_mask(isfinite(vdz));
   } else {
+    int in[WT_PACKET];
     float ox[WT_PACKET], oy[WT_PACKET], oz[WT_PACKET], tn[WT_PACKET];
     float dx[WT_PACKET], dy[WT_PACKET], dz[WT_PACKET], tx[WT_PACKET];
     for (uint l = 0; l < WT_PACKET; ++l) {
@@ -313,122 +339,72 @@ __attribute__((always_inline)) inline int packet_load(RayPacket* p, pint* valid,
   }
   // Each lane's permutation, in lanes: triangle_ray_shear's dominant axis
   // kz (x over y over z on ties, as there) and whether that component is
-  // negative, as a code 2 kz + negative
+  // negative, as a code 2 kz + negative; a lane left out traces (0, 0, 1),
+  // as bvh_closest would never see it
   pfloat ux = packet_pick(in_v, vdx, (pfloat)(0.0f));
   pfloat uy = packet_pick(in_v, vdy, (pfloat)(0.0f));
   pfloat uz = packet_pick(in_v, vdz, (pfloat)(1.0f));
   pfloat adx = fabs(ux), ady = fabs(uy), adz = fabs(uz);
   pint kz_is_x = packet_mask(adx > ady) & packet_mask(adx > adz);
   pint kz_is_y = packet_mask(adx <= ady) & packet_mask(ady > adz);
-  pint flip_v = packet_mask(packet_pick(kz_is_x, ux, packet_pick(kz_is_y, uy, uz)) < 0.0f);
+  pint flip = packet_mask(packet_pick(kz_is_x, ux, packet_pick(kz_is_y, uy, uz)) < 0.0f);
   pfloat codef = packet_pick(kz_is_x, (pfloat)(0.0f), packet_pick(kz_is_y, (pfloat)(2.0f), (pfloat)(4.0f))) +
-                 packet_pick(flip_v, (pfloat)(1.0f), (pfloat)(0.0f));
-  float code_lo = packet_min(packet_pick(in_v, codef, (pfloat)(99.0f)));
-  float code_hi = packet_max(packet_pick(in_v, codef, (pfloat)(-1.0f)));
-  int first = (int)code_hi;  // -1: no lane in
-  bool same = code_hi < 0.0f || code_lo == code_hi;
-  pfloat d[3];
+                 packet_pick(flip, (pfloat)(1.0f), (pfloat)(0.0f));
+  p->o[0] = vox, p->o[1] = voy, p->o[2] = voz;
+  p->tmin = vtn;
+  *tmax = vtx;
+  *valid = in_v;
+  // bvh_safe_rcp, lane by lane
   const float kTiny = 1e-30f;
+  pfloat d[3] = {ux, uy, uz};
+  for (int k = 0; k < 3; ++k)
+    p->inv_d[k] = 1.0f / packet_pick(packet_mask(fabs(d[k]) < kTiny), copysign((pfloat)(kTiny), d[k]), d[k]);
   if (root) {
     // Camera rays that miss the scene's box (most of the view of a small
-    // object) end here, before the triangle test's set-up: with the rays'
-    // origins, intervals and reciprocal directions in lanes.
-    pint finite = in_v;
-    p->o[0] = vox, p->o[1] = voy, p->o[2] = voz;
-    p->tmin = vtn;
-    *tmax = vtx;
-    *valid = finite;
+    // object) end here, before the triangle test's set-up.
     if (root->node_count == 0) return WT_PACKET_MISSES;
-    d[0] = ux, d[1] = uy, d[2] = uz;
-    for (int k = 0; k < 3; ++k)
-      p->inv_d[k] = 1.0f / packet_pick(packet_mask(fabs(d[k]) < kTiny), copysign((pfloat)(kTiny), d[k]), d[k]);
-    if (!packet_any(packet_scene_hit((__global const WtBvh4Node*)root->nodes, p, *tmax) & finite))
+    if (!packet_any(packet_scene_hit((__global const WtBvh4Node*)root->nodes, p, *tmax) & in_v))
       return WT_PACKET_MISSES;
-  }
-  if (!same) {
-    // traced ray by ray: nothing below is needed
-    if (!alone) return WT_PACKET_MIXED;
-    float codes[WT_PACKET];
-    packet_vstore(packet_pick(in_v, codef, (pfloat)(-1.0f)), codes);
-    int code[WT_PACKET];
-    for (uint l = 0; l < WT_PACKET; ++l) code[l] = (int)codes[l];
-    // the permutation of most finite lanes (the lowest of a tie); the others alone
-    int votes[6] = {0, 0, 0, 0, 0, 0};
-    for (uint l = 0; l < WT_PACKET; ++l)
-      if (code[l] >= 0) ++votes[code[l]];
-    // However few share it: on the Cornell box's shadow rays, sending every
-    // lane alone where fewer than half (or three in four) shared it measured
-    // 0.95x (0.90x) of this.
-    int most = 0;
-    for (int c = 0; c < 6; ++c)
-      if (votes[c] > most) first = c, most = votes[c];
-    for (uint l = 0; l < WT_PACKET; ++l) {
-      alone[l] = code[l] >= 0 && code[l] != first;
-      in[l] = code[l] >= 0 && code[l] == first ? -1 : 0;
-    }
-    in_v = packet_vload(in);
-  }
-  if (!root) {
-    p->o[0] = vox, p->o[1] = voy, p->o[2] = voz;
-    p->tmin = vtn;
-    *tmax = vtx;
-    pint ok = in_v;
-    *valid = ok;
-    // a lane left out traces (0, 0, 1), as bvh_closest would never see it
-    d[0] = packet_pick(ok, vdx, (pfloat)(0.0f));
-    d[1] = packet_pick(ok, vdy, (pfloat)(0.0f));
-    d[2] = packet_pick(ok, vdz, (pfloat)(1.0f));
-    // bvh_safe_rcp, lane by lane
-    for (int k = 0; k < 3; ++k)
-      p->inv_d[k] = 1.0f / packet_pick(packet_mask(fabs(d[k]) < kTiny), copysign((pfloat)(kTiny), d[k]), d[k]);
   }
 
   // triangle_ray_shear, lane by lane, with each lane's permutation
   // (the axis masks used as they are: integer arithmetic on them came out
   // wrong under Oclgrind's optimised build, tests/oclgrind/mask_arithmetic.cl)
-  pint flip = flip_v, z_is_x = kz_is_x, z_is_y = kz_is_y;
-  pfloat dk_z = packet_pick(z_is_x, d[0], packet_pick(z_is_y, d[1], d[2]));
+  pfloat dk_z = packet_pick(kz_is_x, d[0], packet_pick(kz_is_y, d[1], d[2]));
   // kx = kz + 1 and ky = kz + 2 (mod 3), swapped when flipped
-  pfloat d_next = packet_pick(z_is_x, d[1], packet_pick(z_is_y, d[2], d[0]));
-  pfloat d_after = packet_pick(z_is_x, d[2], packet_pick(z_is_y, d[0], d[1]));
+  pfloat d_next = packet_pick(kz_is_x, d[1], packet_pick(kz_is_y, d[2], d[0]));
+  pfloat d_after = packet_pick(kz_is_x, d[2], packet_pick(kz_is_y, d[0], d[1]));
   pfloat dk_x = packet_pick(flip, d_after, d_next), dk_y = packet_pick(flip, d_next, d_after);
   p->sx = dk_x / dk_z;
   p->sy = dk_y / dk_z;
   p->sz = 1.0f / dk_z;
-
-  if (first < 0) first = 4;  // no lane valid: +z, unused
-  int pkz = first >> 1;
-  int pkx = pkz == 2 ? 0 : pkz + 1;
-  int pky = pkx == 2 ? 0 : pkx + 1;
-  if (first & 1) {
-    int t = pkx;
-    pkx = pky;
-    pky = t;
-  }
-  p->kx = pkx, p->ky = pky, p->kz = pkz;
-  p->o_kx = pkx == 0 ? p->o[0] : (pkx == 1 ? p->o[1] : p->o[2]);
-  p->o_ky = pky == 0 ? p->o[0] : (pky == 1 ? p->o[1] : p->o[2]);
-  p->o_kz = pkz == 0 ? p->o[0] : (pkz == 1 ? p->o[1] : p->o[2]);
   p->skip_a = p->skip_b = (puint)(WT_NO_HIT);
-  return same ? WT_PACKET_TRACE : WT_PACKET_MIXED;
+
+  *codes = packet_pick(in_v, codef, (pfloat)(-1.0f));
+  float code_lo = packet_min(packet_pick(in_v, codef, (pfloat)(99.0f)));
+  float code_hi = packet_max(*codes);
+  if (code_hi >= 0.0f && code_lo != code_hi) return WT_PACKET_MIXED;
+  packet_permute(p, (int)code_hi);
+  return WT_PACKET_TRACE;
 }
 
-/// packet_load with `alone`, kept out of line: inlined into the any-hit
-/// traversal it measured 1.03x on the Cornell box's shadow rays against the
-/// whole packet traced ray by ray, out of line 1.06-1.17x (while the
-/// closest-hit packets need it inlined: 0.94-0.97x on camera rays otherwise).
-__attribute__((noinline)) bool packet_load_split(RayPacket* p, pint* valid, pfloat* tmax, int* alone,
-                                                 const uint* index, uint lanes, __global const float4* ray_o,
-                                                 __global const float4* ray_d) {
-  return packet_load(p, valid, tmax, alone, index, lanes, ray_o, ray_d, 0) != WT_PACKET_TRACE;
+/// The next pass over a packet of mixed permutations: the lanes in `todo`
+/// that share its lowest code, taken out of `todo`, with the packet's
+/// permutation set to theirs. Each pass traces its lanes as a packet, so a
+/// packet of n permutations takes n passes (shadow rays where the dominant
+/// axis of their directions changes, a few camera rays of a wide view).
+inline pint packet_next_pass(RayPacket* p, pfloat codes, pint* todo) {
+  float code = packet_min(packet_pick(*todo, codes, (pfloat)(99.0f)));
+  pint pass = *todo & packet_mask(codes == code);
+  *todo &= ~pass;
+  packet_permute(p, (int)code);
+  return pass;
 }
 
 /// The triangles each lane never hits (the surface its ray leaves, the
 /// emitter a shadow ray aims at), lane l from skip[index[l]].
-inline void packet_set_skip(RayPacket* p, const uint* index, uint lanes, __global const uint* skip_a,
-                            __global const uint2* skip_ab) {
-  bool contiguous = lanes == WT_PACKET;
-  for (uint l = 1; l < WT_PACKET; ++l) contiguous = contiguous && index[l] == index[0] + l;
+inline void packet_set_skip(RayPacket* p, const uint* index, uint lanes, bool contiguous,
+                            __global const uint* skip_a, __global const uint2* skip_ab) {
   if (contiguous && !skip_ab) {
     p->skip_a = packet_vload(skip_a + index[0]);
     p->skip_b = (puint)(WT_NO_HIT);
@@ -483,12 +459,11 @@ inline uint packet_lane_leaf(__global const float4* tri_verts, const RayPacket* 
 #endif
 
 /// Closest hits of a packet's valid lanes: per lane the nearest t in
-/// (tmin, tmax) with its barycentrics and leaf-order triangle (WT_NO_HIT
-/// and tmax where none).
+/// (tmin, t_best) with its barycentrics and leaf-order triangle, which
+/// replace t_best, b1_best, b2_best and prim_best where one is found (the
+/// other lanes keep theirs).
 inline void packet_closest(BvhScene scene, const RayPacket* p, pint valid, pfloat* t_best, pfloat* b1_best,
                            pfloat* b2_best, puint* prim_best) {
-  *prim_best = (puint)(WT_NO_HIT);
-  *b1_best = *b2_best = (pfloat)(0.0f);
   if (scene.node_count == 0 || !packet_any(valid)) return;
   __global const WtBvh4Node* nodes = (__global const WtBvh4Node*)scene.nodes;
   pfloat tmax = *t_best;
@@ -666,66 +641,63 @@ inline uint packet_from_queue(__global const uint* queue, uint first, uint count
   return lanes;
 }
 
+/// Closest hits written to hits[index[l]] as (t, b1, b2, prim), lane l
+/// for l < lanes.
+inline void packet_store_hits(__global float4* hits, const uint* index, uint lanes, pfloat t, pfloat b1, pfloat b2,
+                              puint prim) {
+  float lt[WT_PACKET], lb1[WT_PACKET], lb2[WT_PACKET];
+  uint lp[WT_PACKET];
+  packet_vstore(t, lt), packet_vstore(b1, lb1), packet_vstore(b2, lb2), packet_vstore(prim, lp);
+  for (uint l = 0; l < lanes; ++l) hits[index[l]] = (float4)(lt[l], lb1[l], lb2[l], as_float(lp[l]));
+}
+
 /// Closest hits of rays index[0], ..., index[lanes - 1] of a batch, written
 /// to hits[index[l]] as (t, b1, b2, leaf-order triangle or WT_NO_HIT);
-/// skip[i] is the triangle ray i leaves. Packet traversal when the rays share
-/// the axis permutation, else ray by ray.
+/// skip[i] is the triangle ray i leaves.
 inline void packet_trace_closest(BvhScene scene, const uint* index, uint lanes, __global const float4* ray_o,
                                  __global const float4* ray_d, __global const uint* skip, __global float4* hits) {
   RayPacket p;
   pint valid;
-  pfloat tmax;
-  int loaded = packet_load(&p, &valid, &tmax, 0, index, lanes, ray_o, ray_d, &scene);
-  if (loaded == WT_PACKET_MISSES) {
-    float lt[WT_PACKET];
-    packet_vstore(tmax, lt);
-    for (uint l = 0; l < lanes; ++l) hits[index[l]] = (float4)(lt[l], 0.0f, 0.0f, as_float(WT_NO_HIT));
-    return;
-  }
-  // Rays of more than one permutation: all traced ray by ray (camera rays'
-  // packets never mix; the any-hit query below splits such packets).
-  if (loaded == WT_PACKET_MIXED) {
-    for (uint l = 0; l < lanes; ++l) {
-      uint i = index[l];
-      float4 o = ray_o[i], d = ray_d[i];
-      Hit hit = bvh_closest(scene, o.xyz, d.xyz, o.w, d.w, skip[i]);
-      hits[i] = (float4)(hit.t, hit.b1, hit.b2, as_float(hit.prim));
+  pfloat tmax, codes;
+  const bool contiguous = packet_contiguous(index, lanes);
+  int loaded = packet_load(&p, &valid, &tmax, &codes, index, lanes, contiguous, ray_o, ray_d, &scene);
+  pfloat b1 = (pfloat)(0.0f), b2 = (pfloat)(0.0f);
+  puint prim = (puint)(WT_NO_HIT);
+  if (loaded != WT_PACKET_MISSES) {
+    packet_set_skip(&p, index, lanes, contiguous, skip, 0);
+    if (loaded == WT_PACKET_TRACE) {
+      packet_closest(scene, &p, valid, &tmax, &b1, &b2, &prim);
+    } else {
+      for (pint todo = valid; packet_any(todo);) {
+        pint pass = packet_next_pass(&p, codes, &todo);
+        packet_closest(scene, &p, pass, &tmax, &b1, &b2, &prim);
+      }
     }
-    return;
   }
-  packet_set_skip(&p, index, lanes, skip, 0);
-  pfloat b1, b2;
-  puint prim;
-  packet_closest(scene, &p, valid, &tmax, &b1, &b2, &prim);
-  float lt[WT_PACKET], lb1[WT_PACKET], lb2[WT_PACKET];
-  uint lp[WT_PACKET];
-  packet_vstore(tmax, lt), packet_vstore(b1, lb1), packet_vstore(b2, lb2), packet_vstore(prim, lp);
-  for (uint l = 0; l < lanes; ++l) hits[index[l]] = (float4)(lt[l], lb1[l], lb2[l], as_float(lp[l]));
+  packet_store_hits(hits, index, lanes, tmax, b1, b2, prim);
 }
 
-/// Occlusion of rays index[0], ..., index[lanes - 1]: blocked[l] non-zero
+/// Occlusion of rays index[0], ..., index[lanes - 1]: all ones in lane l
 /// when ray index[l]'s segment is blocked or the ray is not finite (as
 /// bvh_occluded). skip[i] (skip_ab == 0) or skip_ab[i] are the triangles
 /// ray i never hits.
-inline void packet_trace_occluded(BvhScene scene, const uint* index, uint lanes, __global const float4* ray_o,
+inline pint packet_trace_occluded(BvhScene scene, const uint* index, uint lanes, __global const float4* ray_o,
                                   __global const float4* ray_d, __global const uint* skip,
-                                  __global const uint2* skip_ab, int* blocked) {
+                                  __global const uint2* skip_ab) {
   RayPacket p;
   pint valid;
-  pfloat tmax;
-  int alone[WT_PACKET];
-  const bool some_alone = packet_load_split(&p, &valid, &tmax, alone, index, lanes, ray_o, ray_d);
-  packet_set_skip(&p, index, lanes, skip, skip_ab);
+  pfloat tmax, codes;
+  const bool contiguous = packet_contiguous(index, lanes);
+  int loaded = packet_load(&p, &valid, &tmax, &codes, index, lanes, contiguous, ray_o, ray_d, 0);
+  packet_set_skip(&p, index, lanes, contiguous, skip, skip_ab);
   // a lane whose ray is not finite counts as blocked, as in bvh_occluded
-  packet_vstore(packet_occluded(scene, &p, valid, tmax) | ~valid, blocked);
-  if (!some_alone) return;
-  for (uint l = 0; l < lanes; ++l) {
-    if (!alone[l]) continue;
-    uint i = index[l];
-    float4 o = ray_o[i], d = ray_d[i];
-    uint2 ab = skip_ab ? skip_ab[i] : (uint2)(skip[i], WT_NO_HIT);
-    blocked[l] = bvh_occluded(scene, o.xyz, d.xyz, o.w, d.w, ab.x, ab.y) ? 1 : 0;
+  pint blocked = ~valid;
+  if (loaded == WT_PACKET_TRACE) return blocked | packet_occluded(scene, &p, valid, tmax);
+  for (pint todo = valid; packet_any(todo);) {
+    pint pass = packet_next_pass(&p, codes, &todo);
+    blocked |= packet_occluded(scene, &p, pass, tmax);
   }
+  return blocked;
 }
 
 #endif  // WT_BVH_PACKET_CL

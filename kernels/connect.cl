@@ -36,7 +36,7 @@ WT_KERNEL void connect_packet(__global const uint* counters, __global const uint
   uint lanes = packet_from_queue(shadow_queue, first, count, index);
   BvhScene scene = {nodes, node_count, tri_verts};
   int blocked[WT_PACKET];
-  packet_trace_occluded(scene, index, lanes, shadow_o, shadow_d, 0, shadow_skip, blocked);
+  packet_vstore(packet_trace_occluded(scene, index, lanes, shadow_o, shadow_d, 0, shadow_skip), blocked);
   for (uint l = 0; l < lanes; ++l)
     if (!blocked[l]) radiance[index[l]] += shadow_radiance[index[l]];
 }

@@ -66,7 +66,12 @@ WT_KERNEL void trace_occluded_packet(uint count, __global const float4* ray_o, _
   uint index[WT_PACKET];
   for (uint l = 0; l < WT_PACKET; ++l) index[l] = first + l;
   uint lanes = min(count - first, (uint)WT_PACKET);
-  int blocked[WT_PACKET];
-  packet_trace_occluded(scene, index, lanes, ray_o, ray_d, skip, 0, blocked);
-  for (uint l = 0; l < lanes; ++l) occluded[first + l] = blocked[l] != 0 ? 1u : 0u;
+  puint blocked = as_puint(packet_trace_occluded(scene, index, lanes, ray_o, ray_d, skip, 0)) & 1u;
+  if (lanes == WT_PACKET) {
+    packet_vstore(blocked, occluded + first);
+    return;
+  }
+  uint lane_blocked[WT_PACKET];
+  packet_vstore(blocked, lane_blocked);
+  for (uint l = 0; l < lanes; ++l) occluded[first + l] = lane_blocked[l];
 }

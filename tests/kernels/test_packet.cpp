@@ -174,7 +174,8 @@ TEST(PacketTraversalEdges, CoherentRaysMatchBruteForce) {
 TEST(PacketTraversalEdges, PartialPacketsMixedLanesAndEmptyScenes) {
   // batches that end inside a packet; packets holding rays that are not
   // finite next to ordinary ones (those lanes miss and count as blocked, as
-  // alone); a packet whose rays disagree on the permutation (ray by ray)
+  // alone); a packet whose rays disagree on the permutation (one pass per
+  // permutation)
   Scene scene = makeTriangleSoup(500, 4, 0.2f);
   std::vector<Ray> fan = cameraFans(scene, 8, 4);
   const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
@@ -220,9 +221,9 @@ TEST(PacketTraversalEdges, PartialPacketsMixedLanesAndEmptyScenes) {
 }
 
 TEST(PacketTraversalEdges, MixedPacketsMatchSingleRays) {
-  // Every packet holds a few rays of another axis permutation: the any-hit
-  // query traces the others as a packet and those alone; the closest-hit
-  // query traces the whole packet ray by ray. The same answers as single rays.
+  // Every packet holds a few rays of another axis permutation: both queries
+  // trace the packet in two passes, each the lanes of one permutation. The
+  // same answers as single rays.
   Scene scene = makeTriangleSoup(2000, 6, 0.15f);
   std::vector<Ray> fan = cameraFans(scene, 32, 9);
   for (int width : kPacketWidths) {
