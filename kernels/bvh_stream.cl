@@ -36,7 +36,7 @@ inline ulong bvh_occluded_stream(BvhScene scene, const uint* index, uint n, __gl
                                  __global const float4* ray_d, __global const uint* skip) {
   __global const WtBvh4Node* nodes = (__global const WtBvh4Node*)scene.nodes;
   // per-ray constants, set up once (bvh_occluded's)
-  float3 org[WT_STREAM_RAYS], inv_d[WT_STREAM_RAYS];
+  float3 org[WT_STREAM_RAYS], inv_d[WT_STREAM_RAYS], org_k[WT_STREAM_RAYS];
   float tmin[WT_STREAM_RAYS], tmax[WT_STREAM_RAYS];
   RayPlanes planes[WT_STREAM_RAYS];
   RayShear shear[WT_STREAM_RAYS];
@@ -56,6 +56,8 @@ inline ulong bvh_occluded_stream(BvhScene scene, const uint* index, uint n, __gl
     inv_d[r] = bvh_safe_rcp(d.xyz);
     planes[r] = bvh_ray_planes(inv_d[r]);
     shear[r] = triangle_ray_shear(d.xyz);
+    org_k[r] = (float3)(vec3_component(o.xyz, shear[r].kx), vec3_component(o.xyz, shear[r].ky),
+                        vec3_component(o.xyz, shear[r].kz));
     skip_prim[r] = skip[index[r]];
     open |= 1ul << r;
   }
@@ -114,7 +116,7 @@ inline ulong bvh_occluded_stream(BvhScene scene, const uint* index, uint n, __gl
           uint r = stream_lowest(m);
           for (uint b = first >> 2; b <= last >> 2; ++b) {
             float t, b1, b2;
-            if (triangle_intersect4(org[r], shear[r], tmin[r], tmax[r], scene.tri_verts, b,
+            if (triangle_intersect4_k(org_k[r], shear[r], tmin[r], tmax[r], scene.tri_verts, b,
                                     b == first >> 2 ? first & 3u : 0u, b == last >> 2 ? (last & 3u) + 1u : 4u,
                                     skip_prim[r], WT_NO_HIT, &t, &b1, &b2) != WT_NO_HIT) {
               open &= ~(1ul << r);

@@ -106,12 +106,15 @@ inline uint3 triangle_vertex_indices(__global const float4* tri_verts, uint prim
 /// already one axis of one corner for the four triangles: the ray's axes
 /// (kx, ky, kz) pick rows, no shuffle. Returns the lane's triangle or
 /// WT_NO_HIT; ties go to the lower index, as testing them one by one would.
-__attribute__((always_inline)) inline uint triangle_intersect4(float3 org, RayShear s, float tmin, float tmax,
-                                                               __global const float4* tri_verts, uint block,
-                                                               uint lane_lo, uint lane_hi, uint skip_a, uint skip_b,
-                                                               float* t_hit, float* b1, float* b2) {
+/// triangle_intersect4 with the ray's origin already on its permuted axes
+/// (o_k = (org[kx], org[ky], org[kz])), for callers that test many leaves
+/// with one ray.
+__attribute__((always_inline)) inline uint triangle_intersect4_k(float3 o_k, RayShear s, float tmin, float tmax,
+                                                                 __global const float4* tri_verts, uint block,
+                                                                 uint lane_lo, uint lane_hi, uint skip_a, uint skip_b,
+                                                                 float* t_hit, float* b1, float* b2) {
   __global const float4* r = tri_verts + 12u * block;
-  float ox = vec3_component(org, s.kx), oy = vec3_component(org, s.ky), oz = vec3_component(org, s.kz);
+  float ox = o_k.x, oy = o_k.y, oz = o_k.z;
   float4 vx[3], vy[3], vz[3];
 #pragma unroll
   for (int k = 0; k < 3; ++k) {
@@ -168,6 +171,14 @@ __attribute__((always_inline)) inline uint triangle_intersect4(float3 org, RaySh
   *b1 = vl * inv;
   *b2 = wl * inv;
   return 4u * block + (uint)l;
+}
+
+__attribute__((always_inline)) inline uint triangle_intersect4(float3 org, RayShear s, float tmin, float tmax,
+                                                               __global const float4* tri_verts, uint block,
+                                                               uint lane_lo, uint lane_hi, uint skip_a, uint skip_b,
+                                                               float* t_hit, float* b1, float* b2) {
+  float3 o_k = (float3)(vec3_component(org, s.kx), vec3_component(org, s.ky), vec3_component(org, s.kz));
+  return triangle_intersect4_k(o_k, s, tmin, tmax, tri_verts, block, lane_lo, lane_hi, skip_a, skip_b, t_hit, b1, b2);
 }
 
 /// Point with barycentrics (1 - b1 - b2, b1, b2) on triangle (p0, p1, p2),
