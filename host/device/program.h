@@ -19,13 +19,15 @@ struct KernelFeatures {
   bool pbr = false;               ///< a material uses the metallic-roughness model (else all are Lambertian)
   bool transmission = false;      ///< a metallic-roughness material transmits (KHR_materials_transmission)
   int packetWidth = 8;            ///< rays per packet (WT_PACKET_WIDTH): 8 or 16, packetWidthFor
-  /// WT_STREAM_PREFETCH: streams ask for a node's children as it arrives (streamPrefetchFor)
+  /// WT_STREAM_PREFETCH: streams ask for a node's children as it arrives, and
+  /// keep their rays' order (streamPrefetchFor)
   bool streamPrefetch = false;
 };
 
 /// Whether streams (kernels/bvh_stream.cl) should ask for a node's children
-/// as it arrives: where the scene's nodes and triangles (`sceneBytes`) do not
-/// fit in the device's global memory cache, or the device reports none. On
+/// as it arrives, and keep their rays in order rather than grouped by
+/// octant: where the scene's nodes and triangles (`sceneBytes`) do not fit
+/// in the device's global memory cache, or the device reports none. On
 /// the Zen 4 VM (PoCL reports its 32 MiB L3) the requests measured 1.14-1.23x
 /// on the 1 M-triangle scenes' shadow rays (57 MB) and 0.95-1.05x on
 /// DamagedHelmet's (1 MB): docs/performance.md, "Streams: the children's

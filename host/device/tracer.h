@@ -40,8 +40,9 @@ struct RayHit {
 /// another may win.
 enum class Traversal { kSingle, kPacket, kStream };
 
-/// Whether streams ask for a node's children as it arrives: by the scene's
-/// size against the device's cache (streamPrefetchFor), or always, or never.
+/// Whether streams ask for a node's children as it arrives (and keep their
+/// rays' order instead of grouping them by octant): by the scene's size
+/// against the device's cache (streamPrefetchFor), or always, or never.
 enum class StreamPrefetch { kAuto, kOn, kOff };
 
 /// How alike the directions of each packet's rays are: the mean, over the
