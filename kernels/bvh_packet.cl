@@ -18,7 +18,8 @@
 // answers. Before 2026-12-04 such a packet was traced ray by ray, or for
 // any-hit queries the most common permutation's lanes as a packet and the
 // others ray by ray; passes measured 1.16-1.17x on the Cornell box's shadow
-// rays (docs/performance.md, "Mixed packets in passes").
+// rays (docs/performance.md, "The cheap rays' overhead, and mixed packets
+// in passes").
 #ifndef WT_BVH_PACKET_CL
 #define WT_BVH_PACKET_CL
 
@@ -246,7 +247,8 @@ inline pint packet_triangle(const RayPacket* p, __global const float4* tri_verts
 #define WT_PACKET_MISSES 2
 
 /// Whether a packet's lanes are rays index[0], index[0] + 1, ... of a batch,
-/// every lane real: loaded and stored as whole vectors then.
+/// every lane real: their rays and skip triangles are loaded as whole
+/// vectors then.
 inline bool packet_contiguous(const uint* index, uint lanes) {
   bool contiguous = lanes == WT_PACKET;
   for (uint l = 1; l < WT_PACKET; ++l) contiguous = contiguous && index[l] == index[0] + l;

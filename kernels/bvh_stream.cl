@@ -117,8 +117,8 @@ inline ulong bvh_occluded_stream(BvhScene scene, const uint* index, uint n, __gl
           for (uint b = first >> 2; b <= last >> 2; ++b) {
             float t, b1, b2;
             if (triangle_intersect4_k(org_k[r], shear[r], tmin[r], tmax[r], scene.tri_verts, b,
-                                    b == first >> 2 ? first & 3u : 0u, b == last >> 2 ? (last & 3u) + 1u : 4u,
-                                    skip_prim[r], WT_NO_HIT, &t, &b1, &b2) != WT_NO_HIT) {
+                                      b == first >> 2 ? first & 3u : 0u, b == last >> 2 ? (last & 3u) + 1u : 4u,
+                                      skip_prim[r], WT_NO_HIT, &t, &b1, &b2) != WT_NO_HIT) {
               open &= ~(1ul << r);
               blocked |= 1ul << r;
               break;
@@ -183,8 +183,8 @@ inline void stream_sort_by_octant(const uint* rays, uint n, __global const float
 /// neighbouring points (the bench's and the renderer's shadow rays follow
 /// their pixels), and where every node and leaf block is a trip to memory,
 /// rays that start together share the leaves around their origins: in
-/// order, the 1 M-triangle scenes' shadow streams measured 1.07-1.12x
-/// (MetalRoughSpheres 1.09-1.11x), DamagedHelmet's 0.97x
+/// order, the 1 M-triangle scenes' shadow streams measured about 1.05x
+/// (MetalRoughSpheres) and 1.09x (the grid), DamagedHelmet's 0.97x
 /// (docs/performance.md, "Streams keep the rays' order on large scenes").
 inline void bvh_occluded_window(BvhScene scene, uint first, uint end, __global const float4* ray_o,
                                 __global const float4* ray_d, __global const uint* skip,

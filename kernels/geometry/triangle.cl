@@ -106,9 +106,10 @@ inline uint3 triangle_vertex_indices(__global const float4* tri_verts, uint prim
 /// already one axis of one corner for the four triangles: the ray's axes
 /// (kx, ky, kz) pick rows, no shuffle. Returns the lane's triangle or
 /// WT_NO_HIT; ties go to the lower index, as testing them one by one would.
-/// triangle_intersect4 with the ray's origin already on its permuted axes
-/// (o_k = (org[kx], org[ky], org[kz])), for callers that test many leaves
-/// with one ray.
+/// This form takes the ray's origin already on its permuted axes
+/// (o_k = (org[kx], org[ky], org[kz])), for callers that keep it per ray
+/// (streams test many leaves with each ray); triangle_intersect4 below picks
+/// them from the origin.
 __attribute__((always_inline)) inline uint triangle_intersect4_k(float3 o_k, RayShear s, float tmin, float tmax,
                                                                  __global const float4* tri_verts, uint block,
                                                                  uint lane_lo, uint lane_hi, uint skip_a, uint skip_b,
@@ -173,6 +174,7 @@ __attribute__((always_inline)) inline uint triangle_intersect4_k(float3 o_k, Ray
   return 4u * block + (uint)l;
 }
 
+/// triangle_intersect4_k for a ray whose origin is in world axes.
 __attribute__((always_inline)) inline uint triangle_intersect4(float3 org, RayShear s, float tmin, float tmax,
                                                                __global const float4* tri_verts, uint block,
                                                                uint lane_lo, uint lane_hi, uint skip_a, uint skip_b,
