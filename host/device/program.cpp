@@ -119,11 +119,11 @@ cl::Program buildProgram(Context& context, const KernelFeatures& features, const
   std::string source = expandKernelSource(root);
   std::string options = "-cl-std=CL1.2";
   for (const std::string& d : kernelDefines(features)) options += " " + d;
-  // Oclgrind (the kernel checker) lacks the llvm.bitreverse and llvm.prefetch
-  // intrinsics (tests/oclgrind/prefetch.cl), and loses the initialisation of
-  // .hi of 16-wide vectors (tests/oclgrind/upper_half.cl).
+  // Oclgrind (the kernel checker) lacks the llvm.bitreverse, llvm.prefetch
+  // and llvm.cttz intrinsics (tests/oclgrind/prefetch.cl, ctz.cl), and loses
+  // the initialisation of .hi of 16-wide vectors (tests/oclgrind/upper_half.cl).
   if (context.underOclgrind())
-    options += " -D WT_AVOID_BITREVERSE=1 -D WT_FOLD_THROUGH_MEMORY=1 -D WT_NO_PREFETCH=1";
+    options += " -D WT_AVOID_BITREVERSE=1 -D WT_FOLD_THROUGH_MEMORY=1 -D WT_NO_PREFETCH=1 -D WT_NO_CTZ=1";
   cl::Program program(context.context(), source);
   try {
     program.build({context.info().device}, options.c_str());
