@@ -465,7 +465,7 @@ double collapseCost(const Bvh4& bvh, const Bvh4Options& options) { return treeCo
 
 double sahCost(const Bvh4& bvh) { return treeCosts(bvh, Bvh4Options{}, 1).sah; }
 
-int bvh4StackEntries(const Bvh4Stats& stats) { return 3 * (stats.maxDepth + 1); }
+int bvh4StackEntries(const Bvh4Stats& stats) { return 3 * (stats.maxDepth + 1) + 1; }
 
 LeafPacking packLeavesIntoBlocks(Bvh4& bvh, std::size_t primitives, std::size_t window) {
   constexpr std::uint32_t kB = kTriangleBlock;

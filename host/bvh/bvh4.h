@@ -104,7 +104,9 @@ double sahCost(const Bvh4& bvh);
 /// area(leaf) / area(root) * options.leafCost * ceil(count / 4).
 double collapseCost(const Bvh4& bvh, const Bvh4Options& options);
 
-/// Traversal stack entries the tree can need: at most three pushes per level.
+/// Traversal stack entries the tree can need: at most three pushes per level,
+/// and one more that the stream traversal pushes and pops at once
+/// (kernels/bvh_stream.cl pushes every inner child entered, then pops one).
 int bvh4StackEntries(const Bvh4Stats& stats);
 
 /// Triangles per block of the kernels' triangle layout (WT_TRIANGLE_BLOCK,
