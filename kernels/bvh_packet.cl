@@ -190,7 +190,7 @@ inline pint packet_scene_hit(__global const WtBvh4Node* root, const RayPacket* p
 /// The watertight test of triangle `prim` on every lane in `lanes`: the mask
 /// of lanes that hit it in (tmin, tmax), with distance and barycentrics.
 /// triangle_intersect's operations in its order, lane by lane.
-inline pint packet_triangle(const RayPacket* p, __global const float4* tri_verts, uint prim, pint lanes,
+__attribute__((always_inline)) inline pint packet_triangle(const RayPacket* p, __global const float4* tri_verts, uint prim, pint lanes,
                             pfloat tmax, pfloat* t_hit, pfloat* b1, pfloat* b2) {
   // the block layout (WT_TRIANGLE_BLOCK) gives each corner's coordinate on
   // the packet's permuted axes by one load: row 4 k + axis of the block
@@ -464,7 +464,7 @@ inline uint packet_lane_leaf(__global const float4* tri_verts, const RayPacket* 
 /// (tmin, t_best) with its barycentrics and leaf-order triangle, which
 /// replace t_best, b1_best, b2_best and prim_best where one is found (the
 /// other lanes keep theirs).
-inline void packet_closest(BvhScene scene, const RayPacket* p, pint valid, pfloat* t_best, pfloat* b1_best,
+__attribute__((always_inline)) inline void packet_closest(BvhScene scene, const RayPacket* p, pint valid, pfloat* t_best, pfloat* b1_best,
                            pfloat* b2_best, puint* prim_best) {
   if (scene.node_count == 0 || !packet_any(valid)) return;
   __global const WtBvh4Node* nodes = (__global const WtBvh4Node*)scene.nodes;
@@ -565,7 +565,7 @@ inline void packet_closest(BvhScene scene, const RayPacket* p, pint valid, pfloa
 
 /// Occlusion of a packet's valid lanes: all ones in a lane whose segment
 /// (tmin, tmax) is blocked.
-inline pint packet_occluded(BvhScene scene, const RayPacket* p, pint valid, pfloat tmax) {
+__attribute__((always_inline)) inline pint packet_occluded(BvhScene scene, const RayPacket* p, pint valid, pfloat tmax) {
   pint blocked = (pint)(0);
   if (scene.node_count == 0 || !packet_any(valid)) return blocked;
   __global const WtBvh4Node* nodes = (__global const WtBvh4Node*)scene.nodes;
