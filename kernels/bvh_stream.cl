@@ -3,10 +3,11 @@
 // mask; a node is fetched once for all the rays that entered it, and each of
 // them tests the node's four boxes in a loop with no branch per ray, so the
 // slot branches that single-ray traversal mispredicts are paid per node
-// rather than per ray. A ray leaves the stream when blocked. A ray enters
-// the boxes bvh_occluded's would and tests the same triangles with the same
-// test, in another order (slot order), until one blocks it: the order only
-// decides which blocker is found first, so the answers are the same.
+// rather than per ray. A ray leaves the stream when blocked. Each ray
+// enters the boxes it enters in bvh_occluded and tests their triangles with
+// the same test, in another order (slot order), until one blocks it: the
+// order only decides which blocker is found first, so the answers are the
+// same.
 #ifndef WT_BVH_STREAM_CL
 #define WT_BVH_STREAM_CL
 
