@@ -339,12 +339,15 @@ double traversableRate(const SceneResult& r) {
   return seconds > 0.0 ? double(r.triangles) / seconds * 1e-6 : 0.0;
 }
 
-/// Below this packetCoherence, auto traces a set one ray per work-item. The
+/// Below this packetCoherence, auto does not trace a set in packets. The
 /// bench's sets measure 1.0 (camera rays), 0.99 (shadow rays to the Cornell
 /// box's one small light), 0.68-0.74 (diffuse rays, and shadow rays to
 /// emitters or points spread over a big scene); packets paid only on the
-/// first two kinds (docs/performance.md, "Packets").
-constexpr double kPacketCoherence = 0.9;
+/// first two kinds (docs/performance.md, "Packets"). Shadow sets sorted by
+/// octant and origin measure 0.91-0.93, and packets traced them at
+/// 0.30-0.43x Embree against 0.65-0.81x as streams (docs/performance.md,
+/// "Streams, 2026-12-05"): hence 0.95, not 0.9.
+constexpr double kPacketCoherence = 0.95;
 
 /// The traversal --traversal picks for a set of rays of this packetCoherence
 /// (auto: packets when the rays of a packet point nearly the same way; else,

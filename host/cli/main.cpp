@@ -321,7 +321,7 @@ int main(int argc, char** argv) {
   benchCmd->add_option("--traversal", bench.traversal,
                        "single: one ray per work-item; packet: a packet of rays per work-item; stream: shadow rays "
                        "as streams of 64 that walk the tree together; auto: packets for a set whose packets' rays "
-                       "point nearly the same way (coherence >= 0.9 in --json), else streams for shadow rays on a CPU, "
+                       "point nearly the same way (coherence >= 0.95 in --json), else streams for shadow rays on a CPU, "
                        "else single")
       ->check(CLI::IsMember({"single", "packet", "stream", "auto"}));
   benchCmd->add_option("--packet-width", bench.packetWidth,
