@@ -193,18 +193,18 @@ inline pint packet_scene_hit(__global const WtBvh4Node* root, const RayPacket* p
 __attribute__((always_inline)) inline pint packet_triangle(const RayPacket* p, __global const float4* tri_verts, uint prim, pint lanes,
                             pfloat tmax, pfloat* t_hit, pfloat* b1, pfloat* b2) {
   // the block layout (WT_TRIANGLE_BLOCK) gives each corner's coordinate on
-  // the packet's permuted axes by one load: row 4 k + axis of the block
+  // the packet's permuted axes by one load: row 3 k + axis of the block
   __global const float* f = triangle_block_lane(tri_verts, prim);
   const int ox = 4 * p->kx, oy = 4 * p->ky, oz = 4 * p->kz;
   pfloat az = f[oz] - p->o_kz;
-  pfloat bz = f[16 + oz] - p->o_kz;
-  pfloat cz = f[32 + oz] - p->o_kz;
+  pfloat bz = f[12 + oz] - p->o_kz;
+  pfloat cz = f[24 + oz] - p->o_kz;
   pfloat ax = (f[ox] - p->o_kx) - p->sx * az;
   pfloat ay = (f[oy] - p->o_ky) - p->sy * az;
-  pfloat bx = (f[16 + ox] - p->o_kx) - p->sx * bz;
-  pfloat by = (f[16 + oy] - p->o_ky) - p->sy * bz;
-  pfloat cx = (f[32 + ox] - p->o_kx) - p->sx * cz;
-  pfloat cy = (f[32 + oy] - p->o_ky) - p->sy * cz;
+  pfloat bx = (f[12 + ox] - p->o_kx) - p->sx * bz;
+  pfloat by = (f[12 + oy] - p->o_ky) - p->sy * bz;
+  pfloat cx = (f[24 + ox] - p->o_kx) - p->sx * cz;
+  pfloat cy = (f[24 + oy] - p->o_ky) - p->sy * cz;
 
   pfloat u = cx * by - cy * bx;
   pfloat v = ax * cy - ay * cx;

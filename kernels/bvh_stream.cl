@@ -83,7 +83,8 @@ inline ulong bvh_occluded_stream(BvhScene scene, const uint* index, uint n, __gl
       __global const WtBvh4Node* n = &nodes[node];
 #if WT_STREAM_REQUESTS
       // Every child's data is asked for as the node arrives (a leaf's first
-      // block, an inner node's two cache lines): the box tests of all the
+      // block, 144 bytes on at most three cache lines, an inner node's two
+      // lines): the box tests of all the
       // stream's rays come first, and the misses overlap. On the 1 M-triangle
       // scenes half the stream's time was spent waiting on the first load of
       // a node or of a leaf block; this measured 1.14-1.23x there and
@@ -93,7 +94,7 @@ inline ulong bvh_occluded_stream(BvhScene scene, const uint* index, uint n, __gl
         uint child = n->child[k];
         if (child == WT_BVH4_EMPTY) continue;
         if (n->count[k] > 0u) {
-          __global const float4* block = scene.tri_verts + 12u * (child >> 2);
+          __global const float4* block = scene.tri_verts + WT_TRIANGLE_BLOCK_ROWS * (child >> 2);
           __builtin_prefetch(block, 0, 3);
           __builtin_prefetch(block + 4, 0, 3);
           __builtin_prefetch(block + 8, 0, 3);

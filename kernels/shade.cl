@@ -34,7 +34,7 @@ WT_KERNEL void shade(WtFrameParams frame, WtEnvironment environment, __global co
                      __global const uint* queue_in, __global uint* queue_out,
                      __global float4* ray_o, __global float4* ray_d,
                      __global const float4* hits, __global float4* throughput,
-                     __global float4* radiance, __global const uint* triangle_materials,
+                     __global float4* radiance, __global const uint4* tri_info,
                      __global const float4* tri_verts, __global const float4* normals,
                      __global const WtMaterial* materials, __global const WtLight* lights,
                      __global const WtAliasSlot* alias, __global const float* emitter_pdf_area,
@@ -72,11 +72,11 @@ WT_KERNEL void shade(WtFrameParams frame, WtEnvironment environment, __global co
     return;
   }
 
-  WtMaterial material = materials[triangle_materials[prim]];
+  uint4 info = tri_info[prim];  // the corners' vertex indices and the material
+  WtMaterial material = materials[info.w];
   float3 p0, p1, p2;
   triangle_corners(tri_verts, prim, &p0, &p1, &p2);
-  uint3 corner = triangle_vertex_indices(tri_verts, prim);
-  uint v0 = corner.x, v1 = corner.y, v2 = corner.z;
+  uint v0 = info.x, v1 = info.y, v2 = info.z;
   float3 p, p_error, ng, ns;
   triangle_surface(p0, p1, p2, normals[v0].xyz, normals[v1].xyz, normals[v2].xyz, hit.y, hit.z, &p, &p_error,
                    &ng, &ns);

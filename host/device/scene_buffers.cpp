@@ -4,6 +4,7 @@
 #include "shared/lights.h"
 
 #include <algorithm>
+#include <array>
 #include <map>
 #include <tuple>
 #include <cmath>
@@ -98,32 +99,33 @@ SceneBuffers::SceneBuffers(Context& context, const Scene& scene, const BvhBuildO
   for (std::size_t leaf = 0; leaf < m_leafToScene.size(); ++leaf) m_sceneToLeaf[m_leafToScene[leaf]] = std::uint32_t(leaf);
 
   // The triangles in leaf order, in blocks of four (WT_TRIANGLE_BLOCK): per
-  // corner one row of x, of y, of z and of vertex indices (shading reads the
-  // normals by them), so a triangle costs 3 x 16 bytes and 4 of material.
-  // Every lane is written below but the last block's spare ones, which are
-  // zeroed (no leaf covers them): no zero fill of the whole, 48 MB for 1 M
-  // triangles.
+  // corner one row of x, of y and of z, 36 bytes a triangle; its vertex
+  // indices (shading reads the normals by them) and material go to tri_info,
+  // 16 bytes, which traversal never reads. Every lane is written below but
+  // the last block's spare ones, which are zeroed (no leaf covers them): no
+  // zero fill of the whole, 36 MB for 1 M triangles.
+  constexpr std::size_t kBlockFloats = 4 * WT_TRIANGLE_BLOCK_ROWS;
   const std::size_t triangles = m_leafToScene.size();
-  std::vector<float, UninitialisedAllocator<float>> blocks(48 * ((triangles + kTriangleBlock - 1) / kTriangleBlock));
-  if (triangles % kTriangleBlock != 0) std::fill(blocks.end() - 48, blocks.end(), 0.0f);
-  std::vector<std::uint32_t> materialOf(triangles);
+  std::vector<float, UninitialisedAllocator<float>> blocks(kBlockFloats *
+                                                           ((triangles + kTriangleBlock - 1) / kTriangleBlock));
+  if (triangles % kTriangleBlock != 0) std::fill(blocks.end() - kBlockFloats, blocks.end(), 0.0f);
+  std::vector<std::array<std::uint32_t, 4>, UninitialisedAllocator<std::array<std::uint32_t, 4>>> info(triangles);
   for (std::size_t i = 0; i < triangles; ++i) {
     const WtTriangle& t = scene.triangles[m_leafToScene[i]];
     const std::uint32_t corner[3] = {t.v0, t.v1, t.v2};
-    float* lane = blocks.data() + 48 * (i / kTriangleBlock) + i % kTriangleBlock;
+    float* lane = blocks.data() + kBlockFloats * (i / kTriangleBlock) + i % kTriangleBlock;
     for (int k = 0; k < 3; ++k) {
       const WtVec4& v = scene.positions[corner[k]];
-      lane[16 * k + 0] = v.x;
-      lane[16 * k + 4] = v.y;
-      lane[16 * k + 8] = v.z;
-      std::memcpy(&lane[16 * k + 12], &corner[k], sizeof(float));
+      lane[12 * k + 0] = v.x;
+      lane[12 * k + 4] = v.y;
+      lane[12 * k + 8] = v.z;
     }
-    materialOf[i] = t.material;
+    info[i] = {t.v0, t.v1, t.v2, t.material};
   }
   std::size_t bytes = 0;
   nodes = upload(context, bvh4.nodes, bytes);
   triVerts = upload(context, blocks, bytes);
-  triangleMaterials = upload(context, materialOf, bytes);
+  triangleInfo = upload(context, info, bytes);
   uploadedBytes = bytes;
   std::size_t attributeBytes = 0;
   normals = upload(context, scene.normals, attributeBytes);

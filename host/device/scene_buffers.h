@@ -27,11 +27,12 @@ class SceneBuffers {
 
   cl::Buffer nodes;       ///< WtBvh4Node[nodeCount] (one dummy node when empty); kernels declare it WtBvhNode*
   /// The triangles in leaf order, world space, in blocks of four
-  /// (WT_TRIANGLE_BLOCK, shared/types.h): float4[12 * blocks], per block and
-  /// corner k rows x, y, z of the four triangles and their vertex indices
-  /// (for the per-vertex normals)
+  /// (WT_TRIANGLE_BLOCK, shared/types.h): float4[9 * blocks], per block and
+  /// corner k rows x, y, z of the four triangles
   cl::Buffer triVerts;
-  cl::Buffer triangleMaterials;  ///< uint[triangles], leaf order: the triangle's material
+  /// uint4[triangles], leaf order: the triangle's three vertex indices (for
+  /// the per-vertex normals) and its material
+  cl::Buffer triangleInfo;
   cl::Buffer normals;     ///< float4 per vertex
   cl::Buffer materials;   ///< WtMaterial[]
   std::uint32_t nodeCount = 0;

@@ -149,7 +149,7 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
   m_shade.setArg(4, m_envConditional);
   m_shade.setArg(5, m_counters);
   a = 10;
-  for (cl::Buffer* b : {&m_rayO, &m_rayD, &m_hits, &m_throughput, &m_radiance, &m_scene->triangleMaterials,
+  for (cl::Buffer* b : {&m_rayO, &m_rayD, &m_hits, &m_throughput, &m_radiance, &m_scene->triangleInfo,
                         &m_scene->triVerts, &m_scene->normals, &m_scene->materials, &m_lightBuffer,
                         &m_aliasBuffer, &m_emitterPdfBuffer, &m_shadowQueue, &m_shadowO, &m_shadowD,
                         &m_shadowRadiance, &m_pbrTable, &m_bounceCounts, &m_raySkip, &m_shadowSkip,

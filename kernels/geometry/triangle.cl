@@ -77,25 +77,19 @@ __attribute__((always_inline)) inline bool triangle_intersect(float3 org, RayShe
 }
 
 /// Leaf-order triangle `prim` in the block layout of tri_verts (shared/types.h,
-/// WT_TRIANGLE_BLOCK): float4 row 4k + a of block prim / 4 holds axis a of
-/// corner k for its four triangles, row 4k + 3 their vertex indices. This
-/// is the triangle's lane as floats: element 16 k + 4 a is axis a of corner k.
+/// WT_TRIANGLE_BLOCK): float4 row 3k + a of block prim / 4 holds axis a of
+/// corner k for its four triangles. This is the triangle's lane as floats:
+/// element 12 k + 4 a is axis a of corner k.
 inline __global const float* triangle_block_lane(__global const float4* tri_verts, uint prim) {
-  return (__global const float*)(tri_verts + 12u * (prim >> 2)) + (prim & 3u);
+  return (__global const float*)(tri_verts + WT_TRIANGLE_BLOCK_ROWS * (prim >> 2)) + (prim & 3u);
 }
 
 /// The three corners of leaf-order triangle `prim`.
 inline void triangle_corners(__global const float4* tri_verts, uint prim, float3* p0, float3* p1, float3* p2) {
   __global const float* f = triangle_block_lane(tri_verts, prim);
   *p0 = (float3)(f[0], f[4], f[8]);
-  *p1 = (float3)(f[16], f[20], f[24]);
-  *p2 = (float3)(f[32], f[36], f[40]);
-}
-
-/// The vertex indices of prim's corners (row 4k + 3 of its block).
-inline uint3 triangle_vertex_indices(__global const float4* tri_verts, uint prim) {
-  __global const uint* f = (__global const uint*)triangle_block_lane(tri_verts, prim);
-  return (uint3)(f[12], f[28], f[44]);
+  *p1 = (float3)(f[12], f[16], f[20]);
+  *p2 = (float3)(f[24], f[28], f[32]);
 }
 
 /// The nearest hit in (tmin, tmax) among the triangles of block `block`
@@ -114,14 +108,14 @@ __attribute__((always_inline)) inline uint triangle_intersect4_k(float3 o_k, Ray
                                                                  __global const float4* tri_verts, uint block,
                                                                  uint lane_lo, uint lane_hi, uint skip_a, uint skip_b,
                                                                  float* t_hit, float* b1, float* b2) {
-  __global const float4* r = tri_verts + 12u * block;
+  __global const float4* r = tri_verts + WT_TRIANGLE_BLOCK_ROWS * block;
   float ox = o_k.x, oy = o_k.y, oz = o_k.z;
   float4 vx[3], vy[3], vz[3];
 #pragma unroll
   for (int k = 0; k < 3; ++k) {
-    vx[k] = r[4 * k + s.kx] - ox;
-    vy[k] = r[4 * k + s.ky] - oy;
-    vz[k] = r[4 * k + s.kz] - oz;
+    vx[k] = r[3 * k + s.kx] - ox;
+    vy[k] = r[3 * k + s.ky] - oy;
+    vz[k] = r[3 * k + s.kz] - oz;
   }
   float4 az = vz[0], bz = vz[1], cz = vz[2];
   float4 ax = vx[0] - s.sx * az;

@@ -17,22 +17,26 @@ typedef struct WtVec4 {
 } WtVec4;
 
 /// A triangle of the scene (host side). On the device a triangle is its
-/// corners in tri_verts (WT_TRIANGLE_BLOCK) and its material in
-/// triangle_materials, both in BVH leaf order.
+/// corners in tri_verts (WT_TRIANGLE_BLOCK) and its vertex indices and
+/// material in tri_info (a uint4: v0, v1, v2, material), both in BVH leaf
+/// order.
 typedef struct WtTriangle {
   wt_uint v0, v1, v2;  ///< indices into the vertex arrays
   wt_uint material;    ///< index into the material array
 } WtTriangle;
 
 /// tri_verts holds the leaf-order triangles in blocks of WT_TRIANGLE_BLOCK:
-/// block b covers triangles 4b .. 4b + 3, one per lane, as twelve float4
-/// rows (192 bytes: three cache lines, one per corner, in an aligned
-/// buffer). Row 4k + a is axis a (x, y, z) of corner k of the four
-/// triangles, row 4k + 3 their vertex indices (uint bits, for the normals).
-/// A four-lane leaf test loads the nine rows of the ray's axes as they are,
-/// with no gathering or shuffling, and each leaf is laid out to touch no
-/// more blocks than its size needs (packLeavesIntoBlocks, host/bvh/bvh4.h).
+/// block b covers triangles 4b .. 4b + 3, one per lane, as nine float4
+/// rows (WT_TRIANGLE_BLOCK_ROWS; 144 bytes, which touch three cache lines
+/// at most). Row 3k + a is axis a (x, y, z) of corner k of the four
+/// triangles. A four-lane leaf test loads the nine rows as they are, with
+/// no gathering or shuffling, and each leaf is laid out to touch no more
+/// blocks than its size needs (packLeavesIntoBlocks, host/bvh/bvh4.h). The
+/// vertex indices that shading needs live in tri_info, out of the blocks:
+/// traversal reads a quarter fewer bytes (docs/performance.md, "Triangle
+/// blocks without their index rows").
 #define WT_TRIANGLE_BLOCK 4
+#define WT_TRIANGLE_BLOCK_ROWS 9
 
 /// Binary BVH node, 32 bytes. Children of an internal node are adjacent:
 /// left = first, right = first + 1. Node 0 is the root.

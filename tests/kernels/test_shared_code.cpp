@@ -197,12 +197,13 @@ TEST(SharedCode, FourLaneTriangleTestMatchesOneByOne) {
   const glm::vec3 c(0.0f, 0.0f, 1.0f), r[5] = {{1, 0, 1}, {0, 1, 1}, {-1, 0, 1}, {0, -1, 1}, {1, 0, 1}};
   const glm::vec3 nearer(0.0f, 0.0f, -0.4f);
   const glm::vec3 tris[4][3] = {{c, r[0], r[1]}, {c, r[1], r[2]}, {c + nearer, r[1] + nearer, r[2] + nearer}, {c, r[0], r[1]}};
-  // block 0 far off (never tested), block 1 the four triangles: row 4k + a of
+  // block 0 far off (never tested), block 1 the four triangles: row 3k + a of
   // a block holds axis a of corner k for its four lanes
-  std::vector<float> verts(2 * 48, 1e6f);
+  constexpr int kBlockFloats = 4 * WT_TRIANGLE_BLOCK_ROWS;
+  std::vector<float> verts(2 * kBlockFloats, 1e6f);
   for (int lane = 0; lane < 4; ++lane)
     for (int k = 0; k < 3; ++k)
-      for (int a = 0; a < 3; ++a) verts[48 + 16 * k + 4 * a + lane] = tris[lane][k][a];
+      for (int a = 0; a < 3; ++a) verts[kBlockFloats + 12 * k + 4 * a + lane] = tris[lane][k][a];
   std::mt19937 rng(3);
   std::uniform_real_distribution<float> u(-1.2f, 1.2f);
   std::vector<cl_float4> o, d;
