@@ -17,7 +17,13 @@ struct BenchOptions {
   int primaryWidth = 1024;          ///< primary ray set is width x width
   int pathWidth = 256;              ///< path rays: a render of pathWidth^2 pixels
   int pathSamples = 4;
-  int repetitions = 5;              ///< median of this many timed runs after a warm-up
+  int repetitions = 5;              ///< median of this many timed runs after a warm-up (at least)
+  /// Each tracer's timed runs of a ray set (wavetrace's, each Embree API's)
+  /// go on past `repetitions` while they add up to less than this many
+  /// seconds (20 runs per repetition at most), so that a stall of a few
+  /// tens of milliseconds cannot move the median of a set that traces in a
+  /// few milliseconds.
+  double minSeconds = 0.5;
   int meshTriangles = 1000000;      ///< size of the generated mesh
   /// single, packet8, packet16, stream (host/bench/embree_reference.h), or
   /// fastest: every set traced with all four, compared with the fastest

@@ -305,6 +305,10 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(2, 1 << 26))->capture_default_str();
   benchCmd->add_option("--repetitions", bench.repetitions, "Timed runs per figure (median)")
       ->check(CLI::Range(1, 1000))->capture_default_str();
+  benchCmd->add_option("--min-time", bench.minSeconds,
+                       "Seconds: each tracer's timed runs of a ray set go on past --repetitions until they add up "
+                       "to this, up to 20 x --repetitions runs (0: exactly --repetitions)")
+      ->check(CLI::Range(0.0, 60.0))->capture_default_str();
   benchCmd->add_option("--embree-api", bench.embreeApi,
                        "Embree reference: how rays are handed over; fastest: each set with every API, "
                        "compared with the fastest")
