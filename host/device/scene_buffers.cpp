@@ -9,7 +9,6 @@
 #include <tuple>
 #include <cmath>
 #include <cstddef>
-#include <cstring>
 
 namespace wt {
 namespace {

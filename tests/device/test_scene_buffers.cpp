@@ -8,7 +8,6 @@
 #include <gtest/gtest.h>
 #include <glm/gtc/matrix_transform.hpp>
 
-#include <cstring>
 #include <vector>
 
 namespace wt {
