@@ -196,6 +196,10 @@ void appendScene(Scene& dst, const Scene& src) {
     t.v0 += vertexBase, t.v1 += vertexBase, t.v2 += vertexBase, t.material += materialBase;
     dst.triangles.push_back(t);
   }
+  for (Sphere sphere : src.spheres) {
+    sphere.material += materialBase;
+    dst.spheres.push_back(sphere);
+  }
   dst.materials.insert(dst.materials.end(), src.materials.begin(), src.materials.end());
   dst.materialNames.insert(dst.materialNames.end(), src.materialNames.begin(), src.materialNames.end());
 }

@@ -30,8 +30,9 @@ Scene makeTriangleSoup(std::uint32_t count, std::uint32_t seed, float maxEdge = 
 /// bumps, as a stand-in for a large scanned mesh.
 Scene makeBumpyGrid(std::uint32_t triangleCount);
 
-/// Append `src` to `dst` (vertices, triangles, materials re-indexed; src's
-/// placed copies kept, its geometry ids renumbered past dst's).
+/// Append `src` to `dst` (vertices, triangles, spheres, materials re-indexed;
+/// src's placed copies kept, its geometry ids renumbered past dst's). Both
+/// must share one Scene::origin.
 void appendScene(Scene& dst, const Scene& src);
 
 /// One copy of `mesh`'s triangles per transform (points by the matrix,

@@ -12,6 +12,10 @@ Aabb Scene::bounds() const {
   for (const WtTriangle& t : triangles)
     for (std::uint32_t v : {t.v0, t.v1, t.v2})
       box.extend(glm::vec3(positions[v].x, positions[v].y, positions[v].z));
+  for (const Sphere& s : spheres) {
+    box.extend(s.center - glm::vec3(s.radius));
+    box.extend(s.center + glm::vec3(s.radius));
+  }
   return box;
 }
 

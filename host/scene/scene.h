@@ -57,12 +57,22 @@ struct GeometryInstance {
   std::uint32_t geometry = 0;
 };
 
+/// An analytic sphere (kernels/geometry/sphere.cl), relative to Scene::origin
+/// like every position. A sphere emits when its material does, from its
+/// outside (and its inside for a double-sided material).
+struct Sphere {
+  glm::vec3 center{0.0f};     ///< world, relative to Scene::origin
+  float radius = 1.0f;        ///< world units, > 0
+  std::uint32_t material = 0; ///< index into Scene::materials
+};
+
 struct Scene {
   std::vector<WtVec4> positions;   ///< world space, w = 0
   std::vector<WtVec4> normals;     ///< world space, unit; (0,0,0) = none, use the geometric normal. Same size as positions.
   std::vector<glm::vec2> texcoords;///< TEXCOORD_0, same size as positions ((0,0) where absent)
   std::vector<WtTriangle> triangles;
   std::vector<GeometryInstance> instances; ///< placed copies, in triangle order; may be empty (no copies known)
+  std::vector<Sphere> spheres;            ///< analytic spheres (scene files only: glTF has none)
   std::vector<WtMaterial> materials;      ///< never empty after loading (a default grey is added when needed)
   std::vector<std::string> materialNames; ///< same size as materials
   std::optional<CameraDesc> camera;       ///< absent: frame the bounds (defaultCamera)
@@ -71,6 +81,7 @@ struct Scene {
   std::string sourceName;                 ///< file the scene came from, for messages
   glm::dvec3 origin{0.0};                 ///< world position of the scene's (0,0,0): every position, light and camera here is relative to it (GltfLoadOptions::recenter)
 
+  /// Bounds of every triangle and sphere.
   Aabb bounds() const;
   /// Bounds of one triangle.
   Aabb triangleBounds(std::uint32_t tri) const;
