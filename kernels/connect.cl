@@ -4,12 +4,13 @@
 // count is the bounce's path count; connect_packet's queue is dense
 // (WT_FLAG_COMPACT_SHADOWS).
 #include "bvh_packet.cl"
+#include "bvh_prims.cl"
 
 WT_KERNEL void connect(__global const uint* counters, __global const uint* shadow_queue,
                        __global const float4* shadow_o, __global const float4* shadow_d,
                        __global const float4* shadow_radiance, __global const WtBvhNode* nodes,
                        uint node_count, __global const float4* tri_verts,
-                       __global float4* radiance, __global const uint2* shadow_skip) {
+                       __global float4* radiance, __global const uint2* shadow_skip, WT_GEOMETRY_PARAMS) {
   uint i = get_global_id(0);
   if (i >= counters[WT_COUNTER_SHADOW]) return;
   uint path = shadow_queue[i];
@@ -17,8 +18,9 @@ WT_KERNEL void connect(__global const uint* counters, __global const uint* shado
   float4 o = shadow_o[path];
   float4 d = shadow_d[path];
   BvhScene scene = {nodes, node_count, tri_verts};
+  GeometryScene g = WT_GEOMETRY_SCENE;
   uint2 skip = shadow_skip[path];
-  if (!bvh_occluded(scene, o.xyz, d.xyz, o.w, d.w, skip.x, skip.y)) radiance[path] += shadow_radiance[path];
+  if (!scene_occluded(scene, g, o.xyz, d.xyz, o.w, d.w, skip.x, skip.y)) radiance[path] += shadow_radiance[path];
 }
 
 /// connect for shadow-queue entries [n i, n i + n), n = WT_PACKET_WIDTH,
@@ -28,7 +30,7 @@ WT_KERNEL void connect_packet(__global const uint* counters, __global const uint
                               __global const float4* shadow_o, __global const float4* shadow_d,
                               __global const float4* shadow_radiance, __global const WtBvhNode* nodes,
                               uint node_count, __global const float4* tri_verts,
-                              __global float4* radiance, __global const uint2* shadow_skip) {
+                              __global float4* radiance, __global const uint2* shadow_skip, WT_GEOMETRY_PARAMS) {
   uint first = get_global_id(0) * WT_PACKET;
   uint count = counters[WT_COUNTER_SHADOW];
   if (first >= count) return;
@@ -37,6 +39,18 @@ WT_KERNEL void connect_packet(__global const uint* counters, __global const uint
   BvhScene scene = {nodes, node_count, tri_verts};
   int blocked[WT_PACKET];
   packet_vstore(packet_trace_occluded(scene, index, lanes, shadow_o, shadow_d, 0, shadow_skip), blocked);
-  for (uint l = 0; l < lanes; ++l)
-    if (!blocked[l]) radiance[index[l]] += shadow_radiance[index[l]];
+#if WT_HAS_PRIMITIVES
+  GeometryScene g = WT_GEOMETRY_SCENE;
+#endif
+  for (uint l = 0; l < lanes; ++l) {
+    if (blocked[l]) continue;
+#if WT_HAS_PRIMITIVES
+    // the other primitive types ray by ray, for the rays no triangle blocks
+    uint path = index[l];
+    float4 o = shadow_o[path], d = shadow_d[path];
+    uint2 skip = shadow_skip[path];
+    if (bvh_prims_occluded(g, o.xyz, d.xyz, o.w, d.w, skip.x, skip.y)) continue;
+#endif
+    radiance[index[l]] += shadow_radiance[index[l]];
+  }
 }

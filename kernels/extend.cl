@@ -1,18 +1,20 @@
 // Stage 2: closest hit for every path in the input queue.
 #include "bvh_packet.cl"
+#include "bvh_prims.cl"
 
 WT_KERNEL void extend(__global const uint* counters, uint queue_slot, __global const uint* queue,
                       __global const float4* ray_o, __global const float4* ray_d,
                       __global const WtBvhNode* nodes, uint node_count,
                       __global const float4* tri_verts, __global float4* hits,
-                      __global const uint* ray_skip) {
+                      __global const uint* ray_skip, WT_GEOMETRY_PARAMS) {
   uint i = get_global_id(0);
   if (i >= counters[queue_slot]) return;
   uint path = queue[i];
   float4 o = ray_o[path];
   float4 d = ray_d[path];
   BvhScene scene = {nodes, node_count, tri_verts};
-  Hit hit = bvh_closest(scene, o.xyz, d.xyz, o.w, d.w, ray_skip[path]);
+  GeometryScene g = WT_GEOMETRY_SCENE;
+  Hit hit = scene_closest(scene, g, o.xyz, d.xyz, o.w, d.w, ray_skip[path]);
   hits[path] = (float4)(hit.t, hit.b1, hit.b2, as_float(hit.prim));
 }
 
@@ -23,7 +25,7 @@ WT_KERNEL void extend_packet(__global const uint* counters, uint queue_slot, __g
                              __global const float4* ray_o, __global const float4* ray_d,
                              __global const WtBvhNode* nodes, uint node_count,
                              __global const float4* tri_verts, __global float4* hits,
-                             __global const uint* ray_skip) {
+                             __global const uint* ray_skip, WT_GEOMETRY_PARAMS) {
   uint first = get_global_id(0) * WT_PACKET;
   uint count = counters[queue_slot];
   if (first >= count) return;
@@ -31,4 +33,16 @@ WT_KERNEL void extend_packet(__global const uint* counters, uint queue_slot, __g
   uint lanes = packet_from_queue(queue, first, count, index);
   BvhScene scene = {nodes, node_count, tri_verts};
   packet_trace_closest(scene, index, lanes, ray_o, ray_d, ray_skip, hits);
+#if WT_HAS_PRIMITIVES
+  // the other primitive types ray by ray, in front of the triangles' hits
+  GeometryScene g = WT_GEOMETRY_SCENE;
+  for (uint l = 0; l < lanes; ++l) {
+    uint path = index[l];
+    float4 o = ray_o[path], d = ray_d[path];
+    float4 h = hits[path];
+    Hit hit = {h.x, h.y, h.z, as_uint(h.w)};
+    bvh_prims_closest(g, o.xyz, d.xyz, o.w, ray_skip[path], &hit);
+    if (hit.prim != as_uint(h.w)) hits[path] = (float4)(hit.t, hit.b1, hit.b2, as_float(hit.prim));
+  }
+#endif
 }

@@ -3,7 +3,7 @@
 // bounce limits) a new direction from the material and Russian roulette;
 // surviving paths are appended to the output queue.
 #include "common.h"
-#include "geometry/triangle.cl"
+#include "geometry/geometry.cl"
 #include "lights/light_sampling.cl"
 #include "lights/light_tree.cl"
 #include "sampler.cl"
@@ -43,7 +43,7 @@ WT_KERNEL void shade(WtFrameParams frame, WtEnvironment environment, __global co
                      __global const float* pbr_table, __global ushort4* bounce_counts,
                      __global uint* ray_skip, __global uint2* shadow_skip,
                      __global const WtLightNode* light_tree, __global const uint* emitter_leaf,
-                     __global float4* prev_normal) {
+                     __global float4* prev_normal, WT_GEOMETRY_PARAMS) {
   uint i = get_global_id(0);
   if (i >= counters[in_slot]) return;
   // Without WT_FLAG_COMPACT_SHADOWS entry i of the shadow queue is this
@@ -60,7 +60,8 @@ WT_KERNEL void shade(WtFrameParams frame, WtEnvironment environment, __global co
   float3 dir = ray_d[path].xyz;
 
   EnvScene env = {environment, env_texels, env_marginal_cdf, env_conditional_cdf};
-  LightScene ls = {lights, alias, frame.light_count, tri_verts, env};
+  GeometryScene g = WT_GEOMETRY_SCENE;
+  LightScene ls = {lights, alias, frame.light_count, tri_verts, env, g};
 
   // miss: the environment (camera rays see it unless it is hidden)
   if (prim == WT_NO_HIT) {
@@ -72,14 +73,9 @@ WT_KERNEL void shade(WtFrameParams frame, WtEnvironment environment, __global co
     return;
   }
 
-  uint4 info = tri_info[prim];  // the corners' vertex indices and the material
-  WtMaterial material = materials[info.w];
-  float3 p0, p1, p2;
-  triangle_corners(tri_verts, prim, &p0, &p1, &p2);
-  uint v0 = info.x, v1 = info.y, v2 = info.z;
-  float3 p, p_error, ng, ns;
-  triangle_surface(p0, p1, p2, normals[v0].xyz, normals[v1].xyz, normals[v2].xyz, hit.y, hit.z, &p, &p_error,
-                   &ng, &ns);
+  SurfaceHit surface = geometry_surface(g, tri_verts, tri_info, normals, prim, ray_o[path].xyz, dir, hit);
+  WtMaterial material = materials[surface.material];
+  float3 p = surface.p, p_error = surface.p_error, ng = surface.ng, ns = surface.ns;
   if (dot(ng, ng) == 0.0f) return;  // degenerate triangle: absorb
   // ng is the winding's normal here: a ray meeting its back side comes from inside
   bool inside = dot(ng, dir) > 0.0f;
@@ -98,11 +94,21 @@ WT_KERNEL void shade(WtFrameParams frame, WtEnvironment environment, __global co
     // the probability that NEE at the previous vertex would have picked this
     // emitter: its selection probability over its area, by the light tree's
     // choice at that vertex when the tree holds it (camera rays need none)
-    float select = frame.bounce > 0u ? emitter_pdf_area[prim] : 0.0f;
-    uint leaf = emitter_leaf[prim];
-    if (select > 0.0f && leaf != WT_LIGHT_NODE_NONE)
-      select *= light_tree_pmf(light_tree, leaf, ray_o[path].xyz, prev_normal[path].xyz);
-    float pdf_light = light_triangle_pdf(select, ray_o[path].xyz, p0, p1, p2, hit.x, dir, ng);
+    float select = frame.bounce > 0u ? emitter_pdf_area[geometry_emitter_slot(g, prim)] : 0.0f;
+    float pdf_light;
+#if WT_HAS_PRIMITIVES
+    if (prim_type(prim) != WT_PRIM_TRIANGLE) {
+      pdf_light = select * geometry_emitter_pdf(g, prim, ray_o[path].xyz);
+    } else
+#endif
+    {
+      uint leaf = emitter_leaf[prim];
+      if (select > 0.0f && leaf != WT_LIGHT_NODE_NONE)
+        select *= light_tree_pmf(light_tree, leaf, ray_o[path].xyz, prev_normal[path].xyz);
+      float3 p0, p1, p2;
+      triangle_corners(tri_verts, prim, &p0, &p1, &p2);
+      pdf_light = light_triangle_pdf(select, ray_o[path].xyz, p0, p1, p2, hit.x, dir, ng);
+    }
     float3 emitted = beta * le * shade_emission_weight(frame, pdf_prev, pdf_light);
     shade_check_finite(frame, counters, path, emitted, WT_NONFINITE_EMISSION);
     radiance[path] += (float4)(emitted, 0.0f);

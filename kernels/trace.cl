@@ -3,30 +3,45 @@
 #include "bvh.cl"
 #include "bvh_packet.cl"
 #include "bvh_stream.cl"
+#include "bvh_prims.cl"
+
+#if WT_HAS_PRIMITIVES
+/// Rays [first, end) that no triangle blocks, against the other primitive types.
+inline void trace_prims_occluded(uint first, uint end, __global const float4* ray_o, __global const float4* ray_d,
+                                 __global const uint* skip, __global uint* occluded, GeometryScene g) {
+  for (uint i = first; i < end; ++i) {
+    if (occluded[i]) continue;
+    float4 o = ray_o[i], d = ray_d[i];
+    occluded[i] = bvh_prims_occluded(g, o.xyz, d.xyz, o.w, d.w, skip[i], WT_NO_HIT) ? 1u : 0u;
+  }
+}
+#endif
 
 WT_KERNEL void trace_closest(uint count, __global const float4* ray_o, __global const float4* ray_d,
                              __global const WtBvhNode* nodes, uint node_count,
                              __global const float4* tri_verts, __global float4* hits,
-                             __global const uint* skip) {
+                             __global const uint* skip, WT_GEOMETRY_PARAMS) {
   uint i = get_global_id(0);
   if (i >= count) return;
   float4 o = ray_o[i];
   float4 d = ray_d[i];
   BvhScene scene = {nodes, node_count, tri_verts};
-  Hit hit = bvh_closest(scene, o.xyz, d.xyz, o.w, d.w, skip[i]);
+  GeometryScene g = WT_GEOMETRY_SCENE;
+  Hit hit = scene_closest(scene, g, o.xyz, d.xyz, o.w, d.w, skip[i]);
   hits[i] = (float4)(hit.t, hit.b1, hit.b2, as_float(hit.prim));
 }
 
 WT_KERNEL void trace_occluded(uint count, __global const float4* ray_o,
                               __global const float4* ray_d, __global const WtBvhNode* nodes,
                               uint node_count, __global const float4* tri_verts,
-                              __global uint* occluded, __global const uint* skip) {
+                              __global uint* occluded, __global const uint* skip, WT_GEOMETRY_PARAMS) {
   uint i = get_global_id(0);
   if (i >= count) return;
   float4 o = ray_o[i];
   float4 d = ray_d[i];
   BvhScene scene = {nodes, node_count, tri_verts};
-  occluded[i] = bvh_occluded(scene, o.xyz, d.xyz, o.w, d.w, skip[i], WT_NO_HIT) ? 1u : 0u;
+  GeometryScene g = WT_GEOMETRY_SCENE;
+  occluded[i] = scene_occluded(scene, g, o.xyz, d.xyz, o.w, d.w, skip[i], WT_NO_HIT) ? 1u : 0u;
 }
 
 // Any hit for incoherent rays as streams (kernels/bvh_stream.cl): work-item
@@ -34,12 +49,17 @@ WT_KERNEL void trace_occluded(uint count, __global const float4* ray_o,
 WT_KERNEL void trace_occluded_stream(uint count, __global const float4* ray_o,
                                      __global const float4* ray_d, __global const WtBvhNode* nodes,
                                      uint node_count, __global const float4* tri_verts,
-                                     __global uint* occluded, __global const uint* skip) {
+                                     __global uint* occluded, __global const uint* skip,
+                                     WT_GEOMETRY_PARAMS) {
   uint i = get_global_id(0);
   if (i >= (count + WT_STREAM_WINDOW - 1u) / WT_STREAM_WINDOW) return;
   BvhScene scene = {nodes, node_count, tri_verts};
   uint first = i * WT_STREAM_WINDOW;
   bvh_occluded_window(scene, first, min(first + WT_STREAM_WINDOW, count), ray_o, ray_d, skip, occluded);
+#if WT_HAS_PRIMITIVES
+  GeometryScene g = WT_GEOMETRY_SCENE;
+  trace_prims_occluded(first, min(first + WT_STREAM_WINDOW, count), ray_o, ray_d, skip, occluded, g);
+#endif
 }
 
 // The same queries, WT_PACKET_WIDTH consecutive rays per work-item
@@ -47,19 +67,28 @@ WT_KERNEL void trace_occluded_stream(uint count, __global const float4* ray_o,
 WT_KERNEL void trace_closest_packet(uint count, __global const float4* ray_o, __global const float4* ray_d,
                                     __global const WtBvhNode* nodes, uint node_count,
                                     __global const float4* tri_verts, __global float4* hits,
-                                    __global const uint* skip) {
+                                    __global const uint* skip, WT_GEOMETRY_PARAMS) {
   uint first = get_global_id(0) * WT_PACKET;
   if (first >= count) return;
   BvhScene scene = {nodes, node_count, tri_verts};
   uint index[WT_PACKET];
   for (uint l = 0; l < WT_PACKET; ++l) index[l] = first + l;
   packet_trace_closest(scene, index, min(count - first, (uint)WT_PACKET), ray_o, ray_d, skip, hits);
+#if WT_HAS_PRIMITIVES
+  GeometryScene g = WT_GEOMETRY_SCENE;
+  for (uint i = first; i < min(count, first + WT_PACKET); ++i) {
+    float4 o = ray_o[i], d = ray_d[i], h = hits[i];
+    Hit hit = {h.x, h.y, h.z, as_uint(h.w)};
+    bvh_prims_closest(g, o.xyz, d.xyz, o.w, skip[i], &hit);
+    hits[i] = (float4)(hit.t, hit.b1, hit.b2, as_float(hit.prim));
+  }
+#endif
 }
 
 WT_KERNEL void trace_occluded_packet(uint count, __global const float4* ray_o, __global const float4* ray_d,
                                      __global const WtBvhNode* nodes, uint node_count,
                                      __global const float4* tri_verts, __global uint* occluded,
-                                     __global const uint* skip) {
+                                     __global const uint* skip, WT_GEOMETRY_PARAMS) {
   uint first = get_global_id(0) * WT_PACKET;
   if (first >= count) return;
   BvhScene scene = {nodes, node_count, tri_verts};
@@ -69,9 +98,13 @@ WT_KERNEL void trace_occluded_packet(uint count, __global const float4* ray_o, _
   puint blocked = as_puint(packet_trace_occluded(scene, index, lanes, ray_o, ray_d, skip, 0)) & 1u;
   if (lanes == WT_PACKET) {
     packet_vstore(blocked, occluded + first);
-    return;
+  } else {
+    uint lane_blocked[WT_PACKET];
+    packet_vstore(blocked, lane_blocked);
+    for (uint l = 0; l < lanes; ++l) occluded[first + l] = lane_blocked[l];
   }
-  uint lane_blocked[WT_PACKET];
-  packet_vstore(blocked, lane_blocked);
-  for (uint l = 0; l < lanes; ++l) occluded[first + l] = lane_blocked[l];
+#if WT_HAS_PRIMITIVES
+  GeometryScene g = WT_GEOMETRY_SCENE;
+  trace_prims_occluded(first, first + lanes, ray_o, ray_d, skip, occluded, g);
+#endif
 }

@@ -129,10 +129,53 @@ SceneBuffers::SceneBuffers(Context& context, const Scene& scene, const BvhBuildO
   std::size_t attributeBytes = 0;
   normals = upload(context, scene.normals, attributeBytes);
   materials = upload(context, scene.materials, attributeBytes);
+  uploadPrimitives(context, scene, options);
+}
+
+void SceneBuffers::uploadPrimitives(Context& context, const Scene& scene, const BvhBuildOptions& options) {
+  // The other types share one tree; each leaf entry is a typed id, tested
+  // one by one, so leaves stay small.
+  PrimitiveRows rows = gatherPrimitives(scene);
+  m_primitiveCount = rows.count;
+  m_skippedPrimitives = rows.skipped;
+  BvhBuildOptions primOptions = options;
+  primOptions.maxLeafSize = kPrimitiveLeafSize;
+  const Bvh bvh = buildBvh(rows.bounds, binaryBuildOptions(primOptions, rows.bounds.size()));
+  Bvh4Options collapse = bvh4Options(primOptions);
+  collapse.nodeBytesPerPrimitive = 0.0;  // no triangle blocks to weigh the nodes against
+  Bvh4 bvh4 = collapseToBvh4(bvh, collapse);
+  orderChildSlots(bvh4);
+  m_primStats = bvh4.stats;
+  std::vector<std::uint32_t> refs(bvh.primIndices.size());
+  for (std::size_t i = 0; i < refs.size(); ++i) refs[i] = rows.ids[bvh.primIndices[i]];
+
+  geometry = WtGeometry{};
+  geometry.node_count = std::uint32_t(bvh4.nodes.size());
+  geometry.triangle_count = std::uint32_t(m_leafToScene.size());
+  std::uint32_t emitters = geometry.triangle_count;
+  for (std::uint32_t type = 0; type < WT_PRIM_TYPES; ++type) {
+    geometry.data_first[type] = rows.dataFirst[type];
+    geometry.info_first[type] = rows.infoFirst[type];
+    geometry.emitter_first[type] = type == WT_PRIM_TRIANGLE ? 0u : emitters;
+    if (type != WT_PRIM_TRIANGLE) emitters += std::uint32_t(rows.count[type]);
+  }
+  primitiveBytes = 0;
+  primNodes = upload(context, bvh4.nodes, primitiveBytes);
+  primRefs = upload(context, refs, primitiveBytes);
+  primData = upload(context, rows.data, primitiveBytes);
+  primInfo = upload(context, rows.info, primitiveBytes);
+}
+
+void SceneBuffers::bindGeometry(cl::Kernel& kernel, int first) const {
+  kernel.setArg(first, geometry);
+  kernel.setArg(first + 1, primNodes);
+  kernel.setArg(first + 2, primRefs);
+  kernel.setArg(first + 3, primData);
+  kernel.setArg(first + 4, primInfo);
 }
 
 int SceneBuffers::stackSize() const {
-  int needed = bvh4StackEntries(m_bvh4Stats);
+  int needed = std::max(bvh4StackEntries(m_bvh4Stats), bvh4StackEntries(m_primStats));
   return std::max(32, (needed + 31) / 32 * 32);
 }
 
@@ -155,3 +198,5 @@ static_assert(sizeof(WtFrameParams) == 64);
 static_assert(sizeof(WtLight) == 64);
 static_assert(sizeof(WtAliasSlot) == 16);
 static_assert(sizeof(WtLightNode) == 64);
+static_assert(sizeof(WtGeometry) == 64 && offsetof(WtGeometry, data_first) == 16 &&
+              offsetof(WtGeometry, info_first) == 32 && offsetof(WtGeometry, emitter_first) == 48);

@@ -5,8 +5,10 @@
 #include "bvh/bvh4.h"
 #include "bvh/lbvh.h"
 #include "device/context.h"
+#include "geometry/primitives.h"
 #include "scene/scene.h"
 
+#include <array>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -38,6 +40,20 @@ class SceneBuffers {
   std::uint32_t nodeCount = 0;
   std::size_t uploadedBytes = 0;  ///< nodes + triangle data
 
+  /// The primitives other than triangles (kernels/geometry/geometry.cl): their
+  /// BVH (WtBvh4Node, leaves of up to 4 typed ids), the typed ids in leaf
+  /// order, and each type's rows; `geometry` says where each type's rows start.
+  cl::Buffer primNodes, primRefs, primData, primInfo;
+  WtGeometry geometry{};
+  std::size_t primitiveBytes = 0;  ///< primNodes + primRefs + primData + primInfo
+  /// Set the kernel's WT_GEOMETRY_PARAMS, arguments first .. first + 4.
+  void bindGeometry(cl::Kernel& kernel, int first) const;
+  /// Primitives of `type` (WT_PRIM_*) the scene has, left out or not.
+  std::size_t primitiveCount(std::uint32_t type) const { return m_primitiveCount[type]; }
+  /// Non-triangle primitives left out of their BVH (zero size, non-finite).
+  std::size_t skippedPrimitives() const { return m_skippedPrimitives; }
+  const Bvh4Stats& primitiveBvhStats() const { return m_primStats; }
+
   /// The build of the binary tree the 4-wide tree was collapsed from.
   const BvhBuildStats& bvhStats() const { return m_bvhStats; }
   const Bvh4Stats& bvh4Stats() const { return m_bvh4Stats; }
@@ -58,12 +74,19 @@ class SceneBuffers {
   int stackSize() const;
 
  private:
+  /// Leaves of the primitive BVH hold at most this many typed ids.
+  static constexpr int kPrimitiveLeafSize = 4;
+  void uploadPrimitives(Context& context, const Scene& scene, const BvhBuildOptions& options);
+
   BvhBuildStats m_bvhStats;
   Bvh4Stats m_bvh4Stats;
   std::size_t m_leafMisfits = 0;
   std::vector<std::uint32_t> m_leafToScene;
   std::vector<std::uint32_t> m_sceneToLeaf;
   std::size_t m_skippedTriangles = 0;
+  Bvh4Stats m_primStats;
+  std::array<std::size_t, WT_PRIM_TYPES> m_primitiveCount{};
+  std::size_t m_skippedPrimitives = 0;
 };
 
 }  // namespace wt

@@ -18,6 +18,7 @@ Tracer::Tracer(Context& context, const Scene& scene, const BvhBuildOptions& opti
   features.bvhStackSize = m_scene->stackSize();
   features.packetWidth = m_packetWidth;
   features.streamPrefetch = m_streamPrefetch;
+  features.spheres = m_scene->primitiveCount(WT_PRIM_SPHERE) > 0;
   m_program = buildProgram(context, features);
   m_closest = cl::Kernel(m_program, "trace_closest");
   m_occluded = cl::Kernel(m_program, "trace_occluded");
@@ -67,7 +68,7 @@ void Tracer::uploadRays(std::span<const Ray> rays) {
     o[4 * i + 0] = r.origin.x, o[4 * i + 1] = r.origin.y, o[4 * i + 2] = r.origin.z, o[4 * i + 3] = r.tmin;
     d[4 * i + 0] = r.direction.x, d[4 * i + 1] = r.direction.y, d[4 * i + 2] = r.direction.z,
               d[4 * i + 3] = r.tmax;
-    skip[i] = m_scene->leafTriangle(r.skip);
+    skip[i] = primType(r.skip) == WT_PRIM_TRIANGLE ? m_scene->leafTriangle(r.skip) : r.skip;
   }
   if (!rays.empty()) {
     m_context.queue().enqueueWriteBuffer(m_rayO, CL_TRUE, 0, o.size() * 4, o.data());
@@ -86,6 +87,7 @@ void Tracer::run(cl::Kernel& kernel, const char* name, std::size_t rays, Travers
   kernel.setArg(a++, m_scene->triVerts);
   kernel.setArg(a++, m_out);
   kernel.setArg(a++, m_skip);
+  m_scene->bindGeometry(kernel, a);
   const std::size_t kPacket = std::size_t(m_packetWidth);
   std::size_t items = rays, localSize = Context::kLocalSize;
   if (traversal == Traversal::kPacket) {
@@ -118,7 +120,9 @@ std::vector<RayHit> Tracer::traceClosest(std::span<const Ray> rays, Traversal tr
     hits[i].t = raw[4 * i + 0];
     hits[i].b1 = raw[4 * i + 1];
     hits[i].b2 = raw[4 * i + 2];
-    hits[i].triangle = prim == RayHit::kNoHit ? RayHit::kNoHit : m_scene->sceneTriangle(prim);
+    const bool triangle = prim != RayHit::kNoHit && primType(prim) == WT_PRIM_TRIANGLE;
+    hits[i].triangle = triangle ? m_scene->sceneTriangle(prim) : RayHit::kNoHit;
+    hits[i].prim = triangle ? hits[i].triangle : prim;
   }
   return hits;
 }

@@ -20,13 +20,16 @@ struct Ray {
   float tmin = 0.0f;
   glm::vec3 direction;
   float tmax = 1e30f;
-  std::uint32_t skip = 0xffffffffu;  ///< a scene triangle the ray never hits (the one it leaves), or none
+  /// the primitive the ray leaves (never hit at the ray's start): a scene
+  /// triangle index, or a typed id (primId, host/geometry/primitives.h) of another type; or none
+  std::uint32_t skip = 0xffffffffu;
 };
 
 struct RayHit {
   float t = 0.0f;
   float b1 = 0.0f, b2 = 0.0f;       ///< barycentrics of the triangle's v1 and v2
-  std::uint32_t triangle = kNoHit;  ///< the scene's triangle index
+  std::uint32_t triangle = kNoHit;  ///< the scene's triangle index; kNoHit for a miss or another type
+  std::uint32_t prim = kNoHit;      ///< what was hit: the scene's triangle index, or another type's typed id (primId)
   static constexpr std::uint32_t kNoHit = 0xffffffffu;
 };
 

@@ -135,6 +135,29 @@ LightList buildLightList(const Scene& scene, const SceneBuffers& buffers, double
       list.emitterLeaf[triangleLights[k].triangle] = tree.leafOfEmitter[k];
   }
 
+  // emissive spheres, one entry each (the tree holds triangles only)
+  const WtGeometry& geometry = buffers.geometry;
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> sphereLights;  // emitter slot, light index
+  for (std::size_t i = 0; i < scene.spheres.size(); ++i) {
+    const Sphere& sphere = scene.spheres[i];
+    const WtVec4& e = scene.materials[sphere.material].emission;
+    glm::vec3 le(e.x, e.y, e.z);
+    const double area = 4.0 * std::numbers::pi * double(sphere.radius) * double(sphere.radius);
+    if (!(luminance(le) > 0.0) || !(area > 0.0) || !std::isfinite(area) ||
+        !std::isfinite(sphere.center.x + sphere.center.y + sphere.center.z))
+      continue;
+    WtLight l{};
+    l.type = WT_LIGHT_PRIMITIVE;
+    l.triangle = primId(WT_PRIM_SPHERE, std::uint32_t(i));
+    l.position = {sphere.center.x, sphere.center.y, sphere.center.z, sphere.radius};
+    l.intensity = {le.x, le.y, le.z, 0.0f};
+    sphereLights.push_back({geometry.emitter_first[WT_PRIM_SPHERE] + std::uint32_t(i),
+                            std::uint32_t(list.lights.size())});
+    power.push_back(std::numbers::pi * area * luminance(le));  // pi * L * area, from the outside
+    list.lights.push_back(l);
+  }
+  list.emissivePrimitives = sphereLights.size();
+
   // environment
   std::uint32_t envIndex = ~0u;
   if (environmentPower > 0.0) {
@@ -153,7 +176,10 @@ LightList buildLightList(const Scene& scene, const SceneBuffers& buffers, double
   }
 
   list.alias = buildAliasTable(power);
-  list.emitterPdfArea.assign(order.size(), 0.0f);
+  std::size_t emitterSlots = order.size();
+  for (std::uint32_t type = 0; type < WT_PRIM_TYPES; ++type)
+    if (type != WT_PRIM_TRIANGLE) emitterSlots += buffers.primitiveCount(type);
+  list.emitterPdfArea.assign(emitterSlots, 0.0f);
   double total = 0.0;
   for (double p : power) total += p;
   list.sampleable = total > 0.0;
@@ -165,6 +191,8 @@ LightList buildLightList(const Scene& scene, const SceneBuffers& buffers, double
         float pick = treeEntry != ~0u ? list.alias[treeEntry].pmf : list.alias[lightOfLeaf[leaf]].pmf;
         list.emitterPdfArea[leaf] = float(pick / areas[k++]);
       }
+    // the other types' entries hold their selection probability alone
+    for (auto [slot, light] : sphereLights) list.emitterPdfArea[slot] = list.alias[light].pmf;
     if (envIndex != ~0u) list.environmentPmf = list.alias[envIndex].pmf;
   }
   return list;

@@ -30,12 +30,16 @@ constexpr std::size_t kLightTreeMinEmitters = 8;
 struct LightList {
   std::vector<WtLight> lights;         ///< the alias table's entries first, then (with the tree) the emissive triangles
   std::vector<WtAliasSlot> alias;      ///< one slot per entry the table picks from (lights [0, alias.size()))
-  std::vector<float> emitterPdfArea;   ///< per leaf-order triangle: its (or, with the tree, the tree's) selection probability / area (0: not a light)
+  /// per emitter slot (WtGeometry::emitter_first): for a leaf-order triangle, its (or, with the
+  /// tree, the tree's) selection probability / area; for another type's primitive, its selection
+  /// probability (0: not a light)
+  std::vector<float> emitterPdfArea;
   std::vector<WtLightNode> tree;       ///< the light tree (empty without it)
   std::vector<std::uint32_t> emitterLeaf;  ///< per leaf-order triangle: its tree leaf, WT_LIGHT_NODE_NONE when not in the tree
   std::uint32_t analyticCount = 0;     ///< lights [0, analyticCount) are point/spot/directional
   float environmentPmf = 0.0f;         ///< selection probability of the environment
   std::size_t emissiveTriangles = 0;
+  std::size_t emissivePrimitives = 0;  ///< emissive primitives of other types (spheres)
   bool sampleable = false;             ///< some light has power: NEE may pick from the table
 };
 

@@ -68,6 +68,7 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
   features.transmission = std::any_of(scene.materials.begin(), scene.materials.end(), [](const WtMaterial& m) {
     return m.model == WT_MATERIAL_PBR && m.transmission > 0.0f && m.base_color.w < 1.0f;
   });
+  features.spheres = m_scene->primitiveCount(WT_PRIM_SPHERE) > 0;
   m_program = buildProgram(context, features);
   m_generate = cl::Kernel(m_program, "generate");
   m_extend = cl::Kernel(m_program, "extend");
@@ -140,6 +141,7 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
     k->setArg(7, m_scene->triVerts);
     k->setArg(8, m_hits);
     k->setArg(9, m_raySkip);
+    m_scene->bindGeometry(*k, 10);
   }
 
   // shade: 0 frame, 1 environment, 2-4 its arrays, 5 counters, 6-9 queues (per bounce), 10- fixed
@@ -155,6 +157,7 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
                         &m_shadowRadiance, &m_pbrTable, &m_bounceCounts, &m_raySkip, &m_shadowSkip,
                         &m_lightTree, &m_emitterLeaf, &m_prevNormal})
     m_shade.setArg(a++, *b);
+  m_scene->bindGeometry(m_shade, a);
 
   for (cl::Kernel* k : {&m_connect, &m_connectPacket}) {
     a = 0;
@@ -164,6 +167,7 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
     k->setArg(a++, m_scene->triVerts);
     k->setArg(a++, m_radiance);
     k->setArg(a++, m_shadowSkip);
+    m_scene->bindGeometry(*k, a);
   }
 
   a = 1;

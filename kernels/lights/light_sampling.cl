@@ -5,7 +5,7 @@
 #define WT_LIGHTS_LIGHT_SAMPLING_CL
 
 #include "common.h"
-#include "geometry/triangle.cl"
+#include "geometry/geometry.cl"
 #include "shared/lights.h"
 #include "lights/environment_adapter.cl"
 
@@ -16,6 +16,7 @@ typedef struct LightScene {
   uint light_count;
   __global const float4* tri_verts;  ///< for triangle lights, leaf order
   EnvScene env;
+  GeometryScene geometry;            ///< for emissive primitives of other types
 } LightScene;
 
 /// A sampled connection from a shading point towards a light.
@@ -26,7 +27,7 @@ typedef struct LightSample {
   float3 radiance;  ///< arriving radiance, or intensity / distance^2 for delta lights
   float pdf;        ///< solid-angle pdf given this light was picked; 1 for delta lights
   int is_delta;     ///< point, spot, directional: BSDF sampling cannot hit these
-  uint prim;        ///< the emitter's leaf-order triangle (its shadow ray skips it); WT_NO_HIT for other lights
+  uint prim;        ///< the emitter primitive (its shadow ray skips it): a leaf-order triangle or a typed id; WT_NO_HIT for other lights
 } LightSample;
 
 // Spherical-triangle sampling (Arvo 1995) where the triangle subtends at
@@ -179,6 +180,13 @@ inline bool light_sample(LightScene ls, uint index, float3 p, float u1, float u2
     s->radiance = vec4_xyz(light.intensity);
     return true;
   }
+#if WT_HAS_PRIMITIVES
+  if (light.type == WT_LIGHT_PRIMITIVE) {
+    s->prim = light.triangle;
+    s->radiance = vec4_xyz(light.intensity);
+    return geometry_sample_emitter(ls.geometry, light.triangle, p, u1, u2, &s->wi, &s->distance, &s->target, &s->pdf);
+  }
+#endif
   // environment
   s->distance = INFINITY;
   s->radiance = env_sample(ls.env, u1, u2, &s->wi, &s->pdf);

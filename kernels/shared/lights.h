@@ -14,6 +14,7 @@
 #define WT_LIGHT_DIRECTIONAL 3  ///< KHR_lights_punctual directional
 #define WT_LIGHT_ENVIRONMENT 4  ///< the environment (constant or map), at most one
 #define WT_LIGHT_TREE 5         ///< the light tree over the emissive triangles (kernels/lights/light_tree.cl), at most one
+#define WT_LIGHT_PRIMITIVE 6    ///< an emissive primitive of another type (a sphere), sampled by geometry_sample_emitter
 
 /// One light of the scene's light list, 64 bytes.
 typedef struct WtLight {
@@ -21,7 +22,7 @@ typedef struct WtLight {
   WtVec4 direction;  ///< spot/directional: unit world direction the light travels in
   WtVec4 intensity;  ///< point/spot: cd per channel; directional: lux; triangle: nits (the material's emission)
   wt_uint type;      ///< WT_LIGHT_*
-  wt_uint triangle;  ///< WT_LIGHT_TRIANGLE: leaf-order triangle index
+  wt_uint triangle;  ///< WT_LIGHT_TRIANGLE: leaf-order triangle index; WT_LIGHT_PRIMITIVE: the primitive's typed id (WT_PRIM_TYPE_SHIFT)
   float cos_inner;   ///< spot: cosine of the inner cone angle (full intensity inside)
   float cos_outer;   ///< spot: cosine of the outer cone angle (zero outside)
 } WtLight;

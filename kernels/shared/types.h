@@ -63,6 +63,29 @@ typedef struct WtBvh4Node {
 } WtBvh4Node;
 #define WT_BVH4_EMPTY 0xffffffffu
 
+/// A primitive's identity in hits, skips and lights: its geometry type in
+/// the top four bits (WT_PRIM_*) and its index among that type's primitives
+/// below them. Triangles are type 0, so a triangle's id is its leaf-order
+/// index and the triangle paths never unpack it. WT_NO_HIT (all ones) is no
+/// primitive.
+#define WT_PRIM_TYPE_SHIFT 28
+#define WT_PRIM_INDEX_MASK 0x0fffffffu
+#define WT_PRIM_TRIANGLE 0u  ///< kernels/geometry/triangle.cl, in their own BVH (nodes, tri_verts)
+#define WT_PRIM_SPHERE 1u    ///< kernels/geometry/sphere.cl
+#define WT_PRIM_TYPES 4      ///< type slots in WtGeometry
+
+/// The primitives other than triangles (kernels/geometry/geometry.cl): one
+/// BVH over all of them whose leaves are ranges of prim_refs (typed ids),
+/// and per type its rows of prim_data (float4) and prim_info (uint4).
+typedef struct WtGeometry {
+  wt_uint node_count;      ///< nodes of the primitive BVH; 0: no such primitives
+  wt_uint triangle_count;  ///< leaf-order triangles: emitter slots [0, triangle_count) are triangles, the other types' follow (emitter_pdf_area)
+  wt_uint pad0, pad1;
+  wt_uint data_first[WT_PRIM_TYPES];     ///< per type: where its rows start in prim_data
+  wt_uint info_first[WT_PRIM_TYPES];     ///< per type: where its rows start in prim_info
+  wt_uint emitter_first[WT_PRIM_TYPES];  ///< per type: its first emitter slot (emitter_pdf_area)
+} WtGeometry;
+
 /// Rays per work-item of the packet traversal (kernels/bvh_packet.cl), one
 /// vector lane each: 8 or 16, set per device by the program build
 /// (KernelFeatures::packetWidth); 8 where nothing sets it.

@@ -1,0 +1,44 @@
+// The primitives other than triangles, gathered type by type into the rows
+// the kernels read (kernels/geometry/geometry.cl): a box and a typed id per
+// primitive for their BVH, and each type's prim_data and prim_info rows.
+// A type's gatherer lives in host/geometry/<type>.cpp; gatherPrimitives
+// calls every one.
+#pragma once
+
+#include "core/math.h"
+#include "scene/scene.h"
+#include "shared/types.h"
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+namespace wt {
+
+/// A typed primitive id (WT_PRIM_TYPE_SHIFT): type and index.
+constexpr std::uint32_t primId(std::uint32_t type, std::uint32_t index) {
+  return (type << WT_PRIM_TYPE_SHIFT) | (index & WT_PRIM_INDEX_MASK);
+}
+constexpr std::uint32_t primType(std::uint32_t id) { return id >> WT_PRIM_TYPE_SHIFT; }
+constexpr std::uint32_t primIndex(std::uint32_t id) { return id & WT_PRIM_INDEX_MASK; }
+
+struct PrimitiveRows {
+  std::vector<Aabb> bounds;                         ///< per primitive, world
+  std::vector<std::uint32_t> ids;                   ///< per primitive (as bounds): its typed id
+  std::vector<WtVec4> data;                         ///< prim_data
+  std::vector<std::array<std::uint32_t, 4>> info;   ///< prim_info; x = material
+  std::array<std::uint32_t, WT_PRIM_TYPES> dataFirst{};  ///< per type: its first prim_data row
+  std::array<std::uint32_t, WT_PRIM_TYPES> infoFirst{};  ///< per type: its first prim_info row
+  std::array<std::size_t, WT_PRIM_TYPES> count{};        ///< per type: primitives in the scene (kept or not)
+  std::size_t skipped = 0;  ///< primitives left out (degenerate: zero size, non-finite)
+};
+
+/// Spheres (WT_PRIM_SPHERE): one data row (center, radius) and one info row
+/// (material) per sphere, by scene index; radius <= 0 or a non-finite value
+/// leaves the sphere out.
+void gatherSpheres(const Scene& scene, PrimitiveRows& rows);
+
+/// Every type's rows.
+PrimitiveRows gatherPrimitives(const Scene& scene);
+
+}  // namespace wt

@@ -1,0 +1,127 @@
+// Traversal of the BVH over the primitives other than triangles
+// (kernels/geometry/geometry.cl): one ray at a time, each leaf entry a typed
+// id tested through geometry_intersect. The scene's closest hit is the
+// triangles' (kernels/bvh.cl, bvh_packet.cl) narrowed by this one; without
+// such primitives (WT_HAS_PRIMITIVES 0) none of it is compiled.
+#ifndef WT_BVH_PRIMS_CL
+#define WT_BVH_PRIMS_CL
+
+#include "bvh.cl"
+#include "geometry/geometry.cl"
+
+#if WT_HAS_PRIMITIVES
+
+/// Narrow `hit` (the triangles' closest hit, hit->t its distance or tmax) to
+/// a nearer primitive in (tmin, hit->t), never at the start of `skip`.
+inline void bvh_prims_closest(GeometryScene g, float3 org, float3 dir, float tmin, uint skip, Hit* hit) {
+  if (g.header.node_count == 0 || !bvh_ray_is_finite(org, dir)) return;
+  float3 inv_d = bvh_safe_rcp(dir);
+  RayPlanes planes = bvh_ray_planes(inv_d);
+  uint stack_node[WT_BVH_STACK_SIZE];
+  float stack_t[WT_BVH_STACK_SIZE];
+  int sp = 0;
+  uint node = 0;
+  for (;;) {
+    __global const WtBvh4Node* n = &g.nodes[node];
+    float4 t4;
+    int4 hit4 = bvh4_box_hit(n, planes, org, inv_d, tmin, hit->t, &t4);
+    float t_child[4] = {t4.s0, t4.s1, t4.s2, t4.s3};
+    int hit_child[4] = {hit4.s0, hit4.s1, hit4.s2, hit4.s3};
+    int next = -1;
+    float next_t = INFINITY;
+    for (int k = 0; k < 4; ++k) {
+      if (!hit_child[k]) continue;
+      uint first = n->child[k], count = n->count[k];
+      if (count > 0) {
+        for (uint i = first; i < first + count; ++i) {
+          uint prim = g.refs[i];
+          float t, u, v;
+          if (geometry_intersect(g, prim, org, dir, tmin, hit->t, skip, WT_NO_HIT, &t, &u, &v)) {
+            hit->t = t;
+            hit->b1 = u;
+            hit->b2 = v;
+            hit->prim = prim;
+          }
+        }
+      } else if (t_child[k] < next_t) {
+        // the nearest inner child next; the one it displaces waits
+        if (next >= 0) {
+          stack_node[sp] = (uint)next;
+          stack_t[sp++] = next_t;
+        }
+        next = (int)first;
+        next_t = t_child[k];
+      } else {
+        stack_node[sp] = first;
+        stack_t[sp++] = t_child[k];
+      }
+    }
+    if (next >= 0 && next_t <= hit->t) {
+      node = (uint)next;
+      continue;
+    }
+    for (;;) {
+      if (sp == 0) return;
+      --sp;
+      if (stack_t[sp] <= hit->t) break;
+    }
+    node = stack_node[sp];
+  }
+}
+
+/// Whether a primitive blocks (tmin, tmax), never at the start of skip_a
+/// or skip_b.
+inline bool bvh_prims_occluded(GeometryScene g, float3 org, float3 dir, float tmin, float tmax, uint skip_a,
+                               uint skip_b) {
+  if (g.header.node_count == 0) return false;
+  if (!bvh_ray_is_finite(org, dir)) return true;
+  float3 inv_d = bvh_safe_rcp(dir);
+  RayPlanes planes = bvh_ray_planes(inv_d);
+  uint stack_node[WT_BVH_STACK_SIZE];
+  int sp = 0;
+  uint node = 0;
+  for (;;) {
+    __global const WtBvh4Node* n = &g.nodes[node];
+    float4 t4;
+    int4 hit4 = bvh4_box_hit(n, planes, org, inv_d, tmin, tmax, &t4);
+    int hit_child[4] = {hit4.s0, hit4.s1, hit4.s2, hit4.s3};
+    for (int k = 0; k < 4; ++k) {
+      if (!hit_child[k]) continue;
+      uint first = n->child[k], count = n->count[k];
+      if (count > 0) {
+        for (uint i = first; i < first + count; ++i) {
+          float t, u, v;
+          if (geometry_intersect(g, g.refs[i], org, dir, tmin, tmax, skip_a, skip_b, &t, &u, &v)) return true;
+        }
+      } else {
+        stack_node[sp++] = first;
+      }
+    }
+    if (sp == 0) return false;
+    node = stack_node[--sp];
+  }
+}
+
+#endif  // WT_HAS_PRIMITIVES
+
+/// The scene's closest hit in (tmin, tmax): triangles, then the other types.
+inline Hit scene_closest(BvhScene scene, GeometryScene g, float3 org, float3 dir, float tmin, float tmax, uint skip) {
+  Hit hit = bvh_closest(scene, org, dir, tmin, tmax, skip);
+#if WT_HAS_PRIMITIVES
+  bvh_prims_closest(g, org, dir, tmin, skip, &hit);
+#endif
+  return hit;
+}
+
+/// Whether anything in the scene blocks (tmin, tmax).
+inline bool scene_occluded(BvhScene scene, GeometryScene g, float3 org, float3 dir, float tmin, float tmax,
+                           uint skip_a, uint skip_b) {
+  if (bvh_occluded(scene, org, dir, tmin, tmax, skip_a, skip_b)) return true;
+#if WT_HAS_PRIMITIVES
+  return bvh_prims_occluded(g, org, dir, tmin, tmax, skip_a, skip_b);
+#else
+  return false;
+#endif
+}
+
+#endif  // WT_BVH_PRIMS_CL

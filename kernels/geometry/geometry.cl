@@ -1,0 +1,145 @@
+// The geometry interface: every primitive type but triangles is reached
+// through the three switches below (ray test, surface at a hit, emitter
+// sampling), one case per type, each compiled only when the scene has that
+// type (WT_HAS_<TYPE>). Triangles keep their own BVH and vector leaf tests
+// (kernels/bvh.cl); the other types share one BVH whose leaves are ranges
+// of typed ids (prim_refs), traversed by kernels/bvh_prims.cl after the
+// triangles'. docs/architecture.md, "Adding a geometry type", lists what a
+// new type touches.
+#ifndef WT_GEOMETRY_GEOMETRY_CL
+#define WT_GEOMETRY_GEOMETRY_CL
+
+#include "common.h"
+#include "geometry/triangle.cl"
+
+#ifndef WT_HAS_SPHERES
+#error "WT_HAS_SPHERES is not defined: build options must come from kernelDefines()"
+#endif
+#if WT_HAS_SPHERES
+#include "geometry/sphere.cl"
+#endif
+
+/// Whether any type beside triangles is compiled in (the primitive BVH is traversed).
+#define WT_HAS_PRIMITIVES (WT_HAS_SPHERES)
+
+/// The non-triangle primitives as the kernels see them (WtGeometry).
+typedef struct GeometryScene {
+  WtGeometry header;
+  __global const WtBvh4Node* nodes;  ///< their BVH; leaves index refs
+  __global const uint* refs;         ///< typed ids in leaf order
+  __global const float4* data;       ///< per type's rows (WtGeometry::data_first)
+  __global const uint4* info;        ///< per type's rows (WtGeometry::info_first); x = material
+} GeometryScene;
+
+/// The kernel parameters that carry a GeometryScene (host: SceneBuffers::bindGeometry).
+#define WT_GEOMETRY_PARAMS                                                                                    \
+  WtGeometry geometry, __global const WtBvh4Node *prim_nodes, __global const uint *prim_refs,                 \
+      __global const float4 *prim_data, __global const uint4 *prim_info
+#define WT_GEOMETRY_SCENE {geometry, prim_nodes, prim_refs, prim_data, prim_info}
+
+inline uint prim_type(uint prim) { return prim >> WT_PRIM_TYPE_SHIFT; }
+inline uint prim_index(uint prim) { return prim & WT_PRIM_INDEX_MASK; }
+
+/// The first row of primitive `prim` in prim_data.
+inline __global const float4* geometry_data(GeometryScene g, uint prim) {
+  return g.data + g.header.data_first[prim_type(prim)] + prim_index(prim);
+}
+
+/// Ray (o, d) against primitive `prim` in (tmin, tmax): the distance and the
+/// type's own hit parameters (u, v), which geometry_surface takes back. A
+/// primitive the ray leaves (skip_a) or aims at (skip_b) is never met at the
+/// ray's start.
+inline bool geometry_intersect(GeometryScene g, uint prim, float3 o, float3 d, float tmin, float tmax, uint skip_a,
+                               uint skip_b, float* t, float* u, float* v) {
+  bool leaving = prim == skip_a || prim == skip_b;
+  *u = 0.0f;
+  *v = 0.0f;
+  switch (prim_type(prim)) {
+#if WT_HAS_SPHERES
+    case WT_PRIM_SPHERE:
+      return sphere_intersect(*geometry_data(g, prim), o, d, tmin, tmax, leaving, t);
+#endif
+    default:
+      return false;
+  }
+}
+
+/// The surface at a hit, for shading.
+typedef struct SurfaceHit {
+  float3 p;        ///< world position, computed from the primitive (not o + t d)
+  float3 p_error;  ///< rounding error bound per coordinate of p
+  float3 ng;       ///< unit geometric normal: the winding's for triangles, outward for closed types; zero: degenerate
+  float3 ns;       ///< unit shading normal
+  float2 uv;       ///< surface parameters: spheres by angle; triangles their barycentrics (b1, b2) until texture coordinates reach the device
+  float3 dpdu;     ///< dp/du, world (triangles: the edge p1 - p0)
+  uint material;   ///< index into materials
+} SurfaceHit;
+
+/// The surface where ray (o, d) hit primitive `prim`; `hit` is the stored
+/// (t, u, v, prim).
+inline SurfaceHit geometry_surface(GeometryScene g, __global const float4* tri_verts, __global const uint4* tri_info,
+                                   __global const float4* normals, uint prim, float3 o, float3 d, float4 hit) {
+  SurfaceHit s;
+  switch (prim_type(prim)) {
+#if WT_HAS_SPHERES
+    case WT_PRIM_SPHERE: {
+      sphere_surface(*geometry_data(g, prim), o, d, hit.x, &s.p, &s.p_error, &s.ng, &s.uv, &s.dpdu);
+      s.ns = s.ng;
+      s.material = g.info[g.header.info_first[WT_PRIM_SPHERE] + prim_index(prim)].x;
+      return s;
+    }
+#endif
+    default: {
+      uint4 info = tri_info[prim];  // the corners' vertex indices and the material
+      float3 p0, p1, p2;
+      triangle_corners(tri_verts, prim, &p0, &p1, &p2);
+      triangle_surface(p0, p1, p2, normals[info.x].xyz, normals[info.y].xyz, normals[info.z].xyz, hit.y, hit.z, &s.p,
+                       &s.p_error, &s.ng, &s.ns);
+      s.uv = (float2)(hit.y, hit.z);
+      s.dpdu = p1 - p0;
+      s.material = info.w;
+      return s;
+    }
+  }
+}
+
+/// A point of non-triangle emitter `prim` sampled from p, as solid angle:
+/// the direction, the distance, where a shadow ray ends, and the pdf. False
+/// when the type cannot be sampled from p.
+inline bool geometry_sample_emitter(GeometryScene g, uint prim, float3 p, float u1, float u2, float3* wi,
+                                    float* distance, float3* target, float* pdf) {
+  switch (prim_type(prim)) {
+#if WT_HAS_SPHERES
+    case WT_PRIM_SPHERE: {
+      float4 sphere = *geometry_data(g, prim);
+      *pdf = sphere_cone_pdf(sphere, p);
+      return *pdf > 0.0f && sphere_sample_cone(sphere, p, u1, u2, wi, distance, target);
+    }
+#endif
+    default:
+      return false;
+  }
+}
+
+/// The solid-angle pdf with which geometry_sample_emitter reaches emitter
+/// `prim` from `origin` (0: it cannot), before the emitter's selection.
+inline float geometry_emitter_pdf(GeometryScene g, uint prim, float3 origin) {
+  switch (prim_type(prim)) {
+#if WT_HAS_SPHERES
+    case WT_PRIM_SPHERE:
+      return sphere_cone_pdf(*geometry_data(g, prim), origin);
+#endif
+    default:
+      return 0.0f;
+  }
+}
+
+/// Where primitive `prim`'s entry is in the per-emitter tables
+/// (emitter_pdf_area): triangles by their leaf-order index, the other types
+/// after them.
+inline uint geometry_emitter_slot(GeometryScene g, uint prim) {
+  uint type = prim_type(prim);
+  return type == WT_PRIM_TRIANGLE ? prim : g.header.emitter_first[type] + prim_index(prim);
+}
+
+#endif  // WT_GEOMETRY_GEOMETRY_CL
