@@ -24,18 +24,23 @@ std::vector<std::string> builtInSceneNames() {
 }
 
 Scene loadScene(const std::string& path, const GltfLoadOptions& options) {
+  return loadSceneAny(path, options).scene;
+}
+
+SceneFile loadSceneAny(const std::string& path, const GltfLoadOptions& options) {
   // a bare name that is not a file: one of the built-in scenes
   if (std::filesystem::path(path).extension().empty() && !std::filesystem::exists(path)) {
     if (auto contents = embedded::find("scenes/" + path + ".gltf"))
-      return loadGltfFromMemory(*contents, path + ".gltf (built in)", ".", options);
+      return {loadGltfFromMemory(*contents, path + ".gltf (built in)", ".", options), {}};
     std::string known;
     for (const std::string& n : builtInSceneNames()) known += (known.empty() ? "" : ", ") + n;
     throw SceneError(path + ": no such file, and no built-in scene of that name (built in: " + known + ")");
   }
   std::string ext = std::filesystem::path(path).extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
-  if (ext == ".gltf" || ext == ".glb") return loadGltf(path, options);
-  throw SceneError(path + ": unsupported scene format '" + ext + "' (wavetrace reads .gltf and .glb)");
+  if (ext == ".gltf" || ext == ".glb") return {loadGltf(path, options), {}};
+  if (ext == ".json") return loadSceneFile(path, options);
+  throw SceneError(path + ": unsupported scene format '" + ext + "' (wavetrace reads .gltf, .glb and .json)");
 }
 
 }  // namespace wt

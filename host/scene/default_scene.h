@@ -3,6 +3,7 @@
 #pragma once
 
 #include "scene/gltf_loader.h"
+#include "scene/scene_file.h"
 
 #include <string>
 #include <vector>
@@ -15,8 +16,13 @@ Scene loadDefaultScene(const GltfLoadOptions& options = {});
 /// Names of the built-in scenes (scenes/*.gltf), e.g. "cornell".
 std::vector<std::string> builtInSceneNames();
 
-/// Load a scene file by its extension (.gltf, .glb), or a built-in scene by
-/// its bare name ("cornell_small_light"). Throws SceneError.
+/// Load a scene file by its extension (.gltf, .glb, .json), or a built-in
+/// scene by its bare name ("cornell_small_light"). A scene file's render
+/// settings are dropped (loadSceneAny keeps them). Throws SceneError.
 Scene loadScene(const std::string& path, const GltfLoadOptions& options = {});
+
+/// As loadScene, with the scene file's settings; glTF files and built-in
+/// scenes give empty settings.
+SceneFile loadSceneAny(const std::string& path, const GltfLoadOptions& options = {});
 
 }  // namespace wt

@@ -1,0 +1,851 @@
+// The scene file (docs/scene-format.md): nlohmann-json parses the text, and
+// every field is checked here, by a validator that knows each object's
+// fields, before it is used. Geometry is gathered first (glTF files loaded,
+// transforms composed in double), the origin chosen once everything's place
+// is known, and only then written as floats relative to it.
+#include "scene/scene_file.h"
+
+#include "scene/generators.h"
+
+#include <nlohmann/json.hpp>
+
+#include <glm/gtc/matrix_transform.hpp>
+#include <glm/gtc/quaternion.hpp>
+#include <glm/gtc/type_ptr.hpp>
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <initializer_list>
+#include <iterator>
+#include <limits>
+#include <map>
+#include <new>
+#include <set>
+#include <stdexcept>
+#include <vector>
+
+namespace wt {
+namespace {
+
+namespace fs = std::filesystem;
+/// Keeps the file's order of keys, so the first problem reported is the first in the file.
+using Json = nlohmann::ordered_json;
+
+constexpr int kVersion = 1;
+/// A scene file needs 5 levels (objects[2].centers[7][1]); more is a mistake.
+constexpr std::size_t kMaxNesting = 64;
+constexpr std::size_t kMaxFileBytes = std::size_t(1) << 30;
+constexpr int kMaxImageSide = 16384;
+constexpr int kMaxSamples = 1 << 24;
+constexpr int kMaxBounces = 1024;
+
+// paths and values in messages
+
+bool isIdentifier(std::string_view key) {
+  if (key.empty()) return false;
+  for (char c : key)
+    if (!std::isalnum(static_cast<unsigned char>(c)) && c != '_' && c != '-') return false;
+  return true;
+}
+
+/// The path of `key` inside `path`: "objects[3].radius", or materials["my glass"].
+std::string member(const std::string& path, std::string_view key) {
+  if (!isIdentifier(key)) return path + "[" + Json(std::string(key)).dump(-1, ' ', false, Json::error_handler_t::replace) + "]";
+  return path.empty() ? std::string(key) : path + "." + std::string(key);
+}
+
+std::string element(const std::string& path, std::size_t i) { return path + "[" + std::to_string(i) + "]"; }
+
+/// A value as the file wrote it, shortened for a message.
+std::string describe(const Json& v) {
+  std::string text = v.dump(-1, ' ', false, Json::error_handler_t::replace);
+  if (text.size() > 48) text = text.substr(0, 45) + "...";
+  return text;
+}
+
+std::string joinKeys(std::initializer_list<const char*> keys) {
+  std::string text;
+  for (const char* k : keys) text += (text.empty() ? "" : ", ") + std::string(k);
+  return text;
+}
+
+std::string formatNumber(double v) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%.9g", v);
+  return buffer;
+}
+
+std::string lowerExtension(const fs::path& path) {
+  std::string ext = path.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+  return ext;
+}
+
+bool isFinite(const glm::dvec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
+bool isFinite(const glm::vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
+
+/// A problem found while parsing, at a JSON path; Loader adds the file's name.
+struct JsonProblem {
+  std::string path;
+  std::string problem;
+};
+
+/// nlohmann's DOM builder, and what it leaves out: the path of each value
+/// (the parser reports a number beyond a double's range without one),
+/// duplicate keys (it keeps the last silently), and a nesting limit.
+class ParseHandler {
+ public:
+  explicit ParseHandler(Json& result) : m_dom(result, true) {}
+
+  bool null() { return value(), m_dom.null(); }
+  bool boolean(bool v) { return value(), m_dom.boolean(v); }
+  bool number_integer(Json::number_integer_t v) { return value(), m_dom.number_integer(v); }
+  bool number_unsigned(Json::number_unsigned_t v) { return value(), m_dom.number_unsigned(v); }
+  bool number_float(Json::number_float_t v, const Json::string_t& text) { return value(), m_dom.number_float(v, text); }
+  bool string(Json::string_t& v) { return value(), m_dom.string(v); }
+  bool binary(Json::binary_t& v) { return value(), m_dom.binary(v); }
+  bool start_object(std::size_t n) { return open(false), m_dom.start_object(n); }
+  bool end_object() { return m_frames.pop_back(), m_dom.end_object(); }
+  bool start_array(std::size_t n) { return open(true), m_dom.start_array(n); }
+  bool end_array() { return m_frames.pop_back(), m_dom.end_array(); }
+  bool key(Json::string_t& k) {
+    Frame& f = m_frames.back();
+    if (!f.keys.insert(k).second) throw JsonProblem{member(path(m_frames.size() - 1, false), k), "duplicate key"};
+    f.key = k;
+    return m_dom.key(k);
+  }
+  template <class Exception>
+  bool parse_error(std::size_t position, const std::string& token, const Exception& ex) {
+    // 406: a number that overflows a double; the value has no event, so its path is the next one
+    if (ex.id == 406)
+      throw JsonProblem{path(m_frames.size(), true),
+                        "must be a finite number, got " + token + " (beyond the range of a double)"};
+    return m_dom.parse_error(position, token, ex);  // throws
+  }
+
+ private:
+  struct Frame {
+    bool array = false;
+    std::size_t count = 0;  ///< array: elements begun
+    std::string key;        ///< object: the current member
+    std::set<std::string> keys;
+  };
+
+  void value() {
+    if (!m_frames.empty() && m_frames.back().array) ++m_frames.back().count;
+  }
+  void open(bool array) {
+    value();
+    if (m_frames.size() >= kMaxNesting)
+      throw JsonProblem{path(m_frames.size(), false), "nested more than " + std::to_string(kMaxNesting) + " levels deep"};
+    m_frames.push_back({array, 0, {}, {}});
+  }
+  /// The path through the first `depth` frames; `pending`: the last frame's
+  /// next element rather than its current one.
+  std::string path(std::size_t depth, bool pending) const {
+    std::string text;
+    for (std::size_t i = 0; i < depth; ++i) {
+      const Frame& f = m_frames[i];
+      text = f.array ? element(text, pending && i + 1 == depth ? f.count : f.count - 1) : member(text, f.key);
+    }
+    return text;
+  }
+
+  nlohmann::detail::json_sax_dom_parser<Json> m_dom;
+  std::vector<Frame> m_frames;
+};
+
+/// A glTF file the scene places, loaded once however often it is placed.
+struct IncludedFile {
+  Scene scene;                    ///< relative to scene.origin, as loaded
+  std::uint32_t materialBase = 0; ///< its materials' first index in the result
+  std::uint32_t geometryBase = 0; ///< its geometry ids' offset in the result (copies of one file share them)
+};
+
+/// One placement of an included file.
+struct Placement {
+  std::size_t file;
+  glm::dmat4 world;  ///< file's world (its scene.origin added) to the scene file's world
+  std::string path;  ///< "objects[2]"
+};
+
+/// A sphere in world coordinates, before the origin is subtracted.
+struct WorldSphere {
+  glm::dvec3 center;
+  double radius;
+  std::uint32_t material;
+  std::string path;  ///< "objects[2]" or "objects[2].centers[5]"
+};
+
+/// The "camera" object, in world coordinates.
+struct LookAt {
+  glm::dvec3 from, to, up;
+  double fovDegrees;
+};
+
+class Loader {
+ public:
+  Loader(const std::string& name, const std::string& baseDir, const GltfLoadOptions& options)
+      : m_name(name), m_baseDir(baseDir.empty() ? "." : baseDir), m_options(options) {}
+
+  SceneFile run(std::string_view text) {
+    if (text.empty()) fail("", "the file is empty");
+    Json doc;
+    try {
+      ParseHandler handler(doc);
+      Json::sax_parse(text.begin(), text.end(), &handler);
+    } catch (const JsonProblem& p) {
+      fail(p.path, p.problem);
+    } catch (const Json::parse_error& e) {
+      // "[json.exception.parse_error.101] parse error at line 1, column 5: ..." without the bracket
+      std::string what = e.what();
+      if (auto end = what.find("] "); what.rfind("[json.exception", 0) == 0 && end != std::string::npos)
+        what = what.substr(end + 2);
+      fail("", "malformed JSON at byte " + std::to_string(e.byte) + ": " + what);
+    }
+    m_result.scene.sourceName = m_name;
+    readDocument(doc);
+    return std::move(m_result);
+  }
+
+ private:
+  [[noreturn]] void fail(const std::string& path, const std::string& problem) const {
+    throw SceneError(m_name + ": " + (path.empty() ? "" : path + ": ") + problem);
+  }
+
+  // typed reads: each names the path and what was found
+
+  const Json& object(const Json& v, const std::string& path) const {
+    if (!v.is_object()) fail(path, "must be an object, got " + describe(v));
+    return v;
+  }
+
+  void checkKeys(const Json& obj, const std::string& path, std::initializer_list<const char*> allowed) const {
+    for (const auto& [key, value] : obj.items()) {
+      (void)value;
+      if (std::none_of(allowed.begin(), allowed.end(), [&](const char* k) { return key == k; }))
+        fail(member(path, key), "unknown field (expected one of: " + joinKeys(allowed) + ")");
+    }
+  }
+
+  static const Json* find(const Json& obj, const char* key) {
+    auto it = obj.find(key);
+    return it == obj.end() ? nullptr : &*it;
+  }
+
+  const Json& require(const Json& obj, const std::string& path, const char* key, const std::string& why = "") const {
+    const Json* v = find(obj, key);
+    if (!v) fail(member(path, key), "missing (required" + why + ")");
+    return *v;
+  }
+
+  double number(const Json& v, const std::string& path) const {
+    if (!v.is_number()) fail(path, "must be a number, got " + describe(v));
+    const double d = v.get<double>();
+    if (!std::isfinite(d)) fail(path, "must be a finite number, got one beyond the range of a double");
+    return d;
+  }
+  double positive(const Json& v, const std::string& path) const {
+    const double d = number(v, path);
+    if (!(d > 0.0)) fail(path, "must be > 0, got " + describe(v));
+    return d;
+  }
+  double nonNegative(const Json& v, const std::string& path) const {
+    const double d = number(v, path);
+    if (!(d >= 0.0)) fail(path, "must be >= 0, got " + describe(v));
+    return d;
+  }
+  double inRange(const Json& v, const std::string& path, double lo, double hi) const {
+    const double d = number(v, path);
+    if (!(d >= lo && d <= hi))
+      fail(path, "must be in [" + formatNumber(lo) + ", " + formatNumber(hi) + "], got " + describe(v));
+    return d;
+  }
+  std::int64_t integer(const Json& v, const std::string& path, std::int64_t lo, std::int64_t hi) const {
+    const double d = number(v, path);
+    if (d != std::floor(d)) fail(path, "must be an integer, got " + describe(v));
+    if (!(d >= double(lo) && d <= double(hi)))
+      fail(path, "must be an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "], got " + describe(v));
+    return std::int64_t(d);
+  }
+  bool boolean(const Json& v, const std::string& path) const {
+    if (!v.is_boolean()) fail(path, "must be true or false, got " + describe(v));
+    return v.get<bool>();
+  }
+  std::string string(const Json& v, const std::string& path) const {
+    if (!v.is_string()) fail(path, "must be a string, got " + describe(v));
+    return v.get<std::string>();
+  }
+  const Json& array(const Json& v, const std::string& path, std::size_t size, const char* of) const {
+    if (!v.is_array() || v.size() != size)
+      fail(path, "must be an array of " + std::to_string(size) + " " + of + ", got " + describe(v));
+    return v;
+  }
+  glm::dvec3 vec3(const Json& v, const std::string& path) const {
+    array(v, path, 3, "numbers");
+    return {number(v[0], element(path, 0)), number(v[1], element(path, 1)), number(v[2], element(path, 2))};
+  }
+  /// A colour: 3 numbers >= 0, and <= 1 when `unit` (reflectances).
+  glm::vec3 color(const Json& v, const std::string& path, bool unit) const {
+    array(v, path, 3, "numbers");
+    glm::vec3 c;
+    for (int k = 0; k < 3; ++k)
+      c[k] = float(unit ? inRange(v[k], element(path, k), 0.0, 1.0) : nonNegative(v[k], element(path, k)));
+    if (!isFinite(c)) fail(path, "is beyond the range of a float");
+    return c;
+  }
+
+  /// A file named by the scene, against the scene file's folder.
+  fs::path resolve(const std::string& file) const {
+    fs::path p(file);
+    return (p.is_absolute() ? p : m_baseDir / p).lexically_normal();
+  }
+  void requireFile(const fs::path& path, const std::string& where) const {
+    std::error_code ec;
+    if (!fs::is_regular_file(path, ec))
+      fail(where, (fs::exists(path, ec) ? "not a regular file: " : "no such file: ") + path.string());
+  }
+
+  // the document
+
+  void readDocument(const Json& doc) {
+    if (!doc.is_object()) fail("", "the top level must be an object, got " + describe(doc));
+    const Json& version = require(doc, "", "version", "; this wavetrace reads version " + std::to_string(kVersion));
+    if (!version.is_number_integer() || version.get<std::int64_t>() != kVersion)
+      fail("version", "unsupported version " + describe(version) + " (this wavetrace reads version " +
+                          std::to_string(kVersion) + ")");
+    checkKeys(doc, "", {"version", "camera", "environment", "materials", "objects", "render"});
+    if (m_options.sceneIndex != -1 || m_options.cameraIndex != 0)
+      m_result.scene.addWarning("a glTF scene or camera index applies to .gltf/.glb files, not to scene files; ignored");
+
+    if (const Json* v = find(doc, "render")) readRender(*v, "render");
+    if (const Json* v = find(doc, "environment")) readEnvironment(*v, "environment");
+    if (const Json* v = find(doc, "materials")) readMaterials(*v, "materials");
+    if (const Json* v = find(doc, "camera")) readCamera(*v, "camera");
+    if (const Json* v = find(doc, "objects")) {
+      if (!v->is_array()) fail("objects", "must be an array, got " + describe(*v));
+      for (std::size_t i = 0; i < v->size(); ++i) readObject((*v)[i], element("objects", i));
+    }
+    build();
+  }
+
+  void readRender(const Json& v, const std::string& path) {
+    object(v, path);
+    checkKeys(v, path, {"width", "height", "spp", "max_bounces", "seed", "exposure", "integrator"});
+    SceneFileSettings& s = m_result.settings;
+    if (const Json* x = find(v, "width")) s.width = int(integer(*x, member(path, "width"), 1, kMaxImageSide));
+    if (const Json* x = find(v, "height")) s.height = int(integer(*x, member(path, "height"), 1, kMaxImageSide));
+    if (const Json* x = find(v, "spp")) s.samplesPerPixel = int(integer(*x, member(path, "spp"), 1, kMaxSamples));
+    if (const Json* x = find(v, "max_bounces"))
+      s.maxBounces = int(integer(*x, member(path, "max_bounces"), 0, kMaxBounces));
+    if (const Json* x = find(v, "seed"))
+      s.seed = std::uint32_t(integer(*x, member(path, "seed"), 0, std::numeric_limits<std::uint32_t>::max()));
+    if (const Json* x = find(v, "exposure")) {
+      const double stops = number(*x, member(path, "exposure"));
+      if (std::fabs(stops) > 1000.0) fail(member(path, "exposure"), "must be in [-1000, 1000] stops, got " + describe(*x));
+      s.exposureStops = float(stops);
+    }
+    if (const Json* x = find(v, "integrator")) {
+      const std::string name = string(*x, member(path, "integrator"));
+      if (name != "path" && name != "minimal")
+        fail(member(path, "integrator"), "must be \"path\" or \"minimal\", got " + describe(*x));
+      s.integrator = name;
+    }
+  }
+
+  void readEnvironment(const Json& v, const std::string& path) {
+    object(v, path);
+    checkKeys(v, path, {"color", "map", "intensity", "rotation", "hidden"});
+    const Json* color = find(v, "color");
+    const Json* map = find(v, "map");
+    if (color && map) fail(path, "give \"color\" or \"map\", not both");
+    if (!color && !map) fail(path, "needs \"color\" (a constant environment) or \"map\" (an .hdr or .exr file)");
+    SceneEnvironment env;
+    if (color) {
+      env.color = this->color(*color, member(path, "color"), false);
+      for (const char* key : {"intensity", "rotation"})
+        if (find(v, key)) fail(member(path, key), "applies to a \"map\" only");
+    } else {
+      const std::string where = member(path, "map");
+      const std::string file = string(*map, where);
+      if (file.empty()) fail(where, "must name a file, got \"\"");
+      const fs::path resolved = resolve(file);
+      const std::string ext = lowerExtension(resolved);
+      if (ext != ".hdr" && ext != ".exr") fail(where, "must be a .hdr or .exr file, got " + describe(*map));
+      requireFile(resolved, where);
+      env.map = resolved.string();
+      if (const Json* x = find(v, "intensity")) {
+        env.intensity = float(nonNegative(*x, member(path, "intensity")));
+        if (!std::isfinite(env.intensity)) fail(member(path, "intensity"), "is beyond the range of a float");
+      }
+      if (const Json* x = find(v, "rotation"))
+        env.rotationDegrees = float(std::fmod(number(*x, member(path, "rotation")), 360.0));
+    }
+    if (const Json* x = find(v, "hidden")) env.hidden = boolean(*x, member(path, "hidden"));
+    m_result.settings.environment = env;
+  }
+
+  void readMaterials(const Json& v, const std::string& path) {
+    object(v, path);
+    for (const auto& [name, value] : v.items()) {
+      const std::string where = member(path, name);
+      if (name.empty()) fail(where, "a material needs a name");
+      m_materialIndex[name] = std::uint32_t(m_result.scene.materials.size());
+      m_result.scene.materials.push_back(readMaterial(value, where));
+      m_result.scene.materialNames.push_back(name);
+    }
+  }
+
+  WtMaterial readMaterial(const Json& v, const std::string& path) {
+    object(v, path);
+    std::string type = "pbr";
+    if (const Json* x = find(v, "type")) {
+      type = string(*x, member(path, "type"));
+      if (type != "pbr" && type != "lambert")
+        fail(member(path, "type"), "must be \"pbr\" or \"lambert\", got " + describe(*x));
+    }
+    if (type == "lambert")
+      checkKeys(v, path, {"type", "base_color", "emission", "emission_strength", "double_sided"});
+    else
+      checkKeys(v, path, {"type", "base_color", "metallic", "roughness", "emission", "emission_strength",
+                          "double_sided", "transmission", "ior", "thin_walled", "attenuation_color",
+                          "attenuation_distance"});
+    auto read = [&](const char* key, double fallback, auto&& reader) {
+      const Json* x = find(v, key);
+      return x ? reader(*x, member(path, key)) : fallback;
+    };
+    auto unit = [&](const Json& x, const std::string& p) { return inRange(x, p, 0.0, 1.0); };
+
+    glm::vec3 baseColor(0.8f);
+    if (const Json* x = find(v, "base_color")) baseColor = color(*x, member(path, "base_color"), true);
+    glm::vec3 emission(0.0f);
+    if (const Json* x = find(v, "emission")) emission = color(*x, member(path, "emission"), false);
+    const double strength = read("emission_strength", 1.0, [&](const Json& x, const std::string& p) { return nonNegative(x, p); });
+    emission *= float(strength);
+    if (!isFinite(emission)) fail(member(path, "emission_strength"), "makes the emission overflow a float");
+    bool doubleSided = false;
+    if (const Json* x = find(v, "double_sided")) doubleSided = boolean(*x, member(path, "double_sided"));
+    if (type == "lambert") return makeMaterial(baseColor, emission, doubleSided);
+
+    const float metallic = float(read("metallic", 0.0, unit));
+    const float roughness = float(read("roughness", 0.5, unit));
+    WtMaterial m = makePbrMaterial(baseColor, metallic, roughness, emission, doubleSided);
+    const float transmission = float(read("transmission", 0.0, unit));
+    const float ior = float(read("ior", 1.5, [&](const Json& x, const std::string& p) { return inRange(x, p, 1.0, 10.0); }));
+    bool thinWalled = false;
+    if (const Json* x = find(v, "thin_walled")) thinWalled = boolean(*x, member(path, "thin_walled"));
+    glm::vec3 attenuationColor(1.0f);
+    if (const Json* x = find(v, "attenuation_color")) attenuationColor = color(*x, member(path, "attenuation_color"), true);
+    const double distance = read("attenuation_distance", INFINITY, [&](const Json& x, const std::string& p) { return positive(x, p); });
+    const bool attenuates = std::isfinite(distance) && attenuationColor != glm::vec3(1.0f);
+
+    if (!(transmission > 0.0f)) {
+      for (const char* key : {"ior", "thin_walled", "attenuation_color", "attenuation_distance"})
+        if (find(v, key))
+          m_result.scene.addWarning(member(path, key) + " has no effect without transmission; ignored");
+      return m;
+    }
+    if (find(v, "attenuation_color") && !find(v, "attenuation_distance"))
+      m_result.scene.addWarning(member(path, "attenuation_color") +
+                                " has no effect without attenuation_distance; ignored");
+    if (thinWalled && attenuates)
+      m_result.scene.addWarning(path + ": attenuation of a thin-walled material has no effect; ignored");
+    if (ior != 1.5f && transmission < 1.0f && metallic < 1.0f)
+      m_result.scene.addWarning(member(path, "ior") +
+                                " applies to transmission only; the opaque part's reflection keeps ior 1.5");
+    // a fraction `color` of the light is left after `distance`: sigma = -ln(color) / distance
+    glm::vec3 absorption(0.0f);
+    if (attenuates)
+      for (int k = 0; k < 3; ++k)
+        absorption[k] = float(std::min(-std::log(std::max(double(attenuationColor[k]), 1e-300)) / distance, 1e30));
+    return withTransmission(m, transmission, ior, thinWalled, absorption);
+  }
+
+  void readCamera(const Json& v, const std::string& path) {
+    object(v, path);
+    checkKeys(v, path, {"from", "to", "up", "fov"});
+    LookAt camera;
+    camera.from = vec3(require(v, path, "from"), member(path, "from"));
+    camera.to = vec3(require(v, path, "to"), member(path, "to"));
+    camera.up = glm::dvec3(0.0, 1.0, 0.0);
+    if (const Json* x = find(v, "up")) camera.up = vec3(*x, member(path, "up"));
+    camera.fovDegrees = 45.0;
+    if (const Json* x = find(v, "fov")) {
+      camera.fovDegrees = number(*x, member(path, "fov"));
+      if (!(camera.fovDegrees > 0.0 && camera.fovDegrees < 180.0))
+        fail(member(path, "fov"), "must be in (0, 180) degrees, got " + describe(*x));
+    }
+    const glm::dvec3 forward = camera.to - camera.from;
+    const double distance = glm::length(forward);
+    if (!(distance > 0.0) || !std::isfinite(distance))
+      fail(member(path, "to"), "must differ from camera.from (the view direction is to - from)");
+    const double upLength = glm::length(camera.up);
+    if (!(upLength > 0.0) || !std::isfinite(upLength)) fail(member(path, "up"), "must not be (0, 0, 0)");
+    const double sine = glm::length(glm::cross(forward / distance, camera.up / upLength));
+    if (!(sine > 1e-6)) fail(member(path, "up"), "is parallel to the view direction (to - from)");
+    m_camera = camera;
+  }
+
+  std::uint32_t materialOf(const Json& obj, const std::string& path) {
+    const Json* x = find(obj, "material");
+    if (!x) {
+      // the documented defaults of a material with no fields
+      if (m_defaultMaterial < 0) {
+        m_defaultMaterial = int(m_result.scene.materials.size());
+        m_result.scene.materials.push_back(makePbrMaterial(glm::vec3(0.8f), 0.0f, 0.5f));
+        m_result.scene.materialNames.push_back("(default)");
+      }
+      return std::uint32_t(m_defaultMaterial);
+    }
+    const std::string where = member(path, "material");
+    const std::string name = string(*x, where);
+    auto it = m_materialIndex.find(name);
+    if (it == m_materialIndex.end()) {
+      std::string known;
+      for (const auto& [k, index] : m_materialIndex) known += (known.empty() ? "" : ", ") + k;
+      fail(where, "unknown material " + describe(*x) +
+                      (known.empty() ? " (the file defines no materials)" : " (defined: " + known + ")"));
+    }
+    return it->second;
+  }
+
+  // objects
+
+  void readObject(const Json& v, const std::string& path) {
+    object(v, path);
+    const std::string type = string(require(v, path, "type", ": gltf, sphere or spheres"), member(path, "type"));
+    if (type == "gltf") readGltf(v, path);
+    else if (type == "sphere") readSphere(v, path);
+    else if (type == "spheres") readSpheres(v, path);
+    else if (type == "curves")
+      fail(member(path, "type"), "\"curves\" is not supported yet (curves are the next geometry type to come)");
+    else
+      fail(member(path, "type"), "unknown type \"" + type + "\" (expected one of: gltf, sphere, spheres)");
+  }
+
+  void readSphere(const Json& v, const std::string& path) {
+    checkKeys(v, path, {"type", "center", "radius", "material"});
+    const glm::dvec3 center = vec3(require(v, path, "center"), member(path, "center"));
+    const double radius = positive(require(v, path, "radius"), member(path, "radius"));
+    m_spheres.push_back({center, radius, materialOf(v, path), path});
+  }
+
+  void readSpheres(const Json& v, const std::string& path) {
+    checkKeys(v, path, {"type", "centers", "radius", "radii", "material"});
+    const std::string centersPath = member(path, "centers");
+    const Json& centers = require(v, path, "centers");
+    if (!centers.is_array()) fail(centersPath, "must be an array of [x, y, z] centres, got " + describe(centers));
+    const Json* radius = find(v, "radius");
+    const Json* radii = find(v, "radii");
+    if (radius && radii) fail(path, "give \"radius\" (one for all) or \"radii\" (one per centre), not both");
+    if (!radius && !radii) fail(member(path, "radius"), "missing (required: \"radius\", or \"radii\" with one per centre)");
+    const std::string radiiPath = member(path, "radii");
+    if (radii && (!radii->is_array() || radii->size() != centers.size()))
+      fail(radiiPath, "must be an array of " + std::to_string(centers.size()) + " numbers (one per centre), got " +
+                          describe(*radii));
+    const double shared = radius ? positive(*radius, member(path, "radius")) : 0.0;
+    const std::uint32_t material = materialOf(v, path);
+    m_spheres.reserve(m_spheres.size() + centers.size());
+    for (std::size_t i = 0; i < centers.size(); ++i) {
+      const double r = radii ? positive((*radii)[i], element(radiiPath, i)) : shared;
+      m_spheres.push_back({vec3(centers[i], element(centersPath, i)), r, material, element(centersPath, i)});
+    }
+  }
+
+  void readGltf(const Json& v, const std::string& path) {
+    checkKeys(v, path, {"type", "file", "transform"});
+    const std::string where = member(path, "file");
+    const Json& fileValue = require(v, path, "file");
+    const std::string file = string(fileValue, where);
+    if (file.empty()) fail(where, "must name a file, got \"\"");
+    const fs::path resolved = resolve(file);
+    const std::string ext = lowerExtension(resolved);
+    if (ext != ".gltf" && ext != ".glb") fail(where, "must be a .gltf or .glb file, got " + describe(fileValue));
+    glm::dmat4 transform(1.0);
+    if (const Json* t = find(v, "transform")) transform = readTransform(*t, member(path, "transform"));
+
+    const std::string key = resolved.string();
+    auto [it, added] = m_fileIndex.emplace(key, m_files.size());
+    if (added) {
+      requireFile(resolved, where);
+      GltfLoadOptions include;
+      // relative to its own origin: the floats keep their precision before
+      // the placement moves them (in double)
+      include.recenter = true;
+      include.maxVertices = m_options.maxVertices;
+      include.maxTriangles = m_options.maxTriangles;
+      IncludedFile loaded;
+      try {
+        loaded.scene = loadGltf(key, include);
+      } catch (const SceneError& e) {
+        fail(where, e.what());
+      }
+      loaded.materialBase = std::uint32_t(m_result.scene.materials.size());
+      loaded.geometryBase = m_nextGeometry;
+      for (const GeometryInstance& copy : loaded.scene.instances)
+        m_nextGeometry = std::max(m_nextGeometry, loaded.geometryBase + copy.geometry + 1);
+      m_result.scene.materials.insert(m_result.scene.materials.end(), loaded.scene.materials.begin(),
+                                      loaded.scene.materials.end());
+      m_result.scene.materialNames.insert(m_result.scene.materialNames.end(), loaded.scene.materialNames.begin(),
+                                          loaded.scene.materialNames.end());
+      const std::string label = resolved.filename().string();
+      for (const std::string& w : loaded.scene.warnings) m_result.scene.addWarning(label + ": " + w);
+      m_files.push_back(std::move(loaded));
+    }
+    const IncludedFile& included = m_files[it->second];
+    m_placements.push_back({it->second, transform * glm::translate(glm::dmat4(1.0), included.scene.origin), path});
+  }
+
+  /// translate * rotate * scale (as a glTF node), or a matrix; in double.
+  glm::dmat4 readTransform(const Json& v, const std::string& path) const {
+    object(v, path);
+    checkKeys(v, path, {"translate", "rotate", "quaternion", "scale", "matrix"});
+    glm::dmat4 m(1.0);
+    if (const Json* x = find(v, "matrix")) {
+      const std::string where = member(path, "matrix");
+      if (v.size() > 1) fail(where, "cannot be combined with translate, rotate, quaternion or scale");
+      array(*x, where, 16, "numbers (column-major, as glTF)");
+      double values[16];
+      for (std::size_t i = 0; i < 16; ++i) values[i] = number((*x)[i], element(where, i));
+      if (values[3] != 0.0 || values[7] != 0.0 || values[11] != 0.0 || values[15] != 1.0)
+        fail(where, "must be affine: elements 3, 7, 11 and 15 (the last row) must be 0, 0, 0, 1");
+      m = glm::make_mat4(values);
+    } else {
+      if (find(v, "rotate") && find(v, "quaternion")) fail(path, "give \"rotate\" or \"quaternion\", not both");
+      if (const Json* x = find(v, "translate")) m = glm::translate(m, vec3(*x, member(path, "translate")));
+      if (const Json* x = find(v, "rotate")) {
+        const std::string where = member(path, "rotate");
+        array(*x, where, 4, "numbers (axis x, y, z and degrees)");
+        const glm::dvec3 axis(number((*x)[0], element(where, 0)), number((*x)[1], element(where, 1)),
+                              number((*x)[2], element(where, 2)));
+        const double degrees = number((*x)[3], element(where, 3));
+        const double length = glm::length(axis);
+        if (!(length > 0.0) || !std::isfinite(length)) fail(where, "the axis must not be (0, 0, 0)");
+        m = glm::rotate(m, glm::radians(degrees), axis / length);
+      }
+      if (const Json* x = find(v, "quaternion")) {
+        const std::string where = member(path, "quaternion");
+        array(*x, where, 4, "numbers (x, y, z, w, as glTF)");
+        double q[4];
+        for (std::size_t i = 0; i < 4; ++i) q[i] = number((*x)[i], element(where, i));
+        glm::dquat rotation(q[3], q[0], q[1], q[2]);  // glm takes w first
+        const double length = glm::length(rotation);
+        if (!(length > 0.0) || !std::isfinite(length)) fail(where, "must not be (0, 0, 0, 0)");
+        m = m * glm::mat4_cast(rotation / length);
+      }
+      if (const Json* x = find(v, "scale")) {
+        const std::string where = member(path, "scale");
+        glm::dvec3 s = x->is_number() ? glm::dvec3(number(*x, where)) : vec3(*x, where);
+        if (s.x == 0.0 || s.y == 0.0 || s.z == 0.0) fail(where, "must not be 0 (the object would be flat)");
+        m = glm::scale(m, s);
+      }
+    }
+    const double determinant = glm::determinant(glm::dmat3(m));
+    if (!(determinant != 0.0) || !std::isfinite(determinant))
+      fail(path, "is singular or not finite (determinant " + formatNumber(determinant) + ")");
+    return m;
+  }
+
+  // the scene
+
+  /// The origin (the camera, else the centre of the bounds), then everything
+  /// written relative to it.
+  void build() {
+    Scene& scene = m_result.scene;
+    const Placement* cameraSource = nullptr;
+    if (!m_camera)
+      for (const Placement& p : m_placements)
+        if (m_files[p.file].scene.camera) {
+          cameraSource = &p;
+          break;
+        }
+    glm::dvec3 origin(0.0);
+    if (m_options.recenter) {
+      if (m_camera) origin = m_camera->from;
+      else if (cameraSource)
+        origin = glm::dvec3(cameraSource->world * glm::dvec4(glm::dvec3(m_files[cameraSource->file].scene.camera->cameraToWorld[3]), 1.0));
+      else origin = boundsCentre();
+    }
+    scene.origin = origin;
+
+    std::size_t vertices = 0, triangles = 0;
+    for (const Placement& p : m_placements) {
+      const Scene& src = m_files[p.file].scene;
+      vertices += src.positions.size();
+      triangles += src.triangles.size();
+      if (vertices > m_options.maxVertices || triangles > m_options.maxTriangles ||
+          vertices > std::numeric_limits<std::uint32_t>::max())
+        fail(p.path, "brings the scene to " + std::to_string(vertices) + " vertices and " +
+                         std::to_string(triangles) + " triangles, more than the " +
+                         std::to_string(m_options.maxVertices) + " and " + std::to_string(m_options.maxTriangles) +
+                         " supported");
+    }
+    scene.positions.reserve(vertices);
+    scene.normals.reserve(vertices);
+    scene.texcoords.reserve(vertices);
+    scene.triangles.reserve(triangles);
+    for (const Placement& p : m_placements) place(p, origin);
+
+    if (m_camera) {
+      CameraDesc desc;
+      desc.name = "camera";
+      desc.yfov = float(glm::radians(m_camera->fovDegrees));
+      // glm::lookAt gives world-to-camera (looking down -Z); relative to the origin first, in double
+      const glm::dmat4 view = glm::lookAt(m_camera->from - origin, m_camera->to - origin, m_camera->up);
+      desc.cameraToWorld = glm::mat4(glm::inverse(view));
+      scene.camera = desc;
+    } else if (cameraSource) {
+      CameraDesc desc = *m_files[cameraSource->file].scene.camera;
+      glm::dmat4 world = cameraSource->world * glm::dmat4(desc.cameraToWorld);
+      world[3] -= glm::dvec4(origin, 0.0);
+      desc.cameraToWorld = glm::mat4(world);
+      scene.camera = desc;
+    }
+
+    scene.spheres.reserve(m_spheres.size());
+    for (const WorldSphere& s : m_spheres) {
+      const glm::vec3 center(s.center - origin);
+      const auto radius = float(s.radius);
+      if (!isFinite(center)) fail(s.path, "the centre lies beyond the range of a float from the scene's origin");
+      if (!(radius > 0.0f) || !std::isfinite(radius))
+        fail(s.path, "the radius " + formatNumber(s.radius) + " is out of the range of a float");
+      scene.spheres.push_back({center, radius, s.material});
+    }
+    if (scene.materials.empty()) {
+      scene.materials.push_back(makePbrMaterial(glm::vec3(0.8f), 0.0f, 0.5f));
+      scene.materialNames.push_back("(default)");
+    }
+  }
+
+  /// Centre of everything's bounds (world, double), as the glTF loader does
+  /// without a camera; 0 when the scene is empty or beyond float range.
+  glm::dvec3 boundsCentre() const {
+    glm::dvec3 lo(std::numeric_limits<double>::infinity()), hi(-std::numeric_limits<double>::infinity());
+    for (const Placement& p : m_placements) {
+      const Aabb box = m_files[p.file].scene.bounds();
+      if (box.empty()) continue;
+      for (int corner = 0; corner < 8; ++corner) {
+        const glm::dvec3 c((corner & 1) ? box.hi.x : box.lo.x, (corner & 2) ? box.hi.y : box.lo.y,
+                           (corner & 4) ? box.hi.z : box.lo.z);
+        const glm::dvec3 w(p.world * glm::dvec4(c, 1.0));
+        lo = glm::min(lo, w);
+        hi = glm::max(hi, w);
+      }
+    }
+    for (const WorldSphere& s : m_spheres) {
+      lo = glm::min(lo, s.center - s.radius);
+      hi = glm::max(hi, s.center + s.radius);
+    }
+    const double kFloatMax = std::numeric_limits<float>::max();
+    if (lo.x <= hi.x && lo.y <= hi.y && lo.z <= hi.z && isFinite(lo) && isFinite(hi) &&
+        glm::all(glm::lessThanEqual(glm::max(glm::abs(lo), glm::abs(hi)), glm::dvec3(kFloatMax))))
+      return 0.5 * (lo + hi);
+    return glm::dvec3(0.0);
+  }
+
+  /// Append one placed copy of an included file, moved to the origin.
+  void place(const Placement& p, const glm::dvec3& origin) {
+    Scene& dst = m_result.scene;
+    const IncludedFile& file = m_files[p.file];
+    const Scene& src = file.scene;
+    const glm::dmat3 linear(p.world);
+    // the placement's offset to the origin, once, in double: floats see only what is near
+    const glm::dvec3 offset = glm::dvec3(p.world[3]) - origin;
+    // readTransform refused singular transforms
+    const glm::dmat3 normalMatrix = glm::transpose(glm::inverse(linear));
+    // a mirroring placement turns counter-clockwise into clockwise: swap two corners
+    const bool flip = glm::determinant(linear) < 0.0;
+
+    const auto vertexBase = std::uint32_t(dst.positions.size());
+    const auto triangleBase = std::uint32_t(dst.triangles.size());
+    for (std::size_t i = 0; i < src.positions.size(); ++i) {
+      const WtVec4& sp = src.positions[i];
+      const glm::vec3 q(linear * glm::dvec3(sp.x, sp.y, sp.z) + offset);
+      if (!isFinite(q))
+        fail(p.path, "vertex " + std::to_string(i) + " of " + src.sourceName +
+                         " lies beyond the range of a float from the scene's origin");
+      dst.positions.push_back({q.x, q.y, q.z, 0.0f});
+      const WtVec4& sn = src.normals[i];
+      glm::vec3 n(normalMatrix * glm::dvec3(sn.x, sn.y, sn.z));
+      const float length = glm::length(n);
+      n = std::isfinite(length) && length > 0.0f ? n / length : glm::vec3(0.0f);
+      dst.normals.push_back({n.x, n.y, n.z, 0.0f});
+      dst.texcoords.push_back(i < src.texcoords.size() ? src.texcoords[i] : glm::vec2(0.0f));
+    }
+    for (WtTriangle t : src.triangles) {
+      t.v0 += vertexBase, t.v1 += vertexBase, t.v2 += vertexBase;
+      if (flip) std::swap(t.v1, t.v2);
+      t.material += file.materialBase;
+      dst.triangles.push_back(t);
+    }
+    // copies of one file share its geometry ids: one BVH per geometry serves them all
+    for (GeometryInstance copy : src.instances) {
+      copy.firstTriangle += triangleBase;
+      copy.geometry += file.geometryBase;
+      dst.instances.push_back(copy);
+    }
+    for (PunctualLight light : src.lights) {
+      light.position = glm::vec3(linear * glm::dvec3(light.position) + offset);
+      const glm::dvec3 direction = linear * glm::dvec3(light.direction);
+      if (light.type != WT_LIGHT_POINT) light.direction = glm::vec3(glm::normalize(direction));
+      if (!isFinite(light.position) || !isFinite(light.direction))
+        fail(p.path, "light '" + light.name + "' lies beyond the range of a float from the scene's origin");
+      dst.lights.push_back(light);
+    }
+  }
+
+  const std::string m_name;
+  const fs::path m_baseDir;
+  const GltfLoadOptions& m_options;
+  SceneFile m_result;
+  std::map<std::string, std::uint32_t> m_materialIndex;
+  int m_defaultMaterial = -1;
+  std::optional<LookAt> m_camera;
+  std::vector<IncludedFile> m_files;
+  std::map<std::string, std::size_t> m_fileIndex;  ///< resolved path -> m_files
+  std::vector<Placement> m_placements;
+  std::vector<WorldSphere> m_spheres;
+  std::uint32_t m_nextGeometry = 0;
+};
+
+}  // namespace
+
+SceneFile loadSceneFileFromMemory(std::string_view json, const std::string& name, const std::string& baseDir,
+                                  const GltfLoadOptions& options) {
+  try {
+    return Loader(name, baseDir, options).run(json);
+  } catch (const SceneError&) {
+    throw;
+  } catch (const nlohmann::json::exception& e) {
+    // every access is checked first; this is a safety net, not a path
+    throw SceneError(name + ": " + e.what());
+  } catch (const std::bad_alloc&) {
+    throw SceneError(name + ": out of memory while loading the scene");
+  } catch (const std::length_error&) {
+    throw SceneError(name + ": out of memory while loading the scene");
+  }
+}
+
+SceneFile loadSceneFile(const std::string& path, const GltfLoadOptions& options) {
+  const fs::path file(path);
+  const std::string name = file.filename().string().empty() ? path : file.filename().string();
+  std::error_code ec;
+  if (!fs::is_regular_file(file, ec))
+    throw SceneError(name + ": cannot open " + path + (fs::exists(file, ec) ? " (not a regular file)" : " (no such file)"));
+  const std::uintmax_t size = fs::file_size(file, ec);
+  if (!ec && size > kMaxFileBytes)
+    throw SceneError(name + ": the file is too large (" + std::to_string(size) + " bytes)");
+  std::ifstream in(file, std::ios::binary);
+  if (!in) throw SceneError(name + ": cannot open " + path);
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  if (in.bad()) throw SceneError(name + ": cannot read " + path);
+  std::string baseDir = file.parent_path().string();
+  SceneFile result = loadSceneFileFromMemory(text, name, baseDir.empty() ? "." : baseDir, options);
+  result.scene.sourceName = path;
+  return result;
+}
+
+}  // namespace wt

@@ -1,0 +1,719 @@
+// Scene file (.json) tests on files the tests write themselves: spheres,
+// materials, camera and settings read back; glTF files placed by transforms
+// checked numerically; recentring far from the world origin; every error
+// checked for the file and the JSON path it names; mutated files never crash.
+#include "scene/default_scene.h"
+#include "scene/gltf_doc.h"
+#include "scene/scene_file.h"
+
+#include "test_util.h"
+
+#include <gtest/gtest.h>
+
+#include <glm/glm.hpp>
+#include <glm/gtc/matrix_transform.hpp>
+#include <glm/gtc/quaternion.hpp>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <string>
+#include <vector>
+
+namespace wt {
+namespace {
+
+namespace fs = std::filesystem;
+using namespace gltf_doc;
+
+#define EXPECT_CONTAINS(text, part) \
+  EXPECT_NE(std::string(text).find(part), std::string::npos) << "in: " << (text)
+
+/// A scratch folder named after the running test, so parallel tests never share one.
+fs::path testDir() {
+  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+  std::string name = std::string(info->test_suite_name()) + "." + info->name();
+  for (char& c : name)
+    if (c == '/') c = '_';
+  fs::path dir = test::scratchDir("scene_file") / name;
+  fs::create_directories(dir);
+  return dir;
+}
+
+fs::path writeFile(const fs::path& path, const std::string& contents) {
+  fs::create_directories(path.parent_path());
+  std::ofstream(path, std::ios::binary).write(contents.data(), std::streamsize(contents.size()));
+  return path;
+}
+
+/// The scene file `scene.json` in the test's folder.
+SceneFile loadText(const std::string& json, const GltfLoadOptions& options = {}) {
+  return loadSceneFile(writeFile(testDir() / "scene.json", json).string(), options);
+}
+
+/// The SceneError of loading `json` as scene.json; it must start with the file's name.
+std::string errorOf(const std::string& json, const GltfLoadOptions& options = {}) {
+  try {
+    loadText(json, options);
+  } catch (const SceneError& e) {
+    const std::string message = e.what();
+    EXPECT_EQ(message.rfind("scene.json: ", 0), 0u) << "message does not start with the file name: " << message;
+    return message;
+  }
+  ADD_FAILURE() << "expected a SceneError for " << json;
+  return "";
+}
+
+/// A scene file with these top-level members besides the version.
+std::string doc(const std::string& members) { return "{\"version\": 1" + (members.empty() ? "" : ", " + members) + "}"; }
+
+glm::dvec3 worldPosition(const Scene& s, std::uint32_t v) {
+  return s.origin + glm::dvec3(s.positions[v].x, s.positions[v].y, s.positions[v].z);
+}
+glm::dvec3 cameraPosition(const Scene& s) { return s.origin + glm::dvec3(s.camera->cameraToWorld[3]); }
+glm::vec3 normal(const Scene& s, std::uint32_t v) { return {s.normals[v].x, s.normals[v].y, s.normals[v].z}; }
+
+void expectNear(const glm::dvec3& actual, const glm::dvec3& expected, double eps = 1e-5) {
+  EXPECT_NEAR(actual.x, expected.x, eps);
+  EXPECT_NEAR(actual.y, expected.y, eps);
+  EXPECT_NEAR(actual.z, expected.z, eps);
+}
+
+void expectConsistent(const Scene& s) {
+  ASSERT_EQ(s.normals.size(), s.positions.size());
+  ASSERT_EQ(s.texcoords.size(), s.positions.size());
+  ASSERT_FALSE(s.materials.empty());
+  ASSERT_EQ(s.materialNames.size(), s.materials.size());
+  for (const WtTriangle& t : s.triangles) {
+    ASSERT_LT(std::max({t.v0, t.v1, t.v2}), s.positions.size());
+    ASSERT_LT(t.material, s.materials.size());
+  }
+  for (const Sphere& sphere : s.spheres) {
+    ASSERT_LT(sphere.material, s.materials.size());
+    ASSERT_GT(sphere.radius, 0.0f);
+  }
+  std::uint32_t end = 0;
+  for (const GeometryInstance& copy : s.instances) {
+    ASSERT_GE(copy.firstTriangle, end);  // in triangle order, not overlapping
+    end = copy.firstTriangle + copy.triangleCount;
+  }
+  ASSERT_LE(end, s.triangles.size());
+}
+
+/// One triangle in the z = 0 plane, counter-clockwise seen from +z, with
+/// normals +z and one material "tri"; optionally a camera node and a light.
+GltfDoc triangleDoc(const std::string& moreNodes = "") {
+  GltfDoc doc;
+  const int pos = doc.addVec3({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}});
+  const int nrm = doc.addVec3({{0, 0, 1}, {0, 0, 1}, {0, 0, 1}});
+  doc.addMesh("{\"attributes\":{\"POSITION\":" + str(std::size_t(pos)) + ",\"NORMAL\":" + str(std::size_t(nrm)) +
+              "},\"material\":0}");
+  doc.materials.push_back("{\"name\":\"tri\",\"pbrMetallicRoughness\":{\"baseColorFactor\":[0.2,0.4,0.6,1]}}");
+  doc.addNode("{\"mesh\":0}");
+  doc.scenes.push_back("{\"nodes\":[0" + moreNodes + "]}");
+  return doc;
+}
+
+/// triangle.gltf in the test's folder.
+void writeTriangle(const GltfDoc& doc = triangleDoc(), const std::string& name = "triangle.gltf") {
+  writeFile(testDir() / name, doc.embedded());
+}
+
+std::string gltfObject(const std::string& transform, const std::string& file = "triangle.gltf") {
+  return "{\"type\": \"gltf\", \"file\": \"" + file + "\"" + (transform.empty() ? "" : ", \"transform\": " + transform) + "}";
+}
+
+// ---------------------------------------------------------------------------
+// what a valid file gives
+
+TEST(SceneFile, SpheresMaterialsAndCamera) {
+  SceneFile f = loadText(doc(R"(
+    "camera": {"from": [0, 1, 5], "to": [0, 1, 0], "fov": 30},
+    "materials": {
+      "red": {"base_color": [0.8, 0.1, 0.1], "roughness": 0.3},
+      "lamp": {"type": "lambert", "base_color": [0, 0, 0], "emission": [1, 2, 3], "emission_strength": 10,
+               "double_sided": true}
+    },
+    "objects": [
+      {"type": "sphere", "center": [0, -1000, 0], "radius": 1000, "material": "red"},
+      {"type": "sphere", "center": [0.5, 0.25, -2], "radius": 0.01, "material": "lamp"},
+      {"type": "spheres", "centers": [[1, 0, 0], [2, 0, 0]], "radii": [0.5, 0.25], "material": "red"},
+      {"type": "spheres", "centers": [[3, 0, 0]], "radius": 2}
+    ])"));
+  const Scene& s = f.scene;
+  expectConsistent(s);
+  EXPECT_TRUE(s.triangles.empty());
+  // recentred on the camera
+  EXPECT_EQ(s.origin, glm::dvec3(0, 1, 5));
+  ASSERT_EQ(s.spheres.size(), 5u);
+  expectNear(glm::dvec3(s.spheres[0].center), {0, -1001, -5});
+  EXPECT_EQ(s.spheres[0].radius, 1000.0f);
+  expectNear(glm::dvec3(s.spheres[1].center), {0.5, -0.75, -7});
+  EXPECT_EQ(s.spheres[1].radius, 0.01f);
+  EXPECT_EQ(s.spheres[2].radius, 0.5f);
+  EXPECT_EQ(s.spheres[3].radius, 0.25f);
+  EXPECT_EQ(s.spheres[4].radius, 2.0f);
+  expectNear(s.origin + glm::dvec3(s.spheres[3].center), {2, 0, 0});
+
+  // materials in file order, then the default the last object asked for
+  ASSERT_EQ(s.materialNames, (std::vector<std::string>{"red", "lamp", "(default)"}));
+  EXPECT_EQ(s.spheres[0].material, 0u);
+  EXPECT_EQ(s.spheres[1].material, 1u);
+  EXPECT_EQ(s.spheres[4].material, 2u);
+  const WtMaterial& red = s.materials[0];
+  EXPECT_EQ(red.model, WT_MATERIAL_PBR);
+  EXPECT_FLOAT_EQ(red.base_color.x, 0.8f);
+  EXPECT_FLOAT_EQ(red.base_color.w, 0.0f);  // metallic
+  EXPECT_FLOAT_EQ(red.roughness, 0.3f);
+  const WtMaterial& lamp = s.materials[1];
+  EXPECT_EQ(lamp.model, WT_MATERIAL_DIFFUSE);
+  EXPECT_FLOAT_EQ(lamp.emission.x, 10.0f);
+  EXPECT_FLOAT_EQ(lamp.emission.z, 30.0f);
+  EXPECT_FLOAT_EQ(lamp.emission.w, 1.0f);  // double-sided
+  const WtMaterial& fallback = s.materials[2];
+  EXPECT_EQ(fallback.model, WT_MATERIAL_PBR);
+  EXPECT_FLOAT_EQ(fallback.base_color.y, 0.8f);
+  EXPECT_FLOAT_EQ(fallback.roughness, 0.5f);
+
+  ASSERT_TRUE(s.camera.has_value());
+  EXPECT_FLOAT_EQ(s.camera->yfov, glm::radians(30.0f));
+  expectNear(cameraPosition(s), {0, 1, 5});
+  // looks down -Z of the camera, towards `to`, +Y up
+  expectNear(glm::dvec3(-s.camera->cameraToWorld[2]), {0, 0, -1});
+  expectNear(glm::dvec3(s.camera->cameraToWorld[1]), {0, 1, 0});
+  EXPECT_FALSE(f.settings.environment.has_value());
+  EXPECT_FALSE(f.settings.width.has_value());
+}
+
+TEST(SceneFile, CameraDefaultsAndOrientation) {
+  SceneFile f = loadText(doc(R"("camera": {"from": [3, 0, 0], "to": [0, 0, 0]})"));
+  ASSERT_TRUE(f.scene.camera.has_value());
+  EXPECT_FLOAT_EQ(f.scene.camera->yfov, glm::radians(45.0f));
+  const glm::mat4& m = f.scene.camera->cameraToWorld;
+  expectNear(glm::dvec3(-m[2]), {-1, 0, 0});
+  expectNear(glm::dvec3(m[1]), {0, 1, 0});
+  expectNear(glm::dvec3(m[0]), {0, 0, -1});  // right = forward x up
+  // a tilted up vector is made orthogonal to the view
+  f = loadText(doc(R"("camera": {"from": [0, 0, 0], "to": [0, 0, -1], "up": [1, 1, 0]})"));
+  expectNear(glm::dvec3(f.scene.camera->cameraToWorld[1]), {std::sqrt(0.5), std::sqrt(0.5), 0});
+  // no camera: the renderer frames the bounds; the origin is their centre
+  f = loadText(doc(R"("objects": [{"type": "sphere", "center": [10, 0, 0], "radius": 1}])"));
+  EXPECT_FALSE(f.scene.camera.has_value());
+  EXPECT_EQ(f.scene.origin, glm::dvec3(10, 0, 0));
+  EXPECT_EQ(f.scene.spheres[0].center, glm::vec3(0.0f));
+}
+
+TEST(SceneFile, TransmissionAndAttenuation) {
+  SceneFile f = loadText(doc(R"("materials": {
+      "glass": {"base_color": [1, 1, 1], "roughness": 0, "transmission": 1, "ior": 1.33,
+                "attenuation_color": [0.5, 1, 0.25], "attenuation_distance": 2},
+      "sheet": {"transmission": 0.5, "thin_walled": true},
+      "gold": {"base_color": [1, 0.8, 0.3], "metallic": 1, "roughness": 0.1, "ior": 2}
+    })"));
+  const Scene& s = f.scene;
+  const WtMaterial& glass = s.materials[0];
+  EXPECT_FLOAT_EQ(glass.transmission, 1.0f);
+  EXPECT_FLOAT_EQ(glass.ior, 1.33f);
+  EXPECT_FLOAT_EQ(glass.volume.w, 1.0f);  // a volume boundary
+  EXPECT_NEAR(glass.volume.x, -std::log(0.5) / 2.0, 1e-6);
+  EXPECT_NEAR(glass.volume.y, 0.0, 1e-6);
+  EXPECT_NEAR(glass.volume.z, -std::log(0.25) / 2.0, 1e-6);
+  const WtMaterial& sheet = s.materials[1];
+  EXPECT_FLOAT_EQ(sheet.transmission, 0.5f);
+  EXPECT_FLOAT_EQ(sheet.volume.w, 0.0f);  // thin-walled
+  // ior without transmission does nothing, and says so
+  EXPECT_FLOAT_EQ(s.materials[2].transmission, 0.0f);
+  bool warned = false;
+  for (const std::string& w : s.warnings) warned |= w.find("materials.gold.ior has no effect") != std::string::npos;
+  EXPECT_TRUE(warned);
+}
+
+TEST(SceneFile, RenderSettingsAndEnvironment) {
+  writeFile(testDir() / "maps" / "sky.hdr", "not read by the loader");
+  SceneFile f = loadText(doc(R"(
+    "render": {"width": 320, "height": 200, "spp": 16, "max_bounces": 3, "seed": 4000000000, "exposure": -1.5,
+               "integrator": "minimal"},
+    "environment": {"map": "maps/sky.hdr", "intensity": 2, "rotation": 90, "hidden": true})"));
+  const SceneFileSettings& s = f.settings;
+  EXPECT_EQ(s.width, 320);
+  EXPECT_EQ(s.height, 200);
+  EXPECT_EQ(s.samplesPerPixel, 16);
+  EXPECT_EQ(s.maxBounces, 3);
+  EXPECT_EQ(s.seed, 4000000000u);
+  EXPECT_EQ(s.exposureStops, -1.5f);
+  EXPECT_EQ(s.integrator, "minimal");
+  ASSERT_TRUE(s.environment.has_value());
+  EXPECT_FALSE(s.environment->color.has_value());
+  // resolved against the scene file's folder
+  EXPECT_EQ(fs::path(s.environment->map), (testDir() / "maps" / "sky.hdr").lexically_normal());
+  EXPECT_EQ(s.environment->intensity, 2.0f);
+  EXPECT_EQ(s.environment->rotationDegrees, 90.0f);
+  EXPECT_TRUE(s.environment->hidden);
+
+  f = loadText(doc(R"("environment": {"color": [0.1, 0.2, 0.3]})"));
+  ASSERT_TRUE(f.settings.environment.has_value());
+  EXPECT_EQ(f.settings.environment->color, glm::vec3(0.1f, 0.2f, 0.3f));
+  EXPECT_TRUE(f.settings.environment->map.empty());
+  EXPECT_FALSE(f.settings.environment->hidden);
+}
+
+TEST(SceneFile, LoadSceneDispatchesJson) {
+  const fs::path path = writeFile(testDir() / "scene.json", doc(R"(
+    "render": {"spp": 3},
+    "objects": [{"type": "sphere", "center": [0, 0, 0], "radius": 1}])"));
+  EXPECT_EQ(loadScene(path.string()).spheres.size(), 1u);
+  SceneFile f = loadSceneAny(path.string());
+  EXPECT_EQ(f.settings.samplesPerPixel, 3);
+  EXPECT_EQ(f.scene.sourceName, path.string());
+  // glTF files and built-in scenes come without settings
+  writeTriangle();
+  f = loadSceneAny((testDir() / "triangle.gltf").string());
+  EXPECT_EQ(f.scene.triangles.size(), 1u);
+  EXPECT_FALSE(f.settings.samplesPerPixel.has_value());
+  EXPECT_FALSE(loadSceneAny("cornell").settings.environment.has_value());
+}
+
+TEST(SceneFile, ExampleScenesLoad) {
+  const fs::path scenes = fs::path(WT_SOURCE_DIR) / "scenes";
+  SceneFile spheres = loadSceneFile((scenes / "spheres.json").string());
+  expectConsistent(spheres.scene);
+  EXPECT_GE(spheres.scene.spheres.size(), 10u);
+  EXPECT_TRUE(spheres.scene.camera.has_value());
+  EXPECT_TRUE(spheres.scene.warnings.empty()) << spheres.scene.warnings.front();
+  SceneFile mixed = loadSceneFile((scenes / "mixed.json").string());
+  expectConsistent(mixed.scene);
+  EXPECT_GT(mixed.scene.triangles.size(), 0u);
+  EXPECT_GE(mixed.scene.spheres.size(), 4u);
+  EXPECT_TRUE(mixed.scene.warnings.empty()) << mixed.scene.warnings.front();
+  // the box is scaled by 10: its light hangs at y = 5.487
+  float top = -1e30f;
+  for (const WtVec4& p : mixed.scene.positions) top = std::max(top, p.y);
+  EXPECT_NEAR(mixed.scene.origin.y + top, 5.488, 1e-3);
+}
+
+// ---------------------------------------------------------------------------
+// glTF files placed by transforms
+
+TEST(SceneFile, GltfIncludeIsPlacedByItsTransform) {
+  writeTriangle();
+  // translate * rotate (90 degrees about +z) * scale (2, 3, 1)
+  SceneFile f = loadText(doc(R"("objects": [)" +
+                             gltfObject(R"({"translate": [10, 20, 30], "rotate": [0, 0, 1, 90], "scale": [2, 3, 1]})") +
+                             "]"));
+  const Scene& s = f.scene;
+  expectConsistent(s);
+  ASSERT_EQ(s.triangles.size(), 1u);
+  const WtTriangle& t = s.triangles[0];
+  expectNear(worldPosition(s, t.v0), {10, 20, 30});
+  expectNear(worldPosition(s, t.v1), {10, 22, 30});  // (1,0,0) -> (2,0,0) -> (0,2,0)
+  expectNear(worldPosition(s, t.v2), {7, 20, 30});   // (0,1,0) -> (0,3,0) -> (-3,0,0)
+  expectNear(glm::dvec3(normal(s, t.v0)), {0, 0, 1});
+  // the glTF's material comes along, named as in the file
+  ASSERT_EQ(s.materialNames, std::vector<std::string>{"tri"});
+  EXPECT_EQ(t.material, 0u);
+  EXPECT_FLOAT_EQ(s.materials[0].base_color.y, 0.4f);
+}
+
+TEST(SceneFile, MatrixQuaternionAndRotateAgree) {
+  writeTriangle();
+  const glm::dmat4 expected = glm::translate(glm::dmat4(1.0), glm::dvec3(1, -2, 3)) *
+                              glm::rotate(glm::dmat4(1.0), glm::radians(40.0), glm::normalize(glm::dvec3(1, 2, 3))) *
+                              glm::scale(glm::dmat4(1.0), glm::dvec3(0.5, 2, -1.5));
+  std::string matrix = "[";
+  for (int c = 0; c < 4; ++c)
+    for (int r = 0; r < 4; ++r) {
+      if (c + r > 0) matrix += ",";
+      matrix += num(float(expected[c][r]));
+    }
+  const glm::dquat q = glm::angleAxis(glm::radians(40.0), glm::normalize(glm::dvec3(1, 2, 3)));
+  const std::string quaternion = "[" + num(float(q.x)) + "," + num(float(q.y)) + "," + num(float(q.z)) + "," +
+                                 num(float(q.w)) + "]";
+  const std::vector<std::string> transforms = {
+      R"({"matrix": )" + matrix + "]}",
+      R"({"translate": [1, -2, 3], "quaternion": )" + quaternion + R"(, "scale": [0.5, 2, -1.5]})",
+      R"({"translate": [1, -2, 3], "rotate": [1, 2, 3, 40], "scale": [0.5, 2, -1.5]})"};
+  for (const std::string& transform : transforms) {
+    SCOPED_TRACE(transform);
+    const Scene s = loadText(doc(R"("objects": [)" + gltfObject(transform) + "]")).scene;
+    ASSERT_EQ(s.triangles.size(), 1u);
+    const glm::dvec3 corners[3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+    // the mirroring scale swaps two corners, keeping the front face the front face
+    const WtTriangle& t = s.triangles[0];
+    expectNear(worldPosition(s, t.v0), glm::dvec3(expected * glm::dvec4(corners[0], 1.0)));
+    expectNear(worldPosition(s, t.v1), glm::dvec3(expected * glm::dvec4(corners[2], 1.0)));
+    expectNear(worldPosition(s, t.v2), glm::dvec3(expected * glm::dvec4(corners[1], 1.0)));
+    // normals by the inverse transpose, agreeing with the winding
+    const glm::dvec3 n = glm::normalize(glm::transpose(glm::inverse(glm::dmat3(expected))) * glm::dvec3(0, 0, 1));
+    expectNear(glm::dvec3(normal(s, t.v0)), n);
+    const glm::dvec3 geometric = glm::cross(worldPosition(s, t.v1) - worldPosition(s, t.v0),
+                                            worldPosition(s, t.v2) - worldPosition(s, t.v0));
+    EXPECT_GT(glm::dot(geometric, n), 0.0);
+  }
+}
+
+TEST(SceneFile, GltfCameraAndLightsArePlaced) {
+  GltfDoc gltf = triangleDoc(",1,2");
+  gltf.cameras.push_back("{\"type\":\"perspective\",\"perspective\":{\"yfov\":0.5,\"znear\":0.01}}");
+  gltf.addNode("{\"camera\":0,\"translation\":[0,0,4]}");
+  gltf.addNode("{\"translation\":[0,2,0],\"rotation\":[-0.7071068,0,0,0.7071068],"
+               "\"extensions\":{\"KHR_lights_punctual\":{\"light\":0}}}");  // a spot pointing down
+  gltf.extensionsUsed = "[\"KHR_lights_punctual\"]";
+  gltf.extensions = "{\"KHR_lights_punctual\":{\"lights\":[{\"type\":\"spot\",\"spot\":{},\"intensity\":5}]}}";
+  writeTriangle(gltf);
+  const std::string transform = R"({"translate": [100, 0, 0], "rotate": [0, 1, 0, 90]})";
+  SceneFile f = loadText(doc(R"("objects": [)" + gltfObject(transform) + "]"));
+  const Scene& s = f.scene;
+  expectConsistent(s);
+  // the file's camera, placed: (0,0,4) turned 90 degrees about +y is (4,0,0)
+  ASSERT_TRUE(s.camera.has_value());
+  EXPECT_FLOAT_EQ(s.camera->yfov, 0.5f);
+  expectNear(cameraPosition(s), {104, 0, 0});
+  expectNear(s.origin, {104, 0, 0});
+  expectNear(glm::dvec3(-glm::normalize(s.camera->cameraToWorld[2])), {-1, 0, 0});
+  ASSERT_EQ(s.lights.size(), 1u);
+  expectNear(s.origin + glm::dvec3(s.lights[0].position), {100, 2, 0});
+  expectNear(glm::dvec3(s.lights[0].direction), {0, -1, 0});
+  EXPECT_EQ(s.lights[0].intensity, glm::vec3(5.0f));
+  expectNear(worldPosition(s, s.triangles[0].v1), {100, 0, -1});
+
+  // the scene file's own camera wins
+  f = loadText(doc(R"("camera": {"from": [0, 0, 50], "to": [0, 0, 0]}, "objects": [)" + gltfObject(transform) + "]"));
+  expectNear(cameraPosition(f.scene), {0, 0, 50});
+  expectNear(f.scene.origin, {0, 0, 50});
+  expectNear(worldPosition(f.scene, f.scene.triangles[0].v1), {100, 0, -1});
+}
+
+TEST(SceneFile, PlacedCopiesShareGeometryAndMaterials) {
+  // the file itself places its mesh twice
+  GltfDoc gltf = triangleDoc(",1");
+  gltf.addNode("{\"mesh\":0,\"translation\":[5,0,0]}");
+  writeTriangle(gltf);
+  writeTriangle(triangleDoc(), "other.gltf");
+  SceneFile f = loadText(doc(R"("materials": {"m": {}}, "objects": [
+      {"type": "sphere", "center": [0, 0, 0], "radius": 1, "material": "m"},)" +
+                             gltfObject("") + "," + gltfObject(R"({"translate": [0, 10, 0]})") + "," +
+                             gltfObject("", "other.gltf") + "]"));
+  const Scene& s = f.scene;
+  expectConsistent(s);
+  ASSERT_EQ(s.triangles.size(), 5u);
+  ASSERT_EQ(s.instances.size(), 5u);
+  // triangle.gltf's four copies share one geometry, other.gltf's its own
+  for (int i = 1; i < 4; ++i) EXPECT_EQ(s.instances[i].geometry, s.instances[0].geometry);
+  EXPECT_NE(s.instances[4].geometry, s.instances[0].geometry);
+  // each file's materials once, however often it is placed
+  EXPECT_EQ(s.materialNames, (std::vector<std::string>{"m", "tri", "tri"}));
+  for (int i = 0; i < 4; ++i) EXPECT_EQ(s.triangles[i].material, 1u);
+  EXPECT_EQ(s.triangles[4].material, 2u);
+  expectNear(worldPosition(s, s.triangles[3].v1), {6, 10, 0});
+}
+
+// The same scene 1e6 units from the world origin: stored relative to the
+// camera, its float coordinates are those of the scene at the origin.
+TEST(SceneFile, RecentringKeepsFarScenesPrecise) {
+  writeTriangle();
+  auto placed = [&](double d, bool camera) {
+    auto v = [&](double x, double y, double z) {
+      char text[128];
+      std::snprintf(text, sizeof text, "[%.17g, %.17g, %.17g]", x + d, y - d, z + d);
+      return std::string(text);
+    };
+    std::string members = R"("objects": [)" +
+                          gltfObject(R"({"translate": )" + v(0.1, 0.2, -0.3) + R"(, "rotate": [0, 1, 0, 30]})") +
+                          R"(, {"type": "sphere", "center": )" + v(0.3, 0.05, -1.1) +
+                          R"(, "radius": 0.01}, {"type": "sphere", "center": )" + v(-0.7, 0.4, -2) +
+                          R"(, "radius": 0.5}])";
+    if (camera) members += R"(, "camera": {"from": )" + v(0.25, 0.5, 3) + R"(, "to": )" + v(0, 0, 0) + "}";
+    return loadText(doc(members)).scene;
+  };
+  for (bool camera : {true, false}) {
+    SCOPED_TRACE(camera ? "with a camera" : "without a camera");
+    const Scene here = placed(0.0, camera), far = placed(1e6, camera);
+    expectNear(far.origin - here.origin, {1e6, -1e6, 1e6}, 1e-9);
+    ASSERT_EQ(here.positions.size(), far.positions.size());
+    for (std::size_t v = 0; v < here.positions.size(); ++v) {
+      EXPECT_FLOAT_EQ(here.positions[v].x, far.positions[v].x) << "vertex " << v;
+      EXPECT_FLOAT_EQ(here.positions[v].y, far.positions[v].y) << "vertex " << v;
+      EXPECT_FLOAT_EQ(here.positions[v].z, far.positions[v].z) << "vertex " << v;
+    }
+    ASSERT_EQ(here.spheres.size(), far.spheres.size());
+    for (std::size_t i = 0; i < here.spheres.size(); ++i) {
+      EXPECT_FLOAT_EQ(here.spheres[i].center.x, far.spheres[i].center.x) << "sphere " << i;
+      EXPECT_FLOAT_EQ(here.spheres[i].center.y, far.spheres[i].center.y) << "sphere " << i;
+      EXPECT_FLOAT_EQ(here.spheres[i].center.z, far.spheres[i].center.z) << "sphere " << i;
+    }
+    if (camera) {
+      EXPECT_EQ(glm::vec3(far.camera->cameraToWorld[3]), glm::vec3(0.0f));
+      for (int c = 0; c < 3; ++c)
+        for (int r = 0; r < 3; ++r)
+          EXPECT_FLOAT_EQ(here.camera->cameraToWorld[c][r], far.camera->cameraToWorld[c][r]);
+    }
+  }
+  // without recentring the world coordinates are kept (and 0.01 is lost at 1e6)
+  GltfLoadOptions options;
+  options.recenter = false;
+  const Scene world = loadText(doc(R"("objects": [{"type": "sphere", "center": [1000000, 0, 0], "radius": 1}])"), options).scene;
+  EXPECT_EQ(world.origin, glm::dvec3(0.0));
+  EXPECT_EQ(world.spheres[0].center.x, 1e6f);
+}
+
+// ---------------------------------------------------------------------------
+// errors: each names the file, the JSON path and the problem
+
+struct BadFile {
+  const char* name;
+  std::string json;
+  std::string message;  ///< expected after "scene.json: "
+};
+
+void PrintTo(const BadFile& c, std::ostream* out) { *out << c.name; }
+
+class SceneFileErrors : public ::testing::TestWithParam<BadFile> {};
+
+TEST_P(SceneFileErrors, NameTheFileAndTheField) {
+  writeTriangle();
+  writeFile(testDir() / "sky.hdr", "x");
+  const BadFile& c = GetParam();
+  EXPECT_CONTAINS(errorOf(c.json), "scene.json: " + c.message);
+}
+
+const std::string kSphere = R"({"type": "sphere", "center": [0, 0, 0], "radius": 1})";
+std::string objects(const std::string& list) { return doc("\"objects\": [" + list + "]"); }
+std::string sphere(const std::string& more) {
+  return objects(R"({"type": "sphere", "center": [0, 0, 0], "radius": 1)" + more + "}");
+}
+std::string material(const std::string& fields) { return doc(R"("materials": {"m": {)" + fields + "}}"); }
+std::string transform(const std::string& t) { return objects(gltfObject(t)); }
+
+const BadFile kBadFiles[] = {
+        // the document
+        BadFile{"Empty", "", "the file is empty"},
+        BadFile{"Malformed", "{\"version\": 1,\n \"objects\": [}", "malformed JSON at byte 29: parse error at line 2, column 14"},
+        BadFile{"TooDeep", doc("\"objects\": " + std::string(100, '[') + std::string(100, ']')),
+                [] {  // the top-level object and "objects" are two of the 64 levels
+                  std::string path = "objects";
+                  for (int i = 0; i < 63; ++i) path += "[0]";
+                  return path + ": nested more than 64 levels deep";
+                }()},
+        BadFile{"DuplicateKey", objects(R"({"type": "sphere", "center": [0, 0, 0], "radius": 1, "radius": 2})"),
+                "objects[0].radius: duplicate key"},
+        BadFile{"NotAnObject", "[1, 2]", "the top level must be an object, got [1,2]"},
+        BadFile{"NoVersion", "{}", "version: missing (required; this wavetrace reads version 1)"},
+        BadFile{"WrongVersion", "{\"version\": 2}", "version: unsupported version 2 (this wavetrace reads version 1)"},
+        BadFile{"UnknownTopLevel", doc("\"objetcs\": []"),
+                "objetcs: unknown field (expected one of: version, camera, environment, materials, objects, render)"},
+        BadFile{"ObjectsNotAnArray", doc("\"objects\": {}"), "objects: must be an array, got {}"},
+        // objects
+        BadFile{"UnknownField", objects(kSphere + "," + kSphere + "," + kSphere + R"(, {"type": "sphere", "radus": 1})"),
+                "objects[3].radus: unknown field (expected one of: type, center, radius, material)"},
+        BadFile{"NegativeRadius", objects(kSphere + "," + kSphere + "," + kSphere +
+                                          R"(, {"type": "sphere", "center": [0, 0, 0], "radius": -1})"),
+                "objects[3].radius: must be > 0, got -1"},
+        BadFile{"RadiusNotANumber", objects(R"({"type": "sphere", "center": [0, 0, 0], "radius": "abc"})"),
+                "objects[0].radius: must be a number, got \"abc\""},
+        BadFile{"RadiusNotFinite", objects(R"({"type": "sphere", "center": [0, 0, 0], "radius": 1e999})"),
+                "objects[0].radius: must be a finite number, got 1e999 (beyond the range of a double)"},
+        BadFile{"NumberOverflowInAnArray", objects(R"({"type": "sphere", "center": [0, -1e400, 0], "radius": 1})"),
+                "objects[0].center[1]: must be a finite number, got -1e400"},
+        BadFile{"RadiusBeyondFloat", objects(R"({"type": "sphere", "center": [0, 0, 0], "radius": 1e300})"),
+                "objects[0]: the radius 1e+300 is out of the range of a float"},
+        BadFile{"CenterBeyondFloat", objects(R"({"type": "sphere", "center": [1e300, 0, 0], "radius": 1})"),
+                "objects[0]: the centre lies beyond the range of a float"},
+        BadFile{"MissingCenter", objects(R"({"type": "sphere", "radius": 1})"), "objects[0].center: missing (required)"},
+        BadFile{"ShortCenter", objects(R"({"type": "sphere", "center": [0, 0], "radius": 1})"),
+                "objects[0].center: must be an array of 3 numbers, got [0,0]"},
+        BadFile{"CenterElement", objects(R"({"type": "sphere", "center": [0, true, 0], "radius": 1})"),
+                "objects[0].center[1]: must be a number, got true"},
+        BadFile{"MissingType", objects(R"({"center": [0, 0, 0]})"),
+                "objects[0].type: missing (required: gltf, sphere or spheres)"},
+        BadFile{"UnknownType", objects(R"({"type": "cube"})"),
+                "objects[0].type: unknown type \"cube\" (expected one of: gltf, sphere, spheres)"},
+        BadFile{"CurvesNotYet", objects(kSphere + R"(, {"type": "curves", "file": "hair.bin"})"),
+                "objects[1].type: \"curves\" is not supported yet (curves are the next geometry type to come)"},
+        BadFile{"ObjectNotAnObject", objects("3"), "objects[0]: must be an object, got 3"},
+        BadFile{"UnknownMaterial", doc(R"("materials": {"red": {}, "blue": {}}, "objects": [)" +
+                                       std::string(R"({"type": "sphere", "center": [0, 0, 0], "radius": 1, "material": "green"}])")),
+                "objects[0].material: unknown material \"green\" (defined: blue, red)"},
+        BadFile{"NoMaterials", sphere(R"(, "material": "green")"),
+                "objects[0].material: unknown material \"green\" (the file defines no materials)"},
+        BadFile{"SpheresRadiiCount", objects(R"({"type": "spheres", "centers": [[0, 0, 0], [1, 0, 0]], "radii": [1]})"),
+                "objects[0].radii: must be an array of 2 numbers (one per centre), got [1]"},
+        BadFile{"SpheresRadiusAndRadii", objects(R"({"type": "spheres", "centers": [], "radii": [], "radius": 1})"),
+                "objects[0]: give \"radius\" (one for all) or \"radii\" (one per centre), not both"},
+        BadFile{"SpheresNoRadius", objects(R"({"type": "spheres", "centers": []})"),
+                "objects[0].radius: missing (required: \"radius\", or \"radii\" with one per centre)"},
+        BadFile{"SpheresBadCentre", objects(R"({"type": "spheres", "centers": [[0, 0, 0], [1, 0]], "radius": 1})"),
+                "objects[0].centers[1]: must be an array of 3 numbers, got [1,0]"},
+        BadFile{"SpheresBadRadius", objects(R"({"type": "spheres", "centers": [[0, 0, 0], [1, 0, 0]], "radii": [1, 0]})"),
+                "objects[0].radii[1]: must be > 0, got 0"},
+        // glTF includes
+        BadFile{"MissingGltf", objects(gltfObject("", "nowhere.gltf")), "objects[0].file: no such file: "},
+        BadFile{"GltfNotAGltf", objects(gltfObject("", "mesh.obj")),
+                "objects[0].file: must be a .gltf or .glb file, got \"mesh.obj\""},
+        BadFile{"GltfMissingFile", objects(R"({"type": "gltf"})"), "objects[0].file: missing (required)"},
+        BadFile{"TransformUnknown", transform(R"({"translation": [1, 2, 3]})"),
+                "objects[0].transform.translation: unknown field (expected one of: translate, rotate, quaternion, scale, matrix)"},
+        BadFile{"ZeroScale", transform(R"({"scale": [1, 0, 1]})"),
+                "objects[0].transform.scale: must not be 0 (the object would be flat)"},
+        BadFile{"ScaleNotANumber", transform(R"({"scale": "big"})"),
+                "objects[0].transform.scale: must be an array of 3 numbers, got \"big\""},
+        BadFile{"RotateZeroAxis", transform(R"({"rotate": [0, 0, 0, 45]})"),
+                "objects[0].transform.rotate: the axis must not be (0, 0, 0)"},
+        BadFile{"RotateShort", transform(R"({"rotate": [0, 1, 0]})"),
+                "objects[0].transform.rotate: must be an array of 4 numbers (axis x, y, z and degrees), got [0,1,0]"},
+        BadFile{"RotateAndQuaternion", transform(R"({"rotate": [0, 1, 0, 5], "quaternion": [0, 0, 0, 1]})"),
+                "objects[0].transform: give \"rotate\" or \"quaternion\", not both"},
+        BadFile{"ZeroQuaternion", transform(R"({"quaternion": [0, 0, 0, 0]})"),
+                "objects[0].transform.quaternion: must not be (0, 0, 0, 0)"},
+        BadFile{"MatrixAndTranslate", transform(R"({"translate": [0, 0, 0], "matrix": [1,0,0,0, 0,1,0,0, 0,0,1,0, 0,0,0,1]})"),
+                "objects[0].transform.matrix: cannot be combined with translate, rotate, quaternion or scale"},
+        BadFile{"MatrixNotAffine", transform(R"({"matrix": [1,0,0,0, 0,1,0,0, 0,0,1,1, 0,0,0,1]})"),
+                "objects[0].transform.matrix: must be affine"},
+        BadFile{"MatrixSingular", transform(R"({"matrix": [1,0,0,0, 0,1,0,0, 0,0,0,0, 0,0,0,1]})"),
+                "objects[0].transform: is singular or not finite (determinant 0)"},
+        BadFile{"MatrixShort", transform(R"({"matrix": [1, 0, 0]})"),
+                "objects[0].transform.matrix: must be an array of 16 numbers (column-major, as glTF), got [1,0,0]"},
+        // camera
+        BadFile{"CameraNoFrom", doc(R"("camera": {"to": [0, 0, 0]})"), "camera.from: missing (required)"},
+        BadFile{"CameraFovRange", doc(R"("camera": {"from": [0, 0, 1], "to": [0, 0, 0], "fov": 180})"),
+                "camera.fov: must be in (0, 180) degrees, got 180"},
+        BadFile{"CameraToIsFrom", doc(R"("camera": {"from": [1, 2, 3], "to": [1, 2, 3]})"),
+                "camera.to: must differ from camera.from"},
+        BadFile{"CameraUpParallel", doc(R"("camera": {"from": [0, 5, 0], "to": [0, 0, 0]})"),
+                "camera.up: is parallel to the view direction"},
+        BadFile{"CameraUpZero", doc(R"("camera": {"from": [0, 0, 1], "to": [0, 0, 0], "up": [0, 0, 0]})"),
+                "camera.up: must not be (0, 0, 0)"},
+        BadFile{"CameraUnknown", doc(R"("camera": {"from": [0, 0, 1], "to": [0, 0, 0], "yfov": 1})"),
+                "camera.yfov: unknown field (expected one of: from, to, up, fov)"},
+        // environment
+        BadFile{"EnvironmentBoth", doc(R"("environment": {"color": [1, 1, 1], "map": "sky.hdr"})"),
+                "environment: give \"color\" or \"map\", not both"},
+        BadFile{"EnvironmentNeither", doc(R"("environment": {"hidden": true})"),
+                "environment: needs \"color\" (a constant environment) or \"map\""},
+        BadFile{"EnvironmentMissingMap", doc(R"("environment": {"map": "nowhere.exr"})"),
+                "environment.map: no such file: "},
+        BadFile{"EnvironmentMapFormat", doc(R"("environment": {"map": "sky.png"})"),
+                "environment.map: must be a .hdr or .exr file, got \"sky.png\""},
+        BadFile{"EnvironmentIntensityWithColor", doc(R"("environment": {"color": [1, 1, 1], "intensity": 2})"),
+                "environment.intensity: applies to a \"map\" only"},
+        BadFile{"EnvironmentNegativeColor", doc(R"("environment": {"color": [1, -1, 1]})"),
+                "environment.color[1]: must be >= 0, got -1"},
+        BadFile{"EnvironmentHiddenType", doc(R"("environment": {"map": "sky.hdr", "hidden": 1})"),
+                "environment.hidden: must be true or false, got 1"},
+        BadFile{"EnvironmentNegativeIntensity", doc(R"("environment": {"map": "sky.hdr", "intensity": -2})"),
+                "environment.intensity: must be >= 0, got -2"},
+        // render
+        BadFile{"RenderWidth", doc(R"("render": {"width": 0})"), "render.width: must be an integer in [1, 16384], got 0"},
+        BadFile{"RenderSppFraction", doc(R"("render": {"spp": 1.5})"), "render.spp: must be an integer, got 1.5"},
+        BadFile{"RenderIntegrator", doc(R"("render": {"integrator": "fast"})"),
+                "render.integrator: must be \"path\" or \"minimal\", got \"fast\""},
+        BadFile{"RenderSeed", doc(R"("render": {"seed": -1})"), "render.seed: must be an integer in [0, 4294967295], got -1"},
+        BadFile{"RenderUnknown", doc(R"("render": {"samples": 4})"),
+                "render.samples: unknown field (expected one of: width, height, spp, max_bounces, seed, exposure, integrator)"},
+        // materials
+        BadFile{"MaterialsNotAnObject", doc(R"("materials": [])"), "materials: must be an object, got []"},
+        BadFile{"MaterialBaseColor", material(R"("base_color": [0.5, 1.2, 0.5])"),
+                "materials.m.base_color[1]: must be in [0, 1], got 1.2"},
+        BadFile{"MaterialRoughness", material(R"("roughness": 2)"), "materials.m.roughness: must be in [0, 1], got 2"},
+        BadFile{"MaterialIor", material(R"("transmission": 1, "ior": 0.5)"), "materials.m.ior: must be in [1, 10], got 0.5"},
+        BadFile{"MaterialType", material(R"("type": "glossy")"),
+                "materials.m.type: must be \"pbr\" or \"lambert\", got \"glossy\""},
+        BadFile{"LambertHasNoMetallic", material(R"("type": "lambert", "metallic": 1)"),
+                "materials.m.metallic: unknown field (expected one of: type, base_color, emission, emission_strength, "
+                "double_sided)"},
+        BadFile{"MaterialAttenuationDistance", material(R"("transmission": 1, "attenuation_distance": 0)"),
+                "materials.m.attenuation_distance: must be > 0, got 0"},
+        BadFile{"MaterialNegativeEmission", material(R"("emission": [1, 1, -1])"),
+                "materials.m.emission[2]: must be >= 0, got -1"},
+        BadFile{"MaterialUnknown", material(R"("colour": [1, 1, 1])"), "materials.m.colour: unknown field"},
+        BadFile{"MaterialNameQuoted", doc(R"("materials": {"my glass": {"ior": "x"}})"),
+                "materials[\"my glass\"].ior: must be a number, got \"x\""},
+};
+
+INSTANTIATE_TEST_SUITE_P(All, SceneFileErrors, ::testing::ValuesIn(kBadFiles),
+                         [](const ::testing::TestParamInfo<BadFile>& info) { return std::string(info.param.name); });
+
+TEST(SceneFileErrorsMore, GltfErrorsAreNested) {
+  writeFile(testDir() / "broken.gltf", "{\"asset\": {\"version\": \"2.0\"}, \"nodes\": [{\"mesh\": 4}]}");
+  EXPECT_CONTAINS(errorOf(objects(gltfObject("", "broken.gltf"))),
+                  "scene.json: objects[0].file: broken.gltf: node 0: references missing mesh 4");
+}
+
+TEST(SceneFileErrorsMore, MissingSceneFile) {
+  try {
+    loadSceneFile("/nonexistent/dir/scene.json");
+    ADD_FAILURE() << "expected a SceneError";
+  } catch (const SceneError& e) {
+    EXPECT_CONTAINS(e.what(), "scene.json: cannot open /nonexistent/dir/scene.json (no such file)");
+  }
+}
+
+TEST(SceneFileErrorsMore, FlattenedSceneIsLimited) {
+  writeTriangle();
+  GltfLoadOptions options;
+  options.maxTriangles = 2;
+  loadText(objects(gltfObject("") + "," + gltfObject("")), options);  // two triangles: fine
+  EXPECT_CONTAINS(errorOf(objects(gltfObject("") + "," + gltfObject("") + "," + gltfObject("")), options),
+                  "scene.json: objects[2]: brings the scene to 9 vertices and 3 triangles, more than the 268435456 and 2 supported");
+}
+
+TEST(SceneFileErrorsMore, GltfOptionsWarnWhenSet) {
+  GltfLoadOptions options;
+  options.cameraIndex = 2;
+  const Scene s = loadText(objects(kSphere), options).scene;
+  ASSERT_EQ(s.warnings.size(), 1u);
+  EXPECT_CONTAINS(s.warnings[0], "camera index applies to .gltf/.glb files");
+}
+
+// ---------------------------------------------------------------------------
+// mutations: every input loads into a consistent scene or throws a SceneError
+// that names the file
+
+TEST(SceneFileFuzz, MutatedFilesNeverCrash) {
+  const fs::path dir = testDir();
+  writeTriangle();
+  writeFile(dir / "sky.hdr", "x");
+  const std::string text = doc(R"(
+    "camera": {"from": [0, 1, 5], "to": [0, 1, 0], "up": [0, 1, 0], "fov": 30},
+    "environment": {"map": "sky.hdr", "intensity": 2, "rotation": 15, "hidden": false},
+    "render": {"width": 64, "height": 48, "spp": 4, "max_bounces": 3, "seed": 7, "exposure": 0.5, "integrator": "path"},
+    "materials": {"a": {"base_color": [0.5, 0.5, 0.5], "metallic": 0.5, "roughness": 0.25, "emission": [1, 1, 1],
+                        "emission_strength": 2, "double_sided": true, "transmission": 0.5, "ior": 1.4,
+                        "thin_walled": false, "attenuation_color": [0.5, 0.5, 0.5], "attenuation_distance": 3},
+                  "b": {"type": "lambert", "base_color": [0.1, 0.2, 0.3]}},
+    "objects": [
+      {"type": "gltf", "file": "triangle.gltf", "transform": {"translate": [1, 2, 3], "rotate": [0, 1, 0, 30], "scale": 2}},
+      {"type": "gltf", "file": "triangle.gltf", "transform": {"matrix": [1,0,0,0, 0,1,0,0, 0,0,1,0, 4,5,6,1]}},
+      {"type": "sphere", "center": [0, -100, 0], "radius": 100, "material": "a"},
+      {"type": "spheres", "centers": [[1, 0, 0], [2, 0, 0]], "radii": [0.5, 0.25], "material": "b"}
+    ])");
+  ASSERT_EQ(loadSceneFileFromMemory(text, "fuzz.json", dir.string()).scene.spheres.size(), 3u);
+  std::mt19937 rng(20240611);
+  auto pick = [&](std::size_t n) { return std::uniform_int_distribution<std::size_t>(0, n - 1)(rng); };
+  const std::string alphabet = "0123456789-+.eE[]{},:\" tfnaluxyz";
+  int loaded = 0;
+  for (int i = 0; i < 1500; ++i) {
+    std::string mutant = text;
+    for (std::size_t k = 1 + pick(3); k > 0; --k) {
+      const std::size_t at = pick(mutant.size());
+      switch (pick(4)) {
+        case 0: mutant[at] = alphabet[pick(alphabet.size())]; break;
+        case 1: mutant.erase(at, 1 + pick(8)); break;
+        case 2: mutant.insert(at, 1, alphabet[pick(alphabet.size())]); break;
+        default: mutant[at] = char(pick(256)); break;
+      }
+    }
+    try {
+      const Scene s = loadSceneFileFromMemory(mutant, "fuzz.json", dir.string()).scene;
+      expectConsistent(s);
+      ++loaded;
+    } catch (const SceneError& e) {
+      const std::string message = e.what();
+      ASSERT_EQ(message.rfind("fuzz.json: ", 0), 0u) << "iteration " << i << ": " << message;
+    }
+  }
+  EXPECT_GT(loaded, 0);  // the mutations also reach the end of the loader
+}
+
+}  // namespace
+}  // namespace wt
