@@ -28,6 +28,14 @@ std::atomic<bool> g_interrupted{false};
 
 extern "C" void onInterrupt(int) { g_interrupted = true; }
 
+/// The options a scene file (.json) may also set: true where the command
+/// line named them, which then win over the file.
+struct GivenOptions {
+  bool width = false, height = false, spp = false, maxBounces = false, seed = false, exposure = false;
+  bool integrator = false, background = false, envMap = false, envIntensity = false, envRotation = false,
+       envHidden = false;
+};
+
 struct RenderOptions {
   std::string scene;
   std::vector<std::string> outputs;
@@ -51,6 +59,7 @@ struct RenderOptions {
   std::string kernelDir;
   bool quiet = false;
   bool verbose = false;
+  GivenOptions given;
 };
 
 void writeOutputs(const RenderOptions& options, const wt::Image& image) {
@@ -60,7 +69,43 @@ void writeOutputs(const RenderOptions& options, const wt::Image& image) {
   }
 }
 
-int runRender(const RenderOptions& options) {
+/// The scene file's render settings and environment, except where the
+/// command line named the option; says what was taken.
+void applySceneSettings(const wt::SceneFileSettings& file, const std::string& sceneName, RenderOptions& options) {
+  const GivenOptions& given = options.given;
+  wt::RenderSettings& s = options.settings;
+  std::string taken;
+  auto note = [&](const std::string& what) { taken += (taken.empty() ? "" : ", ") + what; };
+  if (file.width && !given.width) s.width = *file.width, note("width " + std::to_string(*file.width));
+  if (file.height && !given.height) s.height = *file.height, note("height " + std::to_string(*file.height));
+  if (file.samplesPerPixel && !given.spp)
+    s.samplesPerPixel = *file.samplesPerPixel, note("spp " + std::to_string(*file.samplesPerPixel));
+  if (file.maxBounces && !given.maxBounces)
+    s.maxBounces = *file.maxBounces, note("max_bounces " + std::to_string(*file.maxBounces));
+  if (file.seed && !given.seed) s.seed = *file.seed, note("seed " + std::to_string(*file.seed));
+  if (file.exposureStops && !given.exposure)
+    s.exposureStops = *file.exposureStops, note("exposure " + std::to_string(*file.exposureStops));
+  if (file.integrator && !given.integrator) options.integrator = *file.integrator, note("integrator " + *file.integrator);
+  if (const auto& env = file.environment) {
+    // --background or --env-map replaces the file's environment as a whole
+    if (!given.background && !given.envMap) {
+      if (env->color) {
+        options.background = {env->color->x, env->color->y, env->color->z};
+        note("environment color");
+      } else {
+        s.environmentMap = env->map;
+        if (!given.envIntensity) s.environmentIntensity = env->intensity;
+        if (!given.envRotation) s.environmentRotationDegrees = env->rotationDegrees;
+        note("environment map " + env->map);
+      }
+    }
+    if (env->hidden && !given.envHidden) s.environmentHidden = true, note("environment hidden");
+  }
+  if (!taken.empty())
+    wt::log::info(sceneName + ": from the scene file: " + taken + " (command-line options take precedence)");
+}
+
+int runRender(RenderOptions options) {
   wt::log::setQuiet(options.quiet);
   wt::log::setVerbose(options.verbose);
   if (!options.kernelDir.empty()) wt::setKernelDirectory(std::filesystem::path(options.kernelDir));
@@ -73,8 +118,10 @@ int runRender(const RenderOptions& options) {
   loadOptions.cameraIndex = options.camera;
   loadOptions.recenter = !options.noRecenter;
   auto loadStart = std::chrono::steady_clock::now();
-  wt::Scene scene = options.scene.empty() ? wt::loadDefaultScene(loadOptions)
-                                          : wt::loadScene(options.scene, loadOptions);
+  wt::SceneFile loaded = options.scene.empty() ? wt::SceneFile{wt::loadDefaultScene(loadOptions), {}}
+                                               : wt::loadSceneAny(options.scene, loadOptions);
+  wt::Scene& scene = loaded.scene;
+  applySceneSettings(loaded.settings, scene.sourceName, options);
   for (const std::string& w : scene.warnings) wt::log::warnOnce(scene.sourceName + ": " + w);
   if (scene.triangles.empty()) wt::log::warnOnce(scene.sourceName + ": the scene has no triangles");
   double loadSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - loadStart).count();
@@ -202,8 +249,10 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version", "wavetrace 0.1.0");
 
   RenderOptions render;
-  CLI::App* renderCmd = app.add_subcommand("render", "Render a glTF scene (the built-in Cornell box when none is named)");
-  renderCmd->add_option("scene", render.scene, "Scene file (.gltf, .glb)");
+  CLI::App* renderCmd = app.add_subcommand("render", "Render a glTF scene or a scene file (the built-in Cornell box when none is named)");
+  renderCmd->add_option("scene", render.scene,
+                        "Scene: .gltf, .glb, a scene file .json (docs/scene-format.md; its render settings and "
+                        "environment apply unless named here) or a built-in name");
   renderCmd->add_option("-o,--output", render.outputs, "Output image(s), .exr (linear float) or .png (sRGB); repeatable")
       ->default_str("render.png");
   renderCmd->add_option("--spp", render.settings.samplesPerPixel, "Samples per pixel")
@@ -294,7 +343,7 @@ int main(int argc, char** argv) {
   wt::BenchOptions bench;
   CLI::App* benchCmd = app.add_subcommand("bench", "BVH build and ray throughput benchmark");
   benchCmd->add_option("scenes", bench.scenes,
-                       "Scene files (default: built-in Cornell box, MetalRoughSpheresNoTextures and DamagedHelmet "
+                       "Scene files, .gltf, .glb or .json (default: built-in Cornell box, MetalRoughSpheresNoTextures and DamagedHelmet "
                        "from the asset folder, a generated 1M-triangle mesh)");
   benchCmd->add_option("--assets", bench.assetsDir, "Asset folder (default: ../shared/assets beside the source, or from here)");
   benchCmd->add_option("--device", bench.device, "Device index or name substring");
@@ -383,6 +432,10 @@ int main(int argc, char** argv) {
   try {
     if (*renderCmd) {
       if (render.outputs.empty()) render.outputs.push_back("render.png");
+      auto given = [&](const char* name) { return renderCmd->count(name) > 0; };
+      render.given = {given("--width"), given("--height"), given("--spp"), given("--max-bounces"), given("--seed"),
+                      given("--exposure"), given("--integrator"), given("--background"), given("--env-map"),
+                      given("--env-intensity"), given("--env-rotation"), given("--env-hidden")};
       return runRender(render);
     }
     if (*devicesCmd) return runDevices();
