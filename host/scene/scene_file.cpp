@@ -224,8 +224,8 @@ class Loader {
   }
 
   void checkKeys(const Json& obj, const std::string& path, std::initializer_list<const char*> allowed) const {
-    for (const auto& [key, value] : obj.items()) {
-      (void)value;
+    for (const auto& item : obj.items()) {
+      const std::string& key = item.key();
       if (std::none_of(allowed.begin(), allowed.end(), [&](const char* k) { return key == k; }))
         fail(member(path, key), "unknown field (expected one of: " + joinKeys(allowed) + ")");
     }

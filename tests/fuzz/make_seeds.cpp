@@ -2,8 +2,9 @@
 // reach every branch of the loaders (glTF node graphs, every accessor
 // component type, strides, sparse accessors, strips and fans, cameras,
 // lights, materials; .hdr flat and run-length encoded; .exr of every
-// compression, tiled and mip-mapped, Y-only and luminance/chroma).
-// Usage: wt_fuzz_seeds OUTDIR   (writes OUTDIR/{gltf,glb,hdr,exr}/...)
+// compression, tiled and mip-mapped, Y-only and luminance/chroma; scene
+// files with every object type, transform form and setting).
+// Usage: wt_fuzz_seeds OUTDIR   (writes OUTDIR/{gltf,glb,hdr,exr,scene_file}/...)
 #include <ImfChannelList.h>
 #include <ImfFrameBuffer.h>
 #include <ImfHeader.h>
@@ -246,6 +247,49 @@ void writeGltfSeeds(const fs::path& dir) {
 }
 
 // ---------------------------------------------------------------------------
+// scene files (.json): fuzz_scene_file resolves "triangle.gltf" and "sky.hdr"
+// in a folder of its own
+
+void writeSceneFileSeeds(const fs::path& dir) {
+  fs::create_directories(dir / "scene_file");
+  const std::pair<const char*, const char*> seeds[] = {
+      {"minimal", R"({"version": 1})"},
+      {"spheres", R"({"version": 1,
+  "camera": {"from": [0, 1.6, 8], "to": [0, 1, 0], "up": [0, 1, 0], "fov": 40},
+  "environment": {"color": [0.05, 0.07, 0.1], "hidden": false},
+  "render": {"width": 64, "height": 36, "spp": 4, "max_bounces": 8, "seed": 3, "exposure": -0.5, "integrator": "path"},
+  "materials": {
+    "ground": {"base_color": [0.5, 0.5, 0.45], "roughness": 0.9},
+    "gold": {"base_color": [1.0, 0.77, 0.34], "metallic": 1, "roughness": 0.15, "double_sided": true},
+    "glass": {"roughness": 0, "transmission": 1, "ior": 1.5, "thin_walled": false,
+              "attenuation_color": [0.7, 0.9, 0.8], "attenuation_distance": 2},
+    "lamp": {"type": "lambert", "base_color": [0, 0, 0], "emission": [1, 0.85, 0.6], "emission_strength": 40}
+  },
+  "objects": [
+    {"type": "sphere", "center": [0, -1000, 0], "radius": 1000, "material": "ground"},
+    {"type": "sphere", "center": [-1.6, 1, 0], "radius": 1, "material": "glass"},
+    {"type": "sphere", "center": [1.6, 1, 0], "radius": 1, "material": "gold"},
+    {"type": "sphere", "center": [0, 0.01, 2.6], "radius": 0.01},
+    {"type": "spheres", "centers": [[-3, 0.1, 3], [-2.5, 0.2, 3]], "radii": [0.1, 0.2], "material": "lamp"},
+    {"type": "spheres", "centers": [[3, 0.1, 3], [2.5, 0.1, 3]], "radius": 0.1}
+  ]})"},
+      {"gltf", R"({"version": 1,
+  "environment": {"map": "sky.hdr", "intensity": 2, "rotation": 90, "hidden": true},
+  "objects": [
+    {"type": "gltf", "file": "triangle.gltf"},
+    {"type": "gltf", "file": "triangle.gltf", "transform": {"translate": [1000000, 0, -5], "rotate": [0, 1, 0, 30], "scale": 2}},
+    {"type": "gltf", "file": "triangle.gltf", "transform": {"quaternion": [0, 0.2588190451, 0, 0.9659258263], "scale": [1, -1, 2]}},
+    {"type": "gltf", "file": "triangle.gltf", "transform": {"matrix": [1,0,0,0, 0,1,0,0, 0,0,1,0, 4,5,6,1]}},
+    {"type": "sphere", "center": [0, 0, 0], "radius": 0.5}
+  ]})"},
+      {"gltf_with_camera", R"({"version": 1,
+  "camera": {"from": [1e6, 2, 10], "to": [1e6, 0, 0], "fov": 30},
+  "objects": [{"type": "gltf", "file": "triangle.gltf", "transform": {"translate": [1e6, 0, 0]}}]})"},
+  };
+  for (const auto& [name, text] : seeds) writeFile(dir / "scene_file" / (std::string(name) + ".json"), text);
+}
+
+// ---------------------------------------------------------------------------
 // Radiance .hdr
 
 std::vector<float> gradient(int w, int h, int channels) {
@@ -362,6 +406,7 @@ int main(int argc, char** argv) {
   const fs::path dir = argv[1];
   try {
     writeGltfSeeds(dir);
+    writeSceneFileSeeds(dir);
     writeHdrSeeds(dir);
     writeExrSeeds(dir);
   } catch (const std::exception& e) {
