@@ -17,6 +17,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <random>
 #include <string>
 #include <vector>
@@ -290,6 +291,23 @@ TEST(SceneFile, ExampleScenesLoad) {
   float top = -1e30f;
   for (const WtVec4& p : mixed.scene.positions) top = std::max(top, p.y);
   EXPECT_NEAR(mixed.scene.origin.y + top, 5.488, 1e-3);
+}
+
+// The example in docs/scene-format.md is a valid file (its glTF file from scenes/).
+TEST(SceneFile, DocumentedExampleLoads) {
+  std::ifstream in(fs::path(WT_SOURCE_DIR) / "docs" / "scene-format.md");
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::size_t start = text.find("```json\n");
+  ASSERT_NE(start, std::string::npos);
+  const std::size_t end = text.find("```", start + 8);
+  ASSERT_NE(end, std::string::npos);
+  const SceneFile f = loadSceneFileFromMemory(text.substr(start + 8, end - start - 8), "scene-format.md",
+                                              (fs::path(WT_SOURCE_DIR) / "scenes").string());
+  expectConsistent(f.scene);
+  EXPECT_GT(f.scene.triangles.size(), 0u);
+  EXPECT_EQ(f.scene.spheres.size(), 4u);
+  EXPECT_TRUE(f.scene.warnings.empty()) << f.scene.warnings.front();
+  EXPECT_EQ(f.settings.samplesPerPixel, 64);
 }
 
 // ---------------------------------------------------------------------------
