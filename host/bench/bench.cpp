@@ -10,6 +10,7 @@
 #include "device/program.h"
 #include "device/scene_buffers.h"
 #include "device/tracer.h"
+#include "geometry/primitives.h"
 #include "render/renderer.h"
 #include "scene/default_scene.h"
 #include "scene/generators.h"
@@ -101,7 +102,15 @@ struct SurfacePoint {
 };
 
 std::optional<SurfacePoint> surfacePoint(const Scene& scene, const Ray& ray, const RayHit& hit) {
-  if (hit.triangle == RayHit::kNoHit) return std::nullopt;
+  if (hit.prim == RayHit::kNoHit) return std::nullopt;
+  if (primType(hit.prim) == WT_PRIM_SPHERE) {
+    const Sphere& sphere = scene.spheres[primIndex(hit.prim)];
+    glm::vec3 error, n;
+    glm::vec3 p = spherePoint(sphere.center, sphere.radius, ray.origin, ray.direction, hit.t, &error, &n);
+    if (glm::dot(n, ray.direction) > 0.0f) n = -n;
+    return SurfacePoint{offsetRayOrigin(p, error, n), n, p, error};
+  }
+  if (primType(hit.prim) != WT_PRIM_TRIANGLE) return std::nullopt;
   const WtTriangle& tri = scene.triangles[hit.triangle];
   glm::vec3 p0 = position(scene, tri.v0), p1 = position(scene, tri.v1), p2 = position(scene, tri.v2);
   glm::vec3 error;
@@ -135,7 +144,7 @@ std::vector<Ray> diffuseRays(const Scene& scene, std::span<const Ray> primary, s
     ray.direction = glm::normalize(d);
     ray.tmin = 0.0f;
     ray.tmax = 1e30f;
-    ray.skip = hits[i].triangle;  // as the renderer spawns: never the triangle left (Embree has no such test)
+    ray.skip = hits[i].prim;  // as the renderer spawns: never the primitive left (Embree has no such test)
     rays.push_back(ray);
   }
   return rays;
@@ -160,6 +169,17 @@ std::vector<Ray> shadowRays(const Scene& scene, std::span<const Ray> primary, st
     emitters.push_back(i);
     cdf.push_back(total);
   }
+  // emissive spheres after the triangles (index past the triangles), by area
+  for (std::uint32_t i = 0; i < scene.spheres.size(); ++i) {
+    const Sphere& sphere = scene.spheres[i];
+    const WtVec4& e = scene.materials[sphere.material].emission;
+    if (!(e.x > 0.0f || e.y > 0.0f || e.z > 0.0f)) continue;
+    double area = 4.0 * 3.14159265358979 * double(sphere.radius) * sphere.radius;
+    if (!(area > 0.0) || !std::isfinite(area)) continue;
+    total += area;
+    emitters.push_back(std::uint32_t(scene.triangles.size()) + i);
+    cdf.push_back(total);
+  }
   *toEmitters = !emitters.empty();
   Aabb bounds = scene.bounds();
   glm::vec3 lo(bounds.lo.x, bounds.lo.y, bounds.lo.z), hi(bounds.hi.x, bounds.hi.y, bounds.hi.z);
@@ -175,10 +195,21 @@ std::vector<Ray> shadowRays(const Scene& scene, std::span<const Ray> primary, st
       double pick = rng.next() * total;
       std::size_t k = std::min<std::size_t>(std::upper_bound(cdf.begin(), cdf.end(), pick) - cdf.begin(),
                                             emitters.size() - 1);
-      const WtTriangle& tri = scene.triangles[emitters[k]];
-      float u1 = std::sqrt(rng.next()), u2 = rng.next();
-      target = (1.0f - u1) * position(scene, tri.v0) + u1 * (1.0f - u2) * position(scene, tri.v1) +
-               u1 * u2 * position(scene, tri.v2);
+      if (emitters[k] >= scene.triangles.size()) {
+        // a point of the sphere's half that faces the shading point
+        const Sphere& sphere = scene.spheres[emitters[k] - scene.triangles.size()];
+        glm::vec3 w;
+        do w = 2.0f * glm::vec3(rng.next(), rng.next(), rng.next()) - 1.0f;
+        while (glm::dot(w, w) > 1.0f || glm::dot(w, w) < 1e-4f);
+        w = glm::normalize(w);
+        if (glm::dot(w, s->point - sphere.center) < 0.0f) w = -w;
+        target = sphere.center + sphere.radius * w;
+      } else {
+        const WtTriangle& tri = scene.triangles[emitters[k]];
+        float u1 = std::sqrt(rng.next()), u2 = rng.next();
+        target = (1.0f - u1) * position(scene, tri.v0) + u1 * (1.0f - u2) * position(scene, tri.v1) +
+                 u1 * u2 * position(scene, tri.v2);
+      }
     } else {
       target = lo + glm::vec3(rng.next(), rng.next(), rng.next()) * (hi - lo);
     }
@@ -193,7 +224,7 @@ std::vector<Ray> shadowRays(const Scene& scene, std::span<const Ray> primary, st
     float distance = glm::length(d);
     if (!(distance > 0.0f) || !std::isfinite(distance)) continue;
     Ray ray;
-    ray.skip = hits[i].triangle;
+    ray.skip = hits[i].prim;
     ray.origin = origin;
     ray.direction = d / distance;
     ray.tmin = 0.0f;
@@ -240,15 +271,37 @@ bool crossing(const Scene& scene, std::uint32_t tri, const Ray& ray, double& t, 
   return true;
 }
 
+/// A sphere crossing in double: the nearer root in (tmin, ...) and how far
+/// the line passes inside the silhouette, relative to the radius (< 0: outside).
+bool sphereCrossing(const Sphere& sphere, const Ray& ray, double& t, double& inside) {
+  glm::dvec3 f = glm::dvec3(ray.origin) - glm::dvec3(sphere.center), d(ray.direction);
+  double a = glm::dot(d, d), b = glm::dot(f, d), r = sphere.radius;
+  double line = std::sqrt(std::max(0.0, glm::dot(f, f) - b * b / a));
+  inside = (r - line) / r;
+  double disc = b * b - a * (glm::dot(f, f) - r * r);
+  if (disc < 0.0) return true;
+  double t0 = (-b - std::sqrt(disc)) / a, t1 = (-b + std::sqrt(disc)) / a;
+  t = t0 > ray.tmin ? t0 : t1;
+  return true;
+}
+
 Disagreement classify(const Scene& scene, const Ray& ray, const RayHit& wt, const RayHit& em) {
-  const bool wtHit = wt.triangle != RayHit::kNoHit, emHit = em.triangle != RayHit::kNoHit;
+  const bool wtHit = wt.prim != RayHit::kNoHit, emHit = em.prim != RayHit::kNoHit;
   auto close = [](double a, double b) { return std::abs(a - b) <= kTie * std::max(1.0, std::abs(b)); };
   if (wtHit && emHit && close(wt.t, em.t)) return Disagreement::kTie;
-  if (emHit && em.triangle == ray.skip && (!wtHit || em.t < wt.t)) return Disagreement::kSelf;
+  if (emHit && em.prim == ray.skip && (!wtHit || em.t < wt.t)) return Disagreement::kSelf;
   // the nearer of the two reported hits is the one the other tracer missed
   const bool wtNearer = wtHit && (!emHit || wt.t < em.t);
   const RayHit& nearer = wtNearer ? wt : em;
-  double t, minB;
+  double t = 0.0, minB;
+  if (primType(nearer.prim) == WT_PRIM_SPHERE) {
+    double inside;
+    sphereCrossing(scene.spheres[primIndex(nearer.prim)], ray, t, inside);
+    if (std::abs(inside) < kEdge) return Disagreement::kEdge;  // the silhouette grazed
+    if (inside < 0.0) return wtNearer ? Disagreement::kWavetraceFalse : Disagreement::kEmbreeFalse;
+    if (close(t, ray.tmin) || close(t, ray.tmax)) return Disagreement::kRange;
+    return wtNearer ? Disagreement::kEmbreeMiss : Disagreement::kWavetraceMiss;
+  }
   if (!crossing(scene, nearer.triangle, ray, t, minB)) return Disagreement::kEdge;  // parallel: a graze
   if (std::abs(minB) < kEdge) return Disagreement::kEdge;
   if (minB < 0.0) return wtNearer ? Disagreement::kWavetraceFalse : Disagreement::kEmbreeFalse;
@@ -328,6 +381,12 @@ struct SceneResult {
   int packetWidth = 0;  ///< rays per packet for this scene (packetWidthFor, by camera rays per triangle)
   bool streamPrefetch = false;  ///< the streams ask for a node's children early (streamPrefetchFor)
   double embreeBuildSeconds = 0.0;
+  /// The other geometry types (host/geometry/primitives.h): primitives per
+  /// WT_PRIM_* type, their BVH's build and collapse (median) and the bytes
+  /// uploaded for them (nodes, typed ids, rows) per primitive.
+  std::array<std::size_t, WT_PRIM_TYPES> primitives{};
+  double primitiveBuildSeconds = 0.0;
+  double bytesPerPrimitive = 0.0;
   std::vector<SetResult> sets;
   double pathMrays = 0.0;
   std::vector<TreeResult> trees;  ///< --compare-bvh, in that order
@@ -419,7 +478,7 @@ std::vector<RayHit> benchSet(const Scene& scene, Tracer& tracer, const Reference
   result.kernelSeconds = median(kernel);
   std::size_t hitCount = 0;
   for (std::size_t i = 0; i < rays.size(); ++i)
-    hitCount += occlusion ? blocked[i] != 0 : hits[i].triangle != RayHit::kNoHit;
+    hitCount += occlusion ? blocked[i] != 0 : hits[i].prim != RayHit::kNoHit;
   result.hitFraction = double(hitCount) / rays.size();
   if (!embree) return hits;
 
@@ -471,7 +530,7 @@ std::vector<RayHit> benchSet(const Scene& scene, Tracer& tracer, const Reference
     if (!differ.empty()) {
       std::vector<RayHit> a = tracer.traceClosest(differ), b = embree->closest(differ, false);
       for (std::size_t i = 0; i < differ.size(); ++i) {
-        Disagreement why = a[i].triangle == b[i].triangle ? Disagreement::kInconsistent
+        Disagreement why = a[i].prim == b[i].prim ? Disagreement::kInconsistent
                                                           : classify(scene, differ[i], a[i], b[i]);
         ++agreement.byClass[std::size_t(why)];
       }
@@ -479,8 +538,8 @@ std::vector<RayHit> benchSet(const Scene& scene, Tracer& tracer, const Reference
     agreement.disagreements = differ.size();
   } else {
     for (std::size_t i = 0; i < rays.size(); ++i) {
-      refCount += refHits[i].triangle != RayHit::kNoHit;
-      if (hits[i].triangle == refHits[i].triangle) continue;
+      refCount += refHits[i].prim != RayHit::kNoHit;
+      if (hits[i].prim == refHits[i].prim) continue;
       ++agreement.disagreements;
       ++agreement.byClass[std::size_t(classify(scene, rays[i], hits[i], refHits[i]))];
     }
@@ -601,7 +660,7 @@ void compareTrees(Context& context, const Scene& scene, std::span<const Aabb> bo
       if (occlusion) {
         for (std::uint8_t b : tracers[t]->traceOccluded(rays, traversal[t])) hits += b != 0;
       } else {
-        for (const RayHit& h : tracers[t]->traceClosest(rays, traversal[t])) hits += h.triangle != RayHit::kNoHit;
+        for (const RayHit& h : tracers[t]->traceClosest(rays, traversal[t])) hits += h.prim != RayHit::kNoHit;
       }
       trees[t].hitFraction.push_back(rays.empty() ? 0.0 : double(hits) / rays.size());
     }
@@ -632,6 +691,21 @@ SceneResult benchScene(Context& context, const std::string& name, const Scene& s
   for (std::size_t i = 0; i < allTriangles.size(); ++i) allTriangles[i] = std::uint32_t(i);
   const std::vector<BvhInstance> instances = bvhInstances(scene, allTriangles);
   BvhBuildOptions bvhOptions = benchBvhOptions(*parseBvhBuilder(options.bvh), options);
+  // the other geometry types' tree, built as the renderer builds it
+  const PrimitiveRows rows = gatherPrimitives(scene);
+  std::size_t otherPrimitives = 0;
+  for (std::uint32_t type = 0; type < WT_PRIM_TYPES; ++type) {
+    result.primitives[type] = type == WT_PRIM_TRIANGLE ? scene.triangles.size() : rows.count[type];
+    if (type != WT_PRIM_TRIANGLE) otherPrimitives += rows.count[type];
+  }
+  if (otherPrimitives > 0) {
+    std::vector<double> builds;
+    for (int r = 0; r < options.repetitions + 1; ++r) {
+      const double seconds = buildPrimitiveTree(rows, bvhOptions).seconds;
+      if (r > 0) builds.push_back(seconds);
+    }
+    result.primitiveBuildSeconds = median(builds);
+  }
   auto [bvh, seconds] =
       timedBuild(bounds, instances, binaryBuildOptions(bvhOptions, bounds.size()), options.repetitions);
   result.buildSeconds = seconds;
@@ -665,6 +739,10 @@ SceneResult benchScene(Context& context, const std::string& name, const Scene& s
   result.bytesPerTriangle =
       scene.triangles.empty() ? 0.0 : double(tracer.sceneBuffers().uploadedBytes) / scene.triangles.size();
   result.leafMisfits = tracer.sceneBuffers().leafMisfits();
+  std::size_t others = 0;
+  for (std::uint32_t type = 0; type < WT_PRIM_TYPES; ++type)
+    if (type != WT_PRIM_TRIANGLE) others += tracer.sceneBuffers().primitiveCount(type);
+  result.bytesPerPrimitive = others ? double(tracer.sceneBuffers().primitiveBytes) / double(others) : 0.0;
   std::unique_ptr<Reference> embree;
 #ifdef WT_HAVE_EMBREE
   EmbreeOptions embreeOptions;
@@ -699,7 +777,9 @@ SceneResult benchScene(Context& context, const std::string& name, const Scene& s
   benchSet(scene, tracer, embree.get(), "diffuse", diffuse, false, false, options, result.sets[1]);
   benchSet(scene, tracer, embree.get(), "shadow", shadow, true, false, options, result.sets[2]);
   embree.reset();
-  compareTrees(context, scene, bounds, instances, tracer, bvhOptions.builder, {&primary, &diffuse, &shadow},
+  // the tree comparison is the triangle builders'
+  if (!scene.triangles.empty())
+    compareTrees(context, scene, bounds, instances, tracer, bvhOptions.builder, {&primary, &diffuse, &shadow},
                {result.sets[0].traversal, result.sets[1].traversal, result.sets[2].traversal}, options, result.trees);
   primary = {};
   diffuse = {};
@@ -781,6 +861,8 @@ int runBench(const BenchOptions& options) {
         sources.push_back({stem, (std::filesystem::path(assets) / rel).string()});
     }
     sources.push_back({"bumpy grid " + std::to_string(options.meshTriangles / 1000) + "k", "<grid>"});
+    if (options.sphereCount > 0)
+      sources.push_back({"sphere field " + std::to_string(options.sphereCount / 1000) + "k", "<spheres>"});
   } else {
     for (const std::string& path : options.scenes) sources.push_back({path, path});
   }
@@ -790,14 +872,16 @@ int runBench(const BenchOptions& options) {
     Scene scene;
     try {
       scene = source.path.empty()       ? loadDefaultScene()
-              : source.path == "<grid>" ? makeBumpyGrid(std::uint32_t(options.meshTriangles))
-                                        : loadScene(source.path);
+              : source.path == "<grid>"    ? makeBumpyGrid(std::uint32_t(options.meshTriangles))
+              : source.path == "<spheres>" ? makeSphereField(std::uint32_t(options.sphereCount))
+                                           : loadScene(source.path);
     } catch (const SceneError& e) {
       if (!options.scenes.empty()) throw;  // a scene the user named must load
       skipped.emplace_back(source.name, e.what());
       continue;
     }
-    log::info("bench: " + source.name + " (" + std::to_string(scene.triangles.size()) + " triangles)");
+    log::info("bench: " + source.name + " (" + std::to_string(scene.triangles.size()) + " triangles, " +
+              std::to_string(scene.spheres.size()) + " spheres)");
     results.push_back(benchScene(context, source.name, scene, options));
   }
   std::string embreeText = "Embree not found at build time; no comparison";
@@ -840,6 +924,11 @@ int runBench(const BenchOptions& options) {
                   r.buildSeconds > 0 ? r.triangles / r.buildSeconds * 1e-6 : 0.0, r.nodes, r.sah,
                   r.nodes4, r.sah4, r.collapseSeconds, traversableRate(r), r.bytesPerTriangle, r.leafMisfits, r.copiesPlaced,
                   r.flatRegions, r.packetWidth, r.streamPrefetch ? "true" : "false", r.embreeBuildSeconds, r.shadowToEmitters ? "emitters" : "bounds", r.pathMrays);
+      std::printf("   \"primitives\": {");
+      for (std::uint32_t type = 0, n = 0; type < WT_PRIM_TYPES; ++type)
+        if (*primTypeName(type)) std::printf("%s\"%s\": %zu", n++ ? ", " : "", primTypeName(type), r.primitives[type]);
+      std::printf("}, \"primitive_bvh_build_s\": %.6f, \"bytes_per_primitive\": %.1f,\n", r.primitiveBuildSeconds,
+                  r.bytesPerPrimitive);
       std::printf("   \"bvh_builder\": \"%s\", \"trees\": [", options.bvh.c_str());
       const TreeResult* sahTree = nullptr;
       for (const TreeResult& t : r.trees)
@@ -923,6 +1012,21 @@ int runBench(const BenchOptions& options) {
                 r.triangles, r.buildSeconds * 1e3, r.buildSeconds > 0 ? r.triangles / r.buildSeconds * 1e-6 : 0.0,
                 r.nodes, r.sah, r.collapseSeconds * 1e3, traversableRate(r), r.nodes4, r.sah4, r.bytesPerTriangle,
                 embreeMs, r.pathMrays);
+  }
+
+  // the other geometry types: their one BVH (leaves of typed ids), built and collapsed
+  bool anyPrimitives = false;
+  for (const SceneResult& r : results) anyPrimitives |= r.primitiveBuildSeconds > 0.0;
+  if (anyPrimitives) {
+    std::printf("\n%-28s %10s %10s %9s %9s %8s\n", "scene", "spheres", "triangles", "build ms", "Mprims/s", "B/prim");
+    for (const SceneResult& r : results) {
+      if (!(r.primitiveBuildSeconds > 0.0)) continue;
+      std::size_t others = 0;
+      for (std::uint32_t type = 0; type < WT_PRIM_TYPES; ++type)
+        if (type != WT_PRIM_TRIANGLE) others += r.primitives[type];
+      std::printf("%-28s %10zu %10zu %9.2f %9.2f %8.1f\n", r.name.c_str(), r.primitives[WT_PRIM_SPHERE], r.triangles,
+                  r.primitiveBuildSeconds * 1e3, double(others) / r.primitiveBuildSeconds * 1e-6, r.bytesPerPrimitive);
+    }
   }
 
   // tree quality: each builder's tree on the same rays, throughput relative to the SAH tree's

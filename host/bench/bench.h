@@ -25,6 +25,7 @@ struct BenchOptions {
   /// few milliseconds.
   double minSeconds = 0.5;
   int meshTriangles = 1000000;      ///< size of the generated mesh
+  int sphereCount = 100000;         ///< spheres of the generated sphere field (makeSphereField); 0: none
   /// single, packet8, packet16, stream (host/bench/embree_reference.h), or
   /// fastest: every set traced with all four, compared with the fastest
   std::string embreeApi = "fastest";
@@ -60,7 +61,8 @@ struct BenchOptions {
 /// Run the benchmark and print the results to stdout. Returns an exit code.
 /// Default scenes: the built-in Cornell box; MetalRoughSpheresNoTextures and
 /// DamagedHelmet from the asset folder (skipped, saying so, when absent); a
-/// generated height field of meshTriangles triangles.
+/// generated height field of meshTriangles triangles; a generated field of
+/// sphereCount spheres.
 int runBench(const BenchOptions& options);
 
 }  // namespace wt

@@ -1,6 +1,7 @@
 #include "bench/embree_reference.h"
 
 #include "bvh/parallel.h"
+#include "geometry/primitives.h"
 
 #include <embree3/rtcore.h>
 
@@ -30,13 +31,21 @@ void setRay(const Ray& r, RTCRay& ray) {
   ray.flags = 0;
 }
 
-RayHit toHit(const RTCRayHit& rh) {
+/// What a hit names: a scene triangle, or another type's typed id (primId),
+/// by the geometry's type (its WT_PRIM_* by geometry id).
+void setHitPrimitive(RayHit& hit, const std::vector<std::uint32_t>& typeOfGeometry, unsigned geomID, unsigned primID) {
+  const std::uint32_t type = typeOfGeometry[geomID];
+  hit.triangle = type == WT_PRIM_TRIANGLE ? primID : RayHit::kNoHit;
+  hit.prim = type == WT_PRIM_TRIANGLE ? primID : primId(type, primID);
+}
+
+RayHit toHit(const RTCRayHit& rh, const std::vector<std::uint32_t>& typeOfGeometry) {
   RayHit hit;
   if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return hit;
   hit.t = rh.ray.tfar;
   hit.b1 = rh.hit.u;
   hit.b2 = rh.hit.v;
-  hit.triangle = rh.hit.primID;
+  setHitPrimitive(hit, typeOfGeometry, rh.hit.geomID, rh.hit.primID);
   return hit;
 }
 
@@ -79,6 +88,8 @@ struct EmbreeReference::Impl {
   std::vector<RTCRay16> rays16;
   std::vector<PacketValid> valid;
   double lastTraceSeconds = 0.0;
+  std::vector<std::uint32_t> typeOfGeometry;  ///< WT_PRIM_* by Embree geometry id
+  std::vector<float> spheres;                 ///< x, y, z, radius per scene sphere (Embree reads this copy)
 
   ~Impl() {
     if (scene) rtcReleaseScene(scene);
@@ -118,6 +129,12 @@ EmbreeReference::EmbreeReference(const Scene& scene, const EmbreeOptions& option
                                                    : RTC_BUILD_QUALITY_HIGH;
   rtcSetSceneBuildQuality(im.scene, quality);
   rtcSetSceneFlags(im.scene, options.robust ? RTC_SCENE_FLAG_ROBUST : RTC_SCENE_FLAG_NONE);
+  auto attach = [&](RTCGeometry geometry, std::uint32_t type) {
+    const unsigned id = rtcAttachGeometry(im.scene, geometry);
+    rtcReleaseGeometry(geometry);
+    if (im.typeOfGeometry.size() <= id) im.typeOfGeometry.resize(id + 1, WT_PRIM_TRIANGLE);
+    im.typeOfGeometry[id] = type;
+  };
   if (!scene.triangles.empty()) {
     RTCGeometry geometry = rtcNewGeometry(im.device, RTC_GEOMETRY_TYPE_TRIANGLE);
     rtcSetGeometryBuildQuality(geometry, quality);
@@ -129,8 +146,18 @@ EmbreeReference::EmbreeReference(const Scene& scene, const EmbreeOptions& option
     rtcSetSharedGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, scene.triangles.data(), 0,
                                sizeof(WtTriangle), scene.triangles.size());
     rtcCommitGeometry(geometry);
-    rtcAttachGeometry(im.scene, geometry);
-    rtcReleaseGeometry(geometry);
+    attach(geometry, WT_PRIM_TRIANGLE);
+  }
+  if (!scene.spheres.empty()) {
+    // the same centres and radii, one point sphere each, in scene order
+    for (const Sphere& sphere : scene.spheres)
+      im.spheres.insert(im.spheres.end(), {sphere.center.x, sphere.center.y, sphere.center.z, sphere.radius});
+    RTCGeometry geometry = rtcNewGeometry(im.device, RTC_GEOMETRY_TYPE_SPHERE_POINT);
+    rtcSetGeometryBuildQuality(geometry, quality);
+    rtcSetSharedGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4, im.spheres.data(), 0,
+                               4 * sizeof(float), scene.spheres.size());
+    rtcCommitGeometry(geometry);
+    attach(geometry, WT_PRIM_SPHERE);
   }
   rtcCommitScene(im.scene);
   m_buildSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -219,7 +246,7 @@ std::vector<RayHit> EmbreeReference::traceClosest(std::span<const Ray> rays, boo
   im.parallelChunks(n, [&](std::size_t begin, std::size_t end) {
     for (std::size_t i = begin; i < end; ++i) {
       if (lanes == 1) {
-        hits[i] = toHit(im.rayHits[i]);
+        hits[i] = toHit(im.rayHits[i], im.typeOfGeometry);
         continue;
       }
       const std::size_t p = i / std::size_t(lanes), k = i % std::size_t(lanes);
@@ -229,7 +256,8 @@ std::vector<RayHit> EmbreeReference::traceClosest(std::span<const Ray> rays, boo
       h.t = lanes == 8 ? im.rayHits8[p].ray.tfar[k] : im.rayHits16[p].ray.tfar[k];
       h.b1 = lanes == 8 ? im.rayHits8[p].hit.u[k] : im.rayHits16[p].hit.u[k];
       h.b2 = lanes == 8 ? im.rayHits8[p].hit.v[k] : im.rayHits16[p].hit.v[k];
-      h.triangle = lanes == 8 ? im.rayHits8[p].hit.primID[k] : im.rayHits16[p].hit.primID[k];
+      setHitPrimitive(h, im.typeOfGeometry, geom,
+                      lanes == 8 ? im.rayHits8[p].hit.primID[k] : im.rayHits16[p].hit.primID[k]);
     }
   });
   return hits;

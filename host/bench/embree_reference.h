@@ -60,13 +60,14 @@ struct EmbreeOptions {
 class EmbreeReference {
  public:
   /// Build the scene: one triangle geometry sharing the scene's arrays, which
-  /// must outlive this object. Throws std::runtime_error when Embree fails.
+  /// must outlive this object, and one point-sphere geometry with the
+  /// scene's spheres. Throws std::runtime_error when Embree fails.
   EmbreeReference(const Scene& scene, const EmbreeOptions& options = {});
   ~EmbreeReference();
   EmbreeReference(const EmbreeReference&) = delete;
   EmbreeReference& operator=(const EmbreeReference&) = delete;
 
-  /// Closest hit in [tmin, tmax]; triangle is the scene's index (or kNoHit).
+  /// Closest hit in [tmin, tmax]: RayHit::triangle and prim as wt::Tracer gives them.
   /// `coherent` sets RTC_INTERSECT_CONTEXT_FLAG_COHERENT (camera rays).
   std::vector<RayHit> traceClosest(std::span<const Ray> rays, bool coherent = false);
   /// 1 where something blocks [tmin, tmax].

@@ -7,6 +7,7 @@
 #include <array>
 #include <map>
 #include <tuple>
+#include <chrono>
 #include <cmath>
 #include <cstddef>
 
@@ -132,25 +133,33 @@ SceneBuffers::SceneBuffers(Context& context, const Scene& scene, const BvhBuildO
   uploadPrimitives(context, scene, options);
 }
 
-void SceneBuffers::uploadPrimitives(Context& context, const Scene& scene, const BvhBuildOptions& options) {
-  // The other types share one tree; each leaf entry is a typed id, tested
-  // one by one, so leaves stay small.
-  PrimitiveRows rows = gatherPrimitives(scene);
-  m_primitiveCount = rows.count;
-  m_skippedPrimitives = rows.skipped;
+PrimitiveTree buildPrimitiveTree(const PrimitiveRows& rows, const BvhBuildOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  // Each leaf entry is a typed id, tested one by one, so leaves stay small.
   BvhBuildOptions primOptions = options;
   primOptions.maxLeafSize = kPrimitiveLeafSize;
   const Bvh bvh = buildBvh(rows.bounds, binaryBuildOptions(primOptions, rows.bounds.size()));
   Bvh4Options collapse = bvh4Options(primOptions);
   collapse.nodeBytesPerPrimitive = 0.0;  // no triangle blocks to weigh the nodes against
-  Bvh4 bvh4 = collapseToBvh4(bvh, collapse);
-  orderChildSlots(bvh4);
-  m_primStats = bvh4.stats;
-  std::vector<std::uint32_t> refs(bvh.primIndices.size());
-  for (std::size_t i = 0; i < refs.size(); ++i) refs[i] = rows.ids[bvh.primIndices[i]];
+  PrimitiveTree tree;
+  tree.bvh4 = collapseToBvh4(bvh, collapse);
+  orderChildSlots(tree.bvh4);
+  tree.refs.resize(bvh.primIndices.size());
+  for (std::size_t i = 0; i < tree.refs.size(); ++i) tree.refs[i] = rows.ids[bvh.primIndices[i]];
+  tree.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return tree;
+}
+
+void SceneBuffers::uploadPrimitives(Context& context, const Scene& scene, const BvhBuildOptions& options) {
+  PrimitiveRows rows = gatherPrimitives(scene);
+  m_primitiveCount = rows.count;
+  m_skippedPrimitives = rows.skipped;
+  PrimitiveTree tree = buildPrimitiveTree(rows, options);
+  m_primStats = tree.bvh4.stats;
+  m_primitiveBuildSeconds = tree.seconds;
 
   geometry = WtGeometry{};
-  geometry.node_count = std::uint32_t(bvh4.nodes.size());
+  geometry.node_count = std::uint32_t(tree.bvh4.nodes.size());
   geometry.triangle_count = std::uint32_t(m_leafToScene.size());
   std::uint32_t emitters = geometry.triangle_count;
   for (std::uint32_t type = 0; type < WT_PRIM_TYPES; ++type) {
@@ -160,8 +169,8 @@ void SceneBuffers::uploadPrimitives(Context& context, const Scene& scene, const 
     if (type != WT_PRIM_TRIANGLE) emitters += std::uint32_t(rows.count[type]);
   }
   primitiveBytes = 0;
-  primNodes = upload(context, bvh4.nodes, primitiveBytes);
-  primRefs = upload(context, refs, primitiveBytes);
+  primNodes = upload(context, tree.bvh4.nodes, primitiveBytes);
+  primRefs = upload(context, tree.refs, primitiveBytes);
   primData = upload(context, rows.data, primitiveBytes);
   primInfo = upload(context, rows.info, primitiveBytes);
 }

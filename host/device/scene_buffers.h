@@ -21,6 +21,18 @@ namespace wt {
 /// is left out: its triangles are built as the others are.
 std::vector<BvhInstance> bvhInstances(const Scene& scene, std::span<const std::uint32_t> bvhToScene);
 
+/// Leaves of the primitive BVH hold at most this many typed ids.
+constexpr int kPrimitiveLeafSize = 4;
+
+/// The BVH over the primitives other than triangles, as uploaded: the 4-wide
+/// tree and the typed ids in its leaf order.
+struct PrimitiveTree {
+  Bvh4 bvh4;
+  std::vector<std::uint32_t> refs;
+  double seconds = 0.0;  ///< wall time of the build and collapse
+};
+PrimitiveTree buildPrimitiveTree(const PrimitiveRows& rows, const BvhBuildOptions& options);
+
 class SceneBuffers {
  public:
   /// Build the BVH over the scene's triangles (but degenerate ones), collapse
@@ -53,6 +65,7 @@ class SceneBuffers {
   /// Non-triangle primitives left out of their BVH (zero size, non-finite).
   std::size_t skippedPrimitives() const { return m_skippedPrimitives; }
   const Bvh4Stats& primitiveBvhStats() const { return m_primStats; }
+  double primitiveBuildSeconds() const { return m_primitiveBuildSeconds; }
 
   /// The build of the binary tree the 4-wide tree was collapsed from.
   const BvhBuildStats& bvhStats() const { return m_bvhStats; }
@@ -74,8 +87,6 @@ class SceneBuffers {
   int stackSize() const;
 
  private:
-  /// Leaves of the primitive BVH hold at most this many typed ids.
-  static constexpr int kPrimitiveLeafSize = 4;
   void uploadPrimitives(Context& context, const Scene& scene, const BvhBuildOptions& options);
 
   BvhBuildStats m_bvhStats;
@@ -87,6 +98,7 @@ class SceneBuffers {
   Bvh4Stats m_primStats;
   std::array<std::size_t, WT_PRIM_TYPES> m_primitiveCount{};
   std::size_t m_skippedPrimitives = 0;
+  double m_primitiveBuildSeconds = 0.0;
 };
 
 }  // namespace wt

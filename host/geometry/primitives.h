@@ -22,6 +22,15 @@ constexpr std::uint32_t primId(std::uint32_t type, std::uint32_t index) {
 constexpr std::uint32_t primType(std::uint32_t id) { return id >> WT_PRIM_TYPE_SHIFT; }
 constexpr std::uint32_t primIndex(std::uint32_t id) { return id & WT_PRIM_INDEX_MASK; }
 
+/// The type's name in plural, for tables ("triangles", "spheres"); "" for none.
+inline const char* primTypeName(std::uint32_t type) {
+  switch (type) {
+    case WT_PRIM_TRIANGLE: return "triangles";
+    case WT_PRIM_SPHERE: return "spheres";
+    default: return "";
+  }
+}
+
 struct PrimitiveRows {
   std::vector<Aabb> bounds;                         ///< per primitive, world
   std::vector<std::uint32_t> ids;                   ///< per primitive (as bounds): its typed id

@@ -178,6 +178,22 @@ Scene makeBumpyGrid(std::uint32_t triangleCount) {
   return scene;
 }
 
+Scene makeSphereField(std::uint32_t count, std::uint32_t seed) {
+  Scene scene;
+  scene.sourceName = "sphere field";
+  scene.materials = {makeMaterial(glm::vec3(0.6f)), makeMaterial(glm::vec3(0.0f), glm::vec3(20.0f))};
+  scene.materialNames = {"grey", "light"};
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> pos(-1.0f, 1.0f), logScale(std::log(0.1f), std::log(0.6f));
+  const float spacing = 2.0f / std::cbrt(float(std::max<std::uint32_t>(count, 1)));
+  scene.spheres.reserve(count + 4);
+  for (std::uint32_t i = 0; i < count; ++i)
+    scene.spheres.push_back({glm::vec3(pos(rng), pos(rng), pos(rng)), spacing * std::exp(logScale(rng)), 0});
+  for (int k = 0; k < 4; ++k)
+    scene.spheres.push_back({glm::vec3(k % 2 ? 0.8f : -0.8f, 1.6f, k / 2 ? 0.8f : -0.8f), 0.1f, 1});
+  return scene;
+}
+
 void appendScene(Scene& dst, const Scene& src) {
   std::uint32_t vertexBase = std::uint32_t(dst.positions.size());
   std::uint32_t materialBase = std::uint32_t(dst.materials.size());

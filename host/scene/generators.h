@@ -30,6 +30,10 @@ Scene makeTriangleSoup(std::uint32_t count, std::uint32_t seed, float maxEdge = 
 /// bumps, as a stand-in for a large scanned mesh.
 Scene makeBumpyGrid(std::uint32_t triangleCount);
 
+/// `count` spheres in [-1,1]^3 (radii from 0.1 to 0.6 of the mean spacing,
+/// log-uniform; a Lambertian grey), and four emissive spheres above them.
+Scene makeSphereField(std::uint32_t count, std::uint32_t seed = 1);
+
 /// Append `src` to `dst` (vertices, triangles, spheres, materials re-indexed;
 /// src's placed copies kept, its geometry ids renumbered past dst's). Both
 /// must share one Scene::origin.

@@ -7,7 +7,7 @@
 #include "device_fixture.h"
 #include "geometry/primitives.h"
 #include "scene/generators.h"
-#include "shared/spawn.h"
+#include "core/spawn.h"
 #include "test_util.h"
 
 #include <gtest/gtest.h>
@@ -200,16 +200,11 @@ TEST(Spheres, AnyHitAgreesWithClosestHitInEveryTraversal) {
 }
 
 /// The origin shade spawns from: the hit reprojected onto the sphere as the
-/// kernel does, pushed along `n` past its rounding error (shared/spawn.h).
-glm::vec3 spawnOrigin(const Sphere& s, const Ray& ray, float t, glm::vec3 side) {
-  glm::vec3 q = ray.origin + t * ray.direction - s.center;
-  glm::vec3 n = glm::normalize(q);
-  glm::vec3 local = s.radius * n;
-  glm::vec3 p = s.center + local;
-  glm::vec3 e = spawn_gamma(6) * glm::abs(local) + spawn_gamma(2) * glm::abs(p);
-  float d = spawn_offset_distance(side.x, side.y, side.z, e.x, e.y, e.z);
-  return {spawn_offset_coordinate(p.x, d * side.x), spawn_offset_coordinate(p.y, d * side.y),
-          spawn_offset_coordinate(p.z, d * side.z)};
+/// kernel does, pushed to `side` (+1 outward, -1 inward) past its rounding error.
+glm::vec3 spawnOrigin(const Sphere& s, const Ray& ray, float t, float side) {
+  glm::vec3 error, n;
+  glm::vec3 p = spherePoint(s.center, s.radius, ray.origin, ray.direction, t, &error, &n);
+  return offsetRayOrigin(p, error, side * n);
 }
 
 TEST(Spheres, SpawnedRaysLeaveTheSurfaceOrCrossItOnce) {
@@ -232,10 +227,10 @@ TEST(Spheres, SpawnedRaysLeaveTheSurfaceOrCrossItOnce) {
     if (glm::dot(w, n) < 0.0f) w = -w;
     Ray r;
     r.skip = hits[i].prim;
-    r.origin = spawnOrigin(s, rays[i], hits[i].t, n);
+    r.origin = spawnOrigin(s, rays[i], hits[i].t, 1.0f);
     r.direction = w;  // away from the surface: reflection
     out.push_back(r);
-    r.origin = spawnOrigin(s, rays[i], hits[i].t, -n);
+    r.origin = spawnOrigin(s, rays[i], hits[i].t, -1.0f);
     r.direction = -w;  // into the sphere: refraction
     in.push_back(r);
     from.push_back(hits[i].prim);
