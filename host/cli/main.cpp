@@ -123,7 +123,7 @@ int runRender(RenderOptions options) {
   wt::Scene& scene = loaded.scene;
   applySceneSettings(loaded.settings, scene.sourceName, options);
   for (const std::string& w : scene.warnings) wt::log::warnOnce(scene.sourceName + ": " + w);
-  if (scene.triangles.empty()) wt::log::warnOnce(scene.sourceName + ": the scene has no triangles");
+  if (scene.triangles.empty() && scene.spheres.empty()) wt::log::warnOnce(scene.sourceName + ": the scene has no geometry");
   double loadSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - loadStart).count();
 
   wt::DeviceInfo device = wt::selectDevice(options.device);
@@ -149,6 +149,9 @@ int runRender(RenderOptions options) {
   settings.packets = options.traversal == "auto";
   settings.packetWidth = options.packetWidth;
   wt::Renderer renderer(context, scene, settings);
+  if (std::size_t left = renderer.sceneBuffers().skippedPrimitives())
+    wt::log::warnOnce(scene.sourceName + ": " + std::to_string(left) +
+                      " primitives left out (a sphere of radius <= 0, or non-finite values)");
   const wt::BvhBuildStats& bvh = renderer.sceneBuffers().bvhStats();
   wt::log::info("scene " + scene.sourceName + ": " + std::to_string(scene.triangles.size()) +
                 " triangles, loaded in " + std::to_string(int(loadSeconds * 1e3)) + " ms; BVH (" +

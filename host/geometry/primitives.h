@@ -42,6 +42,10 @@ struct PrimitiveRows {
   std::size_t skipped = 0;  ///< primitives left out (degenerate: zero size, non-finite)
 };
 
+/// Whether a sphere can be drawn: a finite centre and a finite radius > 0.
+/// The others are left out of the BVH and of the light list alike.
+bool sphereUsable(const Sphere& sphere);
+
 /// Spheres (WT_PRIM_SPHERE): one data row (center, radius) and one info row
 /// (material) per sphere, by scene index; radius <= 0 or a non-finite value
 /// leaves the sphere out.

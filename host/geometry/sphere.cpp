@@ -5,6 +5,11 @@
 
 namespace wt {
 
+bool sphereUsable(const Sphere& s) {
+  return std::isfinite(s.center.x) && std::isfinite(s.center.y) && std::isfinite(s.center.z) &&
+         std::isfinite(s.radius) && s.radius > 0.0f;
+}
+
 void gatherSpheres(const Scene& scene, PrimitiveRows& rows) {
   rows.dataFirst[WT_PRIM_SPHERE] = std::uint32_t(rows.data.size());
   rows.infoFirst[WT_PRIM_SPHERE] = std::uint32_t(rows.info.size());
@@ -14,9 +19,7 @@ void gatherSpheres(const Scene& scene, PrimitiveRows& rows) {
     const Sphere& s = scene.spheres[i];
     rows.data.push_back({s.center.x, s.center.y, s.center.z, s.radius});
     rows.info.push_back({s.material, 0u, 0u, 0u});
-    const bool finite = std::isfinite(s.center.x) && std::isfinite(s.center.y) && std::isfinite(s.center.z) &&
-                        std::isfinite(s.radius);
-    if (!finite || !(s.radius > 0.0f)) {
+    if (!sphereUsable(s)) {
       ++rows.skipped;
       continue;
     }

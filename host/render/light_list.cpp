@@ -143,9 +143,7 @@ LightList buildLightList(const Scene& scene, const SceneBuffers& buffers, double
     const WtVec4& e = scene.materials[sphere.material].emission;
     glm::vec3 le(e.x, e.y, e.z);
     const double area = 4.0 * std::numbers::pi * double(sphere.radius) * double(sphere.radius);
-    if (!(luminance(le) > 0.0) || !(area > 0.0) || !std::isfinite(area) ||
-        !std::isfinite(sphere.center.x + sphere.center.y + sphere.center.z))
-      continue;
+    if (!(luminance(le) > 0.0) || !sphereUsable(sphere) || !std::isfinite(area)) continue;
     WtLight l{};
     l.type = WT_LIGHT_PRIMITIVE;
     l.triangle = primId(WT_PRIM_SPHERE, std::uint32_t(i));

@@ -93,7 +93,7 @@ const std::vector<std::pair<std::string, StressGroup>>& stressGroups() {
   static const std::vector<std::pair<std::string, StressGroup>> groups = {
       {"transform", stressTransforms},   {"cracks", stressCracks},       {"self-intersection", stressSelfIntersection},
       {"degenerate", stressDegenerate},  {"materials", stressMaterials}, {"accumulation", stressAccumulation},
-      {"non-finite", stressNonFinite},
+      {"non-finite", stressNonFinite},  {"primitives", stressPrimitives},
   };
   return groups;
 }

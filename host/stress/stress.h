@@ -69,5 +69,6 @@ std::vector<StressRow> stressDegenerate(Context&, const StressOptions&);       /
 std::vector<StressRow> stressMaterials(Context&, const StressOptions&);        ///< material extremes in a furnace: no NaN, no energy gain
 std::vector<StressRow> stressAccumulation(Context&, const StressOptions&);     ///< 2^20 samples per precision mode against double
 std::vector<StressRow> stressNonFinite(Context&, const StressOptions&);        ///< NaN samples are counted, reported and never accumulated
+std::vector<StressRow> stressPrimitives(Context&, const StressOptions&);       ///< the other geometry types: transforms, self-intersection, degenerate input
 
 }  // namespace wt
