@@ -27,6 +27,7 @@ inline const char* primTypeName(std::uint32_t type) {
   switch (type) {
     case WT_PRIM_TRIANGLE: return "triangles";
     case WT_PRIM_SPHERE: return "spheres";
+    case WT_PRIM_CURVE: return "curve segments";
     default: return "";
   }
 }
@@ -50,6 +51,41 @@ bool sphereUsable(const Sphere& sphere);
 /// (material) per sphere, by scene index; radius <= 0 or a non-finite value
 /// leaves the sphere out.
 void gatherSpheres(const Scene& scene, PrimitiveRows& rows);
+
+/// B-spline pieces are subdivided until each one's control points lie within
+/// this fraction of its smallest radius of the straight segment that
+/// replaces it (a bound on how far the traced surface strays from the spline's).
+constexpr double kCurveFlatness = 0.05;
+/// A B-spline segment is cut into at most 2^kCurveMaxDepth linear pieces.
+constexpr int kCurveMaxDepth = 10;
+
+/// Curves (WT_PRIM_CURVE) as linear segments, B-splines subdivided first
+/// (kCurveFlatness): two data rows (the joints, with the neighbours' signs,
+/// kernels/geometry/curve.cl) and one info row (material, curve, u at each
+/// end) per segment, curve by curve; a typed id is the segment's index in
+/// that order. A point with a non-finite coordinate or a radius that is
+/// negative or not finite breaks its curve there (the segments that use it
+/// are left out); consecutive points at one position are merged (the larger
+/// radius kept); a segment of radius 0 at both ends is left out. count: the
+/// segments, kept or not.
+void gatherCurves(const Scene& scene, PrimitiveRows& rows);
+
+/// A curve segment as gatherCurves wrote it.
+struct CurveSegment {
+  glm::vec4 p0{0.0f}, p1{0.0f};      ///< the joints: xyz world, w radius (>= 0)
+  bool left = false, right = false;  ///< the curve goes on past p0, past p1 (segments index - 1, index + 1)
+  std::uint32_t material = 0;
+  std::uint32_t curve = 0;           ///< index into Scene::curves
+  float u0 = 0.0f, u1 = 0.0f;        ///< the curve's parameter at p0 and p1 (0 at its root, 1 at its tip)
+};
+/// Segment `index` (a WT_PRIM_CURVE typed id's index) of gathered rows.
+CurveSegment curveSegment(const PrimitiveRows& rows, std::uint32_t index);
+
+/// curve_surface (kernels/geometry/curve.cl) on the host: where ray (o, d)
+/// meets the segment at t, reprojected onto its hull, with its rounding
+/// error bound; *normal is the outward unit normal.
+glm::vec3 curvePoint(const CurveSegment& segment, glm::vec3 o, glm::vec3 d, float t, glm::vec3* error,
+                     glm::vec3* normal);
 
 /// Every type's rows.
 PrimitiveRows gatherPrimitives(const Scene& scene);

@@ -38,6 +38,7 @@ void gatherSpheres(const Scene& scene, PrimitiveRows& rows) {
 PrimitiveRows gatherPrimitives(const Scene& scene) {
   PrimitiveRows rows;
   gatherSpheres(scene, rows);
+  gatherCurves(scene, rows);
   return rows;
 }
 

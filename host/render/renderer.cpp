@@ -69,6 +69,7 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
     return m.model == WT_MATERIAL_PBR && m.transmission > 0.0f && m.base_color.w < 1.0f;
   });
   features.spheres = m_scene->primitiveCount(WT_PRIM_SPHERE) > 0;
+  features.curves = m_scene->primitiveCount(WT_PRIM_CURVE) > 0;
   m_program = buildProgram(context, features);
   m_generate = cl::Kernel(m_program, "generate");
   m_extend = cl::Kernel(m_program, "extend");

@@ -216,6 +216,13 @@ void appendScene(Scene& dst, const Scene& src) {
     sphere.material += materialBase;
     dst.spheres.push_back(sphere);
   }
+  const auto pointBase = std::uint32_t(dst.curvePoints.size());
+  for (Curve curve : src.curves) {
+    curve.firstPoint += pointBase;
+    curve.material += materialBase;
+    dst.curves.push_back(curve);
+  }
+  dst.curvePoints.insert(dst.curvePoints.end(), src.curvePoints.begin(), src.curvePoints.end());
   dst.materials.insert(dst.materials.end(), src.materials.begin(), src.materials.end());
   dst.materialNames.insert(dst.materialNames.end(), src.materialNames.begin(), src.materialNames.end());
 }

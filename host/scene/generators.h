@@ -34,7 +34,7 @@ Scene makeBumpyGrid(std::uint32_t triangleCount);
 /// log-uniform; a Lambertian grey), and four emissive spheres above them.
 Scene makeSphereField(std::uint32_t count, std::uint32_t seed = 1);
 
-/// Append `src` to `dst` (vertices, triangles, spheres, materials re-indexed;
+/// Append `src` to `dst` (vertices, triangles, spheres, curves, materials re-indexed;
 /// src's placed copies kept, its geometry ids renumbered past dst's). Both
 /// must share one Scene::origin.
 void appendScene(Scene& dst, const Scene& src);

@@ -16,6 +16,13 @@ Aabb Scene::bounds() const {
     box.extend(s.center - glm::vec3(s.radius));
     box.extend(s.center + glm::vec3(s.radius));
   }
+  // a B-spline stays inside its points' hull
+  for (const WtVec4& p : curvePoints) {
+    const glm::vec3 c(p.x, p.y, p.z);
+    if (!std::isfinite(p.x + p.y + p.z + p.w)) continue;
+    box.extend(c - glm::vec3(std::fabs(p.w)));
+    box.extend(c + glm::vec3(std::fabs(p.w)));
+  }
   return box;
 }
 

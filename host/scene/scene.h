@@ -66,6 +66,21 @@ struct Sphere {
   std::uint32_t material = 0; ///< index into Scene::materials
 };
 
+/// How a curve's points make its shape (kernels/geometry/curve.cl).
+enum class CurveBasis : std::uint32_t {
+  kLinear,   ///< a polyline of round cones: each point a joint sphere, each pair the hull of two
+  kBSpline,  ///< a uniform cubic B-spline of (position, radius), which passes near but not through its points (not its end points either: repeat them to reach them); subdivided into linear segments on the host
+};
+
+/// A curve of round cross-section (hair, fur, grass, wires): points
+/// [firstPoint, firstPoint + pointCount) of Scene::curvePoints.
+struct Curve {
+  std::uint32_t firstPoint = 0;
+  std::uint32_t pointCount = 0;  ///< >= 2 (linear) or >= 4 (B-spline) for any segment
+  std::uint32_t material = 0;    ///< index into Scene::materials
+  CurveBasis basis = CurveBasis::kLinear;
+};
+
 struct Scene {
   std::vector<WtVec4> positions;   ///< world space, w = 0
   std::vector<WtVec4> normals;     ///< world space, unit; (0,0,0) = none, use the geometric normal. Same size as positions.
@@ -73,6 +88,8 @@ struct Scene {
   std::vector<WtTriangle> triangles;
   std::vector<GeometryInstance> instances; ///< placed copies, in triangle order; may be empty (no copies known)
   std::vector<Sphere> spheres;            ///< analytic spheres (scene files only: glTF has none)
+  std::vector<Curve> curves;              ///< round curves (scene files, .hair and .ply strands)
+  std::vector<WtVec4> curvePoints;        ///< the curves' points: xyz world relative to origin, w = radius (world units, >= 0)
   std::vector<WtMaterial> materials;      ///< never empty after loading (a default grey is added when needed)
   std::vector<std::string> materialNames; ///< same size as materials
   std::optional<CameraDesc> camera;       ///< absent: frame the bounds (defaultCamera)
@@ -81,7 +98,7 @@ struct Scene {
   std::string sourceName;                 ///< file the scene came from, for messages
   glm::dvec3 origin{0.0};                 ///< world position of the scene's (0,0,0): every position, light and camera here is relative to it (GltfLoadOptions::recenter)
 
-  /// Bounds of every triangle and sphere.
+  /// Bounds of every triangle, sphere and curve point (with its radius).
   Aabb bounds() const;
   /// Bounds of one triangle.
   Aabb triangleBounds(std::uint32_t tri) const;

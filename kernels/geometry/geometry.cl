@@ -18,9 +18,15 @@
 #if WT_HAS_SPHERES
 #include "geometry/sphere.cl"
 #endif
+#ifndef WT_HAS_CURVES
+#error "WT_HAS_CURVES is not defined: build options must come from kernelDefines()"
+#endif
+#if WT_HAS_CURVES
+#include "geometry/curve.cl"
+#endif
 
 /// Whether any type beside triangles is compiled in (the primitive BVH is traversed).
-#define WT_HAS_PRIMITIVES (WT_HAS_SPHERES)
+#define WT_HAS_PRIMITIVES (WT_HAS_SPHERES || WT_HAS_CURVES)
 
 /// The non-triangle primitives as the kernels see them (WtGeometry).
 typedef struct GeometryScene {
@@ -59,6 +65,11 @@ inline bool geometry_intersect(GeometryScene g, uint prim, float3 o, float3 d, f
     case WT_PRIM_SPHERE:
       return sphere_intersect(*geometry_data(g, prim), o, d, tmin, tmax, leaving, t);
 #endif
+#if WT_HAS_CURVES
+    case WT_PRIM_CURVE:
+      return curve_intersect(g.data + g.header.data_first[WT_PRIM_CURVE], prim_index(prim), o, d, tmin, tmax,
+                             leaving, t, u);
+#endif
     default:
       return false;
   }
@@ -70,7 +81,7 @@ typedef struct SurfaceHit {
   float3 p_error;  ///< rounding error bound per coordinate of p
   float3 ng;       ///< unit geometric normal: the winding's for triangles, outward for closed types; zero: degenerate
   float3 ns;       ///< unit shading normal
-  float2 uv;       ///< surface parameters: spheres by angle; triangles their barycentrics (b1, b2) until texture coordinates reach the device
+  float2 uv;       ///< surface parameters: spheres by angle; curves along (0 to 1 from root to tip) and around; triangles their barycentrics (b1, b2) until texture coordinates reach the device
   float3 dpdu;     ///< dp/du, world (triangles: the edge p1 - p0)
   uint material;   ///< index into materials
 } SurfaceHit;
@@ -86,6 +97,16 @@ inline SurfaceHit geometry_surface(GeometryScene g, __global const float4* tri_v
       sphere_surface(*geometry_data(g, prim), o, d, hit.x, &s.p, &s.p_error, &s.ng, &s.uv, &s.dpdu);
       s.ns = s.ng;
       s.material = g.info[g.header.info_first[WT_PRIM_SPHERE] + prim_index(prim)].x;
+      return s;
+    }
+#endif
+#if WT_HAS_CURVES
+    case WT_PRIM_CURVE: {
+      uint4 info = g.info[g.header.info_first[WT_PRIM_CURVE] + prim_index(prim)];
+      curve_surface(g.data + g.header.data_first[WT_PRIM_CURVE], prim_index(prim), info, o, d, hit.x, &s.p,
+                    &s.p_error, &s.ng, &s.uv, &s.dpdu);
+      s.ns = s.ng;
+      s.material = info.x;
       return s;
     }
 #endif

@@ -72,6 +72,7 @@ typedef struct WtBvh4Node {
 #define WT_PRIM_INDEX_MASK 0x0fffffffu
 #define WT_PRIM_TRIANGLE 0u  ///< kernels/geometry/triangle.cl, in their own BVH (nodes, tri_verts)
 #define WT_PRIM_SPHERE 1u    ///< kernels/geometry/sphere.cl
+#define WT_PRIM_CURVE 2u     ///< kernels/geometry/curve.cl: one segment (a round cone) of a curve
 #define WT_PRIM_TYPES 4      ///< type slots in WtGeometry
 
 /// The primitives other than triangles (kernels/geometry/geometry.cl): one
