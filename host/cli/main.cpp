@@ -123,7 +123,8 @@ int runRender(RenderOptions options) {
   wt::Scene& scene = loaded.scene;
   applySceneSettings(loaded.settings, scene.sourceName, options);
   for (const std::string& w : scene.warnings) wt::log::warnOnce(scene.sourceName + ": " + w);
-  if (scene.triangles.empty() && scene.spheres.empty()) wt::log::warnOnce(scene.sourceName + ": the scene has no geometry");
+  if (scene.triangles.empty() && scene.spheres.empty() && scene.curves.empty())
+    wt::log::warnOnce(scene.sourceName + ": the scene has no geometry");
   double loadSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - loadStart).count();
 
   wt::DeviceInfo device = wt::selectDevice(options.device);
@@ -151,10 +152,12 @@ int runRender(RenderOptions options) {
   wt::Renderer renderer(context, scene, settings);
   if (std::size_t left = renderer.sceneBuffers().skippedPrimitives())
     wt::log::warnOnce(scene.sourceName + ": " + std::to_string(left) +
-                      " primitives left out (a sphere of radius <= 0, or non-finite values)");
+                      " primitives left out (a sphere of radius <= 0, a curve segment of radius 0, or non-finite values)");
   const wt::BvhBuildStats& bvh = renderer.sceneBuffers().bvhStats();
-  wt::log::info("scene " + scene.sourceName + ": " + std::to_string(scene.triangles.size()) +
-                " triangles, loaded in " + std::to_string(int(loadSeconds * 1e3)) + " ms; BVH (" +
+  wt::log::info("scene " + scene.sourceName + ": " + std::to_string(scene.triangles.size()) + " triangles" +
+                (scene.spheres.empty() ? std::string() : ", " + std::to_string(scene.spheres.size()) + " spheres") +
+                (scene.curves.empty() ? std::string() : ", " + std::to_string(scene.curves.size()) + " curves") +
+                ", loaded in " + std::to_string(int(loadSeconds * 1e3)) + " ms; BVH (" +
                 wt::bvhBuilderName(settings.bvhBuilder) + ") " +
                 std::to_string(bvh.nodeCount) + " nodes built in " +
                 std::to_string(bvh.buildSeconds * 1e3).substr(0, 6) + " ms; device " + device.name);
