@@ -101,8 +101,16 @@ struct SurfacePoint {
   glm::vec3 point, error;  ///< on the surface, and its rounding error bound
 };
 
-std::optional<SurfacePoint> surfacePoint(const Scene& scene, const Ray& ray, const RayHit& hit) {
+/// `rows`: the scene's other primitives as gathered (gatherPrimitives), for curves.
+std::optional<SurfacePoint> surfacePoint(const Scene& scene, const PrimitiveRows& rows, const Ray& ray,
+                                         const RayHit& hit) {
   if (hit.prim == RayHit::kNoHit) return std::nullopt;
+  if (primType(hit.prim) == WT_PRIM_CURVE) {
+    glm::vec3 error, n;
+    glm::vec3 p = curvePoint(curveSegment(rows, primIndex(hit.prim)), ray.origin, ray.direction, hit.t, &error, &n);
+    if (glm::dot(n, ray.direction) > 0.0f) n = -n;
+    return SurfacePoint{offsetRayOrigin(p, error, n), n, p, error};
+  }
   if (primType(hit.prim) == WT_PRIM_SPHERE) {
     const Sphere& sphere = scene.spheres[primIndex(hit.prim)];
     glm::vec3 error, n;
@@ -125,11 +133,12 @@ std::optional<SurfacePoint> surfacePoint(const Scene& scene, const Ray& ray, con
 
 /// Cosine-distributed directions about the camera-side normal at every
 /// camera hit (misses make no ray).
-std::vector<Ray> diffuseRays(const Scene& scene, std::span<const Ray> primary, std::span<const RayHit> hits) {
+std::vector<Ray> diffuseRays(const Scene& scene, const PrimitiveRows& rows, std::span<const Ray> primary,
+                             std::span<const RayHit> hits) {
   std::vector<Ray> rays;
   rays.reserve(primary.size());
   for (std::size_t i = 0; i < primary.size(); ++i) {
-    std::optional<SurfacePoint> s = surfacePoint(scene, primary[i], hits[i]);
+    std::optional<SurfacePoint> s = surfacePoint(scene, rows, primary[i], hits[i]);
     if (!s) continue;
     Rng rng(2 * i + 1);
     float u1 = rng.next(), u2 = rng.next();
@@ -153,7 +162,8 @@ std::vector<Ray> diffuseRays(const Scene& scene, std::span<const Ray> primary, s
 /// From every camera hit to a random point on an emissive triangle (by area),
 /// or in the scene's bounds when nothing emits; tmax stops a relative 1e-4
 /// short of the target, so the target's own surface never counts.
-std::vector<Ray> shadowRays(const Scene& scene, std::span<const Ray> primary, std::span<const RayHit> hits,
+std::vector<Ray> shadowRays(const Scene& scene, const PrimitiveRows& rows, std::span<const Ray> primary,
+                            std::span<const RayHit> hits,
                             bool* toEmitters) {
   std::vector<std::uint32_t> emitters;
   std::vector<double> cdf;
@@ -187,7 +197,7 @@ std::vector<Ray> shadowRays(const Scene& scene, std::span<const Ray> primary, st
   std::vector<Ray> rays;
   rays.reserve(primary.size());
   for (std::size_t i = 0; i < primary.size(); ++i) {
-    std::optional<SurfacePoint> s = surfacePoint(scene, primary[i], hits[i]);
+    std::optional<SurfacePoint> s = surfacePoint(scene, rows, primary[i], hits[i]);
     if (!s) continue;
     Rng rng(2 * i + 2);
     glm::vec3 target;
@@ -285,7 +295,8 @@ bool sphereCrossing(const Sphere& sphere, const Ray& ray, double& t, double& ins
   return true;
 }
 
-Disagreement classify(const Scene& scene, const Ray& ray, const RayHit& wt, const RayHit& em) {
+Disagreement classify(const Scene& scene, const PrimitiveRows& rows, const Ray& ray, const RayHit& wt,
+                      const RayHit& em) {
   const bool wtHit = wt.prim != RayHit::kNoHit, emHit = em.prim != RayHit::kNoHit;
   auto close = [](double a, double b) { return std::abs(a - b) <= kTie * std::max(1.0, std::abs(b)); };
   if (wtHit && emHit && close(wt.t, em.t)) return Disagreement::kTie;
@@ -294,6 +305,25 @@ Disagreement classify(const Scene& scene, const Ray& ray, const RayHit& wt, cons
   const bool wtNearer = wtHit && (!emHit || wt.t < em.t);
   const RayHit& nearer = wtNearer ? wt : em;
   double t = 0.0, minB;
+  if (primType(nearer.prim) == WT_PRIM_CURVE) {
+    // the ray's line against the segment's axis: the radius at the closest
+    // approach (the hull's silhouette to first order)
+    const CurveSegment c = curveSegment(rows, primIndex(nearer.prim));
+    const glm::dvec3 a(c.p0), e = glm::dvec3(c.p1) - a, o(ray.origin), d = glm::normalize(glm::dvec3(ray.direction));
+    const double ee = glm::dot(e, e), ed = glm::dot(e, d);
+    const glm::dvec3 w = a - o;
+    const double denom = ee - ed * ed;
+    double u = denom > 1e-30 ? std::clamp((ed * glm::dot(w, d) - glm::dot(w, e)) / denom, 0.0, 1.0) : 0.0;
+    const glm::dvec3 q = a + u * e;
+    const double along = glm::dot(q - o, d);
+    const double distance = glm::length(q - o - along * d);
+    const double radius = c.p0.w + u * (c.p1.w - c.p0.w);
+    const double inside = radius > 0.0 ? (radius - distance) / radius : -1.0;
+    if (std::abs(inside) < 1e-3) return Disagreement::kEdge;  // the silhouette grazed
+    if (inside < 0.0) return wtNearer ? Disagreement::kWavetraceFalse : Disagreement::kEmbreeFalse;
+    if (close(nearer.t, ray.tmin) || close(nearer.t, ray.tmax)) return Disagreement::kRange;
+    return wtNearer ? Disagreement::kEmbreeMiss : Disagreement::kWavetraceMiss;
+  }
   if (primType(nearer.prim) == WT_PRIM_SPHERE) {
     double inside;
     sphereCrossing(scene.spheres[primIndex(nearer.prim)], ray, t, inside);
@@ -446,7 +476,7 @@ std::vector<double> timeRuns(int repetitions, double minSeconds, Fn&& fn) {
 
 /// Trace one ray set with wavetrace (and Embree): warm-up, then the median
 /// of the repetitions. Returns wavetrace's closest hits (empty for shadow rays).
-std::vector<RayHit> benchSet(const Scene& scene, Tracer& tracer, const Reference* embree, const std::string& name,
+std::vector<RayHit> benchSet(const Scene& scene, const PrimitiveRows& rows, Tracer& tracer, const Reference* embree, const std::string& name,
                              const std::vector<Ray>& rays, bool occlusion, bool coherent,
                              const BenchOptions& options, SetResult& result) {
   result.name = name;
@@ -531,7 +561,7 @@ std::vector<RayHit> benchSet(const Scene& scene, Tracer& tracer, const Reference
       std::vector<RayHit> a = tracer.traceClosest(differ), b = embree->closest(differ, false);
       for (std::size_t i = 0; i < differ.size(); ++i) {
         Disagreement why = a[i].prim == b[i].prim ? Disagreement::kInconsistent
-                                                          : classify(scene, differ[i], a[i], b[i]);
+                                                          : classify(scene, rows, differ[i], a[i], b[i]);
         ++agreement.byClass[std::size_t(why)];
       }
     }
@@ -541,7 +571,7 @@ std::vector<RayHit> benchSet(const Scene& scene, Tracer& tracer, const Reference
       refCount += refHits[i].prim != RayHit::kNoHit;
       if (hits[i].prim == refHits[i].prim) continue;
       ++agreement.disagreements;
-      ++agreement.byClass[std::size_t(classify(scene, rays[i], hits[i], refHits[i]))];
+      ++agreement.byClass[std::size_t(classify(scene, rows, rays[i], hits[i], refHits[i]))];
     }
   }
   result.embreeHitFraction = double(refCount) / rays.size();
@@ -770,12 +800,12 @@ SceneResult benchScene(Context& context, const std::string& name, const Scene& s
   // the three ray sets, made once from the camera rays' hits
   std::vector<Ray> primary = primaryRays(scene, options.primaryWidth);
   result.sets.resize(3);
-  std::vector<RayHit> primaryHits = benchSet(scene, tracer, embree.get(), "primary", primary, false, true,
+  std::vector<RayHit> primaryHits = benchSet(scene, rows, tracer, embree.get(), "primary", primary, false, true,
                                              options, result.sets[0]);
-  std::vector<Ray> diffuse = diffuseRays(scene, primary, primaryHits);
-  std::vector<Ray> shadow = shadowRays(scene, primary, primaryHits, &result.shadowToEmitters);
-  benchSet(scene, tracer, embree.get(), "diffuse", diffuse, false, false, options, result.sets[1]);
-  benchSet(scene, tracer, embree.get(), "shadow", shadow, true, false, options, result.sets[2]);
+  std::vector<Ray> diffuse = diffuseRays(scene, rows, primary, primaryHits);
+  std::vector<Ray> shadow = shadowRays(scene, rows, primary, primaryHits, &result.shadowToEmitters);
+  benchSet(scene, rows, tracer, embree.get(), "diffuse", diffuse, false, false, options, result.sets[1]);
+  benchSet(scene, rows, tracer, embree.get(), "shadow", shadow, true, false, options, result.sets[2]);
   embree.reset();
   // the tree comparison is the triangle builders'
   if (!scene.triangles.empty())
@@ -802,6 +832,43 @@ SceneResult benchScene(Context& context, const std::string& name, const Scene& s
 }
 
 // ---- scenes ------------------------------------------------------------------------
+
+/// `strands` hairs of `points` points each (linear segments) grown from a
+/// unit sphere's upper half: a random walk that droops, tapering from
+/// radius 4e-3 to 1e-3; an emissive sphere above for the shadow rays.
+Scene makeHairBall(std::uint32_t strands, std::uint32_t points, std::uint32_t seed = 7) {
+  Scene scene;
+  scene.sourceName = "hair ball";
+  scene.materials = {makePbrMaterial(glm::vec3(0.35f, 0.2f, 0.1f), 0.0f, 0.4f),
+                     makeMaterial(glm::vec3(0.0f), glm::vec3(30.0f))};
+  scene.materialNames = {"hair", "light"};
+  Rng rng(seed);
+  auto unit = [&] {
+    glm::vec3 v;
+    do v = 2.0f * glm::vec3(rng.next(), rng.next(), rng.next()) - 1.0f;
+    while (glm::dot(v, v) > 1.0f || glm::dot(v, v) < 1e-4f);
+    return glm::normalize(v);
+  };
+  const float step = 0.6f / float(std::max<std::uint32_t>(points - 1, 1));
+  for (std::uint32_t h = 0; h < strands; ++h) {
+    glm::vec3 n = unit();
+    if (n.y < 0.0f) n.y = -n.y;
+    Curve curve;
+    curve.firstPoint = std::uint32_t(scene.curvePoints.size());
+    curve.pointCount = points;
+    glm::vec3 p = n, d = n;
+    for (std::uint32_t k = 0; k < points; ++k) {
+      const float radius = 4e-3f - 3e-3f * float(k) / float(std::max<std::uint32_t>(points - 1, 1));
+      scene.curvePoints.push_back({p.x, p.y, p.z, radius});
+      d = glm::normalize(d + 0.3f * unit() + glm::vec3(0.0f, -0.25f, 0.0f));
+      p += step * d;
+    }
+    scene.curves.push_back(curve);
+  }
+  scene.spheres.push_back({glm::vec3(0.0f), 0.98f, 0});
+  scene.spheres.push_back({glm::vec3(1.5f, 3.0f, 2.0f), 0.3f, 1});
+  return scene;
+}
 
 /// The asset folder: --assets, else ../shared/assets beside the source tree,
 /// else ../shared/assets from the current directory; empty when none exists.
@@ -863,6 +930,8 @@ int runBench(const BenchOptions& options) {
     sources.push_back({"bumpy grid " + std::to_string(options.meshTriangles / 1000) + "k", "<grid>"});
     if (options.sphereCount > 0)
       sources.push_back({"sphere field " + std::to_string(options.sphereCount / 1000) + "k", "<spheres>"});
+    if (options.hairStrands > 0)
+      sources.push_back({"hair ball " + std::to_string(options.hairStrands / 1000) + "k strands", "<hair>"});
   } else {
     for (const std::string& path : options.scenes) sources.push_back({path, path});
   }
@@ -874,6 +943,7 @@ int runBench(const BenchOptions& options) {
       scene = source.path.empty()       ? loadDefaultScene()
               : source.path == "<grid>"    ? makeBumpyGrid(std::uint32_t(options.meshTriangles))
               : source.path == "<spheres>" ? makeSphereField(std::uint32_t(options.sphereCount))
+              : source.path == "<hair>"    ? makeHairBall(std::uint32_t(options.hairStrands), 12)
                                            : loadScene(source.path);
     } catch (const SceneError& e) {
       if (!options.scenes.empty()) throw;  // a scene the user named must load
@@ -881,7 +951,7 @@ int runBench(const BenchOptions& options) {
       continue;
     }
     log::info("bench: " + source.name + " (" + std::to_string(scene.triangles.size()) + " triangles, " +
-              std::to_string(scene.spheres.size()) + " spheres)");
+              std::to_string(scene.spheres.size()) + " spheres, " + std::to_string(scene.curves.size()) + " curves)");
     results.push_back(benchScene(context, source.name, scene, options));
   }
   std::string embreeText = "Embree not found at build time; no comparison";
@@ -1018,13 +1088,15 @@ int runBench(const BenchOptions& options) {
   bool anyPrimitives = false;
   for (const SceneResult& r : results) anyPrimitives |= r.primitiveBuildSeconds > 0.0;
   if (anyPrimitives) {
-    std::printf("\n%-28s %10s %10s %9s %9s %8s\n", "scene", "spheres", "triangles", "build ms", "Mprims/s", "B/prim");
+    std::printf("\n%-28s %10s %10s %10s %9s %9s %8s\n", "scene", "spheres", "curve segs", "triangles", "build ms",
+                "Mprims/s", "B/prim");
     for (const SceneResult& r : results) {
       if (!(r.primitiveBuildSeconds > 0.0)) continue;
       std::size_t others = 0;
       for (std::uint32_t type = 0; type < WT_PRIM_TYPES; ++type)
         if (type != WT_PRIM_TRIANGLE) others += r.primitives[type];
-      std::printf("%-28s %10zu %10zu %9.2f %9.2f %8.1f\n", r.name.c_str(), r.primitives[WT_PRIM_SPHERE], r.triangles,
+      std::printf("%-28s %10zu %10zu %10zu %9.2f %9.2f %8.1f\n", r.name.c_str(), r.primitives[WT_PRIM_SPHERE],
+                  r.primitives[WT_PRIM_CURVE], r.triangles,
                   r.primitiveBuildSeconds * 1e3, double(others) / r.primitiveBuildSeconds * 1e-6, r.bytesPerPrimitive);
     }
   }

@@ -90,6 +90,9 @@ struct EmbreeReference::Impl {
   double lastTraceSeconds = 0.0;
   std::vector<std::uint32_t> typeOfGeometry;  ///< WT_PRIM_* by Embree geometry id
   std::vector<float> spheres;                 ///< x, y, z, radius per scene sphere (Embree reads this copy)
+  std::vector<float> curveJoints;             ///< x, y, z, radius: both joints of every curve segment
+  std::vector<std::uint32_t> curveFirst;      ///< per segment: its first joint
+  std::vector<std::uint8_t> curveFlags;       ///< per segment: RTC_CURVE_FLAG_NEIGHBOR_LEFT / _RIGHT
 
   ~Impl() {
     if (scene) rtcReleaseScene(scene);
@@ -158,6 +161,31 @@ EmbreeReference::EmbreeReference(const Scene& scene, const EmbreeOptions& option
                                4 * sizeof(float), scene.spheres.size());
     rtcCommitGeometry(geometry);
     attach(geometry, WT_PRIM_SPHERE);
+  }
+  // curves: the segments wavetrace traces (B-splines subdivided, the same
+  // joints and radii), as round linear curves told which neighbours exist,
+  // in the order of their typed ids
+  const PrimitiveRows rows = scene.curves.empty() ? PrimitiveRows{} : gatherPrimitives(scene);
+  std::uint32_t segments = 0;
+  for (std::uint32_t id : rows.ids) segments += primType(id) == WT_PRIM_CURVE;
+  if (segments > 0) {
+    for (std::uint32_t i = 0; i < segments; ++i) {
+      const CurveSegment c = curveSegment(rows, i);
+      im.curveFirst.push_back(std::uint32_t(im.curveJoints.size() / 4));
+      im.curveJoints.insert(im.curveJoints.end(), {c.p0.x, c.p0.y, c.p0.z, c.p0.w, c.p1.x, c.p1.y, c.p1.z, c.p1.w});
+      im.curveFlags.push_back(std::uint8_t((c.left ? RTC_CURVE_FLAG_NEIGHBOR_LEFT : 0) |
+                                           (c.right ? RTC_CURVE_FLAG_NEIGHBOR_RIGHT : 0)));
+    }
+    RTCGeometry geometry = rtcNewGeometry(im.device, RTC_GEOMETRY_TYPE_ROUND_LINEAR_CURVE);
+    rtcSetGeometryBuildQuality(geometry, quality);
+    rtcSetSharedGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4, im.curveJoints.data(), 0,
+                               4 * sizeof(float), im.curveJoints.size() / 4);
+    rtcSetSharedGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT, im.curveFirst.data(), 0,
+                               sizeof(std::uint32_t), segments);
+    rtcSetSharedGeometryBuffer(geometry, RTC_BUFFER_TYPE_FLAGS, 0, RTC_FORMAT_UCHAR, im.curveFlags.data(), 0,
+                               sizeof(std::uint8_t), segments);
+    rtcCommitGeometry(geometry);
+    attach(geometry, WT_PRIM_CURVE);
   }
   rtcCommitScene(im.scene);
   m_buildSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

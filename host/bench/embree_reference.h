@@ -60,8 +60,9 @@ struct EmbreeOptions {
 class EmbreeReference {
  public:
   /// Build the scene: one triangle geometry sharing the scene's arrays, which
-  /// must outlive this object, and one point-sphere geometry with the
-  /// scene's spheres. Throws std::runtime_error when Embree fails.
+  /// must outlive this object, one point-sphere geometry with the scene's
+  /// spheres, and one round-linear-curve geometry with the curve segments
+  /// wavetrace traces (gatherCurves). Throws std::runtime_error when Embree fails.
   EmbreeReference(const Scene& scene, const EmbreeOptions& options = {});
   ~EmbreeReference();
   EmbreeReference(const EmbreeReference&) = delete;
