@@ -1,5 +1,7 @@
 #include "scene/generators.h"
 
+#include <glm/gtc/matrix_transform.hpp>
+
 #include <algorithm>
 #include <cmath>
 #include <map>
@@ -191,6 +193,94 @@ Scene makeSphereField(std::uint32_t count, std::uint32_t seed) {
     scene.spheres.push_back({glm::vec3(pos(rng), pos(rng), pos(rng)), spacing * std::exp(logScale(rng)), 0});
   for (int k = 0; k < 4; ++k)
     scene.spheres.push_back({glm::vec3(k % 2 ? 0.8f : -0.8f, 1.6f, k / 2 ? 0.8f : -0.8f), 0.1f, 1});
+  return scene;
+}
+
+void addChildCurves(Scene& scene, std::uint32_t firstGuide, std::uint32_t guideCount, std::uint32_t children,
+                    float spread, std::uint32_t seed) {
+  if (children == 0) return;
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
+  std::vector<glm::vec3> across1, across2;
+  for (std::uint32_t g = firstGuide; g < firstGuide + guideCount; ++g) {
+    const Curve guide = scene.curves[g];  // a copy: the vectors grow below
+    const std::uint32_t n = guide.pointCount;
+    if (n == 0) continue;
+    // a frame across the guide at each point, carried along by projection
+    // (a rotation-minimising frame for steps that turn by less than 90 degrees)
+    across1.assign(n, glm::vec3(0.0f));
+    across2.assign(n, glm::vec3(0.0f));
+    glm::vec3 previous(0.0f);
+    for (std::uint32_t i = 0; i < n; ++i) {
+      const WtVec4& a = scene.curvePoints[guide.firstPoint + (i > 0 ? i - 1 : 0)];
+      const WtVec4& b = scene.curvePoints[guide.firstPoint + std::min(i + 1, n - 1)];
+      glm::vec3 tangent(b.x - a.x, b.y - a.y, b.z - a.z);
+      const float length = glm::length(tangent);
+      tangent = length > 0.0f && std::isfinite(length) ? tangent / length : glm::vec3(0, 1, 0);
+      glm::vec3 u = previous - glm::dot(previous, tangent) * tangent;
+      if (!(glm::length(u) > 1e-3f)) {
+        // the first frame, or a turn too sharp to carry it: any direction across
+        const glm::vec3 other = std::fabs(tangent.x) < 0.9f ? glm::vec3(1, 0, 0) : glm::vec3(0, 1, 0);
+        u = glm::cross(tangent, other);
+      }
+      u = glm::normalize(u);
+      across1[i] = u;
+      across2[i] = glm::cross(tangent, u);
+      previous = u;
+    }
+    for (std::uint32_t c = 0; c < children; ++c) {
+      float x, y;
+      do x = unit(rng), y = unit(rng);
+      while (x * x + y * y > 1.0f);
+      Curve child = guide;
+      child.firstPoint = std::uint32_t(scene.curvePoints.size());
+      for (std::uint32_t i = 0; i < n; ++i) {
+        const WtVec4 p = scene.curvePoints[guide.firstPoint + i];
+        const glm::vec3 q = glm::vec3(p.x, p.y, p.z) + spread * (x * across1[i] + y * across2[i]);
+        scene.curvePoints.push_back({q.x, q.y, q.z, p.w});
+      }
+      scene.curves.push_back(child);
+    }
+  }
+}
+
+Scene makeHairScene(std::uint32_t guides, std::uint32_t children, std::uint32_t seed) {
+  Scene scene;
+  scene.sourceName = "hair (generated)";
+  scene.materials = {makePbrMaterial(glm::vec3(0.8f, 0.6f, 0.5f), 0.0f, 0.6f),
+                     makePbrMaterial(glm::vec3(0.35f, 0.2f, 0.1f), 0.0f, 0.35f)};
+  scene.materialNames = {"head", "hair"};
+  scene.spheres.push_back({glm::vec3(0.0f), 1.0f, 0});
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> unit(-1.0f, 1.0f), u01(0.0f, 1.0f);
+  constexpr int kPoints = 16;
+  constexpr float kStep = 0.11f, kLift = 1.01f;
+  for (std::uint32_t g = 0; g < guides; ++g) {
+    // a root on the cap above y = 0.2, uniform in area
+    const float y = 0.2f + 0.8f * u01(rng), phi = 2.0f * 3.14159265f * u01(rng);
+    const float ring = std::sqrt(1.0f - y * y);
+    glm::vec3 p = kLift * glm::vec3(ring * std::cos(phi), y, -ring * std::sin(phi));
+    glm::vec3 dir = glm::normalize(p);
+    Curve c;
+    c.firstPoint = std::uint32_t(scene.curvePoints.size());
+    c.pointCount = kPoints;
+    c.material = 1;
+    for (int i = 0; i < kPoints; ++i) {
+      const float radius = 0.004f - 0.0025f * float(i) / float(kPoints - 1);
+      scene.curvePoints.push_back({p.x, p.y, p.z, radius});
+      // gravity and a little waviness; the strand rests on the head
+      dir = glm::normalize(dir + glm::vec3(0.0f, -0.35f, 0.0f) + 0.15f * glm::vec3(unit(rng), unit(rng), unit(rng)));
+      p += kStep * dir;
+      if (glm::length(p) < kLift) p = kLift * glm::normalize(p);
+    }
+    scene.curves.push_back(c);
+  }
+  addChildCurves(scene, 0, guides, children, 0.05f, seed + 1);
+  CameraDesc camera;
+  camera.name = "front";
+  camera.yfov = 0.6f;
+  camera.cameraToWorld = glm::inverse(glm::lookAt(glm::vec3(0.0f, 0.4f, 4.6f), glm::vec3(0.0f, -0.1f, 0.0f), glm::vec3(0, 1, 0)));
+  scene.camera = camera;
   return scene;
 }
 

@@ -34,6 +34,22 @@ Scene makeBumpyGrid(std::uint32_t triangleCount);
 /// log-uniform; a Lambertian grey), and four emissive spheres above them.
 Scene makeSphereField(std::uint32_t count, std::uint32_t seed = 1);
 
+/// `children` child strands around each of the guide curves [firstGuide,
+/// firstGuide + guideCount) of `scene`, appended after its curves: each a
+/// copy of its guide moved by a fixed offset drawn uniformly from a disc of
+/// radius `spread` across the guide (in a frame carried along the guide
+/// without twisting, so a child follows its guide's bends), with the guide's
+/// radii, basis and material. Deterministic for a seed.
+void addChildCurves(Scene& scene, std::uint32_t firstGuide, std::uint32_t guideCount, std::uint32_t children,
+                    float spread, std::uint32_t seed = 1);
+
+/// A head of hair made in code (no file): a sphere of radius 1 at the
+/// origin (the head) and `guides` strands of 16 points from its upper part,
+/// falling under gravity along it, radius 0.004 tapering to 0.0015, each
+/// with `children` children within 0.05 (addChildCurves); a camera in front.
+/// 100 guides x 100 children make 10 100 curves of 15 segments (151 500).
+Scene makeHairScene(std::uint32_t guides = 100, std::uint32_t children = 100, std::uint32_t seed = 1);
+
 /// Append `src` to `dst` (vertices, triangles, spheres, curves, materials re-indexed;
 /// src's placed copies kept, its geometry ids renumbered past dst's). Both
 /// must share one Scene::origin.

@@ -6,6 +6,7 @@
 #include "scene/scene_file.h"
 
 #include "scene/generators.h"
+#include "scene/hair_loader.h"
 
 #include <nlohmann/json.hpp>
 
@@ -41,6 +42,9 @@ constexpr std::size_t kMaxFileBytes = std::size_t(1) << 30;
 constexpr int kMaxImageSide = 16384;
 constexpr int kMaxSamples = 1 << 24;
 constexpr int kMaxBounces = 1024;
+/// Curve points a scene may hold, children included (28-bit primitive ids).
+constexpr std::uint64_t kMaxCurvePoints = std::uint64_t(1) << 28;
+constexpr std::int64_t kMaxChildren = 100000;
 
 // paths and values in messages
 
@@ -178,6 +182,18 @@ struct WorldSphere {
   double radius;
   std::uint32_t material;
   std::string path;  ///< "objects[2]" or "objects[2].centers[5]"
+};
+
+/// A "curves" object in world coordinates, before the origin is subtracted.
+struct WorldCurves {
+  std::vector<glm::dvec4> points;      ///< xyz world, w radius (world units)
+  std::vector<std::uint32_t> counts;   ///< points per strand
+  CurveBasis basis = CurveBasis::kLinear;
+  std::uint32_t material = 0;
+  std::uint32_t children = 0;
+  double childRadius = 0.0;
+  std::uint32_t seed = 1;
+  std::string path;  ///< "objects[2]"
 };
 
 /// The "camera" object, in world coordinates.
@@ -516,14 +532,106 @@ class Loader {
 
   void readObject(const Json& v, const std::string& path) {
     object(v, path);
-    const std::string type = string(require(v, path, "type", ": gltf, sphere or spheres"), member(path, "type"));
+    const std::string type = string(require(v, path, "type", ": gltf, sphere, spheres or curves"), member(path, "type"));
     if (type == "gltf") readGltf(v, path);
     else if (type == "sphere") readSphere(v, path);
     else if (type == "spheres") readSpheres(v, path);
-    else if (type == "curves")
-      fail(member(path, "type"), "\"curves\" is not supported yet (curves are the next geometry type to come)");
+    else if (type == "curves") readCurves(v, path);
     else
-      fail(member(path, "type"), "unknown type \"" + type + "\" (expected one of: gltf, sphere, spheres)");
+      fail(member(path, "type"), "unknown type \"" + type + "\" (expected one of: gltf, sphere, spheres, curves)");
+  }
+
+  void readCurves(const Json& v, const std::string& path) {
+    checkKeys(v, path, {"type", "file", "strands", "basis", "radius", "radius_scale", "transform", "material",
+                        "children", "child_radius", "seed"});
+    const Json* file = find(v, "file");
+    const Json* strands = find(v, "strands");
+    if (file && strands) fail(path, "give \"file\" (a .hair or .ply file) or \"strands\" (points), not both");
+    if (!file && !strands) fail(member(path, "strands"), "missing (required: \"strands\", or a \"file\" of strands)");
+    WorldCurves curves;
+    curves.path = path;
+    if (const Json* x = find(v, "basis")) {
+      const std::string basis = string(*x, member(path, "basis"));
+      if (basis != "linear" && basis != "bspline")
+        fail(member(path, "basis"), "must be \"linear\" or \"bspline\", got " + describe(*x));
+      curves.basis = basis == "bspline" ? CurveBasis::kBSpline : CurveBasis::kLinear;
+    }
+    const Json* radiusValue = find(v, "radius");
+    const double radius = radiusValue ? positive(*radiusValue, member(path, "radius")) : 0.0;
+    const double radiusScale = find(v, "radius_scale") ? positive(v["radius_scale"], member(path, "radius_scale")) : 1.0;
+    glm::dmat4 transform(1.0);
+    if (const Json* t = find(v, "transform")) transform = readTransform(*t, member(path, "transform"));
+    // radii scale as lengths do: exactly for a uniform scale
+    const double lengthScale = std::cbrt(std::fabs(glm::determinant(glm::dmat3(transform))));
+
+    std::vector<glm::dvec4> local;  // the file's or the object's points, radius in w (-1: none)
+    if (file) {
+      const std::string where = member(path, "file");
+      const std::string name = string(*file, where);
+      if (name.empty()) fail(where, "must name a file, got \"\"");
+      const fs::path resolved = resolve(name);
+      const std::string ext = lowerExtension(resolved);
+      if (ext != ".hair" && ext != ".ply") fail(where, "must be a .hair or .ply file, got " + describe(*file));
+      requireFile(resolved, where);
+      StrandSet set;
+      try {
+        set = loadStrands(resolved.string());
+      } catch (const SceneError& e) {
+        fail(where, e.what());
+      }
+      if (!set.hasRadius && !radiusValue)
+        fail(member(path, "radius"), "missing (required: " + resolved.filename().string() + " gives no radii)");
+      curves.counts = std::move(set.counts);
+      local.reserve(set.points.size());
+      for (const glm::vec4& p : set.points) local.emplace_back(p);
+    } else {
+      const std::string where = member(path, "strands");
+      if (!strands->is_array() || strands->empty())
+        fail(where, "must be an array of strands, each an array of [x, y, z] or [x, y, z, radius] points, got " +
+                        describe(*strands));
+      for (std::size_t s = 0; s < strands->size(); ++s) {
+        const Json& strand = (*strands)[s];
+        const std::string strandPath = element(where, s);
+        const std::size_t least = curves.basis == CurveBasis::kBSpline ? 4 : 2;
+        if (!strand.is_array() || strand.size() < least)
+          fail(strandPath, "must be an array of at least " + std::to_string(least) + " points" +
+                               (least == 4 ? " (a B-spline segment takes 4)" : "") + ", got " + describe(strand));
+        for (std::size_t i = 0; i < strand.size(); ++i) {
+          const Json& point = strand[i];
+          const std::string pointPath = element(strandPath, i);
+          if (!point.is_array() || (point.size() != 3 && point.size() != 4))
+            fail(pointPath, "must be [x, y, z] or [x, y, z, radius], got " + describe(point));
+          glm::dvec4 p(number(point[0], element(pointPath, 0)), number(point[1], element(pointPath, 1)),
+                       number(point[2], element(pointPath, 2)), -1.0);
+          if (point.size() == 4) p.w = nonNegative(point[3], element(pointPath, 3));
+          else if (!radiusValue)
+            fail(pointPath, "has no radius: give [x, y, z, radius], or the object's \"radius\"");
+          local.push_back(p);
+        }
+        curves.counts.push_back(std::uint32_t(strand.size()));
+      }
+    }
+
+    if (const Json* x = find(v, "children")) curves.children = std::uint32_t(integer(*x, member(path, "children"), 0, kMaxChildren));
+    if (const Json* x = find(v, "child_radius")) {
+      if (curves.children == 0) fail(member(path, "child_radius"), "applies only with \"children\" > 0");
+      curves.childRadius = positive(*x, member(path, "child_radius"));
+    } else if (curves.children > 0) {
+      fail(member(path, "child_radius"), "missing (required with \"children\": how far children stray from their guide)");
+    }
+    if (const Json* x = find(v, "seed")) curves.seed = std::uint32_t(integer(*x, member(path, "seed"), 0, std::numeric_limits<std::uint32_t>::max()));
+    m_curvePoints += std::uint64_t(local.size()) * (std::uint64_t(curves.children) + 1);
+    if (m_curvePoints > kMaxCurvePoints)
+      fail(path, "brings the scene to " + std::to_string(m_curvePoints) + " curve points (children included), more than the " +
+                     std::to_string(kMaxCurvePoints) + " supported");
+
+    curves.material = materialOf(v, path);
+    curves.points.reserve(local.size());
+    for (const glm::dvec4& p : local) {
+      const double r = (radiusValue ? radius : p.w) * radiusScale * lengthScale;
+      curves.points.push_back(glm::dvec4(glm::dvec3(transform * glm::dvec4(glm::dvec3(p), 1.0)), r));
+    }
+    m_curves.push_back(std::move(curves));
   }
 
   void readSphere(const Json& v, const std::string& path) {
@@ -714,6 +822,7 @@ class Loader {
         fail(s.path, "the radius " + formatNumber(s.radius) + " is out of the range of a float");
       scene.spheres.push_back({center, radius, s.material});
     }
+    for (const WorldCurves& c : m_curves) placeCurves(c, origin);
     if (scene.materials.empty()) {
       scene.materials.push_back(makePbrMaterial(glm::vec3(0.8f), 0.0f, 0.5f));
       scene.materialNames.push_back("(default)");
@@ -739,11 +848,44 @@ class Loader {
       lo = glm::min(lo, s.center - s.radius);
       hi = glm::max(hi, s.center + s.radius);
     }
+    for (const WorldCurves& c : m_curves)
+      for (const glm::dvec4& p : c.points) {
+        lo = glm::min(lo, glm::dvec3(p) - p.w);
+        hi = glm::max(hi, glm::dvec3(p) + p.w);
+      }
     const double kFloatMax = std::numeric_limits<float>::max();
     if (lo.x <= hi.x && lo.y <= hi.y && lo.z <= hi.z && isFinite(lo) && isFinite(hi) &&
         glm::all(glm::lessThanEqual(glm::max(glm::abs(lo), glm::abs(hi)), glm::dvec3(kFloatMax))))
       return 0.5 * (lo + hi);
     return glm::dvec3(0.0);
+  }
+
+  /// Append a curves object's strands, moved to the origin, and their children.
+  void placeCurves(const WorldCurves& c, const glm::dvec3& origin) {
+    Scene& scene = m_result.scene;
+    const auto firstGuide = std::uint32_t(scene.curves.size());
+    std::size_t next = 0;
+    for (std::uint32_t count : c.counts) {
+      Curve curve;
+      curve.firstPoint = std::uint32_t(scene.curvePoints.size());
+      curve.pointCount = count;
+      curve.material = c.material;
+      curve.basis = c.basis;
+      for (std::uint32_t i = 0; i < count; ++i, ++next) {
+        const glm::dvec4& p = c.points[next];
+        const glm::vec3 q(glm::dvec3(p) - origin);
+        const auto r = float(p.w);
+        if (!isFinite(q))
+          fail(c.path, "strand " + std::to_string(scene.curves.size() - firstGuide) + ", point " + std::to_string(i) +
+                           " lies beyond the range of a float from the scene's origin");
+        if (!std::isfinite(r))
+          fail(c.path, "strand " + std::to_string(scene.curves.size() - firstGuide) + ", point " + std::to_string(i) +
+                           ": the radius " + formatNumber(p.w) + " is out of the range of a float");
+        scene.curvePoints.push_back({q.x, q.y, q.z, r});
+      }
+      scene.curves.push_back(curve);
+    }
+    addChildCurves(scene, firstGuide, std::uint32_t(c.counts.size()), c.children, float(c.childRadius), c.seed);
   }
 
   /// Append one placed copy of an included file, moved to the origin.
@@ -808,6 +950,8 @@ class Loader {
   std::map<std::string, std::size_t> m_fileIndex;  ///< resolved path -> m_files
   std::vector<Placement> m_placements;
   std::vector<WorldSphere> m_spheres;
+  std::vector<WorldCurves> m_curves;
+  std::uint64_t m_curvePoints = 0;  ///< children included
   std::uint32_t m_nextGeometry = 0;
 };
 

@@ -19,6 +19,7 @@
 #include <fstream>
 #include <iterator>
 #include <random>
+#include <regex>
 #include <string>
 #include <vector>
 
@@ -475,6 +476,73 @@ TEST(SceneFile, RecentringKeepsFarScenesPrecise) {
   EXPECT_EQ(world.spheres[0].center.x, 1e6f);
 }
 
+/// A .hair file of strands with 3 and 2 points, thickness 0.5 by default.
+std::string hairFile(float y = 1.0f) {
+  std::string out = "HAIR";
+  auto u32 = [&](std::uint32_t v) { out.append(reinterpret_cast<const char*>(&v), 4); };
+  auto f32 = [&](float v) { out.append(reinterpret_cast<const char*>(&v), 4); };
+  u32(2), u32(5), u32(3), u32(0), f32(0.5f);
+  out.resize(128, '\0');
+  for (std::uint16_t segments : {2, 1}) out.append(reinterpret_cast<const char*>(&segments), 2);
+  const float points[5][3] = {{0, 0, 0}, {0, y, 0}, {0, 2, 0}, {1, 0, 0}, {1, 1, 0}};
+  for (const auto& p : points) f32(p[0]), f32(p[1]), f32(p[2]);
+  return out;
+}
+
+TEST(SceneFile, CurvesInlineFromAFileAndChildren) {
+  writeFile(testDir() / "two.hair", hairFile());
+  const std::string text = doc(R"("materials": {"hair": {"base_color": [0.3, 0.2, 0.1]}}, "objects": [
+      {"type": "curves", "basis": "bspline", "material": "hair", "transform": {"translate": [10, 0, 0], "scale": 2},
+       "strands": [[[0, 0, 0, 0.1], [1, 0, 0], [2, 1, 0, 0.3], [3, 1, 1]]], "radius_scale": 1.5},
+      {"type": "curves", "file": "two.hair", "radius": 0.05},
+      {"type": "curves", "file": "two.hair", "children": 3, "child_radius": 0.2, "seed": 5}])");
+  GltfLoadOptions options;
+  options.recenter = false;
+  // the points without a radius want the object's
+  EXPECT_CONTAINS(errorOf(text, options), "objects[0].strands[0][1]: has no radius");
+  const std::string fixed = std::regex_replace(text, std::regex(R"("radius_scale": 1.5)"), R"("radius_scale": 1.5, "radius": 0.2)");
+  const Scene s = loadText(fixed, options).scene;
+  ASSERT_EQ(s.curves.size(), 1u + 2u + 2u * (1u + 3u));
+  // a transform scales positions and radii; "radius" replaces every point's, radius_scale multiplies it
+  EXPECT_EQ(s.curves[0].basis, CurveBasis::kBSpline);
+  EXPECT_EQ(s.curves[0].pointCount, 4u);
+  EXPECT_EQ(s.materialNames[s.curves[0].material], "hair");
+  const WtVec4 p = s.curvePoints[s.curves[0].firstPoint + 2];
+  EXPECT_EQ(glm::vec4(p.x, p.y, p.z, p.w), glm::vec4(14, 2, 0, 0.2f * 1.5f * 2.0f));
+  // the file's radii are half its thickness unless "radius" is given
+  EXPECT_FLOAT_EQ(s.curvePoints[s.curves[1].firstPoint].w, 0.05f);
+  EXPECT_FLOAT_EQ(s.curvePoints[s.curves[3].firstPoint].w, 0.25f);
+  EXPECT_EQ(s.curves[1].pointCount, 3u);
+  EXPECT_EQ(s.curves[2].pointCount, 2u);
+  // children follow their guide within child_radius, across it
+  for (std::uint32_t c = 5; c < s.curves.size(); ++c) {
+    const Curve& child = s.curves[c];
+    const Curve& guide = s.curves[child.pointCount == 3 ? 3 : 4];
+    ASSERT_EQ(child.pointCount, guide.pointCount);
+    for (std::uint32_t i = 0; i < child.pointCount; ++i) {
+      const WtVec4 a = s.curvePoints[guide.firstPoint + i], b = s.curvePoints[child.firstPoint + i];
+      const glm::vec3 offset(b.x - a.x, b.y - a.y, b.z - a.z);
+      EXPECT_LE(glm::length(offset), 0.2f + 1e-6f);
+      EXPECT_NEAR(offset.y, 0.0f, 1e-6f);  // the guides run along y
+      EXPECT_EQ(a.w, b.w);
+    }
+  }
+  // bounds take the curves in
+  EXPECT_NEAR(s.bounds().hi.x, 16.0f + 0.6f, 1e-4f);
+}
+
+TEST(SceneFileAssets, HairExampleLoads) {
+  WT_REQUIRE_ASSET(bangs, "curves/hairutil_testdata/Bangs_100.hair");
+  SceneFile hair = loadSceneFile((fs::path(WT_SOURCE_DIR) / "scenes" / "hair.json").string());
+  expectConsistent(hair.scene);
+  EXPECT_TRUE(hair.scene.warnings.empty()) << hair.scene.warnings.front();
+  EXPECT_GE(hair.scene.curves.size(), 10000u);
+  std::size_t segments = 0;
+  for (const Curve& c : hair.scene.curves) segments += c.pointCount - 1;
+  EXPECT_GE(segments, 100000u);
+  EXPECT_EQ(hair.scene.spheres.size(), 2u);  // the head and a lamp
+}
+
 // ---------------------------------------------------------------------------
 // errors: each names the file, the JSON path and the problem
 
@@ -543,11 +611,43 @@ const BadFile kBadFiles[] = {
         BadFile{"CenterElement", objects(R"({"type": "sphere", "center": [0, true, 0], "radius": 1})"),
                 "objects[0].center[1]: must be a number, got true"},
         BadFile{"MissingType", objects(R"({"center": [0, 0, 0]})"),
-                "objects[0].type: missing (required: gltf, sphere or spheres)"},
+                "objects[0].type: missing (required: gltf, sphere, spheres or curves)"},
         BadFile{"UnknownType", objects(R"({"type": "cube"})"),
-                "objects[0].type: unknown type \"cube\" (expected one of: gltf, sphere, spheres)"},
-        BadFile{"CurvesNotYet", objects(kSphere + R"(, {"type": "curves", "file": "hair.bin"})"),
-                "objects[1].type: \"curves\" is not supported yet (curves are the next geometry type to come)"},
+                "objects[0].type: unknown type \"cube\" (expected one of: gltf, sphere, spheres, curves)"},
+        // curves
+        BadFile{"CurvesFileAndStrands", objects(R"({"type": "curves", "file": "a.hair", "strands": []})"),
+                "objects[0]: give \"file\" (a .hair or .ply file) or \"strands\" (points), not both"},
+        BadFile{"CurvesNoStrands", objects(kSphere + R"(, {"type": "curves"})"),
+                "objects[1].strands: missing (required: \"strands\", or a \"file\" of strands)"},
+        BadFile{"CurvesFileType", objects(R"({"type": "curves", "file": "hair.bin"})"),
+                "objects[0].file: must be a .hair or .ply file, got \"hair.bin\""},
+        BadFile{"CurvesMissingFile", objects(R"({"type": "curves", "file": "nowhere.hair"})"),
+                "objects[0].file: no such file: "},
+        BadFile{"CurvesBasis", objects(R"({"type": "curves", "strands": [[[0, 0, 0, 1], [1, 0, 0, 1]]], "basis": "bezier"})"),
+                "objects[0].basis: must be \"linear\" or \"bspline\", got \"bezier\""},
+        BadFile{"CurvesShortStrand", objects(R"({"type": "curves", "strands": [[[0, 0, 0, 1], [1, 0, 0, 1]], [[0, 0, 0, 1]]]})"),
+                "objects[0].strands[1]: must be an array of at least 2 points, got [[0,0,0,1]]"},
+        BadFile{"CurvesShortBSpline", objects(R"({"type": "curves", "basis": "bspline", "strands": [[[0, 0, 0, 1], [1, 0, 0, 1]]]})"),
+                "objects[0].strands[0]: must be an array of at least 4 points (a B-spline segment takes 4)"},
+        BadFile{"CurvesPointWithoutRadius", objects(R"({"type": "curves", "strands": [[[0, 0, 0, 1], [1, 0, 0]]]})"),
+                "objects[0].strands[0][1]: has no radius: give [x, y, z, radius], or the object's \"radius\""},
+        BadFile{"CurvesNegativeRadius", objects(R"({"type": "curves", "strands": [[[0, 0, 0, 1], [1, 0, 0, -1]]]})"),
+                "objects[0].strands[0][1][3]: must be >= 0, got -1"},
+        BadFile{"CurvesShortPoint", objects(R"({"type": "curves", "strands": [[[0, 0, 0, 1], [1, 0]]]})"),
+                "objects[0].strands[0][1]: must be [x, y, z] or [x, y, z, radius], got [1,0]"},
+        BadFile{"CurvesZeroRadius", objects(R"({"type": "curves", "strands": [[[0, 0, 0], [1, 0, 0]]], "radius": 0})"),
+                "objects[0].radius: must be > 0, got 0"},
+        BadFile{"CurvesChildrenWithoutRadius", objects(R"({"type": "curves", "strands": [[[0, 0, 0, 1], [1, 0, 0, 1]]], "children": 4})"),
+                "objects[0].child_radius: missing (required with \"children\": how far children stray from their guide)"},
+        BadFile{"CurvesChildRadiusAlone", objects(R"({"type": "curves", "strands": [[[0, 0, 0, 1], [1, 0, 0, 1]]], "child_radius": 4})"),
+                "objects[0].child_radius: applies only with \"children\" > 0"},
+        BadFile{"CurvesTooManyChildren", objects(R"({"type": "curves", "strands": [[[0, 0, 0, 1], [1, 0, 0, 1]]], "children": 1000000, "child_radius": 1})"),
+                "objects[0].children: must be an integer in [0, 100000], got 1000000"},
+        BadFile{"CurvesUnknownField", objects(R"({"type": "curves", "strands": [[[0, 0, 0, 1], [1, 0, 0, 1]]], "width": 1})"),
+                "objects[0].width: unknown field (expected one of: type, file, strands, basis, radius, radius_scale, transform, "
+                "material, children, child_radius, seed)"},
+        BadFile{"CurvesPointBeyondFloat", objects(R"({"type": "curves", "strands": [[[0, 0, 0, 1], [1e300, 0, 0, 1]]]})"),
+                "objects[0]: strand 0, point 1 lies beyond the range of a float from the scene's origin"},
         BadFile{"ObjectNotAnObject", objects("3"), "objects[0]: must be an object, got 3"},
         BadFile{"UnknownMaterial", doc(R"("materials": {"red": {}, "blue": {}}, "objects": [)" +
                                        std::string(R"({"type": "sphere", "center": [0, 0, 0], "radius": 1, "material": "green"}])")),
@@ -655,6 +755,20 @@ TEST(SceneFileErrorsMore, GltfErrorsAreNested) {
   writeFile(testDir() / "broken.gltf", "{\"asset\": {\"version\": \"2.0\"}, \"nodes\": [{\"mesh\": 4}]}");
   EXPECT_CONTAINS(errorOf(objects(gltfObject("", "broken.gltf"))),
                   "scene.json: objects[0].file: broken.gltf: node 0: references missing mesh 4");
+}
+
+TEST(SceneFileErrorsMore, CurveFileErrorsAreNested) {
+  writeFile(testDir() / "broken.hair", hairFile(NAN));
+  EXPECT_CONTAINS(errorOf(objects(R"({"type": "curves", "file": "broken.hair"})")),
+                  "scene.json: objects[0].file: broken.hair: strand 0, point 1: coordinate is not finite (nan)");
+  writeFile(testDir() / "short.hair", hairFile().substr(0, 150));
+  EXPECT_CONTAINS(errorOf(objects(R"({"type": "curves", "file": "short.hair"})")),
+                  "scene.json: objects[0].file: short.hair: the file ends at byte 150, inside the points array");
+  writeFile(testDir() / "strands.ply", "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\n"
+                                       "property float z\nelement strand 1\nproperty ushort nsegs\nend_header\n0 0 0\n1 0 0\n1\n");
+  EXPECT_CONTAINS(errorOf(objects(R"({"type": "curves", "file": "strands.ply"})")),
+                  "scene.json: objects[0].radius: missing (required: strands.ply gives no radii)");
+  EXPECT_EQ(loadText(objects(R"({"type": "curves", "file": "strands.ply", "radius": 0.1})")).scene.curves.size(), 1u);
 }
 
 TEST(SceneFileErrorsMore, MissingSceneFile) {
