@@ -39,6 +39,7 @@ constexpr const char* kLightsPunctual = "KHR_lights_punctual";
 constexpr const char* kTransmission = "KHR_materials_transmission";
 constexpr const char* kIor = "KHR_materials_ior";
 constexpr const char* kVolume = "KHR_materials_volume";
+constexpr const char* kGpuInstancing = "EXT_mesh_gpu_instancing";
 /// Extensions whose absence changes where the geometry is or how its bytes
 /// read: a file that requires one cannot be drawn correctly without it.
 constexpr std::array<const char*, 3> kGeometryExtensions = {
@@ -306,7 +307,7 @@ class Converter {
     }
     for (const std::string& ext : m_model.extensionsUsed) {
       if (ext == kEmissiveStrength || ext == kLightsPunctual || ext == kTransmission || ext == kIor ||
-          ext == kVolume)
+          ext == kVolume || ext == kGpuInstancing)
         continue;
       bool required = std::find(m_model.extensionsRequired.begin(), m_model.extensionsRequired.end(),
                                 ext) != m_model.extensionsRequired.end();
@@ -983,18 +984,77 @@ class Converter {
       if (node.skin >= 0)
         m_scene.addWarning("skinning is not supported; skinned meshes are drawn in their bind pose");
       const auto meshIndex = std::size_t(node.mesh);
-      const auto [vertices, triangles] = meshSize(meshIndex);
-      m_sceneVertices = saturatingAdd(m_sceneVertices, vertices);
-      m_sceneTriangles = saturatingAdd(m_sceneTriangles, triangles);
-      // counted before anything is decoded: instancing must not let a small
-      // file take all memory
-      if (m_sceneVertices > m_options.maxVertices || m_sceneTriangles > m_options.maxTriangles)
-        fail(label + ": mesh " + std::to_string(meshIndex) + " brings the flattened scene to " +
-             std::to_string(m_sceneVertices) + " vertices and " + std::to_string(m_sceneTriangles) +
-             " triangles, more than the " + std::to_string(m_options.maxVertices) + " and " +
-             std::to_string(m_options.maxTriangles) + " supported");
-      m_meshInstances.push_back({nodeIndex, meshIndex, world});
+      for (const glm::dmat4& placed : gpuInstances(node, label, world)) {
+        const auto [vertices, triangles] = meshSize(meshIndex);
+        m_sceneVertices = saturatingAdd(m_sceneVertices, vertices);
+        m_sceneTriangles = saturatingAdd(m_sceneTriangles, triangles);
+        // counted before anything is decoded: instancing must not let a small
+        // file take all memory
+        if (m_sceneVertices > m_options.maxVertices || m_sceneTriangles > m_options.maxTriangles)
+          fail(label + ": mesh " + std::to_string(meshIndex) + " brings the flattened scene to " +
+               std::to_string(m_sceneVertices) + " vertices and " + std::to_string(m_sceneTriangles) +
+               " triangles, more than the " + std::to_string(m_options.maxVertices) + " and " +
+               std::to_string(m_options.maxTriangles) + " supported");
+        m_meshInstances.push_back({nodeIndex, meshIndex, placed});
+      }
     }
+  }
+
+  /// Where a node's mesh is placed: at the node (`world`), or, with
+  /// EXT_mesh_gpu_instancing, once per instance, world x T x R x S of the
+  /// instance's TRANSLATION, ROTATION and SCALE (each optional, all of one count).
+  std::vector<glm::dmat4> gpuInstances(const tinygltf::Node& node, const std::string& label,
+                                       const glm::dmat4& world) const {
+    auto ext = node.extensions.find(kGpuInstancing);
+    if (ext == node.extensions.end()) return {world};
+    const std::string where = label + ": " + kGpuInstancing;
+    const tinygltf::Value& attributes = ext->second.Get("attributes");
+    // (tinygltf reads an empty object as null: that has no attributes either)
+    if (attributes.Type() != tinygltf::NULL_TYPE && !attributes.IsObject())
+      fail(where + ": 'attributes' is not an object");
+    auto accessorOf = [&](const char* name) {
+      const tinygltf::Value& v = attributes.Get(name);
+      if (!v.IsInt() && !v.IsNumber()) return -1;
+      return v.GetNumberAsInt();
+    };
+    const std::vector<int> kFloat = {TINYGLTF_COMPONENT_TYPE_FLOAT};
+    std::vector<glm::vec3> translation, scale;
+    std::vector<glm::vec4> rotation;
+    if (int a = accessorOf("TRANSLATION"); a >= 0) translation = readAccessor<glm::vec3>(a, {where, "TRANSLATION", kFloat});
+    if (int a = accessorOf("ROTATION"); a >= 0)
+      rotation = readAccessor<glm::vec4>(
+          a, {where, "ROTATION", {TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_COMPONENT_TYPE_BYTE, TINYGLTF_COMPONENT_TYPE_SHORT},
+              true});
+    if (int a = accessorOf("SCALE"); a >= 0) scale = readAccessor<glm::vec3>(a, {where, "SCALE", kFloat});
+    const std::size_t count = std::max({translation.size(), rotation.size(), scale.size()});
+    if (count == 0) fail(where + ": no TRANSLATION, ROTATION or SCALE accessor with instances");
+    for (auto [name, size] : {std::pair{"TRANSLATION", translation.size()}, std::pair{"ROTATION", rotation.size()},
+                              std::pair{"SCALE", scale.size()}})
+      if (size != 0 && size != count)
+        fail(where + ": " + name + " has " + std::to_string(size) + " instances, another attribute " +
+             std::to_string(count));
+    std::vector<glm::dmat4> placed(count, world);
+    for (std::size_t i = 0; i < count; ++i) {
+      const std::string instance = where + ": instance " + std::to_string(i);
+      glm::dmat4 local(1.0);
+      if (!translation.empty()) {
+        if (!isFinite(translation[i])) fail(instance + ": TRANSLATION is not finite");
+        local = glm::translate(local, glm::dvec3(translation[i]));
+      }
+      if (!rotation.empty()) {
+        const glm::vec4 r = rotation[i];  // (x, y, z, w)
+        glm::dquat q(r.w, r.x, r.y, r.z);
+        const double length = glm::length(q);
+        if (!(length > 0.0) || !std::isfinite(length)) fail(instance + ": ROTATION is not a valid quaternion");
+        local = local * glm::mat4_cast(q / length);
+      }
+      if (!scale.empty()) {
+        if (!isFinite(scale[i])) fail(instance + ": SCALE is not finite");
+        local = glm::scale(local, glm::dvec3(scale[i]));
+      }
+      placed[i] = world * local;
+    }
+    return placed;
   }
 
   /// Vertices and triangles one instance of a mesh adds, from the accessor

@@ -162,6 +162,48 @@ TEST(GltfLoader, SingleTriangleIndexed) {
   EXPECT_TRUE(s.warnings.empty());
 }
 
+TEST(GltfLoader, GpuInstancingPlacesTheMeshOncePerInstance) {
+  // EXT_mesh_gpu_instancing: world x T x R x S per instance, under the node's own transform
+  GltfDoc doc = triangleDoc(true);
+  int t = doc.addVec3({{10, 0, 0}, {0, 20, 0}, {0, 0, 30}});
+  // (x, y, z, w): none, a quarter turn about z, none
+  int r = doc.addAccessor(doc.addView(std::vector<glm::vec4>{{0, 0, 0, 1}, {0, 0, 0.70710678f, 0.70710678f}, {0, 0, 0, 1}}),
+                          gltf_doc::kFloat, 3, "VEC4");
+  int sc = doc.addVec3({{1, 1, 1}, {1, 1, 1}, {2, 2, 2}});
+  doc.nodes[0] = "{\"mesh\":0,\"translation\":[0,0,-1],\"extensions\":{\"EXT_mesh_gpu_instancing\":{\"attributes\":"
+                 "{\"TRANSLATION\":" + str(std::size_t(t)) + ",\"ROTATION\":" + str(std::size_t(r)) + ",\"SCALE\":" +
+                 str(std::size_t(sc)) + "}}}}";
+  doc.extensionsUsed = "[\"EXT_mesh_gpu_instancing\"]";
+  GltfLoadOptions options;
+  options.recenter = false;
+  Scene s = loadDoc(doc, options);
+  expectConsistent(s);
+  ASSERT_EQ(s.triangles.size(), 3u);
+  EXPECT_TRUE(s.warnings.empty()) << s.warnings[0];
+  // corner (1, 0, 0) of each copy
+  expectNear(pos(s, s.triangles[0].v1), {11, 0, -1});
+  expectNear(pos(s, s.triangles[1].v1), {0, 21, -1});  // turned onto +y
+  expectNear(pos(s, s.triangles[2].v1), {2, 0, 29});   // scaled by 2
+  // the copies are one geometry placed three times
+  ASSERT_EQ(s.instances.size(), 3u);
+  EXPECT_EQ(s.instances[0].geometry, s.instances[2].geometry);
+}
+
+TEST(GltfLoader, GpuInstancingErrorsNameTheNodeAndAttribute) {
+  GltfDoc doc = triangleDoc(true);
+  int t = doc.addVec3({{1, 0, 0}, {2, 0, 0}});
+  int sc = doc.addVec3({{1, 1, 1}, {1, 1, 1}, {1, 1, 1}});
+  doc.nodes[0] = "{\"mesh\":0,\"extensions\":{\"EXT_mesh_gpu_instancing\":{\"attributes\":{\"TRANSLATION\":" +
+                 str(std::size_t(t)) + ",\"SCALE\":" + str(std::size_t(sc)) + "}}}}";
+  EXPECT_CONTAINS(docError(doc), "node 0: EXT_mesh_gpu_instancing: ");
+  EXPECT_CONTAINS(docError(doc), "instances");
+  doc.nodes[0] = "{\"mesh\":0,\"extensions\":{\"EXT_mesh_gpu_instancing\":{\"attributes\":{}}}}";
+  EXPECT_CONTAINS(docError(doc), "node 0: EXT_mesh_gpu_instancing: no TRANSLATION, ROTATION or SCALE");
+  doc.nodes[0] = "{\"mesh\":0,\"extensions\":{\"EXT_mesh_gpu_instancing\":{\"attributes\":{\"ROTATION\":" +
+                 str(std::size_t(t)) + "}}}}";
+  EXPECT_CONTAINS(docError(doc), "ROTATION accessor has type VEC3, expected VEC4");
+}
+
 TEST(GltfLoader, SingleTriangleWithoutIndices) {
   Scene s = loadDoc(triangleDoc(false));
   expectConsistent(s);
