@@ -19,6 +19,7 @@ struct KernelFeatures {
   bool pbr = false;               ///< a material uses the metallic-roughness model (else all are Lambertian)
   bool transmission = false;      ///< a metallic-roughness material transmits (KHR_materials_transmission)
   bool spheres = false;           ///< the scene has analytic spheres (WT_HAS_SPHERES: their ray test, surface and emitter sampling)
+  bool instances = false;         ///< the scene's buffers hold instances (WT_HAS_INSTANCES: geometries stored once, placed by transforms)
   int packetWidth = 8;            ///< rays per packet (WT_PACKET_WIDTH): 8 or 16, packetWidthFor
   /// WT_STREAM_PREFETCH: streams ask for a node's children as it arrives, and
   /// keep their rays' order (streamPrefetchFor)

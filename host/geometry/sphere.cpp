@@ -32,9 +32,10 @@ void gatherSpheres(const Scene& scene, PrimitiveRows& rows) {
   }
 }
 
-PrimitiveRows gatherPrimitives(const Scene& scene) {
+PrimitiveRows gatherPrimitives(const Scene& scene, std::span<const InstanceDesc> instances) {
   PrimitiveRows rows;
   gatherSpheres(scene, rows);
+  gatherInstances(instances, rows);
   return rows;
 }
 
