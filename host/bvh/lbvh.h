@@ -30,7 +30,7 @@ enum class BvhBuilder {
 enum class Instancing {
   Off,   ///< every copy's triangles in the one tree, world space (the flattened form)
   On,    ///< every eligible geometry once (SceneBuffers::kMinInstanceTriangles, no emission)
-  Auto,  ///< On where the flattened copies would outgrow the budget (SceneBuffers::kInstancingAutoBytes)
+  Auto,  ///< On where the flattened copies would outgrow the device's cache (SceneBuffers::instancingPays)
 };
 
 struct BvhBuildOptions {

@@ -319,7 +319,7 @@ int main(int argc, char** argv) {
   renderCmd->add_option("--instancing", render.instancing,
                         "Geometry placed several times (glTF nodes sharing a mesh): on, stored once with one "
                         "transform per copy (two-level BVH); off, every copy flattened; auto, on where the "
-                        "flattened copies would take more than 64 MiB")
+                        "flattened copies would not fit the device's global memory cache (32 MiB where it reports none)")
       ->check(CLI::IsMember({"auto", "on", "off"}))->capture_default_str();
   renderCmd->add_option("--traversal", render.traversal,
                         "auto: camera rays and their shadow rays in packets of neighbouring pixels, later bounces "
@@ -391,7 +391,7 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"auto", "lbvh", "ploc", "sah"}))->capture_default_str();
   benchCmd->add_option("--instancing", bench.instancing,
                        "Geometry placed several times: on (stored once, two-level BVH), off (flattened) or auto "
-                       "(on where the flattened copies would take more than 64 MiB), for every tree and the path figure")
+                       "(on where the flattened copies would not fit the device's cache), for every tree and the path figure")
       ->check(CLI::IsMember({"auto", "on", "off"}))->capture_default_str();
   benchCmd->add_option("--compare-bvh", bench.compareBvh,
                        "Builders whose trees are traced on the same rays (tree quality table); none: --compare-bvh none")

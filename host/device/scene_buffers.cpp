@@ -188,11 +188,12 @@ SceneBuffers::SceneBuffers(Context& context, const Scene& scene, const BvhBuildO
   if (options.instancing != Instancing::Off) {
     instanced = chooseInstancedGeometries(scene, valid, kMinInstanceTriangles);
     if (options.instancing == Instancing::Auto) {
-      // the bytes the flattened copies beyond the first would take (nodes at
-      // most 12 per triangle, 36 of blocks, 16 of tri_info)
+      // Instances cost a second traversal per ray and lose the packets
+      // inside them; they pay where the flattened copies would not fit the
+      // cache and the stored-once ones do (docs/performance.md, "Instancing")
       std::size_t copiedTriangles = 0;
       for (const InstancedGeometry& g : instanced) copiedTriangles += g.kept.size() * (g.copies.size() - 1);
-      if (copiedTriangles * kFlatBytesPerTriangle <= kInstancingAutoBytes) instanced.clear();
+      if (!instancingPays(copiedTriangles, context.info().globalCacheBytes)) instanced.clear();
     }
   }
   std::vector<std::uint8_t> flat = valid;

@@ -48,10 +48,14 @@ class SceneBuffers {
   /// than the few nodes and blocks it saves.
   static constexpr std::size_t kMinInstanceTriangles = 64;
   /// Instancing::Auto stores geometries once when their flattened copies
-  /// (beyond the first) would take more than this many bytes of nodes and
-  /// triangles (kFlatBytesPerTriangle each).
-  static constexpr std::size_t kInstancingAutoBytes = std::size_t(64) << 20;
+  /// (beyond the first, kFlatBytesPerTriangle of nodes and triangles each)
+  /// would take more than the device's global memory cache, or than
+  /// kInstancingAutoBytes where the device reports none (instancingPays).
+  static constexpr std::size_t kInstancingAutoBytes = std::size_t(32) << 20;
   static constexpr std::size_t kFlatBytesPerTriangle = 64;
+  static bool instancingPays(std::size_t copiedTriangles, std::uint64_t cacheBytes) {
+    return copiedTriangles * kFlatBytesPerTriangle > (cacheBytes > 0 ? cacheBytes : kInstancingAutoBytes);
+  }
 
   /// Build the BVH over the scene's triangles (but degenerate ones), collapse
   /// it to the 4-wide layout the kernels traverse, and upload.

@@ -93,6 +93,10 @@ TEST(Instancing, CopiesBecomeInstances) {
   // Auto keeps a scene this small flat
   Tracer automatic(test::deviceContext(), p.scene, withInstancing(Instancing::Auto));
   EXPECT_EQ(automatic.sceneBuffers().instanceCount(), 0u);
+  // and stores copies once where their flattened form outgrows the cache
+  EXPECT_TRUE(SceneBuffers::instancingPays(std::size_t(1) << 20, std::uint64_t(32) << 20));
+  EXPECT_FALSE(SceneBuffers::instancingPays(std::size_t(1) << 20, std::uint64_t(128) << 20));
+  EXPECT_FALSE(SceneBuffers::instancingPays(7 * 1279, 0));
 }
 
 /// Closest hits, any hits, in every traversal mode: the instanced form
