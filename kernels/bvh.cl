@@ -85,7 +85,10 @@ inline bool bvh_ray_is_finite(float3 org, float3 dir) { return all(isfinite(org)
 /// finite. Skipping the surface left is what keeps a spawned ray off it: a
 /// plane cannot be hit twice, and no distance threshold is needed that
 /// would also drop real hits close by (a concave corner's other face).
-inline Hit bvh_closest(BvhScene scene, float3 org, float3 dir, float tmin, float tmax, uint skip) {
+/// bvh_closest_root starts at node `root` instead of node 0: the root of a
+/// geometry stored once for its placed copies (kernels/geometry/instance.cl),
+/// its nodes after the scene's own tree in the same buffer.
+inline Hit bvh_closest_root(BvhScene scene, uint root, float3 org, float3 dir, float tmin, float tmax, uint skip) {
   Hit hit;
   hit.t = tmax;
   hit.b1 = hit.b2 = 0.0f;
@@ -100,7 +103,7 @@ inline Hit bvh_closest(BvhScene scene, float3 org, float3 dir, float tmin, float
   uint stack_node[WT_BVH_STACK_SIZE];
   float stack_t[WT_BVH_STACK_SIZE];
   int sp = 0;
-  uint node = 0;
+  uint node = root;
   for (;;) {
     __global const WtBvh4Node* n = &nodes[node];
     float4 t4;
@@ -160,12 +163,16 @@ inline Hit bvh_closest(BvhScene scene, float3 org, float3 dir, float tmin, float
   }
 }
 
+inline Hit bvh_closest(BvhScene scene, float3 org, float3 dir, float tmin, float tmax, uint skip) {
+  return bvh_closest_root(scene, 0u, org, dir, tmin, tmax, skip);
+}
+
 /// Any hit in (tmin, tmax) on a triangle other than skip_a and skip_b (the
 /// surface the shadow ray leaves, the emitter it aims at): true when the
 /// segment is blocked, and for a ray that is not finite (no light is carried
-/// along it).
-inline bool bvh_occluded(BvhScene scene, float3 org, float3 dir, float tmin, float tmax, uint skip_a,
-                         uint skip_b) {
+/// along it). From node `root` (bvh_closest_root); bvh_occluded from node 0.
+inline bool bvh_occluded_root(BvhScene scene, uint root, float3 org, float3 dir, float tmin, float tmax, uint skip_a,
+                              uint skip_b) {
   if (!bvh_ray_is_finite(org, dir)) return true;
   if (scene.node_count == 0) return false;
   __global const WtBvh4Node* nodes = (__global const WtBvh4Node*)scene.nodes;
@@ -175,7 +182,7 @@ inline bool bvh_occluded(BvhScene scene, float3 org, float3 dir, float tmin, flo
 
   uint stack_node[WT_BVH_STACK_SIZE];
   int sp = 0;
-  uint node = 0;
+  uint node = root;
   for (;;) {
     __global const WtBvh4Node* n = &nodes[node];
     float4 t4;
@@ -206,6 +213,11 @@ inline bool bvh_occluded(BvhScene scene, float3 org, float3 dir, float tmin, flo
     if (sp == 0) return false;
     node = stack_node[--sp];
   }
+}
+
+inline bool bvh_occluded(BvhScene scene, float3 org, float3 dir, float tmin, float tmax, uint skip_a,
+                         uint skip_b) {
+  return bvh_occluded_root(scene, 0u, org, dir, tmin, tmax, skip_a, skip_b);
 }
 
 #endif  // WT_BVH_CL

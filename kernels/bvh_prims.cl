@@ -12,8 +12,12 @@
 #if WT_HAS_PRIMITIVES
 
 /// Narrow `hit` (the triangles' closest hit, hit->t its distance or tmax) to
-/// a nearer primitive in (tmin, hit->t), never at the start of `skip`.
-inline void bvh_prims_closest(GeometryScene g, float3 org, float3 dir, float tmin, uint skip, Hit* hit) {
+/// a nearer primitive in (tmin, hit->t), never at the start of the surface
+/// the ray leaves: `skip` (on instance `skip_instance` when that is not
+/// WT_NO_HIT). An instance's hit sets *hit_instance (which the caller sets
+/// to WT_NO_HIT first); `scene` holds the instanced geometries' trees.
+inline void bvh_prims_closest(BvhScene scene, GeometryScene g, float3 org, float3 dir, float tmin, uint skip,
+                              uint skip_instance, Hit* hit, uint* hit_instance) {
   if (g.header.node_count == 0 || !bvh_ray_is_finite(org, dir)) return;
   float3 inv_d = bvh_safe_rcp(dir);
   RayPlanes planes = bvh_ray_planes(inv_d);
@@ -35,12 +39,20 @@ inline void bvh_prims_closest(GeometryScene g, float3 org, float3 dir, float tmi
       if (count > 0) {
         for (uint i = first; i < first + count; ++i) {
           uint prim = g.refs[i];
+#if WT_HAS_INSTANCES
+          if (prim_type(prim) == WT_PRIM_INSTANCE) {
+            if (geometry_instance_closest(scene, g, prim, org, dir, tmin, skip, skip_instance, hit))
+              *hit_instance = prim;
+            continue;
+          }
+#endif
           float t, u, v;
           if (geometry_intersect(g, prim, org, dir, tmin, hit->t, skip, WT_NO_HIT, &t, &u, &v)) {
             hit->t = t;
             hit->b1 = u;
             hit->b2 = v;
             hit->prim = prim;
+            *hit_instance = WT_NO_HIT;
           }
         }
       } else if (t_child[k] < next_t) {
@@ -70,9 +82,9 @@ inline void bvh_prims_closest(GeometryScene g, float3 org, float3 dir, float tmi
 }
 
 /// Whether a primitive blocks (tmin, tmax), never at the start of skip_a
-/// or skip_b.
-inline bool bvh_prims_occluded(GeometryScene g, float3 org, float3 dir, float tmin, float tmax, uint skip_a,
-                               uint skip_b) {
+/// (on instance skip_instance when that is not WT_NO_HIT) or skip_b.
+inline bool bvh_prims_occluded(BvhScene scene, GeometryScene g, float3 org, float3 dir, float tmin, float tmax,
+                               uint skip_a, uint skip_b, uint skip_instance) {
   if (g.header.node_count == 0) return false;
   if (!bvh_ray_is_finite(org, dir)) return true;
   float3 inv_d = bvh_safe_rcp(dir);
@@ -90,8 +102,15 @@ inline bool bvh_prims_occluded(GeometryScene g, float3 org, float3 dir, float tm
       uint first = n->child[k], count = n->count[k];
       if (count > 0) {
         for (uint i = first; i < first + count; ++i) {
+          uint prim = g.refs[i];
+#if WT_HAS_INSTANCES
+          if (prim_type(prim) == WT_PRIM_INSTANCE) {
+            if (geometry_instance_occluded(scene, g, prim, org, dir, tmin, tmax, skip_a, skip_instance)) return true;
+            continue;
+          }
+#endif
           float t, u, v;
-          if (geometry_intersect(g, g.refs[i], org, dir, tmin, tmax, skip_a, skip_b, &t, &u, &v)) return true;
+          if (geometry_intersect(g, prim, org, dir, tmin, tmax, skip_a, skip_b, &t, &u, &v)) return true;
         }
       } else {
         stack_node[sp++] = first;
@@ -105,20 +124,24 @@ inline bool bvh_prims_occluded(GeometryScene g, float3 org, float3 dir, float tm
 #endif  // WT_HAS_PRIMITIVES
 
 /// The scene's closest hit in (tmin, tmax): triangles, then the other types.
-inline Hit scene_closest(BvhScene scene, GeometryScene g, float3 org, float3 dir, float tmin, float tmax, uint skip) {
+/// The ray leaves `skip` (on instance skip_instance); *hit_instance is the
+/// instance hit, WT_NO_HIT for none (always, without instances).
+inline Hit scene_closest(BvhScene scene, GeometryScene g, float3 org, float3 dir, float tmin, float tmax, uint skip,
+                         uint skip_instance, uint* hit_instance) {
   Hit hit = bvh_closest(scene, org, dir, tmin, tmax, skip);
+  *hit_instance = WT_NO_HIT;
 #if WT_HAS_PRIMITIVES
-  bvh_prims_closest(g, org, dir, tmin, skip, &hit);
+  bvh_prims_closest(scene, g, org, dir, tmin, skip, skip_instance, &hit, hit_instance);
 #endif
   return hit;
 }
 
 /// Whether anything in the scene blocks (tmin, tmax).
 inline bool scene_occluded(BvhScene scene, GeometryScene g, float3 org, float3 dir, float tmin, float tmax,
-                           uint skip_a, uint skip_b) {
+                           uint skip_a, uint skip_b, uint skip_instance) {
   if (bvh_occluded(scene, org, dir, tmin, tmax, skip_a, skip_b)) return true;
 #if WT_HAS_PRIMITIVES
-  return bvh_prims_occluded(g, org, dir, tmin, tmax, skip_a, skip_b);
+  return bvh_prims_occluded(scene, g, org, dir, tmin, tmax, skip_a, skip_b, skip_instance);
 #else
   return false;
 #endif

@@ -10,7 +10,8 @@ WT_KERNEL void connect(__global const uint* counters, __global const uint* shado
                        __global const float4* shadow_o, __global const float4* shadow_d,
                        __global const float4* shadow_radiance, __global const WtBvhNode* nodes,
                        uint node_count, __global const float4* tri_verts,
-                       __global float4* radiance, __global const uint2* shadow_skip, WT_GEOMETRY_PARAMS) {
+                       __global float4* radiance, __global const uint2* shadow_skip,
+                       __global const uint* hit_instance, WT_GEOMETRY_PARAMS) {
   uint i = get_global_id(0);
   if (i >= counters[WT_COUNTER_SHADOW]) return;
   uint path = shadow_queue[i];
@@ -20,7 +21,10 @@ WT_KERNEL void connect(__global const uint* counters, __global const uint* shado
   BvhScene scene = {nodes, node_count, tri_verts};
   GeometryScene g = WT_GEOMETRY_SCENE;
   uint2 skip = shadow_skip[path];
-  if (!scene_occluded(scene, g, o.xyz, d.xyz, o.w, d.w, skip.x, skip.y)) radiance[path] += shadow_radiance[path];
+  // the shadow ray leaves the path's hit: skip.x on the instance hit
+  uint skip_instance = WT_HAS_INSTANCES ? hit_instance[path] : WT_NO_HIT;
+  if (!scene_occluded(scene, g, o.xyz, d.xyz, o.w, d.w, skip.x, skip.y, skip_instance))
+    radiance[path] += shadow_radiance[path];
 }
 
 /// connect for shadow-queue entries [n i, n i + n), n = WT_PACKET_WIDTH,
@@ -30,7 +34,8 @@ WT_KERNEL void connect_packet(__global const uint* counters, __global const uint
                               __global const float4* shadow_o, __global const float4* shadow_d,
                               __global const float4* shadow_radiance, __global const WtBvhNode* nodes,
                               uint node_count, __global const float4* tri_verts,
-                              __global float4* radiance, __global const uint2* shadow_skip, WT_GEOMETRY_PARAMS) {
+                              __global float4* radiance, __global const uint2* shadow_skip,
+                              __global const uint* hit_instance, WT_GEOMETRY_PARAMS) {
   uint first = get_global_id(0) * WT_PACKET;
   uint count = counters[WT_COUNTER_SHADOW];
   if (first >= count) return;
@@ -49,7 +54,9 @@ WT_KERNEL void connect_packet(__global const uint* counters, __global const uint
     uint path = index[l];
     float4 o = shadow_o[path], d = shadow_d[path];
     uint2 skip = shadow_skip[path];
-    if (bvh_prims_occluded(g, o.xyz, d.xyz, o.w, d.w, skip.x, skip.y)) continue;
+    if (bvh_prims_occluded(scene, g, o.xyz, d.xyz, o.w, d.w, skip.x, skip.y,
+                           WT_HAS_INSTANCES ? hit_instance[path] : WT_NO_HIT))
+      continue;
 #endif
     radiance[index[l]] += shadow_radiance[index[l]];
   }

@@ -6,7 +6,7 @@ WT_KERNEL void extend(__global const uint* counters, uint queue_slot, __global c
                       __global const float4* ray_o, __global const float4* ray_d,
                       __global const WtBvhNode* nodes, uint node_count,
                       __global const float4* tri_verts, __global float4* hits,
-                      __global const uint* ray_skip, WT_GEOMETRY_PARAMS) {
+                      __global const uint* ray_skip, __global uint* hit_instance, WT_GEOMETRY_PARAMS) {
   uint i = get_global_id(0);
   if (i >= counters[queue_slot]) return;
   uint path = queue[i];
@@ -14,8 +14,14 @@ WT_KERNEL void extend(__global const uint* counters, uint queue_slot, __global c
   float4 d = ray_d[path];
   BvhScene scene = {nodes, node_count, tri_verts};
   GeometryScene g = WT_GEOMETRY_SCENE;
-  Hit hit = scene_closest(scene, g, o.xyz, d.xyz, o.w, d.w, ray_skip[path]);
+  // the ray leaves the path's last hit: ray_skip on the instance hit then
+  uint instance;
+  Hit hit = scene_closest(scene, g, o.xyz, d.xyz, o.w, d.w, ray_skip[path],
+                          WT_HAS_INSTANCES ? hit_instance[path] : WT_NO_HIT, &instance);
   hits[path] = (float4)(hit.t, hit.b1, hit.b2, as_float(hit.prim));
+#if WT_HAS_INSTANCES
+  hit_instance[path] = instance;
+#endif
 }
 
 /// extend for queue entries [n i, n i + n), n = WT_PACKET_WIDTH, traced as
@@ -25,7 +31,7 @@ WT_KERNEL void extend_packet(__global const uint* counters, uint queue_slot, __g
                              __global const float4* ray_o, __global const float4* ray_d,
                              __global const WtBvhNode* nodes, uint node_count,
                              __global const float4* tri_verts, __global float4* hits,
-                             __global const uint* ray_skip, WT_GEOMETRY_PARAMS) {
+                             __global const uint* ray_skip, __global uint* hit_instance, WT_GEOMETRY_PARAMS) {
   uint first = get_global_id(0) * WT_PACKET;
   uint count = counters[queue_slot];
   if (first >= count) return;
@@ -41,8 +47,16 @@ WT_KERNEL void extend_packet(__global const uint* counters, uint queue_slot, __g
     float4 o = ray_o[path], d = ray_d[path];
     float4 h = hits[path];
     Hit hit = {h.x, h.y, h.z, as_uint(h.w)};
-    bvh_prims_closest(g, o.xyz, d.xyz, o.w, ray_skip[path], &hit);
-    if (hit.prim != as_uint(h.w)) hits[path] = (float4)(hit.t, hit.b1, hit.b2, as_float(hit.prim));
+    uint instance = WT_NO_HIT;
+    bvh_prims_closest(scene, g, o.xyz, d.xyz, o.w, ray_skip[path], WT_HAS_INSTANCES ? hit_instance[path] : WT_NO_HIT,
+                      &hit, &instance);
+#if WT_HAS_INSTANCES
+    hit_instance[path] = instance;
+    if (hit.prim != as_uint(h.w) || instance != WT_NO_HIT)
+#else
+    if (hit.prim != as_uint(h.w))
+#endif
+      hits[path] = (float4)(hit.t, hit.b1, hit.b2, as_float(hit.prim));
   }
 #endif
 }

@@ -43,7 +43,7 @@ WT_KERNEL void shade(WtFrameParams frame, WtEnvironment environment, __global co
                      __global const float* pbr_table, __global ushort4* bounce_counts,
                      __global uint* ray_skip, __global uint2* shadow_skip,
                      __global const WtLightNode* light_tree, __global const uint* emitter_leaf,
-                     __global float4* prev_normal, WT_GEOMETRY_PARAMS) {
+                     __global float4* prev_normal, __global const uint* hit_instance, WT_GEOMETRY_PARAMS) {
   uint i = get_global_id(0);
   if (i >= counters[in_slot]) return;
   // Without WT_FLAG_COMPACT_SHADOWS entry i of the shadow queue is this
@@ -73,7 +73,12 @@ WT_KERNEL void shade(WtFrameParams frame, WtEnvironment environment, __global co
     return;
   }
 
-  SurfaceHit surface = geometry_surface(g, tri_verts, tri_info, normals, prim, ray_o[path].xyz, dir, hit);
+  // an instance's hit: prim is its geometry's triangle. The path's next rays
+  // leave (prim, instance): ray_skip and shadow_skip name the triangle, and
+  // extend and connect read the instance from hit_instance, which stays as it
+  // is until the next extend.
+  uint instance = WT_HAS_INSTANCES ? hit_instance[path] : WT_NO_HIT;
+  SurfaceHit surface = geometry_surface(g, tri_verts, tri_info, normals, prim, instance, ray_o[path].xyz, dir, hit);
   WtMaterial material = materials[surface.material];
   float3 p = surface.p, p_error = surface.p_error, ng = surface.ng, ns = surface.ns;
   if (dot(ng, ng) == 0.0f) return;  // degenerate triangle: absorb

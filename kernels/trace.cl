@@ -8,11 +8,12 @@
 #if WT_HAS_PRIMITIVES
 /// Rays [first, end) that no triangle blocks, against the other primitive types.
 inline void trace_prims_occluded(uint first, uint end, __global const float4* ray_o, __global const float4* ray_d,
-                                 __global const uint* skip, __global uint* occluded, GeometryScene g) {
+                                 __global const uint* skip, __global const uint* skip_instance,
+                                 __global uint* occluded, BvhScene scene, GeometryScene g) {
   for (uint i = first; i < end; ++i) {
     if (occluded[i]) continue;
     float4 o = ray_o[i], d = ray_d[i];
-    occluded[i] = bvh_prims_occluded(g, o.xyz, d.xyz, o.w, d.w, skip[i], WT_NO_HIT) ? 1u : 0u;
+    occluded[i] = bvh_prims_occluded(scene, g, o.xyz, d.xyz, o.w, d.w, skip[i], WT_NO_HIT, skip_instance[i]) ? 1u : 0u;
   }
 }
 #endif
@@ -20,28 +21,35 @@ inline void trace_prims_occluded(uint first, uint end, __global const float4* ra
 WT_KERNEL void trace_closest(uint count, __global const float4* ray_o, __global const float4* ray_d,
                              __global const WtBvhNode* nodes, uint node_count,
                              __global const float4* tri_verts, __global float4* hits,
-                             __global const uint* skip, WT_GEOMETRY_PARAMS) {
+                             __global const uint* skip, __global uint* instances, WT_GEOMETRY_PARAMS) {
   uint i = get_global_id(0);
   if (i >= count) return;
   float4 o = ray_o[i];
   float4 d = ray_d[i];
   BvhScene scene = {nodes, node_count, tri_verts};
   GeometryScene g = WT_GEOMETRY_SCENE;
-  Hit hit = scene_closest(scene, g, o.xyz, d.xyz, o.w, d.w, skip[i]);
+  uint instance;
+  Hit hit = scene_closest(scene, g, o.xyz, d.xyz, o.w, d.w, skip[i], WT_HAS_INSTANCES ? instances[i] : WT_NO_HIT,
+                          &instance);
   hits[i] = (float4)(hit.t, hit.b1, hit.b2, as_float(hit.prim));
+#if WT_HAS_INSTANCES
+  instances[i] = instance;  // in: the instance of the surface the ray leaves; out: the instance hit
+#endif
 }
 
 WT_KERNEL void trace_occluded(uint count, __global const float4* ray_o,
                               __global const float4* ray_d, __global const WtBvhNode* nodes,
                               uint node_count, __global const float4* tri_verts,
-                              __global uint* occluded, __global const uint* skip, WT_GEOMETRY_PARAMS) {
+                              __global uint* occluded, __global const uint* skip, __global uint* instances,
+                              WT_GEOMETRY_PARAMS) {
   uint i = get_global_id(0);
   if (i >= count) return;
   float4 o = ray_o[i];
   float4 d = ray_d[i];
   BvhScene scene = {nodes, node_count, tri_verts};
   GeometryScene g = WT_GEOMETRY_SCENE;
-  occluded[i] = scene_occluded(scene, g, o.xyz, d.xyz, o.w, d.w, skip[i], WT_NO_HIT) ? 1u : 0u;
+  occluded[i] = scene_occluded(scene, g, o.xyz, d.xyz, o.w, d.w, skip[i], WT_NO_HIT,
+                               WT_HAS_INSTANCES ? instances[i] : WT_NO_HIT) ? 1u : 0u;
 }
 
 // Any hit for incoherent rays as streams (kernels/bvh_stream.cl): work-item
@@ -50,7 +58,7 @@ WT_KERNEL void trace_occluded_stream(uint count, __global const float4* ray_o,
                                      __global const float4* ray_d, __global const WtBvhNode* nodes,
                                      uint node_count, __global const float4* tri_verts,
                                      __global uint* occluded, __global const uint* skip,
-                                     WT_GEOMETRY_PARAMS) {
+                                     __global uint* instances, WT_GEOMETRY_PARAMS) {
   uint i = get_global_id(0);
   if (i >= (count + WT_STREAM_WINDOW - 1u) / WT_STREAM_WINDOW) return;
   BvhScene scene = {nodes, node_count, tri_verts};
@@ -58,7 +66,7 @@ WT_KERNEL void trace_occluded_stream(uint count, __global const float4* ray_o,
   bvh_occluded_window(scene, first, min(first + WT_STREAM_WINDOW, count), ray_o, ray_d, skip, occluded);
 #if WT_HAS_PRIMITIVES
   GeometryScene g = WT_GEOMETRY_SCENE;
-  trace_prims_occluded(first, min(first + WT_STREAM_WINDOW, count), ray_o, ray_d, skip, occluded, g);
+  trace_prims_occluded(first, min(first + WT_STREAM_WINDOW, count), ray_o, ray_d, skip, instances, occluded, scene, g);
 #endif
 }
 
@@ -67,7 +75,7 @@ WT_KERNEL void trace_occluded_stream(uint count, __global const float4* ray_o,
 WT_KERNEL void trace_closest_packet(uint count, __global const float4* ray_o, __global const float4* ray_d,
                                     __global const WtBvhNode* nodes, uint node_count,
                                     __global const float4* tri_verts, __global float4* hits,
-                                    __global const uint* skip, WT_GEOMETRY_PARAMS) {
+                                    __global const uint* skip, __global uint* instances, WT_GEOMETRY_PARAMS) {
   uint first = get_global_id(0) * WT_PACKET;
   if (first >= count) return;
   BvhScene scene = {nodes, node_count, tri_verts};
@@ -79,8 +87,10 @@ WT_KERNEL void trace_closest_packet(uint count, __global const float4* ray_o, __
   for (uint i = first; i < min(count, first + WT_PACKET); ++i) {
     float4 o = ray_o[i], d = ray_d[i], h = hits[i];
     Hit hit = {h.x, h.y, h.z, as_uint(h.w)};
-    bvh_prims_closest(g, o.xyz, d.xyz, o.w, skip[i], &hit);
+    uint instance = WT_NO_HIT;
+    bvh_prims_closest(scene, g, o.xyz, d.xyz, o.w, skip[i], instances[i], &hit, &instance);
     hits[i] = (float4)(hit.t, hit.b1, hit.b2, as_float(hit.prim));
+    instances[i] = instance;
   }
 #endif
 }
@@ -88,7 +98,7 @@ WT_KERNEL void trace_closest_packet(uint count, __global const float4* ray_o, __
 WT_KERNEL void trace_occluded_packet(uint count, __global const float4* ray_o, __global const float4* ray_d,
                                      __global const WtBvhNode* nodes, uint node_count,
                                      __global const float4* tri_verts, __global uint* occluded,
-                                     __global const uint* skip, WT_GEOMETRY_PARAMS) {
+                                     __global const uint* skip, __global uint* instances, WT_GEOMETRY_PARAMS) {
   uint first = get_global_id(0) * WT_PACKET;
   if (first >= count) return;
   BvhScene scene = {nodes, node_count, tri_verts};
@@ -105,6 +115,6 @@ WT_KERNEL void trace_occluded_packet(uint count, __global const float4* ray_o, _
   }
 #if WT_HAS_PRIMITIVES
   GeometryScene g = WT_GEOMETRY_SCENE;
-  trace_prims_occluded(first, first + lanes, ray_o, ray_d, skip, occluded, g);
+  trace_prims_occluded(first, first + lanes, ray_o, ray_d, skip, instances, occluded, scene, g);
 #endif
 }

@@ -403,7 +403,8 @@ struct SceneResult {
   std::size_t nodes4 = 0;  ///< the 4-wide tree the kernels traverse
   double collapseSeconds = 0.0;  ///< binary to 4-wide and the leaves packed in blocks (median), not in buildSeconds
   double sah4 = 0.0;
-  double bytesPerTriangle = 0.0;
+  double bytesPerTriangle = 0.0;  ///< SceneBuffers::triangleBytes per scene triangle (instances' rows and tree included)
+  std::size_t instances = 0;     ///< copies stored as instances (--instancing)
   std::size_t leafMisfits = 0;  ///< leaves taking one more four-lane test than their size needs
   std::size_t copiesPlaced = 0;  ///< copies given their geometry's shared tree (--bvh auto)
   std::size_t flatRegions = 0;   ///< regions the LBVH keyed with their thin axis last
@@ -584,6 +585,7 @@ BvhBuildOptions benchBvhOptions(BvhBuilder builder, const BenchOptions& options)
   bvhOptions.plocRadius = options.plocRadius;
   bvhOptions.maxLeafSize = options.maxLeafSize;
   bvhOptions.plocTopPrims = options.plocTopPrims;
+  bvhOptions.instancing = *parseInstancing(options.instancing);
   return bvhOptions;
 }
 
@@ -644,7 +646,7 @@ void compareTrees(Context& context, const Scene& scene, std::span<const Aabb> bo
       tracers.push_back(owned.back().get());
     }
     tree.bytesPerTriangle = scene.triangles.empty() ? 0.0
-                                                    : double(tracers.back()->sceneBuffers().uploadedBytes) /
+                                                    : double(tracers.back()->sceneBuffers().triangleBytes()) /
                                                           scene.triangles.size();
     trees.push_back(tree);
   }
@@ -669,7 +671,7 @@ void compareTrees(Context& context, const Scene& scene, std::span<const Aabb> bo
     setKernelDirectory(before);
     tracers.push_back(owned.back().get());
     tree.nodes4 = tracers.back()->sceneBuffers().nodeCount;
-    tree.bytesPerTriangle = defaultTracer.sceneBuffers().uploadedBytes / std::max<double>(1.0, scene.triangles.size());
+    tree.bytesPerTriangle = defaultTracer.sceneBuffers().triangleBytes() / std::max<double>(1.0, scene.triangles.size());
     trees.push_back(tree);
   }
   for (std::size_t set = 0; set < sets.size(); ++set) {
@@ -767,7 +769,8 @@ SceneResult benchScene(Context& context, const std::string& name, const Scene& s
   Tracer tracer(context, scene, bvhOptions, result.packetWidth);
   result.streamPrefetch = tracer.streamPrefetch();
   result.bytesPerTriangle =
-      scene.triangles.empty() ? 0.0 : double(tracer.sceneBuffers().uploadedBytes) / scene.triangles.size();
+      scene.triangles.empty() ? 0.0 : double(tracer.sceneBuffers().triangleBytes()) / scene.triangles.size();
+  result.instances = tracer.sceneBuffers().instanceCount();
   result.leafMisfits = tracer.sceneBuffers().leafMisfits();
   std::size_t others = 0;
   for (std::uint32_t type = 0; type < WT_PRIM_TYPES; ++type)
@@ -820,6 +823,7 @@ SceneResult benchScene(Context& context, const std::string& name, const Scene& s
   settings.width = settings.height = options.pathWidth;
   settings.samplesPerPixel = options.pathSamples;
   settings.bvhBuilder = bvhOptions.builder;
+  settings.instancing = bvhOptions.instancing;
   settings.packetWidth = options.packetWidth;
   Renderer renderer(context, scene, settings);
   renderer.renderSample();  // warm-up
@@ -987,13 +991,13 @@ int runBench(const BenchOptions& options) {
       const SceneResult& r = results[i];
       std::printf("  {\"name\": %s, \"triangles\": %zu, \"bvh_build_s\": %.6f, \"bvh_mtris_per_s\": %.3f, "
                   "\"bvh_nodes\": %zu, \"bvh_sah\": %.3f, \"bvh4_nodes\": %zu, \"bvh4_sah\": %.3f, \"bvh4_collapse_s\": %.6f, "
-                  "\"bvh4_mtris_per_s\": %.3f, \"bytes_per_triangle\": %.1f, \"leaf_misfits\": %zu, \"bvh_copies_placed\": %zu, "
+                  "\"bvh4_mtris_per_s\": %.3f, \"bytes_per_triangle\": %.1f, \"instances\": %zu, \"leaf_misfits\": %zu, \"bvh_copies_placed\": %zu, "
                   "\"bvh_flat_regions\": %zu, \"packet_width\": %d, \"stream_prefetch\": %s, \"embree_build_s\": %.6f, "
                   "\"shadow_targets\": \"%s\", \"path_mrays\": %.3f,\n",
                   jsonString(r.name).c_str(), r.triangles, r.buildSeconds,
                   r.buildSeconds > 0 ? r.triangles / r.buildSeconds * 1e-6 : 0.0, r.nodes, r.sah,
-                  r.nodes4, r.sah4, r.collapseSeconds, traversableRate(r), r.bytesPerTriangle, r.leafMisfits, r.copiesPlaced,
-                  r.flatRegions, r.packetWidth, r.streamPrefetch ? "true" : "false", r.embreeBuildSeconds, r.shadowToEmitters ? "emitters" : "bounds", r.pathMrays);
+                  r.nodes4, r.sah4, r.collapseSeconds, traversableRate(r), r.bytesPerTriangle, r.instances, r.leafMisfits,
+                  r.copiesPlaced, r.flatRegions, r.packetWidth, r.streamPrefetch ? "true" : "false", r.embreeBuildSeconds, r.shadowToEmitters ? "emitters" : "bounds", r.pathMrays);
       std::printf("   \"primitives\": {");
       for (std::uint32_t type = 0, n = 0; type < WT_PRIM_TYPES; ++type)
         if (*primTypeName(type)) std::printf("%s\"%s\": %zu", n++ ? ", " : "", primTypeName(type), r.primitives[type]);
@@ -1061,8 +1065,8 @@ int runBench(const BenchOptions& options) {
   std::snprintf(rule, sizeof rule, " (8 for a scene with fewer than %g camera rays per triangle)",
                 kWidePacketRaysPerTriangle);
   const std::string widePacketRule = rule;
-  std::printf("device: %s (%s); reference: %s; bvh: %s; packets of %d rays%s\n", device.name.c_str(),
-              device.platformName.c_str(), embreeText.c_str(), options.bvh.c_str(), packetWidth,
+  std::printf("device: %s (%s); reference: %s; bvh: %s; instancing: %s; packets of %d rays%s\n", device.name.c_str(),
+              device.platformName.c_str(), embreeText.c_str(), options.bvh.c_str(), options.instancing.c_str(), packetWidth,
               options.packetWidth == 0 && packetWidth == 16 ? widePacketRule.c_str() : "");
   std::printf("rays: primary %dx%d through pixel centres; diffuse and shadow rays from their hits; "
               "median of %d or more runs (%g s at least) after a warm-up\npaths: %dx%d, %d spp, up to 8 bounces, "

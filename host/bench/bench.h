@@ -33,6 +33,7 @@ struct BenchOptions {
   int embreeQuality = 2;            ///< RTC_BUILD_QUALITY_: 0 low, 1 medium, 2 high
   bool embreeRobust = false;        ///< RTC_SCENE_FLAG_ROBUST
   std::string bvh = "auto";         ///< the tree compared with Embree and rendering the path figure
+  std::string instancing = "auto";  ///< --instancing: off, on, auto (Instancing, SceneBuffers)
   /// Builders whose trees are built (median of repetitions) and traced on
   /// the same rays, interleaved, for the tree-quality table; "none" skips it.
   std::vector<std::string> compareBvh{"auto", "lbvh", "ploc", "sah"};

@@ -25,6 +25,14 @@ enum class BvhBuilder {
   Sah,   ///< buildSahBvh: top-down binned SAH; slow, the quality yardstick
 };
 
+/// Whether SceneBuffers stores a geometry placed several times once, as a
+/// two-level tree (instances over per-geometry trees), or flattens every copy.
+enum class Instancing {
+  Off,   ///< every copy's triangles in the one tree, world space (the flattened form)
+  On,    ///< every eligible geometry once (SceneBuffers::kMinInstanceTriangles, no emission)
+  Auto,  ///< On where the flattened copies would outgrow the device's cache (SceneBuffers::instancingPays)
+};
+
 struct BvhBuildOptions {
   /// Subtrees with at most this many primitives become one leaf; 0: 4
   /// (buildBvh only; the builders themselves take it as given). SceneBuffers
@@ -37,6 +45,7 @@ struct BvhBuildOptions {
   /// Ploc: clustering stops where clusters average this many primitives and a
   /// binned SAH pass builds the tree above them; 0: PLOC up to the root.
   int plocTopPrims = 16;
+  Instancing instancing = Instancing::Off;  ///< read by SceneBuffers only
 };
 
 /// Primitives [first, first + count) are a placed copy of `geometry`: the

@@ -50,6 +50,7 @@ struct RenderOptions {
   std::string reference, errorLog;
   std::string accumulation = "kahan";
   std::string bvh = "auto";
+  std::string instancing = "auto";
   std::string traversal = "auto";
   int packetWidth = 0;
   int sceneIndex = -1;
@@ -147,6 +148,7 @@ int runRender(RenderOptions options) {
                           : options.accumulation == "double" ? WT_ACCUMULATE_DOUBLE
                                                              : WT_ACCUMULATE_KAHAN;
   settings.bvhBuilder = *wt::parseBvhBuilder(options.bvh);
+  settings.instancing = *wt::parseInstancing(options.instancing);
   settings.packets = options.traversal == "auto";
   settings.packetWidth = options.packetWidth;
   wt::Renderer renderer(context, scene, settings);
@@ -161,6 +163,18 @@ int runRender(RenderOptions options) {
                 wt::bvhBuilderName(settings.bvhBuilder) + ") " +
                 std::to_string(bvh.nodeCount) + " nodes built in " +
                 std::to_string(bvh.buildSeconds * 1e3).substr(0, 6) + " ms; device " + device.name);
+  {
+    const wt::SceneBuffers& buffers = renderer.sceneBuffers();
+    const double perTriangle = double(buffers.triangleBytes()) / double(std::max<std::size_t>(1, scene.triangles.size()));
+    char line[256];
+    std::snprintf(line, sizeof line,
+                  "geometry on the device: %.1f B per scene triangle (nodes, triangles%s), %zu B with normals and "
+                  "materials; instancing %s: %zu instances, %zu of %zu triangles in instanced copies",
+                  perTriangle, buffers.instanceCount() > 0 ? ", instances" : "", buffers.geometryBytes(),
+                  options.instancing.c_str(), buffers.instanceCount(), buffers.instancedTriangles(),
+                  scene.triangles.size());
+    wt::log::debug(line);
+  }
 
   // error against a reference at power-of-two sample counts (not timed)
   std::optional<wt::Image> reference;
@@ -308,6 +322,11 @@ int main(int argc, char** argv) {
                         "triangles, lbvh above), lbvh (Morton codes, fastest), ploc (PLOC clustering in Morton order, "
                         "SAH on top) or sah (top-down binned SAH, slow)")
       ->check(CLI::IsMember({"auto", "lbvh", "ploc", "sah"}))->capture_default_str();
+  renderCmd->add_option("--instancing", render.instancing,
+                        "Geometry placed several times (glTF nodes sharing a mesh): on, stored once with one "
+                        "transform per copy (two-level BVH); off, every copy flattened; auto, on where the "
+                        "flattened copies would not fit the device's global memory cache (32 MiB where it reports none)")
+      ->check(CLI::IsMember({"auto", "on", "off"}))->capture_default_str();
   renderCmd->add_option("--traversal", render.traversal,
                         "auto: camera rays and their shadow rays in packets of neighbouring pixels, later bounces "
                         "one ray per work-item; single: every ray alone")
@@ -379,6 +398,10 @@ int main(int argc, char** argv) {
   benchCmd->add_option("--bvh", bench.bvh,
                        "The BVH builder whose tree is compared with Embree and renders the path figure")
       ->check(CLI::IsMember({"auto", "lbvh", "ploc", "sah"}))->capture_default_str();
+  benchCmd->add_option("--instancing", bench.instancing,
+                       "Geometry placed several times: on (stored once, two-level BVH), off (flattened) or auto "
+                       "(on where the flattened copies would not fit the device's cache), for every tree and the path figure")
+      ->check(CLI::IsMember({"auto", "on", "off"}))->capture_default_str();
   benchCmd->add_option("--compare-bvh", bench.compareBvh,
                        "Builders whose trees are traced on the same rays (tree quality table); none: --compare-bvh none")
       ->delimiter(',')->check(CLI::IsMember({"auto", "lbvh", "ploc", "sah", "none"}))->capture_default_str();

@@ -99,6 +99,7 @@ std::vector<std::string> kernelDefines(const KernelFeatures& features) {
       "-D WT_HAS_TRANSMISSION=" + std::string(features.pbr && features.transmission ? "1" : "0"),
       "-D WT_HAS_SPHERES=" + std::string(features.spheres ? "1" : "0"),
       "-D WT_HAS_CURVES=" + std::string(features.curves ? "1" : "0"),
+      "-D WT_HAS_INSTANCES=" + std::string(features.instances ? "1" : "0"),
       "-D WT_PACKET_WIDTH=" + std::to_string(features.packetWidth),
       "-D WT_STREAM_PREFETCH=" + std::string(features.streamPrefetch ? "1" : "0"),
   };

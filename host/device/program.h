@@ -20,6 +20,7 @@ struct KernelFeatures {
   bool transmission = false;      ///< a metallic-roughness material transmits (KHR_materials_transmission)
   bool spheres = false;           ///< the scene has analytic spheres (WT_HAS_SPHERES: their ray test, surface and emitter sampling)
   bool curves = false;            ///< the scene has curves (WT_HAS_CURVES: their ray test and surface)
+  bool instances = false;         ///< the scene's buffers hold instances (WT_HAS_INSTANCES: geometries stored once, placed by transforms)
   int packetWidth = 8;            ///< rays per packet (WT_PACKET_WIDTH): 8 or 16, packetWidthFor
   /// WT_STREAM_PREFETCH: streams ask for a node's children as it arrives, and
   /// keep their rays' order (streamPrefetchFor)

@@ -3,13 +3,15 @@
 #include "bvh/builders.h"
 #include "shared/lights.h"
 
+#include <glm/gtc/matrix_transform.hpp>
+
 #include <algorithm>
 #include <array>
-#include <map>
-#include <tuple>
 #include <chrono>
 #include <cmath>
 #include <cstddef>
+#include <map>
+#include <tuple>
 
 namespace wt {
 namespace {
@@ -59,14 +61,112 @@ std::vector<BvhInstance> bvhInstances(const Scene& scene, std::span<const std::u
   return out;
 }
 
+namespace {
+
+/// A 4-wide tree over triangles with its leaves packed into blocks of four:
+/// position i of `order` (leaf order) is input triangle order[i].
+struct TriangleTree {
+  Bvh4 bvh4;
+  BvhBuildStats stats;
+  std::vector<std::uint32_t> order;
+  std::size_t misfits = 0;
+};
+
+TriangleTree buildTriangleTree(std::span<const Aabb> bounds, const BvhBuildOptions& options,
+                               std::span<const BvhInstance> instances) {
+  TriangleTree tree;
+  const Bvh bvh = buildBvh(bounds, binaryBuildOptions(options, bounds.size()), instances);
+  tree.stats = bvh.stats;
+  tree.bvh4 = collapseToBvh4(bvh, bvh4Options(options));
+  // Leaves laid out in blocks of four (packLeavesIntoBlocks); from here on
+  // the leaf order addresses the triangles directly.
+  const LeafPacking packing = packLeavesIntoBlocks(tree.bvh4, bvh.primIndices.size());
+  orderChildSlots(tree.bvh4);  // after the packing, which lays the leaves out in slot order
+  tree.misfits = packing.misfits;
+  tree.order.resize(packing.order.size());
+  for (std::size_t i = 0; i < packing.order.size(); ++i) tree.order[i] = bvh.primIndices[packing.order[i]];
+  return tree;
+}
+
+WtBvh4Node emptyBvh4Node() {
+  WtBvh4Node n{};
+  for (int k = 0; k < 4; ++k) {
+    n.lo_x[k] = n.lo_y[k] = n.lo_z[k] = INFINITY;
+    n.hi_x[k] = n.hi_y[k] = n.hi_z[k] = -INFINITY;
+    n.child[k] = WT_BVH4_EMPTY;
+    n.count[k] = 0;
+  }
+  return n;
+}
+
+bool emits(const WtMaterial& m) { return m.emission.x > 0.0f || m.emission.y > 0.0f || m.emission.z > 0.0f; }
+
+/// A geometry stored once: the copy its triangles come from and the copies
+/// (Scene::instances indices) that place it; `kept` its triangles (local
+/// indices) that enter the tree, the same for every copy.
+struct InstancedGeometry {
+  std::uint32_t source = 0;
+  std::vector<std::uint32_t> copies;
+  std::vector<std::uint32_t> kept;
+};
+
+/// The geometries to store once: per geometry id, the copies that keep the
+/// same triangles (zero-area ones drop out per copy), at least two of them,
+/// with at least kMinInstanceTriangles each, no emissive material (the
+/// light list addresses emitters as scene-space triangles) and an invertible
+/// finite transform.
+std::vector<InstancedGeometry> chooseInstancedGeometries(const Scene& scene, const std::vector<std::uint8_t>& valid,
+                                                         std::size_t minTriangles) {
+  std::map<std::pair<std::uint32_t, std::vector<std::uint32_t>>, std::vector<std::uint32_t>> groups;
+  for (std::uint32_t c = 0; c < scene.instances.size(); ++c) {
+    const GeometryInstance& copy = scene.instances[c];
+    if (std::size_t(copy.firstTriangle) + copy.triangleCount > scene.triangles.size()) continue;
+    const double det = glm::determinant(glm::dmat3(copy.transform));
+    if (!(std::isfinite(det) && det != 0.0)) continue;
+    std::vector<std::uint32_t> kept;
+    bool emissive = false;
+    for (std::uint32_t t = 0; t < copy.triangleCount; ++t) {
+      if (!valid[copy.firstTriangle + t]) continue;
+      kept.push_back(t);
+      emissive = emissive || emits(scene.materials[scene.triangles[copy.firstTriangle + t].material]);
+    }
+    if (emissive || kept.size() < minTriangles) continue;
+    groups[{copy.geometry, std::move(kept)}].push_back(c);
+  }
+  std::vector<InstancedGeometry> out;
+  for (auto& [key, copies] : groups) {
+    if (copies.size() < 2) continue;
+    InstancedGeometry g;
+    g.kept = key.second;
+    g.copies = std::move(copies);
+    out.push_back(std::move(g));
+  }
+  // in scene order, so the layout does not depend on the map's
+  std::sort(out.begin(), out.end(), [&](const InstancedGeometry& a, const InstancedGeometry& b) {
+    return scene.instances[a.copies[0]].firstTriangle < scene.instances[b.copies[0]].firstTriangle;
+  });
+  return out;
+}
+
+glm::dvec3 dpos(const Scene& scene, std::uint32_t v) {
+  const WtVec4& p = scene.positions[v];
+  return glm::dvec3(p.x, p.y, p.z);
+}
+
+}  // namespace
+
+std::optional<Instancing> parseInstancing(std::string_view name) {
+  if (name == "off") return Instancing::Off;
+  if (name == "on") return Instancing::On;
+  if (name == "auto") return Instancing::Auto;
+  return std::nullopt;
+}
+
 SceneBuffers::SceneBuffers(Context& context, const Scene& scene, const BvhBuildOptions& options) {
   // Zero-area and non-finite triangles never enter the BVH: they cannot be
   // hit meaningfully, and in float a ray through a collinear triangle can
   // still produce a spurious hit.
-  std::vector<Aabb> bounds;
-  std::vector<std::uint32_t> bvhToScene;
-  bounds.reserve(scene.triangles.size());
-  bvhToScene.reserve(scene.triangles.size());
+  std::vector<std::uint8_t> valid(scene.triangles.size(), 0);
   for (std::size_t i = 0; i < scene.triangles.size(); ++i) {
     const WtTriangle& t = scene.triangles[i];
     auto pos = [&](std::uint32_t v) {
@@ -80,30 +180,143 @@ SceneBuffers::SceneBuffers(Context& context, const Scene& scene, const BvhBuildO
       ++m_skippedTriangles;
       continue;
     }
+    valid[i] = 1;
+  }
+
+  // Geometries stored once leave the flat tree; their copies become instances.
+  std::vector<InstancedGeometry> instanced;
+  if (options.instancing != Instancing::Off) {
+    instanced = chooseInstancedGeometries(scene, valid, kMinInstanceTriangles);
+    if (options.instancing == Instancing::Auto) {
+      // Instances cost a second traversal per ray and lose the packets
+      // inside them; they pay where the flattened copies would not fit the
+      // cache and the stored-once ones do (docs/performance.md, "Instancing")
+      std::size_t copiedTriangles = 0;
+      for (const InstancedGeometry& g : instanced) copiedTriangles += g.kept.size() * (g.copies.size() - 1);
+      if (!instancingPays(copiedTriangles, context.info().globalCacheBytes)) instanced.clear();
+    }
+  }
+  std::vector<std::uint8_t> flat = valid;
+  for (const InstancedGeometry& g : instanced)
+    for (std::uint32_t c : g.copies)
+      for (std::uint32_t t : g.kept) flat[scene.instances[c].firstTriangle + t] = 0;
+
+  std::vector<Aabb> bounds;
+  std::vector<std::uint32_t> bvhToScene;
+  for (std::size_t i = 0; i < scene.triangles.size(); ++i) {
+    if (!flat[i]) continue;
     bounds.push_back(scene.triangleBounds(std::uint32_t(i)));
     bvhToScene.push_back(std::uint32_t(i));
   }
-  const Bvh bvh = buildBvh(bounds, binaryBuildOptions(options, bounds.size()), bvhInstances(scene, bvhToScene));
-  m_bvhStats = bvh.stats;
-  Bvh4 bvh4 = collapseToBvh4(bvh, bvh4Options(options));
-  m_bvh4Stats = bvh4.stats;
-  nodeCount = std::uint32_t(bvh4.nodes.size());
-  // Leaves laid out in blocks of four (packLeavesIntoBlocks); from here on
-  // the leaf order addresses the scene's triangles directly.
-  const LeafPacking packing = packLeavesIntoBlocks(bvh4, bvh.primIndices.size());
-  orderChildSlots(bvh4);  // after the packing, which lays the leaves out in slot order
-  m_leafMisfits = packing.misfits;
-  m_leafToScene.resize(packing.order.size());
-  for (std::size_t i = 0; i < packing.order.size(); ++i) m_leafToScene[i] = bvhToScene[bvh.primIndices[packing.order[i]]];
+  TriangleTree tree = buildTriangleTree(bounds, options, bvhInstances(scene, bvhToScene));
+  m_bvhStats = tree.stats;
+  m_bvh4Stats = tree.bvh4.stats;
+  m_leafMisfits = tree.misfits;
+  std::vector<WtBvh4Node> allNodes(tree.bvh4.nodes.begin(), tree.bvh4.nodes.end());
+  m_leafToScene.resize(tree.order.size());
+  for (std::size_t i = 0; i < tree.order.size(); ++i) m_leafToScene[i] = bvhToScene[tree.order[i]];
   m_sceneToLeaf.assign(scene.triangles.size(), 0xffffffffu);
   for (std::size_t leaf = 0; leaf < m_leafToScene.size(); ++leaf) m_sceneToLeaf[m_leafToScene[leaf]] = std::uint32_t(leaf);
 
   // The triangles in leaf order, in blocks of four (WT_TRIANGLE_BLOCK): per
   // corner one row of x, of y and of z, 36 bytes a triangle; its vertex
   // indices (shading reads the normals by them) and material go to tri_info,
-  // 16 bytes, which traversal never reads. Every lane is written below but
-  // the last block's spare ones, which are zeroed (no leaf covers them): no
-  // zero fill of the whole, 36 MB for 1 M triangles.
+  // 16 bytes, which traversal never reads. Positions per leaf triangle:
+  // the scene's, or for a geometry stored once its object space.
+  std::vector<glm::vec3> corners(3 * m_leafToScene.size());
+  for (std::size_t i = 0; i < m_leafToScene.size(); ++i) {
+    const WtTriangle& t = scene.triangles[m_leafToScene[i]];
+    const std::uint32_t v[3] = {t.v0, t.v1, t.v2};
+    for (int k = 0; k < 3; ++k) {
+      const WtVec4& p = scene.positions[v[k]];
+      corners[3 * i + k] = glm::vec3(p.x, p.y, p.z);
+    }
+  }
+
+  // Each geometry stored once: its tree's nodes after the others (child and
+  // leaf indices moved along), its triangles after the others from a block
+  // boundary (the leaves' block layout holds), in object space: the copy
+  // nearest the scene's origin (the finest floats), moved to its box's
+  // centre. Copy k's transform is W_k W_s^-1 T(centre), composed in double.
+  std::vector<InstanceDesc> descs;
+  if (!instanced.empty()) {
+    if (allNodes.empty()) allNodes.push_back(emptyBvh4Node());  // node 0: the flat tree's root, hit by nothing
+    m_sceneToInstance.assign(scene.triangles.size(), 0xffffffffu);
+  }
+  int blasStack = 0;
+  for (const InstancedGeometry& g : instanced) {
+    // the source: the copy whose box lies nearest the origin
+    double best = INFINITY;
+    std::uint32_t source = g.copies[0];
+    Aabb sourceBox;
+    for (std::uint32_t c : g.copies) {
+      Aabb box;
+      for (std::uint32_t t : g.kept) box.extend(scene.triangleBounds(scene.instances[c].firstTriangle + t));
+      const glm::vec3 far = glm::max(glm::abs(box.lo), glm::abs(box.hi));
+      const double reach = std::max({far.x, far.y, far.z});
+      if (reach < best) best = reach, source = c, sourceBox = box;
+    }
+    const GeometryInstance& src = scene.instances[source];
+    const glm::dvec3 centre = 0.5 * (glm::dvec3(sourceBox.lo) + glm::dvec3(sourceBox.hi));
+    std::vector<glm::vec3> object(3 * g.kept.size());
+    std::vector<Aabb> objectBounds(g.kept.size());
+    for (std::size_t i = 0; i < g.kept.size(); ++i) {
+      const WtTriangle& t = scene.triangles[src.firstTriangle + g.kept[i]];
+      const std::uint32_t v[3] = {t.v0, t.v1, t.v2};
+      for (int k = 0; k < 3; ++k) {
+        object[3 * i + k] = glm::vec3(dpos(scene, v[k]) - centre);
+        objectBounds[i].extend(object[3 * i + k]);
+      }
+    }
+    TriangleTree blas = buildTriangleTree(objectBounds, options, {});
+    blasStack = std::max(blasStack, bvh4StackEntries(blas.bvh4.stats));
+    // pad the leaf order to a block boundary: no leaf covers the spare lanes
+    while (m_leafToScene.size() % kTriangleBlock != 0) {
+      m_leafToScene.push_back(kNoTriangle);
+      corners.insert(corners.end(), 3, glm::vec3(0.0f));
+    }
+    const auto nodeBase = std::uint32_t(allNodes.size());
+    const auto triangleBase = std::uint32_t(m_leafToScene.size());
+    for (WtBvh4Node n : blas.bvh4.nodes) {
+      for (int k = 0; k < 4; ++k)
+        if (n.child[k] != WT_BVH4_EMPTY) n.child[k] += n.count[k] > 0 ? triangleBase : nodeBase;
+      allNodes.push_back(n);
+    }
+    for (std::size_t i = 0; i < blas.order.size(); ++i) {
+      const std::uint32_t local = g.kept[blas.order[i]];
+      m_leafToScene.push_back(src.firstTriangle + local);
+      for (int k = 0; k < 3; ++k) corners.push_back(object[3 * blas.order[i] + k]);
+    }
+    // the root's child boxes bound each copy
+    InstanceDesc desc;
+    desc.root = nodeBase;
+    const WtBvh4Node& root = blas.bvh4.nodes.front();
+    for (int k = 0; k < 4; ++k) {
+      desc.rootBoxes[k].lo = glm::vec3(root.lo_x[k], root.lo_y[k], root.lo_z[k]);
+      desc.rootBoxes[k].hi = glm::vec3(root.hi_x[k], root.hi_y[k], root.hi_z[k]);
+    }
+    const glm::dmat4 fromSource = glm::inverse(src.transform) * glm::translate(glm::dmat4(1.0), centre);
+    for (std::uint32_t c : g.copies) {
+      const GeometryInstance& copy = scene.instances[c];
+      const auto instance = std::uint32_t(descs.size());
+      desc.objectToScene = copy.transform * fromSource;
+      descs.push_back(desc);
+      m_instanceOffset.push_back(std::int64_t(copy.firstTriangle) - std::int64_t(src.firstTriangle));
+      m_instanceMirrored.push_back(glm::determinant(glm::dmat3(desc.objectToScene)) < 0.0);
+      for (std::size_t i = 0; i < blas.order.size(); ++i) {
+        const std::uint32_t sceneTri = copy.firstTriangle + g.kept[blas.order[i]];
+        m_sceneToLeaf[sceneTri] = triangleBase + std::uint32_t(i);
+        m_sceneToInstance[sceneTri] = primId(WT_PRIM_INSTANCE, instance);
+      }
+    }
+    m_instancedTriangles += g.kept.size() * g.copies.size();
+  }
+  m_blasStackEntries = blasStack;
+  nodeCount = std::uint32_t(allNodes.size());
+
+  // Every lane is written below but the last block's spare ones and the
+  // padding, which are zeroed (no leaf covers them): no zero fill of the
+  // whole, 36 MB for 1 M triangles.
   constexpr std::size_t kBlockFloats = 4 * WT_TRIANGLE_BLOCK_ROWS;
   const std::size_t triangles = m_leafToScene.size();
   std::vector<float, UninitialisedAllocator<float>> blocks(kBlockFloats *
@@ -111,26 +324,27 @@ SceneBuffers::SceneBuffers(Context& context, const Scene& scene, const BvhBuildO
   if (triangles % kTriangleBlock != 0) std::fill(blocks.end() - kBlockFloats, blocks.end(), 0.0f);
   std::vector<std::array<std::uint32_t, 4>, UninitialisedAllocator<std::array<std::uint32_t, 4>>> info(triangles);
   for (std::size_t i = 0; i < triangles; ++i) {
-    const WtTriangle& t = scene.triangles[m_leafToScene[i]];
-    const std::uint32_t corner[3] = {t.v0, t.v1, t.v2};
     float* lane = blocks.data() + kBlockFloats * (i / kTriangleBlock) + i % kTriangleBlock;
     for (int k = 0; k < 3; ++k) {
-      const WtVec4& v = scene.positions[corner[k]];
-      lane[12 * k + 0] = v.x;
-      lane[12 * k + 4] = v.y;
-      lane[12 * k + 8] = v.z;
+      lane[12 * k + 0] = corners[3 * i + k].x;
+      lane[12 * k + 4] = corners[3 * i + k].y;
+      lane[12 * k + 8] = corners[3 * i + k].z;
     }
+    if (m_leafToScene[i] == kNoTriangle) {
+      info[i] = {0u, 0u, 0u, 0u};
+      continue;
+    }
+    const WtTriangle& t = scene.triangles[m_leafToScene[i]];
     info[i] = {t.v0, t.v1, t.v2, t.material};
   }
   std::size_t bytes = 0;
-  nodes = upload(context, bvh4.nodes, bytes);
+  nodes = upload(context, allNodes, bytes);
   triVerts = upload(context, blocks, bytes);
   triangleInfo = upload(context, info, bytes);
   uploadedBytes = bytes;
-  std::size_t attributeBytes = 0;
-  normals = upload(context, scene.normals, attributeBytes);
-  materials = upload(context, scene.materials, attributeBytes);
-  uploadPrimitives(context, scene, options);
+  normals = upload(context, scene.normals, m_attributeBytes);
+  materials = upload(context, scene.materials, m_attributeBytes);
+  uploadPrimitives(context, scene, options, descs);
 }
 
 PrimitiveTree buildPrimitiveTree(const PrimitiveRows& rows, const BvhBuildOptions& options) {
@@ -150,8 +364,9 @@ PrimitiveTree buildPrimitiveTree(const PrimitiveRows& rows, const BvhBuildOption
   return tree;
 }
 
-void SceneBuffers::uploadPrimitives(Context& context, const Scene& scene, const BvhBuildOptions& options) {
-  PrimitiveRows rows = gatherPrimitives(scene);
+void SceneBuffers::uploadPrimitives(Context& context, const Scene& scene, const BvhBuildOptions& options,
+                                    std::span<const InstanceDesc> instances) {
+  PrimitiveRows rows = gatherPrimitives(scene, instances);
   m_primitiveCount = rows.count;
   m_skippedPrimitives = rows.skipped;
   PrimitiveTree tree = buildPrimitiveTree(rows, options);
@@ -183,8 +398,14 @@ void SceneBuffers::bindGeometry(cl::Kernel& kernel, int first) const {
   kernel.setArg(first + 4, primInfo);
 }
 
+std::uint32_t SceneBuffers::sceneTriangle(std::uint32_t leafIndex, std::uint32_t instance) const {
+  const std::uint32_t first = m_leafToScene[leafIndex];
+  if (instance == 0xffffffffu) return first;
+  return std::uint32_t(std::int64_t(first) + m_instanceOffset[primIndex(instance)]);
+}
+
 int SceneBuffers::stackSize() const {
-  int needed = std::max(bvh4StackEntries(m_bvh4Stats), bvh4StackEntries(m_primStats));
+  int needed = std::max({bvh4StackEntries(m_bvh4Stats), bvh4StackEntries(m_primStats), m_blasStackEntries});
   return std::max(32, (needed + 31) / 32 * 32);
 }
 

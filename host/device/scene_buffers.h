@@ -10,7 +10,9 @@
 
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <span>
+#include <string_view>
 #include <vector>
 
 namespace wt {
@@ -33,14 +35,38 @@ struct PrimitiveTree {
 };
 PrimitiveTree buildPrimitiveTree(const PrimitiveRows& rows, const BvhBuildOptions& options);
 
+/// "off", "on", "auto" (Instancing, host/bvh/lbvh.h).
+std::optional<Instancing> parseInstancing(std::string_view name);
+
 class SceneBuffers {
  public:
+  /// A leaf-order slot no triangle fills (the padding before a geometry
+  /// stored once, which starts at a block boundary).
+  static constexpr std::uint32_t kNoTriangle = 0xffffffffu;
+  /// Geometries with fewer triangles a copy stay flattened with
+  /// Instancing::On: the instance's transform and second traversal cost more
+  /// than the few nodes and blocks it saves.
+  static constexpr std::size_t kMinInstanceTriangles = 64;
+  /// Instancing::Auto stores geometries once when their flattened copies
+  /// (beyond the first, kFlatBytesPerTriangle of nodes and triangles each)
+  /// would take more than the device's global memory cache, or than
+  /// kInstancingAutoBytes where the device reports none (instancingPays).
+  static constexpr std::size_t kInstancingAutoBytes = std::size_t(32) << 20;
+  static constexpr std::size_t kFlatBytesPerTriangle = 64;
+  static bool instancingPays(std::size_t copiedTriangles, std::uint64_t cacheBytes) {
+    return copiedTriangles * kFlatBytesPerTriangle > (cacheBytes > 0 ? cacheBytes : kInstancingAutoBytes);
+  }
+
   /// Build the BVH over the scene's triangles (but degenerate ones), collapse
   /// it to the 4-wide layout the kernels traverse, and upload.
   SceneBuffers(Context& context, const Scene& scene, const BvhBuildOptions& options = {});
 
-  cl::Buffer nodes;       ///< WtBvh4Node[nodeCount] (one dummy node when empty); kernels declare it WtBvhNode*
-  /// The triangles in leaf order, world space, in blocks of four
+  /// WtBvh4Node[nodeCount] (one dummy node when empty); kernels declare it
+  /// WtBvhNode*. The scene's tree from node 0, then each instanced
+  /// geometry's (InstanceDesc::root).
+  cl::Buffer nodes;
+  /// The triangles in leaf order, world space (an instanced geometry's in its
+  /// object space, after the others from a block boundary), in blocks of four
   /// (WT_TRIANGLE_BLOCK, shared/types.h): float4[9 * blocks], per block and
   /// corner k rows x, y, z of the four triangles
   cl::Buffer triVerts;
@@ -50,7 +76,7 @@ class SceneBuffers {
   cl::Buffer normals;     ///< float4 per vertex
   cl::Buffer materials;   ///< WtMaterial[]
   std::uint32_t nodeCount = 0;
-  std::size_t uploadedBytes = 0;  ///< nodes + triangle data
+  std::size_t uploadedBytes = 0;  ///< nodes + triangle data (tri_verts, tri_info)
 
   /// The primitives other than triangles (kernels/geometry/geometry.cl): their
   /// BVH (WtBvh4Node, leaves of up to 4 typed ids), the typed ids in leaf
@@ -73,21 +99,48 @@ class SceneBuffers {
   /// Leaves that take one more four-lane test than their size needs
   /// (LeafPacking::misfits).
   std::size_t leafMisfits() const { return m_leafMisfits; }
-  /// Leaf order (the kernels' triangle index) -> the scene's triangle index.
+  /// Leaf order (the kernels' triangle index) -> the scene's triangle index;
+  /// for an instanced geometry's triangle, its source copy's; kNoTriangle
+  /// for padding.
   const std::vector<std::uint32_t>& leafOrder() const { return m_leafToScene; }
-  std::uint32_t sceneTriangle(std::uint32_t leafIndex) const { return m_leafToScene[leafIndex]; }
-  /// The scene's triangle index -> its leaf-order index; 0xffffffff for one
-  /// left out of the BVH or out of range.
+  /// The scene triangle of leaf-order triangle `leafIndex` on instance
+  /// `instance` (a typed id, as the kernels' hit_instance), or of the flat
+  /// triangle for 0xffffffff.
+  std::uint32_t sceneTriangle(std::uint32_t leafIndex, std::uint32_t instance = 0xffffffffu) const;
+  /// The scene's triangle index -> its leaf-order index (an instanced copy's:
+  /// its geometry's triangle); 0xffffffff for one left out of the BVH or out
+  /// of range.
   std::uint32_t leafTriangle(std::uint32_t sceneIndex) const {
     return sceneIndex < m_sceneToLeaf.size() ? m_sceneToLeaf[sceneIndex] : 0xffffffffu;
   }
+  /// The instance (typed id) the scene's triangle is part of; 0xffffffff for
+  /// a flat one.
+  std::uint32_t triangleInstance(std::uint32_t sceneIndex) const {
+    return sceneIndex < m_sceneToInstance.size() ? m_sceneToInstance[sceneIndex] : 0xffffffffu;
+  }
+  /// Instances (WT_PRIM_INSTANCE primitives); 0 unless Instancing put some in.
+  std::size_t instanceCount() const { return m_instanceOffset.size(); }
+  /// Whether instance `instance` (typed id) mirrors its geometry: the copy's
+  /// corners 1 and 2 are swapped against its geometry's (barycentrics b1, b2
+  /// trade places).
+  bool instanceMirrored(std::uint32_t instance) const { return m_instanceMirrored[primIndex(instance)]; }
+  /// Scene triangles in instanced copies (each stored once per geometry).
+  std::size_t instancedTriangles() const { return m_instancedTriangles; }
+  /// What the triangles take on the device: uploadedBytes, and with
+  /// instances primitiveBytes (their rows and tree; a scene with spheres too
+  /// counts theirs here as well).
+  std::size_t triangleBytes() const { return uploadedBytes + (instanceCount() > 0 ? primitiveBytes : 0); }
+  /// Everything the scene's geometry takes on the device: uploadedBytes,
+  /// primitiveBytes (with the instances' rows), normals and materials.
+  std::size_t geometryBytes() const { return uploadedBytes + primitiveBytes + m_attributeBytes; }
   /// Triangles left out of the BVH (zero area or non-finite vertices).
   std::size_t skippedTriangles() const { return m_skippedTriangles; }
   /// Traversal stack entries the BVH needs, for KernelFeatures::bvhStackSize.
   int stackSize() const;
 
  private:
-  void uploadPrimitives(Context& context, const Scene& scene, const BvhBuildOptions& options);
+  void uploadPrimitives(Context& context, const Scene& scene, const BvhBuildOptions& options,
+                        std::span<const InstanceDesc> instances);
 
   BvhBuildStats m_bvhStats;
   Bvh4Stats m_bvh4Stats;
@@ -99,6 +152,12 @@ class SceneBuffers {
   std::array<std::size_t, WT_PRIM_TYPES> m_primitiveCount{};
   std::size_t m_skippedPrimitives = 0;
   double m_primitiveBuildSeconds = 0.0;
+  std::vector<std::uint32_t> m_sceneToInstance;  ///< empty without instances
+  std::vector<std::int64_t> m_instanceOffset;    ///< per instance: its first scene triangle less its source copy's
+  std::vector<bool> m_instanceMirrored;
+  std::size_t m_instancedTriangles = 0;
+  int m_blasStackEntries = 0;
+  std::size_t m_attributeBytes = 0;
 };
 
 }  // namespace wt

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <utility>
 
 namespace wt {
 
@@ -20,6 +21,7 @@ Tracer::Tracer(Context& context, const Scene& scene, const BvhBuildOptions& opti
   features.streamPrefetch = m_streamPrefetch;
   features.spheres = m_scene->primitiveCount(WT_PRIM_SPHERE) > 0;
   features.curves = m_scene->primitiveCount(WT_PRIM_CURVE) > 0;
+  features.instances = m_scene->instanceCount() > 0;
   m_program = buildProgram(context, features);
   m_closest = cl::Kernel(m_program, "trace_closest");
   m_occluded = cl::Kernel(m_program, "trace_occluded");
@@ -58,23 +60,28 @@ void Tracer::uploadRays(std::span<const Ray> rays) {
     m_rayO = cl::Buffer(m_context.context(), CL_MEM_READ_ONLY, n * 16);
     m_rayD = cl::Buffer(m_context.context(), CL_MEM_READ_ONLY, n * 16);
     m_skip = cl::Buffer(m_context.context(), CL_MEM_READ_ONLY, n * 4);
+    m_instances = cl::Buffer(m_context.context(), CL_MEM_READ_WRITE, n * 4);
     m_out = cl::Buffer(m_context.context(), CL_MEM_READ_WRITE, n * 16);
     m_capacity = n;
   }
   // Split the interleaved rays into the two float4 streams the kernels read.
   std::vector<float> o(4 * rays.size()), d(4 * rays.size());
-  std::vector<cl_uint> skip(rays.size());
+  std::vector<cl_uint> skip(rays.size()), skipInstance(rays.size());
   for (std::size_t i = 0; i < rays.size(); ++i) {
     const Ray& r = rays[i];
     o[4 * i + 0] = r.origin.x, o[4 * i + 1] = r.origin.y, o[4 * i + 2] = r.origin.z, o[4 * i + 3] = r.tmin;
     d[4 * i + 0] = r.direction.x, d[4 * i + 1] = r.direction.y, d[4 * i + 2] = r.direction.z,
               d[4 * i + 3] = r.tmax;
-    skip[i] = primType(r.skip) == WT_PRIM_TRIANGLE ? m_scene->leafTriangle(r.skip) : r.skip;
+    // a scene triangle of an instanced copy is its geometry's triangle on that instance
+    const bool triangle = primType(r.skip) == WT_PRIM_TRIANGLE;
+    skip[i] = triangle ? m_scene->leafTriangle(r.skip) : r.skip;
+    skipInstance[i] = triangle ? m_scene->triangleInstance(r.skip) : RayHit::kNoHit;
   }
   if (!rays.empty()) {
     m_context.queue().enqueueWriteBuffer(m_rayO, CL_TRUE, 0, o.size() * 4, o.data());
     m_context.queue().enqueueWriteBuffer(m_rayD, CL_TRUE, 0, d.size() * 4, d.data());
     m_context.queue().enqueueWriteBuffer(m_skip, CL_TRUE, 0, skip.size() * 4, skip.data());
+    m_context.queue().enqueueWriteBuffer(m_instances, CL_TRUE, 0, skipInstance.size() * 4, skipInstance.data());
   }
 }
 
@@ -88,6 +95,7 @@ void Tracer::run(cl::Kernel& kernel, const char* name, std::size_t rays, Travers
   kernel.setArg(a++, m_scene->triVerts);
   kernel.setArg(a++, m_out);
   kernel.setArg(a++, m_skip);
+  kernel.setArg(a++, m_instances);
   m_scene->bindGeometry(kernel, a);
   const std::size_t kPacket = std::size_t(m_packetWidth);
   std::size_t items = rays, localSize = Context::kLocalSize;
@@ -114,6 +122,9 @@ std::vector<RayHit> Tracer::traceClosest(std::span<const Ray> rays, Traversal tr
   std::vector<float> raw(4 * rays.size());
   if (!rays.empty())
     m_context.queue().enqueueReadBuffer(m_out, CL_TRUE, 0, raw.size() * 4, raw.data());
+  std::vector<cl_uint> instances(rays.size(), RayHit::kNoHit);
+  if (!rays.empty() && m_scene->instanceCount() > 0)
+    m_context.queue().enqueueReadBuffer(m_instances, CL_TRUE, 0, instances.size() * 4, instances.data());
   std::vector<RayHit> hits(rays.size());
   for (std::size_t i = 0; i < rays.size(); ++i) {
     std::uint32_t prim;
@@ -122,8 +133,12 @@ std::vector<RayHit> Tracer::traceClosest(std::span<const Ray> rays, Traversal tr
     hits[i].b1 = raw[4 * i + 1];
     hits[i].b2 = raw[4 * i + 2];
     const bool triangle = prim != RayHit::kNoHit && primType(prim) == WT_PRIM_TRIANGLE;
-    hits[i].triangle = triangle ? m_scene->sceneTriangle(prim) : RayHit::kNoHit;
+    const std::uint32_t instance = triangle ? instances[i] : RayHit::kNoHit;
+    hits[i].triangle = triangle ? m_scene->sceneTriangle(prim, instance) : RayHit::kNoHit;
     hits[i].prim = triangle ? hits[i].triangle : prim;
+    hits[i].instance = instance;
+    // a mirroring copy's corners 1 and 2 are its geometry's 2 and 1
+    if (instance != RayHit::kNoHit && m_scene->instanceMirrored(instance)) std::swap(hits[i].b1, hits[i].b2);
   }
   return hits;
 }

@@ -30,6 +30,9 @@ struct RayHit {
   float b1 = 0.0f, b2 = 0.0f;       ///< barycentrics of the triangle's v1 and v2
   std::uint32_t triangle = kNoHit;  ///< the scene's triangle index; kNoHit for a miss or another type
   std::uint32_t prim = kNoHit;      ///< what was hit: the scene's triangle index, or another type's typed id (primId)
+  /// the instance (typed id, WT_PRIM_INSTANCE) whose copy of `triangle` was
+  /// hit; kNoHit for a flat triangle, another type or a miss
+  std::uint32_t instance = kNoHit;
   static constexpr std::uint32_t kNoHit = 0xffffffffu;
 };
 
@@ -85,6 +88,7 @@ class Tracer {
   cl::Program m_program;
   cl::Kernel m_closest, m_occluded, m_closestPacket, m_occludedPacket, m_occludedStream;
   cl::Buffer m_rayO, m_rayD, m_skip, m_out;
+  cl::Buffer m_instances;  ///< per ray: in, the instance of the surface it leaves; out, the instance hit
   std::size_t m_capacity = 0;
   double m_lastKernelSeconds = 0.0;
 };

@@ -11,6 +11,7 @@
 
 #include <array>
 #include <cstdint>
+#include <span>
 #include <vector>
 
 namespace wt {
@@ -87,7 +88,22 @@ CurveSegment curveSegment(const PrimitiveRows& rows, std::uint32_t index);
 glm::vec3 curvePoint(const CurveSegment& segment, glm::vec3 o, glm::vec3 d, float t, glm::vec3* error,
                      glm::vec3* normal);
 
-/// Every type's rows.
-PrimitiveRows gatherPrimitives(const Scene& scene);
+/// A placed copy of a triangle geometry stored once (WT_PRIM_INSTANCE,
+/// kernels/geometry/instance.cl), as SceneBuffers laid it out.
+struct InstanceDesc {
+  glm::dmat4 objectToScene{1.0};  ///< the geometry's object space -> scene space, double
+  std::uint32_t root = 0;         ///< the geometry's root node in SceneBuffers::nodes
+  std::array<Aabb, 4> rootBoxes;  ///< the root's child boxes, object space (empty ones unused)
+};
+
+/// Instances (WT_PRIM_INSTANCE): WT_INSTANCE_ROWS data rows each
+/// (object-from-scene and scene-from-object, float 3x4 both, rounded from
+/// the double matrix and its double inverse) and one info row (root,
+/// WT_INSTANCE_MIRRORED); the box is the root's child boxes moved to scene
+/// space, corner by corner, in double, widened past float rounding.
+void gatherInstances(std::span<const InstanceDesc> instances, PrimitiveRows& rows);
+
+/// Every type's rows; instances as given (SceneBuffers builds their geometries first).
+PrimitiveRows gatherPrimitives(const Scene& scene, std::span<const InstanceDesc> instances = {});
 
 }  // namespace wt

@@ -80,6 +80,9 @@ LightList buildLightList(const Scene& scene, const SceneBuffers& buffers, double
   std::vector<std::uint32_t> lightOfLeaf(order.size(), ~0u);
   std::vector<double> areas;
   for (std::size_t leaf = 0; leaf < order.size(); ++leaf) {
+    // padding before an instanced geometry; its triangles never emit (SceneBuffers)
+    if (order[leaf] == SceneBuffers::kNoTriangle || buffers.triangleInstance(order[leaf]) != SceneBuffers::kNoTriangle)
+      continue;
     const WtTriangle& t = scene.triangles[order[leaf]];
     const WtVec4& e = scene.materials[t.material].emission;
     glm::vec3 le(e.x, e.y, e.z);

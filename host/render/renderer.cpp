@@ -48,6 +48,7 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
   BvhBuildOptions bvhOptions;
   bvhOptions.builder = settings.bvhBuilder;
   bvhOptions.maxLeafSize = 0;  // leaves of up to kBvh4MaxLeafSize, chosen by the collapse
+  bvhOptions.instancing = settings.instancing;
   m_scene = std::make_unique<SceneBuffers>(context, scene, bvhOptions);
   m_environment = settings.environmentMap.empty()
                       ? constantEnvironment(settings.background)
@@ -70,6 +71,7 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
   });
   features.spheres = m_scene->primitiveCount(WT_PRIM_SPHERE) > 0;
   features.curves = m_scene->primitiveCount(WT_PRIM_CURVE) > 0;
+  features.instances = m_scene->instanceCount() > 0;
   m_program = buildProgram(context, features);
   m_generate = cl::Kernel(m_program, "generate");
   m_extend = cl::Kernel(m_program, "extend");
@@ -96,6 +98,7 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
   m_shadowQueue = make(4), m_shadowO = make(16), m_shadowD = make(16), m_shadowRadiance = make(16);
   m_bounceCounts = make(8);  // ushort4: diffuse, specular, transmission bounces
   m_raySkip = make(4), m_shadowSkip = make(8), m_prevNormal = make(16);
+  m_hitInstance = features.instances ? make(4) : cl::Buffer(ctx, CL_MEM_READ_WRITE, 4);
   auto upload = [&](const auto& data) {
     using T = typename std::decay_t<decltype(data)>::value_type;
     std::size_t bytes = std::max<std::size_t>(data.size(), 1) * sizeof(T);
@@ -142,7 +145,8 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
     k->setArg(7, m_scene->triVerts);
     k->setArg(8, m_hits);
     k->setArg(9, m_raySkip);
-    m_scene->bindGeometry(*k, 10);
+    k->setArg(10, m_hitInstance);
+    m_scene->bindGeometry(*k, 11);
   }
 
   // shade: 0 frame, 1 environment, 2-4 its arrays, 5 counters, 6-9 queues (per bounce), 10- fixed
@@ -156,7 +160,7 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
                         &m_scene->triVerts, &m_scene->normals, &m_scene->materials, &m_lightBuffer,
                         &m_aliasBuffer, &m_emitterPdfBuffer, &m_shadowQueue, &m_shadowO, &m_shadowD,
                         &m_shadowRadiance, &m_pbrTable, &m_bounceCounts, &m_raySkip, &m_shadowSkip,
-                        &m_lightTree, &m_emitterLeaf, &m_prevNormal})
+                        &m_lightTree, &m_emitterLeaf, &m_prevNormal, &m_hitInstance})
     m_shade.setArg(a++, *b);
   m_scene->bindGeometry(m_shade, a);
 
@@ -168,6 +172,7 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
     k->setArg(a++, m_scene->triVerts);
     k->setArg(a++, m_radiance);
     k->setArg(a++, m_shadowSkip);
+    k->setArg(a++, m_hitInstance);
     m_scene->bindGeometry(*k, a);
   }
 

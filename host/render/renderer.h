@@ -50,6 +50,7 @@ struct RenderSettings {
   LightSampler lightSampler = LightSampler::Auto;  ///< path: how NEE picks among emissive triangles
   std::uint32_t accumulation = WT_ACCUMULATE_KAHAN;  ///< WT_ACCUMULATE_* (double needs fp64)
   BvhBuilder bvhBuilder = BvhBuilder::Auto;  ///< which tree the scene's BVH is (host/bvh/builders.h)
+  Instancing instancing = Instancing::Off;   ///< whether repeated geometry is stored once (SceneBuffers)
   /// Camera rays and the shadow rays from their hits traced in packets of
   /// packetWidth neighbouring pixels (kernels/bvh_packet.cl); later
   /// bounces, incoherent, one ray per work-item. The same hits either way
@@ -121,6 +122,10 @@ class Renderer {
   cl::Buffer m_shadowQueue, m_shadowO, m_shadowD, m_shadowRadiance;
   cl::Buffer m_pbrTable, m_bounceCounts;
   cl::Buffer m_raySkip, m_shadowSkip;
+  /// per path: the instance of its last hit (WT_NO_HIT: none), written by
+  /// extend; its next rays leave (ray_skip or shadow_skip.x, this instance).
+  /// One element when the scene has no instances (never read).
+  cl::Buffer m_hitInstance;
   cl::Buffer m_lightTree, m_emitterLeaf, m_prevNormal;  ///< the triangle each ray leaves (and the emitter a shadow ray aims at): never hit
   // path state (structure of arrays, one entry per pixel)
   cl::Buffer m_rayO, m_rayD, m_hits, m_throughput, m_radiance;

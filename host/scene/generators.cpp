@@ -335,9 +335,13 @@ Scene placeCopies(const Scene& mesh, std::span<const glm::mat4> transforms) {
       scene.normals.push_back({normal.x, normal.y, normal.z, 0.0f});
       scene.texcoords.push_back(v < mesh.texcoords.size() ? mesh.texcoords[v] : glm::vec2(0.0f));
     }
-    scene.instances.push_back({std::uint32_t(scene.triangles.size()), std::uint32_t(mesh.triangles.size()), 0});
+    scene.instances.push_back(
+        {std::uint32_t(scene.triangles.size()), std::uint32_t(mesh.triangles.size()), 0, glm::dmat4(transform)});
+    // a mirroring transform swaps two corners, as the loader does, so the front face stays in front
+    const bool flip = glm::determinant(glm::mat3(transform)) < 0.0f;
     for (WtTriangle t : mesh.triangles) {
       t.v0 += vertexBase, t.v1 += vertexBase, t.v2 += vertexBase;
+      if (flip) std::swap(t.v1, t.v2);
       scene.triangles.push_back(t);
     }
   }

@@ -772,7 +772,7 @@ class Converter {
     const auto offset = std::uint32_t(base);
     if (prim.corners.size() >= 3)
       m_scene.instances.push_back({std::uint32_t(m_scene.triangles.size()), std::uint32_t(prim.corners.size() / 3),
-                                   prim.geometry});
+                                   prim.geometry, world});
     reserveGrowing(m_scene.triangles, m_scene.triangles.size() + prim.corners.size() / 3);
     for (std::size_t t = 0; t + 2 < prim.corners.size(); t += 3) {
       WtTriangle tri;

@@ -50,11 +50,16 @@ struct PunctualLight {
 /// firstTriangle + triangleCount) are the primitive's triangles, in its own
 /// order, moved by the copy's transform. Copies of one primitive's geometry
 /// (the same positions and indices) share `geometry`, so that a BVH can be
-/// built once per geometry (BvhInstance, host/bvh/lbvh.h).
+/// built once per geometry (BvhInstance, host/bvh/lbvh.h) and the geometry
+/// stored once (SceneBuffers with InstancingMode::On).
 struct GeometryInstance {
   std::uint32_t firstTriangle = 0;
   std::uint32_t triangleCount = 0;
   std::uint32_t geometry = 0;
+  /// mesh space -> scene space (world less Scene::origin), composed in double
+  /// as the loader placed the copy; a mirroring one (negative determinant)
+  /// had two corners of each triangle swapped so the front face stays in front
+  glm::dmat4 transform{1.0};
 };
 
 /// An analytic sphere (kernels/geometry/sphere.cl), relative to Scene::origin

@@ -924,9 +924,12 @@ class Loader {
       dst.triangles.push_back(t);
     }
     // copies of one file share its geometry ids: one BVH per geometry serves them all
+    glm::dmat4 placement(linear);
+    placement[3] = glm::dvec4(offset, 1.0);
     for (GeometryInstance copy : src.instances) {
       copy.firstTriangle += triangleBase;
       copy.geometry += file.geometryBase;
+      copy.transform = placement * copy.transform;
       dst.instances.push_back(copy);
     }
     for (PunctualLight light : src.lights) {

@@ -24,9 +24,15 @@
 #if WT_HAS_CURVES
 #include "geometry/curve.cl"
 #endif
+#ifndef WT_HAS_INSTANCES
+#error "WT_HAS_INSTANCES is not defined: build options must come from kernelDefines()"
+#endif
+#if WT_HAS_INSTANCES
+#include "geometry/instance.cl"
+#endif
 
 /// Whether any type beside triangles is compiled in (the primitive BVH is traversed).
-#define WT_HAS_PRIMITIVES (WT_HAS_SPHERES || WT_HAS_CURVES)
+#define WT_HAS_PRIMITIVES (WT_HAS_SPHERES || WT_HAS_CURVES || WT_HAS_INSTANCES)
 
 /// The non-triangle primitives as the kernels see them (WtGeometry).
 typedef struct GeometryScene {
@@ -50,6 +56,35 @@ inline uint prim_index(uint prim) { return prim & WT_PRIM_INDEX_MASK; }
 inline __global const float4* geometry_data(GeometryScene g, uint prim) {
   return g.data + g.header.data_first[prim_type(prim)] + prim_index(prim);
 }
+
+#if WT_HAS_INSTANCES
+/// Instance `prim`'s rows in prim_data (WT_INSTANCE_ROWS).
+inline __global const float4* geometry_instance_rows(GeometryScene g, uint prim) {
+  return g.data + g.header.data_first[WT_PRIM_INSTANCE] + WT_INSTANCE_ROWS * prim_index(prim);
+}
+
+/// Instance `prim`'s prim_info row: x its geometry's root node, y WT_INSTANCE_* flags.
+inline uint4 geometry_instance_info(GeometryScene g, uint prim) {
+  return g.info[g.header.info_first[WT_PRIM_INSTANCE] + prim_index(prim)];
+}
+
+/// The instance case of the ray tests. Not a case of geometry_intersect: an
+/// instance's hit is a triangle of its geometry (hit->prim, leaf order) found
+/// by the triangles' own traversal, and the primitive it belongs to is the
+/// instance (the caller's hit_instance). The surface a ray leaves is a
+/// (triangle, instance) pair: the triangle is skipped on that copy only.
+inline bool geometry_instance_closest(BvhScene scene, GeometryScene g, uint prim, float3 o, float3 d, float tmin,
+                                      uint skip, uint skip_instance, Hit* hit) {
+  return instance_closest(scene, geometry_instance_rows(g, prim), geometry_instance_info(g, prim).x, o, d, tmin,
+                          hit->t, prim == skip_instance ? skip : WT_NO_HIT, hit);
+}
+
+inline bool geometry_instance_occluded(BvhScene scene, GeometryScene g, uint prim, float3 o, float3 d, float tmin,
+                                       float tmax, uint skip, uint skip_instance) {
+  return instance_occluded(scene, geometry_instance_rows(g, prim), geometry_instance_info(g, prim).x, o, d, tmin, tmax,
+                           prim == skip_instance ? skip : WT_NO_HIT);
+}
+#endif
 
 /// Ray (o, d) against primitive `prim` in (tmin, tmax): the distance and the
 /// type's own hit parameters (u, v), which geometry_surface takes back. A
@@ -87,10 +122,21 @@ typedef struct SurfaceHit {
 } SurfaceHit;
 
 /// The surface where ray (o, d) hit primitive `prim`; `hit` is the stored
-/// (t, u, v, prim).
+/// (t, u, v, prim); `instance` the instance hit (prim then its geometry's
+/// leaf-order triangle), WT_NO_HIT for none.
 inline SurfaceHit geometry_surface(GeometryScene g, __global const float4* tri_verts, __global const uint4* tri_info,
-                                   __global const float4* normals, uint prim, float3 o, float3 d, float4 hit) {
+                                   __global const float4* normals, uint prim, uint instance, float3 o, float3 d,
+                                   float4 hit) {
   SurfaceHit s;
+#if WT_HAS_INSTANCES
+  if (instance != WT_NO_HIT) {
+    instance_surface(geometry_instance_rows(g, instance), tri_verts, tri_info, normals, prim, hit.y, hit.z, &s.p,
+                     &s.p_error, &s.ng, &s.ns, &s.dpdu);
+    s.uv = (float2)(hit.y, hit.z);
+    s.material = tri_info[prim].w;
+    return s;
+  }
+#endif
   switch (prim_type(prim)) {
 #if WT_HAS_SPHERES
     case WT_PRIM_SPHERE: {

@@ -73,6 +73,18 @@ typedef struct WtBvh4Node {
 #define WT_PRIM_TRIANGLE 0u  ///< kernels/geometry/triangle.cl, in their own BVH (nodes, tri_verts)
 #define WT_PRIM_SPHERE 1u    ///< kernels/geometry/sphere.cl
 #define WT_PRIM_CURVE 2u     ///< kernels/geometry/curve.cl: one segment (a round cone) of a curve
+/// A placed copy of a triangle geometry stored once (kernels/geometry/instance.cl):
+/// its own 4-wide tree in `nodes` after the scene's, its triangles in
+/// tri_verts/tri_info after the scene's (leaf order). A hit on it keeps the
+/// geometry's leaf-order triangle in the hit and the instance's typed id
+/// beside it (hit_instance).
+#define WT_PRIM_INSTANCE 3u
+/// prim_data rows per instance: object-from-scene as three float4 rows of a
+/// 3x4 matrix (xyz the linear part's row, w the translation), then
+/// scene-from-object the same way. prim_info: x = the geometry's root node,
+/// y = WT_INSTANCE_* flags.
+#define WT_INSTANCE_ROWS 6
+#define WT_INSTANCE_MIRRORED 1u  ///< the transform's determinant is negative (the copy's corners 1 and 2 swapped)
 #define WT_PRIM_TYPES 4      ///< type slots in WtGeometry
 
 /// The primitives other than triangles (kernels/geometry/geometry.cl): one
