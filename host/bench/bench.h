@@ -33,7 +33,10 @@ struct BenchOptions {
   int embreeQuality = 2;            ///< RTC_BUILD_QUALITY_: 0 low, 1 medium, 2 high
   bool embreeRobust = false;        ///< RTC_SCENE_FLAG_ROBUST
   std::string bvh = "auto";         ///< the tree compared with Embree and rendering the path figure
-  std::string instancing = "auto";  ///< --instancing: off, on, auto (Instancing, SceneBuffers)
+  /// --instancing: off, on, auto (Instancing, SceneBuffers). Off by default:
+  /// Embree traces the flattened copies, so the ratios compare traversal of
+  /// one geometry; `render` defaults to auto.
+  std::string instancing = "off";
   /// Builders whose trees are built (median of repetitions) and traced on
   /// the same rays, interleaved, for the tree-quality table; "none" skips it.
   std::vector<std::string> compareBvh{"auto", "lbvh", "ploc", "sah"};

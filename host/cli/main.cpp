@@ -400,7 +400,8 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"auto", "lbvh", "ploc", "sah"}))->capture_default_str();
   benchCmd->add_option("--instancing", bench.instancing,
                        "Geometry placed several times: on (stored once, two-level BVH), off (flattened) or auto "
-                       "(on where the flattened copies would not fit the device's cache), for every tree and the path figure")
+                       "(on where the flattened copies would not fit the device's cache), for every tree and the path figure; "
+                       "off by default, the geometry Embree traces")
       ->check(CLI::IsMember({"auto", "on", "off"}))->capture_default_str();
   benchCmd->add_option("--compare-bvh", bench.compareBvh,
                        "Builders whose trees are traced on the same rays (tree quality table); none: --compare-bvh none")
