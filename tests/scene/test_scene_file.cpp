@@ -288,6 +288,10 @@ TEST(SceneFile, ExampleScenesLoad) {
   EXPECT_GT(mixed.scene.triangles.size(), 0u);
   EXPECT_GE(mixed.scene.spheres.size(), 4u);
   EXPECT_TRUE(mixed.scene.warnings.empty()) << mixed.scene.warnings.front();
+  SceneFile tube = loadSceneFile((scenes / "glass_tube.json").string());
+  expectConsistent(tube.scene);
+  EXPECT_EQ(tube.scene.curves.size(), 1u);
+  EXPECT_EQ(tube.scene.curves[0].pointCount, 25u);
   // the box is scaled by 10: its light hangs at y = 5.487
   float top = -1e30f;
   for (const WtVec4& p : mixed.scene.positions) top = std::max(top, p.y);
