@@ -837,43 +837,6 @@ SceneResult benchScene(Context& context, const std::string& name, const Scene& s
 
 // ---- scenes ------------------------------------------------------------------------
 
-/// `strands` hairs of `points` points each (linear segments) grown from a
-/// unit sphere's upper half: a random walk that droops, tapering from
-/// radius 4e-3 to 1e-3; an emissive sphere above for the shadow rays.
-Scene makeHairBall(std::uint32_t strands, std::uint32_t points, std::uint32_t seed = 7) {
-  Scene scene;
-  scene.sourceName = "hair ball";
-  scene.materials = {makePbrMaterial(glm::vec3(0.35f, 0.2f, 0.1f), 0.0f, 0.4f),
-                     makeMaterial(glm::vec3(0.0f), glm::vec3(30.0f))};
-  scene.materialNames = {"hair", "light"};
-  Rng rng(seed);
-  auto unit = [&] {
-    glm::vec3 v;
-    do v = 2.0f * glm::vec3(rng.next(), rng.next(), rng.next()) - 1.0f;
-    while (glm::dot(v, v) > 1.0f || glm::dot(v, v) < 1e-4f);
-    return glm::normalize(v);
-  };
-  const float step = 0.6f / float(std::max<std::uint32_t>(points - 1, 1));
-  for (std::uint32_t h = 0; h < strands; ++h) {
-    glm::vec3 n = unit();
-    if (n.y < 0.0f) n.y = -n.y;
-    Curve curve;
-    curve.firstPoint = std::uint32_t(scene.curvePoints.size());
-    curve.pointCount = points;
-    glm::vec3 p = n, d = n;
-    for (std::uint32_t k = 0; k < points; ++k) {
-      const float radius = 4e-3f - 3e-3f * float(k) / float(std::max<std::uint32_t>(points - 1, 1));
-      scene.curvePoints.push_back({p.x, p.y, p.z, radius});
-      d = glm::normalize(d + 0.3f * unit() + glm::vec3(0.0f, -0.25f, 0.0f));
-      p += step * d;
-    }
-    scene.curves.push_back(curve);
-  }
-  scene.spheres.push_back({glm::vec3(0.0f), 0.98f, 0});
-  scene.spheres.push_back({glm::vec3(1.5f, 3.0f, 2.0f), 0.3f, 1});
-  return scene;
-}
-
 /// The asset folder: --assets, else ../shared/assets beside the source tree,
 /// else ../shared/assets from the current directory; empty when none exists.
 std::string findAssets(const std::string& option) {
@@ -934,8 +897,8 @@ int runBench(const BenchOptions& options) {
     sources.push_back({"bumpy grid " + std::to_string(options.meshTriangles / 1000) + "k", "<grid>"});
     if (options.sphereCount > 0)
       sources.push_back({"sphere field " + std::to_string(options.sphereCount / 1000) + "k", "<spheres>"});
-    if (options.hairStrands > 0)
-      sources.push_back({"hair ball " + std::to_string(options.hairStrands / 1000) + "k strands", "<hair>"});
+    if (options.hairGuides > 0)
+      sources.push_back({"head of hair " + std::to_string(options.hairGuides) + "x101 strands", "<hair>"});
   } else {
     for (const std::string& path : options.scenes) sources.push_back({path, path});
   }
@@ -947,7 +910,7 @@ int runBench(const BenchOptions& options) {
       scene = source.path.empty()       ? loadDefaultScene()
               : source.path == "<grid>"    ? makeBumpyGrid(std::uint32_t(options.meshTriangles))
               : source.path == "<spheres>" ? makeSphereField(std::uint32_t(options.sphereCount))
-              : source.path == "<hair>"    ? makeHairBall(std::uint32_t(options.hairStrands), 12)
+              : source.path == "<hair>"    ? makeHairScene(std::uint32_t(options.hairGuides), 100)
                                            : loadScene(source.path);
     } catch (const SceneError& e) {
       if (!options.scenes.empty()) throw;  // a scene the user named must load

@@ -26,7 +26,7 @@ struct BenchOptions {
   double minSeconds = 0.5;
   int meshTriangles = 1000000;      ///< size of the generated mesh
   int sphereCount = 100000;         ///< spheres of the generated sphere field (makeSphereField); 0: none
-  int hairStrands = 10000;          ///< strands of 12 points (11 segments each) of the generated hair ball; 0: none
+  int hairGuides = 100;             ///< guide strands of the generated head of hair (makeHairScene), 100 children each; 0: none
   /// single, packet8, packet16, stream (host/bench/embree_reference.h), or
   /// fastest: every set traced with all four, compared with the fastest
   std::string embreeApi = "fastest";
@@ -67,7 +67,7 @@ struct BenchOptions {
 /// Default scenes: the built-in Cornell box; MetalRoughSpheresNoTextures and
 /// DamagedHelmet from the asset folder (skipped, saying so, when absent); a
 /// generated height field of meshTriangles triangles; a generated field of
-/// sphereCount spheres; a generated ball of hairStrands hairs.
+/// sphereCount spheres; a generated head of hair of hairGuides x 101 strands.
 int runBench(const BenchOptions& options);
 
 }  // namespace wt

@@ -379,9 +379,9 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(2, 1 << 26))->capture_default_str();
   benchCmd->add_option("--spheres", bench.sphereCount, "Spheres of the generated sphere field (0: none)")
       ->check(CLI::Range(0, 1 << 26))->capture_default_str();
-  benchCmd->add_option("--hair-strands", bench.hairStrands,
-                       "Strands (12 points, 11 segments each) of the generated hair ball (0: none)")
-      ->check(CLI::Range(0, 1 << 22))->capture_default_str();
+  benchCmd->add_option("--hair-guides", bench.hairGuides,
+                       "Guide strands of the generated head of hair, 100 children each, 15 segments a strand (0: none)")
+      ->check(CLI::Range(0, 1 << 16))->capture_default_str();
   benchCmd->add_option("--repetitions", bench.repetitions, "Timed runs per figure (median)")
       ->check(CLI::Range(1, 1000))->capture_default_str();
   benchCmd->add_option("--min-time", bench.minSeconds,
