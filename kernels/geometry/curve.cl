@@ -169,6 +169,21 @@ inline bool curve_intersect(__global const float4* rows, uint k, float3 o, float
   float dd = dot(d, d);
   float t_mid = dot(0.5f * (a.xyz + b.xyz) - o, d) / dd;
   float3 o_mid = o + t_mid * d;
+  // Most segments a ray is tested against it misses: first the cheap bound,
+  // the hull lies within max(ra, rb) of the segment from a to b. The ray's
+  // line passes the segment's points at distance |w_perp + s e_perp| (the
+  // parts across the ray), least at the s below.
+  float3 e_ab = b.xyz - a.xyz;
+  float3 w = a.xyz - o_mid;
+  float3 w_perp = w - (dot(w, d) / dd) * d;
+  float3 e_perp = e_ab - (dot(e_ab, d) / dd) * d;
+  float ee = dot(e_perp, e_perp);
+  float s_near = ee > 0.0f ? clamp(-dot(w_perp, e_perp) / ee, 0.0f, 1.0f) : 0.0f;
+  float3 gap = w_perp + s_near * e_perp;
+  float r_max = fmax(a.w, b.w);
+  // wide of the rounding of o_mid, of the projections and of the radii
+  float reach = r_max * 1.001f + spawn_gamma(32) * (curve_max3(o_mid) + curve_max3(a.xyz) + curve_max3(e_ab) + r_max);
+  if (dot(gap, gap) > reach * reach) return false;
   float lo = INFINITY, hi = -INFINITY;
   curve_cone_roots(a, b, o_mid, d, &lo, &hi);
   curve_sphere_roots(a.xyz, a.w, o_mid, d, dd, &lo, &hi);
