@@ -1,6 +1,7 @@
 #include "device/program.h"
 
 #include "core/embedded.h"
+#include "geometry/primitives.h"
 
 #include <cstdlib>
 #include <fstream>
@@ -92,17 +93,17 @@ std::string expandKernelSource(const std::string& file) {
 }
 
 std::vector<std::string> kernelDefines(const KernelFeatures& features) {
-  return {
+  std::vector<std::string> defines = {
       "-D WT_INTEGRATOR_MINIMAL=" + std::string(features.integratorMinimal ? "1" : "0"),
       "-D WT_BVH_STACK_SIZE=" + std::to_string(features.bvhStackSize),
       "-D WT_HAS_PBR=" + std::string(features.pbr ? "1" : "0"),
       "-D WT_HAS_TRANSMISSION=" + std::string(features.pbr && features.transmission ? "1" : "0"),
-      "-D WT_HAS_SPHERES=" + std::string(features.spheres ? "1" : "0"),
-      "-D WT_HAS_CURVES=" + std::string(features.curves ? "1" : "0"),
-      "-D WT_HAS_INSTANCES=" + std::string(features.instances ? "1" : "0"),
       "-D WT_PACKET_WIDTH=" + std::to_string(features.packetWidth),
       "-D WT_STREAM_PREFETCH=" + std::string(features.streamPrefetch ? "1" : "0"),
   };
+  for (const PrimitiveType& type : primitiveTypes())
+    defines.push_back("-D " + std::string(type.define) + "=" + (features.primitives[type.id] ? "1" : "0"));
+  return defines;
 }
 
 bool streamPrefetchFor(const DeviceInfo& device, std::size_t sceneBytes) {

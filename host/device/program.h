@@ -3,6 +3,9 @@
 #pragma once
 
 #include "device/context.h"
+#include "shared/types.h"
+
+#include <array>
 
 #include <filesystem>
 #include <optional>
@@ -18,9 +21,9 @@ struct KernelFeatures {
   int bvhStackSize = 64;          ///< traversal stack entries; >= BVH depth + 1, rounded up to 32
   bool pbr = false;               ///< a material uses the metallic-roughness model (else all are Lambertian)
   bool transmission = false;      ///< a metallic-roughness material transmits (KHR_materials_transmission)
-  bool spheres = false;           ///< the scene has analytic spheres (WT_HAS_SPHERES: their ray test, surface and emitter sampling)
-  bool curves = false;            ///< the scene has curves (WT_HAS_CURVES: their ray test and surface)
-  bool instances = false;         ///< the scene's buffers hold instances (WT_HAS_INSTANCES: geometries stored once, placed by transforms)
+  /// The geometry types beside triangles compiled in, by WT_PRIM_* (each
+  /// primitiveTypes() entry's define; SceneBuffers::primitiveTypesPresent)
+  std::array<bool, WT_PRIM_TYPES> primitives{};
   int packetWidth = 8;            ///< rays per packet (WT_PACKET_WIDTH): 8 or 16, packetWidthFor
   /// WT_STREAM_PREFETCH: streams ask for a node's children as it arrives, and
   /// keep their rays' order (streamPrefetchFor)

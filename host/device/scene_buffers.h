@@ -88,6 +88,13 @@ class SceneBuffers {
   void bindGeometry(cl::Kernel& kernel, int first) const;
   /// Primitives of `type` (WT_PRIM_*) the scene has, left out or not.
   std::size_t primitiveCount(std::uint32_t type) const { return m_primitiveCount[type]; }
+  /// Which types beside triangles the scene has (KernelFeatures::primitives).
+  std::array<bool, WT_PRIM_TYPES> primitiveTypesPresent() const {
+    std::array<bool, WT_PRIM_TYPES> present{};
+    for (std::uint32_t type = 0; type < WT_PRIM_TYPES; ++type)
+      present[type] = type != WT_PRIM_TRIANGLE && m_primitiveCount[type] > 0;
+    return present;
+  }
   /// Non-triangle primitives left out of their BVH (zero size, non-finite).
   std::size_t skippedPrimitives() const { return m_skippedPrimitives; }
   const Bvh4Stats& primitiveBvhStats() const { return m_primStats; }

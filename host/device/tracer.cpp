@@ -19,9 +19,7 @@ Tracer::Tracer(Context& context, const Scene& scene, const BvhBuildOptions& opti
   features.bvhStackSize = m_scene->stackSize();
   features.packetWidth = m_packetWidth;
   features.streamPrefetch = m_streamPrefetch;
-  features.spheres = m_scene->primitiveCount(WT_PRIM_SPHERE) > 0;
-  features.curves = m_scene->primitiveCount(WT_PRIM_CURVE) > 0;
-  features.instances = m_scene->instanceCount() > 0;
+  features.primitives = m_scene->primitiveTypesPresent();
   m_program = buildProgram(context, features);
   m_closest = cl::Kernel(m_program, "trace_closest");
   m_occluded = cl::Kernel(m_program, "trace_occluded");

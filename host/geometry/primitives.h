@@ -1,8 +1,9 @@
 // The primitives other than triangles, gathered type by type into the rows
 // the kernels read (kernels/geometry/geometry.cl): a box and a typed id per
 // primitive for their BVH, and each type's prim_data and prim_info rows.
-// A type's gatherer lives in host/geometry/<type>.cpp; gatherPrimitives
-// calls every one.
+// A type's gatherer lives in host/geometry/<type>.cpp; primitiveTypes()
+// (host/geometry/primitives.cpp) lists every type, the one table a new type
+// adds a row to.
 #pragma once
 
 #include "core/math.h"
@@ -23,15 +24,23 @@ constexpr std::uint32_t primId(std::uint32_t type, std::uint32_t index) {
 constexpr std::uint32_t primType(std::uint32_t id) { return id >> WT_PRIM_TYPE_SHIFT; }
 constexpr std::uint32_t primIndex(std::uint32_t id) { return id & WT_PRIM_INDEX_MASK; }
 
+struct PrimitiveRows;
+
+/// A geometry type beside triangles, as the host knows it.
+struct PrimitiveType {
+  std::uint32_t id;    ///< WT_PRIM_*
+  const char* name;    ///< plural, for tables ("spheres")
+  const char* define;  ///< the kernels' switch that compiles it in ("WT_HAS_SPHERES", kernelDefines)
+  /// Its boxes, typed ids and rows from the scene; null for instances, which
+  /// SceneBuffers lays out from the geometries it stores once.
+  void (*gather)(const Scene&, PrimitiveRows&);
+};
+
+/// Every type beside triangles, in the order gatherPrimitives lays them out.
+std::span<const PrimitiveType> primitiveTypes();
+
 /// The type's name in plural, for tables ("triangles", "spheres"); "" for none.
-inline const char* primTypeName(std::uint32_t type) {
-  switch (type) {
-    case WT_PRIM_TRIANGLE: return "triangles";
-    case WT_PRIM_SPHERE: return "spheres";
-    case WT_PRIM_CURVE: return "curve segments";
-    default: return "";
-  }
-}
+const char* primTypeName(std::uint32_t type);
 
 struct PrimitiveRows {
   std::vector<Aabb> bounds;                         ///< per primitive, world

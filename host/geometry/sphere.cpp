@@ -35,12 +35,4 @@ void gatherSpheres(const Scene& scene, PrimitiveRows& rows) {
   }
 }
 
-PrimitiveRows gatherPrimitives(const Scene& scene, std::span<const InstanceDesc> instances) {
-  PrimitiveRows rows;
-  gatherSpheres(scene, rows);
-  gatherCurves(scene, rows);
-  gatherInstances(instances, rows);
-  return rows;
-}
-
 }  // namespace wt

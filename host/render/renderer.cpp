@@ -69,9 +69,7 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
   features.transmission = std::any_of(scene.materials.begin(), scene.materials.end(), [](const WtMaterial& m) {
     return m.model == WT_MATERIAL_PBR && m.transmission > 0.0f && m.base_color.w < 1.0f;
   });
-  features.spheres = m_scene->primitiveCount(WT_PRIM_SPHERE) > 0;
-  features.curves = m_scene->primitiveCount(WT_PRIM_CURVE) > 0;
-  features.instances = m_scene->instanceCount() > 0;
+  features.primitives = m_scene->primitiveTypesPresent();
   m_program = buildProgram(context, features);
   m_generate = cl::Kernel(m_program, "generate");
   m_extend = cl::Kernel(m_program, "extend");
@@ -98,7 +96,7 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
   m_shadowQueue = make(4), m_shadowO = make(16), m_shadowD = make(16), m_shadowRadiance = make(16);
   m_bounceCounts = make(8);  // ushort4: diffuse, specular, transmission bounces
   m_raySkip = make(4), m_shadowSkip = make(8), m_prevNormal = make(16);
-  m_hitInstance = features.instances ? make(4) : cl::Buffer(ctx, CL_MEM_READ_WRITE, 4);
+  m_hitInstance = features.primitives[WT_PRIM_INSTANCE] ? make(4) : cl::Buffer(ctx, CL_MEM_READ_WRITE, 4);
   auto upload = [&](const auto& data) {
     using T = typename std::decay_t<decltype(data)>::value_type;
     std::size_t bytes = std::max<std::size_t>(data.size(), 1) * sizeof(T);
