@@ -1008,13 +1008,16 @@ class Converter {
     auto ext = node.extensions.find(kGpuInstancing);
     if (ext == node.extensions.end()) return {world};
     const std::string where = label + ": " + kGpuInstancing;
-    const tinygltf::Value& attributes = ext->second.Get("attributes");
-    // (tinygltf reads an empty object as null: that has no attributes either)
+    // (tinygltf's Value::Get asserts an object, and reads an empty one as null)
+    static const tinygltf::Value kNone;
+    const tinygltf::Value& attributes =
+        ext->second.IsObject() && ext->second.Has("attributes") ? ext->second.Get("attributes") : kNone;
     if (attributes.Type() != tinygltf::NULL_TYPE && !attributes.IsObject())
       fail(where + ": 'attributes' is not an object");
     auto accessorOf = [&](const char* name) {
+      if (!attributes.IsObject() || !attributes.Has(name)) return -1;
       const tinygltf::Value& v = attributes.Get(name);
-      if (!v.IsInt() && !v.IsNumber()) return -1;
+      if (!v.IsInt() && !v.IsNumber()) fail(where + ": attributes." + name + " is not an accessor index");
       return v.GetNumberAsInt();
     };
     const std::vector<int> kFloat = {TINYGLTF_COMPONENT_TYPE_FLOAT};
