@@ -78,6 +78,36 @@ StressRow refusedObjectRow(const std::string& what, const char* object) {
   return row;
 }
 
+/// A scene made in code (no validator in the way) whose degenerate
+/// primitives must be left out, `leftOut` of them, while one good emitter of
+/// radiance 1 in front of the camera renders: no NaN, the centre pixel 1.
+StressRow leftOutRow(Context& context, const StressOptions& options, Scene scene,
+                     std::chrono::steady_clock::time_point start, const std::string& name, std::size_t leftOut) {
+  scene.camera = CameraDesc{};
+  RenderSettings settings;
+  settings.width = settings.height = 16;
+  settings.samplesPerPixel = options.quick ? 4 : 16;
+  settings.maxBounces = 4;
+  Renderer renderer(context, scene, settings);
+  for (int s = 0; s < settings.samplesPerPixel; ++s) renderer.renderSample();
+  const Image image = renderer.readImage();
+  std::size_t nonFinitePixels = 0;
+  for (float v : image.rgb) nonFinitePixels += !std::isfinite(v);
+  const float centre = image.rgb[3 * (8 * 16 + 8)];
+  StressRow row;
+  row.group = "primitives";
+  row.name = name;
+  row.figure = std::to_string(renderer.sceneBuffers().skippedPrimitives()) + " left out, " +
+               std::to_string(renderer.stats().nonFiniteSamples) + " NaN/Inf samples, " +
+               std::to_string(nonFinitePixels) + " non-finite pixels; centre pixel " + stressFormat("%.3f", centre);
+  row.criterion = std::to_string(leftOut) +
+                  " left out (the renderer warns), no NaN, the good one seen (centre pixel 1, its radiance)";
+  row.pass = renderer.sceneBuffers().skippedPrimitives() == leftOut && renderer.stats().nonFiniteSamples == 0 &&
+             nonFinitePixels == 0 && std::abs(centre - 1.0f) < 1e-4f;
+  row.seconds = secondsSince(start);
+  return row;
+}
+
 struct Rendered {
   Image image;
   std::uint64_t nonFinite = 0;
@@ -234,29 +264,8 @@ std::vector<StressRow> sphereDegenerate(Context& context, const StressOptions& o
   const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
   scene.spheres = {{glm::vec3(0.0f), 0.0f, 0}, {glm::vec3(nan, 0.0f, 0.0f), 1.0f, 0}, {glm::vec3(0.0f), inf, 0},
                    {glm::vec3(0.0f), -2.0f, 0}, {glm::vec3(0.0f, 0.0f, -4.0f), 1.0f, 0}};
-  CameraDesc camera;
-  scene.camera = camera;
-  RenderSettings settings;
-  settings.width = settings.height = 16;
-  settings.samplesPerPixel = options.quick ? 4 : 16;
-  settings.maxBounces = 4;
-  Renderer renderer(context, scene, settings);
-  for (int s = 0; s < settings.samplesPerPixel; ++s) renderer.renderSample();
-  const Image image = renderer.readImage();
-  std::size_t nonFinitePixels = 0;
-  for (float v : image.rgb) nonFinitePixels += !std::isfinite(v);
-  StressRow row;
-  row.group = "primitives";
-  row.name = "spheres made in code: radius 0, a NaN centre, radius inf, radius -2, and one good one";
-  row.figure = std::to_string(renderer.sceneBuffers().skippedPrimitives()) + " left out, " +
-               std::to_string(renderer.stats().nonFiniteSamples) + " NaN/Inf samples, " +
-               std::to_string(nonFinitePixels) + " non-finite pixels; centre pixel " +
-               stressFormat("%.3f", image.rgb[3 * (8 * 16 + 8)]);
-  row.criterion = "4 left out (the renderer warns), no NaN, the good sphere seen (centre pixel 1, its radiance)";
-  row.pass = renderer.sceneBuffers().skippedPrimitives() == 4 && renderer.stats().nonFiniteSamples == 0 &&
-             nonFinitePixels == 0 && std::abs(image.rgb[3 * (8 * 16 + 8)] - 1.0f) < 1e-4f;
-  row.seconds = secondsSince(start);
-  rows.push_back(row);
+  rows.push_back(leftOutRow(context, options, scene, start,
+                            "spheres made in code: radius 0, a NaN centre, radius inf, radius -2, and one good one", 4));
   return rows;
 }
 
@@ -375,29 +384,10 @@ std::vector<StressRow> curveDegenerate(Context& context, const StressOptions& op
   add({{0, 0, 0, 0.5f}, {0, 0, 0, 0.7f}, {0, 0, 0, 0.2f}});  // one point thrice
   add({{0, 0, 0, 0.5f}, {nan, 0, 0, 0.5f}, {0, 0, 1, 0.5f}, {0, 1, 1, 0.5f}}, CurveBasis::kBSpline);
   add({{-1, 0, -4, 1.0f}, {-1, 0, -4, 1.0f}, {1, 0, -4, 1.0f}});  // coincident points, then a good segment
-  CameraDesc camera;
-  scene.camera = camera;
-  RenderSettings settings;
-  settings.width = settings.height = 16;
-  settings.samplesPerPixel = options.quick ? 4 : 16;
-  settings.maxBounces = 4;
-  Renderer renderer(context, scene, settings);
-  for (int s = 0; s < settings.samplesPerPixel; ++s) renderer.renderSample();
-  const Image image = renderer.readImage();
-  std::size_t nonFinitePixels = 0;
-  for (float v : image.rgb) nonFinitePixels += !std::isfinite(v);
-  StressRow row;
-  row.group = "primitives";
-  row.name = "curves made in code: radius 0, a NaN point, radius -2, radius inf, one point thrice, a B-spline with a "
-             "NaN point, coincident points before a good segment";
-  row.figure = std::to_string(renderer.sceneBuffers().skippedPrimitives()) + " segments left out, " +
-               std::to_string(renderer.stats().nonFiniteSamples) + " NaN/Inf samples, " +
-               std::to_string(nonFinitePixels) + " non-finite pixels; centre pixel " +
-               stressFormat("%.3f", image.rgb[3 * (8 * 16 + 8)]);
-  row.criterion = "6 left out (the renderer warns), no NaN, the good segment seen (centre pixel 1, its radiance)";
-  row.pass = renderer.sceneBuffers().skippedPrimitives() == 6 && renderer.stats().nonFiniteSamples == 0 &&
-             nonFinitePixels == 0 && std::abs(image.rgb[3 * (8 * 16 + 8)] - 1.0f) < 1e-4f;
-  row.seconds = secondsSince(start);
+  StressRow row = leftOutRow(context, options, scene, start,
+                             "curves made in code: radius 0, a NaN point, radius -2, radius inf, one point thrice, a "
+                             "B-spline with a NaN point, coincident points before a good segment",
+                             6);
   rows.push_back(row);
   return rows;
 }
