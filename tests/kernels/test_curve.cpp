@@ -7,6 +7,7 @@
 // degenerate input on the host.
 #include "device/tracer.h"
 #include "device_fixture.h"
+#include "primitive_checks.h"
 #include "geometry/primitives.h"
 #include "scene/generators.h"
 #include "core/spawn.h"
@@ -592,23 +593,7 @@ TEST(Curves, CurveOnTrianglesAndSpheresLeaksNothing) {
     r.direction = glm::normalize(target - r.origin);
     rays.push_back(r);
   }
-  Tracer tracer(test::deviceContext(), scene);
-  const std::vector<RayHit> hits = tracer.traceClosest(rays);
-  int leaks = 0, curves = 0;
-  for (std::size_t i = 0; i < rays.size(); ++i) {
-    leaks += hits[i].prim == RayHit::kNoHit;
-    curves += hits[i].prim != RayHit::kNoHit && primType(hits[i].prim) == WT_PRIM_CURVE;
-    if (hits[i].prim != RayHit::kNoHit) {
-      EXPECT_GE(rays[i].origin.y + hits[i].t * rays[i].direction.y, -1e-5f);
-    }
-  }
-  EXPECT_EQ(leaks, 0);
-  EXPECT_GT(curves, 100);
-  EXPECT_LT(curves, int(rays.size()));
-  const std::vector<std::uint8_t> blocked = tracer.traceOccluded(rays, Traversal::kPacket);
-  int unblocked = 0;
-  for (std::uint8_t b : blocked) unblocked += b == 0;
-  EXPECT_EQ(unblocked, 0);
+  test::expectNoLeaksOnFloor(scene, rays, WT_PRIM_CURVE);
 }
 
 TEST(Curves, DegenerateInputIsLeftOutOrMerged) {

@@ -5,6 +5,7 @@
 // resting on triangles.
 #include "device/tracer.h"
 #include "device_fixture.h"
+#include "primitive_checks.h"
 #include "geometry/primitives.h"
 #include "scene/generators.h"
 #include "core/spawn.h"
@@ -273,24 +274,7 @@ TEST(Spheres, SphereOnTrianglesLeaksNothing) {
     r.direction = glm::normalize(target - r.origin);
     rays.push_back(r);
   }
-  Tracer tracer(test::deviceContext(), scene);
-  const std::vector<RayHit> hits = tracer.traceClosest(rays);
-  int leaks = 0, spheres = 0;
-  for (std::size_t i = 0; i < rays.size(); ++i) {
-    leaks += hits[i].prim == RayHit::kNoHit;
-    spheres += hits[i].prim != RayHit::kNoHit && primType(hits[i].prim) == WT_PRIM_SPHERE;
-    // nothing below the floor
-    if (hits[i].prim != RayHit::kNoHit) {
-      EXPECT_GE(rays[i].origin.y + hits[i].t * rays[i].direction.y, -1e-5f);
-    }
-  }
-  EXPECT_EQ(leaks, 0);
-  EXPECT_GT(spheres, 100);
-  EXPECT_LT(spheres, int(rays.size()));
-  const std::vector<std::uint8_t> blocked = tracer.traceOccluded(rays, Traversal::kPacket);
-  int unblocked = 0;
-  for (std::uint8_t b : blocked) unblocked += b == 0;
-  EXPECT_EQ(unblocked, 0);
+  test::expectNoLeaksOnFloor(scene, rays, WT_PRIM_SPHERE);
 }
 
 TEST(Spheres, DegenerateSpheresAreLeftOut) {
