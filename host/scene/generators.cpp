@@ -23,6 +23,10 @@ WtMaterial makeMaterial(glm::vec3 albedo, glm::vec3 emission, bool twoSided) {
   m.model = WT_MATERIAL_DIFFUSE;
   m.ior = 1.5f;
   m.volume = {0.0f, 0.0f, 0.0f, 0.0f};
+  m.alpha = 1.0f;
+  m.alpha_mode = WT_ALPHA_OPAQUE;
+  m.alpha_cutoff = 0.5f;
+  m.texture_mask = 0u;
   return m;
 }
 

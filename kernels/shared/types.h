@@ -123,7 +123,35 @@ typedef struct WtMaterial {
   float transmission; ///< KHR_materials_transmission factor in [0,1]: the share of the dielectric that is a transmitting interface (PBR only)
   float ior;          ///< KHR_materials_ior: index of refraction of that interface (1.5 by default)
   WtVec4 volume;      ///< KHR_materials_volume: xyz absorption coefficient per unit length inside (world units); w = 1: a volume boundary (refracts), 0: thin-walled (passes straight through)
+  float alpha;         ///< base colour alpha factor in [0,1] (times the texture's and COLOR_0's alpha)
+  wt_uint alpha_mode;  ///< WT_ALPHA_*
+  float alpha_cutoff;  ///< WT_ALPHA_MASK: coverage below it is a hole
+  wt_uint texture_mask;///< bit s: slot s (WT_TEXTURE_SLOT_*) is textured, by material_textures[material * WT_TEXTURE_SLOTS + s]
 } WtMaterial;
+
+#define WT_ALPHA_OPAQUE 0u  ///< alpha is ignored
+#define WT_ALPHA_MASK 1u    ///< covered where alpha >= alpha_cutoff, a hole elsewhere
+#define WT_ALPHA_BLEND 2u   ///< covered with probability alpha (stochastic transparency)
+
+/// A material's texture slots (WtMaterial::texture_mask) and which channels
+/// each one multiplies into.
+#define WT_TEXTURE_SLOT_BASE_COLOR 0u          ///< rgb: base colour (sRGB), a: alpha
+#define WT_TEXTURE_SLOT_METALLIC_ROUGHNESS 1u  ///< g: roughness, b: metallic
+#define WT_TEXTURE_SLOT_NORMAL 2u              ///< tangent-space normal, xy scaled by WtTextureRef::scale
+#define WT_TEXTURE_SLOT_EMISSIVE 3u            ///< rgb: emission (sRGB)
+#define WT_TEXTURE_SLOT_TRANSMISSION 4u        ///< r: KHR_materials_transmission
+#define WT_TEXTURE_SLOTS 16u
+
+/// One textured slot of a material: which texture (WtTexture, shared/textures.h),
+/// read at which texture coordinate set, moved by KHR_texture_transform.
+typedef struct WtTextureRef {
+  wt_uint texture;     ///< index into the texture table
+  wt_uint texcoord;    ///< 0: TEXCOORD_0, 1: TEXCOORD_1
+  float scale;         ///< normal textures: normalTexture.scale; 1 otherwise
+  wt_uint pad;
+  WtVec4 transform_u;  ///< u' = x u + y v + z (w unused)
+  WtVec4 transform_v;  ///< v' = x u + y v + z
+} WtTextureRef;
 
 #define WT_MATERIAL_DIFFUSE 0u  ///< Lambertian: base_color / pi
 #define WT_MATERIAL_PBR 1u      ///< glTF 2.0 metallic-roughness
