@@ -6,7 +6,8 @@
 WT_KERNEL void generate(WtFrameParams frame, WtCamera camera, __global float4* ray_o,
                         __global float4* ray_d, __global float4* throughput,
                         __global float4* radiance, __global uint* queue,
-                        __global uint* counters, __global ushort4* bounce_counts, __global uint* ray_skip) {
+                        __global uint* counters, __global ushort4* bounce_counts, __global uint* ray_skip,
+                        __global float2* ray_cone) {
   uint i = get_global_id(0);
   uint pixel_count = frame.width * frame.height;
   if (i >= pixel_count) return;
@@ -40,4 +41,9 @@ WT_KERNEL void generate(WtFrameParams frame, WtCamera camera, __global float4* r
   queue[i] = i;
   bounce_counts[i] = (ushort4)(0);
   ray_skip[i] = WT_NO_HIT;
+#if WT_HAS_TEXTURES
+  // the pixel's cone (materials/textured.cl): a perspective ray's angle, an orthographic ray's width
+  float pixel = 2.0f * length(vec4_xyz(camera.up)) / (float)frame.height;
+  ray_cone[i] = camera.origin.w == (float)WT_CAMERA_ORTHOGRAPHIC ? (float2)(pixel, 0.0f) : (float2)(0.0f, pixel);
+#endif
 }

@@ -8,6 +8,7 @@
 #include "lights/light_tree.cl"
 #include "sampler.cl"
 #include "materials/bsdf.cl"
+#include "materials/textured.cl"
 
 /// Weight of emission found by BSDF sampling (pdf_bsdf, solid angle) from a
 /// light that NEE could also have sampled with pdf_light (0: NEE cannot).
@@ -43,7 +44,8 @@ WT_KERNEL void shade(WtFrameParams frame, WtEnvironment environment, __global co
                      __global const float* pbr_table, __global ushort4* bounce_counts,
                      __global uint* ray_skip, __global uint2* shadow_skip,
                      __global const WtLightNode* light_tree, __global const uint* emitter_leaf,
-                     __global float4* prev_normal, __global const uint* hit_instance, WT_GEOMETRY_PARAMS) {
+                     __global float4* prev_normal, __global const uint* hit_instance, WT_GEOMETRY_PARAMS,
+                     __global float2* ray_cone, WT_SURFACE_PARAMS) {
   uint i = get_global_id(0);
   if (i >= counters[in_slot]) return;
   // Without WT_FLAG_COMPACT_SHADOWS entry i of the shadow queue is this
@@ -61,7 +63,8 @@ WT_KERNEL void shade(WtFrameParams frame, WtEnvironment environment, __global co
 
   EnvScene env = {environment, env_texels, env_marginal_cdf, env_conditional_cdf};
   GeometryScene g = WT_GEOMETRY_SCENE;
-  LightScene ls = {lights, alias, frame.light_count, tri_verts, env, g};
+  SurfaceScene ss = WT_SURFACE_SCENE;
+  LightScene ls = {lights, alias, frame.light_count, tri_verts, env, g, tri_info, ss};
 
   // miss: the environment (camera rays see it unless it is hidden)
   if (prim == WT_NO_HIT) {
@@ -82,6 +85,37 @@ WT_KERNEL void shade(WtFrameParams frame, WtEnvironment environment, __global co
   WtMaterial material = materials[surface.material];
   float3 p = surface.p, p_error = surface.p_error, ng = surface.ng, ns = surface.ns;
   if (dot(ng, ng) == 0.0f) return;  // degenerate triangle: absorb
+  // the path's footprint here (textured.cl): its spread so far and this segment's cone
+  float footprint = 0.0f;
+  float cone_angle = 0.0f;
+#if WT_HAS_TEXTURES
+  if (frame.flags & WT_FLAG_TEXTURE_FOOTPRINT) {
+    float2 cone = ray_cone[path];
+    float dir_len = length(dir);
+    float cos_hit = fabs(dot(ng, dir)) / dir_len;
+    footprint = cone.x + hit.x * dir_len * cone.y * rsqrt(fmax(cos_hit, 1e-4f));
+    cone_angle = cone.y;
+  }
+#endif
+#if WT_HAS_TEXTURES || WT_HAS_VERTEX_COLORS
+  // triangles (an instance's too) carry vertex attributes and textures
+  if (prim_type(prim) == WT_PRIM_TRIANGLE) {
+    float3 p0, p1, p2;
+    triangle_corners(tri_verts, prim, &p0, &p1, &p2);
+#if WT_HAS_INSTANCES
+    __global const float4* to_world = instance != WT_NO_HIT ? geometry_instance_rows(g, instance) + 3 : 0;
+    if (to_world) p0 = instance_point(to_world, p0), p1 = instance_point(to_world, p1), p2 = instance_point(to_world, p2);
+#endif
+    SurfacePoint sp = surface_point(ss, tri_info[prim], hit.y, hit.z, p0, p1, p2, footprint);
+#if WT_HAS_INSTANCES
+    if (to_world && dot(sp.tangent, sp.tangent) > 0.0f) {
+      sp.tangent = normalize(instance_vector(to_world, sp.tangent));
+      if (geometry_instance_info(g, instance).y & WT_INSTANCE_MIRRORED) sp.sign = -sp.sign;
+    }
+#endif
+    material = material_at(ss, surface.material, material, sp, &ns);
+  }
+#endif
   // ng is the winding's normal here: a ray meeting its back side comes from inside
   bool inside = dot(ng, dir) > 0.0f;
 #if WT_HAS_TRANSMISSION
@@ -125,6 +159,9 @@ WT_KERNEL void shade(WtFrameParams frame, WtEnvironment environment, __global co
   if (dot(ns, ng) < 0.0f) ns = -ns;
   // a shading normal turned away from the viewer gives way to the geometric one
   if (dot(ns, wo) <= 0.0f) ns = ng;
+#if WT_HAS_TEXTURES
+  if (material.texture_mask & (1u << WT_TEXTURE_SLOT_NORMAL)) ns = shading_normal_reflecting(ns, ng, wo);
+#endif
   float3 frame_t, frame_b;
   frame_from_normal(ns, &frame_t, &frame_b);
   float3 wo_local = (float3)(dot(wo, frame_t), dot(wo, frame_b), dot(wo, ns));
@@ -231,6 +268,10 @@ WT_KERNEL void shade(WtFrameParams frame, WtEnvironment environment, __global co
   if (beta.x <= 0.0f && beta.y <= 0.0f && beta.z <= 0.0f) return;
 
   throughput[path] = (float4)(beta, bs.pdf);
+#if WT_HAS_TEXTURES
+  // the next segment's cone: as wide as the sample's pdf says; a delta sample keeps the angle it came with
+  ray_cone[path] = (float2)(footprint, bs.pdf > 0.0f ? rsqrt(bs.pdf) : cone_angle);
+#endif
   bounce_counts[path] = counts;
   ray_skip[path] = prim;
   prev_normal[path] = (float4)(tree_normal, 0.0f);  // for the light tree's pmf if the ray finds an emitter

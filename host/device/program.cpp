@@ -98,6 +98,8 @@ std::vector<std::string> kernelDefines(const KernelFeatures& features) {
       "-D WT_BVH_STACK_SIZE=" + std::to_string(features.bvhStackSize),
       "-D WT_HAS_PBR=" + std::string(features.pbr ? "1" : "0"),
       "-D WT_HAS_TRANSMISSION=" + std::string(features.pbr && features.transmission ? "1" : "0"),
+      "-D WT_HAS_TEXTURES=" + std::string(features.textures ? "1" : "0"),
+      "-D WT_HAS_VERTEX_COLORS=" + std::string(features.vertexColors ? "1" : "0"),
       "-D WT_PACKET_WIDTH=" + std::to_string(features.packetWidth),
       "-D WT_STREAM_PREFETCH=" + std::string(features.streamPrefetch ? "1" : "0"),
   };

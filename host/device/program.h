@@ -21,6 +21,8 @@ struct KernelFeatures {
   int bvhStackSize = 64;          ///< traversal stack entries; >= BVH depth + 1, rounded up to 32
   bool pbr = false;               ///< a material uses the metallic-roughness model (else all are Lambertian)
   bool transmission = false;      ///< a metallic-roughness material transmits (KHR_materials_transmission)
+  bool textures = false;          ///< a material reads a texture (materials/textured.cl)
+  bool vertexColors = false;      ///< the scene's vertices have COLOR_0
   /// The geometry types beside triangles compiled in, by WT_PRIM_* (each
   /// primitiveTypes() entry's define; SceneBuffers::primitiveTypesPresent)
   std::array<bool, WT_PRIM_TYPES> primitives{};

@@ -345,6 +345,47 @@ SceneBuffers::SceneBuffers(Context& context, const Scene& scene, const BvhBuildO
   normals = upload(context, scene.normals, m_attributeBytes);
   materials = upload(context, scene.materials, m_attributeBytes);
   uploadPrimitives(context, scene, options, descs);
+  uploadSurface(context, scene);
+}
+
+void SceneBuffers::uploadSurface(Context& context, const Scene& scene) {
+  m_hasTextures = !scene.materialTextures.empty() &&
+                  std::any_of(scene.materials.begin(), scene.materials.end(),
+                              [](const WtMaterial& m) { return m.texture_mask != 0u; });
+  m_hasVertexColors = !scene.colors.empty();
+  std::vector<WtVec4> uv, color, tangent;
+  if (m_hasTextures) {
+    uv.resize(scene.positions.size());
+    for (std::size_t v = 0; v < uv.size(); ++v) {
+      glm::vec2 a = v < scene.texcoords.size() ? scene.texcoords[v] : glm::vec2(0.0f);
+      glm::vec2 b = v < scene.texcoords1.size() ? scene.texcoords1[v] : glm::vec2(0.0f);
+      uv[v] = {a.x, a.y, b.x, b.y};
+    }
+    tangent.resize(scene.positions.size(), WtVec4{0.0f, 0.0f, 0.0f, 1.0f});
+    for (std::size_t v = 0; v < std::min(tangent.size(), scene.tangents.size()); ++v)
+      tangent[v] = {scene.tangents[v].x, scene.tangents[v].y, scene.tangents[v].z, scene.tangents[v].w};
+  }
+  if (m_hasVertexColors) {
+    color.resize(scene.positions.size(), WtVec4{1.0f, 1.0f, 1.0f, 1.0f});
+    for (std::size_t v = 0; v < std::min(color.size(), scene.colors.size()); ++v)
+      color[v] = {scene.colors[v].x, scene.colors[v].y, scene.colors[v].z, scene.colors[v].w};
+  }
+  vertexUv = upload(context, uv, m_attributeBytes);
+  vertexColor = upload(context, color, m_attributeBytes);
+  vertexTangent = upload(context, tangent, m_attributeBytes);
+  std::vector<WtTextureRef> refs;
+  if (m_hasTextures) refs = scene.materialTextures;
+  materialTextures = upload(context, refs, m_attributeBytes);
+  std::size_t bytes = 0;
+  textures = upload(context, m_hasTextures ? scene.textures.textures : std::vector<WtTexture>{}, bytes);
+  textureLevels = upload(context, m_hasTextures ? scene.textures.levels : std::vector<WtTextureLevel>{}, bytes);
+  texels = upload(context, m_hasTextures ? scene.textures.texels : std::vector<wt_uint>{}, bytes);
+  textureBytes = m_hasTextures ? bytes : 0;
+}
+
+void SceneBuffers::bindSurface(cl::Kernel& kernel, int first) const {
+  for (const cl::Buffer* b : {&vertexUv, &vertexColor, &vertexTangent, &materialTextures, &textures, &textureLevels, &texels})
+    kernel.setArg(first++, *b);
 }
 
 PrimitiveTree buildPrimitiveTree(const PrimitiveRows& rows, const BvhBuildOptions& options) {
@@ -424,6 +465,7 @@ static_assert(offsetof(WtBvh4Node, hi_x) == 16 && offsetof(WtBvh4Node, hi_y) == 
 static_assert(offsetof(WtBvh4Node, child) == 96 && offsetof(WtBvh4Node, count) == 112);
 static_assert(sizeof(WtMaterial) == 80);
 static_assert(sizeof(WtTextureRef) == 48);
+static_assert(sizeof(WtTexture) == 16 && sizeof(WtTextureLevel) == 16);
 static_assert(sizeof(WtCamera) == 64);
 static_assert(sizeof(WtFrameParams) == 64);
 static_assert(sizeof(WtLight) == 64);

@@ -75,6 +75,19 @@ class SceneBuffers {
   cl::Buffer triangleInfo;
   cl::Buffer normals;     ///< float4 per vertex
   cl::Buffer materials;   ///< WtMaterial[]
+
+  /// What materials/textured.cl reads (WT_SURFACE_PARAMS), each one dummy
+  /// entry where the scene has none: per vertex TEXCOORD_0 and _1 (float4),
+  /// COLOR_0 (float4) and tangents (float4); the materials' texture slots
+  /// (WtTextureRef, WT_TEXTURE_SLOTS per material) and the textures
+  /// (shared/textures.h).
+  cl::Buffer vertexUv, vertexColor, vertexTangent, materialTextures, textures, textureLevels, texels;
+  std::size_t textureBytes = 0;  ///< textures, levels and texels on the device
+  /// Set the kernel's WT_SURFACE_PARAMS, arguments first .. first + 6.
+  void bindSurface(cl::Kernel& kernel, int first) const;
+  /// Whether a material reads a texture / the vertices have COLOR_0 (KernelFeatures).
+  bool hasTextures() const { return m_hasTextures; }
+  bool hasVertexColors() const { return m_hasVertexColors; }
   std::uint32_t nodeCount = 0;
   std::size_t uploadedBytes = 0;  ///< nodes + triangle data (tri_verts, tri_info)
 
@@ -149,6 +162,9 @@ class SceneBuffers {
   void uploadPrimitives(Context& context, const Scene& scene, const BvhBuildOptions& options,
                         std::span<const InstanceDesc> instances);
 
+  void uploadSurface(Context& context, const Scene& scene);
+
+  bool m_hasTextures = false, m_hasVertexColors = false;
   BvhBuildStats m_bvhStats;
   Bvh4Stats m_bvh4Stats;
   std::size_t m_leafMisfits = 0;

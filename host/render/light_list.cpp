@@ -41,6 +41,69 @@ std::vector<WtAliasSlot> buildAliasTable(std::span<const double> weights) {
   return table;
 }
 
+namespace {
+
+/// The texel of `texture` nearest to uv at `level`, linear RGB (host twin of
+/// kernels/materials/texture.cl for the light list's estimates).
+glm::dvec3 texelAt(const TextureSet& set, const WtTexture& texture, std::uint32_t level, glm::dvec2 uv) {
+  const WtTextureLevel& l = set.levels[texture.first_level + std::min(level, texture.level_count - 1)];
+  auto wrap = [](double x, std::uint32_t size, std::uint32_t mode) {
+    double t = x * double(size);
+    if (!std::isfinite(t)) t = 0.0;
+    long long i = (long long)std::floor(t), n = size;
+    if (mode == WT_WRAP_CLAMP) return std::uint32_t(std::clamp(i, 0ll, n - 1));
+    if (mode == WT_WRAP_MIRROR) {
+      long long m = ((i % (2 * n)) + 2 * n) % (2 * n);
+      return std::uint32_t(m < n ? m : 2 * n - 1 - m);
+    }
+    return std::uint32_t(((i % n) + n) % n);
+  };
+  const std::uint32_t x = wrap(uv.x, l.width, WT_TEXTURE_WRAP_S(texture.flags));
+  const std::uint32_t y = wrap(uv.y, l.height, WT_TEXTURE_WRAP_T(texture.flags));
+  const std::size_t index = std::size_t(y) * l.width + x;
+  glm::dvec3 c;
+  if (texture.flags & WT_TEXTURE_16BIT) {
+    const wt_uint a = set.texels[l.offset + 2 * index], b = set.texels[l.offset + 2 * index + 1];
+    c = glm::dvec3(a & 0xffffu, a >> 16, b & 0xffffu) / 65535.0;
+  } else {
+    const wt_uint a = set.texels[l.offset + index];
+    c = glm::dvec3(a & 0xffu, (a >> 8) & 0xffu, (a >> 16) & 0xffu) / 255.0;
+  }
+  if (texture.flags & WT_TEXTURE_SRGB) c = glm::dvec3(srgbToLinear(c.x), srgbToLinear(c.y), srgbToLinear(c.z));
+  return c;
+}
+
+}  // namespace
+
+glm::dvec3 averageEmissiveTexture(const Scene& scene, const WtTriangle& t) {
+  const WtMaterial& m = scene.materials[t.material];
+  if (!(m.texture_mask & (1u << WT_TEXTURE_SLOT_EMISSIVE))) return glm::dvec3(1.0);
+  const WtTextureRef& ref = scene.materialTextures[std::size_t(t.material) * WT_TEXTURE_SLOTS + WT_TEXTURE_SLOT_EMISSIVE];
+  const WtTexture& texture = scene.textures.textures[ref.texture];
+  auto uvOf = [&](std::uint32_t v) {
+    glm::dvec2 st = ref.texcoord == 1 ? (v < scene.texcoords1.size() ? glm::dvec2(scene.texcoords1[v]) : glm::dvec2(0.0))
+                                      : (v < scene.texcoords.size() ? glm::dvec2(scene.texcoords[v]) : glm::dvec2(0.0));
+    return glm::dvec2(ref.transform_u.x * st.x + ref.transform_u.y * st.y + ref.transform_u.z,
+                      ref.transform_v.x * st.x + ref.transform_v.y * st.y + ref.transform_v.z);
+  };
+  const glm::dvec2 a = uvOf(t.v0), b = uvOf(t.v1), c = uvOf(t.v2);
+  // the level whose texels are about as large as a sample's share of the
+  // triangle, so that kSide^2 nearest texels of the box-filtered pyramid average it
+  constexpr int kSide = 4;
+  const WtTextureLevel& base = scene.textures.levels[texture.first_level];
+  const double texels = 0.5 * std::fabs((b - a).x * (c - a).y - (b - a).y * (c - a).x) * double(base.width) * base.height;
+  const double level = texels > kSide * kSide ? 0.5 * std::log2(texels / (kSide * kSide)) : 0.0;
+  glm::dvec3 sum(0.0);
+  for (int i = 0; i < kSide; ++i)
+    for (int j = 0; j < kSide; ++j) {
+      // stratified over the unit square, then onto the triangle (square-root map)
+      const double su = std::sqrt((i + 0.5) / kSide), v = (j + 0.5) / kSide;
+      const double b1 = su * (1.0 - v), b2 = su * v;
+      sum += texelAt(scene.textures, texture, std::uint32_t(std::lround(level)), (1.0 - b1 - b2) * a + b1 * b + b2 * c);
+    }
+  return sum / double(kSide * kSide);
+}
+
 double environmentPowerEstimate(const Scene& scene, double meanLuminance) {
   Aabb box = scene.bounds();
   double r = box.empty() ? 1.0 : 0.5 * glm::length(box.extent());
@@ -87,6 +150,11 @@ LightList buildLightList(const Scene& scene, const SceneBuffers& buffers, double
     const WtVec4& e = scene.materials[t.material].emission;
     glm::vec3 le(e.x, e.y, e.z);
     if (!(luminance(le) > 0.0)) continue;
+    // a textured emitter's power by its texture's average over the triangle
+    // (none: BSDF sampling alone finds what little it emits)
+    const bool textured = scene.materials[t.material].texture_mask & (1u << WT_TEXTURE_SLOT_EMISSIVE);
+    const glm::vec3 average = textured ? glm::vec3(averageEmissiveTexture(scene, t)) * le : le;
+    if (!(luminance(average) > 0.0)) continue;
     auto pos = [&](std::uint32_t v) { return glm::dvec3(scene.positions[v].x, scene.positions[v].y, scene.positions[v].z); };
     double area = 0.5 * glm::length(glm::cross(pos(t.v1) - pos(t.v0), pos(t.v2) - pos(t.v0)));
     if (!(area > 0.0)) continue;
@@ -96,9 +164,10 @@ LightList buildLightList(const Scene& scene, const SceneBuffers& buffers, double
     l.intensity = {le.x, le.y, le.z, 0.0f};
     const bool twoSided = e.w != 0.0f;
     l.position.w = twoSided ? 1.0f : 0.0f;
+    l.position.y = textured ? 1.0f : 0.0f;
     lightOfLeaf[leaf] = std::uint32_t(list.lights.size());
     // pi * L * area from each emitting face
-    power.push_back((twoSided ? 2.0 : 1.0) * std::numbers::pi * area * luminance(le));
+    power.push_back((twoSided ? 2.0 : 1.0) * std::numbers::pi * area * luminance(average));
     areas.push_back(area);
     list.lights.push_back(l);
   }

@@ -56,5 +56,9 @@ LightList buildLightList(const Scene& scene, const SceneBuffers& buffers, double
 double environmentPowerEstimate(const Scene& scene, double meanLuminance);
 
 double luminance(glm::vec3 rgb);
+/// The mean of the emissive texture (linear RGB) over triangle `t`, from 16
+/// stratified texels of the mip level where each stands for about a 16th of
+/// the triangle; 1 where its material has no emissive texture.
+glm::dvec3 averageEmissiveTexture(const Scene& scene, const WtTriangle& t);
 
 }  // namespace wt

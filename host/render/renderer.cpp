@@ -33,6 +33,7 @@ WtFrameParams frameParams(const RenderSettings& s, const LightList& lights, int 
               (s.powerHeuristic ? WT_FLAG_POWER_HEURISTIC : 0u) | (s.useRussianRoulette ? WT_FLAG_RR : 0u);
   }
   if (s.sobol) p.flags |= WT_FLAG_SOBOL;
+  if (s.textureFootprint) p.flags |= WT_FLAG_TEXTURE_FOOTPRINT;
   p.accumulate_mode = s.accumulation;
   if (s.environmentHidden) p.flags |= WT_FLAG_ENV_HIDDEN;
   if (s.stopOnNonFinite) p.flags |= WT_FLAG_CHECK_NONFINITE;
@@ -70,6 +71,8 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
     return m.model == WT_MATERIAL_PBR && m.transmission > 0.0f && m.base_color.w < 1.0f;
   });
   features.primitives = m_scene->primitiveTypesPresent();
+  features.textures = m_scene->hasTextures();
+  features.vertexColors = m_scene->hasVertexColors();
   m_program = buildProgram(context, features);
   m_generate = cl::Kernel(m_program, "generate");
   m_extend = cl::Kernel(m_program, "extend");
@@ -97,6 +100,7 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
   m_bounceCounts = make(8);  // ushort4: diffuse, specular, transmission bounces
   m_raySkip = make(4), m_shadowSkip = make(8), m_prevNormal = make(16);
   m_hitInstance = features.primitives[WT_PRIM_INSTANCE] ? make(4) : cl::Buffer(ctx, CL_MEM_READ_WRITE, 4);
+  m_rayCone = features.textures ? make(8) : cl::Buffer(ctx, CL_MEM_READ_WRITE, 8);
   auto upload = [&](const auto& data) {
     using T = typename std::decay_t<decltype(data)>::value_type;
     std::size_t bytes = std::max<std::size_t>(data.size(), 1) * sizeof(T);
@@ -131,7 +135,7 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
   // Arguments that never change; per-launch ones are set in renderSample().
   int a = 2;  // generate: frame, camera set per pass
   for (cl::Buffer* b : {&m_rayO, &m_rayD, &m_throughput, &m_radiance, &m_queueA, &m_counters, &m_bounceCounts,
-                        &m_raySkip})
+                        &m_raySkip, &m_rayCone})
     m_generate.setArg(a++, *b);
 
   for (cl::Kernel* k : {&m_extend, &m_extendPacket}) {
@@ -161,6 +165,8 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
                         &m_lightTree, &m_emitterLeaf, &m_prevNormal, &m_hitInstance})
     m_shade.setArg(a++, *b);
   m_scene->bindGeometry(m_shade, a);
+  m_shade.setArg(a + 5, m_rayCone);
+  m_scene->bindSurface(m_shade, a + 6);
 
   for (cl::Kernel* k : {&m_connect, &m_connectPacket}) {
     a = 0;

@@ -47,6 +47,7 @@ struct RenderSettings {
   bool useRussianRoulette = true;  ///< path
   int rrMinDepth = 3;           ///< path: first bounce at which roulette may end a path
   bool sobol = false;           ///< Owen-scrambled Sobol instead of independent random numbers
+  bool textureFootprint = true;  ///< textures read at the mip level of the path's footprint (else the finest level)
   LightSampler lightSampler = LightSampler::Auto;  ///< path: how NEE picks among emissive triangles
   std::uint32_t accumulation = WT_ACCUMULATE_KAHAN;  ///< WT_ACCUMULATE_* (double needs fp64)
   BvhBuilder bvhBuilder = BvhBuilder::Auto;  ///< which tree the scene's BVH is (host/bvh/builders.h)
@@ -126,6 +127,7 @@ class Renderer {
   /// extend; its next rays leave (ray_skip or shadow_skip.x, this instance).
   /// One element when the scene has no instances (never read).
   cl::Buffer m_hitInstance;
+  cl::Buffer m_rayCone;  ///< float2 per path: footprint spread so far, cone angle of its ray (materials/textured.cl)
   cl::Buffer m_lightTree, m_emitterLeaf, m_prevNormal;  ///< the triangle each ray leaves (and the emitter a shadow ray aims at): never hit
   // path state (structure of arrays, one entry per pixel)
   cl::Buffer m_rayO, m_rayD, m_hits, m_throughput, m_radiance;

@@ -3,6 +3,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 
 #include <algorithm>
+#include <stdexcept>
 #include <cmath>
 #include <map>
 #include <random>
@@ -289,6 +290,8 @@ Scene makeHairScene(std::uint32_t guides, std::uint32_t children, std::uint32_t 
 }
 
 void appendScene(Scene& dst, const Scene& src) {
+  // scenes made in code have no textures; a loaded one may only be the destination
+  if (!src.materialTextures.empty()) throw std::invalid_argument("appendScene: the appended scene has textures");
   std::uint32_t vertexBase = std::uint32_t(dst.positions.size());
   std::uint32_t materialBase = std::uint32_t(dst.materials.size());
   std::uint32_t triangleBase = std::uint32_t(dst.triangles.size());
@@ -302,6 +305,16 @@ void appendScene(Scene& dst, const Scene& src) {
   dst.positions.insert(dst.positions.end(), src.positions.begin(), src.positions.end());
   dst.normals.insert(dst.normals.end(), src.normals.begin(), src.normals.end());
   dst.texcoords.insert(dst.texcoords.end(), src.texcoords.begin(), src.texcoords.end());
+  // the attributes only some scenes have: every vertex gets one once either has them
+  auto appendOptional = [&](auto& to, const auto& from, auto fallback) {
+    if (to.empty() && from.empty()) return;
+    to.resize(vertexBase, fallback);
+    if (from.empty()) to.resize(vertexBase + src.positions.size(), fallback);
+    else to.insert(to.end(), from.begin(), from.end());
+  };
+  appendOptional(dst.texcoords1, src.texcoords1, glm::vec2(0.0f));
+  appendOptional(dst.colors, src.colors, glm::vec4(1.0f));
+  appendOptional(dst.tangents, src.tangents, glm::vec4(0.0f));
   for (WtTriangle t : src.triangles) {
     t.v0 += vertexBase, t.v1 += vertexBase, t.v2 += vertexBase, t.material += materialBase;
     dst.triangles.push_back(t);

@@ -5,6 +5,8 @@
 #include "scene/gltf_loader.h"
 
 #include "scene/generators.h"
+#include "scene/tangents.h"
+#include "texture/texture.h"
 
 #include <tiny_gltf.h>
 
@@ -39,6 +41,7 @@ constexpr const char* kLightsPunctual = "KHR_lights_punctual";
 constexpr const char* kTransmission = "KHR_materials_transmission";
 constexpr const char* kIor = "KHR_materials_ior";
 constexpr const char* kVolume = "KHR_materials_volume";
+constexpr const char* kTextureTransform = "KHR_texture_transform";
 constexpr const char* kGpuInstancing = "EXT_mesh_gpu_instancing";
 /// Extensions whose absence changes where the geometry is or how its bytes
 /// read: a file that requires one cannot be drawn correctly without it.
@@ -229,10 +232,13 @@ bool isFinite(const glm::vec3& v) {
   return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
 }
 
-/// Accept every image without decoding it: textures are not used yet, so a
-/// missing or undecodable image must not fail the load.
-bool ignoreImage(tinygltf::Image*, const int, std::string*, std::string*, int, int,
-                 const unsigned char*, int, void*) {
+/// Keep every image's bytes as they are: the converter decodes the images
+/// materials use, once it knows how (sRGB or linear), and warns for the
+/// formats it cannot read rather than failing the load.
+bool keepImageBytes(tinygltf::Image* image, const int, std::string*, std::string*, int, int,
+                    const unsigned char* bytes, int size, void*) {
+  image->image.assign(bytes, bytes + std::max(size, 0));
+  image->width = image->height = -1;
   return true;
 }
 
@@ -251,6 +257,9 @@ struct DecodedPrimitive {
   std::vector<glm::vec3> positions;
   std::vector<glm::vec3> normals;     ///< empty: the primitive has none
   std::vector<glm::vec2> texcoords;   ///< empty: the primitive has none
+  std::vector<glm::vec2> texcoords1;  ///< TEXCOORD_1; empty: none
+  std::vector<glm::vec4> colors;      ///< COLOR_0 (alpha 1 for a VEC3 one); empty: none
+  std::vector<glm::vec4> tangents;    ///< TANGENT (xyz, w the bitangent's sign), from the file or generated for a normal map; empty: none
   std::vector<std::uint32_t> corners; ///< 3 per triangle, indices into positions
   std::uint32_t material = 0;
   glm::dvec3 lo{0.0}, hi{0.0};        ///< bounds of positions, mesh space
@@ -287,9 +296,6 @@ class Converter {
     if (m_scene.camera) m_scene.camera->cameraToWorld = glm::mat4(shifted(m_cameraWorld));
     reportDegenerateTriangles();
     if (m_scene.materials.empty()) defaultMaterial();
-    if (!m_model.images.empty())
-      m_scene.addWarning("textures are not supported yet; " + std::to_string(m_model.images.size()) +
-                         " images ignored");
     if (!m_model.animations.empty())
       m_scene.addWarning("animations are not supported; the static pose is drawn");
   }
@@ -307,7 +313,7 @@ class Converter {
     }
     for (const std::string& ext : m_model.extensionsUsed) {
       if (ext == kEmissiveStrength || ext == kLightsPunctual || ext == kTransmission || ext == kIor ||
-          ext == kVolume || ext == kGpuInstancing)
+          ext == kVolume || ext == kGpuInstancing || ext == kTextureTransform)
         continue;
       bool required = std::find(m_model.extensionsRequired.begin(), m_model.extensionsRequired.end(),
                                 ext) != m_model.extensionsRequired.end();
@@ -369,19 +375,176 @@ class Converter {
       const float metallic = unitFactor(pbr.metallicFactor, "metallicFactor");
       const float roughness = unitFactor(pbr.roughnessFactor, "roughnessFactor");
 
-      if (pbr.baseColorTexture.index >= 0 || pbr.metallicRoughnessTexture.index >= 0 ||
-          src.normalTexture.index >= 0 || src.occlusionTexture.index >= 0 ||
-          src.emissiveTexture.index >= 0)
-        m_scene.addWarning("material textures are not supported yet; ignored");
       if (src.alphaMode != "OPAQUE")
         m_scene.addWarning("alphaMode " + src.alphaMode + " is not supported yet; drawn as OPAQUE");
 
       // glTF draws a single-sided material's back face not at all: it emits from the front only
       WtMaterial material = makePbrMaterial(clamped, metallic, roughness, emission, src.doubleSided);
+      if (pbr.baseColorFactor.size() >= 4) material.alpha = unitFactor(pbr.baseColorFactor[3], "baseColorFactor alpha");
       material = withTransmissionExtensions(src, label, material);
+
+      // textures (occlusion is not one: a path tracer finds the occlusion itself)
+      std::array<WtTextureRef, WT_TEXTURE_SLOTS> refs{};
+      auto slot = [&](std::uint32_t s, const char* name, const TextureUse& use, bool srgb) {
+        if (use.index < 0) return;
+        if (std::optional<WtTextureRef> ref = textureRef(label + " " + name, use, srgb)) {
+          refs[s] = *ref;
+          material.texture_mask |= 1u << s;
+        }
+      };
+      slot(WT_TEXTURE_SLOT_BASE_COLOR, "baseColorTexture", TextureUse(pbr.baseColorTexture), true);
+      slot(WT_TEXTURE_SLOT_METALLIC_ROUGHNESS, "metallicRoughnessTexture", TextureUse(pbr.metallicRoughnessTexture), false);
+      slot(WT_TEXTURE_SLOT_NORMAL, "normalTexture", TextureUse(src.normalTexture), false);
+      slot(WT_TEXTURE_SLOT_EMISSIVE, "emissiveTexture", TextureUse(src.emissiveTexture), true);
+      if (auto it = src.extensions.find(kTransmission); it != src.extensions.end() && it->second.IsObject() &&
+                                                         it->second.Has("transmissionTexture"))
+        slot(WT_TEXTURE_SLOT_TRANSMISSION, "transmissionTexture",
+             extensionTextureUse(it->second.Get("transmissionTexture"), label + " transmissionTexture"), false);
+      if (material.texture_mask != 0u) {
+        m_scene.materialTextures.resize(m_scene.materials.size() * WT_TEXTURE_SLOTS);
+        m_scene.materialTextures.insert(m_scene.materialTextures.end(), refs.begin(), refs.end());
+      }
       m_scene.materials.push_back(material);
       m_scene.materialNames.push_back(src.name.empty() ? "material " + std::to_string(i) : src.name);
     }
+  }
+
+  /// Where a material reads a texture: glTF's textureInfo.
+  struct TextureUse {
+    int index = -1;
+    int texCoord = 0;
+    double scale = 1.0;  ///< normalTexture.scale
+    const tinygltf::ExtensionMap* extensions = nullptr;
+    const tinygltf::Value* transform = nullptr;  ///< KHR_texture_transform of an extension's textureInfo
+    TextureUse() = default;
+    explicit TextureUse(const tinygltf::TextureInfo& t) : index(t.index), texCoord(t.texCoord), extensions(&t.extensions) {}
+    explicit TextureUse(const tinygltf::NormalTextureInfo& t)
+        : index(t.index), texCoord(t.texCoord), scale(t.scale), extensions(&t.extensions) {}
+    explicit TextureUse(const tinygltf::OcclusionTextureInfo& t)
+        : index(t.index), texCoord(t.texCoord), extensions(&t.extensions) {}
+  };
+
+  /// An extension's textureInfo, which tinygltf leaves as JSON.
+  TextureUse extensionTextureUse(const tinygltf::Value& v, const std::string& who) const {
+    if (!v.IsObject()) fail(who + " is not an object");
+    TextureUse use;
+    auto integer = [&](const char* name, int fallback) {
+      if (!v.Has(name)) return fallback;
+      const tinygltf::Value& n = v.Get(name);
+      if (!n.IsNumber() || n.GetNumberAsDouble() != std::floor(n.GetNumberAsDouble()) ||
+          std::fabs(n.GetNumberAsDouble()) > 1e9)
+        fail(who + ": " + name + " is not an integer");
+      return int(n.GetNumberAsDouble());
+    };
+    use.index = integer("index", -1);
+    if (use.index < 0) fail(who + ": index is missing or negative");
+    use.texCoord = integer("texCoord", 0);
+    if (v.Has("extensions") && v.Get("extensions").IsObject() && v.Get("extensions").Has(kTextureTransform))
+      use.transform = &v.Get("extensions").Get(kTextureTransform);
+    return use;
+  }
+
+  /// The slot reference for texture use `use` (`who` names the material and
+  /// slot), or nothing, with a warning, where the texture cannot be read (an
+  /// unsupported image format or texture coordinate set): the material
+  /// keeps its factors there.
+  std::optional<WtTextureRef> textureRef(const std::string& who, const TextureUse& use, bool srgb) {
+    if (std::size_t(use.index) >= m_model.textures.size())
+      fail(who + " references missing texture " + std::to_string(use.index));
+    const tinygltf::Value* transform = use.transform;
+    if (use.extensions) {
+      auto it = use.extensions->find(kTextureTransform);
+      if (it != use.extensions->end()) transform = &it->second;
+    }
+    WtTextureRef ref{};
+    ref.texture = 0;
+    ref.texcoord = std::uint32_t(use.texCoord);
+    ref.scale = float(use.scale);
+    if (!std::isfinite(ref.scale)) fail(who + ": scale is not finite");
+    ref.transform_u = {1.0f, 0.0f, 0.0f, 0.0f};
+    ref.transform_v = {0.0f, 1.0f, 0.0f, 0.0f};
+    if (transform) {
+      if (!transform->IsObject()) fail(who + ": " + kTextureTransform + " is not an object");
+      const std::string where = who + " " + kTextureTransform;
+      auto pair = [&](const char* name, glm::dvec2 fallback) {
+        if (!transform->Has(name)) return fallback;
+        const tinygltf::Value& a = transform->Get(name);
+        if (!a.IsArray() || a.ArrayLen() != 2 || !a.Get(0).IsNumber() || !a.Get(1).IsNumber() ||
+            !std::isfinite(a.Get(0).GetNumberAsDouble()) || !std::isfinite(a.Get(1).GetNumberAsDouble()))
+          fail(where + ": " + name + " is not an array of 2 finite numbers");
+        return glm::dvec2(a.Get(0).GetNumberAsDouble(), a.Get(1).GetNumberAsDouble());
+      };
+      const glm::dvec2 offset = pair("offset", glm::dvec2(0.0)), scale = pair("scale", glm::dvec2(1.0));
+      const double rotation = extensionNumber(*transform, "rotation", 0.0, where);
+      if (transform->Has("texCoord")) ref.texcoord = std::uint32_t(extensionNumber(*transform, "texCoord", 0.0, where));
+      // uv' = translation * rotation * scale * uv (the extension's matrices)
+      const double c = std::cos(rotation), s = std::sin(rotation);
+      ref.transform_u = {float(c * scale.x), float(s * scale.y), float(offset.x), 0.0f};
+      ref.transform_v = {float(-s * scale.x), float(c * scale.y), float(offset.y), 0.0f};
+    }
+    if (ref.texcoord > 1) {
+      m_scene.addWarning(who + ": TEXCOORD_" + std::to_string(ref.texcoord) +
+                         " is not supported (TEXCOORD_0 and _1 are); the texture is ignored");
+      return std::nullopt;
+    }
+    const tinygltf::Texture& texture = m_model.textures[std::size_t(use.index)];
+    const std::string textureLabel = "texture " + std::to_string(use.index);
+    if (texture.source < 0) {
+      // only an extension's source (KHR_texture_basisu, EXT_texture_webp), warned for by name
+      m_scene.addWarning(textureLabel + " has no PNG or JPEG source; the materials using it keep their factors");
+      return std::nullopt;
+    }
+    if (std::size_t(texture.source) >= m_model.images.size())
+      fail(textureLabel + " references missing image " + std::to_string(texture.source));
+    if (texture.sampler >= 0 && std::size_t(texture.sampler) >= m_model.samplers.size())
+      fail(textureLabel + " references missing sampler " + std::to_string(texture.sampler));
+    const auto key = std::make_pair(use.index, srgb);
+    if (auto it = m_textureIndex.find(key); it != m_textureIndex.end()) {
+      if (it->second < 0) return std::nullopt;
+      ref.texture = std::uint32_t(it->second);
+      return ref;
+    }
+    const std::optional<std::uint32_t> image = imageIndex(std::size_t(texture.source), srgb);
+    if (!image) {
+      m_textureIndex[key] = -1;
+      return std::nullopt;
+    }
+    int wrapS = -1, wrapT = -1, mag = -1, min = -1;
+    if (texture.sampler >= 0) {
+      const tinygltf::Sampler& sampler = m_model.samplers[std::size_t(texture.sampler)];
+      wrapS = sampler.wrapS, wrapT = sampler.wrapT, mag = sampler.magFilter, min = sampler.minFilter;
+    }
+    ref.texture = m_scene.textures.addTexture(*image, wrapS, wrapT, mag, min);
+    m_textureIndex[key] = int(ref.texture);
+    return ref;
+  }
+
+  /// Image `index` decoded and added to the scene's textures (once per
+  /// encoding), or nothing, with a warning, for a format we do not read.
+  std::optional<std::uint32_t> imageIndex(std::size_t index, bool srgb) {
+    const auto key = std::make_pair(index, srgb);
+    if (auto it = m_imageIndex.find(key); it != m_imageIndex.end()) return it->second;
+    const tinygltf::Image& image = m_model.images[index];
+    const std::string label = "image " + std::to_string(index) +
+                              (!image.uri.empty() && image.uri.rfind("data:", 0) != 0 ? " ('" + image.uri + "')"
+                               : !image.name.empty()                                  ? " '" + image.name + "'"
+                                                                                      : "");
+    if (image.image.empty()) fail(label + ": no image data (a missing or empty file?)");
+    const ImageFileFormat format = sniffImageFormat(image.image.data(), image.image.size());
+    std::optional<std::uint32_t> result;
+    if (!isDecodableFormat(format)) {
+      m_scene.addWarning(label + " is " + imageFormatName(format) +
+                         ", which is not supported (PNG and JPEG are); the materials using it keep their factors");
+    } else {
+      try {
+        DecodedImage decoded = decodeImage(image.image.data(), image.image.size(), label);
+        result = m_scene.textures.addImage(decoded, srgb);
+      } catch (const TextureError& e) {
+        fail(e.what());
+      }
+    }
+    m_imageIndex[key] = result;
+    return result;
   }
 
   /// A number of an extension object: `fallback` when absent, an error when
@@ -413,8 +576,6 @@ class Converter {
       if (t < 0.0 || t > 1.0)
         m_scene.addWarning(who + kTransmission + " transmissionFactor " + std::to_string(t) + " is outside [0,1]; clamped");
       factor = float(std::clamp(t, 0.0, 1.0));
-      if (transmission->Has("transmissionTexture"))
-        m_scene.addWarning("material textures are not supported yet; ignored");
     }
     float eta = 1.5f;
     if (ior) {
@@ -656,15 +817,38 @@ class Converter {
         fail(where + ": NORMAL has " + std::to_string(out.normals.size()) + " elements, POSITION has " +
              std::to_string(vertexCount));
     }
+    auto checkCount = [&](std::size_t count, const char* semantic) {
+      if (count != vertexCount)
+        fail(where + ": " + semantic + " has " + std::to_string(count) + " elements, POSITION has " +
+             std::to_string(vertexCount));
+    };
+    const std::vector<int> kUnitTypes = {TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE,
+                                         TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT};
     if (int uv = attribute("TEXCOORD_0"); uv >= 0) {
-      out.texcoords = readAccessor<glm::vec2>(
-          uv, {where, "TEXCOORD_0",
-               {TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE,
-                TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT},
-               true});
-      if (out.texcoords.size() != vertexCount)
-        fail(where + ": TEXCOORD_0 has " + std::to_string(out.texcoords.size()) +
-             " elements, POSITION has " + std::to_string(vertexCount));
+      out.texcoords = readAccessor<glm::vec2>(uv, {where, "TEXCOORD_0", kUnitTypes, true});
+      checkCount(out.texcoords.size(), "TEXCOORD_0");
+    }
+    if (int uv = attribute("TEXCOORD_1"); uv >= 0) {
+      out.texcoords1 = readAccessor<glm::vec2>(uv, {where, "TEXCOORD_1", kUnitTypes, true});
+      checkCount(out.texcoords1.size(), "TEXCOORD_1");
+    }
+    if (int color = attribute("COLOR_0"); color >= 0) {
+      const bool rgb = std::size_t(color) < m_model.accessors.size() &&
+                       m_model.accessors[std::size_t(color)].type == TINYGLTF_TYPE_VEC3;
+      if (rgb) {
+        for (const glm::vec3& c : readAccessor<glm::vec3>(color, {where, "COLOR_0", kUnitTypes, true}))
+          out.colors.emplace_back(c, 1.0f);
+      } else {
+        out.colors = readAccessor<glm::vec4>(color, {where, "COLOR_0", kUnitTypes, true});
+      }
+      checkCount(out.colors.size(), "COLOR_0");
+      for (glm::vec4& c : out.colors)  // the spec's range; NaN becomes 0
+        c = glm::clamp(c, glm::vec4(0.0f), glm::vec4(1.0f)), c = glm::vec4(std::isnan(c.x) ? 0.0f : c.x,
+            std::isnan(c.y) ? 0.0f : c.y, std::isnan(c.z) ? 0.0f : c.z, std::isnan(c.w) ? 0.0f : c.w);
+    }
+    if (int tangent = attribute("TANGENT"); tangent >= 0) {
+      out.tangents = readAccessor<glm::vec4>(tangent, {where, "TANGENT", kFloat});
+      checkCount(out.tangents.size(), "TANGENT");
     }
     if (!prim.targets.empty())
       m_scene.addWarning("morph targets are not supported; the base shape is drawn");
@@ -711,7 +895,26 @@ class Converter {
     } else {
       out.material = defaultMaterial();
     }
+    if (prim.material >= 0 && out.tangents.empty()) generateTangentsFor(m_model.materials[std::size_t(prim.material)], out);
     return out;
+  }
+
+  /// Tangents for a primitive whose material has a normal map and whose file
+  /// gives none (glTF asks for MikkTSpace's); a vertex split at a mirrored
+  /// seam gets a geometry of its own, so no other primitive shares it.
+  void generateTangentsFor(const tinygltf::Material& material, DecodedPrimitive& out) {
+    if (material.normalTexture.index < 0) return;
+    const std::vector<glm::vec2>& uv = material.normalTexture.texCoord == 1 ? out.texcoords1 : out.texcoords;
+    if (uv.empty()) return;  // the texture is left out: warned where the material is read
+    const std::size_t before = out.positions.size();
+    std::vector<std::uint32_t> sources = generateTangents(out.positions, out.normals, uv, out.corners, out.tangents);
+    if (sources.size() == before) return;
+    auto extend = [&](auto& v) {
+      if (v.empty()) return;
+      for (std::size_t i = before; i < sources.size(); ++i) v.push_back(v[sources[i]]);
+    };
+    extend(out.positions), extend(out.normals), extend(out.texcoords), extend(out.texcoords1), extend(out.colors);
+    out.geometry = std::uint32_t(m_geometries.size() + m_splitGeometries++ + (1u << 30));
   }
 
   /// Append one placed copy of a primitive to the scene.
@@ -768,6 +971,23 @@ class Converter {
       if (!std::isfinite(uv.x) || !std::isfinite(uv.y)) uv = glm::vec2(0.0f);
       m_scene.texcoords.push_back(uv);
     }
+    // the attributes only some primitives have: every vertex gets one once any does
+    auto append = [&](auto& dst, const auto& src, auto fallback, auto convert) {
+      if (src.empty() && dst.empty()) return;
+      dst.resize(base, fallback);
+      for (std::size_t i = 0; i < count; ++i) dst.push_back(src.empty() ? fallback : convert(src[i]));
+    };
+    append(m_scene.texcoords1, prim.texcoords1, glm::vec2(0.0f), [](glm::vec2 uv) {
+      return std::isfinite(uv.x) && std::isfinite(uv.y) ? uv : glm::vec2(0.0f);
+    });
+    append(m_scene.colors, prim.colors, glm::vec4(1.0f), [](glm::vec4 c) { return c; });
+    // a tangent moves with the surface (the linear part); a mirror flips the bitangent's side
+    append(m_scene.tangents, prim.tangents, glm::vec4(0.0f), [&](glm::vec4 t) {
+      glm::vec3 moved(linear * glm::dvec3(t.x, t.y, t.z));
+      float length = glm::length(moved);
+      if (!(length > 0.0f) || !std::isfinite(length)) return glm::vec4(0.0f);
+      return glm::vec4(moved / length, (t.w < 0.0f) != flip ? -1.0f : 1.0f);
+    });
 
     const auto offset = std::uint32_t(base);
     if (prim.corners.size() >= 3)
@@ -1197,6 +1417,9 @@ class Converter {
   std::vector<bool> m_localDone;
   std::vector<std::vector<std::unique_ptr<DecodedPrimitive>>> m_decoded;
   std::map<std::array<int, 3>, std::uint32_t> m_geometries;  ///< (POSITION, indices, mode) -> GeometryInstance::geometry
+  std::map<std::pair<int, bool>, int> m_textureIndex;  ///< (glTF texture, sRGB) -> scene texture; -1: left out
+  std::map<std::pair<std::size_t, bool>, std::optional<std::uint32_t>> m_imageIndex;  ///< (glTF image, sRGB) -> TextureSet image
+  std::uint32_t m_splitGeometries = 0;  ///< geometries of their own for primitives whose vertices tangents split
   std::vector<std::pair<std::size_t, glm::dmat4>> m_cameraNodes;
   std::vector<MeshInstance> m_meshInstances;  ///< in traversal order
   std::vector<LightInstance> m_lightInstances;
@@ -1251,7 +1474,7 @@ Scene loadFromBytes(const unsigned char* bytes, std::size_t size, bool expectBin
 
   tinygltf::Model model;
   tinygltf::TinyGLTF parser;
-  parser.SetImageLoader(&ignoreImage, nullptr);
+  parser.SetImageLoader(&keepImageBytes, nullptr);
   std::string err, warn;
   bool ok = false;
   try {

@@ -6,6 +6,7 @@
 #include "core/math.h"
 #include "shared/lights.h"
 #include "shared/types.h"
+#include "texture/texture.h"
 
 #include <glm/glm.hpp>
 
@@ -90,12 +91,20 @@ struct Scene {
   std::vector<WtVec4> positions;   ///< world space, w = 0
   std::vector<WtVec4> normals;     ///< world space, unit; (0,0,0) = none, use the geometric normal. Same size as positions.
   std::vector<glm::vec2> texcoords;///< TEXCOORD_0, same size as positions ((0,0) where absent)
+  std::vector<glm::vec2> texcoords1;///< TEXCOORD_1: empty, or the size of positions ((0,0) where absent)
+  std::vector<glm::vec4> colors;   ///< COLOR_0, linear RGBA: empty, or the size of positions ((1,1,1,1) where absent)
+  std::vector<glm::vec4> tangents; ///< world, unit xyz and w = +-1 the bitangent's side (cross(n, t) w): empty, or the size of positions (zero where absent)
   std::vector<WtTriangle> triangles;
   std::vector<GeometryInstance> instances; ///< placed copies, in triangle order; may be empty (no copies known)
   std::vector<Sphere> spheres;            ///< analytic spheres (scene files only: glTF has none)
   std::vector<Curve> curves;              ///< round curves (scene files, .hair and .ply strands)
   std::vector<WtVec4> curvePoints;        ///< the curves' points: xyz world relative to origin, w = radius (world units, >= 0)
   std::vector<WtMaterial> materials;      ///< never empty after loading (a default grey is added when needed)
+  /// WT_TEXTURE_SLOTS per material (empty: no material is textured); slot s
+  /// of material m, at m * WT_TEXTURE_SLOTS + s, counts where bit s of its
+  /// texture_mask is set
+  std::vector<WtTextureRef> materialTextures;
+  TextureSet textures;                    ///< the images and samplers materialTextures name
   std::vector<std::string> materialNames; ///< same size as materials
   std::optional<CameraDesc> camera;       ///< absent: frame the bounds (defaultCamera)
   std::vector<PunctualLight> lights;      ///< KHR_lights_punctual

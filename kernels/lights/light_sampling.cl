@@ -8,6 +8,7 @@
 #include "geometry/geometry.cl"
 #include "shared/lights.h"
 #include "lights/environment_adapter.cl"
+#include "materials/textured.cl"
 
 /// The light list as the shading stage sees it.
 typedef struct LightScene {
@@ -17,7 +18,27 @@ typedef struct LightScene {
   __global const float4* tri_verts;  ///< for triangle lights, leaf order
   EnvScene env;
   GeometryScene geometry;            ///< for emissive primitives of other types
+  __global const uint4* tri_info;    ///< for textured triangle lights: vertices and material
+  SurfaceScene surface;              ///< their texture coordinates and textures
 } LightScene;
+
+/// A triangle light's radiance at barycentrics (b1, b2): its emission, times
+/// the emissive texture there where its material has one (light.position.y).
+inline float3 light_triangle_radiance(LightScene ls, WtLight light, float b1, float b2) {
+  float3 le = vec4_xyz(light.intensity);
+#if WT_HAS_TEXTURES
+  if (light.position.y != 0.0f) {
+    uint4 v = ls.tri_info[light.triangle];
+    float b0 = 1.0f - b1 - b2;
+    SurfacePoint sp;
+    sp.uv = b0 * ls.surface.uv[v.x] + b1 * ls.surface.uv[v.y] + b2 * ls.surface.uv[v.z];
+    sp.uv_scale = (float2)(0.0f);
+    sp.footprint = 0.0f;
+    le *= material_texture(ls.surface, v.w, WT_TEXTURE_SLOT_EMISSIVE, sp).xyz;
+  }
+#endif
+  return le;
+}
 
 /// A sampled connection from a shading point towards a light.
 typedef struct LightSample {
@@ -156,7 +177,7 @@ inline bool light_sample(LightScene ls, uint index, float3 p, float u1, float u2
       s->wi = w;
       s->distance = dist;
       s->pdf = 1.0f / solid_angle;
-      s->radiance = vec4_xyz(light.intensity);
+      s->radiance = light_triangle_radiance(ls, light, b1, b2);
       return true;
     }
     // uniform by area (the square-root parameterisation), converted to solid angle
@@ -177,7 +198,7 @@ inline bool light_sample(LightScene ls, uint index, float3 p, float u1, float u2
     // off the emitter, on the shading point's side of its plane
     s->target = ray_offset_origin(q, q_error, dot(n, to_light) < 0.0f ? n / area2 : -n / area2);
     s->pdf = (2.0f / area2) * d2 / cos_light;
-    s->radiance = vec4_xyz(light.intensity);
+    s->radiance = light_triangle_radiance(ls, light, b1, b2);
     return true;
   }
 #if WT_HAS_PRIMITIVES

@@ -18,7 +18,7 @@
 
 /// One light of the scene's light list, 64 bytes.
 typedef struct WtLight {
-  WtVec4 position;   ///< point/spot: world position; triangle: w = 1 when both faces emit
+  WtVec4 position;   ///< point/spot: world position; triangle: w = 1 when both faces emit, y = 1 when its material's emission is textured (materials/textured.cl)
   WtVec4 direction;  ///< spot/directional: unit world direction the light travels in
   WtVec4 intensity;  ///< point/spot: cd per channel; directional: lux; triangle: nits (the material's emission)
   wt_uint type;      ///< WT_LIGHT_*
