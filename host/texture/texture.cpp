@@ -91,11 +91,12 @@ void checkJpegHuffmanTables(const std::string& name, const unsigned char* bytes,
 }
 
 // ---------------------------------------------------------------------------
-// sRGB tables for 8-bit texels
+// sRGB tables
 
 struct Srgb8 {
-  std::array<float, 256> toLinear;     ///< decoded value of each code
-  std::array<double, 255> thresholds;  ///< code k + 1 from linear thresholds[k] up (midpoints in encoded space)
+  std::array<float, 256> toLinear;          ///< decoded value of each code
+  std::array<double, 255> thresholds;       ///< code k + 1 from linear thresholds[k] up (midpoints in encoded space)
+  std::array<std::uint8_t, 4097> guess;     ///< code of linear i / 4096, exact; a start for encodeSrgb8
 };
 
 const Srgb8& srgb8() {
@@ -103,15 +104,33 @@ const Srgb8& srgb8() {
     Srgb8 t{};
     for (int i = 0; i < 256; ++i) t.toLinear[i] = float(srgbToLinear(i / 255.0));
     for (int k = 0; k < 255; ++k) t.thresholds[k] = srgbToLinear((k + 0.5) / 255.0);
+    for (int i = 0; i <= 4096; ++i)
+      t.guess[i] = std::uint8_t(std::upper_bound(t.thresholds.begin(), t.thresholds.end(), i / 4096.0) -
+                                t.thresholds.begin());
     return t;
   }();
   return table;
 }
 
-/// round(255 x linearToSrgb(linear)), by search instead of pow.
+/// round(255 x linearToSrgb(linear)) without pow: the code at the start of
+/// linear's 1/4096 cell, stepped up past the thresholds below linear (two
+/// steps at most, near black where the curve is steepest).
 std::uint8_t encodeSrgb8(float linear) {
-  const auto& t = srgb8().thresholds;
-  return std::uint8_t(std::upper_bound(t.begin(), t.end(), double(linear)) - t.begin());
+  const Srgb8& t = srgb8();
+  const double x = std::clamp(double(linear), 0.0, 1.0);
+  unsigned k = t.guess[unsigned(x * 4096.0)];
+  while (k < 255 && x >= t.thresholds[k]) ++k;
+  return std::uint8_t(k);
+}
+
+/// Decoded value of each 16-bit sRGB code (256 KiB, made on first use).
+const std::vector<float>& srgb16ToLinear() {
+  static const std::vector<float> table = [] {
+    std::vector<float> t(65536);
+    for (std::size_t i = 0; i < t.size(); ++i) t[i] = float(srgbToLinear(double(i) / 65535.0));
+    return t;
+  }();
+  return table;
 }
 
 // ---------------------------------------------------------------------------
@@ -148,45 +167,61 @@ std::vector<Taps> axisTaps(std::uint32_t n) {
 /// How the channels of one storage type turn into values to filter and back.
 struct Codec8 {
   bool srgb;
-  float decode(std::uint8_t v, int channel) const {
-    return srgb && channel < 3 ? srgb8().toLinear[v] : float(v) * (1.0f / 255.0f);
+  /// `texels` RGBA texels to floats, linear light.
+  void decodeRow(const std::uint8_t* in, float* out, std::size_t texels) const {
+    const float* table = srgb8().toLinear.data();
+    for (std::size_t i = 0; i < 4 * texels; i += 4) {
+      for (int c = 0; c < 3; ++c) out[i + c] = srgb ? table[in[i + c]] : float(in[i + c]) * (1.0f / 255.0f);
+      out[i + 3] = float(in[i + 3]) * (1.0f / 255.0f);
+    }
   }
   std::uint8_t encode(float x, int channel) const {
     if (srgb && channel < 3) return encodeSrgb8(x);
-    return std::uint8_t(std::lround(std::clamp(x, 0.0f, 1.0f) * 255.0f));
+    return std::uint8_t(std::clamp(x, 0.0f, 1.0f) * 255.0f + 0.5f);  // round to nearest
   }
 };
 
 struct Codec16 {
   bool srgb;
-  float decode(std::uint16_t v, int channel) const {
-    const double x = v / 65535.0;
-    return float(srgb && channel < 3 ? srgbToLinear(x) : x);
+  void decodeRow(const std::uint16_t* in, float* out, std::size_t texels) const {
+    const float* table = srgb ? srgb16ToLinear().data() : nullptr;
+    for (std::size_t i = 0; i < 4 * texels; i += 4) {
+      for (int c = 0; c < 3; ++c) out[i + c] = table ? table[in[i + c]] : float(in[i + c]) * (1.0f / 65535.0f);
+      out[i + 3] = float(in[i + 3]) * (1.0f / 65535.0f);
+    }
   }
   std::uint16_t encode(float x, int channel) const {
     double c = std::clamp(double(x), 0.0, 1.0);
     if (srgb && channel < 3) c = linearToSrgb(c);
-    return std::uint16_t(std::lround(c * 65535.0));
+    return std::uint16_t(c * 65535.0 + 0.5);
   }
 };
 
-/// The level below `src` (width x height RGBA), box-filtered per the taps.
+/// The level below `src` (width x height RGBA), box-filtered per the taps:
+/// each destination row blends its 1-3 source rows (decoded once each),
+/// then its columns.
 template <typename T, typename Codec>
 std::vector<T> downsample(const std::vector<T>& src, std::uint32_t width, std::uint32_t height, const Codec& codec) {
   const std::vector<Taps> tx = axisTaps(width), ty = axisTaps(height);
+  const std::size_t rowValues = std::size_t(width) * 4;
+  // rows 2y .. 2y + 2 of one destination row fall in distinct slots (row % 3)
+  std::vector<float> decoded(3 * rowValues), blend(rowValues);
+  std::array<std::int64_t, 3> slotRow = {-1, -1, -1};
   std::vector<T> dst(tx.size() * ty.size() * 4);
   std::size_t out = 0;
   for (const Taps& row : ty) {
+    std::fill(blend.begin(), blend.end(), 0.0f);
+    for (std::uint32_t j = 0; j < row.count; ++j) {
+      const std::uint32_t r = row.first + j;
+      float* line = decoded.data() + (r % 3) * rowValues;
+      if (slotRow[r % 3] != r) codec.decodeRow(src.data() + r * rowValues, line, width), slotRow[r % 3] = r;
+      const float w = row.weight[j];
+      for (std::size_t i = 0; i < rowValues; ++i) blend[i] += w * line[i];
+    }
     for (const Taps& col : tx) {
       float sum[4] = {0.0f, 0.0f, 0.0f, 0.0f};
-      for (std::uint32_t j = 0; j < row.count; ++j) {
-        const T* line = src.data() + std::size_t(row.first + j) * width * 4;
-        for (std::uint32_t i = 0; i < col.count; ++i) {
-          const float w = row.weight[j] * col.weight[i];
-          const T* texel = line + std::size_t(col.first + i) * 4;
-          for (int c = 0; c < 4; ++c) sum[c] += w * codec.decode(texel[c], c);
-        }
-      }
+      for (std::uint32_t i = 0; i < col.count; ++i)
+        for (int c = 0; c < 4; ++c) sum[c] += col.weight[i] * blend[(col.first + i) * 4 + c];
       for (int c = 0; c < 4; ++c) dst[out++] = codec.encode(sum[c], c);
     }
   }
@@ -194,27 +229,32 @@ std::vector<T> downsample(const std::vector<T>& src, std::uint32_t width, std::u
 }
 
 void appendTexels(std::vector<wt_uint>& texels, const std::vector<std::uint8_t>& rgba) {
+  std::size_t out = texels.size();
+  texels.resize(out + rgba.size() / 4);
   for (std::size_t i = 0; i < rgba.size(); i += 4)
-    texels.push_back(wt_uint(rgba[i]) | wt_uint(rgba[i + 1]) << 8 | wt_uint(rgba[i + 2]) << 16 |
-                     wt_uint(rgba[i + 3]) << 24);
+    texels[out++] = wt_uint(rgba[i]) | wt_uint(rgba[i + 1]) << 8 | wt_uint(rgba[i + 2]) << 16 |
+                    wt_uint(rgba[i + 3]) << 24;
 }
 
 void appendTexels(std::vector<wt_uint>& texels, const std::vector<std::uint16_t>& rgba) {
+  std::size_t out = texels.size();
+  texels.resize(out + rgba.size() / 2);
   for (std::size_t i = 0; i < rgba.size(); i += 4) {
-    texels.push_back(wt_uint(rgba[i]) | wt_uint(rgba[i + 1]) << 16);
-    texels.push_back(wt_uint(rgba[i + 2]) | wt_uint(rgba[i + 3]) << 16);
+    texels[out++] = wt_uint(rgba[i]) | wt_uint(rgba[i + 1]) << 16;
+    texels[out++] = wt_uint(rgba[i + 2]) | wt_uint(rgba[i + 3]) << 16;
   }
 }
 
-/// Append every level of an image, level 0 first.
+/// Append every level of an image, level 0 (`pixels`) first.
 template <typename T, typename Codec>
-void appendPyramid(std::vector<wt_uint>& texels, std::vector<WtTextureLevel>& levels, std::vector<T> level,
+void appendPyramid(std::vector<wt_uint>& texels, std::vector<WtTextureLevel>& levels, const std::vector<T>& pixels,
                    std::uint32_t width, std::uint32_t height, const Codec& codec) {
-  for (;;) {
+  std::vector<T> level;  // the last level made; level 0 is not copied
+  for (const std::vector<T>* current = &pixels;; current = &level) {
     levels.push_back({wt_uint(texels.size()), width, height, 0});
-    appendTexels(texels, level);
+    appendTexels(texels, *current);
     if (width == 1 && height == 1) return;
-    level = downsample(level, width, height, codec);
+    level = downsample(*current, width, height, codec);
     width = std::max(width / 2, 1u), height = std::max(height / 2, 1u);
   }
 }

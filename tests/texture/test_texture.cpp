@@ -402,6 +402,28 @@ TEST(TextureMips, SrgbIsAveragedInLinearLight) {
   EXPECT_EQ(ba >> 16, 32768u);  // alpha linear: round(65535 / 2)
 }
 
+TEST(TextureMips, SrgbMeansRoundToTheNearestCode) {
+  // level 1 of a 512 x 1 image is the mean of each pair of texels: pairs of
+  // neighbouring, scattered and opposite codes
+  auto linear = [](int code) { return float(srgbToLinear(code / 255.0)); };
+  for (int pairing = 0; pairing < 3; ++pairing) {
+    std::vector<std::uint8_t> rgba;
+    std::vector<int> second(256);
+    for (int a = 0; a < 256; ++a) {
+      second[a] = pairing == 0 ? std::min(a + 1, 255) : pairing == 1 ? (a * 37 + 11) % 256 : 255 - a;
+      rgba.insert(rgba.end(), {std::uint8_t(a), std::uint8_t(a), std::uint8_t(a), 255});
+      rgba.insert(rgba.end(), {std::uint8_t(second[a]), std::uint8_t(second[a]), std::uint8_t(second[a]), 255});
+    }
+    TextureSet set;
+    set.addImage(image8(512, 1, rgba), true);
+    for (int a = 0; a < 256; ++a) {
+      const float mean = 0.5f * linear(a) + 0.5f * linear(second[a]);
+      const long expected = std::lround(255.0 * linearToSrgb(double(mean)));
+      ASSERT_EQ(channel8(set, 1, std::uint32_t(a), 0, 0), expected) << "codes " << a << " and " << second[a];
+    }
+  }
+}
+
 TEST(TextureMips, SrgbTransferFunctionsAreExactAndInverse) {
   EXPECT_DOUBLE_EQ(srgbToLinear(0.04045), 0.04045 / 12.92);
   EXPECT_DOUBLE_EQ(srgbToLinear(0.5), std::pow((0.5 + 0.055) / 1.055, 2.4));
