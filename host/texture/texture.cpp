@@ -113,8 +113,9 @@ const Srgb8& srgb8() {
 }
 
 /// round(255 x linearToSrgb(linear)) without pow: the code at the start of
-/// linear's 1/4096 cell, stepped up past the thresholds below linear (two
-/// steps at most, near black where the curve is steepest).
+/// linear's 1/4096 cell, stepped up past the thresholds below linear (one
+/// step at most: no cell spans two codes, even near black where the curve
+/// is steepest).
 std::uint8_t encodeSrgb8(float linear) {
   const Srgb8& t = srgb8();
   const double x = std::clamp(double(linear), 0.0, 1.0);
@@ -308,7 +309,8 @@ double linearToSrgb(double linear) {
 // decoding
 
 DecodedImage decodeImage(const unsigned char* bytes, std::size_t size, const std::string& name) {
-  if (!bytes || size == 0) fail(name, "no image data (0 bytes)");
+  if (size == 0) fail(name, "no image data (0 bytes)");
+  if (!bytes) fail(name, "no image data (a null pointer)");
   const ImageFormat format = sniffImageFormat(bytes, size);
   if (format == ImageFormat::Unknown)
     fail(name, "not a PNG or JPEG file (starts with " + firstBytes(bytes, size) + ")");
