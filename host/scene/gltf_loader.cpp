@@ -1376,13 +1376,33 @@ class Converter {
     if (!(std::abs(determinant) > 0.0) || !std::isfinite(determinant) || !std::isfinite(world[3].x + world[3].y + world[3].z))
       fail(label + " (node " + std::to_string(nodeIndex) + "): its node's transform is singular or not finite "
            "(a zero scale), so the camera has no view direction");
+    // rigid axes: glTF asks for a camera node without scale, but files scale
+    // the camera with its scene. The rays need an orthonormal basis (a sheared
+    // or non-uniformly scaled one skews the image): keep -Z's direction, make
+    // +Y perpendicular to it, X last (on its side, so a mirroring node mirrors)
+    const glm::dvec3 axisZ = glm::normalize(glm::dvec3(world[2]));
+    glm::dvec3 axisY = glm::dvec3(world[1]) - glm::dot(glm::dvec3(world[1]), axisZ) * axisZ;
+    axisY = glm::normalize(axisY);
+    glm::dvec3 axisX = glm::dvec3(world[0]) - glm::dot(glm::dvec3(world[0]), axisZ) * axisZ -
+                       glm::dot(glm::dvec3(world[0]), axisY) * axisY;
+    axisX = glm::normalize(axisX);
+    if (!std::isfinite(axisX.x + axisX.y + axisX.z + axisY.x + axisY.y + axisY.z + axisZ.x + axisZ.y + axisZ.z))
+      fail(label + " (node " + std::to_string(nodeIndex) + "): its node's axes are too close to parallel "
+           "to give the camera a view direction");
+    glm::dmat4 rigid(glm::dvec4(axisX, 0.0), glm::dvec4(axisY, 0.0), glm::dvec4(axisZ, 0.0), world[3]);
+    // distances in the camera's own units (znear, orthographic extents) are
+    // world distances times the node's scale along that axis
+    const double scaleZ = glm::length(glm::dvec3(world[2]));
+    const double scaleY = glm::length(glm::dvec3(world[1]));
+    const double scaleX = glm::length(glm::dvec3(world[0]));
     CameraDesc desc;
-    m_cameraWorld = world;  // shifted to the origin once it is chosen
-    desc.cameraToWorld = glm::mat4(world);
+    m_cameraWorld = rigid;  // shifted to the origin once it is chosen
+    desc.cameraToWorld = glm::mat4(rigid);
     desc.name = !src.name.empty() ? src.name : !node.name.empty() ? node.name : label;
     auto positive = [&](double v, const char* what) {
-      if (!std::isfinite(v) || v <= 0.0) fail(label + ": " + what + " must be positive and finite");
-      return float(v);
+      const auto f = float(v);  // the check is on the float: a scaled extent may leave its range
+      if (!std::isfinite(f) || !(f > 0.0f)) fail(label + ": " + what + " must be positive and finite");
+      return f;
     };
     if (src.type == "perspective") {
       desc.orthographic = false;
@@ -1390,20 +1410,24 @@ class Converter {
       desc.aspectRatio = src.perspective.aspectRatio > 0.0
                              ? positive(src.perspective.aspectRatio, "aspectRatio")
                              : 0.0f;
+      // yfov is an angle: a uniform scale leaves it; a non-uniform one is not
+      // rigid, and the frustum keeps the file's yfov and the image's aspect
       desc.znear = src.perspective.znear >= 0.0 && std::isfinite(src.perspective.znear)
-                       ? float(src.perspective.znear)
+                       ? float(src.perspective.znear * scaleZ)
                        : 0.0f;
     } else if (src.type == "orthographic") {
       desc.orthographic = true;
       // the spec only forbids zero; a negative magnification mirrors the image
-      desc.xmag = positive(std::fabs(src.orthographic.xmag), "xmag");
-      desc.ymag = positive(std::fabs(src.orthographic.ymag), "ymag");
+      desc.xmag = positive(std::fabs(src.orthographic.xmag) * scaleX, "xmag (times the node's scale)");
+      desc.ymag = positive(std::fabs(src.orthographic.ymag) * scaleY, "ymag (times the node's scale)");
       desc.znear = src.orthographic.znear >= 0.0 && std::isfinite(src.orthographic.znear)
-                       ? float(src.orthographic.znear)
+                       ? float(src.orthographic.znear * scaleZ)
                        : 0.0f;
     } else {
       fail(label + ": unknown type '" + src.type + "'");
     }
+    // zfar is not read: a path tracer has no depth buffer to fit, and cutting
+    // rays at a far plane would only remove light that is there
     m_scene.camera = desc;
   }
 

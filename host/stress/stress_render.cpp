@@ -59,17 +59,13 @@ std::size_t nonFinitePixels(const Image& image) {
 // transforms
 
 /// A built-in scene under one more root node that translates (by d on every
-/// axis) or scales it, the camera with it; the near plane scales too.
+/// axis) or scales it, the camera with it (the loader scales the near plane
+/// with the camera's node).
 std::string transformedScene(std::string_view gltf, double translate, double scale) {
   nlohmann::json d = nlohmann::json::parse(gltf);
   nlohmann::json root = {{"name", "stress root"}, {"children", d["scenes"][0]["nodes"]}};
   if (translate != 0.0) root["translation"] = {translate, translate, translate};
-  if (scale != 1.0) {
-    root["scale"] = {scale, scale, scale};
-    for (nlohmann::json& camera : d["cameras"])
-      for (const char* kind : {"perspective", "orthographic"})
-        if (camera.contains(kind) && camera[kind].contains("znear")) camera[kind]["znear"] = camera[kind]["znear"].get<double>() * scale;
-  }
+  if (scale != 1.0) root["scale"] = {scale, scale, scale};
   d["nodes"].push_back(root);
   d["scenes"][0]["nodes"] = {d["nodes"].size() - 1};
   return d.dump();

@@ -721,6 +721,71 @@ TEST(GltfLoader, CameraUnderARotatedParent) {
   expectNear(cameraPosition(s), {3, 0.5f, -0.5f});
 }
 
+// A scene scaled by 1e-3 with its camera: the near plane is a distance in the
+// camera node's units, so it shrinks with the scene. Unscaled (0.1 in the
+// world) it lay beyond the triangle 0.05 away and the image was black.
+TEST(GltfLoader, CameraNearPlaneFollowsTheNodeScale) {
+  GltfDoc doc = triangleDoc();
+  doc.cameras.push_back("{\"type\":\"perspective\",\"perspective\":{\"yfov\":0.7,\"znear\":0.1,\"zfar\":100}}");
+  doc.addNode("{\"camera\":0,\"translation\":[0.25,0.25,50]}");
+  doc.addNode("{\"scale\":[0.001,0.001,0.001],\"children\":[0,1]}");
+  doc.scenes[0] = "{\"nodes\":[2]}";
+  Scene s = loadDoc(doc);
+  ASSERT_TRUE(s.camera.has_value());
+  const CameraDesc& c = *s.camera;
+  expectNear(cameraPosition(s), {0.00025f, 0.00025f, 0.05f}, 1e-7f);
+  EXPECT_NEAR(c.znear, 1e-4f, 1e-9f);
+  EXPECT_FLOAT_EQ(c.yfov, 0.7f);  // an angle: no scale
+
+  // the centre ray starts at tmin = forward.w (generate.cl) and must reach the triangle
+  WtCamera cam = makeCamera(c, 64, 32);
+  const float triangleDistance = 0.05f;  // world, from the camera to the z = 0 plane
+  EXPECT_LT(cam.forward.w, triangleDistance);
+  EXPECT_NEAR(cam.forward.w, 1e-4f, 1e-9f);
+  expectNear({cam.forward.x, cam.forward.y, cam.forward.z}, {0, 0, -1});
+  // the frustum is the file's: unit axes times tan(yfov/2), the image's aspect
+  const float tanHalf = std::tan(0.35f);
+  expectNear({cam.up.x, cam.up.y, cam.up.z}, {0, tanHalf, 0});
+  expectNear({cam.right.x, cam.right.y, cam.right.z}, {2.0f * tanHalf, 0, 0});
+
+  // an orthographic camera's extents are in the node's units too
+  doc.cameras[0] = "{\"type\":\"orthographic\",\"orthographic\":{\"xmag\":2,\"ymag\":3,\"znear\":0.1,\"zfar\":10}}";
+  Scene ortho = loadDoc(doc);
+  ASSERT_TRUE(ortho.camera.has_value());
+  EXPECT_TRUE(ortho.camera->orthographic);
+  EXPECT_NEAR(ortho.camera->znear, 1e-4f, 1e-9f);
+  EXPECT_NEAR(ortho.camera->xmag, 2e-3f, 1e-8f);
+  EXPECT_NEAR(ortho.camera->ymag, 3e-3f, 1e-8f);
+}
+
+// A non-uniform parent scale under a rotated camera shears its axes: the
+// view direction is kept, the basis made orthonormal (glTF camera nodes are
+// meant to be rigid), and the near plane scales with the node's -Z axis.
+TEST(GltfLoader, ShearedCameraNodeKeepsItsViewDirectionWithRigidAxes) {
+  GltfDoc doc = triangleDoc();
+  doc.cameras.push_back("{\"type\":\"perspective\",\"perspective\":{\"yfov\":0.7,\"znear\":0.1}}");
+  const float halfAngle = 0.5f * glm::radians(45.0f);  // 45 degrees about +x
+  doc.addNode("{\"camera\":0,\"rotation\":[" + num(std::sin(halfAngle)) + ",0,0," + num(std::cos(halfAngle)) +
+              "],\"translation\":[0,0,5]}");
+  doc.addNode("{\"scale\":[1,4,1],\"children\":[1]}");
+  doc.scenes[0] = "{\"nodes\":[0,2]}";
+  Scene s = loadDoc(doc);
+  ASSERT_TRUE(s.camera.has_value());
+  const glm::mat4& m = s.camera->cameraToWorld;
+  const glm::vec3 x(m[0]), y(m[1]), z(m[2]);
+  // the node's -Z: (0, sin 45, -cos 45) rotated, then y times 4
+  expectNear(-z, glm::normalize(glm::vec3(0, 4, -1)));
+  EXPECT_NEAR(glm::length(x), 1.0f, kEps);
+  EXPECT_NEAR(glm::length(y), 1.0f, kEps);
+  EXPECT_NEAR(glm::dot(x, y), 0.0f, kEps);
+  EXPECT_NEAR(glm::dot(y, z), 0.0f, kEps);
+  EXPECT_NEAR(glm::dot(x, z), 0.0f, kEps);
+  EXPECT_NEAR(glm::dot(glm::cross(x, y), z), 1.0f, kEps);  // still right-handed
+  EXPECT_GT(y.y, 0.0f);                                     // up stays up
+  EXPECT_NEAR(s.camera->znear, 0.1f * std::sqrt(8.5f), 1e-6f);  // |node Z| = |(0, -4 sin 45, cos 45)|
+  expectNear(cameraPosition(s), {0, 0, 5});
+}
+
 // ---------------------------------------------------------------------------
 // materials and warnings
 
