@@ -44,7 +44,8 @@ inline std::string base64(const std::vector<unsigned char>& bytes) {
 /// A glTF document assembled from JSON fragments plus one binary buffer, so
 /// a test can start from a valid file and break exactly one element.
 struct GltfDoc {
-  std::vector<std::string> accessors, bufferViews, meshes, nodes, materials, cameras, scenes, images;
+  std::vector<std::string> accessors, bufferViews, meshes, nodes, materials, cameras, scenes, images, textures,
+      samplers;
   std::string extensionsUsed;      ///< JSON array text; empty: absent
   std::string extensionsRequired;  ///< JSON array text; empty: absent
   std::string extensions;          ///< the root "extensions" object text (e.g. KHR_lights_punctual's lights); empty: absent
@@ -111,6 +112,8 @@ struct GltfDoc {
     list("materials", materials);
     list("cameras", cameras);
     list("images", images);
+    list("textures", textures);
+    list("samplers", samplers);
     list("accessors", accessors);
     list("bufferViews", bufferViews);
     if (!bin.empty()) {

@@ -273,27 +273,27 @@ wt_uint wrapMode(int code) {
 // ---------------------------------------------------------------------------
 // formats
 
-ImageFormat sniffImageFormat(const unsigned char* bytes, std::size_t size) {
-  if (!bytes) return ImageFormat::Unknown;
-  if (startsWith(bytes, size, 0, "\x89PNG\r\n\x1a\n")) return ImageFormat::Png;
-  if (startsWith(bytes, size, 0, "\xff\xd8\xff")) return ImageFormat::Jpeg;
-  if (startsWith(bytes, size, 0, "RIFF") && startsWith(bytes, size, 8, "WEBP")) return ImageFormat::WebP;
-  if (startsWith(bytes, size, 0, "\xabKTX 20\xbb\r\n\x1a\n")) return ImageFormat::Ktx2;
-  return ImageFormat::Unknown;
+ImageFileFormat sniffImageFormat(const unsigned char* bytes, std::size_t size) {
+  if (!bytes) return ImageFileFormat::Unknown;
+  if (startsWith(bytes, size, 0, "\x89PNG\r\n\x1a\n")) return ImageFileFormat::Png;
+  if (startsWith(bytes, size, 0, "\xff\xd8\xff")) return ImageFileFormat::Jpeg;
+  if (startsWith(bytes, size, 0, "RIFF") && startsWith(bytes, size, 8, "WEBP")) return ImageFileFormat::WebP;
+  if (startsWith(bytes, size, 0, "\xabKTX 20\xbb\r\n\x1a\n")) return ImageFileFormat::Ktx2;
+  return ImageFileFormat::Unknown;
 }
 
-const char* imageFormatName(ImageFormat format) {
+const char* imageFormatName(ImageFileFormat format) {
   switch (format) {
-    case ImageFormat::Png: return "PNG";
-    case ImageFormat::Jpeg: return "JPEG";
-    case ImageFormat::WebP: return "WebP";
-    case ImageFormat::Ktx2: return "KTX2";
-    case ImageFormat::Unknown: break;
+    case ImageFileFormat::Png: return "PNG";
+    case ImageFileFormat::Jpeg: return "JPEG";
+    case ImageFileFormat::WebP: return "WebP";
+    case ImageFileFormat::Ktx2: return "KTX2";
+    case ImageFileFormat::Unknown: break;
   }
   return "unknown format";
 }
 
-bool isDecodableFormat(ImageFormat format) { return format == ImageFormat::Png || format == ImageFormat::Jpeg; }
+bool isDecodableFormat(ImageFileFormat format) { return format == ImageFileFormat::Png || format == ImageFileFormat::Jpeg; }
 
 bool isDecodableMimeType(std::string_view mimeType) { return mimeType == "image/png" || mimeType == "image/jpeg"; }
 
@@ -311,17 +311,17 @@ double linearToSrgb(double linear) {
 DecodedImage decodeImage(const unsigned char* bytes, std::size_t size, const std::string& name) {
   if (size == 0) fail(name, "no image data (0 bytes)");
   if (!bytes) fail(name, "no image data (a null pointer)");
-  const ImageFormat format = sniffImageFormat(bytes, size);
-  if (format == ImageFormat::Unknown)
+  const ImageFileFormat format = sniffImageFormat(bytes, size);
+  if (format == ImageFileFormat::Unknown)
     fail(name, "not a PNG or JPEG file (starts with " + firstBytes(bytes, size) + ")");
   if (!isDecodableFormat(format))
     fail(name, std::string(imageFormatName(format)) + " images are not supported (only PNG and JPEG)");
   if (size > std::size_t(INT_MAX)) fail(name, "file too large (" + std::to_string(size) + " bytes)");
 
-  if (format == ImageFormat::Jpeg) checkJpegHuffmanTables(name, bytes, size);
+  if (format == ImageFileFormat::Jpeg) checkJpegHuffmanTables(name, bytes, size);
   // the header alone first: refuse huge images before allocating them (stb
   // refuses a PNG over 2^30 bytes of pixels itself, saying only "too large")
-  if (format == ImageFormat::Png && size >= 24 && startsWith(bytes, size, 12, "IHDR")) {
+  if (format == ImageFileFormat::Png && size >= 24 && startsWith(bytes, size, 12, "IHDR")) {
     auto be32 = [&](std::size_t at) {
       return std::uint64_t(bytes[at]) << 24 | std::uint64_t(bytes[at + 1]) << 16 | std::uint64_t(bytes[at + 2]) << 8 |
              bytes[at + 3];
@@ -336,7 +336,7 @@ DecodedImage decodeImage(const unsigned char* bytes, std::size_t size, const std
 
   DecodedImage image;
   image.name = name;
-  image.sixteenBit = format == ImageFormat::Png && stbi_is_16_bit_from_memory(bytes, length);
+  image.sixteenBit = format == ImageFileFormat::Png && stbi_is_16_bit_from_memory(bytes, length);
   int w = 0, h = 0;
   void* pixels = image.sixteenBit ? static_cast<void*>(stbi_load_16_from_memory(bytes, length, &w, &h, &channels, 4))
                                   : static_cast<void*>(stbi_load_from_memory(bytes, length, &w, &h, &channels, 4));

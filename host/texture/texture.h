@@ -27,15 +27,15 @@ constexpr std::uint32_t kMaxTextureSide = 32768;
 constexpr std::uint64_t kMaxTextureTexels = std::uint64_t(1) << 28;
 
 /// Image file formats told apart by their first bytes.
-enum class ImageFormat { Png, Jpeg, WebP, Ktx2, Unknown };
+enum class ImageFileFormat { Png, Jpeg, WebP, Ktx2, Unknown };
 
 /// The format of an image file's bytes (magic numbers only, nothing decoded).
-ImageFormat sniffImageFormat(const unsigned char* bytes, std::size_t size);
+ImageFileFormat sniffImageFormat(const unsigned char* bytes, std::size_t size);
 /// "PNG", "JPEG", "WebP", "KTX2" or "unknown format", for messages.
-const char* imageFormatName(ImageFormat format);
+const char* imageFormatName(ImageFileFormat format);
 /// Whether decodeImage reads this format: PNG and JPEG. WebP
 /// (EXT_texture_webp) and KTX2 (KHR_texture_basisu) are not.
-bool isDecodableFormat(ImageFormat format);
+bool isDecodableFormat(ImageFileFormat format);
 /// Whether a glTF image's mimeType is one decodeImage reads ("image/png", "image/jpeg").
 bool isDecodableMimeType(std::string_view mimeType);
 

@@ -922,12 +922,8 @@ TEST(GltfLoader, DefaultMaterialIsAppendedOnce) {
 TEST(GltfLoader, UnsupportedFeaturesWarnOnceEach) {
   GltfDoc doc = triangleDoc();
   doc.extensionsUsed = "[\"KHR_materials_clearcoat\",\"KHR_materials_emissive_strength\",\"KHR_materials_sheen\"]";
-  doc.images.push_back("{\"uri\":\"does_not_exist.png\"}");
-  doc.images.push_back("{\"uri\":\"also_missing.jpg\"}");
-  doc.materials.push_back(
-      "{\"pbrMetallicRoughness\":{\"baseColorTexture\":{\"index\":0},\"metallicFactor\":0},"
-      "\"alphaMode\":\"BLEND\"}");
-  doc.materials.push_back("{\"pbrMetallicRoughness\":{\"baseColorTexture\":{\"index\":0}},\"doubleSided\":true}");
+  doc.materials.push_back("{\"pbrMetallicRoughness\":{\"metallicFactor\":0},\"alphaMode\":\"BLEND\"}");
+  doc.materials.push_back("{\"pbrMetallicRoughness\":{},\"doubleSided\":true}");
   doc.meshes[0] = "{\"primitives\":[{\"attributes\":{\"POSITION\":0},\"material\":0}]}";
   Scene s = loadDoc(doc);
   EXPECT_EQ(s.triangles.size(), 1u);
@@ -938,11 +934,31 @@ TEST(GltfLoader, UnsupportedFeaturesWarnOnceEach) {
   EXPECT_EQ(count("KHR_materials_clearcoat is not supported; ignored"), 1);
   EXPECT_EQ(count("KHR_materials_sheen is not supported"), 1);
   EXPECT_EQ(count("emissive_strength"), 0);
-  EXPECT_EQ(count("textures are not supported yet; 2 images ignored"), 1);
-  EXPECT_EQ(count("material textures"), 1);
   EXPECT_EQ(count("metallic"), 0);  // the metallic-roughness model draws metallicFactor
   EXPECT_EQ(count("alphaMode BLEND"), 1);
   EXPECT_EQ(count("doubleSided"), 0);
+}
+
+TEST(GltfLoader, TextureProblemsNameTheirElement) {
+  GltfDoc doc = triangleDoc();
+  doc.materials.push_back("{\"pbrMetallicRoughness\":{\"baseColorTexture\":{\"index\":0}}}");
+  doc.meshes[0] = "{\"primitives\":[{\"attributes\":{\"POSITION\":0},\"material\":0}]}";
+  EXPECT_CONTAINS(docError(doc), "material 0 baseColorTexture references missing texture 0");
+  doc.textures.push_back("{\"source\":0}");
+  EXPECT_CONTAINS(docError(doc), "texture 0 references missing image 0");
+  // a file that is not there is an error naming it, not a white material
+  doc.images.push_back("{\"uri\":\"does_not_exist.png\"}");
+  EXPECT_CONTAINS(docError(doc), "image 0 ('does_not_exist.png'): no image data");
+  // a format we do not decode (WebP's magic): a warning, and the factors stand
+  doc.images[0] = "{\"uri\":\"data:application/octet-stream;base64,UklGRgAAAABXRUJQ\"}";
+  Scene s = loadDoc(doc);
+  EXPECT_EQ(s.materials[0].texture_mask, 0u);
+  EXPECT_EQ(std::count_if(s.warnings.begin(), s.warnings.end(),
+                          [](const std::string& w) { return w.find("image 0 is WebP, which is not supported") != std::string::npos; }),
+            1);
+  // garbage that claims to be a PNG: an error naming the image
+  doc.images[0] = "{\"uri\":\"data:application/octet-stream;base64,iVBORw0KGgoAAAAA\"}";
+  EXPECT_CONTAINS(docError(doc), "image 0");
 }
 
 TEST(GltfLoader, RequiredGeometryExtensionIsAnError) {
