@@ -42,8 +42,12 @@ WT_KERNEL void generate(WtFrameParams frame, WtCamera camera, __global float4* r
   bounce_counts[i] = (ushort4)(0);
   ray_skip[i] = WT_NO_HIT;
 #if WT_HAS_TEXTURES
-  // the pixel's cone (materials/textured.cl): a perspective ray's angle, an orthographic ray's width
-  float pixel = 2.0f * length(vec4_xyz(camera.up)) / (float)frame.height;
+  // the pixel's cone (materials/textured.cl): a perspective ray's angle, an
+  // orthographic ray's width. Sample k takes 1/sqrt(k + 1) of the pixel (a
+  // pixel's k samples each stand for a k-th of it): the first samples read
+  // blurred texels, where they cut the most noise, and the running mean
+  // converges to the pixel's box integral of the finest level.
+  float pixel = 2.0f * length(vec4_xyz(camera.up)) / (float)frame.height * rsqrt((float)frame.sample + 1.0f);
   ray_cone[i] = camera.origin.w == (float)WT_CAMERA_ORTHOGRAPHIC ? (float2)(pixel, 0.0f) : (float2)(0.0f, pixel);
 #endif
 }

@@ -46,6 +46,7 @@ struct RenderOptions {
   std::string misHeuristic = "balance";
   bool noNee = false, noMis = false, noRr = false;
   std::string sampler = "independent";
+  std::string textureFilter = "footprint";
   std::string lightSampler = "auto";
   std::string reference, errorLog;
   std::string accumulation = "kahan";
@@ -141,6 +142,7 @@ int runRender(RenderOptions options) {
   settings.useRussianRoulette = !options.noRr;
   settings.powerHeuristic = options.misHeuristic == "power";
   settings.sobol = options.sampler == "sobol";
+  settings.textureFootprint = options.textureFilter == "footprint";
   settings.lightSampler = options.lightSampler == "power" ? wt::LightSampler::Power
                           : options.lightSampler == "tree" ? wt::LightSampler::Tree
                                                            : wt::LightSampler::Auto;
@@ -174,6 +176,22 @@ int runRender(RenderOptions options) {
                   options.instancing.c_str(), buffers.instanceCount(), buffers.instancedTriangles(),
                   scene.triangles.size());
     wt::log::debug(line);
+    if (buffers.hasTextures()) {
+      // texels of the images' finest levels
+      std::size_t baseTexels = 0;
+      std::vector<bool> first(scene.textures.levels.size(), false);
+      for (const WtTexture& t : scene.textures.textures) first[t.first_level] = true;
+      for (std::size_t i = 0; i < first.size(); ++i)
+        if (first[i]) baseTexels += std::size_t(scene.textures.levels[i].width) * scene.textures.levels[i].height;
+      std::snprintf(line, sizeof line,
+                    "textures: %zu images, %zu textures, %.1f MiB on the device (%.2f B per finest-level texel with "
+                    "its mips), decoded and filtered in %.0f ms, uploaded in %.1f ms",
+                    scene.textures.imageCount(), scene.textures.textures.size(),
+                    double(buffers.textureBytes) / (1 << 20),
+                    double(buffers.textureBytes) / double(std::max<std::size_t>(baseTexels, 1)),
+                    scene.textureSeconds * 1e3, buffers.textureUploadSeconds * 1e3);
+      wt::log::debug(line);
+    }
   }
 
   // error against a reference at power-of-two sample counts (not timed)
@@ -308,6 +326,10 @@ int main(int argc, char** argv) {
   renderCmd->add_flag("--no-rr", render.noRr, "path: no Russian roulette");
   renderCmd->add_option("--sampler", render.sampler, "independent (hashed) or sobol (Owen-scrambled Sobol)")
       ->check(CLI::IsMember({"independent", "sobol"}))->capture_default_str();
+  renderCmd->add_option("--texture-filter", render.textureFilter,
+                         "footprint: textures read at the mip level of the path's footprint (ray cone at the camera hit, "
+                         "path spread after); finest: always the finest level (point sampling, slower to converge)")
+      ->check(CLI::IsMember({"footprint", "finest"}))->capture_default_str();
   renderCmd->add_option("--light-sampler", render.lightSampler,
                         "path: how NEE picks an emissive triangle: power (alias table), tree (light tree, by "
                         "importance at the shading point) or auto (the tree from 8 emitters on)")

@@ -377,10 +377,12 @@ void SceneBuffers::uploadSurface(Context& context, const Scene& scene) {
   if (m_hasTextures) refs = scene.materialTextures;
   materialTextures = upload(context, refs, m_attributeBytes);
   std::size_t bytes = 0;
+  const auto start = std::chrono::steady_clock::now();
   textures = upload(context, m_hasTextures ? scene.textures.textures : std::vector<WtTexture>{}, bytes);
   textureLevels = upload(context, m_hasTextures ? scene.textures.levels : std::vector<WtTextureLevel>{}, bytes);
   texels = upload(context, m_hasTextures ? scene.textures.texels : std::vector<wt_uint>{}, bytes);
   textureBytes = m_hasTextures ? bytes : 0;
+  textureUploadSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
 void SceneBuffers::bindSurface(cl::Kernel& kernel, int first) const {

@@ -83,6 +83,7 @@ class SceneBuffers {
   /// (shared/textures.h).
   cl::Buffer vertexUv, vertexColor, vertexTangent, materialTextures, textures, textureLevels, texels;
   std::size_t textureBytes = 0;  ///< textures, levels and texels on the device
+  double textureUploadSeconds = 0.0;
   /// Set the kernel's WT_SURFACE_PARAMS, arguments first .. first + 6.
   void bindSurface(cl::Kernel& kernel, int first) const;
   /// Whether a material reads a texture / the vertices have COLOR_0 (KernelFeatures).

@@ -16,6 +16,7 @@
 
 #include <algorithm>
 #include <array>
+#include <chrono>
 #include <cctype>
 #include <cmath>
 #include <cstdint>
@@ -536,12 +537,14 @@ class Converter {
       m_scene.addWarning(label + " is " + imageFormatName(format) +
                          ", which is not supported (PNG and JPEG are); the materials using it keep their factors");
     } else {
+      const auto start = std::chrono::steady_clock::now();
       try {
         DecodedImage decoded = decodeImage(image.image.data(), image.image.size(), label);
         result = m_scene.textures.addImage(decoded, srgb);
       } catch (const TextureError& e) {
         fail(e.what());
       }
+      m_scene.textureSeconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     }
     m_imageIndex[key] = result;
     return result;

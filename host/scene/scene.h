@@ -105,6 +105,7 @@ struct Scene {
   /// texture_mask is set
   std::vector<WtTextureRef> materialTextures;
   TextureSet textures;                    ///< the images and samplers materialTextures name
+  double textureSeconds = 0.0;            ///< decoding the images and building their mips
   std::vector<std::string> materialNames; ///< same size as materials
   std::optional<CameraDesc> camera;       ///< absent: frame the bounds (defaultCamera)
   std::vector<PunctualLight> lights;      ///< KHR_lights_punctual
