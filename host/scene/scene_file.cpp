@@ -697,6 +697,22 @@ class Loader {
         m_nextGeometry = std::max(m_nextGeometry, loaded.geometryBase + copy.geometry + 1);
       m_result.scene.materials.insert(m_result.scene.materials.end(), loaded.scene.materials.begin(),
                                       loaded.scene.materials.end());
+      // the file's textures, their slots renumbered past the scene's
+      if (!loaded.scene.materialTextures.empty()) {
+        std::uint32_t textureBase = 0;
+        try {
+          textureBase = m_result.scene.textures.append(loaded.scene.textures);
+        } catch (const TextureError& e) {
+          fail(where, e.what());
+        }
+        std::vector<WtTextureRef>& refs = m_result.scene.materialTextures;
+        refs.resize(std::size_t(loaded.materialBase) * WT_TEXTURE_SLOTS);
+        for (WtTextureRef ref : loaded.scene.materialTextures) {
+          ref.texture += textureBase;
+          refs.push_back(ref);
+        }
+        m_result.scene.textureSeconds += loaded.scene.textureSeconds;
+      }
       m_result.scene.materialNames.insert(m_result.scene.materialNames.end(), loaded.scene.materialNames.begin(),
                                           loaded.scene.materialNames.end());
       const std::string label = resolved.filename().string();
@@ -809,6 +825,21 @@ class Loader {
       CameraDesc desc = *m_files[cameraSource->file].scene.camera;
       glm::dmat4 world = cameraSource->world * glm::dmat4(desc.cameraToWorld);
       world[3] -= glm::dvec4(origin, 0.0);
+      // a scaling placement scales the camera's distances (the file's camera
+      // axes are unit): znear along its view axis, the orthographic extents
+      // along theirs; the rays need rigid axes again (as the glTF loader makes them)
+      const glm::dvec3 axisZ = glm::normalize(glm::dvec3(world[2]));
+      glm::dvec3 axisY = glm::dvec3(world[1]) - glm::dot(glm::dvec3(world[1]), axisZ) * axisZ;
+      axisY = glm::normalize(axisY);
+      glm::dvec3 axisX = glm::dvec3(world[0]) - glm::dot(glm::dvec3(world[0]), axisZ) * axisZ -
+                         glm::dot(glm::dvec3(world[0]), axisY) * axisY;
+      axisX = glm::normalize(axisX);
+      desc.znear = float(desc.znear * glm::length(glm::dvec3(world[2])));
+      if (desc.orthographic) {
+        desc.xmag = float(desc.xmag * glm::length(glm::dvec3(world[0])));
+        desc.ymag = float(desc.ymag * glm::length(glm::dvec3(world[1])));
+      }
+      world[0] = glm::dvec4(axisX, 0.0), world[1] = glm::dvec4(axisY, 0.0), world[2] = glm::dvec4(axisZ, 0.0);
       desc.cameraToWorld = glm::mat4(world);
       scene.camera = desc;
     }
@@ -917,6 +948,21 @@ class Loader {
       dst.normals.push_back({n.x, n.y, n.z, 0.0f});
       dst.texcoords.push_back(i < src.texcoords.size() ? src.texcoords[i] : glm::vec2(0.0f));
     }
+    // the attributes only some files have: every vertex gets one once any does
+    auto appendOptional = [&](auto& to, const auto& from, auto fallback, auto convert) {
+      if (to.empty() && from.empty()) return;
+      to.resize(vertexBase, fallback);
+      for (std::size_t i = 0; i < src.positions.size(); ++i) to.push_back(i < from.size() ? convert(from[i]) : fallback);
+    };
+    appendOptional(dst.texcoords1, src.texcoords1, glm::vec2(0.0f), [](glm::vec2 v) { return v; });
+    appendOptional(dst.colors, src.colors, glm::vec4(1.0f), [](glm::vec4 v) { return v; });
+    // tangents move with the surface; a mirroring placement flips the bitangent's side
+    appendOptional(dst.tangents, src.tangents, glm::vec4(0.0f), [&](glm::vec4 t) {
+      const glm::vec3 moved(linear * glm::dvec3(t.x, t.y, t.z));
+      const float length = glm::length(moved);
+      if (!(length > 0.0f) || !std::isfinite(length)) return glm::vec4(0.0f);
+      return glm::vec4(moved / length, (t.w < 0.0f) != flip ? -1.0f : 1.0f);
+    });
     for (WtTriangle t : src.triangles) {
       t.v0 += vertexBase, t.v1 += vertexBase, t.v2 += vertexBase;
       if (flip) std::swap(t.v1, t.v2);

@@ -3,6 +3,7 @@
 #include <stb_image.h>
 
 #include <algorithm>
+#include <limits>
 #include <array>
 #include <climits>
 #include <cmath>
@@ -412,6 +413,27 @@ std::uint32_t TextureSet::addTexture(std::uint32_t imageIndex, int wrapS, int wr
   flags |= mip << WT_TEXTURE_MIP_SHIFT;
   textures.push_back({image.firstLevel, image.levelCount, flags, 0});
   return std::uint32_t(textures.size() - 1);
+}
+
+std::uint32_t TextureSet::append(const TextureSet& other) {
+  if (texels.size() + other.texels.size() > std::numeric_limits<wt_uint>::max())
+    throw TextureError("textures: more than 2^32 texel words in one scene");
+  const auto texelBase = wt_uint(texels.size()), levelBase = wt_uint(levels.size());
+  const auto textureBase = std::uint32_t(textures.size());
+  texels.insert(texels.end(), other.texels.begin(), other.texels.end());
+  for (WtTextureLevel l : other.levels) {
+    l.offset += texelBase;
+    levels.push_back(l);
+  }
+  for (WtTexture t : other.textures) {
+    t.first_level += levelBase;
+    textures.push_back(t);
+  }
+  for (Image image : other.m_images) {
+    image.firstLevel += levelBase;
+    m_images.push_back(image);
+  }
+  return textureBase;
 }
 
 std::size_t TextureSet::bytes() const {

@@ -88,6 +88,10 @@ class TextureSet {
   std::size_t imageCount() const { return m_images.size(); }
   /// Bytes of the three arrays together, for -v reporting.
   std::size_t bytes() const;
+  /// Append every image and texture of `other` (a scene placed in another);
+  /// returns the index its texture 0 now has. Throws TextureError when the
+  /// texel array would pass 2^32 uints.
+  std::uint32_t append(const TextureSet& other);
 
   std::vector<wt_uint> texels;          ///< __global const uint*; empty until an image is added
   std::vector<WtTextureLevel> levels;   ///< __global const WtTextureLevel*

@@ -9,6 +9,7 @@
 #include "test_util.h"
 
 #include <gtest/gtest.h>
+#include <stb_image_write.h>
 
 #include <glm/glm.hpp>
 #include <glm/gtc/matrix_transform.hpp>
@@ -405,6 +406,61 @@ TEST(SceneFile, GltfCameraAndLightsArePlaced) {
   expectNear(cameraPosition(f.scene), {0, 0, 50});
   expectNear(f.scene.origin, {0, 0, 50});
   expectNear(worldPosition(f.scene, f.scene.triangles[0].v1), {100, 0, -1});
+}
+
+// A textured file placed by a scene file keeps its textures (renumbered
+// past another file's), its texture coordinates and vertex colours, and a
+// scaling transform scales its camera's near plane.
+TEST(SceneFile, GltfTexturesColoursAndScaledCameraArePlaced) {
+  auto textured = [](std::uint8_t red) {
+    GltfDoc gltf = triangleDoc(",1");
+    const int uv = gltf.addVec2({{0, 0}, {1, 0}, {0, 1}});
+    const std::vector<float> colors = {1, 0, 0, 1, 0, 1, 0, 1, 0, 0, 1, 1};
+    const int col = gltf.addAccessor(gltf.addView(colors), gltf_doc::kFloat, 3, "VEC4");
+    gltf.meshes[0] = "{\"primitives\":[{\"attributes\":{\"POSITION\":0,\"NORMAL\":1,\"TEXCOORD_0\":" +
+                     str(std::size_t(uv)) + ",\"COLOR_0\":" + str(std::size_t(col)) + "},\"material\":0}]}";
+    gltf.materials[0] = "{\"name\":\"tri\",\"pbrMetallicRoughness\":{\"baseColorTexture\":{\"index\":0}}}";
+    std::vector<unsigned char> png;
+    const std::uint8_t pixels[4] = {red, 20, 30, 255};
+    stbi_write_png_to_func([](void* out, void* data, int size) {
+      auto* bytes = static_cast<unsigned char*>(data);
+      static_cast<std::vector<unsigned char>*>(out)->insert(static_cast<std::vector<unsigned char>*>(out)->end(),
+                                                            bytes, bytes + size);
+    }, &png, 1, 1, 4, pixels, 4);
+    gltf.images.push_back("{\"uri\":\"data:image/png;base64," + gltf_doc::base64(png) + "\"}");
+    gltf.textures.push_back("{\"source\":0}");
+    gltf.cameras.push_back("{\"type\":\"perspective\",\"perspective\":{\"yfov\":0.5,\"znear\":0.1}}");
+    gltf.addNode("{\"camera\":0,\"translation\":[0,0,4]}");
+    return gltf;
+  };
+  writeTriangle(textured(200), "red.gltf");
+  writeTriangle(textured(100), "dim.gltf");
+  SceneFile f = loadText(doc(R"("materials": {"m": {}}, "objects": [
+      {"type": "sphere", "center": [0, 0, 0], "radius": 1, "material": "m"},)" +
+                             gltfObject(R"({"scale": [0.001, 0.001, 0.001]})", "red.gltf") + "," +
+                             gltfObject("", "dim.gltf") + "]"));
+  const Scene& s = f.scene;
+  expectConsistent(s);
+  EXPECT_TRUE(s.warnings.empty()) << s.warnings.front();
+  ASSERT_EQ(s.materials.size(), 3u);
+  ASSERT_EQ(s.materialTextures.size(), 3u * WT_TEXTURE_SLOTS);
+  ASSERT_EQ(s.textures.textures.size(), 2u);
+  for (std::uint32_t m : {1u, 2u}) {
+    EXPECT_EQ(s.materials[m].texture_mask, 1u << WT_TEXTURE_SLOT_BASE_COLOR);
+    const WtTextureRef& ref = s.materialTextures[m * WT_TEXTURE_SLOTS + WT_TEXTURE_SLOT_BASE_COLOR];
+    ASSERT_EQ(ref.texture, m - 1);
+    // each texture's level 0 is its own 1x1 image
+    const WtTextureLevel& level = s.textures.levels[s.textures.textures[ref.texture].first_level];
+    EXPECT_EQ(s.textures.texels[level.offset] & 0xffu, m == 1 ? 200u : 100u);
+  }
+  ASSERT_EQ(s.colors.size(), s.positions.size());
+  ASSERT_EQ(s.texcoords.size(), s.positions.size());
+  EXPECT_EQ(s.colors[s.triangles[0].v0], glm::vec4(1, 0, 0, 1));
+  EXPECT_EQ(s.texcoords[s.triangles[1].v1], glm::vec2(1, 0));
+  // the first file's camera, scaled by 1e-3 with its scene
+  ASSERT_TRUE(s.camera.has_value());
+  EXPECT_NEAR(s.camera->znear, 1e-4f, 1e-9f);
+  EXPECT_NEAR(glm::length(glm::vec3(s.camera->cameraToWorld[2])), 1.0f, 1e-6f);
 }
 
 TEST(SceneFile, PlacedCopiesShareGeometryAndMaterials) {
