@@ -269,8 +269,11 @@ WT_KERNEL void shade(WtFrameParams frame, WtEnvironment environment, __global co
 
   throughput[path] = (float4)(beta, bs.pdf);
 #if WT_HAS_TEXTURES
-  // the next segment's cone: as wide as the sample's pdf says; a delta sample keeps the angle it came with
-  ray_cone[path] = (float2)(footprint, bs.pdf > 0.0f ? rsqrt(bs.pdf) : cone_angle);
+  // the next segment's cone: as wide as the sample's pdf says, narrowed for
+  // the pixel's later samples as the camera's cone is (generate.cl), so the
+  // mean converges to unfiltered textures at every bounce; a delta sample
+  // keeps the angle it came with
+  ray_cone[path] = (float2)(footprint, bs.pdf > 0.0f ? rsqrt(bs.pdf * ((float)frame.sample + 1.0f)) : cone_angle);
 #endif
   bounce_counts[path] = counts;
   ray_skip[path] = prim;
