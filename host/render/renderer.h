@@ -104,6 +104,8 @@ class Renderer {
   const RenderStats& stats() const { return m_stats; }
   const RenderSettings& settings() const { return m_settings; }
   const SceneBuffers& sceneBuffers() const { return *m_scene; }
+  /// The light list NEE picks from (built from the scene at construction).
+  const LightList& lights() const { return m_lights; }
   const Environment& environment() const { return m_environment; }
 
  private:
