@@ -21,6 +21,7 @@
 #include "scene/tangents.h"
 #include "test_util.h"
 
+#include <glm/gtc/constants.hpp>
 #include <glm/gtc/matrix_transform.hpp>
 
 #include <gtest/gtest.h>
@@ -590,6 +591,335 @@ TEST(GltfTextureAssets, TextureTransformTestOffsetsRotationScale) {
     std::printf("%s: %s\n", q.name, line.c_str());
   }
   if (testing::Test::HasFailure()) ADD_FAILURE() << "render: " << keepImage(image, "TextureTransformTest");
+}
+
+// ---------------------------------------------------------------------------
+// TextureEncodingTest, TextureLinearInterpolationTest
+
+// TextureEncodingTest: unit spheres at z = 0 in four columns, x = -2.75
+// (factors only), 0.25 (a 1 x 1 texture), 3.25 (the same texel with a PNG
+// gamma of 0.2, which glTF says to ignore) and 6.25 (with an ICC profile,
+// ignored too); rows y = 2 (base colour: factor 0.2462 green = sRGB 136),
+// y = -1 (emission: the same) and y = -4 (metallic-roughness: metallic 1,
+// roughness 0.5333 = 136 / 255, stored linear in the texture's green; its
+// blue is 255, metallic 1). Labels (alphaMode MASK) lie at z = -1 behind.
+constexpr float kEncodingColumns[] = {-2.75f, 0.25f, 3.25f, 6.25f};
+constexpr const char* kEncodingColumnNames[] = {"factors", "texture", "texture with gamma", "texture with ICC profile"};
+constexpr float kSrgb136 = 0.24620133f;  // sRGB 136 / 255 decoded, the models' factor
+
+TEST(GltfTextureAssets, TextureEncodingTestEmissionDecodesSrgb) {
+  WT_REQUIRE_ASSET(path, "gltf/TextureEncodingTest/glTF/TextureEncodingTest.gltf");
+  Scene scene = loadModel(path);
+  const View view{{-4.0f, -2.25f}, {7.5f, 0.25f}, 16.0f};
+  const Image image = renderView(scene, view, emissionOnly(), 1);
+  for (int c = 0; c < 4; ++c) {
+    const Window w = window(image, view, {kEncodingColumns[c], -1.0f}, 0.5f);
+    EXPECT_NEAR(w.mean.y, kSrgb136, 2e-3) << kEncodingColumnNames[c] << " " << str(w.mean);
+    EXPECT_LT(std::max(w.mean.x, w.mean.z), 1e-4) << kEncodingColumnNames[c] << " " << str(w.mean);
+  }
+  if (testing::Test::HasFailure()) ADD_FAILURE() << "render: " << keepImage(image, "TextureEncodingTest_emissive");
+}
+
+TEST(GltfTextureAssets, TextureEncodingTestBaseColorDecodesSrgb) {
+  WT_REQUIRE_ASSET(path, "gltf/TextureEncodingTest/glTF/TextureEncodingTest.gltf");
+  Scene scene = loadModel(path);
+  const View view{{-4.0f, 0.75f}, {7.5f, 3.25f}, 16.0f};
+  const Image image = renderView(scene, view, whiteFurnace(), 64);
+  // the sphere's middle faces the camera: a green metal (metallicFactor
+  // defaults to 1) under the white environment
+  const Window factors = window(image, view, {kEncodingColumns[0], 2.0f}, 0.3f);
+  EXPECT_EQ(hueOf(factors.mean), Hue::Green) << str(factors.mean);
+  for (int c = 1; c < 4; ++c) {
+    const Window w = window(image, view, {kEncodingColumns[c], 2.0f}, 0.3f);
+    for (int k = 0; k < 3; ++k) {
+      const double se = std::hypot(w.standardError[k], factors.standardError[k]);
+      EXPECT_NEAR(w.mean[k], factors.mean[k], 4.0 * se + 0.02 * factors.mean[k])
+          << kEncodingColumnNames[c] << " channel " << k << ": " << str(w.mean) << " vs factors " << str(factors.mean);
+    }
+  }
+  if (testing::Test::HasFailure()) ADD_FAILURE() << "render: " << keepImage(image, "TextureEncodingTest_base_color");
+}
+
+TEST(GltfTextureAssets, TextureEncodingTestMetallicRoughnessIsLinear) {
+  WT_REQUIRE_ASSET(path, "gltf/TextureEncodingTest/glTF/TextureEncodingTest.gltf");
+  Scene scene = loadModel(path);
+  // a directional light from the upper right, in front, on a black
+  // environment: the highlight's size and height follow the roughness
+  PunctualLight sun;
+  sun.type = WT_LIGHT_DIRECTIONAL;
+  sun.direction = glm::normalize(glm::vec3(-1.0f, -1.0f, -2.0f));
+  sun.intensity = glm::vec3(3.0f);
+  scene.lights.push_back(sun);
+  RenderSettings settings;
+  settings.maxBounces = 1;
+  const View view{{-4.0f, -5.25f}, {7.5f, -2.75f}, 32.0f};
+  const Image image = renderView(scene, view, settings, 16);
+  // windows over each sphere at the same places: orthographic, every sphere
+  // is seen alike; compare with the factor sphere
+  int worse = 0;
+  double worstZ = 0.0;
+  for (int c = 1; c < 4; ++c)
+    for (float dy = -0.6f; dy <= 0.61f; dy += 0.2f)
+      for (float dx = -0.6f; dx <= 0.61f; dx += 0.2f) {
+        if (dx * dx + dy * dy > 0.7f * 0.7f) continue;
+        const Window f = window(image, view, {kEncodingColumns[0] + dx, -4.0f + dy}, 0.06f);
+        const Window w = window(image, view, {kEncodingColumns[c] + dx, -4.0f + dy}, 0.06f);
+        for (int k = 0; k < 3; ++k) {
+          const double se = std::hypot(w.standardError[k], f.standardError[k]);
+          worstZ = std::max(worstZ, std::abs(w.mean[k] - f.mean[k]) / se);
+          if (std::abs(w.mean[k] - f.mean[k]) > 4.0 * se + 0.03 * f.mean[k] && ++worse <= 5)
+            ADD_FAILURE() << kEncodingColumnNames[c] << " at (" << dx << ", " << dy << ") channel " << k << ": "
+                          << str(w.mean) << " vs factors " << str(f.mean) << " (standard error " << se << ")";
+        }
+      }
+  std::printf("metallic-roughness: worst z %.2f\n", worstZ);
+  if (testing::Test::HasFailure()) ADD_FAILURE() << "render: " << keepImage(image, "TextureEncodingTest_metallic_roughness");
+}
+
+// TextureLinearInterpolationTest: two unit spheres at y = -1 emitting green,
+// x = -1.5 by the factor 0.5, x = 1.5 by a 2 x 1 texture (sRGB 0 and 255)
+// read at u = 0.5 by every vertex with LINEAR filtering: filtered after
+// decoding it is 0.5, filtered before (the encoded 127.5 decoded) 0.2140.
+TEST(GltfTextureAssets, TextureLinearInterpolationTestFiltersLinearValues) {
+  WT_REQUIRE_ASSET(path, "gltf/TextureLinearInterpolationTest/glTF/TextureLinearInterpolationTest.gltf");
+  Scene scene = loadModel(path);
+  const View view{{-2.75f, -2.25f}, {2.75f, 0.25f}, 16.0f};
+  const Image image = renderView(scene, view, emissionOnly(), 1);
+  for (float x : {-1.5f, 1.5f}) {
+    const Window w = window(image, view, {x, -1.0f}, 0.5f);
+    EXPECT_NEAR(w.mean.y, 0.5, 0.01) << "sphere at x = " << x << ": " << str(w.mean);
+    EXPECT_LT(std::max(w.mean.x, w.mean.z), 1e-4) << "sphere at x = " << x << ": " << str(w.mean);
+  }
+  if (testing::Test::HasFailure()) ADD_FAILURE() << "render: " << keepImage(image, "TextureLinearInterpolationTest");
+}
+
+// ---------------------------------------------------------------------------
+// VertexColorTest
+
+// Six quads facing +Z at z = 0.036 (VertexColorTest.bin, node scale z
+// 0.0741): the test row (y in [0.109, 0.572]) shows checks with an X of the
+// two other channels over them, multiplied by COLOR_0 red, green and blue;
+// the sample row (y in [-0.759, -0.297]) the plain checks times white.
+// Columns: x centres -0.548, 0, 0.592, half width 0.231.
+TEST(GltfTextureAssets, VertexColorTestMultipliesBaseColor) {
+  WT_REQUIRE_ASSET(path, "gltf/VertexColorTest/glTF/VertexColorTest.gltf");
+  Scene scene = loadModel(path);
+  const View view{{-1.05f, -1.05f}, {1.05f, 1.05f}, 96.0f};
+  const Image image = renderView(scene, view, whiteFurnace(), 16);
+  const struct {
+    const char* name;
+    float x;
+    int channel;
+    Hue hue;
+  } columns[] = {{"red", -0.548f, 0, Hue::Red}, {"green", 0.0f, 1, Hue::Green}, {"blue", 0.592f, 2, Hue::Blue}};
+  for (const auto& col : columns) {
+    SCOPED_TRACE(col.name);
+    std::vector<double> testMain, sampleMain;
+    int leaks = 0;
+    double brightest = 0.0;
+    Hue brightestHue = Hue::Black;
+    for (float dy = -0.175f; dy <= 0.176f; dy += 0.07f)
+      for (float dx = -0.175f; dx <= 0.176f; dx += 0.07f) {
+        const Window t = window(image, view, {col.x + dx, 0.3405f + dy}, 0.03f);
+        const Window s = window(image, view, {col.x + dx, -0.528f + dy}, 0.03f);
+        testMain.push_back(t.mean[col.channel]);
+        sampleMain.push_back(s.mean[col.channel]);
+        if (t.mean[col.channel] > brightest) brightest = t.mean[col.channel], brightestHue = hueOf(t.mean);
+        // the other channels: no more than in the sample (the specular's share)
+        for (int k = 0; k < 3; ++k) {
+          if (k == col.channel) continue;
+          const double se = std::hypot(t.standardError[k], s.standardError[k]);
+          if (t.mean[k] > s.mean[k] + 4.0 * se + 0.03 && ++leaks <= 3)
+            ADD_FAILURE() << "channel " << k << " at (" << dx << ", " << dy << "): test " << str(t.mean)
+                          << " vs sample " << str(s.mean);
+        }
+      }
+    // the check itself: the same shape as the sample's, in the right colour
+    const double shape = correlation(testMain, sampleMain);
+    EXPECT_GT(shape, 0.9) << "the test check's channel " << col.channel << " does not follow the sample's";
+    EXPECT_EQ(brightestHue, col.hue);
+    std::printf("%s: leaks %d, shape %.3f, brightest %.3f\n", col.name, leaks, shape, brightest);
+  }
+  if (testing::Test::HasFailure()) ADD_FAILURE() << "render: " << keepImage(image, "VertexColorTest");
+}
+
+// ---------------------------------------------------------------------------
+// NormalTangentTest, NormalTangentMirrorTest
+
+/// An environment whose red light comes from above (+Y) and whose blue
+/// light comes from the left (-X), both of radiance 1, green none: written
+/// as an equirectangular .hdr (kernels/lights/environment.cl's convention:
+/// row 0 at +Y, longitude atan2(x, z) = 2 pi (0.5 - u)).
+std::string redAboveBlueLeft() {
+  constexpr int kWidth = 64, kHeight = 32;
+  std::vector<float> rgb(3 * kWidth * kHeight, 0.0f);
+  for (int y = 0; y < kHeight; ++y)
+    for (int x = 0; x < kWidth; ++x) {
+      const float theta = (float(y) + 0.5f) / kHeight * glm::pi<float>();
+      const float longitude = (0.5f - (float(x) + 0.5f) / kWidth) * glm::two_pi<float>();
+      const glm::vec3 d(std::sin(theta) * std::sin(longitude), std::cos(theta), std::sin(theta) * std::cos(longitude));
+      float* t = &rgb[3 * (y * kWidth + x)];
+      t[0] = d.y > 0.0f ? 1.0f : 0.0f;
+      t[2] = d.x < 0.0f ? 1.0f : 0.0f;
+    }
+  const std::filesystem::path path = scratch() / "red_above_blue_left.hdr";
+  EXPECT_TRUE(stbi_write_hdr(path.c_str(), kWidth, kHeight, 3, rgb.data()));
+  return path.string();
+}
+
+/// How a dome (or its normal-mapped picture) at `centre` turns: red (from
+/// above) on its upper side against its lower, blue (from the left) on its
+/// left against its right, as (a - b) / (a + b) of windows `offset` from the
+/// centre. Positive both for a bump facing the camera.
+struct DomeShading {
+  double upDown = 0.0, leftRight = 0.0;
+};
+
+DomeShading domeShading(const Image& image, const View& view, glm::vec2 centre) {
+  constexpr float kOffset = 0.05f, kHalf = 0.02f;
+  auto contrast = [](double a, double b) { return a + b > 0.0 ? (a - b) / (a + b) : 0.0; };
+  DomeShading d;
+  d.upDown = contrast(window(image, view, centre + glm::vec2(0, kOffset), kHalf).mean.x,
+                      window(image, view, centre - glm::vec2(0, kOffset), kHalf).mean.x);
+  d.leftRight = contrast(window(image, view, centre - glm::vec2(kOffset, 0), kHalf).mean.z,
+                         window(image, view, centre + glm::vec2(kOffset, 0), kHalf).mean.z);
+  return d;
+}
+
+/// Every row of tiles: the geometry dome at `geometryX` turns as a bump
+/// should, and each normal-mapped dome in the same row (at `mappedX`) turns
+/// the same way, at least half as much.
+void expectDomesLikeGeometry(const Image& image, const View& view, float geometryX,
+                             const std::vector<std::pair<const char*, float>>& mappedX) {
+  for (float y : {0.8f, 0.4f, 0.0f, -0.4f, -0.8f}) {
+    const DomeShading g = domeShading(image, view, {geometryX, y});
+    EXPECT_GT(g.upDown, 0.2) << "geometry dome at (" << geometryX << ", " << y << ")";
+    EXPECT_GT(g.leftRight, 0.2) << "geometry dome at (" << geometryX << ", " << y << ")";
+    std::printf("  row y %.1f: geometry %.3f %.3f", y, g.upDown, g.leftRight);
+    for (const auto& [name, x] : mappedX) {
+      const DomeShading m = domeShading(image, view, {x, y});
+      EXPECT_GT(m.upDown, 0.5 * g.upDown) << name << " dome at (" << x << ", " << y << "): red above "
+                                          << m.upDown << " against the geometry's " << g.upDown;
+      EXPECT_GT(m.leftRight, 0.5 * g.leftRight) << name << " dome at (" << x << ", " << y << "): blue left "
+                                                << m.leftRight << " against the geometry's " << g.leftRight;
+      std::printf(", %s %.3f %.3f", name, m.upDown, m.leftRight);
+    }
+    std::printf("\n");
+  }
+}
+
+// NormalTangentTest (no tangents in the file: they are generated): five rows
+// (y = 0.8 ... -0.8) of three pairs, a real dome at x = -0.96, -0.16, 0.64
+// and a flat tile normal-mapped as a dome 0.32 to its right (dome centres
+// from NormalTangentTest0.bin; the normal map's bumps located through the
+// mesh's uv), the map turned a different way on every tile.
+TEST(GltfTextureAssets, NormalTangentTestMapsLikeGeometry) {
+  WT_REQUIRE_ASSET(path, "gltf/NormalTangentTest/glTF/NormalTangentTest.gltf");
+  Scene scene = loadModel(path);
+  ASSERT_EQ(scene.tangents.size(), scene.positions.size()) << "no tangents generated";
+  RenderSettings settings = whiteFurnace();
+  settings.environmentMap = redAboveBlueLeft();
+  const View view{{-1.15f, -1.0f}, {1.15f, 1.0f}, 128.0f};
+  const Image image = renderView(scene, view, settings, 32);
+  for (float x : {-0.96f, -0.16f, 0.64f}) {
+    SCOPED_TRACE("column at x = " + std::to_string(x));
+    std::printf("column at x = %.2f\n", x);
+    expectDomesLikeGeometry(image, view, x, {{"normal-mapped", x + 0.32f}});
+  }
+  if (testing::Test::HasFailure()) ADD_FAILURE() << "render: " << keepImage(image, "NormalTangentTest");
+}
+
+// NormalTangentMirrorTest (tangents in the file): two groups of four columns,
+// a real dome at x = -1.275 and 0.3, then the normal map, the normal map with
+// v mirrored and with u mirrored (the bumps at x = -0.955, -0.63, -0.29 and
+// 0.62, 0.94, 1.264, located through the mesh's uv); rows as above.
+void expectMirrorTestDomes(const Image& image, const View& view) {
+  const struct {
+    float geometry;
+    float mapped[3];
+  } groups[] = {{-1.275f, {-0.955f, -0.63f, -0.29f}}, {0.3f, {0.62f, 0.94f, 1.264f}}};
+  for (const auto& g : groups) {
+    SCOPED_TRACE("group at x = " + std::to_string(g.geometry));
+    std::printf("group at x = %.3f\n", g.geometry);
+    expectDomesLikeGeometry(image, view, g.geometry,
+                            {{"normal", g.mapped[0]}, {"v mirror", g.mapped[1]}, {"u mirror", g.mapped[2]}});
+  }
+}
+
+TEST(GltfTextureAssets, NormalTangentMirrorTestMapsLikeGeometry) {
+  WT_REQUIRE_ASSET(path, "gltf/NormalTangentMirrorTest/glTF/NormalTangentMirrorTest.gltf");
+  Scene scene = loadModel(path);
+  RenderSettings settings = whiteFurnace();
+  settings.environmentMap = redAboveBlueLeft();
+  const View view{{-1.45f, -1.0f}, {1.45f, 1.0f}, 128.0f};
+  const Image image = renderView(scene, view, settings, 32);
+  expectMirrorTestDomes(image, view);
+  if (testing::Test::HasFailure()) ADD_FAILURE() << "render: " << keepImage(image, "NormalTangentMirrorTest");
+}
+
+/// The scene with its tangents made again by generateTangents (as for a
+/// file without them) from its positions, normals and TEXCOORD_0, vertices
+/// split where it splits them; `sources` gets, per vertex, the vertex it copies.
+Scene withGeneratedTangents(const Scene& scene, std::vector<std::uint32_t>& sources) {
+  std::vector<glm::vec3> positions, normals;
+  for (std::size_t v = 0; v < scene.positions.size(); ++v) {
+    positions.emplace_back(scene.positions[v].x, scene.positions[v].y, scene.positions[v].z);
+    normals.emplace_back(scene.normals[v].x, scene.normals[v].y, scene.normals[v].z);
+  }
+  std::vector<std::uint32_t> corners;
+  for (const WtTriangle& t : scene.triangles) corners.insert(corners.end(), {t.v0, t.v1, t.v2});
+  Scene out = scene;
+  sources = generateTangents(positions, normals, scene.texcoords, corners, out.tangents);
+  for (std::size_t v = scene.positions.size(); v < sources.size(); ++v) {
+    out.positions.push_back(scene.positions[sources[v]]);
+    out.normals.push_back(scene.normals[sources[v]]);
+    out.texcoords.push_back(scene.texcoords[sources[v]]);
+    if (!out.texcoords1.empty()) out.texcoords1.push_back(scene.texcoords1[sources[v]]);
+    if (!out.colors.empty()) out.colors.push_back(scene.colors[sources[v]]);
+  }
+  for (std::size_t t = 0; t < out.triangles.size(); ++t) {
+    out.triangles[t].v0 = corners[3 * t];
+    out.triangles[t].v1 = corners[3 * t + 1];
+    out.triangles[t].v2 = corners[3 * t + 2];
+  }
+  return out;
+}
+
+// glTF asks for MikkTSpace tangents where a file has none: those generated
+// for NormalTangentMirrorTest's mesh (one node, no transform) must agree with
+// the ones in its file, in direction and handedness, and render the same
+// domes.
+TEST(GltfTextureAssets, NormalTangentMirrorTestGeneratedTangentsMatchTheFiles) {
+  WT_REQUIRE_ASSET(path, "gltf/NormalTangentMirrorTest/glTF/NormalTangentMirrorTest.gltf");
+  const Scene scene = loadModel(path);
+  ASSERT_EQ(scene.tangents.size(), scene.positions.size());
+  std::vector<std::uint32_t> sources;
+  const Scene generated = withGeneratedTangents(scene, sources);
+  // a vertex the generator split (corners of both handednesses) compares
+  // with the file's tangent of the vertex it copies
+  std::size_t otherSide = 0, apart = 0;
+  double worstCosine = 1.0;
+  for (std::size_t v = 0; v < generated.tangents.size(); ++v) {
+    const glm::vec4 file = scene.tangents[sources[v]], made = generated.tangents[v];
+    const double cosine = glm::dot(glm::vec3(file), glm::vec3(made));
+    worstCosine = std::min(worstCosine, cosine);
+    if (file.w != made.w && ++otherSide <= 3)
+      ADD_FAILURE() << "vertex " << v << ": handedness " << made.w << ", the file's " << file.w;
+    // within 11 degrees (MikkTSpace and the file's exporter may weigh corners differently)
+    if (cosine < 0.98 && ++apart <= 3)
+      ADD_FAILURE() << "vertex " << v << ": tangent " << str(glm::dvec3(glm::vec3(made))) << ", the file's "
+                    << str(glm::dvec3(glm::vec3(file)));
+  }
+  std::printf("%zu vertices (%zu split): %zu on the other side, %zu apart, worst cosine %.4f\n",
+              generated.tangents.size(), generated.tangents.size() - scene.positions.size(), otherSide, apart,
+              worstCosine);
+
+  RenderSettings settings = whiteFurnace();
+  settings.environmentMap = redAboveBlueLeft();
+  const View view{{-1.45f, -1.0f}, {1.45f, 1.0f}, 128.0f};
+  const Image image = renderView(generated, view, settings, 32);
+  expectMirrorTestDomes(image, view);
+  if (testing::Test::HasFailure()) ADD_FAILURE() << "render: " << keepImage(image, "NormalTangentMirrorTest_generated");
 }
 
 }  // namespace
