@@ -490,7 +490,9 @@ TEST(GltfTextureAssets, TextureSettingsTestWrapModes) {
         green += hueOf(w.mean) == Hue::Green;
         if (hueOf(w.mean) == Hue::Red && ++red <= 3) ADD_FAILURE() << "a red window in the test box: " << str(w.mean);
       }
-    if (row.wrap == Wrap::Clamp) EXPECT_EQ(green, windows) << "the clamped box is not solid green";
+    if (row.wrap == Wrap::Clamp) {
+      EXPECT_EQ(green, windows) << "the clamped box is not solid green";
+    }
   }
   {
     // double-sided: the back-facing double-sided quad at z = 0.1 (a check)
