@@ -20,6 +20,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <initializer_list>
 #include <iterator>
 #include <limits>
 #include <map>
@@ -39,6 +40,10 @@ constexpr const char* kLightsPunctual = "KHR_lights_punctual";
 constexpr const char* kTransmission = "KHR_materials_transmission";
 constexpr const char* kIor = "KHR_materials_ior";
 constexpr const char* kVolume = "KHR_materials_volume";
+constexpr const char* kSpecular = "KHR_materials_specular";
+constexpr const char* kClearcoat = "KHR_materials_clearcoat";
+constexpr const char* kSheen = "KHR_materials_sheen";
+constexpr const char* kUnlit = "KHR_materials_unlit";
 constexpr const char* kGpuInstancing = "EXT_mesh_gpu_instancing";
 /// Extensions whose absence changes where the geometry is or how its bytes
 /// read: a file that requires one cannot be drawn correctly without it.
@@ -307,7 +312,8 @@ class Converter {
     }
     for (const std::string& ext : m_model.extensionsUsed) {
       if (ext == kEmissiveStrength || ext == kLightsPunctual || ext == kTransmission || ext == kIor ||
-          ext == kVolume || ext == kGpuInstancing)
+          ext == kVolume || ext == kSpecular || ext == kClearcoat || ext == kSheen || ext == kUnlit ||
+          ext == kGpuInstancing)
         continue;
       bool required = std::find(m_model.extensionsRequired.begin(), m_model.extensionsRequired.end(),
                                 ext) != m_model.extensionsRequired.end();
@@ -379,6 +385,8 @@ class Converter {
       // glTF draws a single-sided material's back face not at all: it emits from the front only
       WtMaterial material = makePbrMaterial(clamped, metallic, roughness, emission, src.doubleSided);
       material = withTransmissionExtensions(src, label, material);
+      material = withLayerExtensions(src, label, material);
+      if (materialExtension(src, label, kUnlit)) material = unlitMaterial(src, label, material);
       m_scene.materials.push_back(material);
       m_scene.materialNames.push_back(src.name.empty() ? "material " + std::to_string(i) : src.name);
     }
@@ -394,14 +402,108 @@ class Converter {
     return v.GetNumberAsDouble();
   }
 
+  /// A material's extension object `name`; none when absent, an error when not an object.
+  const tinygltf::Value* materialExtension(const tinygltf::Material& src, const std::string& label,
+                                           const char* name) const {
+    auto it = src.extensions.find(name);
+    if (it == src.extensions.end()) return nullptr;
+    if (!it->second.IsObject()) fail(label + ": " + name + " is not an object");
+    return &it->second;
+  }
+
+  /// A factor in [0,1] of an extension object: `fallback` when absent,
+  /// clamped with a warning when outside, an error when not a finite number.
+  float extensionUnit(const tinygltf::Value& ext, const char* name, double fallback, const std::string& where) {
+    double v = extensionNumber(ext, name, fallback, where);
+    if (v < 0.0 || v > 1.0) m_scene.addWarning(where + " " + name + " " + std::to_string(v) + " is outside [0,1]; clamped");
+    return float(std::clamp(v, 0.0, 1.0));
+  }
+
+  /// An RGB factor of an extension object: `fallback` when absent, each
+  /// component clamped to [0,1] (or only to >= 0 where not `unit`) with a
+  /// warning, an error when not an array of 3 finite numbers.
+  glm::vec3 extensionColor(const tinygltf::Value& ext, const char* name, glm::vec3 fallback, bool unit,
+                           const std::string& where) {
+    if (!ext.Has(name)) return fallback;
+    const tinygltf::Value& c = ext.Get(name);
+    if (!c.IsArray() || c.ArrayLen() != 3) fail(where + ": " + name + " is not an array of 3 numbers");
+    glm::dvec3 color;
+    for (int k = 0; k < 3; ++k) {
+      if (!c.Get(k).IsNumber() || !std::isfinite(c.Get(k).GetNumberAsDouble()))
+        fail(where + ": " + name + " is not an array of 3 finite numbers");
+      color[k] = c.Get(k).GetNumberAsDouble();
+    }
+    glm::dvec3 clamped = glm::clamp(color, glm::dvec3(0.0), glm::dvec3(unit ? 1.0 : INFINITY));
+    if (clamped != color)
+      m_scene.addWarning(where + ": " + name + " " + formatVec3(glm::vec3(color)) + " is outside " +
+                         (unit ? "[0,1]" : "[0,inf)") + "; clamped");
+    return glm::vec3(clamped);
+  }
+
+  /// Warn (once, like every material texture) where an extension names a texture.
+  void warnTextures(const tinygltf::Value& ext, std::initializer_list<const char*> names) {
+    for (const char* name : names)
+      if (ext.Has(name)) m_scene.addWarning("material textures are not supported yet; ignored");
+  }
+
+  /// KHR_materials_specular, _clearcoat and _sheen on a converted material:
+  /// their factors; their textures are warned about (textured values will be
+  /// multiplied into these factors, shared/types.h WT_TEXTURE_SLOT_*).
+  WtMaterial withLayerExtensions(const tinygltf::Material& src, const std::string& label, WtMaterial m) {
+    if (const tinygltf::Value* ext = materialExtension(src, label, kSpecular)) {
+      const std::string where = label + " " + kSpecular;
+      float specular = extensionUnit(*ext, "specularFactor", 1.0, where);
+      // F0 = ((ior - 1) / (ior + 1))^2 x colour is capped at 1 by the BSDF; any non-negative colour is valid
+      glm::vec3 color = extensionColor(*ext, "specularColorFactor", glm::vec3(1.0f), false, where);
+      m = withSpecular(m, specular, glm::min(color, glm::vec3(1e6f)));
+      if (m.base_color.w == 1.0f && (specular != 1.0f || color != glm::vec3(1.0f)))
+        m_scene.addWarning(where + " has no effect on a metal (metallicFactor 1)");
+      if (m.transmission > 0.0f && color != glm::vec3(1.0f))
+        m_scene.addWarning(where + " specularColorFactor tints the opaque part's reflection only; transmission's "
+                                   "Fresnel term is weighted by specularFactor alone");
+      warnTextures(*ext, {"specularTexture", "specularColorTexture"});
+    }
+    if (const tinygltf::Value* ext = materialExtension(src, label, kClearcoat)) {
+      const std::string where = label + " " + kClearcoat;
+      float coat = extensionUnit(*ext, "clearcoatFactor", 0.0, where);
+      float roughness = extensionUnit(*ext, "clearcoatRoughnessFactor", 0.0, where);
+      m = withClearcoat(m, coat, roughness);
+      warnTextures(*ext, {"clearcoatTexture", "clearcoatRoughnessTexture", "clearcoatNormalTexture"});
+    }
+    if (const tinygltf::Value* ext = materialExtension(src, label, kSheen)) {
+      const std::string where = label + " " + kSheen;
+      glm::vec3 color = extensionColor(*ext, "sheenColorFactor", glm::vec3(0.0f), true, where);
+      float roughness = extensionUnit(*ext, "sheenRoughnessFactor", 0.0, where);
+      m = withSheen(m, color, roughness);
+      warnTextures(*ext, {"sheenColorTexture", "sheenRoughnessTexture"});
+    }
+    return m;
+  }
+
+  /// KHR_materials_unlit: what glTF viewers show -- the base colour as it is,
+  /// whatever the lighting. In a path tracer that is a surface that emits
+  /// radiance equal to its base colour (from the front face, or both faces
+  /// when double-sided) and scatters nothing: camera rays see the base
+  /// colour, reflections and refractions of it show the same, and it lights
+  /// its surroundings as an emitter of that radiance would (it joins the
+  /// light list). A black Lambertian emitter says exactly that, so the
+  /// kernels need nothing new. Emission, metal, roughness and the other
+  /// extensions are the fallbacks the extension keeps for viewers without
+  /// it, and are ignored. (When material textures arrive, this material's
+  /// baseColorTexture belongs in its emissive slot.)
+  WtMaterial unlitMaterial(const tinygltf::Material& src, const std::string& label, const WtMaterial& m) {
+    for (const char* other : {kTransmission, kVolume, kSpecular, kClearcoat, kSheen})
+      if (src.extensions.count(other))
+        m_scene.addWarning(label + ": " + other + " has no effect on a " + kUnlit + " material; ignored");
+    WtMaterial unlit = makeMaterial(glm::vec3(0.0f), glm::vec3(m.base_color.x, m.base_color.y, m.base_color.z), src.doubleSided);
+    unlit.alpha = m.alpha, unlit.alpha_mode = m.alpha_mode, unlit.alpha_cutoff = m.alpha_cutoff;
+    unlit.texture_mask = m.texture_mask;
+    return unlit;
+  }
+
   /// KHR_materials_transmission, _ior and _volume on a converted material.
   WtMaterial withTransmissionExtensions(const tinygltf::Material& src, const std::string& label, WtMaterial m) {
-    auto find = [&](const char* name) -> const tinygltf::Value* {
-      auto it = src.extensions.find(name);
-      if (it == src.extensions.end()) return nullptr;
-      if (!it->second.IsObject()) fail(label + ": " + name + " is not an object");
-      return &it->second;
-    };
+    auto find = [&](const char* name) { return materialExtension(src, label, name); };
     const tinygltf::Value* transmission = find(kTransmission);
     const tinygltf::Value* ior = find(kIor);
     const tinygltf::Value* volume = find(kVolume);
@@ -427,13 +529,11 @@ class Converter {
         v = std::clamp(v, 1.0, 10.0);
       }
       eta = float(v);
-      // the opaque dielectric's coat is tabulated for F0 = 0.04 (ior 1.5)
-      if (eta != 1.5f && factor < 1.0f && m.base_color.w < 1.0f)
-        m_scene.addWarning(who + kIor + " ior " + std::to_string(v) +
-                           " applies to transmission only; the opaque part's reflection keeps ior 1.5");
     }
     if (!(factor > 0.0f)) {
       if (volume) m_scene.addWarning(who + kVolume + " without transmission has no effect; ignored");
+      // the opaque dielectric's F0 follows the index (((ior - 1) / (ior + 1))^2)
+      m.ior = eta;
       return m;
     }
     bool thinWalled = true;
