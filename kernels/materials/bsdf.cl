@@ -48,9 +48,12 @@
 // sheen extension allows: a white lossless base under any layers then
 // reflects exactly 1, where the reciprocal product (1 - E(mu_o))(1 -
 // E(mu_i)) / (1 - E_avg) used for the diffuse base gains energy over a
-// specular base (5% over a mirror at normal incidence); the layered BSDF
-// is therefore not reciprocal, which a path tracer that always evaluates
-// from the viewer's side does not need.
+// specular base (4.8% over a white mirror under a smooth coat at normal
+// incidence) and the sheen's reciprocal min form loses some of a diffuse
+// one (docs/materials.md). The layered BSDF is therefore not reciprocal,
+// which a path tracer that always evaluates from the viewer's side does
+// not need. KHR_materials_unlit needs nothing here: the loader makes it a
+// black Lambertian emitter of its base colour.
 //
 // Sampling picks the coat's GGX lobe, the base's GGX lobe (visible normals,
 // Heitz 2018 for both), the interface (visible normals again, then
