@@ -3,6 +3,7 @@
 #include "core/embedded.h"
 #include "geometry/primitives.h"
 
+#include <algorithm>
 #include <cstdlib>
 #include <fstream>
 #include <set>
@@ -92,6 +93,24 @@ std::string expandKernelSource(const std::string& file) {
   return out.str();
 }
 
+void setMaterialFeatures(KernelFeatures& features, std::span<const WtMaterial> materials) {
+  auto any = [&](auto&& pred) {
+    return std::any_of(materials.begin(), materials.end(),
+                       [&](const WtMaterial& m) { return m.model == WT_MATERIAL_PBR && pred(m); });
+  };
+  features.pbr = any([](const WtMaterial&) { return true; });
+  features.transmission = any([](const WtMaterial& m) { return m.transmission > 0.0f && m.base_color.w < 1.0f; });
+  // the opaque dielectric's F0 departs from 0.04 (ior on its opaque share), or the specular extension weighs or tints it
+  features.specular = any([](const WtMaterial& m) {
+    bool tinted = m.specular.x != 1.0f || m.specular.y != 1.0f || m.specular.z != 1.0f;
+    const bool textured = m.texture_mask & ((1u << WT_TEXTURE_SLOT_SPECULAR) | (1u << WT_TEXTURE_SLOT_SPECULAR_COLOR));
+    return m.base_color.w < 1.0f &&
+           (m.specular.w != 1.0f || tinted || textured || (m.ior != 1.5f && m.transmission < 1.0f));
+  });
+  features.clearcoat = any([](const WtMaterial& m) { return m.clearcoat > 0.0f; });
+  features.sheen = any([](const WtMaterial& m) { return m.sheen.x > 0.0f || m.sheen.y > 0.0f || m.sheen.z > 0.0f; });
+}
+
 std::vector<std::string> kernelDefines(const KernelFeatures& features) {
   std::vector<std::string> defines = {
       "-D WT_INTEGRATOR_MINIMAL=" + std::string(features.integratorMinimal ? "1" : "0"),
@@ -100,6 +119,9 @@ std::vector<std::string> kernelDefines(const KernelFeatures& features) {
       "-D WT_HAS_TRANSMISSION=" + std::string(features.pbr && features.transmission ? "1" : "0"),
       "-D WT_HAS_TEXTURES=" + std::string(features.textures ? "1" : "0"),
       "-D WT_HAS_VERTEX_COLORS=" + std::string(features.vertexColors ? "1" : "0"),
+      "-D WT_HAS_SPECULAR=" + std::string(features.pbr && features.specular ? "1" : "0"),
+      "-D WT_HAS_CLEARCOAT=" + std::string(features.pbr && features.clearcoat ? "1" : "0"),
+      "-D WT_HAS_SHEEN=" + std::string(features.pbr && features.sheen ? "1" : "0"),
       "-D WT_PACKET_WIDTH=" + std::to_string(features.packetWidth),
       "-D WT_STREAM_PREFETCH=" + std::string(features.streamPrefetch ? "1" : "0"),
   };

@@ -9,6 +9,7 @@
 
 #include <filesystem>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -23,6 +24,9 @@ struct KernelFeatures {
   bool transmission = false;      ///< a metallic-roughness material transmits (KHR_materials_transmission)
   bool textures = false;          ///< a material reads a texture (materials/textured.cl)
   bool vertexColors = false;      ///< the scene's vertices have COLOR_0
+  bool specular = false;          ///< a dielectric's F0 is not 0.04 or its Fresnel is weighted (KHR_materials_specular, KHR_materials_ior)
+  bool clearcoat = false;         ///< a material has a clear coat (KHR_materials_clearcoat)
+  bool sheen = false;             ///< a material has a sheen (KHR_materials_sheen)
   /// The geometry types beside triangles compiled in, by WT_PRIM_* (each
   /// primitiveTypes() entry's define; SceneBuffers::primitiveTypesPresent)
   std::array<bool, WT_PRIM_TYPES> primitives{};
@@ -57,6 +61,10 @@ constexpr double kWidePacketRaysPerTriangle = 3.0;
 /// DeviceError for any other request.
 int packetWidthFor(const DeviceInfo& device, int requested = 0, std::size_t cameraRays = 0,
                    std::size_t triangles = 0);
+
+/// Set pbr, transmission, specular, clearcoat and sheen from the materials
+/// a scene holds: only scenes that use a material layer compile it in.
+void setMaterialFeatures(KernelFeatures& features, std::span<const WtMaterial> materials);
 
 /// The build options for a feature set, e.g. "-D WT_INTEGRATOR_MINIMAL=1 ...".
 std::vector<std::string> kernelDefines(const KernelFeatures& features);

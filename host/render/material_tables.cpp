@@ -2,6 +2,7 @@
 
 #include "shared/ggx.h"
 #include "shared/materials.h"
+#include "shared/sheen.h"
 
 #include <algorithm>
 #include <cmath>
@@ -36,37 +37,51 @@ GgxAlbedo ggxAlbedo(double mu, double roughness, double f0, int radial, int arou
   return sum;
 }
 
+double sheenAlbedo(double mu, double sheenRoughness, int polar, int around) {
+  const float alpha = float(sheenRoughness * sheenRoughness);
+  const double ox = std::sqrt(std::max(0.0, 1.0 - mu * mu)), oz = mu;
+  // wi over the hemisphere: cos(theta_i) = v^2 crowds the grazing directions,
+  // where the fibres' lobe lies; phi over [0, pi] twice (the lobe is symmetric about wo's plane)
+  double sum = 0.0;
+  for (int a = 0; a < polar; ++a) {
+    double v = (a + 0.5) / polar, iz = v * v, jacobian = 2.0 * v;
+    double s = std::sqrt(std::max(0.0, 1.0 - iz * iz));
+    for (int b = 0; b < around; ++b) {
+      double phi = M_PI * (b + 0.5) / around;
+      double ix = s * std::cos(phi), iy = s * std::sin(phi);
+      double hx = ox + ix, hy = iy, hz = oz + iz, len = std::sqrt(hx * hx + hy * hy + hz * hz);
+      sum += jacobian * sheen_eval_cos(float(oz), float(iz), float(hz / len), alpha);
+    }
+  }
+  return sum * (1.0 / polar) * (2.0 * M_PI / around);
+}
+
 std::vector<float> integratePbrAlbedoTable() {
     const int n = WT_PBR_TABLE_N;
     std::vector<float> t(WT_PBR_TABLE_SIZE, 0.0f);
+    // averages 2 int E(mu) mu dmu, by the trapezoid rule on the grid
+    auto average = [&](const std::vector<double>& f) {
+      double s = 0.0;
+      for (int i = 0; i + 1 < n; ++i) {
+        double m0 = pbr_table_mu(i), m1 = pbr_table_mu(i + 1);
+        s += 0.5 * (f[i] * m0 + f[i + 1] * m1) * (m1 - m0);
+      }
+      return 2.0 * s;
+    };
     for (int j = 0; j < n; ++j) {
-      double r = pbr_table_roughness(j);
-      std::vector<double> e(n), coat(n);
+      double r = pbr_table_roughness(j), sheenR = pbr_table_sheen_roughness(j);
+      std::vector<double> e(n), s(n);
       for (int i = 0; i < n; ++i) {
         double mu = std::max(double(pbr_table_mu(i)), 1e-4);
-        GgxAlbedo a = ggxAlbedo(mu, r, WT_PBR_DIELECTRIC_F0);
+        GgxAlbedo a = ggxAlbedo(mu, r, 0.0);  // Schlick with F0 = 0: (1 - v.h)^5
         e[i] = a.white;
-        coat[i] = a.fresnel;
-      }
-      // averages 2 int E(mu) mu dmu, by the trapezoid rule on the grid
-      auto average = [&](const std::vector<double>& f) {
-        double s = 0.0;
-        for (int i = 0; i + 1 < n; ++i) {
-          double m0 = pbr_table_mu(i), m1 = pbr_table_mu(i + 1);
-          s += 0.5 * (f[i] * m0 + f[i + 1] * m1) * (m1 - m0);
-        }
-        return 2.0 * s;
-      };
-      double eAvg = average(e);
-      // the coat with its own multiple scattering (Kulla-Conty at F0 0.04)
-      double fms = pbr_multiscatter_fresnel(ggx_schlick_average(WT_PBR_DIELECTRIC_F0), float(eAvg));
-      for (int i = 0; i < n; ++i) coat[i] += fms * (1.0 - e[i]);
-      for (int i = 0; i < n; ++i) {
+        s[i] = a.fresnel;
         t[WT_PBR_TABLE_E + j * n + i] = float(e[i]);
-        t[WT_PBR_TABLE_E_COAT + j * n + i] = float(coat[i]);
+        t[WT_PBR_TABLE_S + j * n + i] = float(s[i]);
+        t[WT_PBR_TABLE_SHEEN + j * n + i] = float(sheenAlbedo(mu, sheenR));
       }
-      t[WT_PBR_TABLE_E_AVG + j] = float(eAvg);
-      t[WT_PBR_TABLE_E_COAT_AVG + j] = float(average(coat));
+      t[WT_PBR_TABLE_E_AVG + j] = float(average(e));
+      t[WT_PBR_TABLE_S_AVG + j] = float(average(s));
     }
     return t;
 }

@@ -1,8 +1,10 @@
-// Directional albedos of the GGX lobe, tabulated once per process for the
-// energy compensation of the metallic-roughness BSDF (kernels/materials/pbr.cl):
-// Kulla and Conty 2017's multiple-scattering lobe needs E(mu) and its
-// average, and the diffuse base under the dielectric coat is scaled by what
-// the coat leaves, 1 - E_coat(mu).
+// Directional albedos of the GGX and sheen lobes, tabulated at build time for
+// the energy compensation of the metallic-roughness BSDF and its layers
+// (kernels/materials/bsdf.cl): Kulla and Conty 2017's multiple-scattering
+// lobe needs E(mu) and its average, the diffuse base under the dielectric's
+// specular lobe is scaled by what that lobe leaves (F0 E + (1 - F0) S, E
+// and S the split sum of Schlick's Fresnel), and the clear coat and the
+// sheen leave the layers below them what they do not reflect.
 #pragma once
 
 #include "shared/materials.h"
@@ -12,7 +14,7 @@
 namespace wt {
 
 /// The table the kernels read (WT_PBR_TABLE_* layout, shared/materials.h),
-/// integrated at build time by host/tools/make_pbr_table.cpp (about 0.5 s,
+/// integrated at build time by host/tools/make_pbr_table.cpp (about 0.8 s,
 /// too long to pay at every start).
 const std::vector<float>& pbrAlbedoTable();
 
@@ -33,5 +35,11 @@ struct GgxAlbedo {
 /// is) and `around` points in u2; 128 x 24 (the table's) is within 1e-4 of
 /// the converged value.
 GgxAlbedo ggxAlbedo(double mu, double roughness, double f0, int radial = 128, int around = 24);
+
+/// Directional albedo of the sheen lobe (shared/sheen.h) with colour 1 at
+/// cos(theta_o) = mu and sheen roughness r (alpha = r^2), by the midpoint
+/// rule over wi: `polar` points in v with cos(theta_i) = v^2 (crowding the
+/// grazing directions, where the fibres reflect) by `around` in phi.
+double sheenAlbedo(double mu, double sheenRoughness, int polar = 96, int around = 48);
 
 }  // namespace wt

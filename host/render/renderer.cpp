@@ -65,11 +65,7 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
   m_packetWidth = packetWidthFor(context.info(), settings.packetWidth,
                                  std::size_t(settings.width) * std::size_t(settings.height), scene.triangles.size());
   features.packetWidth = m_packetWidth;
-  features.pbr = std::any_of(scene.materials.begin(), scene.materials.end(),
-                             [](const WtMaterial& m) { return m.model == WT_MATERIAL_PBR; });
-  features.transmission = std::any_of(scene.materials.begin(), scene.materials.end(), [](const WtMaterial& m) {
-    return m.model == WT_MATERIAL_PBR && m.transmission > 0.0f && m.base_color.w < 1.0f;
-  });
+  setMaterialFeatures(features, scene.materials);
   features.primitives = m_scene->primitiveTypesPresent();
   features.textures = m_scene->hasTextures();
   features.vertexColors = m_scene->hasVertexColors();

@@ -28,6 +28,11 @@ WtMaterial makeMaterial(glm::vec3 albedo, glm::vec3 emission, bool twoSided) {
   m.alpha_mode = WT_ALPHA_OPAQUE;
   m.alpha_cutoff = 0.5f;
   m.texture_mask = 0u;
+  m.specular = {1.0f, 1.0f, 1.0f, 1.0f};
+  m.sheen = {0.0f, 0.0f, 0.0f, 0.0f};
+  m.clearcoat = 0.0f;
+  m.clearcoat_roughness = 0.0f;
+  m.pad0 = m.pad1 = 0u;
   return m;
 }
 
@@ -45,6 +50,25 @@ WtMaterial withTransmission(WtMaterial m, float transmission, float ior, bool th
   m.ior = std::clamp(ior, 1.0f, 10.0f);
   glm::vec3 sigma = glm::max(absorption, glm::vec3(0.0f));
   m.volume = toVec4(thinWalled ? glm::vec3(0.0f) : sigma, thinWalled ? 0.0f : 1.0f);
+  return m;
+}
+
+WtMaterial withSpecular(WtMaterial m, float specular, glm::vec3 specularColor) {
+  m.model = WT_MATERIAL_PBR;
+  m.specular = toVec4(glm::max(specularColor, glm::vec3(0.0f)), std::clamp(specular, 0.0f, 1.0f));
+  return m;
+}
+
+WtMaterial withClearcoat(WtMaterial m, float clearcoat, float roughness) {
+  m.model = WT_MATERIAL_PBR;
+  m.clearcoat = std::clamp(clearcoat, 0.0f, 1.0f);
+  m.clearcoat_roughness = std::clamp(roughness, 0.0f, 1.0f);
+  return m;
+}
+
+WtMaterial withSheen(WtMaterial m, glm::vec3 color, float roughness) {
+  m.model = WT_MATERIAL_PBR;
+  m.sheen = toVec4(glm::clamp(color, glm::vec3(0.0f), glm::vec3(1.0f)), std::clamp(roughness, 0.0f, 1.0f));
   return m;
 }
 

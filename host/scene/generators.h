@@ -77,4 +77,19 @@ WtMaterial makePbrMaterial(glm::vec3 baseColor, float metallic, float roughness,
 WtMaterial withTransmission(WtMaterial m, float transmission, float ior = 1.5f, bool thinWalled = false,
                             glm::vec3 absorption = glm::vec3(0.0f));
 
+/// KHR_materials_specular: `specular` (clamped to [0,1]) weighs the
+/// dielectric's whole Fresnel term, `specularColor` (>= 0) tints its F0
+/// (((ior - 1) / (ior + 1))^2, capped at 1). Specular 0 leaves a purely
+/// Lambertian dielectric.
+WtMaterial withSpecular(WtMaterial m, float specular, glm::vec3 specularColor = glm::vec3(1.0f));
+
+/// KHR_materials_clearcoat: a GGX dielectric coat (F0 0.04) of weight
+/// `clearcoat` and its own `roughness` over the whole material (both
+/// clamped to [0,1]).
+WtMaterial withClearcoat(WtMaterial m, float clearcoat, float roughness);
+
+/// KHR_materials_sheen: a sheen of `color` and `roughness` (clamped to
+/// [0,1]) over the material, under a clear coat; colour 0 is no sheen.
+WtMaterial withSheen(WtMaterial m, glm::vec3 color, float roughness);
+
 }  // namespace wt

@@ -23,6 +23,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <initializer_list>
 #include <iterator>
 #include <limits>
 #include <map>
@@ -43,6 +44,10 @@ constexpr const char* kTransmission = "KHR_materials_transmission";
 constexpr const char* kIor = "KHR_materials_ior";
 constexpr const char* kVolume = "KHR_materials_volume";
 constexpr const char* kTextureTransform = "KHR_texture_transform";
+constexpr const char* kSpecular = "KHR_materials_specular";
+constexpr const char* kClearcoat = "KHR_materials_clearcoat";
+constexpr const char* kSheen = "KHR_materials_sheen";
+constexpr const char* kUnlit = "KHR_materials_unlit";
 constexpr const char* kGpuInstancing = "EXT_mesh_gpu_instancing";
 /// Extensions whose absence changes where the geometry is or how its bytes
 /// read: a file that requires one cannot be drawn correctly without it.
@@ -314,7 +319,8 @@ class Converter {
     }
     for (const std::string& ext : m_model.extensionsUsed) {
       if (ext == kEmissiveStrength || ext == kLightsPunctual || ext == kTransmission || ext == kIor ||
-          ext == kVolume || ext == kGpuInstancing || ext == kTextureTransform)
+          ext == kVolume || ext == kSpecular || ext == kClearcoat || ext == kSheen || ext == kUnlit ||
+          ext == kGpuInstancing || ext == kTextureTransform)
         continue;
       bool required = std::find(m_model.extensionsRequired.begin(), m_model.extensionsRequired.end(),
                                 ext) != m_model.extensionsRequired.end();
@@ -383,6 +389,7 @@ class Converter {
       WtMaterial material = makePbrMaterial(clamped, metallic, roughness, emission, src.doubleSided);
       if (pbr.baseColorFactor.size() >= 4) material.alpha = unitFactor(pbr.baseColorFactor[3], "baseColorFactor alpha");
       material = withTransmissionExtensions(src, label, material);
+      material = withLayerExtensions(src, label, material);
 
       // textures (occlusion is not one: a path tracer finds the occlusion itself)
       std::array<WtTextureRef, WT_TEXTURE_SLOTS> refs{};
@@ -397,14 +404,27 @@ class Converter {
       slot(WT_TEXTURE_SLOT_METALLIC_ROUGHNESS, "metallicRoughnessTexture", TextureUse(pbr.metallicRoughnessTexture), false);
       slot(WT_TEXTURE_SLOT_NORMAL, "normalTexture", TextureUse(src.normalTexture), false);
       slot(WT_TEXTURE_SLOT_EMISSIVE, "emissiveTexture", TextureUse(src.emissiveTexture), true);
-      if (auto it = src.extensions.find(kTransmission); it != src.extensions.end() && it->second.IsObject() &&
-                                                         it->second.Has("transmissionTexture"))
-        slot(WT_TEXTURE_SLOT_TRANSMISSION, "transmissionTexture",
-             extensionTextureUse(it->second.Get("transmissionTexture"), label + " transmissionTexture"), false);
+      // the extensions' textures, where the extension's factor leaves them something to scale
+      auto extensionSlot = [&](const char* extension, const char* name, std::uint32_t s, bool srgb, bool used) {
+        auto it = src.extensions.find(extension);
+        if (!used || it == src.extensions.end() || !it->second.IsObject() || !it->second.Has(name)) return;
+        slot(s, name, extensionTextureUse(it->second.Get(name), label + " " + extension + " " + name), srgb);
+      };
+      const bool coated = material.clearcoat > 0.0f;
+      const bool sheen = material.sheen.x > 0.0f || material.sheen.y > 0.0f || material.sheen.z > 0.0f;
+      extensionSlot(kTransmission, "transmissionTexture", WT_TEXTURE_SLOT_TRANSMISSION, false, material.transmission > 0.0f);
+      extensionSlot(kSpecular, "specularTexture", WT_TEXTURE_SLOT_SPECULAR, false, true);
+      extensionSlot(kSpecular, "specularColorTexture", WT_TEXTURE_SLOT_SPECULAR_COLOR, true, true);
+      extensionSlot(kClearcoat, "clearcoatTexture", WT_TEXTURE_SLOT_CLEARCOAT, false, coated);
+      extensionSlot(kClearcoat, "clearcoatRoughnessTexture", WT_TEXTURE_SLOT_CLEARCOAT_ROUGHNESS, false, coated);
+      extensionSlot(kSheen, "sheenColorTexture", WT_TEXTURE_SLOT_SHEEN_COLOR, true, sheen);
+      extensionSlot(kSheen, "sheenRoughnessTexture", WT_TEXTURE_SLOT_SHEEN_ROUGHNESS, false, sheen);
+      // unlit: the base colour texture colours the emission (unlitMaterial moves the slot)
       if (material.texture_mask != 0u) {
         m_scene.materialTextures.resize(m_scene.materials.size() * WT_TEXTURE_SLOTS);
         m_scene.materialTextures.insert(m_scene.materialTextures.end(), refs.begin(), refs.end());
       }
+      if (materialExtension(src, label, kUnlit)) material = unlitMaterial(src, label, material);
       m_scene.materials.push_back(material);
       m_scene.materialNames.push_back(src.name.empty() ? "material " + std::to_string(i) : src.name);
     }
@@ -560,14 +580,106 @@ class Converter {
     return v.GetNumberAsDouble();
   }
 
+  /// A material's extension object `name`; none when absent, an error when not an object.
+  const tinygltf::Value* materialExtension(const tinygltf::Material& src, const std::string& label,
+                                           const char* name) const {
+    auto it = src.extensions.find(name);
+    if (it == src.extensions.end()) return nullptr;
+    if (!it->second.IsObject()) fail(label + ": " + name + " is not an object");
+    return &it->second;
+  }
+
+  /// A factor in [0,1] of an extension object: `fallback` when absent,
+  /// clamped with a warning when outside, an error when not a finite number.
+  float extensionUnit(const tinygltf::Value& ext, const char* name, double fallback, const std::string& where) {
+    double v = extensionNumber(ext, name, fallback, where);
+    if (v < 0.0 || v > 1.0) m_scene.addWarning(where + " " + name + " " + std::to_string(v) + " is outside [0,1]; clamped");
+    return float(std::clamp(v, 0.0, 1.0));
+  }
+
+  /// An RGB factor of an extension object: `fallback` when absent, each
+  /// component clamped to [0,1] (or only to >= 0 where not `unit`) with a
+  /// warning, an error when not an array of 3 finite numbers.
+  glm::vec3 extensionColor(const tinygltf::Value& ext, const char* name, glm::vec3 fallback, bool unit,
+                           const std::string& where) {
+    if (!ext.Has(name)) return fallback;
+    const tinygltf::Value& c = ext.Get(name);
+    if (!c.IsArray() || c.ArrayLen() != 3) fail(where + ": " + name + " is not an array of 3 numbers");
+    glm::dvec3 color;
+    for (int k = 0; k < 3; ++k) {
+      if (!c.Get(k).IsNumber() || !std::isfinite(c.Get(k).GetNumberAsDouble()))
+        fail(where + ": " + name + " is not an array of 3 finite numbers");
+      color[k] = c.Get(k).GetNumberAsDouble();
+    }
+    glm::dvec3 clamped = glm::clamp(color, glm::dvec3(0.0), glm::dvec3(unit ? 1.0 : INFINITY));
+    if (clamped != color)
+      m_scene.addWarning(where + ": " + name + " " + formatVec3(glm::vec3(color)) + " is outside " +
+                         (unit ? "[0,1]" : "[0,inf)") + "; clamped");
+    return glm::vec3(clamped);
+  }
+
+  /// KHR_materials_specular, _clearcoat and _sheen on a converted material:
+  /// their factors (their textures are read with the others, in convertMaterials).
+  WtMaterial withLayerExtensions(const tinygltf::Material& src, const std::string& label, WtMaterial m) {
+    if (const tinygltf::Value* ext = materialExtension(src, label, kSpecular)) {
+      const std::string where = label + " " + kSpecular;
+      float specular = extensionUnit(*ext, "specularFactor", 1.0, where);
+      // F0 = ((ior - 1) / (ior + 1))^2 x colour is capped at 1 by the BSDF; any non-negative colour is valid
+      glm::vec3 color = extensionColor(*ext, "specularColorFactor", glm::vec3(1.0f), false, where);
+      m = withSpecular(m, specular, glm::min(color, glm::vec3(1e6f)));
+      if (m.base_color.w == 1.0f && (specular != 1.0f || color != glm::vec3(1.0f)))
+        m_scene.addWarning(where + " has no effect on a metal (metallicFactor 1)");
+      if (m.transmission > 0.0f && color != glm::vec3(1.0f))
+        m_scene.addWarning(where + " specularColorFactor tints the opaque part's reflection only; transmission's "
+                                   "Fresnel term is weighted by specularFactor alone");
+    }
+    if (const tinygltf::Value* ext = materialExtension(src, label, kClearcoat)) {
+      const std::string where = label + " " + kClearcoat;
+      float coat = extensionUnit(*ext, "clearcoatFactor", 0.0, where);
+      float roughness = extensionUnit(*ext, "clearcoatRoughnessFactor", 0.0, where);
+      m = withClearcoat(m, coat, roughness);
+      if (ext->Has("clearcoatNormalTexture"))
+        m_scene.addWarning(where + " clearcoatNormalTexture is not supported yet; the coat follows the base's normal");
+    }
+    if (const tinygltf::Value* ext = materialExtension(src, label, kSheen)) {
+      const std::string where = label + " " + kSheen;
+      glm::vec3 color = extensionColor(*ext, "sheenColorFactor", glm::vec3(0.0f), true, where);
+      float roughness = extensionUnit(*ext, "sheenRoughnessFactor", 0.0, where);
+      m = withSheen(m, color, roughness);
+    }
+    return m;
+  }
+
+  /// KHR_materials_unlit: what glTF viewers show -- the base colour as it is,
+  /// whatever the lighting. In a path tracer that is a surface that emits
+  /// radiance equal to its base colour (from the front face, or both faces
+  /// when double-sided) and scatters nothing: camera rays see the base
+  /// colour, reflections and refractions of it show the same, and it lights
+  /// its surroundings as an emitter of that radiance would (it joins the
+  /// light list). A black Lambertian emitter says exactly that, so the
+  /// kernels need nothing new. Emission, metal, roughness and the other
+  /// extensions are the fallbacks the extension keeps for viewers without
+  /// it, and are ignored. (When material textures arrive, this material's
+  /// baseColorTexture belongs in its emissive slot.)
+  WtMaterial unlitMaterial(const tinygltf::Material& src, const std::string& label, const WtMaterial& m) {
+    for (const char* other : {kTransmission, kVolume, kSpecular, kClearcoat, kSheen})
+      if (src.extensions.count(other))
+        m_scene.addWarning(label + ": " + other + " has no effect on a " + kUnlit + " material; ignored");
+    WtMaterial unlit = makeMaterial(glm::vec3(0.0f), glm::vec3(m.base_color.x, m.base_color.y, m.base_color.z), src.doubleSided);
+    unlit.alpha = m.alpha, unlit.alpha_mode = m.alpha_mode, unlit.alpha_cutoff = m.alpha_cutoff;
+    // the base colour texture (and nothing else) colours what it emits
+    unlit.texture_mask = 0u;
+    const std::size_t first = m_scene.materials.size() * WT_TEXTURE_SLOTS;
+    if ((m.texture_mask & (1u << WT_TEXTURE_SLOT_BASE_COLOR)) && m_scene.materialTextures.size() >= first + WT_TEXTURE_SLOTS) {
+      m_scene.materialTextures[first + WT_TEXTURE_SLOT_EMISSIVE] = m_scene.materialTextures[first + WT_TEXTURE_SLOT_BASE_COLOR];
+      unlit.texture_mask = 1u << WT_TEXTURE_SLOT_EMISSIVE;
+    }
+    return unlit;
+  }
+
   /// KHR_materials_transmission, _ior and _volume on a converted material.
   WtMaterial withTransmissionExtensions(const tinygltf::Material& src, const std::string& label, WtMaterial m) {
-    auto find = [&](const char* name) -> const tinygltf::Value* {
-      auto it = src.extensions.find(name);
-      if (it == src.extensions.end()) return nullptr;
-      if (!it->second.IsObject()) fail(label + ": " + name + " is not an object");
-      return &it->second;
-    };
+    auto find = [&](const char* name) { return materialExtension(src, label, name); };
     const tinygltf::Value* transmission = find(kTransmission);
     const tinygltf::Value* ior = find(kIor);
     const tinygltf::Value* volume = find(kVolume);
@@ -591,13 +703,11 @@ class Converter {
         v = std::clamp(v, 1.0, 10.0);
       }
       eta = float(v);
-      // the opaque dielectric's coat is tabulated for F0 = 0.04 (ior 1.5)
-      if (eta != 1.5f && factor < 1.0f && m.base_color.w < 1.0f)
-        m_scene.addWarning(who + kIor + " ior " + std::to_string(v) +
-                           " applies to transmission only; the opaque part's reflection keeps ior 1.5");
     }
     if (!(factor > 0.0f)) {
       if (volume) m_scene.addWarning(who + kVolume + " without transmission has no effect; ignored");
+      // the opaque dielectric's F0 follows the index (((ior - 1) / (ior + 1))^2)
+      m.ior = eta;
       return m;
     }
     bool thinWalled = true;
@@ -607,7 +717,8 @@ class Converter {
       double thickness = extensionNumber(*volume, "thicknessFactor", 0.0, where);
       if (thickness < 0.0) fail(where + ": thicknessFactor " + std::to_string(thickness) + " is negative");
       thinWalled = thickness == 0.0;
-      if (volume->Has("thicknessTexture")) m_scene.addWarning("material textures are not supported yet; ignored");
+      if (volume->Has("thicknessTexture"))
+        m_scene.addWarning(where + " thicknessTexture is not supported yet (only whether thicknessFactor is 0 matters here)");
       double distance = extensionNumber(*volume, "attenuationDistance", INFINITY, where);
       if (volume->Has("attenuationDistance") && !(distance > 0.0))
         fail(where + ": attenuationDistance " + std::to_string(distance) + " is not positive");

@@ -428,7 +428,8 @@ class Loader {
     else
       checkKeys(v, path, {"type", "base_color", "metallic", "roughness", "emission", "emission_strength",
                           "double_sided", "transmission", "ior", "thin_walled", "attenuation_color",
-                          "attenuation_distance"});
+                          "attenuation_distance", "specular", "specular_color", "clearcoat",
+                          "clearcoat_roughness", "sheen_color", "sheen_roughness"});
     auto read = [&](const char* key, double fallback, auto&& reader) {
       const Json* x = find(v, key);
       return x ? reader(*x, member(path, key)) : fallback;
@@ -458,8 +459,20 @@ class Loader {
     const double distance = read("attenuation_distance", INFINITY, [&](const Json& x, const std::string& p) { return positive(x, p); });
     const bool attenuates = std::isfinite(distance) && attenuationColor != glm::vec3(1.0f);
 
+    // the layers (glTF's KHR_materials_specular, _clearcoat, _sheen)
+    glm::vec3 specularColor(1.0f), sheenColor(0.0f);
+    if (const Json* x = find(v, "specular_color")) specularColor = color(*x, member(path, "specular_color"), false);
+    if (const Json* x = find(v, "sheen_color")) sheenColor = color(*x, member(path, "sheen_color"), true);
+    m = withSpecular(m, float(read("specular", 1.0, unit)), glm::min(specularColor, glm::vec3(1e6f)));
+    m = withClearcoat(m, float(read("clearcoat", 0.0, unit)), float(read("clearcoat_roughness", 0.0, unit)));
+    m = withSheen(m, sheenColor, float(read("sheen_roughness", 0.0, unit)));
+    // ior sets the dielectric's F0 ((ior - 1) / (ior + 1))^2 as well as the interface's index
+    m.ior = ior;
+    if (metallic >= 1.0f)
+      for (const char* key : {"ior", "specular", "specular_color"})
+        if (find(v, key)) m_result.scene.addWarning(member(path, key) + " has no effect on a metal (metallic 1); ignored");
     if (!(transmission > 0.0f)) {
-      for (const char* key : {"ior", "thin_walled", "attenuation_color", "attenuation_distance"})
+      for (const char* key : {"thin_walled", "attenuation_color", "attenuation_distance"})
         if (find(v, key))
           m_result.scene.addWarning(member(path, key) + " has no effect without transmission; ignored");
       return m;
@@ -469,9 +482,6 @@ class Loader {
                                 " has no effect without attenuation_distance; ignored");
     if (thinWalled && attenuates)
       m_result.scene.addWarning(path + ": attenuation of a thin-walled material has no effect; ignored");
-    if (ior != 1.5f && transmission < 1.0f && metallic < 1.0f)
-      m_result.scene.addWarning(member(path, "ior") +
-                                " applies to transmission only; the opaque part's reflection keeps ior 1.5");
     // a fraction `color` of the light is left after `distance`: sigma = -ln(color) / distance
     glm::vec3 absorption(0.0f);
     if (attenuates)

@@ -414,12 +414,47 @@ std::vector<StressRow> stressMaterials(Context& context, const StressOptions& op
       make("black (base colour 0)", pbr("0,0,0,1", 0, 0.5)),
       make("base colour 1.5 in the file", pbr("1.5,1.5,1.5,1", 0, 1), "clamped"),
       make("metallic 1.5 and roughness -0.2 in the file", pbr(white, 1.5, -0.2), "metallicFactor 1.500000 is outside [0,1]; clamped"),
-      make("ior 1 on an opaque dielectric (KHR_materials_ior)",
-           pbr(white, 0, 0.5, ",\"extensions\":{\"KHR_materials_ior\":{\"ior\":1.0}}"), "applies to transmission only"),
-      make("ior 3 on an opaque dielectric (KHR_materials_ior)",
-           pbr(white, 0, 0.5, ",\"extensions\":{\"KHR_materials_ior\":{\"ior\":3.0}}"), "applies to transmission only"),
+      make("ior 1 on an opaque dielectric (KHR_materials_ior: F0 0)",
+           pbr(white, 0, 0.5, ",\"extensions\":{\"KHR_materials_ior\":{\"ior\":1.0}}")),
+      make("ior 3 on an opaque dielectric (KHR_materials_ior: F0 0.25)",
+           pbr(white, 0, 0.5, ",\"extensions\":{\"KHR_materials_ior\":{\"ior\":3.0}}")),
   };
   cases[9].extensions = cases[10].extensions = "[\"KHR_materials_ior\"]";
+  // the layers (KHR_materials_specular, _clearcoat, _sheen) and unlit
+  auto layer = [&](std::string name, std::string material, std::string extension) {
+    MaterialCase c = make(std::move(name), std::move(material));
+    c.extensions = "[\"" + extension + "\"]";
+    return c;
+  };
+  const std::string allLayers =
+      ",\"extensions\":{\"KHR_materials_clearcoat\":{\"clearcoatFactor\":1,\"clearcoatRoughnessFactor\":0.3},"
+      "\"KHR_materials_sheen\":{\"sheenColorFactor\":[1,1,1],\"sheenRoughnessFactor\":0.5},"
+      "\"KHR_materials_specular\":{\"specularFactor\":0.5,\"specularColorFactor\":[25,1,0]}}";
+  cases.insert(cases.end(),
+               {layer("specular 0 (a Lambertian dielectric)",
+                      pbr(white, 0, 0.5, ",\"extensions\":{\"KHR_materials_specular\":{\"specularFactor\":0}}"),
+                      "KHR_materials_specular"),
+                layer("specular colour 25 (F0 capped at 1), roughness 0.3",
+                      pbr(white, 0, 0.3, ",\"extensions\":{\"KHR_materials_specular\":{\"specularColorFactor\":[25,25,25]}}"),
+                      "KHR_materials_specular"),
+                layer("mirror clear coat over a white metal, roughness 1",
+                      pbr(white, 1, 1, ",\"extensions\":{\"KHR_materials_clearcoat\":{\"clearcoatFactor\":1}}"),
+                      "KHR_materials_clearcoat"),
+                layer("clear coat roughness 1 over a mirror dielectric",
+                      pbr(white, 0, 0, ",\"extensions\":{\"KHR_materials_clearcoat\":{\"clearcoatFactor\":1,"
+                                       "\"clearcoatRoughnessFactor\":1}}"),
+                      "KHR_materials_clearcoat"),
+                layer("white sheen of roughness 0 (clamped to 0.2646)",
+                      pbr(white, 0, 1, ",\"extensions\":{\"KHR_materials_sheen\":{\"sheenColorFactor\":[1,1,1]}}"),
+                      "KHR_materials_sheen"),
+                layer("white sheen of roughness 1 over a white metal",
+                      pbr(white, 1, 0.2, ",\"extensions\":{\"KHR_materials_sheen\":{\"sheenColorFactor\":[1,1,1],"
+                                         "\"sheenRoughnessFactor\":1}}"),
+                      "KHR_materials_sheen"),
+                layer("coat, sheen and a specular colour (25, 1, 0) at once", pbr(white, 0, 0.6, allLayers),
+                      "KHR_materials_clearcoat\",\"KHR_materials_sheen\",\"KHR_materials_specular"),
+                layer("unlit white (an emitter of radiance 1 that reflects nothing)",
+                      pbr(white, 0, 0.5, ",\"extensions\":{\"KHR_materials_unlit\":{}}"), "KHR_materials_unlit")});
   // transmitting spheres (KHR_materials_transmission, a volume of KHR_materials_volume, KHR_materials_ior)
   auto glass = [&](std::string name, double roughness, double ior, bool thin) {
     MaterialCase c = make(std::move(name),

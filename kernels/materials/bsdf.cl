@@ -1,51 +1,101 @@
 // The surface BSDF: Lambertian (scenes made in code) or glTF 2.0
-// metallic-roughness, evaluated and sampled in the local shading frame (z
-// along the shading normal), restricted to the lobes a path may still use
-// (per-lobe bounce limits).
+// metallic-roughness with its layers, evaluated and sampled in the local
+// shading frame (z along the shading normal), restricted to the lobes a path
+// may still use (per-lobe bounce limits).
 //
 // Metallic-roughness follows the glTF specification's appendix B -- a GGX
-// specular lobe (height-correlated Smith masking, Schlick Fresnel with F0 =
-// 0.04 for the dielectric and the base colour for metals) over a Lambertian
-// base, mixed by metallic -- with two corrections for energy conservation:
-// the multiple-scattering lobe of Kulla and Conty 2017 restores what single
-// scattering loses at high roughness, and the base under the dielectric coat
-// is weighted by what the coat leaves, (1 - E_coat(mu_o)) (1 - E_coat(mu_i)) /
-// (1 - E_coat_avg), instead of the specification's (1 - F(v.h)), which gains
-// energy at grazing angles. A white material then reflects exactly what
-// arrives, at every roughness and angle (tests/kernels/test_bsdf.cpp).
+// specular lobe (height-correlated Smith masking, Schlick Fresnel with the
+// dielectric's F0 and the base colour for metals) over a Lambertian base,
+// mixed by metallic -- with two corrections for energy conservation: the
+// multiple-scattering lobe of Kulla and Conty 2017 restores what single
+// scattering loses at high roughness, and the base under the dielectric's
+// specular lobe is weighted by what that lobe leaves, (1 - E_spec(mu_o)) (1 -
+// E_spec(mu_i)) / (1 - E_spec_avg) per channel, instead of the
+// specification's (1 - F(v.h)), which gains energy at grazing angles.
+//
+// The dielectric's Fresnel term is specular (F0 + (1 - F0)(1 - v.h)^5) with
+// F0 = min(((ior - 1) / (ior + 1))^2 specularColor, 1) per channel
+// (KHR_materials_specular and _ior; 0.04 and specular 1 without them).
+// Schlick's albedo is linear in F0 and F90 (the split sum), so E_spec(mu) =
+// specular (F0 E + (1 - F0) S + F_ms (1 - E)) comes from two tables, E (F =
+// 1) and S (F = (1 - v.h)^5), for every F0 exactly. Specular 0 leaves the
+// Lambertian base / pi. A white material reflects exactly what arrives, at
+// every roughness, angle and F0 (tests/kernels/test_bsdf.cpp).
 //
 // KHR_materials_transmission turns a share `transmission` of the dielectric
 // (what is not metal) into a rough dielectric interface (Walter et al.
 // 2007: GGX reflection and refraction with the exact Fresnel term of index
-// KHR_materials_ior, the refracted part tinted by the base colour): a
-// volume boundary that bends light by the ratio of indices across it
+// KHR_materials_ior, weighted by specular except under total internal
+// reflection; the refracted part tinted by the base colour): a volume
+// boundary that bends light by the ratio of indices across it
 // (KHR_materials_volume), or a thin wall that light crosses without
 // bending (the glTF default without a volume), its reflection flipped to
 // the far side. Radiance crossing into a denser medium is scaled by the
 // squared index ratio, so a path in and out of a closed object carries none.
 //
-// Sampling picks the GGX lobe (visible normals, Heitz 2018), a cosine lobe
-// or the interface (visible normals again, then reflection or transmission
-// by Fresnel) with probabilities from the lobes' albedos, and every
-// continuous sample is weighted by the mixture pdf of all three techniques
-// (one-sample MIS over lobes). Below WT_PBR_MIN_ROUGHNESS the GGX lobe is a
-// mirror and the interface smooth; so is a volume boundary of index 1,
-// which transmits straight through at any roughness.
+// Two layers lie over that base on its outside (not seen from inside a
+// volume), the clear coat above the sheen as the extensions order them:
+//
+//   f = clearcoat f_coat + w_coat(mu_o) [ f_sheen + w_sheen(mu_o) f_base ]
+//
+// f_coat: KHR_materials_clearcoat, GGX of its own roughness with Schlick's
+// F0 0.04 (single scattering). f_sheen: KHR_materials_sheen, sheenColor
+// times the Charlie distribution with Estevez and Kulla's visibility
+// (shared/sheen.h). Each layer leaves those below it what it does not
+// reflect towards the viewer: w_coat = 1 - clearcoat E_coat(mu_o), w_sheen
+// = 1 - max(sheenColor) E_sheen(mu_o), E the layer's tabulated albedo. That
+// is the albedo in place of clearcoat's F(n.v) and the view-only form the
+// sheen extension allows: a white lossless base under any layers then
+// reflects exactly 1, where the reciprocal product (1 - E(mu_o))(1 -
+// E(mu_i)) / (1 - E_avg) used for the diffuse base gains energy over a
+// specular base (4.8% over a white mirror under a smooth coat at normal
+// incidence) and the sheen's reciprocal min form loses some of a diffuse
+// one (docs/materials.md). The layered BSDF is therefore not reciprocal,
+// which a path tracer that always evaluates from the viewer's side does
+// not need. KHR_materials_unlit needs nothing here: the loader makes it a
+// black Lambertian emitter of its base colour.
+//
+// Sampling picks the coat's GGX lobe, the base's GGX lobe (visible normals,
+// Heitz 2018 for both), the interface (visible normals again, then
+// reflection or transmission by Fresnel) or a cosine lobe (the diffuse base
+// and the sheen) with probabilities from the lobes' albedos at wo, and every
+// continuous sample is weighted by the mixture pdf of all techniques
+// (one-sample MIS over lobes). Below WT_PBR_MIN_ROUGHNESS the GGX lobes are
+// mirrors (a mirror coat over a mirror base: one delta, both lobes' weights)
+// and the interface smooth; so is a volume boundary of index 1, which
+// transmits straight through at any roughness. The clear coat, the sheen
+// and a dielectric F0 other than 0.04 are compiled in only for scenes that
+// use them (WT_HAS_CLEARCOAT, WT_HAS_SHEEN, WT_HAS_SPECULAR).
 #ifndef WT_MATERIALS_BSDF_CL
 #define WT_MATERIALS_BSDF_CL
 
 #include "common.h"
 #include "materials/lambert.cl"
 #include "shared/materials.h"
+#include "shared/sheen.h"
 
-#if !defined(WT_HAS_PBR) || !defined(WT_HAS_TRANSMISSION)
-#error "WT_HAS_PBR / WT_HAS_TRANSMISSION are not defined: build options must come from kernelDefines()"
+#if !defined(WT_HAS_PBR) || !defined(WT_HAS_TRANSMISSION) || !defined(WT_HAS_SPECULAR) || \
+    !defined(WT_HAS_CLEARCOAT) || !defined(WT_HAS_SHEEN)
+#error "WT_HAS_PBR / _TRANSMISSION / _SPECULAR / _CLEARCOAT / _SHEEN are not defined: build options must come from kernelDefines()"
 #endif
 
-#define WT_LOBE_DIFFUSE 1u       ///< the Lambertian base (and any cosine-sampled direction)
-#define WT_LOBE_SPECULAR 2u      ///< reflection: GGX, its multiple scattering, the mirror, the interface's reflection
+#define WT_LOBE_DIFFUSE 1u       ///< the Lambertian base and the sheen (any cosine-sampled direction)
+#define WT_LOBE_SPECULAR 2u      ///< reflection: GGX (base and clear coat), its multiple scattering, the mirrors, the interface's reflection
 #define WT_LOBE_DELTA 4u         ///< set on a sample: the direction came from a mirror or a smooth interface
 #define WT_LOBE_TRANSMISSION 8u  ///< through the interface: refraction, or crossing a thin wall
+
+/// The dielectric's Fresnel quantities (F0, its albedos): per channel where
+/// KHR_materials_specular may tint F0, one float otherwise (0.04 is grey),
+/// so scenes without the extension pay nothing for the colour.
+#if WT_HAS_SPECULAR
+typedef float3 DielectricColor;
+#define dielectric_luminance(c) bsdf_luminance(c)
+#else
+typedef float DielectricColor;
+#define dielectric_luminance(c) (c)
+#endif
+
+inline float bsdf_luminance(float3 c) { return 0.2126f * c.x + 0.7152f * c.y + 0.0722f * c.z; }
 
 /// A material at a shading point.
 typedef struct Bsdf {
@@ -58,6 +108,13 @@ typedef struct Bsdf {
   float eta;         ///< n(far side) / n(wo side) of a volume boundary; the index itself for a thin wall
   int thin;          ///< thin-walled: transmission does not bend
   int smooth;        ///< the interface is smooth (mirror roughness, or a volume boundary of index 1)
+  DielectricColor f0;  ///< the dielectric's F0, min(((ior-1)/(ior+1))^2 specularColor, 1) (0.04 without WT_HAS_SPECULAR)
+  float specular;    ///< weight of the dielectric's whole Fresnel term (1 without WT_HAS_SPECULAR)
+  float clearcoat;   ///< weight of the clear coat (0 without WT_HAS_CLEARCOAT, and inside a volume)
+  float clearcoat_roughness;  ///< perceptual; alpha = roughness^2
+  int clearcoat_mirror;       ///< a coat whose roughness is below WT_PBR_MIN_ROUGHNESS
+  float3 sheen;      ///< sheen colour (0 without WT_HAS_SHEEN, and inside a volume)
+  float sheen_roughness;  ///< clamped to [WT_SHEEN_MIN_ROUGHNESS, 1]; alpha = roughness^2
   __global const float* table;  ///< directional albedos (shared/materials.h)
 } Bsdf;
 
@@ -83,63 +140,146 @@ inline Bsdf bsdf_make(WtMaterial m, __global const float* table, int inside) {
   b.eta = (b.thin || !inside) ? m.ior : 1.0f / m.ior;
   b.smooth = b.mirror || (!b.thin && fabs(b.eta - 1.0f) < 1e-3f);
   b.table = table;
+  b.f0 = (DielectricColor)(WT_PBR_DIELECTRIC_F0);
+  b.specular = 1.0f;
+  b.clearcoat = 0.0f;
+  b.clearcoat_roughness = 1.0f;
+  b.clearcoat_mirror = 0;
+  b.sheen = (float3)(0.0f);
+  b.sheen_roughness = 1.0f;
+  bool pbr = m.model == WT_MATERIAL_PBR;
+#if WT_HAS_SPECULAR
+  if (pbr) {
+    float r = (m.ior - 1.0f) / (m.ior + 1.0f);
+    b.f0 = fmin(r * r * vec4_xyz(m.specular), (float3)(1.0f));
+    b.specular = m.specular.w;
+  }
+#endif
+  // the layers lie on the outside: a ray inside a volume meets the interface first
+  bool outside = !inside || b.thin;
+#if WT_HAS_CLEARCOAT
+  if (pbr && outside && m.clearcoat > 0.0f) {
+    b.clearcoat = m.clearcoat;
+    b.clearcoat_roughness = m.clearcoat_roughness;
+    b.clearcoat_mirror = m.clearcoat_roughness < WT_PBR_MIN_ROUGHNESS;
+  }
+#endif
+#if WT_HAS_SHEEN
+  if (pbr && outside) {
+    b.sheen = vec4_xyz(m.sheen);
+    b.sheen_roughness = fmin(fmax(m.sheen.w, WT_SHEEN_MIN_ROUGHNESS), 1.0f);
+  }
+#endif
   return b;
 }
 
 /// Whether any light passes through (the far side needs lights and rays).
 inline bool bsdf_transmits(Bsdf b) { return b.transmission > 0.0f && b.metallic < 1.0f; }
 
-inline float bsdf_luminance(float3 c) { return 0.2126f * c.x + 0.7152f * c.y + 0.0722f * c.z; }
+inline bool bsdf_has_sheen(Bsdf b) { return WT_HAS_SHEEN && (b.sheen.x > 0.0f || b.sheen.y > 0.0f || b.sheen.z > 0.0f); }
 
-/// Albedos the PBR model needs at one direction's cosine.
-typedef struct PbrAlbedo {
-  float e;       ///< GGX single scattering with F = 1
-  float e_coat;  ///< the dielectric coat, with its multiple scattering
-} PbrAlbedo;
+/// GGX albedos at a cosine for a roughness (a mirror below
+/// WT_PBR_MIN_ROUGHNESS): E with F = 1 and S with F = (1 - v.h)^5.
+inline float2 pbr_moments(__global const float* table, float mu, float roughness) {
+  if (roughness < WT_PBR_MIN_ROUGHNESS) return (float2)(1.0f, ggx_schlick(0.0f, mu));
+  return (float2)(pbr_table_albedo(table, WT_PBR_TABLE_E, mu, roughness),
+                  pbr_table_albedo(table, WT_PBR_TABLE_S, mu, roughness));
+}
 
-inline PbrAlbedo pbr_albedo(Bsdf b, float mu) {
-  PbrAlbedo a;
-  if (b.mirror) {
-    a.e = 1.0f;
-    a.e_coat = ggx_schlick(WT_PBR_DIELECTRIC_F0, mu);
-  } else {
-    a.e = pbr_table_albedo(b.table, WT_PBR_TABLE_E, mu, b.roughness);
-    a.e_coat = pbr_table_albedo(b.table, WT_PBR_TABLE_E_COAT, mu, b.roughness);
+/// Kulla and Conty's Fresnel of the multiple-scattering lobe, per channel.
+inline float3 pbr_multiscatter_fresnel3(float3 f_avg, float e_avg) {
+  return f_avg * f_avg * e_avg / (1.0f - f_avg * (1.0f - e_avg));
+}
+
+/// The same for the dielectric's F0.
+inline DielectricColor pbr_dielectric_multiscatter(DielectricColor f_avg, float e_avg) {
+  return f_avg * f_avg * e_avg / (1.0f - f_avg * (1.0f - e_avg));
+}
+
+/// The dielectric's specular albedo from the moments (E, S) at a cosine and
+/// its multiple-scattering Fresnel: single scattering by the split sum, and
+/// the multiple-scattering lobe's share of what single scattering lost.
+inline DielectricColor pbr_dielectric_albedo(Bsdf b, float2 es, DielectricColor fms) {
+  return b.specular * (b.f0 * es.x + (1.0f - b.f0) * es.y + fms * (1.0f - es.x));
+}
+
+/// What the PBR model needs from wo alone to pick a technique (the
+/// averages and multiple scattering wait for evaluation: measured 10% of a
+/// Cornell box's CPU time when every view looked them up).
+typedef struct PbrView {
+  float e;          ///< GGX albedo at mu_o, F = 1
+  float s;          ///< GGX albedo at mu_o, F = (1 - v.h)^5
+  DielectricColor spec_ss;  ///< the dielectric's single-scattering albedo at mu_o
+  float coat;       ///< clearcoat x the coat's albedo at mu_o
+  float sheen;      ///< the sheen lobe's albedo at mu_o, colour 1
+  float sheen_lambda_o;  ///< the sheen's Lambda at mu_o
+  float w_coat;     ///< 1 - coat: what the coat leaves to the sheen and the base
+  float w_base;     ///< w_coat (1 - max(sheen colour) sheen): what both layers leave to the base
+} PbrView;
+
+/// The view of a Lambertian material (no layers; nothing else is read).
+inline PbrView pbr_view_none(void) {
+  PbrView v;
+  v.e = v.s = v.coat = v.sheen = v.sheen_lambda_o = 0.0f;
+  v.spec_ss = (DielectricColor)(0.0f);
+  v.w_coat = v.w_base = 1.0f;
+  return v;
+}
+
+inline PbrView pbr_view(Bsdf b, float mu) {
+  PbrView v;
+  float2 es = pbr_moments(b.table, mu, b.roughness);
+  v.e = es.x, v.s = es.y;
+  v.spec_ss = pbr_dielectric_albedo(b, es, (DielectricColor)(0.0f));
+  v.coat = v.sheen = v.sheen_lambda_o = 0.0f;
+#if WT_HAS_CLEARCOAT
+  if (b.clearcoat > 0.0f) {
+    float2 c = pbr_moments(b.table, mu, b.clearcoat_roughness);
+    v.coat = b.clearcoat * (WT_PBR_DIELECTRIC_F0 * c.x + (1.0f - WT_PBR_DIELECTRIC_F0) * c.y);
   }
-  return a;
+#endif
+  v.w_coat = v.w_base = 1.0f - v.coat;
+#if WT_HAS_SHEEN
+  if (bsdf_has_sheen(b)) {
+    v.sheen = pbr_table_sheen(b.table, mu, b.sheen_roughness);
+    v.sheen_lambda_o = sheen_lambda(mu, b.sheen_roughness * b.sheen_roughness);
+    v.w_base *= 1.0f - fmax(b.sheen.x, fmax(b.sheen.y, b.sheen.z)) * v.sheen;
+  }
+#endif
+  return v;
 }
 
-inline float pbr_coat_average(Bsdf b) {
-  return b.mirror ? ggx_schlick_average(WT_PBR_DIELECTRIC_F0)
-                  : pbr_table_average(b.table, WT_PBR_TABLE_E_COAT_AVG, b.roughness);
-}
-
-/// Probabilities of the three sampling techniques -- GGX reflection (or the
-/// mirror), the cosine lobe, the interface -- from the lobes' albedos at wo
-/// (ao = pbr_albedo(b, mu_o); unused for Lambertian materials), restricted
+/// Probabilities of the sampling techniques -- the base's GGX reflection
+/// (or its mirror), the cosine lobe (diffuse base and sheen), the
+/// interface, the coat's GGX reflection (or its mirror) -- from the lobes'
+/// albedos at wo (the view v; unused for Lambertian materials), restricted
 /// to the lobes allowed; all 0 when no allowed lobe reflects.
 typedef struct Techniques {
-  float specular, diffuse, interface;
+  float specular, diffuse, interface, clearcoat, sheen;
 } Techniques;
 
-inline Techniques bsdf_techniques(Bsdf b, PbrAlbedo ao, uint lobes) {
-  Techniques t = {0.0f, 0.0f, 0.0f};
+inline Techniques bsdf_techniques(Bsdf b, PbrView v, uint lobes) {
+  Techniques t = {0.0f, 0.0f, 0.0f, 0.0f, 0.0f};
   if (b.model != WT_MATERIAL_PBR) {
     t.diffuse = (lobes & WT_LOBE_DIFFUSE) ? 1.0f : 0.0f;
     return t;
   }
   float metal = b.metallic, opaque = (1.0f - b.metallic) * (1.0f - b.transmission),
         clear = (1.0f - b.metallic) * b.transmission;
-  if (lobes & WT_LOBE_SPECULAR) t.specular = metal * ao.e + opaque * ao.e_coat;
-  if (lobes & WT_LOBE_DIFFUSE)
-    t.diffuse = metal * (1.0f - ao.e) + opaque * (1.0f - ao.e_coat) * bsdf_luminance(b.base);
   bool reflect = (lobes & WT_LOBE_SPECULAR) != 0u, through = (lobes & WT_LOBE_TRANSMISSION) != 0u;
+  float spec = dielectric_luminance(v.spec_ss);
+  if (reflect) t.specular = v.w_base * (metal * v.e + opaque * spec);
+  if (lobes & WT_LOBE_DIFFUSE) {
+    t.diffuse = v.w_base * (metal * (1.0f - v.e) + opaque * bsdf_luminance((1.0f - v.spec_ss) * b.base));
+    t.sheen = v.w_coat * bsdf_luminance(b.sheen) * v.sheen;
+  }
   if (clear > 0.0f && (reflect || through))
-    t.interface = clear * (reflect && through ? 1.0f
-                                              : reflect ? ao.e_coat : (1.0f - ao.e_coat) * fmax(bsdf_luminance(b.base), 0.05f));
-  float sum = t.specular + t.diffuse + t.interface;
-  if (!(sum > 0.0f)) return (Techniques){0.0f, 0.0f, 0.0f};
-  t.specular /= sum, t.diffuse /= sum, t.interface /= sum;
+    t.interface = v.w_base * clear *
+                  (reflect && through ? 1.0f : reflect ? spec : (1.0f - spec) * fmax(bsdf_luminance(b.base), 0.05f));
+  if (reflect) t.clearcoat = v.coat;
+  float sum = t.specular + t.diffuse + t.interface + t.clearcoat + t.sheen;
+  if (!(sum > 0.0f)) return (Techniques){0.0f, 0.0f, 0.0f, 0.0f, 0.0f};
+  t.specular /= sum, t.diffuse /= sum, t.interface /= sum, t.clearcoat /= sum, t.sheen /= sum;
   return t;
 }
 
@@ -148,6 +288,14 @@ inline Techniques bsdf_techniques(Bsdf b, PbrAlbedo ao, uint lobes) {
 inline float interface_reflect_probability(float f, uint lobes) {
   bool reflect = (lobes & WT_LOBE_SPECULAR) != 0u, through = (lobes & WT_LOBE_TRANSMISSION) != 0u;
   return reflect && through ? f : (reflect ? 1.0f : 0.0f);
+}
+
+/// The interface's reflectance at cos(theta) on wo's side: the exact
+/// Fresnel term weighted by specular, but all of it under total internal
+/// reflection (where nothing could be transmitted instead).
+inline float interface_fresnel(Bsdf b, float cos_i) {
+  float f = ggx_fresnel_dielectric(cos_i, b.eta);
+  return f >= 1.0f ? 1.0f : b.specular * f;
 }
 
 #if WT_HAS_TRANSMISSION
@@ -177,7 +325,7 @@ inline float3 interface_eval(Bsdf b, float3 wo, float3 wi, uint lobes, float* pd
   }
   float oh = dot(wo, h);
   if (!(oh > 0.0f)) return (float3)(0.0f);
-  float f = ggx_fresnel_dielectric(oh, b.eta);
+  float f = interface_fresnel(b, oh);
   float p_reflect = interface_reflect_probability(f, lobes);
   float d = ggx_d(h.x, h.y, h.z, alpha);
   float g1 = ggx_g1(wo.x, wo.y, wo.z, alpha);
@@ -205,46 +353,69 @@ inline float3 interface_eval(Bsdf b, float3 wo, float3 wi, uint lobes, float* pd
 inline float3 pbr_eval(Bsdf b, float3 wo, float3 wi, uint lobes, float* pdf) {
   *pdf = 0.0f;
   if (wo.z <= 0.0f || wi.z == 0.0f) return (float3)(0.0f);
-  PbrAlbedo ao = pbr_albedo(b, wo.z);
-  Techniques t = bsdf_techniques(b, ao, lobes);
-  float3 f = (float3)(0.0f);
-  float pdf_spec = 0.0f, pdf_diffuse = 0.0f, pdf_interface = 0.0f;
+  PbrView v = pbr_view(b, wo.z);
+  Techniques t = bsdf_techniques(b, v, lobes);
+  float3 f = (float3)(0.0f);       // the base, before the layers above take their share
+  float3 f_layers = (float3)(0.0f);  // the coat and the sheen
+  float pdf_spec = 0.0f, pdf_diffuse = 0.0f, pdf_interface = 0.0f, pdf_coat = 0.0f;
   float opaque = (1.0f - b.metallic) * (1.0f - b.transmission);
   if (wi.z > 0.0f) {
-    PbrAlbedo ai = pbr_albedo(b, wi.z);
+    float3 h = normalize(wo + wi);
+    float oh = fmax(dot(wo, h), 0.0f);
+    float m5 = ggx_schlick(0.0f, oh);  // (1 - oh)^5
+    float2 es_i = pbr_moments(b.table, wi.z, b.roughness);
+    float e_avg = b.mirror ? 1.0f : pbr_table_average(b.table, WT_PBR_TABLE_E_AVG, b.roughness);
+    DielectricColor fms = pbr_dielectric_multiscatter(b.f0 + (1.0f - b.f0) / 21.0f, e_avg);
     if ((lobes & WT_LOBE_SPECULAR) && !b.mirror) {
       float alpha = b.roughness * b.roughness;
-      float3 h = normalize(wo + wi);
-      float oh = fmax(dot(wo, h), 0.0f);
       float d = ggx_d(h.x, h.y, h.z, alpha);
       float dv = d * ggx_g2(wo.x, wo.y, wo.z, wi.x, wi.y, wi.z, alpha) / (4.0f * wo.z * wi.z);
-      float m5 = ggx_schlick(0.0f, oh);  // (1 - oh)^5
       float3 f_metal = b.base + (1.0f - b.base) * m5;
-      float f_coat = ggx_schlick(WT_PBR_DIELECTRIC_F0, oh);
-      f += (b.metallic * f_metal + opaque * f_coat) * dv;
+      DielectricColor f_dielectric = b.specular * (b.f0 + (1.0f - b.f0) * m5);
+      f += (b.metallic * f_metal + opaque * f_dielectric) * dv;
       // multiple scattering: (1 - E(mu_o)) (1 - E(mu_i)) / (pi (1 - E_avg)), by the average Fresnel
-      float e_avg = pbr_table_average(b.table, WT_PBR_TABLE_E_AVG, b.roughness);
-      float ms = (1.0f - ao.e) * (1.0f - ai.e) / (WT_PI * fmax(1.0f - e_avg, 1e-6f));
-      float3 f_avg_metal = b.base + (1.0f - b.base) / 21.0f;
-      float3 fms_metal = f_avg_metal * f_avg_metal * e_avg / (1.0f - f_avg_metal * (1.0f - e_avg));
-      float fms_coat = pbr_multiscatter_fresnel(ggx_schlick_average(WT_PBR_DIELECTRIC_F0), e_avg);
-      f += (b.metallic * fms_metal + opaque * fms_coat) * ms;
+      float ms = (1.0f - v.e) * (1.0f - es_i.x) / (WT_PI * fmax(1.0f - e_avg, 1e-6f));
+      float3 fms_metal = pbr_multiscatter_fresnel3(b.base + (1.0f - b.base) / 21.0f, e_avg);
+      f += (b.metallic * fms_metal + opaque * b.specular * fms) * ms;
       pdf_spec = ggx_g1(wo.x, wo.y, wo.z, alpha) * d / (4.0f * wo.z);
     }
     if (lobes & WT_LOBE_DIFFUSE) {
-      float coat_avg = pbr_coat_average(b);
-      f += opaque * b.base * (1.0f / WT_PI) * (1.0f - ao.e_coat) * (1.0f - ai.e_coat) /
-           fmax(1.0f - coat_avg, 1e-6f);
+      // what the specular lobe (with its multiple scattering) leaves, both ways, over its average
+      float s_avg = b.mirror ? 1.0f / 21.0f : pbr_table_average(b.table, WT_PBR_TABLE_S_AVG, b.roughness);
+      DielectricColor spec_avg = b.specular * (b.f0 * e_avg + (1.0f - b.f0) * s_avg + fms * (1.0f - e_avg));
+      DielectricColor spec_o = pbr_dielectric_albedo(b, (float2)(v.e, v.s), fms);
+      DielectricColor spec_i = pbr_dielectric_albedo(b, es_i, fms);
+      f += opaque * b.base * ((1.0f / WT_PI) * (1.0f - spec_o) * (1.0f - spec_i) / fmax(1.0f - spec_avg, 1e-6f));
       pdf_diffuse = wi.z / WT_PI;
     }
     f *= wi.z;
+#if WT_HAS_CLEARCOAT
+    if ((lobes & WT_LOBE_SPECULAR) && b.clearcoat > 0.0f && !b.clearcoat_mirror) {
+      // D G F / (4 mu_o mu_i) mu_i, F0 0.04
+      float alpha = b.clearcoat_roughness * b.clearcoat_roughness;
+      float d = ggx_d(h.x, h.y, h.z, alpha);
+      float g2 = ggx_g2(wo.x, wo.y, wo.z, wi.x, wi.y, wi.z, alpha);
+      f_layers += b.clearcoat * ggx_schlick(WT_PBR_DIELECTRIC_F0, oh) * d * g2 / (4.0f * wo.z);
+      pdf_coat = ggx_g1(wo.x, wo.y, wo.z, alpha) * d / (4.0f * wo.z);
+    }
+#endif
+#if WT_HAS_SHEEN
+    if ((lobes & WT_LOBE_DIFFUSE) && bsdf_has_sheen(b)) {
+      // D / (4 mu_o (1 + Lambda(o) + Lambda(i))), under the coat
+      float alpha = b.sheen_roughness * b.sheen_roughness;
+      float fibres = sheen_d(h.z, alpha) / (4.0f * wo.z * (1.0f + v.sheen_lambda_o + sheen_lambda(wi.z, alpha)));
+      f_layers += v.w_coat * b.sheen * fibres;
+      pdf_diffuse = wi.z / WT_PI;
+    }
+#endif
   }
 #if WT_HAS_TRANSMISSION
   if (t.interface > 0.0f && !b.smooth)
     f += (1.0f - b.metallic) * b.transmission * interface_eval(b, wo, wi, lobes, &pdf_interface);
 #endif
-  *pdf = t.specular * pdf_spec + t.diffuse * pdf_diffuse + t.interface * pdf_interface;
-  return f;
+  *pdf = t.specular * pdf_spec + (t.diffuse + t.sheen) * pdf_diffuse + t.interface * pdf_interface +
+         t.clearcoat * pdf_coat;
+  return f_layers + v.w_base * f;
 }
 
 /// f |cos| of the continuous part for local wo, wi; *pdf as pbr_eval.
@@ -255,6 +426,29 @@ inline float3 bsdf_eval(Bsdf b, float3 wo, float3 wi, uint lobes, float* pdf) {
   bool ok = (lobes & WT_LOBE_DIFFUSE) && wo.z > 0.0f && wi.z > 0.0f;
   *pdf = ok ? wi.z / WT_PI : 0.0f;
   return ok ? b.base * (wi.z / WT_PI) : (float3)(0.0f);
+}
+
+/// The delta reflections towards the mirror direction of wo that the
+/// techniques allow: the base's mirror (its layers' share w_base of it) and
+/// the mirror coat. Their weight F (what a delta carries, no pdf), summed,
+/// and *p: the summed probability of the techniques that produce them, so a
+/// mirror coat over a mirror base is one delta reached by either technique.
+inline float3 pbr_mirror(Bsdf b, PbrView v, Techniques t, float3 wo, float* p) {
+  float3 f = (float3)(0.0f);
+  *p = 0.0f;
+  if (b.mirror && t.specular > 0.0f) {
+    float m5 = ggx_schlick(0.0f, wo.z);
+    float opaque = (1.0f - b.metallic) * (1.0f - b.transmission);
+    f += v.w_base * (b.metallic * (b.base + (1.0f - b.base) * m5) + opaque * b.specular * (b.f0 + (1.0f - b.f0) * m5));
+    *p += t.specular;
+  }
+#if WT_HAS_CLEARCOAT
+  if (b.clearcoat_mirror && t.clearcoat > 0.0f) {
+    f += b.clearcoat * ggx_schlick(WT_PBR_DIELECTRIC_F0, wo.z);
+    *p += t.clearcoat;
+  }
+#endif
+  return f;
 }
 
 #if WT_HAS_TRANSMISSION
@@ -286,39 +480,41 @@ inline bool interface_direction(Bsdf b, float3 wo, float3 h, float p_reflect, fl
 /// nothing is scattered (no allowed lobe, a direction on the wrong side).
 inline bool bsdf_sample(Bsdf b, float3 wo, uint lobes, float u_lobe, float u1, float u2, BsdfSample* s) {
   if (wo.z <= 0.0f || !(lobes & (WT_LOBE_DIFFUSE | WT_LOBE_SPECULAR | WT_LOBE_TRANSMISSION))) return false;
-  PbrAlbedo ao = {1.0f, 1.0f};
-  if (b.model == WT_MATERIAL_PBR) ao = pbr_albedo(b, wo.z);
-  Techniques t = bsdf_techniques(b, ao, lobes);
-  if (u_lobe < t.specular) {
+  PbrView v = b.model == WT_MATERIAL_PBR ? pbr_view(b, wo.z) : pbr_view_none();
+  Techniques t = bsdf_techniques(b, v, lobes);
+  // the techniques in order: coat, base GGX, interface, cosine (diffuse and sheen)
+  float below_spec = t.clearcoat, below_interface = below_spec + t.specular;
+  float below_cosine = below_interface + t.interface;
+  if (u_lobe < below_interface) {
+    bool coat = u_lobe < below_spec;
     s->lobe = WT_LOBE_SPECULAR;
-    if (b.mirror) {
-      // the mirror: F at mu_o, over the probability of having picked it
+    if (coat ? b.clearcoat_mirror : b.mirror) {
+      // the mirror: F at mu_o, over the probability of having picked a technique that makes it
+      float p;
+      float3 f = pbr_mirror(b, v, t, wo, &p);
       s->wi = (float3)(-wo.x, -wo.y, wo.z);
-      float m5 = ggx_schlick(0.0f, wo.z);
-      float3 f = b.metallic * (b.base + (1.0f - b.base) * m5) +
-                 (1.0f - b.metallic) * (1.0f - b.transmission) * ggx_schlick(WT_PBR_DIELECTRIC_F0, wo.z);
-      s->weight = f / t.specular;
+      s->weight = f / p;
       s->pdf = 0.0f;
       s->lobe |= WT_LOBE_DELTA;
-      return true;
+      return p > 0.0f && (f.x > 0.0f || f.y > 0.0f || f.z > 0.0f);
     }
-    float alpha = b.roughness * b.roughness;
+    float r = coat ? b.clearcoat_roughness : b.roughness;
     float hx, hy, hz;
-    ggx_sample_visible_normal(wo.x, wo.y, wo.z, alpha, u1, u2, &hx, &hy, &hz);
+    ggx_sample_visible_normal(wo.x, wo.y, wo.z, r * r, u1, u2, &hx, &hy, &hz);
     float3 h = (float3)(hx, hy, hz);
     s->wi = 2.0f * dot(wo, h) * h - wo;
-  } else if (u_lobe < t.specular + t.interface) {
+  } else if (u_lobe < below_cosine) {
 #if WT_HAS_TRANSMISSION
-    float u = fmin((u_lobe - t.specular) / t.interface, 0x1.fffffep-1f);  // reused for reflect or transmit
+    float u = fmin((u_lobe - below_interface) / t.interface, 0x1.fffffep-1f);  // reused for reflect or transmit
     float clear = (1.0f - b.metallic) * b.transmission;
     if (b.smooth) {
-      float f = ggx_fresnel_dielectric(wo.z, b.eta);
+      float f = interface_fresnel(b, wo.z);
       float p_reflect = interface_reflect_probability(f, lobes);
       if (!interface_direction(b, wo, (float3)(0.0f, 0.0f, 1.0f), p_reflect, u, &s->wi, &s->lobe)) return false;
       float3 w = s->lobe == WT_LOBE_SPECULAR
                      ? (float3)(f / p_reflect)
                      : b.base * ((1.0f - f) / ((b.thin ? 1.0f : b.eta * b.eta) * (1.0f - p_reflect)));
-      s->weight = w * (clear / t.interface);
+      s->weight = w * (clear * v.w_base / t.interface);
       s->pdf = 0.0f;
       s->lobe |= WT_LOBE_DELTA;
       return s->weight.x > 0.0f || s->weight.y > 0.0f || s->weight.z > 0.0f;
@@ -327,13 +523,13 @@ inline bool bsdf_sample(Bsdf b, float3 wo, uint lobes, float u_lobe, float u1, f
     float hx, hy, hz;
     ggx_sample_visible_normal(wo.x, wo.y, wo.z, alpha, u1, u2, &hx, &hy, &hz);
     float3 h = (float3)(hx, hy, hz);
-    float p_reflect = interface_reflect_probability(ggx_fresnel_dielectric(dot(wo, h), b.eta), lobes);
+    float p_reflect = interface_reflect_probability(interface_fresnel(b, dot(wo, h)), lobes);
     if (!interface_direction(b, wo, h, p_reflect, u, &s->wi, &s->lobe)) return false;
 #else
     return false;
 #endif
   } else {
-    if (!(lobes & WT_LOBE_DIFFUSE) || !(t.diffuse > 0.0f)) return false;
+    if (!(lobes & WT_LOBE_DIFFUSE) || !(t.diffuse + t.sheen > 0.0f)) return false;
     s->lobe = WT_LOBE_DIFFUSE;
     s->wi = lambert_sample((float3)(0.0f, 0.0f, 1.0f), u1, u2);
   }

@@ -120,6 +120,20 @@ inline WtMaterial material_at(SurfaceScene ss, uint index, WtMaterial m, Surface
   if (mask & (1u << WT_TEXTURE_SLOT_TRANSMISSION)) {
     m.transmission *= material_texture(ss, index, WT_TEXTURE_SLOT_TRANSMISSION, sp).x;
   }
+  // the layers' textures (their factors are zero where a layer is absent: the loader reads no texture there)
+  if (mask & (1u << WT_TEXTURE_SLOT_SPECULAR)) m.specular.w *= material_texture(ss, index, WT_TEXTURE_SLOT_SPECULAR, sp).w;
+  if (mask & (1u << WT_TEXTURE_SLOT_SPECULAR_COLOR)) {
+    float4 t = material_texture(ss, index, WT_TEXTURE_SLOT_SPECULAR_COLOR, sp);
+    m.specular.x *= t.x, m.specular.y *= t.y, m.specular.z *= t.z;
+  }
+  if (mask & (1u << WT_TEXTURE_SLOT_CLEARCOAT)) m.clearcoat *= material_texture(ss, index, WT_TEXTURE_SLOT_CLEARCOAT, sp).x;
+  if (mask & (1u << WT_TEXTURE_SLOT_CLEARCOAT_ROUGHNESS))
+    m.clearcoat_roughness *= material_texture(ss, index, WT_TEXTURE_SLOT_CLEARCOAT_ROUGHNESS, sp).y;
+  if (mask & (1u << WT_TEXTURE_SLOT_SHEEN_COLOR)) {
+    float4 t = material_texture(ss, index, WT_TEXTURE_SLOT_SHEEN_COLOR, sp);
+    m.sheen.x *= t.x, m.sheen.y *= t.y, m.sheen.z *= t.z;
+  }
+  if (mask & (1u << WT_TEXTURE_SLOT_SHEEN_ROUGHNESS)) m.sheen.w *= material_texture(ss, index, WT_TEXTURE_SLOT_SHEEN_ROUGHNESS, sp).w;
   if ((mask & (1u << WT_TEXTURE_SLOT_NORMAL)) && dot(sp.tangent, sp.tangent) > 0.0f) {
     float4 t = material_texture(ss, index, WT_TEXTURE_SLOT_NORMAL, sp);
     float scale = ss.refs[index * WT_TEXTURE_SLOTS + WT_TEXTURE_SLOT_NORMAL].scale;

@@ -4,7 +4,7 @@
 // Smith masking-shadowing, Schlick's Fresnel and sampling of the visible
 // normals (Heitz 2018). The host tabulates directional albedos with these
 // same functions (host/render/material_tables.cpp) for the energy
-// compensation the kernels apply (kernels/materials/pbr.cl).
+// compensation the kernels apply (kernels/materials/bsdf.cl).
 #ifndef WT_SHARED_GGX_H
 #define WT_SHARED_GGX_H
 

@@ -1,9 +1,10 @@
 // Material models and the layout of the albedo table that the
-// metallic-roughness BSDF reads, shared by host and kernels.
+// metallic-roughness BSDF and its layers read, shared by host and kernels.
 #ifndef WT_SHARED_MATERIALS_H
 #define WT_SHARED_MATERIALS_H
 
 #include "shared/ggx.h"
+#include "shared/sheen.h"
 #include "shared/types.h"
 
 #ifdef __OPENCL_C_VERSION__
@@ -24,24 +25,40 @@
 // 1e-4 for i = 0) and roughness from WT_PBR_MIN_ROUGHNESS to 1 at
 // WT_PBR_MIN_ROUGHNESS + (1 - WT_PBR_MIN_ROUGHNESS) (j / (N - 1))^2 (crowded
 // towards smooth), then the averages over mu (2 int_0^1 E(mu) mu dmu) per
-// roughness.
+// roughness. GGX with Schlick's Fresnel F0 + (F90 - F0)(1 - v.h)^5 has the
+// single-scattering albedo F0 (E - S) + F90 S for every F0 and F90 (the
+// split sum), so E and S serve every dielectric, the clear coat and
+// KHR_materials_specular's coloured, weighted F0 exactly. The sheen rows
+// run over sheen roughness from WT_SHEEN_MIN_ROUGHNESS to 1 the same way.
 #define WT_PBR_TABLE_N 32
 #define WT_PBR_TABLE_E 0                                            ///< GGX single scattering, F = 1
-#define WT_PBR_TABLE_E_COAT (WT_PBR_TABLE_N * WT_PBR_TABLE_N)       ///< the dielectric coat (F0 0.04) with its multiple scattering
-#define WT_PBR_TABLE_E_AVG (2 * WT_PBR_TABLE_N * WT_PBR_TABLE_N)    ///< average of E, per roughness
-#define WT_PBR_TABLE_E_COAT_AVG (WT_PBR_TABLE_E_AVG + WT_PBR_TABLE_N) ///< average of E_coat, per roughness
-#define WT_PBR_TABLE_SIZE (WT_PBR_TABLE_E_COAT_AVG + WT_PBR_TABLE_N)
+#define WT_PBR_TABLE_S (WT_PBR_TABLE_N * WT_PBR_TABLE_N)            ///< GGX single scattering with F = (1 - v.h)^5
+#define WT_PBR_TABLE_SHEEN (2 * WT_PBR_TABLE_N * WT_PBR_TABLE_N)    ///< the sheen lobe with colour 1 (shared/sheen.h), over (mu, sheen roughness)
+#define WT_PBR_TABLE_E_AVG (3 * WT_PBR_TABLE_N * WT_PBR_TABLE_N)    ///< average of E, per roughness
+#define WT_PBR_TABLE_S_AVG (WT_PBR_TABLE_E_AVG + WT_PBR_TABLE_N)    ///< average of S, per roughness
+#define WT_PBR_TABLE_SIZE (WT_PBR_TABLE_S_AVG + WT_PBR_TABLE_N)
 
-/// Continuous table coordinate of a roughness, in [0, N - 1].
-WT_MATERIALS_INLINE float pbr_table_roughness_coord(float roughness) {
-  float t = (roughness - WT_PBR_MIN_ROUGHNESS) / (1.0f - WT_PBR_MIN_ROUGHNESS);
+/// Continuous table row of a roughness whose rows start at `lowest`, in [0, N - 1].
+WT_MATERIALS_INLINE float pbr_table_row(float roughness, float lowest) {
+  float t = (roughness - lowest) / (1.0f - lowest);
   return sqrt(fmin(fmax(t, 0.0f), 1.0f)) * (float)(WT_PBR_TABLE_N - 1);
 }
 
-/// The roughness of table row j.
+/// Continuous table coordinate of a GGX roughness, in [0, N - 1].
+WT_MATERIALS_INLINE float pbr_table_roughness_coord(float roughness) {
+  return pbr_table_row(roughness, WT_PBR_MIN_ROUGHNESS);
+}
+
+/// The GGX roughness of table row j.
 WT_MATERIALS_INLINE float pbr_table_roughness(int j) {
   float y = (float)j / (float)(WT_PBR_TABLE_N - 1);
   return WT_PBR_MIN_ROUGHNESS + (1.0f - WT_PBR_MIN_ROUGHNESS) * y * y;
+}
+
+/// The sheen roughness of the sheen rows' row j.
+WT_MATERIALS_INLINE float pbr_table_sheen_roughness(int j) {
+  float y = (float)j / (float)(WT_PBR_TABLE_N - 1);
+  return WT_SHEEN_MIN_ROUGHNESS + (1.0f - WT_SHEEN_MIN_ROUGHNESS) * y * y;
 }
 
 /// The cosine of table column i.
@@ -50,10 +67,9 @@ WT_MATERIALS_INLINE float pbr_table_mu(int i) {
   return x * x;
 }
 
-/// Bilinear lookup of a 2D table (offset WT_PBR_TABLE_E or _E_COAT) at (mu, roughness).
-WT_MATERIALS_INLINE float pbr_table_albedo(WT_GLOBAL const float* table, int offset, float mu, float roughness) {
+/// Bilinear lookup of a 2D table at mu and a continuous row y.
+WT_MATERIALS_INLINE float pbr_table_lookup(WT_GLOBAL const float* table, int offset, float mu, float y) {
   float x = sqrt(fmin(fmax(mu, 0.0f), 1.0f)) * (float)(WT_PBR_TABLE_N - 1);
-  float y = pbr_table_roughness_coord(roughness);
   int x0 = (int)fmin(x, (float)(WT_PBR_TABLE_N - 2)), y0 = (int)fmin(y, (float)(WT_PBR_TABLE_N - 2));
   float fx = x - (float)x0, fy = y - (float)y0;
   WT_GLOBAL const float* row0 = table + offset + y0 * WT_PBR_TABLE_N;
@@ -63,7 +79,17 @@ WT_MATERIALS_INLINE float pbr_table_albedo(WT_GLOBAL const float* table, int off
   return a + fy * (b - a);
 }
 
-/// Linear lookup of an average (offset WT_PBR_TABLE_E_AVG or _E_COAT_AVG) at a roughness.
+/// Bilinear lookup of a GGX table (offset WT_PBR_TABLE_E or _S) at (mu, roughness).
+WT_MATERIALS_INLINE float pbr_table_albedo(WT_GLOBAL const float* table, int offset, float mu, float roughness) {
+  return pbr_table_lookup(table, offset, mu, pbr_table_roughness_coord(roughness));
+}
+
+/// The sheen lobe's albedo (colour 1) at (mu, sheen roughness).
+WT_MATERIALS_INLINE float pbr_table_sheen(WT_GLOBAL const float* table, float mu, float sheen_roughness) {
+  return pbr_table_lookup(table, WT_PBR_TABLE_SHEEN, mu, pbr_table_row(sheen_roughness, WT_SHEEN_MIN_ROUGHNESS));
+}
+
+/// Linear lookup of an average (offset WT_PBR_TABLE_E_AVG or _S_AVG) at a roughness.
 WT_MATERIALS_INLINE float pbr_table_average(WT_GLOBAL const float* table, int offset, float roughness) {
   float y = pbr_table_roughness_coord(roughness);
   int y0 = (int)fmin(y, (float)(WT_PBR_TABLE_N - 2));

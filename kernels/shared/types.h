@@ -113,8 +113,10 @@ typedef struct WtGeometry {
 #define WT_STREAM_RAYS 64
 #define WT_STREAM_WINDOW 256
 
-/// A surface: Lambertian (scenes made in code, analytic tests) or glTF
-/// metallic-roughness (kernels/materials/bsdf.cl), with emission.
+/// A surface: Lambertian (scenes made in code, analytic tests, and glTF's
+/// KHR_materials_unlit as a black emitter) or glTF metallic-roughness with
+/// its layers (kernels/materials/bsdf.cl), with emission. Textured values
+/// are multiplied into the factors below before bsdf_make.
 typedef struct WtMaterial {
   WtVec4 base_color;  ///< linear RGB base colour in [0,1]; w = metallic in [0,1] (PBR only)
   WtVec4 emission;    ///< emitted radiance (nits) per channel (factor x strength); w = 1: both faces emit (doubleSided), 0: the front face only (counter-clockwise winding)
@@ -127,6 +129,11 @@ typedef struct WtMaterial {
   wt_uint alpha_mode;  ///< WT_ALPHA_*
   float alpha_cutoff;  ///< WT_ALPHA_MASK: coverage below it is a hole
   wt_uint texture_mask;///< bit s: slot s (WT_TEXTURE_SLOT_*) is textured, by material_textures[material * WT_TEXTURE_SLOTS + s]
+  WtVec4 specular;    ///< KHR_materials_specular: xyz specularColorFactor (>= 0, tints the dielectric's F0 = ((ior-1)/(ior+1))^2, capped at 1), w specularFactor in [0,1] (weight of the dielectric's whole Fresnel term); (1,1,1,1) without it (PBR only)
+  WtVec4 sheen;       ///< KHR_materials_sheen: xyz sheenColorFactor in [0,1] (linear RGB; 0: no sheen), w sheenRoughnessFactor in [0,1] (PBR only)
+  float clearcoat;           ///< KHR_materials_clearcoat clearcoatFactor in [0,1] (0: no coat; PBR only)
+  float clearcoat_roughness; ///< clearcoatRoughnessFactor in [0,1], alpha = roughness^2
+  wt_uint pad0, pad1;
 } WtMaterial;
 
 #define WT_ALPHA_OPAQUE 0u  ///< alpha is ignored
@@ -140,7 +147,14 @@ typedef struct WtMaterial {
 #define WT_TEXTURE_SLOT_NORMAL 2u              ///< tangent-space normal, xy scaled by WtTextureRef::scale
 #define WT_TEXTURE_SLOT_EMISSIVE 3u            ///< rgb: emission (sRGB)
 #define WT_TEXTURE_SLOT_TRANSMISSION 4u        ///< r: KHR_materials_transmission
-#define WT_TEXTURE_SLOTS 16u
+#define WT_TEXTURE_SLOT_SPECULAR 5u            ///< a: KHR_materials_specular specularFactor
+#define WT_TEXTURE_SLOT_SPECULAR_COLOR 6u      ///< rgb: specularColorFactor (sRGB)
+#define WT_TEXTURE_SLOT_CLEARCOAT 7u           ///< r: KHR_materials_clearcoat clearcoatFactor
+#define WT_TEXTURE_SLOT_CLEARCOAT_ROUGHNESS 8u ///< g: clearcoatRoughnessFactor
+#define WT_TEXTURE_SLOT_CLEARCOAT_NORMAL 9u    ///< tangent-space normal of the coat, xy scaled by WtTextureRef::scale
+#define WT_TEXTURE_SLOT_SHEEN_COLOR 10u        ///< rgb: KHR_materials_sheen sheenColorFactor (sRGB)
+#define WT_TEXTURE_SLOT_SHEEN_ROUGHNESS 11u    ///< a: sheenRoughnessFactor
+#define WT_TEXTURE_SLOTS 16u                   ///< slots 12..15 are free
 
 /// One textured slot of a material: which texture (WtTexture, shared/textures.h),
 /// read at which texture coordinate set, moved by KHR_texture_transform.

@@ -2,8 +2,12 @@
 // includes expand from the embedded copies.
 #include "core/embedded.h"
 #include "device/program.h"
+#include "scene/generators.h"
 
 #include <gtest/gtest.h>
+
+#include <algorithm>
+#include <vector>
 
 namespace wt {
 namespace {
@@ -57,6 +61,34 @@ TEST(Embedded, DefinesCarryEveryFeature) {
   features.streamPrefetch = true;
   defines = kernelDefines(features);
   EXPECT_TRUE(has("-D WT_STREAM_PREFETCH=1"));
+  for (const char* layer : {"SPECULAR", "CLEARCOAT", "SHEEN"}) EXPECT_TRUE(has(std::string("-D WT_HAS_") + layer + "=0"));
+}
+
+// Only scenes whose materials use a layer compile it in; a layer on a
+// Lambertian material (which has none) does not count.
+TEST(Embedded, MaterialFeaturesFollowTheMaterials) {
+  auto features = [](std::vector<WtMaterial> materials) {
+    KernelFeatures f;
+    setMaterialFeatures(f, materials);
+    return f;
+  };
+  KernelFeatures plain = features({makeMaterial(glm::vec3(0.5f)), makePbrMaterial(glm::vec3(0.5f), 0.0f, 0.5f)});
+  EXPECT_TRUE(plain.pbr);
+  EXPECT_FALSE(plain.transmission || plain.specular || plain.clearcoat || plain.sheen);
+  EXPECT_TRUE(features({withClearcoat(makePbrMaterial(glm::vec3(0.5f), 0.0f, 0.5f), 0.5f, 0.1f)}).clearcoat);
+  EXPECT_TRUE(features({withSheen(makePbrMaterial(glm::vec3(0.5f), 0.0f, 0.5f), glm::vec3(0.0f, 0.1f, 0.0f), 0.5f)}).sheen);
+  EXPECT_TRUE(features({withSpecular(makePbrMaterial(glm::vec3(0.5f), 0.0f, 0.5f), 0.0f)}).specular);
+  EXPECT_TRUE(features({withSpecular(makePbrMaterial(glm::vec3(0.5f), 0.0f, 0.5f), 1.0f, glm::vec3(1, 1, 0.5f))}).specular);
+  WtMaterial dense = makePbrMaterial(glm::vec3(0.5f), 0.0f, 0.5f);
+  dense.ior = 2.0f;  // the opaque dielectric's F0 is no longer 0.04
+  EXPECT_TRUE(features({dense}).specular);
+  EXPECT_FALSE(features({withTransmission(dense, 1.0f, 2.0f)}).specular) << "all of it is the interface, which reads ior itself";
+  WtMaterial metal = withSpecular(makePbrMaterial(glm::vec3(0.5f), 1.0f, 0.5f), 0.0f);
+  EXPECT_FALSE(features({metal}).specular) << "a metal has no dielectric";
+  WtMaterial lambert = withClearcoat(withSheen(makeMaterial(glm::vec3(0.5f)), glm::vec3(1.0f), 0.5f), 1.0f, 0.5f);
+  lambert.model = WT_MATERIAL_DIFFUSE;
+  KernelFeatures none = features({lambert});
+  EXPECT_FALSE(none.pbr || none.clearcoat || none.sheen);
 }
 
 }  // namespace

@@ -177,6 +177,61 @@ TEST(Integrators, WhitePbrSpheresUnderAUniformSkyReflectEverything) {
   }
 }
 
+// The same through the renderer for the layers (compiled in from the
+// scene's materials): white spheres under a clear coat, a white sheen, a
+// tinted and weighted F0 of a denser ior, all three at once, keep all the
+// sky's light; and specularFactor 0 leaves a Lambertian sphere that shows
+// its base colour times the sky.
+TEST(Integrators, WhiteLayeredSpheresUnderAUniformSkyReflectEverything) {
+  WtMaterial tinted = withSpecular(makePbrMaterial(glm::vec3(1.0f), 0.0f, 0.4f), 0.7f, glm::vec3(1.0f, 0.5f, 0.25f));
+  tinted.ior = 2.0f;
+  const std::pair<WtMaterial, const char*> cases[] = {
+      {withClearcoat(makePbrMaterial(glm::vec3(1.0f), 0.0f, 0.6f), 1.0f, 0.2f), "clear coat over a dielectric"},
+      {withClearcoat(makePbrMaterial(glm::vec3(1.0f), 1.0f, 0.3f), 0.8f, 0.0f), "mirror coat over a metal"},
+      {withSheen(makePbrMaterial(glm::vec3(1.0f), 0.0f, 0.8f), glm::vec3(1.0f), 0.5f), "white sheen"},
+      {tinted, "tinted specular, ior 2"},
+      {withSheen(withClearcoat(tinted, 0.6f, 0.3f), glm::vec3(1.0f), 0.7f), "all layers"},
+  };
+  for (const auto& [material, name] : cases) {
+    Scene scene = makeIcosphere(3, glm::vec3(0.0f), 1.0f, material);
+    for (WtVec4& n : scene.normals) n = {0, 0, 0, 0};
+    CameraDesc cam;
+    cam.cameraToWorld = glm::translate(glm::mat4(1.0f), glm::vec3(0.0f, 0.0f, 4.0f));
+    cam.yfov = 0.2f;
+    scene.camera = cam;
+    RenderSettings s = small(Integrator::Path, 8);
+    s.background = glm::vec3(1.0f, 0.5f, 0.25f);
+    s.maxBounces = 4;
+    expectUniform(render(scene, s, 128), s.background, 0.01, 5.0, name);
+  }
+  const glm::vec3 base(0.8f, 0.5f, 0.2f);
+  Scene lambert = makeIcosphere(3, glm::vec3(0.0f), 1.0f, withSpecular(makePbrMaterial(base, 0.0f, 0.3f), 0.0f));
+  for (WtVec4& n : lambert.normals) n = {0, 0, 0, 0};
+  CameraDesc cam;
+  cam.cameraToWorld = glm::translate(glm::mat4(1.0f), glm::vec3(0.0f, 0.0f, 4.0f));
+  cam.yfov = 0.2f;
+  lambert.camera = cam;
+  RenderSettings s = small(Integrator::Path, 8);
+  s.background = glm::vec3(1.0f);
+  s.maxBounces = 1;
+  expectUniform(render(lambert, s, 64), base, 0.01, 5.0, "specular 0: a Lambertian sphere");
+  // and the layers are compiled in where a scene has them: over a base that
+  // reflects nothing, the coat alone and the sheen alone still light the sphere
+  const WtMaterial black = withSpecular(makePbrMaterial(glm::vec3(0.0f), 0.0f, 0.5f), 0.0f);
+  for (const auto& [material, name] : {std::pair{black, "nothing"}, std::pair{withClearcoat(black, 1.0f, 0.3f), "coat alone"},
+                                       std::pair{withSheen(black, glm::vec3(1.0f), 0.5f), "sheen alone"}}) {
+    Scene layer = lambert;
+    layer.materials[0] = material;
+    Image img = render(layer, s, 16);
+    double mean = 0.0;
+    for (float v : img.rgb) mean += v / double(img.rgb.size());
+    if (std::string(name) == "nothing")
+      EXPECT_EQ(mean, 0.0) << name;
+    else
+      EXPECT_GT(mean, 0.02) << name;
+  }
+}
+
 // Per-lobe bounce limits cut paths exactly where the total limit would: on
 // a Lambertian scene two diffuse bounces are two bounces, bit for bit; with
 // no lobe left, a glossy scene shows emission only, as with no bounces.

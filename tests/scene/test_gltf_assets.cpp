@@ -341,7 +341,8 @@ TEST(GltfAssets, TransmissionMaterials) {
   EXPECT_NEAR(r2.volume.y, 0.6931472f, 1e-5f);
   EXPECT_NEAR(r2.volume.z, 0.1053605f, 1e-5f);
   EXPECT_FALSE(hasWarning(a, "KHR_materials_transmission is not supported"));
-  EXPECT_TRUE(hasWarning(a, "material textures are not supported yet"));  // thicknessTexture, label textures
+  EXPECT_TRUE(hasWarning(a, "thicknessTexture is not supported yet"));
+  EXPECT_GT(a.textures.textures.size(), 0u);  // the labels' base colour
   Scene r = loadGltf(roughness.string());
   const WtMaterial& water = named(r, "Mat_IOR_1.33");
   EXPECT_FLOAT_EQ(water.ior, 1.33f);
@@ -350,6 +351,59 @@ TEST(GltfAssets, TransmissionMaterials) {
   EXPECT_EQ(water.volume.x, 0.0f);
   EXPECT_FLOAT_EQ(water.base_color.y, 0.7f);
   EXPECT_EQ(named(r, "Mat_IOR_1.50").ior, 1.5f);  // no KHR_materials_ior: the default
+}
+
+// The layer extensions' factors on the Khronos test models (values from
+// their JSON): ClearCoatTest's "Simple_Coated" (clearcoat 1, roughness
+// 0.03) and "RoughVariations_Coated" (roughness 1); SpecularTest's specular
+// factors and colours, up to the "HDR" colour 25 (F0 0.04 x 25, capped at 1
+// by the BSDF); UnlitTest's orange [1, 0.2176, 0] as emission; and
+// IridescenceSuzanne, whose iridescence is not drawn and said so once, while
+// its opaque ior 2.0 now sets the dielectric's F0.
+TEST(GltfAssets, LayerMaterials) {
+  WT_REQUIRE_ASSET(coat, "gltf/ClearCoatTest/glTF/ClearCoatTest.gltf");
+  WT_REQUIRE_ASSET(specular, "gltf/SpecularTest/glTF/SpecularTest.gltf");
+  WT_REQUIRE_ASSET(unlit, "gltf/UnlitTest/glTF/UnlitTest.gltf");
+  WT_REQUIRE_ASSET(iridescence, "gltf/IridescenceSuzanne/glTF/IridescenceSuzanne.gltf");
+  auto named = [](const Scene& s, const std::string& name) -> const WtMaterial& {
+    auto it = std::find(s.materialNames.begin(), s.materialNames.end(), name);
+    EXPECT_NE(it, s.materialNames.end()) << name;
+    return s.materials[std::size_t(it - s.materialNames.begin())];
+  };
+  Scene c = loadGltf(coat.string());
+  EXPECT_EQ(named(c, "Simple_Coated").clearcoat, 1.0f);
+  EXPECT_FLOAT_EQ(named(c, "Simple_Coated").clearcoat_roughness, 0.03f);
+  EXPECT_EQ(named(c, "RoughVariations_Coated").clearcoat_roughness, 1.0f);
+  EXPECT_EQ(named(c, "Simple_Base").clearcoat, 0.0f);
+  EXPECT_FALSE(hasWarning(c, "KHR_materials_clearcoat is not supported"));
+  EXPECT_TRUE(hasWarning(c, "clearcoatNormalTexture is not supported yet"));
+  // the coat's factor and roughness textures are read
+  EXPECT_EQ(named(c, "Partial_Coated").texture_mask, 1u << WT_TEXTURE_SLOT_CLEARCOAT);
+  EXPECT_EQ(named(c, "RoughVariations_Coated").texture_mask, 1u << WT_TEXTURE_SLOT_CLEARCOAT_ROUGHNESS);
+  Scene sp = loadGltf(specular.string());
+  EXPECT_EQ(named(sp, "M1.1_specFac").specular.w, 0.0f);
+  EXPECT_FLOAT_EQ(named(sp, "M1.4_specFac").specular.w, 0.520996f);
+  const WtMaterial& yellow = named(sp, "M5.4_yellowFac");
+  EXPECT_FLOAT_EQ(yellow.specular.x, 0.520996f);
+  EXPECT_EQ(yellow.specular.z, 0.0f);
+  EXPECT_EQ(yellow.specular.w, 1.0f);
+  EXPECT_EQ(named(sp, "M7.5_HDR").specular.y, 25.0f);
+  EXPECT_FALSE(hasWarning(sp, "KHR_materials_specular is not supported"));
+  EXPECT_FALSE(hasWarning(sp, "clamped"));
+  Scene u = loadGltf(unlit.string());
+  const WtMaterial& orange = named(u, "Orange");
+  EXPECT_EQ(orange.model, WT_MATERIAL_DIFFUSE);
+  EXPECT_EQ(orange.base_color.x, 0.0f);
+  EXPECT_EQ(orange.emission.x, 1.0f);
+  EXPECT_NEAR(orange.emission.y, 0.217637640824031, 1e-7);
+  EXPECT_EQ(orange.emission.z, 0.0f);
+  EXPECT_FALSE(hasWarning(u, "KHR_materials_unlit is not supported"));
+  Scene i = loadGltf(iridescence.string());
+  EXPECT_EQ(std::count_if(i.warnings.begin(), i.warnings.end(),
+                          [](const std::string& w) { return w == "KHR_materials_iridescence is not supported; ignored"; }),
+            1);
+  EXPECT_FALSE(hasWarning(i, "applies to transmission only"));
+  EXPECT_EQ(i.materials[0].ior, 2.0f);
 }
 
 }  // namespace

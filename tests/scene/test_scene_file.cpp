@@ -225,11 +225,42 @@ TEST(SceneFile, TransmissionAndAttenuation) {
   const WtMaterial& sheet = s.materials[1];
   EXPECT_FLOAT_EQ(sheet.transmission, 0.5f);
   EXPECT_FLOAT_EQ(sheet.volume.w, 0.0f);  // thin-walled
-  // ior without transmission does nothing, and says so
+  // ior on a metal does nothing, and says so
   EXPECT_FLOAT_EQ(s.materials[2].transmission, 0.0f);
   bool warned = false;
-  for (const std::string& w : s.warnings) warned |= w.find("materials.gold.ior has no effect") != std::string::npos;
+  for (const std::string& w : s.warnings)
+    warned |= w.find("materials.gold.ior has no effect on a metal") != std::string::npos;
   EXPECT_TRUE(warned);
+}
+
+// The layers: a weighted, tinted specular F0 (ior sets it without
+// transmission too), a clear coat, a sheen; defaults where absent.
+TEST(SceneFile, MaterialLayers) {
+  SceneFile f = loadText(doc(R"("materials": {
+      "velvet": {"base_color": [0.3, 0.1, 0.1], "specular": 0.5, "specular_color": [1, 0.5, 3], "ior": 1.8,
+                 "clearcoat": 0.7, "clearcoat_roughness": 0.2, "sheen_color": [0.9, 0.4, 0.1], "sheen_roughness": 0.6},
+      "plain": {},
+      "wall": {"specular": 0}
+    })"));
+  const Scene& s = f.scene;
+  const WtMaterial& v = s.materials[0];
+  EXPECT_FLOAT_EQ(v.specular.w, 0.5f);
+  EXPECT_FLOAT_EQ(v.specular.z, 3.0f);
+  EXPECT_FLOAT_EQ(v.ior, 1.8f);
+  EXPECT_FLOAT_EQ(v.clearcoat, 0.7f);
+  EXPECT_FLOAT_EQ(v.clearcoat_roughness, 0.2f);
+  EXPECT_FLOAT_EQ(v.sheen.x, 0.9f);
+  EXPECT_FLOAT_EQ(v.sheen.w, 0.6f);
+  const WtMaterial& p = s.materials[1];
+  EXPECT_EQ(p.specular.w, 1.0f);
+  EXPECT_EQ(p.specular.x, 1.0f);
+  EXPECT_EQ(p.clearcoat, 0.0f);
+  EXPECT_EQ(p.sheen.x, 0.0f);
+  EXPECT_EQ(p.ior, 1.5f);
+  EXPECT_EQ(s.materials[2].specular.w, 0.0f);
+  EXPECT_TRUE(s.warnings.empty()) << s.warnings.at(0);
+  EXPECT_CONTAINS(errorOf(doc(R"("materials": {"m": {"sheen_color": [2, 0, 0]}})")), "materials.m.sheen_color");
+  EXPECT_CONTAINS(errorOf(doc(R"("materials": {"m": {"clearcoat": 1.5}})")), "materials.m.clearcoat: must be in [0, 1]");
 }
 
 TEST(SceneFile, RenderSettingsAndEnvironment) {
