@@ -58,7 +58,8 @@
 // Sampling picks the coat's GGX lobe, the base's GGX lobe (visible normals,
 // Heitz 2018 for both), the interface (visible normals again, then
 // reflection or transmission by Fresnel) or a cosine lobe (the diffuse base
-// and the sheen) with probabilities from the lobes' albedos at wo, and every
+// and the sheen) with probabilities from the lobes' albedos at wo (the
+// dielectric's by single scattering: no averages to look up), and every
 // continuous sample is weighted by the mixture pdf of all techniques
 // (one-sample MIS over lobes). Below WT_PBR_MIN_ROUGHNESS the GGX lobes are
 // mirrors (a mirror coat over a mirror base: one delta, both lobes' weights)
