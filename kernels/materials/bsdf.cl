@@ -58,7 +58,8 @@
 // Sampling picks the coat's GGX lobe, the base's GGX lobe (visible normals,
 // Heitz 2018 for both), the interface (visible normals again, then
 // reflection or transmission by Fresnel) or a cosine lobe (the diffuse base
-// and the sheen) with probabilities from the lobes' albedos at wo, and every
+// and the sheen) with probabilities from the lobes' albedos at wo (the
+// dielectric's by single scattering: no averages to look up), and every
 // continuous sample is weighted by the mixture pdf of all techniques
 // (one-sample MIS over lobes). Below WT_PBR_MIN_ROUGHNESS the GGX lobes are
 // mirrors (a mirror coat over a mirror base: one delta, both lobes' weights)
@@ -115,6 +116,7 @@ typedef struct Bsdf {
   int clearcoat_mirror;       ///< a coat whose roughness is below WT_PBR_MIN_ROUGHNESS
   float3 sheen;      ///< sheen colour (0 without WT_HAS_SHEEN, and inside a volume)
   float sheen_roughness;  ///< clamped to [WT_SHEEN_MIN_ROUGHNESS, 1]; alpha = roughness^2
+  SheenFit sheen_fit;     ///< its visibility's Lambda fit, once per material
   __global const float* table;  ///< directional albedos (shared/materials.h)
 } Bsdf;
 
@@ -125,6 +127,8 @@ typedef struct BsdfSample {
   float pdf;       ///< solid-angle pdf of the whole mixture; 0 for a delta sample
   uint lobe;       ///< WT_LOBE_DIFFUSE, _SPECULAR or _TRANSMISSION, | WT_LOBE_DELTA for a delta
 } BsdfSample;
+
+inline bool bsdf_has_sheen(Bsdf b) { return WT_HAS_SHEEN && (b.sheen.x > 0.0f || b.sheen.y > 0.0f || b.sheen.z > 0.0f); }
 
 /// The BSDF of `m` seen from its front face (inside = 0) or from its back
 /// face, inside the volume it bounds (inside = 1).
@@ -147,6 +151,7 @@ inline Bsdf bsdf_make(WtMaterial m, __global const float* table, int inside) {
   b.clearcoat_mirror = 0;
   b.sheen = (float3)(0.0f);
   b.sheen_roughness = 1.0f;
+  b.sheen_fit = (SheenFit){0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f};
   bool pbr = m.model == WT_MATERIAL_PBR;
 #if WT_HAS_SPECULAR
   if (pbr) {
@@ -168,6 +173,7 @@ inline Bsdf bsdf_make(WtMaterial m, __global const float* table, int inside) {
   if (pbr && outside) {
     b.sheen = vec4_xyz(m.sheen);
     b.sheen_roughness = fmin(fmax(m.sheen.w, WT_SHEEN_MIN_ROUGHNESS), 1.0f);
+    if (bsdf_has_sheen(b)) b.sheen_fit = sheen_fit(b.sheen_roughness * b.sheen_roughness);
   }
 #endif
   return b;
@@ -175,8 +181,6 @@ inline Bsdf bsdf_make(WtMaterial m, __global const float* table, int inside) {
 
 /// Whether any light passes through (the far side needs lights and rays).
 inline bool bsdf_transmits(Bsdf b) { return b.transmission > 0.0f && b.metallic < 1.0f; }
-
-inline bool bsdf_has_sheen(Bsdf b) { return WT_HAS_SHEEN && (b.sheen.x > 0.0f || b.sheen.y > 0.0f || b.sheen.z > 0.0f); }
 
 /// GGX albedos at a cosine for a roughness (a mirror below
 /// WT_PBR_MIN_ROUGHNESS): E with F = 1 and S with F = (1 - v.h)^5.
@@ -242,7 +246,7 @@ inline PbrView pbr_view(Bsdf b, float mu) {
 #if WT_HAS_SHEEN
   if (bsdf_has_sheen(b)) {
     v.sheen = pbr_table_sheen(b.table, mu, b.sheen_roughness);
-    v.sheen_lambda_o = sheen_lambda(mu, b.sheen_roughness * b.sheen_roughness);
+    v.sheen_lambda_o = sheen_lambda(b.sheen_fit, mu);
     v.w_base *= 1.0f - fmax(b.sheen.x, fmax(b.sheen.y, b.sheen.z)) * v.sheen;
   }
 #endif
@@ -403,7 +407,7 @@ inline float3 pbr_eval(Bsdf b, float3 wo, float3 wi, uint lobes, float* pdf) {
     if ((lobes & WT_LOBE_DIFFUSE) && bsdf_has_sheen(b)) {
       // D / (4 mu_o (1 + Lambda(o) + Lambda(i))), under the coat
       float alpha = b.sheen_roughness * b.sheen_roughness;
-      float fibres = sheen_d(h.z, alpha) / (4.0f * wo.z * (1.0f + v.sheen_lambda_o + sheen_lambda(wi.z, alpha)));
+      float fibres = sheen_d(h.z, alpha) / (4.0f * wo.z * (1.0f + v.sheen_lambda_o + sheen_lambda(b.sheen_fit, wi.z)));
       f_layers += v.w_coat * b.sheen * fibres;
       pdf_diffuse = wi.z / WT_PI;
     }
