@@ -882,7 +882,9 @@ TEST(Bsdf, MirrorCoatAndLayerLobes) {
   for (const cl_float4& d : sampleOnDevice(sheen, wo, kSpecular, u).wiPdf) EXPECT_LT(d.s[3], 0.0f);
   Sampled diffuse = sampleOnDevice(sheen, wo, 1u, u);
   for (std::size_t i = 0; i < u.size(); ++i)
-    if (diffuse.wiPdf[i].s[3] > 0.0f) EXPECT_EQ(lobeOf(diffuse.weightLobe[i]), 1u);
+    if (diffuse.wiPdf[i].s[3] > 0.0f) {
+      EXPECT_EQ(lobeOf(diffuse.weightLobe[i]), 1u);
+    }
 }
 
 // Roughness 0 and 1 for the base, the coat and the sheen, metal and glass,
@@ -911,13 +913,17 @@ TEST(Bsdf, LayersStayFiniteAtTheExtremes) {
                   const cl_float4 &d = s.wiPdf[i], &w = s.weightLobe[i];
                   for (int c = 0; c < 4; ++c) ASSERT_TRUE(std::isfinite(d.s[c])) << "sample " << i << ", mu " << mu;
                   for (int c = 0; c < 3; ++c) ASSERT_TRUE(std::isfinite(w.s[c]) && w.s[c] >= 0.0f) << "mu " << mu;
-                  if (mu < 0.0f) ASSERT_LT(d.s[3], 0.0f) << "nothing is sampled from behind";
+                  if (mu < 0.0f) {
+                    ASSERT_LT(d.s[3], 0.0f) << "nothing is sampled from behind";
+                  }
                 }
                 for (std::size_t i = 0; i < wis.size(); ++i)
                   for (int c = 0; c < 4; ++c) {
                     ASSERT_TRUE(std::isfinite(ev[i].s[c]) && ev[i].s[c] >= 0.0f)
                         << "roughness " << r << "/" << coatR << "/" << sheenR << ", mu " << mu << ", wi " << i;
-                    if (mu < 0.0f) ASSERT_EQ(ev[i].s[c], 0.0f);
+                    if (mu < 0.0f) {
+                      ASSERT_EQ(ev[i].s[c], 0.0f);
+                    }
                   }
                 ++checked;
               }
