@@ -100,6 +100,7 @@ std::vector<std::string> kernelDefines(const KernelFeatures& features) {
       "-D WT_HAS_TRANSMISSION=" + std::string(features.pbr && features.transmission ? "1" : "0"),
       "-D WT_HAS_TEXTURES=" + std::string(features.textures ? "1" : "0"),
       "-D WT_HAS_VERTEX_COLORS=" + std::string(features.vertexColors ? "1" : "0"),
+      "-D WT_HAS_ALPHA=" + std::string(features.alpha ? "1" : "0"),
       "-D WT_PACKET_WIDTH=" + std::to_string(features.packetWidth),
       "-D WT_STREAM_PREFETCH=" + std::string(features.streamPrefetch ? "1" : "0"),
   };

@@ -23,6 +23,10 @@ struct KernelFeatures {
   bool transmission = false;      ///< a metallic-roughness material transmits (KHR_materials_transmission)
   bool textures = false;          ///< a material reads a texture (materials/textured.cl)
   bool vertexColors = false;      ///< the scene's vertices have COLOR_0
+  /// A triangle's material can have a hole (alphaMode MASK or BLEND,
+  /// SceneBuffers::hasAlpha): traversal runs the alpha test
+  /// (kernels/materials/alpha.cl) and its kernels take WT_ALPHA_PARAMS
+  bool alpha = false;
   /// The geometry types beside triangles compiled in, by WT_PRIM_* (each
   /// primitiveTypes() entry's define; SceneBuffers::primitiveTypesPresent)
   std::array<bool, WT_PRIM_TYPES> primitives{};
