@@ -441,6 +441,11 @@ inline void packet_set_alpha(RayPacket* p, BvhScene scene, const uint* index) {
 /// lost with it).
 inline pint packet_alpha_keep(BvhScene scene, const RayPacket* p, uint prim, pint won, pfloat b1, pfloat b2) {
   if (!alpha_flagged(scene.alpha, prim)) return won;
+  // the triangle's part once; a uniform coverage (the factor alone) is the same for every lane
+  AlphaTriangle tri = alpha_triangle(scene.alpha, prim);
+  const bool uniform = alpha_uniform(tri);
+  const float uniform_coverage = tri.m.factor;
+  if (uniform && tri.m.mode == WT_ALPHA_MASK) return uniform_coverage >= tri.m.cutoff ? won : (pint)(0);
   int lane_won[WT_PACKET];
   float lane_b1[WT_PACKET], lane_b2[WT_PACKET];
   uint ray[WT_PACKET];
@@ -449,7 +454,8 @@ inline pint packet_alpha_keep(BvhScene scene, const RayPacket* p, uint prim, pin
   for (int l = 0; l < WT_PACKET; ++l) {
     if (!lane_won[l]) continue;
     scene.alpha.ray = ray[l];
-    if (!alpha_keeps(scene.alpha, prim, lane_b1[l], lane_b2[l])) lane_won[l] = 0;
+    float coverage = uniform ? uniform_coverage : alpha_coverage(scene.alpha, tri, lane_b1[l], lane_b2[l]);
+    if (!alpha_covered(scene.alpha, tri, prim, coverage)) lane_won[l] = 0;
   }
   return packet_vload(lane_won);
 }

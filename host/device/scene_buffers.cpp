@@ -1,6 +1,7 @@
 #include "device/scene_buffers.h"
 
 #include "bvh/builders.h"
+#include "shared/alpha.h"
 #include "shared/lights.h"
 
 #include <glm/gtc/matrix_transform.hpp>
@@ -389,11 +390,12 @@ bool triangleMayHaveHoles(const Scene& scene, std::uint32_t tri, const std::vect
 void SceneBuffers::uploadAlpha(Context& context, const Scene& scene) {
   m_alphaTriangles = 0;
   std::vector<std::uint32_t> bits;
+  std::vector<std::int8_t> opaque;  // per texture: its alpha is 1 everywhere
   const bool any = std::any_of(scene.materials.begin(), scene.materials.end(), [](const WtMaterial& m) {
     return m.alpha_mode == WT_ALPHA_MASK || m.alpha_mode == WT_ALPHA_BLEND;
   });
   if (any) {
-    std::vector<std::int8_t> opaque(scene.textures.textures.size());
+    opaque.resize(scene.textures.textures.size());
     for (std::size_t t = 0; t < opaque.size(); ++t) opaque[t] = textureIsOpaque(scene.textures, std::uint32_t(t));
     bits.assign((m_leafToScene.size() + 31) / 32, 0u);
     for (std::size_t leaf = 0; leaf < m_leafToScene.size(); ++leaf) {
@@ -405,13 +407,27 @@ void SceneBuffers::uploadAlpha(Context& context, const Scene& scene) {
     if (m_alphaTriangles == 0) bits.clear();
   }
   alphaBits = upload(context, bits, m_attributeBytes);
+  // each material's row; a texture whose alpha is 1 everywhere is left out
+  std::vector<WtAlphaMaterial> rows;
+  if (m_alphaTriangles > 0) {
+    for (std::size_t i = 0; i < scene.materials.size(); ++i) {
+      const WtMaterial& m = scene.materials[i];
+      const std::size_t slot = i * WT_TEXTURE_SLOTS + WT_TEXTURE_SLOT_BASE_COLOR;
+      const bool textured = m_hasTextures && (m.texture_mask & (1u << WT_TEXTURE_SLOT_BASE_COLOR)) &&
+                            slot < scene.materialTextures.size() &&
+                            !(scene.materialTextures[slot].texture < opaque.size() &&
+                              opaque[scene.materialTextures[slot].texture]);
+      rows.push_back({m.alpha_mode, m.alpha_cutoff, m.alpha, textured ? 1u : 0u});
+    }
+  }
+  alphaMaterials = upload(context, rows, m_attributeBytes);
 }
 
 void SceneBuffers::bindAlpha(cl::Kernel& kernel, int first, std::uint32_t key) const {
   kernel.setArg(first, cl_uint(key));
   kernel.setArg(first + 1, alphaBits);
   kernel.setArg(first + 2, triangleInfo);
-  kernel.setArg(first + 3, materials);
+  kernel.setArg(first + 3, alphaMaterials);
   bindSurface(kernel, first + 4);
 }
 
@@ -532,6 +548,7 @@ static_assert(offsetof(WtBvh4Node, hi_x) == 16 && offsetof(WtBvh4Node, hi_y) == 
 static_assert(offsetof(WtBvh4Node, child) == 96 && offsetof(WtBvh4Node, count) == 112);
 static_assert(sizeof(WtMaterial) == 80);
 static_assert(sizeof(WtTextureRef) == 48);
+static_assert(sizeof(WtAlphaMaterial) == 16);
 static_assert(sizeof(WtTexture) == 16 && sizeof(WtTextureLevel) == 16);
 static_assert(sizeof(WtCamera) == 64);
 static_assert(sizeof(WtFrameParams) == 64);

@@ -109,14 +109,17 @@ class SceneBuffers {
   /// triangles array whose word for a block of four sits with its
   /// neighbours' in one cache line. One dummy word when no triangle has one.
   cl::Buffer alphaBits;
+  /// WtAlphaMaterial per material (shared/alpha.h): what the test reads of
+  /// it; one dummy entry when no triangle has a hole.
+  cl::Buffer alphaMaterials;
   /// Leaf-order triangles whose bit is set: an instanced geometry's once.
   std::size_t alphaTriangles() const { return m_alphaTriangles; }
   /// Whether the alpha test is needed at all (KernelFeatures::alpha).
   bool hasAlpha() const { return m_alphaTriangles > 0; }
   /// Set the kernel's WT_ALPHA_PARAMS, arguments first .. first + 10: the
   /// launch's key for stochastic transparency (rng_alpha_key, set again per
-  /// launch where it changes), alphaBits, triangleInfo, materials and the
-  /// surface (bindSurface). Only kernels built with WT_HAS_ALPHA have them.
+  /// launch where it changes), alphaBits, triangleInfo, alphaMaterials and
+  /// the surface (bindSurface). Only kernels built with WT_HAS_ALPHA have them.
   void bindAlpha(cl::Kernel& kernel, int first, std::uint32_t key = 0) const;
   std::uint32_t nodeCount = 0;
   std::size_t uploadedBytes = 0;  ///< nodes + triangle data (tri_verts, tri_info)

@@ -16,11 +16,13 @@
 // SceneBuffers::hasAlpha) none of this is compiled and the traversal code is
 // what it was. With it, a candidate hit reads one bit per triangle
 // (alpha_bits, set where the material can have a hole there), and only a
-// flagged triangle's hit reads tri_info, the material and the texture.
+// flagged triangle's hit reads tri_info, the material's 16-byte alpha row
+// (shared/alpha.h) and, where its alpha varies, the texture.
 #ifndef WT_MATERIALS_ALPHA_CL
 #define WT_MATERIALS_ALPHA_CL
 
 #include "common.h"
+#include "shared/alpha.h"
 // outside the switch: the host expands each include once, where it first
 // appears (expandKernelSource), whatever the preprocessor later keeps
 #include "materials/textured.cl"
@@ -38,13 +40,13 @@
 /// kernels without it keep their arguments.
 #define WT_ALPHA_PARAMS                                                                                        \
   , uint alpha_key, __global const uint *alpha_bits, __global const uint4 *alpha_tri_info,                     \
-      __global const WtMaterial *alpha_materials, WT_SURFACE_PARAMS
+      __global const WtAlphaMaterial *alpha_materials, WT_SURFACE_PARAMS
 
 /// What the alpha test reads, and the stream of the ray it tests.
 typedef struct AlphaScene {
   __global const uint* bits;            ///< bit t of word t / 32: leaf-order triangle t may have a hole
   __global const uint4* tri_info;       ///< per leaf-order triangle: vertices and material
-  __global const WtMaterial* materials;
+  __global const WtAlphaMaterial* materials;  ///< per material (SceneBuffers::alphaMaterials)
   SurfaceScene surface;
   uint key;  ///< the launch's key (rng_alpha_key)
   uint ray;  ///< the ray's stream (rng_alpha_ray of the key and the ray's index): BLEND's numbers
@@ -71,19 +73,37 @@ inline bool alpha_flagged(AlphaScene a, uint prim) { return ((a.bits[prim >> 5] 
 /// The bits of block `block`'s four triangles (WT_TRIANGLE_BLOCK), lane l at bit l.
 inline uint alpha_block_bits(AlphaScene a, uint block) { return (a.bits[block >> 3] >> ((block & 7u) * 4u)) & 15u; }
 
-/// The coverage of leaf-order triangle `prim` (material `material`, vertices
-/// `v`) at barycentrics (b1, b2): the alpha factor, COLOR_0's alpha and the
-/// base colour texture's alpha at the finest level.
-inline float alpha_coverage(AlphaScene a, uint4 v, __global const WtMaterial* m, float b1, float b2) {
-  float alpha = m->alpha;
+/// What a flagged triangle's test needs whatever the point: its vertices
+/// (w: its material) and its material's alpha row.
+typedef struct AlphaTriangle {
+  uint4 v;
+  WtAlphaMaterial m;
+} AlphaTriangle;
+
+inline AlphaTriangle alpha_triangle(AlphaScene a, uint prim) {
+  AlphaTriangle tri;
+  tri.v = a.tri_info[prim];
+  tri.m = a.materials[tri.v.w];
+  return tri;
+}
+
+/// Whether the triangle's coverage is the same everywhere (the factor): no
+/// texture to read and no COLOR_0 compiled in.
+inline bool alpha_uniform(AlphaTriangle tri) { return !WT_HAS_VERTEX_COLORS && (!WT_HAS_TEXTURES || !tri.m.texture); }
+
+/// The triangle's coverage at barycentrics (b1, b2): the alpha factor,
+/// COLOR_0's alpha and the base colour texture's alpha at the finest level.
+inline float alpha_coverage(AlphaScene a, AlphaTriangle tri, float b1, float b2) {
+  float alpha = tri.m.factor;
 #if WT_HAS_VERTEX_COLORS || WT_HAS_TEXTURES
   float b0 = 1.0f - b1 - b2;
+  uint4 v = tri.v;
 #endif
 #if WT_HAS_VERTEX_COLORS
   alpha *= b0 * a.surface.color[v.x].w + b1 * a.surface.color[v.y].w + b2 * a.surface.color[v.z].w;
 #endif
 #if WT_HAS_TEXTURES
-  if (m->texture_mask & (1u << WT_TEXTURE_SLOT_BASE_COLOR)) {
+  if (tri.m.texture) {
     SurfacePoint sp;
     sp.uv = b0 * a.surface.uv[v.x] + b1 * a.surface.uv[v.y] + b2 * a.surface.uv[v.z];
     sp.uv_scale = (float2)(0.0f);
@@ -97,18 +117,20 @@ inline float alpha_coverage(AlphaScene a, uint4 v, __global const WtMaterial* m,
   return alpha;
 }
 
-/// Whether a hit at barycentrics (b1, b2) of flagged triangle `prim` is kept:
-/// MASK where the coverage reaches the cutoff, BLEND with probability equal
-/// to the coverage (a number of the ray's stream and the triangle, so that
+/// Whether coverage `coverage` of triangle `prim` is there for the ray whose
+/// stream is a.ray: MASK where it reaches the cutoff, BLEND with probability
+/// equal to it (a number of the ray's stream and the triangle, so that
 /// every traversal of the ray decides the same), OPAQUE always.
+inline bool alpha_covered(AlphaScene a, AlphaTriangle tri, uint prim, float coverage) {
+  if (tri.m.mode == WT_ALPHA_MASK) return coverage >= tri.m.cutoff;
+  if (tri.m.mode == WT_ALPHA_BLEND) return rng_alpha_uniform(a.ray, prim) < coverage;
+  return true;
+}
+
+/// Whether a hit at barycentrics (b1, b2) of flagged triangle `prim` is kept.
 inline bool alpha_keeps(AlphaScene a, uint prim, float b1, float b2) {
-  uint4 v = a.tri_info[prim];
-  __global const WtMaterial* m = a.materials + v.w;
-  uint mode = m->alpha_mode;
-  if (mode == WT_ALPHA_OPAQUE) return true;
-  float coverage = alpha_coverage(a, v, m, b1, b2);
-  if (mode == WT_ALPHA_MASK) return coverage >= m->alpha_cutoff;
-  return rng_alpha_uniform(a.ray, prim) < coverage;
+  AlphaTriangle tri = alpha_triangle(a, prim);
+  return alpha_covered(a, tri, prim, alpha_coverage(a, tri, b1, b2));
 }
 
 #else
