@@ -6,12 +6,16 @@
 
 #include "common.h"
 #include "geometry/triangle.cl"
+#include "materials/alpha.cl"
 
 /// The scene's geometry as the traversal sees it.
 typedef struct BvhScene {
   __global const WtBvhNode* nodes;
   uint node_count;
   __global const float4* tri_verts;  ///< 3 per triangle, leaf order, world space
+#if WT_HAS_ALPHA
+  AlphaScene alpha;  ///< the alpha test, with the stream of the ray being traced (WT_ALPHA_BIND)
+#endif
 } BvhScene;
 
 typedef struct Hit {
@@ -75,6 +79,48 @@ inline int4 bvh4_box_hit(__global const WtBvh4Node* n, RayPlanes planes, float3 
   return enter <= exit;
 }
 
+/// The nearest hit among a block's lanes (triangle_intersect4_k) that the
+/// alpha test keeps: a lane whose triangle has a hole there is dropped and
+/// the next nearest lane of the block taken, until one is kept or none is
+/// left. Where WT_HAS_ALPHA is off, triangle_intersect4_k itself.
+__attribute__((always_inline)) inline uint bvh_block_hit_k(BvhScene scene, float3 o_k, RayShear s, float tmin,
+                                                           float tmax, uint block, uint lane_lo, uint lane_hi,
+                                                           uint skip_a, uint skip_b, float* t, float* b1, float* b2) {
+#if WT_HAS_ALPHA
+  TriangleLanes h = triangle_test4_k(o_k, s, tmin, tmax, scene.tri_verts, block, lane_lo, lane_hi, skip_a, skip_b);
+  if (!triangle_any4(h)) return WT_NO_HIT;
+  uint flagged = alpha_block_bits(scene.alpha, block);
+  for (;;) {
+    // t, b1 and b2 are written for a hit kept only: callers keep an earlier block's there
+    float tt, bb1, bb2;
+    uint prim = triangle_nearest4(h, block, &tt, &bb1, &bb2);
+    uint lane = prim & 3u;
+    if (((flagged >> lane) & 1u) == 0u || alpha_keeps(scene.alpha, prim, bb1, bb2)) {
+      *t = tt, *b1 = bb1, *b2 = bb2;
+      return prim;
+    }
+    // a hole: the lane drops out (ok lanes are masked with &, never ~, as triangle_any4 says)
+    h.ok &= (int4)(lane == 0u ? 0 : -1, lane == 1u ? 0 : -1, lane == 2u ? 0 : -1, lane == 3u ? 0 : -1);
+    if (!triangle_any4(h)) return WT_NO_HIT;
+  }
+#else
+  return triangle_intersect4_k(o_k, s, tmin, tmax, scene.tri_verts, block, lane_lo, lane_hi, skip_a, skip_b, t, b1,
+                               b2);
+#endif
+}
+
+/// bvh_block_hit_k for a ray whose origin is in world axes.
+__attribute__((always_inline)) inline uint bvh_block_hit(BvhScene scene, float3 org, RayShear s, float tmin,
+                                                         float tmax, uint block, uint lane_lo, uint lane_hi,
+                                                         uint skip_a, uint skip_b, float* t, float* b1, float* b2) {
+#if WT_HAS_ALPHA
+  return bvh_block_hit_k(scene, triangle_origin_k(org, s), s, tmin, tmax, block, lane_lo, lane_hi, skip_a, skip_b, t,
+                         b1, b2);
+#else
+  return triangle_intersect4(org, s, tmin, tmax, scene.tri_verts, block, lane_lo, lane_hi, skip_a, skip_b, t, b1, b2);
+#endif
+}
+
 // A ray whose origin or direction is NaN or infinite has no slab test: the
 // terms of an empty slot's inverted box become NaN on every axis, fmin and
 // fmax drop them, the slot passes and traversal reads node WT_BVH4_EMPTY.
@@ -85,6 +131,7 @@ inline bool bvh_ray_is_finite(float3 org, float3 dir) { return all(isfinite(org)
 /// finite. Skipping the surface left is what keeps a spawned ray off it: a
 /// plane cannot be hit twice, and no distance threshold is needed that
 /// would also drop real hits close by (a concave corner's other face).
+/// With WT_HAS_ALPHA a hole the alpha test finds (bvh_block_hit) is no hit.
 /// bvh_closest_root starts at node `root` instead of node 0: the root of a
 /// geometry stored once for its placed copies (kernels/geometry/instance.cl),
 /// its nodes after the scene's own tree in the same buffer.
@@ -122,8 +169,8 @@ inline Hit bvh_closest_root(BvhScene scene, uint root, float3 org, float3 dir, f
         uint last = first + count - 1u;
         for (uint b = first >> 2; b <= last >> 2; ++b) {
           float t, b1, b2;
-          uint prim = triangle_intersect4(org, shear, tmin, hit.t, scene.tri_verts, b, b == first >> 2 ? first & 3u : 0u,
-                                          b == last >> 2 ? (last & 3u) + 1u : 4u, skip, skip, &t, &b1, &b2);
+          uint prim = bvh_block_hit(scene, org, shear, tmin, hit.t, b, b == first >> 2 ? first & 3u : 0u,
+                                    b == last >> 2 ? (last & 3u) + 1u : 4u, skip, skip, &t, &b1, &b2);
           if (prim != WT_NO_HIT) {
             hit.t = t;
             hit.b1 = b1;
@@ -170,7 +217,8 @@ inline Hit bvh_closest(BvhScene scene, float3 org, float3 dir, float tmin, float
 /// Any hit in (tmin, tmax) on a triangle other than skip_a and skip_b (the
 /// surface the shadow ray leaves, the emitter it aims at): true when the
 /// segment is blocked, and for a ray that is not finite (no light is carried
-/// along it). From node `root` (bvh_closest_root); bvh_occluded from node 0.
+/// along it); a hole the alpha test finds blocks nothing. From node `root`
+/// (bvh_closest_root); bvh_occluded from node 0.
 inline bool bvh_occluded_root(BvhScene scene, uint root, float3 org, float3 dir, float tmin, float tmax, uint skip_a,
                               uint skip_b) {
   if (!bvh_ray_is_finite(org, dir)) return true;
@@ -196,8 +244,8 @@ inline bool bvh_occluded_root(BvhScene scene, uint root, float3 org, float3 dir,
         uint last = first + count - 1u;
         for (uint b = first >> 2; b <= last >> 2; ++b) {
           float t, b1, b2;
-          if (triangle_intersect4(org, shear, tmin, tmax, scene.tri_verts, b, b == first >> 2 ? first & 3u : 0u,
-                                  b == last >> 2 ? (last & 3u) + 1u : 4u, skip_a, skip_b, &t, &b1, &b2) != WT_NO_HIT)
+          if (bvh_block_hit(scene, org, shear, tmin, tmax, b, b == first >> 2 ? first & 3u : 0u,
+                            b == last >> 2 ? (last & 3u) + 1u : 4u, skip_a, skip_b, &t, &b1, &b2) != WT_NO_HIT)
             return true;
         }
       } else if (next < 0) {

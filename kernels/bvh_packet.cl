@@ -149,6 +149,9 @@ typedef struct RayPacket {
   int kx, ky, kz;    ///< the permutation every lane shares
   pfloat tmin;
   puint skip_a, skip_b;  ///< leaf-order triangles a lane never hits
+#if WT_HAS_ALPHA
+  puint alpha_ray;  ///< each lane's stream for the alpha test (AlphaScene::ray)
+#endif
 } RayPacket;
 
 /// Slab test of child k's box against every lane: a mask of the lanes whose
@@ -422,6 +425,42 @@ inline void packet_set_skip(RayPacket* p, const uint* index, uint lanes, bool co
   p->skip_b = packet_vload(b);
 }
 
+#if WT_HAS_ALPHA
+/// Each lane's stream for the alpha test: the one its ray has traced alone
+/// (WT_ALPHA_RAY of its index), so that both decide the same.
+inline void packet_set_alpha(RayPacket* p, BvhScene scene, const uint* index) {
+  uint ray[WT_PACKET];
+  for (uint l = 0; l < WT_PACKET; ++l) ray[l] = rng_alpha_ray(scene.alpha.key, index[l]);
+  p->alpha_ray = packet_vload(ray);
+}
+
+/// The lanes of `won` (hits on triangle `prim` at barycentrics b1, b2) that
+/// the alpha test keeps: all of them unless the triangle is flagged. A lane
+/// dropped goes on as if the triangle were not there, as alone (each
+/// triangle of a leaf is tested on its own here, so no other candidate is
+/// lost with it).
+inline pint packet_alpha_keep(BvhScene scene, const RayPacket* p, uint prim, pint won, pfloat b1, pfloat b2) {
+  if (!alpha_flagged(scene.alpha, prim)) return won;
+  // the triangle's part once; a uniform coverage (the factor alone) is the same for every lane
+  AlphaTriangle tri = alpha_triangle(scene.alpha, prim);
+  const bool uniform = alpha_uniform(tri);
+  const float uniform_coverage = tri.m.factor;
+  if (uniform && tri.m.mode == WT_ALPHA_MASK) return uniform_coverage >= tri.m.cutoff ? won : (pint)(0);
+  int lane_won[WT_PACKET];
+  float lane_b1[WT_PACKET], lane_b2[WT_PACKET];
+  uint ray[WT_PACKET];
+  packet_vstore(won, lane_won), packet_vstore(b1, lane_b1), packet_vstore(b2, lane_b2);
+  packet_vstore(p->alpha_ray, ray);
+  for (int l = 0; l < WT_PACKET; ++l) {
+    if (!lane_won[l]) continue;
+    scene.alpha.ray = ray[l];
+    float coverage = uniform ? uniform_coverage : alpha_coverage(scene.alpha, tri, lane_b1[l], lane_b2[l]);
+    if (!alpha_covered(scene.alpha, tri, prim, coverage)) lane_won[l] = 0;
+  }
+  return packet_vload(lane_won);
+}
+#endif
+
 #if WT_PACKET_LEAF_LANES > 0
 /// Each lane's ray as scalars, for the leaves that few lanes enter.
 typedef struct PacketLanes {
@@ -429,6 +468,10 @@ typedef struct PacketLanes {
   float sx[WT_PACKET], sy[WT_PACKET], sz[WT_PACKET];
   float tmin[WT_PACKET];
   uint skip_a[WT_PACKET], skip_b[WT_PACKET];
+#if WT_HAS_ALPHA
+  AlphaScene alpha;  ///< the scene's alpha test (the lanes' streams in alpha_ray)
+  uint alpha_ray[WT_PACKET];
+#endif
 } PacketLanes;
 
 inline void packet_lanes(const RayPacket* p, PacketLanes* lanes) {
@@ -436,6 +479,9 @@ inline void packet_lanes(const RayPacket* p, PacketLanes* lanes) {
   packet_vstore(p->sx, lanes->sx), packet_vstore(p->sy, lanes->sy), packet_vstore(p->sz, lanes->sz);
   packet_vstore(p->tmin, lanes->tmin);
   packet_vstore(p->skip_a, lanes->skip_a), packet_vstore(p->skip_b, lanes->skip_b);
+#if WT_HAS_ALPHA
+  packet_vstore(p->alpha_ray, lanes->alpha_ray);
+#endif
 }
 
 /// Lane l's ray against the leaf [first, first + count), four triangles at a
@@ -446,11 +492,16 @@ inline uint packet_lane_leaf(__global const float4* tri_verts, const RayPacket* 
                              uint first, uint count, float tmax, bool any, float* t, float* b1, float* b2) {
   RayShear shear = {p->kx, p->ky, p->kz, lanes->sx[l], lanes->sy[l], lanes->sz[l]};
   float3 org = (float3)(lanes->ox[l], lanes->oy[l], lanes->oz[l]);
+  // the lane's view of the scene: the triangles, and the alpha test with the lane's stream
+  BvhScene scene = {0, 0u, tri_verts};
+#if WT_HAS_ALPHA
+  scene.alpha = lanes->alpha;
+  scene.alpha.ray = lanes->alpha_ray[l];
+#endif
   uint last = first + count - 1u, found = WT_NO_HIT;
   for (uint b = first >> 2; b <= last >> 2; ++b) {
-    uint prim = triangle_intersect4(org, shear, lanes->tmin[l], tmax, tri_verts, b, b == first >> 2 ? first & 3u : 0u,
-                                    b == last >> 2 ? (last & 3u) + 1u : 4u, lanes->skip_a[l], lanes->skip_b[l], t, b1,
-                                    b2);
+    uint prim = bvh_block_hit(scene, org, shear, lanes->tmin[l], tmax, b, b == first >> 2 ? first & 3u : 0u,
+                              b == last >> 2 ? (last & 3u) + 1u : 4u, lanes->skip_a[l], lanes->skip_b[l], t, b1, b2);
     if (prim == WT_NO_HIT) continue;
     found = prim;
     tmax = *t;
@@ -474,6 +525,9 @@ __attribute__((always_inline)) inline void packet_closest(BvhScene scene, const 
 #if WT_PACKET_LEAF_LANES > 0
   PacketLanes lanes;
   packet_lanes(p, &lanes);
+#if WT_HAS_ALPHA
+  lanes.alpha = scene.alpha;
+#endif
 #endif
   uint stack_node[WT_BVH_STACK_SIZE];
   float stack_t[WT_BVH_STACK_SIZE];
@@ -521,6 +575,10 @@ __attribute__((always_inline)) inline void packet_closest(BvhScene scene, const 
           pfloat t, b1, b2;
           pint won = packet_triangle(p, scene.tri_verts, prim, hit, tmax, &t, &b1, &b2);
           if (!packet_any(won)) continue;
+#if WT_HAS_ALPHA
+          won = packet_alpha_keep(scene, p, prim, won, b1, b2);
+          if (!packet_any(won)) continue;
+#endif
           tmax = packet_pick(won, t, tmax);
           *b1_best = packet_pick(won, b1, *b1_best);
           *b2_best = packet_pick(won, b2, *b2_best);
@@ -573,6 +631,9 @@ __attribute__((always_inline)) inline pint packet_occluded(BvhScene scene, const
 #if WT_PACKET_LEAF_LANES > 0
   PacketLanes lanes;
   packet_lanes(p, &lanes);
+#if WT_HAS_ALPHA
+  lanes.alpha = scene.alpha;
+#endif
   float lane_tmax[WT_PACKET];
   packet_vstore(tmax, lane_tmax);
 #endif
@@ -615,6 +676,9 @@ __attribute__((always_inline)) inline pint packet_occluded(BvhScene scene, const
         for (uint prim = first; prim < first + count; ++prim) {
           pfloat t, b1, b2;
           pint won = packet_triangle(p, scene.tri_verts, prim, hit & open, tmax, &t, &b1, &b2);
+#if WT_HAS_ALPHA
+          if (packet_any(won)) won = packet_alpha_keep(scene, p, prim, won, b1, b2);
+#endif
           blocked |= won;
           open &= ~won;
         }
@@ -667,6 +731,9 @@ inline void packet_trace_closest(BvhScene scene, const uint* index, uint lanes, 
   puint prim = (puint)(WT_NO_HIT);
   if (loaded != WT_PACKET_MISSES) {
     packet_set_skip(&p, index, lanes, contiguous, skip, 0);
+#if WT_HAS_ALPHA
+    packet_set_alpha(&p, scene, index);
+#endif
     if (loaded == WT_PACKET_TRACE) {
       packet_closest(scene, &p, valid, &tmax, &b1, &b2, &prim);
     } else {
@@ -692,6 +759,9 @@ inline pint packet_trace_occluded(BvhScene scene, const uint* index, uint lanes,
   const bool contiguous = packet_contiguous(index, lanes);
   int loaded = packet_load(&p, &valid, &tmax, &codes, index, lanes, contiguous, ray_o, ray_d, 0);
   packet_set_skip(&p, index, lanes, contiguous, skip, skip_ab);
+#if WT_HAS_ALPHA
+  packet_set_alpha(&p, scene, index);
+#endif
   // a lane whose ray is not finite counts as blocked, as in bvh_occluded
   pint blocked = ~valid;
   if (loaded == WT_PACKET_TRACE) return blocked | packet_occluded(scene, &p, valid, tmax);

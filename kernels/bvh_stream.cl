@@ -40,7 +40,8 @@ inline uint stream_lowest(ulong m) { return (uint)__builtin_ctzl(m); }
 /// Occlusion of rays index[0 .. n) of a batch (n <= WT_STREAM_RAYS): bit r
 /// of the result is set where ray index[r]'s (tmin, tmax) is blocked by a
 /// triangle other than skip[index[r]], or where the ray is not finite
-/// (bvh_occluded's answers).
+/// (bvh_occluded's answers; with WT_HAS_ALPHA each ray draws from its own
+/// stream, that of ray index[r] alone, so the holes are the same too).
 inline ulong bvh_occluded_stream(BvhScene scene, const uint* index, uint n, __global const float4* ray_o,
                                  __global const float4* ray_d, __global const uint* skip) {
   __global const WtBvh4Node* nodes = (__global const WtBvh4Node*)scene.nodes;
@@ -50,6 +51,9 @@ inline ulong bvh_occluded_stream(BvhScene scene, const uint* index, uint n, __gl
   RayPlanes planes[WT_STREAM_RAYS];
   RayShear shear[WT_STREAM_RAYS];
   uint skip_prim[WT_STREAM_RAYS];
+#if WT_HAS_ALPHA
+  uint alpha_ray[WT_STREAM_RAYS];  // each ray's stream for the alpha test (WT_ALPHA_RAY)
+#endif
   ulong blocked = 0ul;
   ulong open = 0ul;  // rays still searching
   for (uint r = 0; r < n; ++r) {
@@ -68,6 +72,10 @@ inline ulong bvh_occluded_stream(BvhScene scene, const uint* index, uint n, __gl
     org_k[r] = (float3)(vec3_component(o.xyz, shear[r].kx), vec3_component(o.xyz, shear[r].ky),
                         vec3_component(o.xyz, shear[r].kz));
     skip_prim[r] = skip[index[r]];
+#if WT_HAS_ALPHA
+    WT_ALPHA_RAY(scene, index[r]);
+    alpha_ray[r] = scene.alpha.ray;
+#endif
     open |= 1ul << r;
   }
 
@@ -133,11 +141,14 @@ inline ulong bvh_occluded_stream(BvhScene scene, const uint* index, uint n, __gl
         // ray by ray, each through the leaf's blocks until one blocks it
         for (ulong m = enter[k] & open; m != 0ul; m &= m - 1ul) {
           uint r = stream_lowest(m);
+#if WT_HAS_ALPHA
+          scene.alpha.ray = alpha_ray[r];
+#endif
           for (uint b = first >> 2; b <= last >> 2; ++b) {
             float t, b1, b2;
-            if (triangle_intersect4_k(org_k[r], shear[r], tmin[r], tmax[r], scene.tri_verts, b,
-                                      b == first >> 2 ? first & 3u : 0u, b == last >> 2 ? (last & 3u) + 1u : 4u,
-                                      skip_prim[r], WT_NO_HIT, &t, &b1, &b2) != WT_NO_HIT) {
+            if (bvh_block_hit_k(scene, org_k[r], shear[r], tmin[r], tmax[r], b, b == first >> 2 ? first & 3u : 0u,
+                                b == last >> 2 ? (last & 3u) + 1u : 4u, skip_prim[r], WT_NO_HIT, &t, &b1,
+                                &b2) != WT_NO_HIT) {
               open &= ~(1ul << r);
               blocked |= 1ul << r;
               break;
@@ -156,8 +167,11 @@ inline ulong bvh_occluded_stream(BvhScene scene, const uint* index, uint n, __gl
           for (ulong m = enter[k] & open; m != 0ul; m &= m - 1ul) {
             uint r = stream_lowest(m);
             float t, b1, b2;
-            uint prim = triangle_intersect4_k(org_k[r], shear[r], tmin[r], tmax[r], scene.tri_verts, b, lo, hi,
-                                              skip_prim[r], WT_NO_HIT, &t, &b1, &b2);
+#if WT_HAS_ALPHA
+            scene.alpha.ray = alpha_ray[r];
+#endif
+            uint prim = bvh_block_hit_k(scene, org_k[r], shear[r], tmin[r], tmax[r], b, lo, hi, skip_prim[r],
+                                        WT_NO_HIT, &t, &b1, &b2);
             hits |= prim != WT_NO_HIT ? 1ul << r : 0ul;
           }
           open &= ~hits;

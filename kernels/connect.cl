@@ -11,7 +11,7 @@ WT_KERNEL void connect(__global const uint* counters, __global const uint* shado
                        __global const float4* shadow_radiance, __global const WtBvhNode* nodes,
                        uint node_count, __global const float4* tri_verts,
                        __global float4* radiance, __global const uint2* shadow_skip,
-                       __global const uint* hit_instance, WT_GEOMETRY_PARAMS) {
+                       __global const uint* hit_instance, WT_GEOMETRY_PARAMS WT_ALPHA_PARAMS) {
   uint i = get_global_id(0);
   if (i >= counters[WT_COUNTER_SHADOW]) return;
   uint path = shadow_queue[i];
@@ -19,6 +19,7 @@ WT_KERNEL void connect(__global const uint* counters, __global const uint* shado
   float4 o = shadow_o[path];
   float4 d = shadow_d[path];
   BvhScene scene = {nodes, node_count, tri_verts};
+  WT_ALPHA_BIND(scene, path);
   GeometryScene g = WT_GEOMETRY_SCENE;
   uint2 skip = shadow_skip[path];
   // the shadow ray leaves the path's hit: skip.x on the instance hit
@@ -35,13 +36,14 @@ WT_KERNEL void connect_packet(__global const uint* counters, __global const uint
                               __global const float4* shadow_radiance, __global const WtBvhNode* nodes,
                               uint node_count, __global const float4* tri_verts,
                               __global float4* radiance, __global const uint2* shadow_skip,
-                              __global const uint* hit_instance, WT_GEOMETRY_PARAMS) {
+                              __global const uint* hit_instance, WT_GEOMETRY_PARAMS WT_ALPHA_PARAMS) {
   uint first = get_global_id(0) * WT_PACKET;
   uint count = counters[WT_COUNTER_SHADOW];
   if (first >= count) return;
   uint index[WT_PACKET];
   uint lanes = packet_from_queue(shadow_queue, first, count, index);
   BvhScene scene = {nodes, node_count, tri_verts};
+  WT_ALPHA_BIND(scene, index[0]);  // packets set each lane's own (packet_set_alpha)
   int blocked[WT_PACKET];
   packet_vstore(packet_trace_occluded(scene, index, lanes, shadow_o, shadow_d, 0, shadow_skip), blocked);
 #if WT_HAS_PRIMITIVES
@@ -52,6 +54,7 @@ WT_KERNEL void connect_packet(__global const uint* counters, __global const uint
 #if WT_HAS_PRIMITIVES
     // the other primitive types ray by ray, for the rays no triangle blocks
     uint path = index[l];
+    WT_ALPHA_RAY(scene, path);
     float4 o = shadow_o[path], d = shadow_d[path];
     uint2 skip = shadow_skip[path];
     if (bvh_prims_occluded(scene, g, o.xyz, d.xyz, o.w, d.w, skip.x, skip.y,

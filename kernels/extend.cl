@@ -6,13 +6,14 @@ WT_KERNEL void extend(__global const uint* counters, uint queue_slot, __global c
                       __global const float4* ray_o, __global const float4* ray_d,
                       __global const WtBvhNode* nodes, uint node_count,
                       __global const float4* tri_verts, __global float4* hits,
-                      __global const uint* ray_skip, __global uint* hit_instance, WT_GEOMETRY_PARAMS) {
+                      __global const uint* ray_skip, __global uint* hit_instance, WT_GEOMETRY_PARAMS WT_ALPHA_PARAMS) {
   uint i = get_global_id(0);
   if (i >= counters[queue_slot]) return;
   uint path = queue[i];
   float4 o = ray_o[path];
   float4 d = ray_d[path];
   BvhScene scene = {nodes, node_count, tri_verts};
+  WT_ALPHA_BIND(scene, path);
   GeometryScene g = WT_GEOMETRY_SCENE;
   // the ray leaves the path's last hit: ray_skip on the instance hit then
   uint instance;
@@ -31,19 +32,21 @@ WT_KERNEL void extend_packet(__global const uint* counters, uint queue_slot, __g
                              __global const float4* ray_o, __global const float4* ray_d,
                              __global const WtBvhNode* nodes, uint node_count,
                              __global const float4* tri_verts, __global float4* hits,
-                             __global const uint* ray_skip, __global uint* hit_instance, WT_GEOMETRY_PARAMS) {
+                             __global const uint* ray_skip, __global uint* hit_instance, WT_GEOMETRY_PARAMS WT_ALPHA_PARAMS) {
   uint first = get_global_id(0) * WT_PACKET;
   uint count = counters[queue_slot];
   if (first >= count) return;
   uint index[WT_PACKET];
   uint lanes = packet_from_queue(queue, first, count, index);
   BvhScene scene = {nodes, node_count, tri_verts};
+  WT_ALPHA_BIND(scene, index[0]);  // packets set each lane's own (packet_set_alpha)
   packet_trace_closest(scene, index, lanes, ray_o, ray_d, ray_skip, hits);
 #if WT_HAS_PRIMITIVES
   // the other primitive types ray by ray, in front of the triangles' hits
   GeometryScene g = WT_GEOMETRY_SCENE;
   for (uint l = 0; l < lanes; ++l) {
     uint path = index[l];
+    WT_ALPHA_RAY(scene, path);
     float4 o = ray_o[path], d = ray_d[path];
     float4 h = hits[path];
     Hit hit = {h.x, h.y, h.z, as_uint(h.w)};

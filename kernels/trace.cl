@@ -12,6 +12,7 @@ inline void trace_prims_occluded(uint first, uint end, __global const float4* ra
                                  __global uint* occluded, BvhScene scene, GeometryScene g) {
   for (uint i = first; i < end; ++i) {
     if (occluded[i]) continue;
+    WT_ALPHA_RAY(scene, i);
     float4 o = ray_o[i], d = ray_d[i];
     occluded[i] = bvh_prims_occluded(scene, g, o.xyz, d.xyz, o.w, d.w, skip[i], WT_NO_HIT, skip_instance[i]) ? 1u : 0u;
   }
@@ -21,12 +22,13 @@ inline void trace_prims_occluded(uint first, uint end, __global const float4* ra
 WT_KERNEL void trace_closest(uint count, __global const float4* ray_o, __global const float4* ray_d,
                              __global const WtBvhNode* nodes, uint node_count,
                              __global const float4* tri_verts, __global float4* hits,
-                             __global const uint* skip, __global uint* instances, WT_GEOMETRY_PARAMS) {
+                             __global const uint* skip, __global uint* instances, WT_GEOMETRY_PARAMS WT_ALPHA_PARAMS) {
   uint i = get_global_id(0);
   if (i >= count) return;
   float4 o = ray_o[i];
   float4 d = ray_d[i];
   BvhScene scene = {nodes, node_count, tri_verts};
+  WT_ALPHA_BIND(scene, i);
   GeometryScene g = WT_GEOMETRY_SCENE;
   uint instance;
   Hit hit = scene_closest(scene, g, o.xyz, d.xyz, o.w, d.w, skip[i], WT_HAS_INSTANCES ? instances[i] : WT_NO_HIT,
@@ -41,12 +43,13 @@ WT_KERNEL void trace_occluded(uint count, __global const float4* ray_o,
                               __global const float4* ray_d, __global const WtBvhNode* nodes,
                               uint node_count, __global const float4* tri_verts,
                               __global uint* occluded, __global const uint* skip, __global uint* instances,
-                              WT_GEOMETRY_PARAMS) {
+                              WT_GEOMETRY_PARAMS WT_ALPHA_PARAMS) {
   uint i = get_global_id(0);
   if (i >= count) return;
   float4 o = ray_o[i];
   float4 d = ray_d[i];
   BvhScene scene = {nodes, node_count, tri_verts};
+  WT_ALPHA_BIND(scene, i);
   GeometryScene g = WT_GEOMETRY_SCENE;
   occluded[i] = scene_occluded(scene, g, o.xyz, d.xyz, o.w, d.w, skip[i], WT_NO_HIT,
                                WT_HAS_INSTANCES ? instances[i] : WT_NO_HIT) ? 1u : 0u;
@@ -58,10 +61,11 @@ WT_KERNEL void trace_occluded_stream(uint count, __global const float4* ray_o,
                                      __global const float4* ray_d, __global const WtBvhNode* nodes,
                                      uint node_count, __global const float4* tri_verts,
                                      __global uint* occluded, __global const uint* skip,
-                                     __global uint* instances, WT_GEOMETRY_PARAMS) {
+                                     __global uint* instances, WT_GEOMETRY_PARAMS WT_ALPHA_PARAMS) {
   uint i = get_global_id(0);
   if (i >= (count + WT_STREAM_WINDOW - 1u) / WT_STREAM_WINDOW) return;
   BvhScene scene = {nodes, node_count, tri_verts};
+  WT_ALPHA_BIND(scene, i);  // the stream sets each ray's own (bvh_occluded_stream)
   uint first = i * WT_STREAM_WINDOW;
   bvh_occluded_window(scene, first, min(first + WT_STREAM_WINDOW, count), ray_o, ray_d, skip, occluded);
 #if WT_HAS_PRIMITIVES
@@ -75,16 +79,18 @@ WT_KERNEL void trace_occluded_stream(uint count, __global const float4* ray_o,
 WT_KERNEL void trace_closest_packet(uint count, __global const float4* ray_o, __global const float4* ray_d,
                                     __global const WtBvhNode* nodes, uint node_count,
                                     __global const float4* tri_verts, __global float4* hits,
-                                    __global const uint* skip, __global uint* instances, WT_GEOMETRY_PARAMS) {
+                                    __global const uint* skip, __global uint* instances, WT_GEOMETRY_PARAMS WT_ALPHA_PARAMS) {
   uint first = get_global_id(0) * WT_PACKET;
   if (first >= count) return;
   BvhScene scene = {nodes, node_count, tri_verts};
+  WT_ALPHA_BIND(scene, first);  // packets set each lane's own (packet_set_alpha)
   uint index[WT_PACKET];
   for (uint l = 0; l < WT_PACKET; ++l) index[l] = first + l;
   packet_trace_closest(scene, index, min(count - first, (uint)WT_PACKET), ray_o, ray_d, skip, hits);
 #if WT_HAS_PRIMITIVES
   GeometryScene g = WT_GEOMETRY_SCENE;
   for (uint i = first; i < min(count, first + WT_PACKET); ++i) {
+    WT_ALPHA_RAY(scene, i);
     float4 o = ray_o[i], d = ray_d[i], h = hits[i];
     Hit hit = {h.x, h.y, h.z, as_uint(h.w)};
     uint instance = WT_NO_HIT;
@@ -98,10 +104,11 @@ WT_KERNEL void trace_closest_packet(uint count, __global const float4* ray_o, __
 WT_KERNEL void trace_occluded_packet(uint count, __global const float4* ray_o, __global const float4* ray_d,
                                      __global const WtBvhNode* nodes, uint node_count,
                                      __global const float4* tri_verts, __global uint* occluded,
-                                     __global const uint* skip, __global uint* instances, WT_GEOMETRY_PARAMS) {
+                                     __global const uint* skip, __global uint* instances, WT_GEOMETRY_PARAMS WT_ALPHA_PARAMS) {
   uint first = get_global_id(0) * WT_PACKET;
   if (first >= count) return;
   BvhScene scene = {nodes, node_count, tri_verts};
+  WT_ALPHA_BIND(scene, first);  // packets set each lane's own (packet_set_alpha)
   uint index[WT_PACKET];
   for (uint l = 0; l < WT_PACKET; ++l) index[l] = first + l;
   uint lanes = min(count - first, (uint)WT_PACKET);

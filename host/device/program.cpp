@@ -122,6 +122,7 @@ std::vector<std::string> kernelDefines(const KernelFeatures& features) {
       "-D WT_HAS_SPECULAR=" + std::string(features.pbr && features.specular ? "1" : "0"),
       "-D WT_HAS_CLEARCOAT=" + std::string(features.pbr && features.clearcoat ? "1" : "0"),
       "-D WT_HAS_SHEEN=" + std::string(features.pbr && features.sheen ? "1" : "0"),
+      "-D WT_HAS_ALPHA=" + std::string(features.alpha ? "1" : "0"),
       "-D WT_PACKET_WIDTH=" + std::to_string(features.packetWidth),
       "-D WT_STREAM_PREFETCH=" + std::string(features.streamPrefetch ? "1" : "0"),
   };

@@ -27,6 +27,10 @@ struct KernelFeatures {
   bool specular = false;          ///< a dielectric's F0 is not 0.04 or its Fresnel is weighted (KHR_materials_specular, KHR_materials_ior)
   bool clearcoat = false;         ///< a material has a clear coat (KHR_materials_clearcoat)
   bool sheen = false;             ///< a material has a sheen (KHR_materials_sheen)
+  /// A triangle's material can have a hole (alphaMode MASK or BLEND,
+  /// SceneBuffers::hasAlpha): traversal runs the alpha test
+  /// (kernels/materials/alpha.cl) and its kernels take WT_ALPHA_PARAMS
+  bool alpha = false;
   /// The geometry types beside triangles compiled in, by WT_PRIM_* (each
   /// primitiveTypes() entry's define; SceneBuffers::primitiveTypesPresent)
   std::array<bool, WT_PRIM_TYPES> primitives{};

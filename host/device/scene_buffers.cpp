@@ -1,6 +1,7 @@
 #include "device/scene_buffers.h"
 
 #include "bvh/builders.h"
+#include "shared/alpha.h"
 #include "shared/lights.h"
 
 #include <glm/gtc/matrix_transform.hpp>
@@ -346,6 +347,88 @@ SceneBuffers::SceneBuffers(Context& context, const Scene& scene, const BvhBuildO
   materials = upload(context, scene.materials, m_attributeBytes);
   uploadPrimitives(context, scene, options, descs);
   uploadSurface(context, scene);
+  uploadAlpha(context, scene);
+}
+
+bool textureIsOpaque(const TextureSet& textures, std::uint32_t texture) {
+  if (texture >= textures.textures.size()) return false;
+  const WtTexture& tex = textures.textures[texture];
+  if (tex.first_level >= textures.levels.size()) return false;
+  const WtTextureLevel& level = textures.levels[tex.first_level];
+  const bool wide = (tex.flags & WT_TEXTURE_16BIT) != 0u;
+  const std::size_t count = std::size_t(level.width) * level.height * (wide ? 2 : 1);
+  if (std::size_t(level.offset) + count > textures.texels.size()) return false;
+  const wt_uint* texel = textures.texels.data() + level.offset;
+  // 8-bit: A in the top byte; 16-bit: A in the top half of the second uint (shared/textures.h)
+  for (std::size_t i = wide ? 1 : 0; i < count; i += wide ? 2 : 1)
+    if ((texel[i] >> (wide ? 16 : 24)) != (wide ? 0xffffu : 0xffu)) return false;
+  return true;
+}
+
+bool triangleMayHaveHoles(const Scene& scene, std::uint32_t tri, const std::vector<std::int8_t>& opaqueTexture) {
+  if (tri >= scene.triangles.size()) return false;
+  const WtTriangle& t = scene.triangles[tri];
+  if (t.material >= scene.materials.size()) return false;
+  const WtMaterial& m = scene.materials[t.material];
+  if (m.alpha_mode != WT_ALPHA_MASK && m.alpha_mode != WT_ALPHA_BLEND) return false;
+  // the base colour texture as the kernels read it (SceneBuffers::uploadSurface)
+  const std::size_t slot = std::size_t(t.material) * WT_TEXTURE_SLOTS + WT_TEXTURE_SLOT_BASE_COLOR;
+  if ((m.texture_mask & (1u << WT_TEXTURE_SLOT_BASE_COLOR)) && slot < scene.materialTextures.size()) {
+    const std::uint32_t texture = scene.materialTextures[slot].texture;
+    if (texture >= opaqueTexture.size() || !opaqueTexture[texture]) return true;
+  }
+  // the least coverage over the triangle: the factor times its corners' least COLOR_0 alpha
+  float least = m.alpha;
+  if (!scene.colors.empty()) {
+    for (std::uint32_t v : {t.v0, t.v1, t.v2})
+      least = std::min(least, m.alpha * (v < scene.colors.size() ? scene.colors[v].w : 1.0f));
+  }
+  const float needed = m.alpha_mode == WT_ALPHA_MASK ? m.alpha_cutoff : 1.0f;
+  return !(least >= needed);
+}
+
+void SceneBuffers::uploadAlpha(Context& context, const Scene& scene) {
+  m_alphaTriangles = 0;
+  std::vector<std::uint32_t> bits;
+  std::vector<std::int8_t> opaque;  // per texture: its alpha is 1 everywhere
+  const bool any = std::any_of(scene.materials.begin(), scene.materials.end(), [](const WtMaterial& m) {
+    return m.alpha_mode == WT_ALPHA_MASK || m.alpha_mode == WT_ALPHA_BLEND;
+  });
+  if (any) {
+    opaque.resize(scene.textures.textures.size());
+    for (std::size_t t = 0; t < opaque.size(); ++t) opaque[t] = textureIsOpaque(scene.textures, std::uint32_t(t));
+    bits.assign((m_leafToScene.size() + 31) / 32, 0u);
+    for (std::size_t leaf = 0; leaf < m_leafToScene.size(); ++leaf) {
+      // an instanced geometry's triangle stands for its source copy's, whose material every copy shares
+      if (m_leafToScene[leaf] == kNoTriangle || !triangleMayHaveHoles(scene, m_leafToScene[leaf], opaque)) continue;
+      bits[leaf / 32] |= 1u << (leaf % 32);
+      ++m_alphaTriangles;
+    }
+    if (m_alphaTriangles == 0) bits.clear();
+  }
+  alphaBits = upload(context, bits, m_attributeBytes);
+  // each material's row; a texture whose alpha is 1 everywhere is left out
+  std::vector<WtAlphaMaterial> rows;
+  if (m_alphaTriangles > 0) {
+    for (std::size_t i = 0; i < scene.materials.size(); ++i) {
+      const WtMaterial& m = scene.materials[i];
+      const std::size_t slot = i * WT_TEXTURE_SLOTS + WT_TEXTURE_SLOT_BASE_COLOR;
+      const bool textured = m_hasTextures && (m.texture_mask & (1u << WT_TEXTURE_SLOT_BASE_COLOR)) &&
+                            slot < scene.materialTextures.size() &&
+                            !(scene.materialTextures[slot].texture < opaque.size() &&
+                              opaque[scene.materialTextures[slot].texture]);
+      rows.push_back({m.alpha_mode, m.alpha_cutoff, m.alpha, textured ? 1u : 0u});
+    }
+  }
+  alphaMaterials = upload(context, rows, m_attributeBytes);
+}
+
+void SceneBuffers::bindAlpha(cl::Kernel& kernel, int first, std::uint32_t key) const {
+  kernel.setArg(first, cl_uint(key));
+  kernel.setArg(first + 1, alphaBits);
+  kernel.setArg(first + 2, triangleInfo);
+  kernel.setArg(first + 3, alphaMaterials);
+  bindSurface(kernel, first + 4);
 }
 
 void SceneBuffers::uploadSurface(Context& context, const Scene& scene) {
@@ -468,6 +551,7 @@ static_assert(offsetof(WtBvh4Node, child) == 96 && offsetof(WtBvh4Node, count) =
 static_assert(sizeof(WtMaterial) == 128 && offsetof(WtMaterial, specular) == 80 && offsetof(WtMaterial, sheen) == 96 &&
               offsetof(WtMaterial, clearcoat) == 112);
 static_assert(sizeof(WtTextureRef) == 48);
+static_assert(sizeof(WtAlphaMaterial) == 16);
 static_assert(sizeof(WtTexture) == 16 && sizeof(WtTextureLevel) == 16);
 static_assert(sizeof(WtCamera) == 64);
 static_assert(sizeof(WtFrameParams) == 64);

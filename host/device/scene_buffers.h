@@ -35,6 +35,18 @@ struct PrimitiveTree {
 };
 PrimitiveTree buildPrimitiveTree(const PrimitiveRows& rows, const BvhBuildOptions& options);
 
+/// Whether scene triangle `tri` can have a hole under its material's alpha
+/// mode (kernels/materials/alpha.cl): MASK where its coverage (the alpha
+/// factor, COLOR_0's alpha at its corners, the base colour texture's alpha)
+/// can fall below the cutoff, BLEND where it can fall below 1. A texture
+/// whose alpha is 1 everywhere (a JPEG, an opaque PNG) counts as none:
+/// `opaqueTexture` answers for texture indices (textureIsOpaque).
+bool triangleMayHaveHoles(const Scene& scene, std::uint32_t tri, const std::vector<std::int8_t>& opaqueTexture);
+
+/// Whether texture `texture` of the scene's TextureSet is opaque: its
+/// finest level's alpha is 1 at every texel.
+bool textureIsOpaque(const TextureSet& textures, std::uint32_t texture);
+
 /// "off", "on", "auto" (Instancing, host/bvh/lbvh.h).
 std::optional<Instancing> parseInstancing(std::string_view name);
 
@@ -89,6 +101,27 @@ class SceneBuffers {
   /// Whether a material reads a texture / the vertices have COLOR_0 (KernelFeatures).
   bool hasTextures() const { return m_hasTextures; }
   bool hasVertexColors() const { return m_hasVertexColors; }
+
+  /// One bit per leaf-order triangle (bit t % 32 of word t / 32): set where
+  /// the triangle may have a hole (triangleMayHaveHoles), so that traversal
+  /// reads the material of those triangles' hits only. A bit per triangle
+  /// rather than a flag in the material: the material is a second dependent
+  /// load (tri_info, then 80 bytes) on every hit, the bits a 1 MiB-per-8 M
+  /// triangles array whose word for a block of four sits with its
+  /// neighbours' in one cache line. One dummy word when no triangle has one.
+  cl::Buffer alphaBits;
+  /// WtAlphaMaterial per material (shared/alpha.h): what the test reads of
+  /// it; one dummy entry when no triangle has a hole.
+  cl::Buffer alphaMaterials;
+  /// Leaf-order triangles whose bit is set: an instanced geometry's once.
+  std::size_t alphaTriangles() const { return m_alphaTriangles; }
+  /// Whether the alpha test is needed at all (KernelFeatures::alpha).
+  bool hasAlpha() const { return m_alphaTriangles > 0; }
+  /// Set the kernel's WT_ALPHA_PARAMS, arguments first .. first + 10: the
+  /// launch's key for stochastic transparency (rng_alpha_key, set again per
+  /// launch where it changes), alphaBits, triangleInfo, alphaMaterials and
+  /// the surface (bindSurface). Only kernels built with WT_HAS_ALPHA have them.
+  void bindAlpha(cl::Kernel& kernel, int first, std::uint32_t key = 0) const;
   std::uint32_t nodeCount = 0;
   std::size_t uploadedBytes = 0;  ///< nodes + triangle data (tri_verts, tri_info)
 
@@ -165,7 +198,10 @@ class SceneBuffers {
 
   void uploadSurface(Context& context, const Scene& scene);
 
+  void uploadAlpha(Context& context, const Scene& scene);
+
   bool m_hasTextures = false, m_hasVertexColors = false;
+  std::size_t m_alphaTriangles = 0;
   BvhBuildStats m_bvhStats;
   Bvh4Stats m_bvh4Stats;
   std::size_t m_leafMisfits = 0;

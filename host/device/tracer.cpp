@@ -20,6 +20,10 @@ Tracer::Tracer(Context& context, const Scene& scene, const BvhBuildOptions& opti
   features.packetWidth = m_packetWidth;
   features.streamPrefetch = m_streamPrefetch;
   features.primitives = m_scene->primitiveTypesPresent();
+  // the alpha test reads the surface: texture coordinates, COLOR_0 and textures
+  features.alpha = m_scene->hasAlpha();
+  features.textures = features.alpha && m_scene->hasTextures();
+  features.vertexColors = features.alpha && m_scene->hasVertexColors();
   m_program = buildProgram(context, features);
   m_closest = cl::Kernel(m_program, "trace_closest");
   m_occluded = cl::Kernel(m_program, "trace_occluded");
@@ -95,6 +99,7 @@ void Tracer::run(cl::Kernel& kernel, const char* name, std::size_t rays, Travers
   kernel.setArg(a++, m_skip);
   kernel.setArg(a++, m_instances);
   m_scene->bindGeometry(kernel, a);
+  if (m_scene->hasAlpha()) m_scene->bindAlpha(kernel, a + 5, m_alphaKey);
   const std::size_t kPacket = std::size_t(m_packetWidth);
   std::size_t items = rays, localSize = Context::kLocalSize;
   if (traversal == Traversal::kPacket) {

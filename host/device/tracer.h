@@ -73,6 +73,10 @@ class Tracer {
   int packetWidth() const { return m_packetWidth; }
   /// Whether this tracer's streams ask for a node's children early.
   bool streamPrefetch() const { return m_streamPrefetch; }
+  /// The key of stochastic transparency's numbers (rng_alpha_key; alphaMode
+  /// BLEND) for the next trace calls: ray i of a call draws from stream
+  /// rng_alpha_ray(key, i), whichever the traversal. 0 until set.
+  void setAlphaKey(std::uint32_t key) { m_alphaKey = key; }
   /// Kernel time of the last trace call (profiling events), seconds.
   double lastKernelSeconds() const { return m_lastKernelSeconds; }
 
@@ -90,6 +94,7 @@ class Tracer {
   cl::Buffer m_rayO, m_rayD, m_skip, m_out;
   cl::Buffer m_instances;  ///< per ray: in, the instance of the surface it leaves; out, the instance hit
   std::size_t m_capacity = 0;
+  std::uint32_t m_alphaKey = 0;
   double m_lastKernelSeconds = 0.0;
 };
 

@@ -2,6 +2,7 @@
 
 #include "device/program.h"
 #include "render/material_tables.h"
+#include "shared/rng.h"
 
 #include <algorithm>
 #include <chrono>
@@ -10,6 +11,10 @@
 
 namespace wt {
 namespace {
+
+/// Where WT_ALPHA_PARAMS start in extend, extend_packet, connect and
+/// connect_packet: after their 11 arguments and WT_GEOMETRY_PARAMS (5).
+constexpr int kAlphaArg = 16;
 
 WtFrameParams frameParams(const RenderSettings& s, const LightList& lights, int sample, int bounce) {
   WtFrameParams p{};
@@ -69,6 +74,7 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
   features.primitives = m_scene->primitiveTypesPresent();
   features.textures = m_scene->hasTextures();
   features.vertexColors = m_scene->hasVertexColors();
+  features.alpha = m_scene->hasAlpha();
   m_program = buildProgram(context, features);
   m_generate = cl::Kernel(m_program, "generate");
   m_extend = cl::Kernel(m_program, "extend");
@@ -145,6 +151,7 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
     k->setArg(9, m_raySkip);
     k->setArg(10, m_hitInstance);
     m_scene->bindGeometry(*k, 11);
+    if (features.alpha) m_scene->bindAlpha(*k, kAlphaArg);
   }
 
   // shade: 0 frame, 1 environment, 2-4 its arrays, 5 counters, 6-9 queues (per bounce), 10- fixed
@@ -174,6 +181,7 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
     k->setArg(a++, m_shadowSkip);
     k->setArg(a++, m_hitInstance);
     m_scene->bindGeometry(*k, a);
+    if (features.alpha) m_scene->bindAlpha(*k, kAlphaArg);
   }
 
   a = 1;
@@ -216,6 +224,9 @@ void Renderer::renderSample() {
     cl::Kernel& extend = packets ? m_extendPacket : m_extend;
     extend.setArg(1, inSlot);
     extend.setArg(2, *queueIn);
+    // stochastic transparency: numbers of their own per sample, bounce and stage
+    if (m_scene->hasAlpha())
+      extend.setArg(kAlphaArg, rng_alpha_key(cl_uint(sample), cl_uint(bounce), WT_DIM_ALPHA_EXTEND, m_settings.seed));
     if (packets)
       m_context.launch("extend_packet", extend, (alive + m_packetWidth - 1) / m_packetWidth);
     else
@@ -233,6 +244,9 @@ void Renderer::renderSample() {
 
     // connect: shadow rays of this bounce (count read on the device)
     if (m_lights.sampleable) {
+      if (m_scene->hasAlpha())
+        (packets ? m_connectPacket : m_connect)
+            .setArg(kAlphaArg, rng_alpha_key(cl_uint(sample), cl_uint(bounce), WT_DIM_ALPHA_SHADOW, m_settings.seed));
       if (packets)
         m_context.launch("connect_packet", m_connectPacket, (alive + m_packetWidth - 1) / m_packetWidth);
       else

@@ -382,12 +382,10 @@ class Converter {
       const float metallic = unitFactor(pbr.metallicFactor, "metallicFactor");
       const float roughness = unitFactor(pbr.roughnessFactor, "roughnessFactor");
 
-      if (src.alphaMode != "OPAQUE")
-        m_scene.addWarning("alphaMode " + src.alphaMode + " is not supported yet; drawn as OPAQUE");
-
       // glTF draws a single-sided material's back face not at all: it emits from the front only
       WtMaterial material = makePbrMaterial(clamped, metallic, roughness, emission, src.doubleSided);
       if (pbr.baseColorFactor.size() >= 4) material.alpha = unitFactor(pbr.baseColorFactor[3], "baseColorFactor alpha");
+      setAlphaMode(src, label, material);
       material = withTransmissionExtensions(src, label, material);
       material = withLayerExtensions(src, label, material);
 
@@ -428,6 +426,31 @@ class Converter {
       m_scene.materials.push_back(material);
       m_scene.materialNames.push_back(src.name.empty() ? "material " + std::to_string(i) : src.name);
     }
+  }
+
+  /// alphaMode and alphaCutoff (kernels/materials/alpha.cl). An unknown mode
+  /// is drawn as OPAQUE (the specification's default) and a negative cutoff
+  /// as 0, each with a warning naming the material; a cutoff that is not a
+  /// number is an error.
+  void setAlphaMode(const tinygltf::Material& src, const std::string& label, WtMaterial& material) {
+    if (src.alphaMode == "MASK") {
+      material.alpha_mode = WT_ALPHA_MASK;
+    } else if (src.alphaMode == "BLEND") {
+      material.alpha_mode = WT_ALPHA_BLEND;
+    } else {
+      material.alpha_mode = WT_ALPHA_OPAQUE;
+      if (src.alphaMode != "OPAQUE")
+        m_scene.addWarning(label + ": alphaMode '" + src.alphaMode +
+                           "' is not OPAQUE, MASK or BLEND; drawn as OPAQUE");
+    }
+    // tinygltf gives the specification's default, 0.5, where the file has none
+    double cutoff = src.alphaCutoff;
+    if (!std::isfinite(cutoff)) fail(label + ": alphaCutoff is not finite");
+    if (cutoff < 0.0) {
+      m_scene.addWarning(label + ": alphaCutoff " + std::to_string(cutoff) + " is negative; 0 used (nothing is cut out)");
+      cutoff = 0.0;
+    }
+    material.alpha_cutoff = float(cutoff);
   }
 
   /// Where a material reads a texture: glTF's textureInfo.

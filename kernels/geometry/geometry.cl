@@ -11,6 +11,12 @@
 
 #include "common.h"
 #include "geometry/triangle.cl"
+// The instance case (instance.cl) traverses triangles, which bring the alpha
+// test and the surface it reads (materials/alpha.cl, textured.cl): included
+// here, outside the switch below, because the host expands each include once,
+// where it first appears (expandKernelSource), and a later includer (light
+// sampling) needs textured.cl whether instances are compiled in or not.
+#include "bvh.cl"
 
 #ifndef WT_HAS_SPHERES
 #error "WT_HAS_SPHERES is not defined: build options must come from kernelDefines()"
@@ -75,12 +81,18 @@ inline uint4 geometry_instance_info(GeometryScene g, uint prim) {
 /// (triangle, instance) pair: the triangle is skipped on that copy only.
 inline bool geometry_instance_closest(BvhScene scene, GeometryScene g, uint prim, float3 o, float3 d, float tmin,
                                       uint skip, uint skip_instance, Hit* hit) {
+#if WT_HAS_ALPHA
+  scene.alpha.ray = rng_alpha_instance(scene.alpha.ray, prim);  // each copy's holes of its own (stochastic ones)
+#endif
   return instance_closest(scene, geometry_instance_rows(g, prim), geometry_instance_info(g, prim).x, o, d, tmin,
                           hit->t, prim == skip_instance ? skip : WT_NO_HIT, hit);
 }
 
 inline bool geometry_instance_occluded(BvhScene scene, GeometryScene g, uint prim, float3 o, float3 d, float tmin,
                                        float tmax, uint skip, uint skip_instance) {
+#if WT_HAS_ALPHA
+  scene.alpha.ray = rng_alpha_instance(scene.alpha.ray, prim);
+#endif
   return instance_occluded(scene, geometry_instance_rows(g, prim), geometry_instance_info(g, prim).x, o, d, tmin, tmax,
                            prim == skip_instance ? skip : WT_NO_HIT);
 }

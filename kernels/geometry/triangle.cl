@@ -92,22 +92,29 @@ inline void triangle_corners(__global const float4* tri_verts, uint prim, float3
   *p2 = (float3)(f[24], f[28], f[32]);
 }
 
-/// The nearest hit in (tmin, tmax) among the triangles of block `block`
+/// The four lanes of a block's test (triangle_test4_k): which lanes hit, and
+/// each lane's distance and barycentric terms (b1 = v inv_det, b2 = w inv_det).
+typedef struct TriangleLanes {
+  int4 ok;  ///< non-zero: the lane's triangle is hit in (tmin, tmax) and not skipped
+  float4 t, v, w, inv_det;
+} TriangleLanes;
+
+/// The hits in (tmin, tmax) of the triangles of block `block`
 /// (leaf-order triangles 4 block + lane) whose lanes lie in [lane_lo,
 /// lane_hi), but skip_a and skip_b, tested at once: the watertight test of
 /// triangle_intersect on float4 lanes, one triangle per lane, with the same
 /// operations in the same order (so the same answers). The block's rows are
 /// already one axis of one corner for the four triangles: the ray's axes
-/// (kx, ky, kz) pick rows, no shuffle. Returns the lane's triangle or
-/// WT_NO_HIT; ties go to the lower index, as testing them one by one would.
-/// This form takes the ray's origin already on its permuted axes
-/// (o_k = (org[kx], org[ky], org[kz])), for callers that keep it per ray
-/// (streams test many leaves with each ray); triangle_intersect4 below picks
-/// them from the origin.
-__attribute__((always_inline)) inline uint triangle_intersect4_k(float3 o_k, RayShear s, float tmin, float tmax,
-                                                                 __global const float4* tri_verts, uint block,
-                                                                 uint lane_lo, uint lane_hi, uint skip_a, uint skip_b,
-                                                                 float* t_hit, float* b1, float* b2) {
+/// (kx, ky, kz) pick rows, no shuffle. triangle_nearest4 picks the nearest
+/// lane; traversal with the alpha test (bvh_block_hit, kernels/bvh.cl)
+/// drops the lanes whose surface has a hole there and picks again. This
+/// form takes the ray's origin already on its permuted axes (o_k = (org[kx],
+/// org[ky], org[kz]), triangle_origin_k), for callers that keep it per ray
+/// (streams test many leaves with each ray).
+__attribute__((always_inline)) inline TriangleLanes triangle_test4_k(float3 o_k, RayShear s, float tmin, float tmax,
+                                                                      __global const float4* tri_verts, uint block,
+                                                                      uint lane_lo, uint lane_hi, uint skip_a,
+                                                                      uint skip_b) {
   __global const float4* r = tri_verts + WT_TRIANGLE_BLOCK_ROWS * block;
   float ox = o_k.x, oy = o_k.y, oz = o_k.z;
   float4 vx[3], vy[3], vz[3];
@@ -150,12 +157,23 @@ __attribute__((always_inline)) inline uint triangle_intersect4_k(float3 o_k, Ray
   float4 t = t_scaled * inv_det;
   uint4 lane = (uint4)(0u, 1u, 2u, 3u);
   uint4 index = (uint4)(4u * block) + lane;
-  int4 ok = inside & (det != 0.0f) & (t > tmin) & (t < tmax) & (lane >= (uint4)(lane_lo)) & (lane < (uint4)(lane_hi)) &
-            (index != (uint4)(skip_a)) & (index != (uint4)(skip_b));
-  // Lanes are combined with & and | and tested for non-zero, never by their
-  // sign bit (any, select) or with ~: Oclgrind's optimised build makes some
-  // of these comparisons 1 instead of -1.
-  if (!(ok.s0 | ok.s1 | ok.s2 | ok.s3)) return WT_NO_HIT;
+  TriangleLanes h;
+  h.ok = inside & (det != 0.0f) & (t > tmin) & (t < tmax) & (lane >= (uint4)(lane_lo)) & (lane < (uint4)(lane_hi)) &
+         (index != (uint4)(skip_a)) & (index != (uint4)(skip_b));
+  h.t = t;
+  h.v = v;
+  h.w = w;
+  h.inv_det = inv_det;
+  return h;
+}
+
+/// The nearest of a block's lanes that hit (h.ok has one at least): its
+/// leaf-order triangle, distance and barycentrics; ties go to the lower
+/// index, as testing the triangles one by one would.
+__attribute__((always_inline)) inline uint triangle_nearest4(TriangleLanes h, uint block, float* t_hit, float* b1,
+                                                             float* b2) {
+  int4 ok = h.ok;
+  float4 t = h.t, v = h.v, w = h.w, inv_det = h.inv_det;
   float4 tt = (float4)(ok.s0 ? t.s0 : INFINITY, ok.s1 ? t.s1 : INFINITY, ok.s2 ? t.s2 : INFINITY, ok.s3 ? t.s3 : INFINITY);
   float best = fmin(fmin(tt.s0, tt.s1), fmin(tt.s2, tt.s3));
   int l = (ok.s0 && tt.s0 == best) ? 0 : (ok.s1 && tt.s1 == best) ? 1 : (ok.s2 && tt.s2 == best) ? 2 : 3;
@@ -168,13 +186,34 @@ __attribute__((always_inline)) inline uint triangle_intersect4_k(float3 o_k, Ray
   return 4u * block + (uint)l;
 }
 
+/// Whether any lane of a block's test hit. Lanes are combined with & and |
+/// and tested for non-zero, never by their sign bit (any, select) or with ~:
+/// Oclgrind's optimised build makes some of these comparisons 1 instead of -1.
+inline bool triangle_any4(TriangleLanes h) { return (h.ok.s0 | h.ok.s1 | h.ok.s2 | h.ok.s3) != 0; }
+
+/// The nearest hit among a block's lanes (triangle_test4_k, triangle_nearest4):
+/// its triangle, or WT_NO_HIT.
+__attribute__((always_inline)) inline uint triangle_intersect4_k(float3 o_k, RayShear s, float tmin, float tmax,
+                                                                 __global const float4* tri_verts, uint block,
+                                                                 uint lane_lo, uint lane_hi, uint skip_a, uint skip_b,
+                                                                 float* t_hit, float* b1, float* b2) {
+  TriangleLanes h = triangle_test4_k(o_k, s, tmin, tmax, tri_verts, block, lane_lo, lane_hi, skip_a, skip_b);
+  if (!triangle_any4(h)) return WT_NO_HIT;
+  return triangle_nearest4(h, block, t_hit, b1, b2);
+}
+
+/// The ray's origin on its permuted axes, as triangle_test4_k takes it.
+inline float3 triangle_origin_k(float3 org, RayShear s) {
+  return (float3)(vec3_component(org, s.kx), vec3_component(org, s.ky), vec3_component(org, s.kz));
+}
+
 /// triangle_intersect4_k for a ray whose origin is in world axes.
 __attribute__((always_inline)) inline uint triangle_intersect4(float3 org, RayShear s, float tmin, float tmax,
                                                                __global const float4* tri_verts, uint block,
                                                                uint lane_lo, uint lane_hi, uint skip_a, uint skip_b,
                                                                float* t_hit, float* b1, float* b2) {
-  float3 o_k = (float3)(vec3_component(org, s.kx), vec3_component(org, s.ky), vec3_component(org, s.kz));
-  return triangle_intersect4_k(o_k, s, tmin, tmax, tri_verts, block, lane_lo, lane_hi, skip_a, skip_b, t_hit, b1, b2);
+  return triangle_intersect4_k(triangle_origin_k(org, s), s, tmin, tmax, tri_verts, block, lane_lo, lane_hi, skip_a,
+                               skip_b, t_hit, b1, b2);
 }
 
 /// Point with barycentrics (1 - b1 - b2, b1, b2) on triangle (p0, p1, p2),

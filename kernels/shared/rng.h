@@ -6,6 +6,9 @@
 // dims 2-3: BSDF direction; 4-5: point on the light; 6: light selection;
 // 7: Russian roulette; 8: BSDF lobe; 9: light tree descent. Pairs (2k, 2k+1) are stratified
 // together by the Sobol sampler. Later features take the next free dimensions.
+// Stochastic transparency (kernels/materials/alpha.cl) keys its numbers by
+// dimension 10 (extend) and 11 (shadow rays): one per (ray, triangle), which
+// the sampler's fixed dimensions cannot give.
 #ifndef WT_SHARED_RNG_H
 #define WT_SHARED_RNG_H
 
@@ -29,6 +32,24 @@ WT_INLINE float rng_uniform(wt_uint pixel, wt_uint sample, wt_uint bounce, wt_ui
                             wt_uint seed) {
   wt_uint h = rng_hash(seed ^ rng_hash(pixel ^ rng_hash(sample ^ rng_hash((bounce << 8u) + dim))));
   return (float)(h >> 8u) * (1.0f / 16777216.0f);
+}
+
+/// Stochastic transparency's numbers (kernels/materials/alpha.cl): a key per
+/// launch (the host computes it: sample, bounce, stage dimension, seed), a
+/// stream per ray of the launch, and one uniform per triangle the ray meets.
+#define WT_DIM_ALPHA_EXTEND 10u
+#define WT_DIM_ALPHA_SHADOW 11u
+WT_INLINE wt_uint rng_alpha_key(wt_uint sample, wt_uint bounce, wt_uint dim, wt_uint seed) {
+  return rng_hash(seed ^ rng_hash(sample ^ rng_hash((bounce << 8u) + dim)));
+}
+WT_INLINE wt_uint rng_alpha_ray(wt_uint key, wt_uint ray) { return rng_hash(key ^ rng_hash(ray)); }
+/// The stream of a ray inside instance `instance` (a typed id): each copy of
+/// a geometry stored once draws its own numbers for its triangles.
+WT_INLINE wt_uint rng_alpha_instance(wt_uint ray_stream, wt_uint instance) {
+  return rng_hash(ray_stream ^ rng_hash(instance + 0x7f4a7c15u));
+}
+WT_INLINE float rng_alpha_uniform(wt_uint ray_stream, wt_uint prim) {
+  return (float)(rng_hash(ray_stream ^ rng_hash(prim + 0x9e3779b9u)) >> 8u) * (1.0f / 16777216.0f);
 }
 
 #endif  // WT_SHARED_RNG_H

@@ -1092,8 +1092,57 @@ TEST(GltfLoader, UnsupportedFeaturesWarnOnceEach) {
   EXPECT_EQ(count("KHR_materials_unlit"), 0);
   EXPECT_EQ(count("emissive_strength"), 0);
   EXPECT_EQ(count("metallic"), 0);  // the metallic-roughness model draws metallicFactor
-  EXPECT_EQ(count("alphaMode BLEND"), 1);
+  EXPECT_EQ(count("alphaMode"), 0);  // drawn since 2026-12 (kernels/materials/alpha.cl)
   EXPECT_EQ(count("doubleSided"), 0);
+}
+
+TEST(GltfLoader, AlphaModeAndCutoffAreRead) {
+  GltfDoc doc = triangleDoc();
+  doc.meshes[0] = "{\"primitives\":[{\"attributes\":{\"POSITION\":0},\"material\":0}]}";
+  doc.materials.push_back("{\"pbrMetallicRoughness\":{\"baseColorFactor\":[1,1,1,0.25]}}");
+  doc.materials.push_back("{\"alphaMode\":\"OPAQUE\",\"alphaCutoff\":0.9}");
+  doc.materials.push_back("{\"alphaMode\":\"MASK\"}");
+  doc.materials.push_back("{\"alphaMode\":\"MASK\",\"alphaCutoff\":0.75}");
+  doc.materials.push_back("{\"alphaMode\":\"BLEND\",\"pbrMetallicRoughness\":{\"baseColorFactor\":[1,1,1,0.3]}}");
+  doc.materials.push_back("{\"alphaMode\":\"MASK\",\"alphaCutoff\":0}");
+  Scene s = loadDoc(doc);
+  ASSERT_EQ(s.materials.size(), 6u);
+  EXPECT_EQ(s.materials[0].alpha_mode, WT_ALPHA_OPAQUE);  // the default
+  EXPECT_FLOAT_EQ(s.materials[0].alpha, 0.25f);
+  EXPECT_FLOAT_EQ(s.materials[0].alpha_cutoff, 0.5f);
+  EXPECT_EQ(s.materials[1].alpha_mode, WT_ALPHA_OPAQUE);
+  EXPECT_EQ(s.materials[2].alpha_mode, WT_ALPHA_MASK);
+  EXPECT_FLOAT_EQ(s.materials[2].alpha_cutoff, 0.5f);  // the specification's default
+  EXPECT_EQ(s.materials[3].alpha_mode, WT_ALPHA_MASK);
+  EXPECT_FLOAT_EQ(s.materials[3].alpha_cutoff, 0.75f);
+  EXPECT_EQ(s.materials[4].alpha_mode, WT_ALPHA_BLEND);
+  EXPECT_FLOAT_EQ(s.materials[4].alpha, 0.3f);
+  EXPECT_EQ(s.materials[5].alpha_mode, WT_ALPHA_MASK);
+  EXPECT_FLOAT_EQ(s.materials[5].alpha_cutoff, 0.0f);
+  EXPECT_TRUE(s.warnings.empty()) << s.warnings.front();
+}
+
+TEST(GltfLoader, BadAlphaModesAndCutoffsNameTheMaterial) {
+  GltfDoc doc = triangleDoc();
+  doc.meshes[0] = "{\"primitives\":[{\"attributes\":{\"POSITION\":0},\"material\":0}]}";
+  doc.materials.push_back("{\"name\":\"fuzzy\",\"alphaMode\":\"DITHER\"}");
+  doc.materials.push_back("{\"name\":\"sieve\",\"alphaMode\":\"MASK\",\"alphaCutoff\":-0.5}");
+  doc.materials.push_back("{\"alphaMode\":\"mask\"}");  // names are case-sensitive
+  Scene s = loadDoc(doc);
+  ASSERT_EQ(s.materials.size(), 3u);
+  EXPECT_EQ(s.materials[0].alpha_mode, WT_ALPHA_OPAQUE);
+  EXPECT_EQ(s.materials[1].alpha_mode, WT_ALPHA_MASK);
+  EXPECT_FLOAT_EQ(s.materials[1].alpha_cutoff, 0.0f);
+  EXPECT_EQ(s.materials[2].alpha_mode, WT_ALPHA_OPAQUE);
+  auto has = [&](const std::string& part) {
+    return std::any_of(s.warnings.begin(), s.warnings.end(),
+                       [&](const std::string& w) { return w.find(part) != std::string::npos; });
+  };
+  EXPECT_TRUE(has("material 0 'fuzzy': alphaMode 'DITHER' is not OPAQUE, MASK or BLEND; drawn as OPAQUE"));
+  EXPECT_TRUE(has("material 1 'sieve': alphaCutoff -0.5"));
+  EXPECT_TRUE(has("is negative; 0 used"));
+  EXPECT_TRUE(has("material 2: alphaMode 'mask'"));
+  EXPECT_EQ(s.warnings.size(), 3u);
 }
 
 TEST(GltfLoader, TextureProblemsNameTheirElement) {
