@@ -1517,16 +1517,11 @@ class Converter {
     // the camera with its scene. The rays need an orthonormal basis (a sheared
     // or non-uniformly scaled one skews the image): keep -Z's direction, make
     // +Y perpendicular to it, X last (on its side, so a mirroring node mirrors)
-    const glm::dvec3 axisZ = glm::normalize(glm::dvec3(world[2]));
-    glm::dvec3 axisY = glm::dvec3(world[1]) - glm::dot(glm::dvec3(world[1]), axisZ) * axisZ;
-    axisY = glm::normalize(axisY);
-    glm::dvec3 axisX = glm::dvec3(world[0]) - glm::dot(glm::dvec3(world[0]), axisZ) * axisZ -
-                       glm::dot(glm::dvec3(world[0]), axisY) * axisY;
-    axisX = glm::normalize(axisX);
-    if (!std::isfinite(axisX.x + axisX.y + axisX.z + axisY.x + axisY.y + axisY.z + axisZ.x + axisZ.y + axisZ.z))
+    const glm::dmat4 rigid = rigidCameraTransform(world);
+    const glm::dvec3 axes = glm::dvec3(rigid[0]) + glm::dvec3(rigid[1]) + glm::dvec3(rigid[2]);
+    if (!std::isfinite(axes.x + axes.y + axes.z))
       fail(label + " (node " + std::to_string(nodeIndex) + "): its node's axes are too close to parallel "
            "to give the camera a view direction");
-    glm::dmat4 rigid(glm::dvec4(axisX, 0.0), glm::dvec4(axisY, 0.0), glm::dvec4(axisZ, 0.0), world[3]);
     // distances in the camera's own units (znear, orthographic extents) are
     // world distances times the node's scale along that axis
     const double scaleZ = glm::length(glm::dvec3(world[2]));

@@ -80,4 +80,12 @@ WtCamera makeCamera(const CameraDesc& desc, int width, int height) {
   return cam;
 }
 
+glm::dmat4 rigidCameraTransform(const glm::dmat4& world) {
+  const glm::dvec3 z = glm::normalize(glm::dvec3(world[2]));
+  const glm::dvec3 y = glm::normalize(glm::dvec3(world[1]) - glm::dot(glm::dvec3(world[1]), z) * z);
+  const glm::dvec3 x = glm::normalize(glm::dvec3(world[0]) - glm::dot(glm::dvec3(world[0]), z) * z -
+                                      glm::dot(glm::dvec3(world[0]), y) * y);
+  return glm::dmat4(glm::dvec4(x, 0.0), glm::dvec4(y, 0.0), glm::dvec4(z, 0.0), world[3]);
+}
+
 }  // namespace wt

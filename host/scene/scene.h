@@ -124,6 +124,12 @@ struct Scene {
 /// that the whole box fits the vertical field of view.
 CameraDesc defaultCamera(const Aabb& bounds);
 
+/// A camera transform with rigid axes: -Z keeps its direction, +Y is made
+/// perpendicular to it, X last (on its side, so a mirroring transform still
+/// mirrors); the translation as it was. Non-finite axes where the
+/// transform's are parallel or zero.
+glm::dmat4 rigidCameraTransform(const glm::dmat4& world);
+
 /// The device camera for an image of width x height pixels.
 WtCamera makeCamera(const CameraDesc& desc, int width, int height);
 

@@ -838,19 +838,12 @@ class Loader {
       // a scaling placement scales the camera's distances (the file's camera
       // axes are unit): znear along its view axis, the orthographic extents
       // along theirs; the rays need rigid axes again (as the glTF loader makes them)
-      const glm::dvec3 axisZ = glm::normalize(glm::dvec3(world[2]));
-      glm::dvec3 axisY = glm::dvec3(world[1]) - glm::dot(glm::dvec3(world[1]), axisZ) * axisZ;
-      axisY = glm::normalize(axisY);
-      glm::dvec3 axisX = glm::dvec3(world[0]) - glm::dot(glm::dvec3(world[0]), axisZ) * axisZ -
-                         glm::dot(glm::dvec3(world[0]), axisY) * axisY;
-      axisX = glm::normalize(axisX);
       desc.znear = float(desc.znear * glm::length(glm::dvec3(world[2])));
       if (desc.orthographic) {
         desc.xmag = float(desc.xmag * glm::length(glm::dvec3(world[0])));
         desc.ymag = float(desc.ymag * glm::length(glm::dvec3(world[1])));
       }
-      world[0] = glm::dvec4(axisX, 0.0), world[1] = glm::dvec4(axisY, 0.0), world[2] = glm::dvec4(axisZ, 0.0);
-      desc.cameraToWorld = glm::mat4(world);
+      desc.cameraToWorld = glm::mat4(rigidCameraTransform(world));
       scene.camera = desc;
     }
 
