@@ -13,6 +13,7 @@
 #include "scene/generators.h"
 #include "shared/rng.h"
 #include "test_util.h"
+#include "texture_helpers.h"
 
 #include <gtest/gtest.h>
 
@@ -27,31 +28,9 @@
 namespace wt {
 namespace {
 
-constexpr int kNearest = 9728;  // glTF's NEAREST filter
-
-/// An n x n texture whose alpha is a checkerboard (opaque where x + y is
-/// even), white, read nearest.
-std::uint32_t addCheckerTexture(Scene& scene, std::uint32_t n) {
-  DecodedImage image;
-  image.width = image.height = n;
-  image.name = "checker";
-  for (std::uint32_t y = 0; y < n; ++y)
-    for (std::uint32_t x = 0; x < n; ++x)
-      for (std::uint8_t c : {255, 255, 255, (x + y) % 2 == 0 ? 255 : 0}) image.rgba8.push_back(c);
-  return scene.textures.addTexture(scene.textures.addImage(image, true), -1, -1, kNearest, kNearest);
-}
-
-/// Material `material` reads texture `texture` as its base colour (TEXCOORD_0, no transform).
-void setBaseColorTexture(Scene& scene, std::uint32_t material, std::uint32_t texture) {
-  scene.materialTextures.resize(scene.materials.size() * WT_TEXTURE_SLOTS);
-  WtTextureRef ref{};
-  ref.texture = texture;
-  ref.scale = 1.0f;
-  ref.transform_u = {1.0f, 0.0f, 0.0f, 0.0f};
-  ref.transform_v = {0.0f, 1.0f, 0.0f, 0.0f};
-  scene.materialTextures[material * WT_TEXTURE_SLOTS + WT_TEXTURE_SLOT_BASE_COLOR] = ref;
-  scene.materials[material].texture_mask |= 1u << WT_TEXTURE_SLOT_BASE_COLOR;
-}
+using test::addCheckerTexture;
+using test::kNearest;
+using test::setBaseColorTexture;
 
 WtMaterial alphaMaterial(std::uint32_t mode, float alpha, float cutoff = 0.5f) {
   WtMaterial m = makePbrMaterial(glm::vec3(0.8f), 0.0f, 0.5f);

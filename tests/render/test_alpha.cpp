@@ -7,6 +7,7 @@
 // packets and one by one.
 #include "render/render_helpers.h"
 #include "test_util.h"
+#include "texture_helpers.h"
 
 #include <glm/gtc/matrix_transform.hpp>
 
@@ -21,7 +22,8 @@ using test::blockStat;
 using test::expectUniform;
 using test::render;
 
-constexpr int kNearest = 9728;  // glTF's NEAREST filter
+using test::kNearest;
+using test::setBaseColorTexture;
 
 /// A 4 x 4 texture, white, whose texel (x, y) has alpha (x + 4 y) * 16 / 255:
 /// 0 to 240 in steps of 16, so that a cutoff picks how many are holes.
@@ -34,28 +36,7 @@ std::uint32_t addRampTexture(Scene& scene) {
   return scene.textures.addTexture(scene.textures.addImage(image, true), -1, -1, kNearest, kNearest);
 }
 
-/// A 4 x 4 white texture whose alpha is a checkerboard, read nearest.
-std::uint32_t addCheckerTexture(Scene& scene) {
-  DecodedImage image;
-  image.width = image.height = 4;
-  image.name = "checker";
-  for (std::uint32_t y = 0; y < 4; ++y)
-    for (std::uint32_t x = 0; x < 4; ++x)
-      for (std::uint8_t c : {255, 255, 255, (x + y) % 2 == 0 ? 255 : 0}) image.rgba8.push_back(c);
-  return scene.textures.addTexture(scene.textures.addImage(image, true), -1, -1, kNearest, kNearest);
-}
-
-/// Material `material` reads `texture` as its base colour.
-void setBaseColorTexture(Scene& scene, std::uint32_t material, std::uint32_t texture) {
-  scene.materialTextures.resize(scene.materials.size() * WT_TEXTURE_SLOTS);
-  WtTextureRef ref{};
-  ref.texture = texture;
-  ref.scale = 1.0f;
-  ref.transform_u = {1.0f, 0.0f, 0.0f, 0.0f};
-  ref.transform_v = {0.0f, 1.0f, 0.0f, 0.0f};
-  scene.materialTextures[material * WT_TEXTURE_SLOTS + WT_TEXTURE_SLOT_BASE_COLOR] = ref;
-  scene.materials[material].texture_mask |= 1u << WT_TEXTURE_SLOT_BASE_COLOR;
-}
+std::uint32_t addCheckerTexture(Scene& scene) { return test::addCheckerTexture(scene, 4); }
 
 WtMaterial withAlpha(WtMaterial m, std::uint32_t mode, float alpha, float cutoff = 0.5f) {
   m.alpha_mode = mode;

@@ -6,6 +6,7 @@
 // and at one sample per pixel beat point sampling.
 #include "render/render_helpers.h"
 #include "test_util.h"
+#include "texture_helpers.h"
 
 #include <glm/gtc/matrix_transform.hpp>
 
@@ -47,15 +48,7 @@ Scene checkerPlane() {
       image.rgba8.insert(image.rgba8.end(), {c, c, c, 255});
     }
   // stored values are exactly k/255: the reference reads the same numbers
-  const std::uint32_t index = scene.textures.addImage(image, false);
-  WtTextureRef ref{};
-  ref.texture = scene.textures.addTexture(index);
-  ref.scale = 1.0f;
-  ref.transform_u = {1.0f, 0.0f, 0.0f, 0.0f};
-  ref.transform_v = {0.0f, 1.0f, 0.0f, 0.0f};
-  scene.materials[0].texture_mask = 1u << WT_TEXTURE_SLOT_EMISSIVE;
-  scene.materialTextures.resize(WT_TEXTURE_SLOTS);
-  scene.materialTextures[WT_TEXTURE_SLOT_EMISSIVE] = ref;
+  test::setMaterialTexture(scene, 0, WT_TEXTURE_SLOT_EMISSIVE, scene.textures.addTexture(scene.textures.addImage(image, false)));
   // a metre above the plane, looking down at 12 degrees: the far half of the image grazes it
   CameraDesc camera;
   camera.yfov = 0.5f;

@@ -5,6 +5,7 @@
 #include "render/light_list.h"
 #include "render/render_helpers.h"
 #include "test_util.h"
+#include "texture_helpers.h"
 
 #include <glm/gtc/matrix_transform.hpp>
 
@@ -37,14 +38,7 @@ Scene lampScene(std::array<glm::vec2, 4> uvs) {
   for (int v = 0; v < 4; ++v) lamp.texcoords[v] = uvs[v];
   appendScene(scene, lamp);
   const std::uint32_t texture = addLampTexture(scene);
-  WtTextureRef ref{};
-  ref.texture = texture;
-  ref.scale = 1.0f;
-  ref.transform_u = {1.0f, 0.0f, 0.0f, 0.0f};
-  ref.transform_v = {0.0f, 1.0f, 0.0f, 0.0f};
-  scene.materials[1].texture_mask = 1u << WT_TEXTURE_SLOT_EMISSIVE;
-  scene.materialTextures.resize(2 * WT_TEXTURE_SLOTS);
-  scene.materialTextures[WT_TEXTURE_SLOTS + WT_TEXTURE_SLOT_EMISSIVE] = ref;
+  test::setMaterialTexture(scene, 1, WT_TEXTURE_SLOT_EMISSIVE, texture);
   CameraDesc cam;
   cam.cameraToWorld = glm::inverse(glm::lookAt(glm::vec3(0.0f, 1.4f, 2.6f), glm::vec3(0.0f, 0.3f, 0.0f), glm::vec3(0, 1, 0)));
   scene.camera = cam;
