@@ -27,8 +27,8 @@
 #define WT_SHEEN_MIN_ROUGHNESS 0.26457513f
 
 /// x^y for x >= 0, y > 0. On the device as exp2(y log2 x) (0 at x = 0):
-/// PoCL's pow and powr made a sheen-covered floor's frame 2.7x as slow as
-/// the same floor without sheen (the fit's power below was 7 s of 15 s added).
+/// PoCL's pow and powr are slow enough to dominate a sheen-covered frame
+/// (docs/materials.md, "Cost"), so the power is exp2(y log2 x).
 #ifdef __OPENCL_C_VERSION__
 #define WT_SHEEN_POWR(x, y) exp2((y) * log2(x))
 #else
