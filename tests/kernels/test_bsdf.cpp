@@ -19,6 +19,7 @@
 #include <filesystem>
 #include <fstream>
 #include <random>
+#include <sstream>
 
 namespace wt {
 namespace {
@@ -164,9 +165,59 @@ TEST(Bsdf, WhiteMaterialsReflectEverythingAtEveryRoughnessAndAngle) {
   EXPECT_GT(blue, 0.25);
 }
 
-// Histograms of sampled directions over (cos theta, phi) bins against the
-// pdf integrated over each bin (midpoint rule on 8 x 8 points per bin from
-// bsdf_eval), plus one bin for samples that fall below the surface.
+/// Histograms of sampled directions over (cos theta, phi) bins -- the upper
+/// hemisphere, or the whole sphere when `sphere` -- against the pdf
+/// integrated over each bin (midpoint rule, 8 x 8 points per bin), plus one
+/// bin for what the pdf does not cover: samples lost and delta samples (pdf
+/// 0); `inside`: wo lies inside the material. When it fails the histograms go to scratch/bsdf/<name>.csv.
+void expectSamplingMatchesPdf(const WtMaterial& m, glm::vec3 wo, cl_uint lobes, const std::string& name,
+                              bool sphere = false, int kSub = 8, std::uint32_t seed = 17, bool inside = false) {
+  const int kTheta = sphere ? 32 : 16, kPhi = 32;
+  const int kSide = int(test::testSize(512, 64));
+  const float lo = sphere ? -1.0f : 0.0f;
+  Sampled s = sampleOnDevice(m, wo, lobes, stratified(kSide, seed), inside);
+  std::vector<double> observed(kTheta * kPhi + 1, 0.0);
+  for (const cl_float4& d : s.wiPdf) {
+    if (d.s[3] <= 0.0f) {
+      observed.back() += 1;
+      continue;
+    }
+    float phi = std::atan2(d.s[1], d.s[0]);
+    if (phi < 0.0f) phi += 2.0f * float(M_PI);
+    int ti = std::clamp(int((d.s[2] - lo) / (1.0f - lo) * kTheta), 0, kTheta - 1);
+    int pi = std::min(kPhi - 1, int(phi / (2.0f * float(M_PI)) * kPhi));
+    observed[ti * kPhi + pi] += 1;
+  }
+  std::vector<glm::vec3> grid;
+  for (int ti = 0; ti < kTheta; ++ti)
+    for (int pi = 0; pi < kPhi; ++pi)
+      for (int a = 0; a < kSub; ++a)
+        for (int b = 0; b < kSub; ++b) {
+          float mu = lo + (1.0f - lo) * (ti + (a + 0.5f) / kSub) / kTheta;
+          grid.push_back(localDirection(mu, 2.0f * float(M_PI) * (pi + (b + 0.5f) / kSub) / kPhi));
+        }
+  std::vector<cl_float4> pdf = evalOnDevice(m, wo, lobes, grid, inside);
+  const double n = double(kSide) * kSide, cellArea = ((1.0 - lo) / (kTheta * kSub)) * (2.0 * M_PI / (kPhi * kSub));
+  auto [expected, total] = expectedCounts(pdf, cellArea, n, kSub * kSub, kTheta * kPhi);
+  auto [chi2, dof, limit] = chiSquare(observed, expected);
+  bool fractionOk = std::abs(total - (1.0 - observed.back() / n)) < 0.01;
+  EXPECT_TRUE(fractionOk) << name << ": the pdf integrates to " << total << ", sampled off it "
+                          << observed.back() / n;
+  if (chi2 < limit && fractionOk) return;
+  std::string file = name;
+  for (char& c : file)
+    if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
+  std::filesystem::path csv = test::scratchDir("bsdf") / (file + ".csv");
+  std::ofstream out(csv);
+  out << "theta_bin,phi_bin,observed,expected\n";
+  for (int b = 0; b < kTheta * kPhi; ++b) out << b / kPhi << "," << b % kPhi << "," << observed[b] << "," << expected[b] << "\n";
+  out << "off,off," << observed.back() << "," << expected.back() << "\n";
+  ADD_FAILURE() << name << ": chi2 " << chi2 << " over " << dof << " dof (limit " << limit << "); off the pdf "
+                << observed.back() << " vs " << expected.back() << "; histograms in " << csv.string();
+}
+
+// Sampled directions against the pdf (expectSamplingMatchesPdf): both lobes
+// of the opaque metallic-roughness model from several angles.
 TEST(Bsdf, SamplingMatchesItsPdfChiSquare) {
   struct Case {
     glm::vec3 base;
@@ -176,39 +227,11 @@ TEST(Bsdf, SamplingMatchesItsPdfChiSquare) {
                         {glm::vec3(0.9f, 0.6f, 0.3f), 1.0f, 0.35f, 0.3f},
                         {glm::vec3(0.5f), 0.5f, 0.6f, 0.9f},
                         {glm::vec3(0.2f), 0.0f, 1.0f, 0.15f}};
-  const int kTheta = 16, kPhi = 32, kSub = 8, kSide = 512;
   for (const Case& c : cases) {
-    WtMaterial m = makePbrMaterial(c.base, c.metallic, c.roughness);
-    glm::vec3 wo = localDirection(c.mu, 0.4f);
-    Sampled s = sampleOnDevice(m, wo, kBothLobes, stratified(kSide, 17));
-    std::vector<double> observed(kTheta * kPhi + 1, 0.0);
-    for (const cl_float4& d : s.wiPdf) {
-      if (d.s[3] < 0.0f) {
-        observed.back() += 1;
-        continue;
-      }
-      float phi = std::atan2(d.s[1], d.s[0]);
-      if (phi < 0.0f) phi += 2.0f * float(M_PI);
-      int ti = std::min(kTheta - 1, int(d.s[2] * kTheta)), pi = std::min(kPhi - 1, int(phi / (2.0f * float(M_PI)) * kPhi));
-      observed[ti * kPhi + pi] += 1;
-    }
-    // the pdf over each bin: d omega = d(cos theta) d phi
-    std::vector<glm::vec3> grid;
-    for (int ti = 0; ti < kTheta; ++ti)
-      for (int pi = 0; pi < kPhi; ++pi)
-        for (int a = 0; a < kSub; ++a)
-          for (int b = 0; b < kSub; ++b) {
-            float mu = (ti + (a + 0.5f) / kSub) / kTheta, phi = 2.0f * float(M_PI) * (pi + (b + 0.5f) / kSub) / kPhi;
-            grid.push_back(localDirection(mu, phi));
-          }
-    std::vector<cl_float4> pdf = evalOnDevice(m, wo, kBothLobes, grid);
-    const double n = double(kSide) * kSide, cellArea = (1.0 / (kTheta * kSub)) * (2.0 * M_PI / (kPhi * kSub));
-    auto [expected, total] = expectedCounts(pdf, cellArea, n, kSub * kSub, kTheta * kPhi);
-    auto [chi2, dof, limit] = chiSquare(observed, expected);
-    EXPECT_LT(chi2, limit) << "metallic " << c.metallic << ", roughness " << c.roughness << ", mu " << c.mu
-                           << ": chi2 " << chi2 << " over " << dof << " dof; below the surface " << observed.back()
-                           << " vs " << expected.back();
-    EXPECT_NEAR(total, 1.0 - observed.back() / n, 0.01) << "the pdf integrates to the fraction sampled";
+    std::ostringstream name;
+    name << "metallic " << c.metallic << ", roughness " << c.roughness << ", mu " << c.mu;
+    expectSamplingMatchesPdf(makePbrMaterial(c.base, c.metallic, c.roughness), localDirection(c.mu, 0.4f), kBothLobes,
+                             name.str());
   }
 }
 
@@ -483,8 +506,8 @@ TEST(Bsdf, WhiteGlassConservesEnergySmoothAndLosesOnlyWhatSingleScatteringLosesR
   EXPECT_EQ(failures, 0);
 }
 
-// Histograms of sampled directions over the whole sphere, (cos theta in
-// [-1, 1], phi) bins, against the pdf integrated over each bin: rough
+// Sampled directions over the whole sphere against the pdf
+// (expectSamplingMatchesPdf, 6 x 6 points per bin): rough
 // refraction from both sides, a thin wall, glass mixed with metal and an
 // opaque base, and a direction inside past the critical angle.
 TEST(Bsdf, TransmissionSamplingMatchesItsPdfChiSquare) {
@@ -503,39 +526,8 @@ TEST(Bsdf, TransmissionSamplingMatchesItsPdfChiSquare) {
       {glass(0.3f, 1.5f, true, glm::vec3(0.8f, 0.6f, 0.4f)), 0.5f, false, "thin wall"},
       {glass(0.4f, 1.33f, false, glm::vec3(0.7f), 0.3f, 0.5f), 0.4f, false, "glass mixed with metal and an opaque base"},
   };
-  const int kTheta = 32, kPhi = 32, kSub = 6, kSide = 512;
-  for (const Case& c : cases) {
-    glm::vec3 wo = localDirection(c.mu, 0.4f);
-    Sampled s = sampleOnDevice(c.m, wo, kAllLobes, stratified(kSide, 41), c.inside);
-    std::vector<double> observed(kTheta * kPhi + 1, 0.0);
-    for (const cl_float4& d : s.wiPdf) {
-      if (d.s[3] < 0.0f) {
-        observed.back() += 1;
-        continue;
-      }
-      float phi = std::atan2(d.s[1], d.s[0]);
-      if (phi < 0.0f) phi += 2.0f * float(M_PI);
-      int ti = std::clamp(int((d.s[2] + 1.0f) * 0.5f * kTheta), 0, kTheta - 1);
-      int pi = std::min(kPhi - 1, int(phi / (2.0f * float(M_PI)) * kPhi));
-      observed[ti * kPhi + pi] += 1;
-    }
-    std::vector<glm::vec3> grid;
-    for (int ti = 0; ti < kTheta; ++ti)
-      for (int pi = 0; pi < kPhi; ++pi)
-        for (int a = 0; a < kSub; ++a)
-          for (int b = 0; b < kSub; ++b) {
-            float mu = -1.0f + 2.0f * (ti + (a + 0.5f) / kSub) / kTheta;
-            float phi = 2.0f * float(M_PI) * (pi + (b + 0.5f) / kSub) / kPhi;
-            grid.push_back(localDirection(mu, phi));
-          }
-    std::vector<cl_float4> pdf = evalOnDevice(c.m, wo, kAllLobes, grid, c.inside);
-    const double n = double(kSide) * kSide, cellArea = (2.0 / (kTheta * kSub)) * (2.0 * M_PI / (kPhi * kSub));
-    auto [expected, total] = expectedCounts(pdf, cellArea, n, kSub * kSub, kTheta * kPhi);
-    auto [chi2, dof, limit] = chiSquare(observed, expected);
-    EXPECT_LT(chi2, limit) << c.name << ": chi2 " << chi2 << " over " << dof << " dof; lost " << observed.back()
-                           << " vs " << expected.back();
-    EXPECT_NEAR(total, 1.0 - observed.back() / n, 0.01) << c.name << ": the pdf integrates to the fraction sampled";
-  }
+  for (const Case& c : cases)
+    expectSamplingMatchesPdf(c.m, localDirection(c.mu, 0.4f), kAllLobes, c.name, true, 6, 41, c.inside);
 }
 
 // Refraction with radiance scaling satisfies f(wi, wo) = eta^2 f(wo, wi)
@@ -603,57 +595,6 @@ WtMaterial layered(WtMaterial m, float coat, float coatRoughness, glm::vec3 shee
   m = withSpecular(withSheen(withClearcoat(m, coat, coatRoughness), sheen, sheenRoughness), specular, specularColor);
   m.ior = ior;
   return m;
-}
-
-/// Histograms of sampled directions over (cos theta, phi) bins -- the upper
-/// hemisphere, or the whole sphere when `sphere` -- against the pdf
-/// integrated over each bin (midpoint rule, 8 x 8 points per bin), plus one
-/// bin for what the pdf does not cover: samples lost and delta samples (pdf
-/// 0). When it fails the histograms go to scratch/bsdf/<name>.csv.
-void expectSamplingMatchesPdf(const WtMaterial& m, glm::vec3 wo, cl_uint lobes, const std::string& name,
-                              bool sphere = false, int kSub = 8, std::uint32_t seed = 17) {
-  const int kTheta = sphere ? 32 : 16, kPhi = 32;
-  const int kSide = int(test::testSize(512, 64));
-  const float lo = sphere ? -1.0f : 0.0f;
-  Sampled s = sampleOnDevice(m, wo, lobes, stratified(kSide, seed));
-  std::vector<double> observed(kTheta * kPhi + 1, 0.0);
-  for (const cl_float4& d : s.wiPdf) {
-    if (d.s[3] <= 0.0f) {
-      observed.back() += 1;
-      continue;
-    }
-    float phi = std::atan2(d.s[1], d.s[0]);
-    if (phi < 0.0f) phi += 2.0f * float(M_PI);
-    int ti = std::clamp(int((d.s[2] - lo) / (1.0f - lo) * kTheta), 0, kTheta - 1);
-    int pi = std::min(kPhi - 1, int(phi / (2.0f * float(M_PI)) * kPhi));
-    observed[ti * kPhi + pi] += 1;
-  }
-  std::vector<glm::vec3> grid;
-  for (int ti = 0; ti < kTheta; ++ti)
-    for (int pi = 0; pi < kPhi; ++pi)
-      for (int a = 0; a < kSub; ++a)
-        for (int b = 0; b < kSub; ++b) {
-          float mu = lo + (1.0f - lo) * (ti + (a + 0.5f) / kSub) / kTheta;
-          grid.push_back(localDirection(mu, 2.0f * float(M_PI) * (pi + (b + 0.5f) / kSub) / kPhi));
-        }
-  std::vector<cl_float4> pdf = evalOnDevice(m, wo, lobes, grid);
-  const double n = double(kSide) * kSide, cellArea = ((1.0 - lo) / (kTheta * kSub)) * (2.0 * M_PI / (kPhi * kSub));
-  auto [expected, total] = expectedCounts(pdf, cellArea, n, kSub * kSub, kTheta * kPhi);
-  auto [chi2, dof, limit] = chiSquare(observed, expected);
-  bool fractionOk = std::abs(total - (1.0 - observed.back() / n)) < 0.01;
-  EXPECT_TRUE(fractionOk) << name << ": the pdf integrates to " << total << ", sampled off it "
-                          << observed.back() / n;
-  if (chi2 < limit && fractionOk) return;
-  std::string file = name;
-  for (char& c : file)
-    if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
-  std::filesystem::path csv = test::scratchDir("bsdf") / (file + ".csv");
-  std::ofstream out(csv);
-  out << "theta_bin,phi_bin,observed,expected\n";
-  for (int b = 0; b < kTheta * kPhi; ++b) out << b / kPhi << "," << b % kPhi << "," << observed[b] << "," << expected[b] << "\n";
-  out << "off,off," << observed.back() << "," << expected.back() << "\n";
-  ADD_FAILURE() << name << ": chi2 " << chi2 << " over " << dof << " dof (limit " << limit << "); off the pdf "
-                << observed.back() << " vs " << expected.back() << "; histograms in " << csv.string();
 }
 
 // Sampled directions of every layer and their combinations against the
