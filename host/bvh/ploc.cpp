@@ -5,8 +5,8 @@
 // plocRadius positions whose union with it has the smallest surface area;
 // mutual nearest neighbours merge into a new node at the lower position, and
 // the array is compacted. Clustering stops where the clusters average
-// plocTopPrims primitives: there PLOC's tree measured furthest from the SAH
-// tree's (its upper levels cost 1.3x theirs on the bumpy grid), so a binned
+// plocTopPrims primitives: PLOC's upper levels are where its tree is furthest
+// from the SAH tree's (docs/lab/2026-12-01-performance-log.md, "What did not win"), so a binned
 // SAH pass over the clusters, weighted by their primitive counts, builds the
 // levels above. Subtrees of at most maxLeafSize primitives become leaves.
 #include "bvh/build_tree.h"
