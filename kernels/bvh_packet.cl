@@ -15,11 +15,9 @@
 // axis permutation (the dominant axis and sign of the directions). A packet
 // whose rays do not agree is traced in passes, one per permutation, each a
 // packet of the lanes that have it (packet_next_pass): with the same
-// answers. Before 2026-12-04 such a packet was traced ray by ray, or for
-// any-hit queries the most common permutation's lanes as a packet and the
-// others ray by ray; passes measured 1.16-1.17x on the Cornell box's shadow
-// rays (docs/performance.md, "The cheap rays' overhead, and mixed packets
-// in passes").
+// answers, and faster than tracing the minority lanes ray by ray
+// (docs/lab/2026-12-04-performance-log.md, "The cheap rays' overhead, and
+// mixed packets in passes").
 #ifndef WT_BVH_PACKET_CL
 #define WT_BVH_PACKET_CL
 
@@ -51,12 +49,9 @@
 // triangles at a time (bvh_closest's and bvh_occluded's leaf test), instead
 // of one triangle at a time on every lane. Packets of 8 only: they are the
 // width where a sample has fewer than 3 camera rays per triangle
-// (packetWidthFor), so leaves are small against a packet's footprint.
-// Measured 2026-12-04 (in-process A/B): camera rays 1.03-1.09x on the bumpy
-// grid and 1.00-1.05x on MetalRoughSpheres (5 rounds), shadow rays in
-// packets 1.12-1.17x and 1.08-1.10x (3 rounds); with packets of 16, 4 lanes
-// alone measured 0.85-1.04x on DamagedHelmet's camera rays ("Leaves that
-// few lanes enter" in docs/performance.md).
+// (packetWidthFor), so leaves are small against a packet's footprint; with
+// packets of 16 it did not pay (docs/lab/2026-12-04-performance-log.md,
+// "Leaves that few lanes enter").
 #ifndef WT_PACKET_LEAF_LANES
 #define WT_PACKET_LEAF_LANES (WT_PACKET == 8 ? 2 : 0)
 #endif
@@ -68,14 +63,13 @@ inline pint packet_mask(pint c) { return (c | -c) >> 31; }
 // Reductions over the lanes: halves folded down to one float8 / int8 first.
 // Minima and maxima compare and pick instead of calling fmin / fmax: no lane
 // reduced holds a NaN (the lanes left out carry +-inf), and fmin's NaN rules
-// cost extra compares in every reduction of the traversal (camera rays
-// 1.03-1.07x on DamagedHelmet and MetalRoughSpheres, with the reach below
-// updated once per leaf, in-process 2026-12-04).
+// cost extra compares in every reduction of the traversal
+// (docs/lab/2026-12-04-performance-log.md, "The cheap rays' overhead").
 // Under Oclgrind (WT_FOLD_THROUGH_MEMORY, set by the host) the 16 lanes go
 // through private memory instead of .hi: Oclgrind 21.10 loses the upper
 // half's initialisation on .hi of a 16-wide vector in an unoptimised build
 // (tests/oclgrind/upper_half.cl). On PoCL .hi is the faster of the two
-// (primaries 1.02-1.05x, docs/performance.md, "Sixteen lanes").
+// (docs/lab/2026-12-01-performance-log.md, "Sixteen lanes").
 #if WT_PACKET == 16 && defined(WT_FOLD_THROUGH_MEMORY) && WT_FOLD_THROUGH_MEMORY
 inline int8 packet_fold8_i(int16 m) {
   int t[16];

@@ -29,8 +29,8 @@
 
 /// The lowest set bit's position (m != 0): one instruction from the
 /// builtin, three from popcount where it is missing (Oclgrind,
-/// WT_NO_CTZ). Taking rays from a mask this way measured 1.011-1.018x on
-/// DamagedHelmet's shadow rays (docs/performance.md).
+/// WT_NO_CTZ). Rays are taken from a mask this way because it is the
+/// cheapest loop over them (docs/lab/2026-12-05-performance-log.md, "Streams, 2026-12-05").
 #if defined(WT_NO_CTZ) && WT_NO_CTZ
 inline uint stream_lowest(ulong m) { return (uint)popcount((m & (0ul - m)) - 1ul); }
 #else
@@ -95,9 +95,8 @@ inline ulong bvh_occluded_stream(BvhScene scene, const uint* index, uint n, __gl
       // lines): the box tests of all the
       // stream's rays come first, and the misses overlap. On the 1 M-triangle
       // scenes half the stream's time was spent waiting on the first load of
-      // a node or of a leaf block; this measured 1.14-1.23x there and
-      // 0.95-1.05x on DamagedHelmet, whose tree fits in the caches
-      // (docs/performance.md, "Streams: the children's data asked for early").
+      // a node or of a leaf block; a tree that fits in the caches gains nothing
+      // (docs/lab/2026-12-04-performance-log.md, "Streams: the children's data asked for early").
       for (int k = 0; k < 4; ++k) {
         uint child = n->child[k];
         if (child == WT_BVH4_EMPTY) continue;
@@ -127,8 +126,8 @@ inline ulong bvh_occluded_stream(BvhScene scene, const uint* index, uint n, __gl
       ulong enter[4] = {enter0, enter1, enter2, enter3};
       // leaves now, by every ray that entered them (leaves come first in
       // slot order), taken from a mask of the leaf slots some ray entered
-      // rather than by a branch or two per slot: DamagedHelmet's shadow
-      // rays 1.04-1.05x (docs/performance.md, "Streams, 2026-12-05")
+      // rather than by a branch or two per slot, which the predictor cannot
+      // learn (docs/lab/2026-12-05-performance-log.md, "Streams, 2026-12-05")
       uint4 counts = vload4(0, n->count);
       int4 is_leaf = counts != (uint4)(0u);
       ulong leaves = ((is_leaf.s0 && enter0 != 0ul) ? 1ul : 0ul) | ((is_leaf.s1 && enter1 != 0ul) ? 2ul : 0ul) |
@@ -158,9 +157,8 @@ inline ulong bvh_occluded_stream(BvhScene scene, const uint* index, uint n, __gl
 #else
         // block by block, each tested by every ray still open, the blocked
         // ones gathered in a mask rather than branched on: one branch per
-        // block instead of one per ray, 1.02-1.03x on DamagedHelmet's
-        // shadow rays, but 0.97-1.00x where the blocks come from memory
-        // (docs/performance.md, "Streams, 2026-12-05")
+        // block instead of one per ray, which pays only where the blocks are
+        // in cache (docs/lab/2026-12-05-performance-log.md, "Streams, 2026-12-05")
         for (uint b = first >> 2; b <= last >> 2; ++b) {
           uint lo = b == first >> 2 ? first & 3u : 0u, hi = b == last >> 2 ? (last & 3u) + 1u : 4u;
           ulong hits = 0ul;
@@ -182,11 +180,10 @@ inline ulong bvh_occluded_stream(BvhScene scene, const uint* index, uint n, __gl
       // Every inner child entered is pushed, the last slot first, with no
       // branch per slot, and the pop below takes the first: the rays visit
       // the children in slot order (largest box first). Against the first
-      // child taken at once and the others pushed behind a branch each:
-      // DamagedHelmet's shadow rays 1.02-1.03x, the 1 M-triangle scenes'
-      // about 1.01x (docs/performance.md, "Streams, 2026-12-05"). The
-      // fourth push, popped at once, is the one entry bvh4StackEntries
-      // adds to three per level.
+      // child taken at once and the others pushed behind a branch each, this
+      // saves the branches (docs/lab/2026-12-05-performance-log.md, "Streams,
+      // 2026-12-05"). The fourth push, popped at once, is the one entry
+      // bvh4StackEntries adds to three per level.
       for (int k = 3; k >= 0; --k) {
         stack_node[sp] = n->child[k];
         stack_rays[sp] = enter[k];
@@ -228,10 +225,9 @@ inline void stream_sort_by_octant(const uint* rays, uint n, __global const float
 /// then traced as streams of WT_STREAM_RAYS. Consecutive rays leave
 /// neighbouring points (the bench's and the renderer's shadow rays follow
 /// their pixels), and where every node and leaf block is a trip to memory,
-/// rays that start together share the leaves around their origins: in
-/// order, the 1 M-triangle scenes' shadow streams measured about 1.05x
-/// (MetalRoughSpheres) and 1.09x (the grid), DamagedHelmet's 0.97x
-/// (docs/performance.md, "Streams keep the rays' order on large scenes").
+/// rays that start together share the leaves around their origins, which
+/// matters only where the scene outgrows the cache
+/// (docs/lab/2026-12-04-performance-log.md, "Streams keep the rays' order on large scenes").
 inline void bvh_occluded_window(BvhScene scene, uint first, uint end, __global const float4* ray_o,
                                 __global const float4* ray_d, __global const uint* skip,
                                 __global uint* occluded) {

@@ -29,11 +29,11 @@
 // Every kernel is declared WT_KERNEL: vec_type_hint(float4) says the
 // kernel's own float4 and float8 code is its vector width. Intel's CPU
 // runtime then compiles each work-item as written instead of vectorising
-// across work-items, which ran single-ray traversal at a fifth of its
-// scalar speed (rays in lock step) and got shading wrong: bsdf_sample's
-// answers were right in the first of every eight work-items only, and
-// renders with next-event estimation changed from run to run
-// (docs/performance.md, "A second OpenCL implementation"). PoCL's code
+// across work-items, which slowed single-ray traversal (rays in lock step)
+// and got shading wrong: bsdf_sample's answers were right in the first of
+// every eight work-items only, and renders with next-event estimation
+// changed from run to run (docs/lab/2026-12-02-performance-log.md, "A
+// second OpenCL implementation"). PoCL's code
 // is the same with or without the hint. Embedded.EveryKernelIsWtKernel
 // keeps a plain __kernel from coming back.
 #define WT_KERNEL __kernel __attribute__((vec_type_hint(float4)))
@@ -43,8 +43,9 @@
 
 /// atan2 for finite arguments, within 2 ulp of the true angle plus about
 /// 1e-7 rad (Cephes' atanf: reduction to |t| <= tan(pi/8), a degree-9 odd
-/// polynomial), without the library's handling of infinities: PoCL's atan2
-/// measured 13% of an environment-lit render. atan2(0, 0) is 0 (or pi for
+/// polynomial), without the library's handling of infinities, which made
+/// PoCL's atan2 a visible share of an environment-lit render
+/// (docs/lab/2026-12-02-performance-log.md, "atan2 in shading"). atan2(0, 0) is 0 (or pi for
 /// x = -0), as the library's; NaN in, NaN out.
 inline float wt_atan2(float y, float x) {
   float ax = fabs(x), ay = fabs(y);

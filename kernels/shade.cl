@@ -50,7 +50,7 @@ WT_KERNEL void shade(WtFrameParams frame, WtEnvironment environment, __global co
   if (i >= counters[in_slot]) return;
   // Without WT_FLAG_COMPACT_SHADOWS entry i of the shadow queue is this
   // item's shadow ray, if it makes one: no atomic counter, whose increments
-  // from the two threads contended (docs/performance.md, "Queue atomics").
+  // from the two threads contended (docs/lab/2026-12-02-performance-log.md, "Queue atomics").
   const bool compact_shadows = (frame.flags & WT_FLAG_COMPACT_SHADOWS) != 0u;
   if (!compact_shadows) shadow_queue[i] = WT_NO_HIT;
   uint path = queue_in[i];

@@ -433,10 +433,10 @@ double traversableRate(const SceneResult& r) {
 /// bench's sets measure 1.0 (camera rays), 0.99 (shadow rays to the Cornell
 /// box's one small light), 0.68-0.74 (diffuse rays, and shadow rays to
 /// emitters or points spread over a big scene); packets paid only on the
-/// first two kinds (docs/performance.md, "Packets"). Shadow sets sorted by
-/// octant and origin measure 0.91-0.93, and packets traced them at
-/// 0.30-0.43x Embree against 0.65-0.81x as streams (docs/performance.md,
-/// "Streams, 2026-12-05"): hence 0.95, not 0.9.
+/// first two kinds (docs/lab/2026-12-01-performance-log.md, "Packets").
+/// Shadow sets sorted by octant and origin measure just over 0.9 and trace
+/// faster as streams (docs/lab/2026-12-05-performance-log.md, "Streams,
+/// 2026-12-05"): hence 0.95, not 0.9.
 constexpr double kPacketCoherence = 0.95;
 
 /// The traversal --traversal picks for a set of rays of this packetCoherence
@@ -458,9 +458,8 @@ const char* traversalName(Traversal t) {
 
 /// Each run's wall time: `repetitions` runs, then more while they add up
 /// to less than minSeconds (--min-time), at most kMaxRunsPerRepetition per
-/// repetition. On this VM a set that traces in 7 ms (the Cornell box's
-/// shadow rays) once measured 73 Mrays/s over its five runs against 132
-/// later in the same process: a stall had hit three of them.
+/// repetition: a stall of a shared machine can hit most of five runs of a
+/// set that traces in a few milliseconds (docs/lab/2026-12-05-bench-full-runs.md).
 constexpr int kMaxRunsPerRepetition = 20;
 template <typename Fn>
 std::vector<double> timeRuns(int repetitions, double minSeconds, Fn&& fn) {

@@ -16,10 +16,8 @@
 namespace wt {
 
 /// How a thread hands its chunk of rays to Embree. Which is fastest depends
-/// on the rays and the machine (docs/performance.md, "Embree settings": on a
-/// Zen 4 VM the stream traced DamagedHelmet's shadow rays 1.3-1.45x faster
-/// than packets of 16, packets of 8 the 1 M-triangle scenes' camera rays
-/// 1.1-1.15x), so the bench times all four per ray set by default and
+/// on the rays and the machine (docs/lab/2026-11-23-performance-log.md,
+/// "Embree settings"), so the bench times all four per ray set by default and
 /// compares with the fastest (BenchOptions::embreeApi "fastest").
 enum class EmbreeApi {
   kSingle,    ///< rtcIntersect1 / rtcOccluded1 per ray

@@ -31,14 +31,13 @@ namespace {
 
 using namespace bvh_detail;
 
-/// Up to this many primitives a part is built by PLOC (about 15-20 ms at
-/// 64 Ki primitives on the 2-core VM, where its tree traced at 0.91-1.0x the
-/// SAH tree's throughput against the LBVH's 0.87-0.95x), above it by the LBVH.
+/// Up to this many primitives a part is built by PLOC, whose tree is close to
+/// the SAH tree's, above it by the LBVH, whose build stays fast at any size
+/// (docs/lab/2026-12-01-performance-log.md, "The auto builder").
 constexpr std::size_t kQualityBuildPrims = 65536;
 /// Repeated geometries of at most this many primitives in all (one copy of
-/// each) are built by the binned SAH builder (MetalRoughSpheres' sphere,
-/// 10 600 triangles: 2.5 ms more than PLOC, and the whole tree then traced at
-/// 1.02-1.03x the SAH tree's throughput against PLOC's 0.95-1.04x).
+/// each) are built by the binned SAH builder: built once, the best tree is
+/// worth its build time (docs/lab/2026-12-01-performance-log.md, "The auto builder").
 constexpr std::size_t kSahGeometryPrims = 32768;
 /// Copies of fewer primitives are built with the rest: a million copies of
 /// one triangle would make the top pass a full SAH build.

@@ -19,9 +19,9 @@ namespace wt {
 
 /// The 4-wide leaf limit for maxLeafSize 0 (every traversable tree unless
 /// the user asks otherwise): four blocks of four triangles (one four-lane
-/// test each). 16 against 8 measured 1.04x normalised by Embree and 58
-/// instead of 61-62 bytes per triangle on the 1 M-triangle scenes
-/// (docs/performance.md, "Triangle blocks").
+/// test each): with triangle blocks an extra block is one cheap test, and
+/// larger leaves mean fewer nodes (docs/lab/2026-12-02-performance-log.md,
+/// "Triangle blocks").
 constexpr int kBvh4MaxLeafSize = 16;
 
 struct Bvh4Options {
@@ -33,8 +33,8 @@ struct Bvh4Options {
   double leafCost = 1.0;
   /// The cost of a node in its own right, its 128 bytes, as a fraction of
   /// one test at the root: a node is kept only where it saves more than a
-  /// test by that fraction of all rays (docs/performance.md, "The 4-wide
-  /// collapse", has what it measured).
+  /// test by that fraction of all rays (docs/lab/2026-11-23-performance-log.md,
+  /// "The 4-wide collapse", has what it measured).
   double nodeCost = 1e-4;
   /// Node memory allowed per primitive: a tree over budget is collapsed
   /// again with nodeCost doubled, up to kBudgetRounds times. 12 keeps a
@@ -75,9 +75,9 @@ Bvh4 collapseToBvh4(const Bvh& bvh, const Bvh4Options& options = {});
 /// The binary build options for a traversable tree over `primitives` whose
 /// leaves hold at most given.maxLeafSize primitives (0: kBvh4MaxLeafSize):
 /// binary leaves of at most four, which the collapse merges where a merged
-/// leaf is cheaper; from 65 536 primitives of at most eight, which builds
-/// and collapses in about half the time for a collapse cost 1.5% higher
-/// (docs/performance.md, "The 4-wide collapse").
+/// leaf is cheaper; from 65 536 primitives of at most eight, since there
+/// the build time matters more than the small rise in collapse cost
+/// (docs/lab/2026-11-23-performance-log.md, "The 4-wide collapse").
 inline BvhBuildOptions binaryBuildOptions(const BvhBuildOptions& given, std::size_t primitives) {
   BvhBuildOptions options = given;
   const int binaryLeaf = primitives >= 65536 ? 8 : 4;
@@ -139,9 +139,9 @@ LeafPacking packLeavesIntoBlocks(Bvh4& bvh, std::size_t primitives, std::size_t 
 /// slots last. Closest-hit traversal sorts the children it enters by
 /// distance, so only the any-hit loops (which descend into the first inner
 /// child they enter and push the others) see the order: the largest box,
-/// likeliest to hold a blocker, is searched first (shadow rays 1.07-1.10x
-/// on the 1 M-triangle scenes, docs/performance.md). Boxes, children and
-/// leaf ranges are unchanged, only their slots.
+/// likeliest to hold a blocker, is searched first
+/// (docs/lab/2026-12-01-performance-log.md, "Child slots by area"). Boxes,
+/// children and leaf ranges are unchanged, only their slots.
 void orderChildSlots(Bvh4& bvh);
 
 }  // namespace wt

@@ -141,9 +141,9 @@ struct MortonKeys {
 // sheet over two axes (a terrain, a height field, a patch of a large smooth surface),
 // a split across the third cuts the sheet along a contour line: a ridge's crest goes
 // to one child and both its flanks to the other, whose box then holds the first's.
-// A SAH build never splits so. On the bumpy grid such splits left the LBVH's 4-wide
-// SAH 9% above the binned SAH tree's (51.3 against 47.0) and its diffuse rays at
-// 0.88-0.91x that tree's throughput. So the key of a region whose primitives form
+// A SAH build never splits so, and such splits are what the LBVH lost to the binned
+// SAH tree on the bumpy grid (docs/lab/2026-12-01-performance-log.md, "Flat regions").
+// So the key of a region whose primitives form
 // such a sheet puts the bits of the region's shortest axis below the other two
 // axes' bits: the region's subtree splits only the sheet's two axes, down to the
 // primitives that share a cell in them.
@@ -154,14 +154,14 @@ struct MortonKeys {
 // keys sharing the subtree's prefix). A sample is too sparse to show what the
 // reordering costs at the finest levels, where a closed object's front and back,
 // now sorted together, would share every node (MetalRoughSpheres' rows of spheres
-// sample at 0.99-1.16 and measured twice the 4-wide SAH when reordered), so the
+// pass the sample and are far dearer reordered), so the
 // key pass keeps every primitive of one column of each candidate aside (all of it
 // along the shortest axis, about kFlatWindowPrims primitives), and both trees are
 // built again over that column at full density. Regions whose column tree costs
 // kFlatCostRatio of the Morton one or less keep their reordered keys; the key pass
 // wrote a candidate's keys reordered, and a second pass puts a rejected one's back
-// (re-keying the accepted ones in a second pass instead took 6 ms of the 1 M-triangle
-// grid's 25 ms of keys on the Zen 4 VM). A region's keys keep its prefix, so the
+// (re-keying the accepted ones in a second pass instead was dearer:
+// docs/lab/2026-12-04-performance-log.md, "Build, 2026-12-04 evening"). A region's keys keep its prefix, so the
 // order of regions and of everything around them stays the Morton order.
 
 // About this many primitives are sampled (every n / kFlatSamples-th, in input order).
@@ -179,9 +179,8 @@ constexpr std::size_t kFlatWindowMax = 8192;
 // A column of fewer primitives says too little: the region stays in Morton order.
 constexpr std::size_t kFlatMinWindow = 64;
 // A region is re-keyed when its column's reordered tree costs at most this much of its
-// Morton tree. Measured (2026-12-04): the bumpy grid's columns 0.83-0.91; a level-6
-// icosphere's 0.87-1.17 (16 of 25 re-keyed); MetalRoughSpheres' 1.13-6.9 and a
-// random soup's 1.46-1.60 (none).
+// Morton tree: below it lie height fields' columns, above it closed objects' and
+// random soups' (docs/lab/2026-12-01-performance-log.md, "Flat regions").
 constexpr double kFlatCostRatio = 0.97;
 
 /// A range of keys (those sharing the bits from lowBits up) whose low lowBits bits
@@ -449,7 +448,7 @@ MortonKeys computeMortonKeys(std::span<const Aabb> primBounds, int threads, Cell
     // Cubic cells: one scale for all axes, that of the longest. A short axis then
     // has only low bits that vary, so the radix tree splits it only once the cells
     // are as small as its extent (scaling every axis to 21 bits cut a flat mesh
-    // across its thin axis near the root: 1.65x the binary SAH on the bumpy grid).
+    // across its thin axis near the root: docs/lab/2026-12-02-performance-log.md, "Build, 2026-12-02").
     const double longest = std::max({extent[0], extent[1], extent[2]});
     for (int axis = 0; axis < 3; ++axis)
       frame.scale[axis] = extent[axis] > 0.0
@@ -1040,8 +1039,7 @@ void sortKeysWithPlan(int threads, std::size_t n, const RadixPlan& plan, std::un
                       std::uint32_t* primIndices) {
   // The keys' low kFixupBits bits, which the items leave out: the keys' array then
   // holds the items, each written where its key was read, and is the sort's scratch
-  // (a third array of 8 bytes a key measured 1 ms more on the 1 M-triangle grid,
-  // most of it in faulting the fresh memory in).
+  // (a third array would cost more, mostly in faulting the fresh memory in).
   auto lowBits = std::make_unique_for_overwrite<std::uint32_t[]>(n);
   constexpr std::uint64_t kLowMask = (std::uint64_t{1} << kFixupBits) - 1;
   std::uint64_t* const items0 = keys.get();
@@ -1053,7 +1051,7 @@ void sortKeysWithPlan(int threads, std::size_t n, const RadixPlan& plan, std::un
   std::atomic<std::size_t> nextBucket{0};
   // A bucket bigger than this is split again by the team before the buckets are shared
   // out: one core sorting a cluster that holds most of the scene (a far outlier
-  // shrinks the rest into one cell of the first digit) measured nearly 4x the sort time.
+  // shrinks the rest into one cell of the first digit) would leave the other cores idle.
   const std::size_t bigBucket = std::max(kBigBucket, n / (4 * static_cast<std::size_t>(threads)));
   const int msdShift = 32 + plan.msdShift;
   runTeam(threads, [&](int rank, int size, Barrier& barrier) {
@@ -1250,10 +1248,9 @@ Bvh buildLbvh(std::span<const Aabb> primBounds, const BvhBuildOptions& options) 
   if (n == 0) return Bvh{};
   if (n >= kMaxPrims) throw std::length_error("buildLbvh: too many primitives for 32-bit node indices");
   Bvh bvh = buildWithCells(primBounds, options, Cells::Cubic);
-  // Cubic cells gave the lower 4-wide SAH on the generated 1 M-triangle mesh and on
-  // 12 of the 16 asset scenes of over 500 triangles (up to 1.65x lower), a higher
-  // one on 3 (up to 5%) and on the default Cornell box (1.19x); small trees are
-  // cheap enough to build both ways and keep the better.
+  // Cubic cells give the lower 4-wide SAH on most scenes but not all (the Cornell
+  // box among them: docs/lab/2026-12-02-performance-log.md, "Build, 2026-12-02");
+  // small trees are cheap enough to build both ways and keep the better.
   if (n <= kBothCellsBelow) {
     Bvh perAxis = buildWithCells(primBounds, options, Cells::PerAxis);
     if (perAxis.stats.sahCost < bvh.stats.sahCost) bvh = std::move(perAxis);

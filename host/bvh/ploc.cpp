@@ -5,8 +5,8 @@
 // plocRadius positions whose union with it has the smallest surface area;
 // mutual nearest neighbours merge into a new node at the lower position, and
 // the array is compacted. Clustering stops where the clusters average
-// plocTopPrims primitives: there PLOC's tree measured furthest from the SAH
-// tree's (its upper levels cost 1.3x theirs on the bumpy grid), so a binned
+// plocTopPrims primitives: PLOC's upper levels are where its tree is furthest
+// from the SAH tree's (docs/lab/2026-12-01-performance-log.md, "What did not win"), so a binned
 // SAH pass over the clusters, weighted by their primitive counts, builds the
 // levels above. Subtrees of at most maxLeafSize primitives become leaves.
 #include "bvh/build_tree.h"
@@ -214,8 +214,8 @@ std::uint32_t buildTopSah(std::vector<TopCluster>& clusters, std::vector<BuildNo
 Bvh buildPlocBvh(std::span<const Aabb> primBounds, const BvhBuildOptions& options) {
   const auto start = std::chrono::steady_clock::now();
   // One primitive per first cluster, in Morton order. Seeding with the LBVH's
-  // leaves of up to maxLeafSize instead measured 10-20% worse in 4-wide SAH
-  // (bumpy grid, icosphere, soup).
+  // leaves of up to maxLeafSize instead gave a worse 4-wide SAH
+  // (docs/lab/2026-12-01-performance-log.md, "What did not win").
   const std::size_t n = primBounds.size();
   const std::uint32_t maxLeaf = std::uint32_t(std::max(options.maxLeafSize, 1));
   if (n <= std::max<std::size_t>(maxLeaf, 2)) return buildLbvh(primBounds, options);  // one leaf, or two
@@ -297,8 +297,8 @@ Bvh buildPlocBvh(std::span<const Aabb> primBounds, const BvhBuildOptions& option
         for (int r = 0; r < size; ++r) mergedTotal += merges[r].value;
         nextNode += mergedTotal;
         // The pair of smallest distance is always mutual, so every round merges.
-        // A round that merges fewer than 1/16 of the clusters (measured 0.14-0.45
-        // on the bench's scenes) hands them to the SAH pass below: clusters
+        // A round that merges fewer than 1/16 of the clusters (the bench's
+        // scenes merge far more a round) hands them to the SAH pass below: clusters
         // whose nearest neighbours run in one direction (sizes or gaps growing
         // along the order) merge one pair a round, quadratic time and a chain.
         if (mergedTotal == 0 || std::uint64_t(mergedTotal) * kMinMergeShare < count) stalled = true;

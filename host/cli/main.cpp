@@ -476,14 +476,12 @@ int main(int argc, char** argv) {
   }
 
   // PoCL leaves the worker threads of its CPU device unpinned unless
-  // POCL_AFFINITY is set. On the 2-core VMs here about half the bench
-  // processes then ran short kernels (12-20 ms) at about 1.3x one thread
-  // instead of 2x; pinned, 31 of 32 runs were at full speed
-  // (docs/performance.md, "PoCL's worker threads"). Pinned threads of
-  // several processes at once cannot move aside, though (the test suite
-  // under ctest -j2 took 1.24x as long), and renders, whose launches are
-  // long, took the same time either way: so for the bench only, set before
-  // PoCL starts, and never over the user's own setting.
+  // POCL_AFFINITY is set, and unpinned workers made the bench's short
+  // kernels bimodal. Pinned threads of several processes at once cannot
+  // move aside, though (the test suite under ctest -j2 got slower), and
+  // renders, whose launches are long, gain nothing: so for the bench only,
+  // set before PoCL starts, and never over the user's own setting
+  // (docs/lab/2026-12-02-performance-log.md, "PoCL's worker threads").
   if (*benchCmd) setenv("POCL_AFFINITY", "1", 0);
 
   try {

@@ -1,6 +1,6 @@
 // Host builds of the kernels' robust spawning (kernels/shared/spawn.h): the
-// bench makes its secondary rays with them, and the tests compare them with
-// the device bit for bit.
+// bench and the stress suite make their secondary rays with them, and
+// tests/kernels/test_shared_code.cpp compares them with the device bit for bit.
 #pragma once
 
 #include "shared/spawn.h"

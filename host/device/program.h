@@ -18,7 +18,7 @@ namespace wt {
 /// What a scene needs compiled in; becomes -D options (kernelDefines). Keep
 /// the set coarse so few variants exist and PoCL's cache keeps them warm.
 struct KernelFeatures {
-  bool integratorMinimal = true;  ///< the brute-force reference (the only integrator so far)
+  bool integratorMinimal = true;  ///< the brute-force reference (--integrator minimal), else the path integrator
   int bvhStackSize = 64;          ///< traversal stack entries; >= BVH depth + 1, rounded up to 32
   bool pbr = false;               ///< a material uses the metallic-roughness model (else all are Lambertian)
   bool transmission = false;      ///< a metallic-roughness material transmits (KHR_materials_transmission)
@@ -43,19 +43,16 @@ struct KernelFeatures {
 /// Whether streams (kernels/bvh_stream.cl) should ask for a node's children
 /// as it arrives, and keep their rays in order rather than grouped by
 /// octant: where the scene's nodes and triangles (`sceneBytes`) do not fit
-/// in the device's global memory cache, or the device reports none. On
-/// the Zen 4 VM (PoCL reports its 32 MiB L3) the requests measured 1.14-1.23x
-/// on the 1 M-triangle scenes' shadow rays (57 MB) and 0.95-1.05x on
-/// DamagedHelmet's (1 MB): docs/performance.md, "Streams: the children's
-/// data asked for early".
+/// in the device's global memory cache, or the device reports none. The
+/// requests hide memory latency, so they only pay where the tree comes from
+/// memory (docs/lab/2026-12-04-performance-log.md, "Streams: the children's
+/// data asked for early").
 bool streamPrefetchFor(const DeviceInfo& device, std::size_t sceneBytes);
 
 /// Camera rays per triangle below which a 16-wide device still gets packets
 /// of 8: a packet's rays then spread over several leaves, and 16 lanes pay
-/// for the union (1024x1024 camera rays on the 1 M-triangle scenes traced
-/// 1.10-1.25x faster in packets of 8 on an AVX-512 Zen 4, and at 0.98-1.00x
-/// on a Zen 5; 4 rays per triangle or more, 16 was the faster:
-/// docs/performance.md, "Packet width by camera rays per triangle").
+/// for the union (docs/lab/2026-12-01-performance-log.md, "Packet width by
+/// camera rays per triangle").
 constexpr double kWidePacketRaysPerTriangle = 3.0;
 
 /// Rays per packet for a device: `requested` (8 or 16) when non-zero, else

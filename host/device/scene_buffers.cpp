@@ -191,7 +191,7 @@ SceneBuffers::SceneBuffers(Context& context, const Scene& scene, const BvhBuildO
     if (options.instancing == Instancing::Auto) {
       // Instances cost a second traversal per ray and lose the packets
       // inside them; they pay where the flattened copies would not fit the
-      // cache and the stored-once ones do (docs/performance.md, "Instancing")
+      // cache and the stored-once ones do (docs/lab/2026-12-05-performance-log.md, "Instancing")
       std::size_t copiedTriangles = 0;
       for (const InstancedGeometry& g : instanced) copiedTriangles += g.kept.size() * (g.copies.size() - 1);
       if (!instancingPays(copiedTriangles, context.info().globalCacheBytes)) instanced.clear();

@@ -1,4 +1,4 @@
-// Round curves as linear swept spheres (docs/architecture.md, "Curves"):
+// Round curves as linear swept spheres (docs/curves.md):
 // segment k of a curve is the convex hull of its two joint spheres (p0, r0)
 // and (p1, r1), a round cone -- the surface swept by a sphere whose centre
 // and radius move linearly from one joint to the other (Embree's round

@@ -34,8 +34,8 @@ inline RayShear triangle_ray_shear(float3 d) {
 /// Hit in (tmin, tmax): writes the distance and the barycentrics of p1 and p2.
 /// The reference form of triangle_intersect4, which traversal uses and which
 /// must give the same answers (SharedCode.FourLaneTriangleTestMatchesOneByOne).
-/// Forced inline: PoCL otherwise calls it per triangle (1.4-1.7x slower traversal
-/// on the Cornell ray sets, wavetrace bench).
+/// Forced inline: PoCL otherwise calls it per triangle, which traversal cannot
+/// afford (docs/lab/2026-11-23-performance-log.md, "After forcing").
 __attribute__((always_inline)) inline bool triangle_intersect(float3 org, RayShear s, float tmin, float tmax, float3 p0,
                                float3 p1, float3 p2, float* t_hit, float* b1, float* b2) {
   float3 a = p0 - org;

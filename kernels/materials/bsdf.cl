@@ -208,8 +208,8 @@ inline DielectricColor pbr_dielectric_albedo(Bsdf b, float2 es, DielectricColor 
 }
 
 /// What the PBR model needs from wo alone to pick a technique (the
-/// averages and multiple scattering wait for evaluation: measured 10% of a
-/// Cornell box's CPU time when every view looked them up).
+/// averages and multiple scattering wait for evaluation: looked up for every
+/// view they were a visible share of a render, docs/materials.md, "Cost").
 typedef struct PbrView {
   float e;          ///< GGX albedo at mu_o, F = 1
   float s;          ///< GGX albedo at mu_o, F = (1 - v.h)^5

@@ -1,6 +1,7 @@
-// Lambertian reflection: the only material model until the full glTF
-// material lands. Sampling is cosine-weighted around the shading normal, so
-// the estimator's weight f * cos / pdf is exactly the albedo.
+// Cosine-weighted sampling: the diffuse lobe of every material (the
+// Lambertian model and the metallic-roughness base and sheen in bsdf.cl,
+// sampled about +z of the shading frame), so a Lambertian estimator's
+// weight f * cos / pdf is exactly the albedo.
 #ifndef WT_MATERIALS_LAMBERT_CL
 #define WT_MATERIALS_LAMBERT_CL
 

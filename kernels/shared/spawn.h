@@ -1,4 +1,4 @@
-// Robust ray spawning, shared by host (bench ray sets, tests) and kernels.
+// Robust ray spawning, shared by host (bench ray sets, stress suite, tests) and kernels.
 //
 // A surface point computed in float carries a rounding error bound per
 // coordinate. A ray leaving the surface starts from the point pushed along the
@@ -6,9 +6,9 @@
 // origin lies strictly on the intended side of the true surface at any scale
 // and any distance from the world origin; no world-space epsilon is involved
 // (the error-bound offsets of pbrt-v4, Pharr, Jakob and Humphreys, 4th ed.,
-// sec. 6.8.6). The triangle test rejects hits closer than its own t error
-// bound (kernels/geometry/triangle.cl), which together make a spawned ray miss
-// the surface it left.
+// sec. 6.8.6). Traversal also never tests the primitive a ray leaves (the
+// ray's skip index, kernels/geometry/triangle.cl), which together make a
+// spawned ray miss the surface it left.
 #ifndef WT_SHARED_SPAWN_H
 #define WT_SHARED_SPAWN_H
 

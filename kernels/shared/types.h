@@ -33,8 +33,8 @@ typedef struct WtTriangle {
 /// no gathering or shuffling, and each leaf is laid out to touch no more
 /// blocks than its size needs (packLeavesIntoBlocks, host/bvh/bvh4.h). The
 /// vertex indices that shading needs live in tri_info, out of the blocks:
-/// traversal reads a quarter fewer bytes (docs/performance.md, "Triangle
-/// blocks without their index rows").
+/// traversal reads a quarter fewer bytes (docs/lab/2026-12-05-performance-log.md,
+/// "Triangle blocks without their index rows").
 #define WT_TRIANGLE_BLOCK 4
 #define WT_TRIANGLE_BLOCK_ROWS 9
 
