@@ -1,7 +1,9 @@
-// .hair and PLY strand readers. Every count is checked against the bytes
-// that are there before anything is allocated, so a truncated or lying
-// header is an error, never a crash or a huge allocation.
+// .hair and PLY strand readers (PLY parsing: scene/ply.h). Every count is
+// checked against the bytes that are there before anything is allocated, so
+// a truncated or lying header is an error, never a crash or a huge allocation.
 #include "scene/hair_loader.h"
+
+#include "scene/ply.h"
 
 #include <algorithm>
 #include <bit>
@@ -79,98 +81,6 @@ enum HairArrays : std::uint32_t {
   kHairColors = 16,
 };
 
-// PLY
-
-enum class PlyFormat { kAscii, kLittle, kBig };
-
-struct PlyProperty {
-  std::string name;
-  std::string type;       ///< scalar type, or the item type of a list
-  std::string countType;  ///< list: the count's type; "" for a scalar
-};
-
-struct PlyElement {
-  std::string name;
-  std::uint64_t count = 0;
-  std::vector<PlyProperty> properties;
-  int headerLine = 0;
-};
-
-/// Bytes of a PLY scalar type; 0 for an unknown name.
-std::size_t plyTypeSize(const std::string& type) {
-  if (type == "char" || type == "uchar" || type == "int8" || type == "uint8") return 1;
-  if (type == "short" || type == "ushort" || type == "int16" || type == "uint16") return 2;
-  if (type == "int" || type == "uint" || type == "int32" || type == "uint32" || type == "float" || type == "float32")
-    return 4;
-  if (type == "double" || type == "float64") return 8;
-  return 0;
-}
-
-bool plyIsFloat(const std::string& type) {
-  return type == "float" || type == "float32" || type == "double" || type == "float64";
-}
-bool plyIsSigned(const std::string& type) {
-  return type == "char" || type == "int8" || type == "short" || type == "int16" || type == "int" || type == "int32";
-}
-
-/// Reads the body of a PLY file value by value.
-class PlyReader {
- public:
-  PlyReader(std::span<const std::uint8_t> bytes, std::size_t offset, PlyFormat format, const std::string& name)
-      : m_bytes(bytes), m_pos(offset), m_format(format), m_name(name) {}
-
-  /// One value of `type`, as a double; `where` names it in errors.
-  double value(const std::string& type, const std::string& where) {
-    if (m_format == PlyFormat::kAscii) return asciiValue(type, where);
-    const std::size_t size = plyTypeSize(type);
-    if (m_bytes.size() - m_pos < size)
-      fail(m_name, where + ": the file ends at byte " + std::to_string(m_bytes.size()) + " (truncated)");
-    std::uint8_t raw[8];
-    std::memcpy(raw, m_bytes.data() + m_pos, size);
-    m_pos += size;
-    if (m_format == PlyFormat::kBig) std::reverse(raw, raw + size);
-    std::uint64_t bits = 0;
-    for (std::size_t k = 0; k < size; ++k) bits |= std::uint64_t(raw[k]) << (8 * k);
-    if (plyIsFloat(type)) return size == 4 ? double(std::bit_cast<float>(std::uint32_t(bits))) : std::bit_cast<double>(bits);
-    if (plyIsSigned(type)) {
-      const int shift = int(64 - 8 * size);
-      return double(std::int64_t(bits << shift) >> shift);
-    }
-    return double(bits);
-  }
-
-  /// Bytes left, for checks of binary counts before they are read.
-  std::size_t remaining() const { return m_bytes.size() - m_pos; }
-
- private:
-  double asciiValue(const std::string& type, const std::string& where) {
-    while (m_pos < m_bytes.size() && std::isspace(m_bytes[m_pos])) ++m_pos;
-    const std::size_t start = m_pos;
-    while (m_pos < m_bytes.size() && !std::isspace(m_bytes[m_pos])) ++m_pos;
-    if (start == m_pos) fail(m_name, where + ": the file ends before this value (truncated)");
-    const char* first = reinterpret_cast<const char*>(m_bytes.data() + start);
-    const char* last = reinterpret_cast<const char*>(m_bytes.data() + m_pos);
-    const std::string token(first, last);
-    double v = 0.0;
-    std::size_t used = 0;
-    try {
-      v = std::stod(token, &used);
-    } catch (const std::exception&) {
-      used = 0;
-    }
-    // "nan" and "inf" parse: the caller checks finiteness where it matters
-    if (used != token.size()) fail(m_name, where + ": not a number: \"" + token.substr(0, 32) + "\"");
-    if (!plyIsFloat(type) && v != std::floor(v))
-      fail(m_name, where + ": must be an integer (" + type + "), got " + token.substr(0, 32));
-    return v;
-  }
-
-  std::span<const std::uint8_t> m_bytes;
-  std::size_t m_pos;
-  PlyFormat m_format;
-  const std::string& m_name;
-};
-
 }  // namespace
 
 StrandSet loadHairFromMemory(std::span<const std::uint8_t> bytes, const std::string& name) {
@@ -245,144 +155,39 @@ StrandSet loadHairFromMemory(std::span<const std::uint8_t> bytes, const std::str
 }
 
 StrandSet loadPlyStrandsFromMemory(std::span<const std::uint8_t> bytes, const std::string& name) {
-  // the header: lines up to end_header
-  std::size_t pos = 0;
-  int lineNumber = 0;
-  auto nextLine = [&](std::string& line) {
-    if (pos >= bytes.size()) return false;
-    const std::size_t start = pos;
-    while (pos < bytes.size() && bytes[pos] != '\n') ++pos;
-    line.assign(reinterpret_cast<const char*>(bytes.data() + start), pos - start);
-    if (pos < bytes.size()) ++pos;
-    if (!line.empty() && line.back() == '\r') line.pop_back();
-    ++lineNumber;
-    return true;
+  const auto check = [&](const PlyData& data) {
+    const PlyData::Element* vertex = data.find("vertex");
+    const PlyData::Element* strand = data.find("strand");
+    if (!vertex) fail(name, "no \"vertex\" element");
+    if (!strand)
+      fail(name, "no \"strand\" element: strands need their segment counts (an element \"strand\" with one property, "
+                 "e.g. \"property ushort nsegs\")");
+    if (!vertex->scalar("x") || !vertex->scalar("y") || !vertex->scalar("z"))
+      fail(name, "line " + std::to_string(vertex->headerLine) + ": vertex needs scalar x, y and z");
+    if (strand->properties.size() != 1 || strand->properties[0].list)
+      fail(name, "line " + std::to_string(strand->headerLine) +
+                     ": \"strand\" must have exactly one scalar property (its segment count)");
+    if (vertex->count > kMaxPoints)
+      fail(name, "vertex: " + std::to_string(vertex->count) + " points, more than the " + std::to_string(kMaxPoints) +
+                     " supported");
   };
-  std::string line;
-  if (!nextLine(line) || line != "ply") fail(name, "line 1: not a PLY file (it does not begin with \"ply\")");
-  std::optional<PlyFormat> format;
-  std::vector<PlyElement> elements;
-  bool ended = false;
-  while (!ended && nextLine(line)) {
-    const std::string where = "line " + std::to_string(lineNumber);
-    if (line.size() > 4096) fail(name, where + ": header line too long");
-    std::istringstream words(line);
-    std::string keyword;
-    words >> keyword;
-    if (keyword.empty() || keyword == "comment" || keyword == "obj_info") continue;
-    if (keyword == "end_header") {
-      ended = true;
-    } else if (keyword == "format") {
-      std::string kind, version;
-      words >> kind >> version;
-      if (kind == "ascii") format = PlyFormat::kAscii;
-      else if (kind == "binary_little_endian") format = PlyFormat::kLittle;
-      else if (kind == "binary_big_endian") format = PlyFormat::kBig;
-      else fail(name, where + ": unknown format \"" + kind.substr(0, 32) + "\"");
-    } else if (keyword == "element") {
-      PlyElement e;
-      std::string count;
-      words >> e.name >> count;
-      std::uint64_t n = 0;
-      const auto [end, ec] = std::from_chars(count.data(), count.data() + count.size(), n);
-      if (e.name.empty() || ec != std::errc() || end != count.data() + count.size())
-        fail(name, where + ": expected \"element <name> <count>\"");
-      e.count = n;
-      e.headerLine = lineNumber;
-      elements.push_back(std::move(e));
-    } else if (keyword == "property") {
-      if (elements.empty()) fail(name, where + ": a property before any element");
-      PlyProperty p;
-      std::string type;
-      words >> type;
-      if (type == "list") {
-        words >> p.countType >> p.type >> p.name;
-        if (plyTypeSize(p.countType) == 0 || plyIsFloat(p.countType))
-          fail(name, where + ": bad list count type \"" + p.countType.substr(0, 32) + "\"");
-      } else {
-        p.type = type;
-        words >> p.name;
-      }
-      if (plyTypeSize(p.type) == 0) fail(name, where + ": unknown property type \"" + p.type.substr(0, 32) + "\"");
-      if (p.name.empty()) fail(name, where + ": a property needs a name");
-      elements.back().properties.push_back(p);
-    } else {
-      fail(name, where + ": unknown header keyword \"" + keyword.substr(0, 32) + "\"");
-    }
-  }
-  if (!ended) fail(name, "the header has no end_header line (truncated, or not a PLY file)");
-  if (!format) fail(name, "the header has no format line");
-
-  // the elements we need, and where their properties are
-  const PlyElement* vertex = nullptr;
-  const PlyElement* strand = nullptr;
-  for (const PlyElement& e : elements) {
-    if (e.name == "vertex") vertex = &e;
-    if (e.name == "strand") strand = &e;
-  }
-  if (!vertex) fail(name, "no \"vertex\" element");
-  if (!strand)
-    fail(name, "no \"strand\" element: strands need their segment counts (an element \"strand\" with one property, "
-               "e.g. \"property ushort nsegs\")");
-  auto find = [&](const PlyElement& e, const char* prop) -> int {
-    for (std::size_t k = 0; k < e.properties.size(); ++k)
-      if (e.properties[k].name == prop && e.properties[k].countType.empty()) return int(k);
-    return -1;
-  };
-  const int px = find(*vertex, "x"), py = find(*vertex, "y"), pz = find(*vertex, "z");
-  if (px < 0 || py < 0 || pz < 0) fail(name, "line " + std::to_string(vertex->headerLine) + ": vertex needs scalar x, y and z");
-  const int pr = find(*vertex, "radius");
-  int segs = -1;
-  for (std::size_t k = 0; k < strand->properties.size(); ++k)
-    if (strand->properties[k].countType.empty() && segs < 0) segs = int(k);
-  if (segs < 0 || strand->properties.size() != 1)
-    fail(name, "line " + std::to_string(strand->headerLine) + ": \"strand\" must have exactly one scalar property (its segment count)");
-  if (vertex->count > kMaxPoints)
-    fail(name, "vertex: " + std::to_string(vertex->count) + " points, more than the " + std::to_string(kMaxPoints) +
-                   " supported");
+  const PlyData data = readPly(bytes, name, check);
+  const PlyData::Element* vertex = data.find("vertex");
+  const PlyData::Element* strand = data.find("strand");
+  const PlyData::Property *px = vertex->scalar("x"), *py = vertex->scalar("y"), *pz = vertex->scalar("z");
+  const PlyData::Property* pr = vertex->scalar("radius");
 
   StrandSet set;
-  set.hasRadius = pr >= 0;
-  PlyReader reader(bytes, pos, *format, name);
-  for (const PlyElement& e : elements) {
-    const bool isVertex = &e == vertex, isStrand = &e == strand;
-    // a binary element of scalars cannot hold more items than the bytes left
-    if (*format != PlyFormat::kAscii) {
-      std::size_t least = 0;
-      for (const PlyProperty& p : e.properties) least += p.countType.empty() ? plyTypeSize(p.type) : plyTypeSize(p.countType);
-      if (least > 0 && e.count > reader.remaining() / least)
-        fail(name, e.name + ": " + std::to_string(e.count) + " items do not fit in the " +
-                       std::to_string(reader.remaining()) + " bytes left (truncated, or the count is wrong)");
-    } else if (e.count > reader.remaining()) {
-      fail(name, e.name + ": " + std::to_string(e.count) + " items do not fit in the " +
-                     std::to_string(reader.remaining()) + " bytes left (truncated, or the count is wrong)");
-    }
-    if (isVertex) set.points.resize(e.count);
-    if (isStrand) set.counts.resize(e.count);
-    for (std::uint64_t i = 0; i < e.count; ++i) {
-      const std::string where = e.name + " " + std::to_string(i);
-      for (std::size_t k = 0; k < e.properties.size(); ++k) {
-        const PlyProperty& p = e.properties[k];
-        if (!p.countType.empty()) {
-          const double n = reader.value(p.countType, where + ", " + p.name);
-          if (!(n >= 0.0) || n > double(reader.remaining()))
-            fail(name, where + ", " + p.name + ": list of " + std::to_string(n) + " items (truncated, or a bad count)");
-          for (std::uint64_t j = 0; j < std::uint64_t(n); ++j) reader.value(p.type, where + ", " + p.name);
-          continue;
-        }
-        const double v = reader.value(p.type, where + ", " + p.name);
-        if (isVertex) {
-          if (int(k) == px) set.points[i].x = float(v);
-          else if (int(k) == py) set.points[i].y = float(v);
-          else if (int(k) == pz) set.points[i].z = float(v);
-          else if (int(k) == pr) set.points[i].w = float(v);
-        } else if (isStrand) {
-          if (!(v >= 0.0 && v < double(kMaxPoints)))
-            fail(name, "strand " + std::to_string(i) + ": segment count " + std::to_string(v) + " out of range");
-          set.counts[i] = std::uint32_t(v) + 1;
-        }
-      }
-    }
+  set.hasRadius = pr != nullptr;
+  set.points.resize(vertex->count);
+  for (std::size_t i = 0; i < set.points.size(); ++i)
+    set.points[i] = glm::vec4(float(px->values[i]), float(py->values[i]), float(pz->values[i]), pr ? float(pr->values[i]) : 0.0f);
+  const std::vector<double>& segments = strand->properties[0].values;
+  set.counts.resize(strand->count);
+  for (std::size_t i = 0; i < set.counts.size(); ++i) {
+    if (!(segments[i] >= 0.0 && segments[i] < double(kMaxPoints)))
+      fail(name, "strand " + std::to_string(i) + ": segment count " + std::to_string(segments[i]) + " out of range");
+    set.counts[i] = std::uint32_t(segments[i]) + 1;
   }
 
   std::uint64_t needed = 0;

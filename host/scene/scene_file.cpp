@@ -7,6 +7,7 @@
 
 #include "scene/generators.h"
 #include "scene/hair_loader.h"
+#include "scene/ply.h"
 
 #include <nlohmann/json.hpp>
 
@@ -542,13 +543,15 @@ class Loader {
 
   void readObject(const Json& v, const std::string& path) {
     object(v, path);
-    const std::string type = string(require(v, path, "type", ": gltf, sphere, spheres or curves"), member(path, "type"));
+    const std::string type =
+        string(require(v, path, "type", ": gltf, mesh, sphere, spheres or curves"), member(path, "type"));
     if (type == "gltf") readGltf(v, path);
+    else if (type == "mesh") readMesh(v, path);
     else if (type == "sphere") readSphere(v, path);
     else if (type == "spheres") readSpheres(v, path);
     else if (type == "curves") readCurves(v, path);
     else
-      fail(member(path, "type"), "unknown type \"" + type + "\" (expected one of: gltf, sphere, spheres, curves)");
+      fail(member(path, "type"), "unknown type \"" + type + "\" (expected one of: gltf, mesh, sphere, spheres, curves)");
   }
 
   void readCurves(const Json& v, const std::string& path) {
@@ -727,6 +730,61 @@ class Loader {
                                           loaded.scene.materialNames.end());
       const std::string label = resolved.filename().string();
       for (const std::string& w : loaded.scene.warnings) m_result.scene.addWarning(label + ": " + w);
+      m_files.push_back(std::move(loaded));
+    }
+    const IncludedFile& included = m_files[it->second];
+    m_placements.push_back({it->second, transform * glm::translate(glm::dmat4(1.0), included.scene.origin), path});
+  }
+
+  /// A triangle mesh from a PLY file with one material: an included file of
+  /// its own (copies of one file with one material share its geometry).
+  void readMesh(const Json& v, const std::string& path) {
+    checkKeys(v, path, {"type", "file", "transform", "material"});
+    const std::string where = member(path, "file");
+    const Json& fileValue = require(v, path, "file");
+    const std::string file = string(fileValue, where);
+    if (file.empty()) fail(where, "must name a file, got \"\"");
+    const fs::path resolved = resolve(file);
+    if (lowerExtension(resolved) != ".ply") fail(where, "must be a .ply file, got " + describe(fileValue));
+    glm::dmat4 transform(1.0);
+    if (const Json* t = find(v, "transform")) transform = readTransform(*t, member(path, "transform"));
+    const std::uint32_t material = materialOf(v, path);
+
+    const std::string key = resolved.string() + "\n" + std::to_string(material);
+    auto [it, added] = m_fileIndex.emplace(key, m_files.size());
+    if (added) {
+      requireFile(resolved, where);
+      PlyMesh mesh;
+      try {
+        mesh = loadPlyMesh(resolved.string());
+      } catch (const SceneError& e) {
+        fail(where, e.what());
+      }
+      if (mesh.positions.size() > m_options.maxVertices || mesh.triangles.size() > m_options.maxTriangles)
+        fail(where, std::to_string(mesh.positions.size()) + " vertices and " + std::to_string(mesh.triangles.size()) +
+                        " triangles, more than the " + std::to_string(m_options.maxVertices) + " and " +
+                        std::to_string(m_options.maxTriangles) + " supported");
+      IncludedFile loaded;
+      Scene& scene = loaded.scene;
+      scene.sourceName = resolved.filename().string();
+      // relative to the centre of its bounds, as glTF files are included: the
+      // floats keep their precision before the placement moves them (in double)
+      glm::dvec3 lo(std::numeric_limits<double>::infinity()), hi(-lo);
+      for (const glm::dvec3& p : mesh.positions) lo = glm::min(lo, p), hi = glm::max(hi, p);
+      scene.origin = mesh.positions.empty() ? glm::dvec3(0.0) : 0.5 * (lo + hi);
+      scene.positions.reserve(mesh.positions.size());
+      for (std::size_t i = 0; i < mesh.positions.size(); ++i) {
+        const glm::vec3 q(mesh.positions[i] - scene.origin);
+        const glm::vec3 n = mesh.normals[i];
+        scene.positions.push_back({q.x, q.y, q.z, 0.0f});
+        scene.normals.push_back({n.x, n.y, n.z, 0.0f});
+        scene.texcoords.push_back(mesh.texcoords.empty() ? glm::vec2(0.0f) : mesh.texcoords[i]);
+      }
+      // triangles name the scene's material itself (materialBase 0)
+      for (const auto& t : mesh.triangles) scene.triangles.push_back({t[0], t[1], t[2], material});
+      scene.instances.push_back({0, std::uint32_t(scene.triangles.size()), 0, glm::dmat4(1.0)});
+      loaded.materialBase = 0;
+      loaded.geometryBase = m_nextGeometry++;
       m_files.push_back(std::move(loaded));
     }
     const IncludedFile& included = m_files[it->second];

@@ -631,7 +631,52 @@ TEST(SceneFileAssets, HairExampleLoads) {
   std::size_t segments = 0;
   for (const Curve& c : hair.scene.curves) segments += c.pointCount - 1;
   EXPECT_GE(segments, 100000u);
-  EXPECT_EQ(hair.scene.spheres.size(), 2u);  // the head and a lamp
+  EXPECT_EQ(hair.scene.spheres.size(), 1u);  // the lamp; the head is a mesh
+  EXPECT_EQ(hair.scene.triangles.size(), 7694u);
+}
+
+/// A PLY square of two triangles (one quad face) with normals along +z.
+std::string plySquare() {
+  return "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n"
+         "property float nx\nproperty float ny\nproperty float nz\nelement face 1\n"
+         "property list uchar int vertex_indices\nend_header\n"
+         "0 0 0 0 0 1\n1 0 0 0 0 1\n1 1 0 0 0 1\n0 1 0 0 0 1\n4 0 1 2 3\n";
+}
+
+TEST(SceneFile, MeshesFromPlyFiles) {
+  writeFile(testDir() / "square.ply", plySquare());
+  GltfLoadOptions options;
+  options.recenter = false;
+  const Scene s = loadText(doc(R"("materials": {"red": {"base_color": [1, 0, 0]}, "blue": {"base_color": [0, 0, 1]}},
+      "objects": [
+      {"type": "mesh", "file": "square.ply", "material": "red",
+       "transform": {"translate": [10, 0, 0], "rotate": [1, 0, 0, 90], "scale": 2}},
+      {"type": "mesh", "file": "square.ply", "material": "red"},
+      {"type": "mesh", "file": "square.ply", "material": "blue"}])"), options).scene;
+  expectConsistent(s);
+  ASSERT_EQ(s.triangles.size(), 6u);
+  ASSERT_EQ(s.instances.size(), 3u);
+  // the same file with the same material is one geometry; another material makes another
+  EXPECT_EQ(s.instances[0].geometry, s.instances[1].geometry);
+  EXPECT_NE(s.instances[0].geometry, s.instances[2].geometry);
+  EXPECT_EQ(s.materialNames[s.triangles[0].material], "red");
+  EXPECT_EQ(s.materialNames[s.triangles[4].material], "blue");
+  // the quad's far corner (1, 1, 0): scaled by 2, turned about x by 90 degrees, moved to x = 10
+  const glm::dvec3 corner = worldPosition(s, s.triangles[1].v1);
+  EXPECT_NEAR(corner.x, 12.0, 1e-5);
+  EXPECT_NEAR(corner.y, 0.0, 1e-5);
+  EXPECT_NEAR(corner.z, 2.0, 1e-5);
+  // normals turn with the surface: +z becomes -y
+  const WtVec4 n = s.normals[s.triangles[0].v0];
+  EXPECT_NEAR(n.y, -1.0f, 1e-6f);
+}
+
+TEST(SceneFileAssets, HeadMeshLoads) {
+  WT_REQUIRE_ASSET(head, "curves/hairutil_testdata/Bangs_head.ply");
+  const Scene s = loadText(doc(R"("objects": [{"type": "mesh", "file": ")" + head.string() + R"("}])")).scene;
+  expectConsistent(s);
+  EXPECT_EQ(s.positions.size(), 3943u);
+  EXPECT_EQ(s.triangles.size(), 7694u);
 }
 
 // ---------------------------------------------------------------------------
@@ -702,9 +747,15 @@ const BadFile kBadFiles[] = {
         BadFile{"CenterElement", objects(R"({"type": "sphere", "center": [0, true, 0], "radius": 1})"),
                 "objects[0].center[1]: must be a number, got true"},
         BadFile{"MissingType", objects(R"({"center": [0, 0, 0]})"),
-                "objects[0].type: missing (required: gltf, sphere, spheres or curves)"},
+                "objects[0].type: missing (required: gltf, mesh, sphere, spheres or curves)"},
         BadFile{"UnknownType", objects(R"({"type": "cube"})"),
-                "objects[0].type: unknown type \"cube\" (expected one of: gltf, sphere, spheres, curves)"},
+                "objects[0].type: unknown type \"cube\" (expected one of: gltf, mesh, sphere, spheres, curves)"},
+        // meshes
+        BadFile{"MeshFileType", objects(R"({"type": "mesh", "file": "head.obj"})"),
+                "objects[0].file: must be a .ply file, got \"head.obj\""},
+        BadFile{"MeshMissingFile", objects(R"({"type": "mesh", "file": "nowhere.ply"})"), "objects[0].file: no such file: "},
+        BadFile{"MeshUnknownMaterial", objects(R"({"type": "mesh", "file": "a.ply", "material": "chrome"})"),
+                "objects[0].material: unknown material \"chrome\""},
         // curves
         BadFile{"CurvesFileAndStrands", objects(R"({"type": "curves", "file": "a.hair", "strands": []})"),
                 "objects[0]: give \"file\" (a .hair or .ply file) or \"strands\" (points), not both"},
