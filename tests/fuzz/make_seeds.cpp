@@ -4,7 +4,7 @@
 // lights, materials; .hdr flat and run-length encoded; .exr of every
 // compression, tiled and mip-mapped, Y-only and luminance/chroma; scene
 // files with every object type, transform form and setting).
-// Usage: wt_fuzz_seeds OUTDIR   (writes OUTDIR/{gltf,glb,hdr,exr,scene_file}/...)
+// Usage: wt_fuzz_seeds OUTDIR   (writes OUTDIR/{gltf,glb,hdr,exr,scene_file,ply}/...)
 #include <ImfChannelList.h>
 #include <ImfFrameBuffer.h>
 #include <ImfHeader.h>
@@ -396,6 +396,41 @@ void writeExrSeeds(const fs::path& dir) {
   }
 }
 
+// PLY: a mesh in each format (with normals and texture coordinates in one),
+// and strands with an element to skip
+void writePlySeeds(const fs::path& dir) {
+  fs::create_directories(dir / "ply");
+  const std::string header = "element vertex 4\nproperty float x\nproperty float y\nproperty float z\n"
+                             "element face 2\nproperty list uchar int vertex_indices\nend_header\n";
+  writeFile(dir / "ply" / "quad_ascii.ply",
+            "ply\nformat ascii 1.0\n" + header + "0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 1 2\n4 0 2 3 1\n");
+  for (const char* format : {"binary_little_endian", "binary_big_endian"}) {
+    const bool big = std::string(format) == "binary_big_endian";
+    std::string body;
+    auto put = [&](const void* p, std::size_t n) {
+      std::string b(static_cast<const char*>(p), n);
+      if (big) b.assign(b.rbegin(), b.rend());
+      body += b;
+    };
+    for (float v : {0.f, 0.f, 0.f, 1.f, 0.f, 0.f, 1.f, 1.f, 0.f, 0.f, 1.f, 0.f}) put(&v, 4);
+    for (const std::vector<int>& f : {std::vector<int>{0, 1, 2}, std::vector<int>{0, 2, 3}}) {
+      const auto n = std::uint8_t(f.size());
+      put(&n, 1);
+      for (int i : f) put(&i, 4);
+    }
+    writeFile(dir / "ply" / (std::string("quad_") + format + ".ply"), "ply\nformat " + std::string(format) + " 1.0\n" + header + body);
+  }
+  writeFile(dir / "ply" / "attributes.ply",
+            "ply\nformat ascii 1.0\nelement vertex 3\nproperty double x\nproperty double y\nproperty double z\n"
+            "property float nx\nproperty float ny\nproperty float nz\nproperty float s\nproperty float t\n"
+            "element face 1\nproperty list uchar uint vertex_index\nend_header\n"
+            "0 0 0 0 0 1 0 0\n1 0 0 0 0 1 1 0\n0 1 0 0 0 1 0 1\n3 0 1 2\n");
+  writeFile(dir / "ply" / "strands.ply",
+            "ply\nformat ascii 1.0\nelement vertex 5\nproperty float x\nproperty float y\nproperty float z\n"
+            "property float radius\nelement strand 2\nproperty ushort nsegs\nelement edge 1\nproperty int vertex1\n"
+            "property int vertex2\nend_header\n0 0 0 0.1\n0 1 0 0.1\n0 2 0 0.1\n1 0 0 0.1\n1 1 0 0.1\n2\n1\n0 1\n");
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -409,6 +444,7 @@ int main(int argc, char** argv) {
     writeSceneFileSeeds(dir);
     writeHdrSeeds(dir);
     writeExrSeeds(dir);
+    writePlySeeds(dir);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "wt_fuzz_seeds: %s\n", e.what());
     return 1;
