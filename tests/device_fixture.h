@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <filesystem>
 #include <map>
 #include <memory>
 #include <string>
@@ -24,10 +25,15 @@ inline SharedDevice& sharedDevice() {
   return shared;
 }
 
-/// The default device's context, shared by every test in the binary.
+/// The default device's context, shared by every test in the binary. The
+/// test kernels, which the binary does not embed, are read from the source
+/// tree.
 inline Context& deviceContext() {
   SharedDevice& shared = sharedDevice();
-  if (!shared.context) shared.context = std::make_unique<Context>(selectDevice(""), /*profiling=*/true);
+  if (!shared.context) {
+    setKernelFallbackDirectory(std::filesystem::path(WT_SOURCE_DIR) / "kernels");
+    shared.context = std::make_unique<Context>(selectDevice(""), /*profiling=*/true);
+  }
   return *shared.context;
 }
 

@@ -14,6 +14,7 @@ namespace {
 
 std::optional<std::filesystem::path> g_kernelDir;
 bool g_kernelDirFromEnv = false;
+std::optional<std::filesystem::path> g_fallbackDir;
 
 }  // namespace
 
@@ -29,16 +30,21 @@ std::optional<std::filesystem::path> kernelDirectory() {
 
 namespace {
 
-/// A kernel file by its path relative to kernels/, from disk or embedded.
+/// The whole file, or nothing where it cannot be read.
+std::optional<std::string> readFrom(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return std::nullopt;
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+/// A kernel file by its path relative to kernels/: from the kernel folder
+/// when one is set, else embedded, else from the fallback folder.
 std::optional<std::string> readKernelFile(const std::string& rel) {
-  if (auto dir = kernelDirectory()) {
-    std::ifstream in(*dir / rel, std::ios::binary);
-    if (!in) return std::nullopt;
-    std::ostringstream ss;
-    ss << in.rdbuf();
-    return ss.str();
-  }
+  if (auto dir = kernelDirectory()) return readFrom(*dir / rel);
   if (auto contents = embedded::find("kernels/" + rel)) return std::string(*contents);
+  if (g_fallbackDir) return readFrom(*g_fallbackDir / rel);
   return std::nullopt;
 }
 
@@ -85,6 +91,8 @@ void setKernelDirectory(const std::optional<std::filesystem::path>& dir) {
   g_kernelDir = dir;
   g_kernelDirFromEnv = true;
 }
+
+void setKernelFallbackDirectory(const std::optional<std::filesystem::path>& dir) { g_fallbackDir = dir; }
 
 std::string expandKernelSource(const std::string& file) {
   std::set<std::string> seen;

@@ -80,6 +80,11 @@ void setKernelDirectory(const std::optional<std::filesystem::path>& dir);
 /// none: the embedded copies.
 std::optional<std::filesystem::path> kernelDirectory();
 
+/// Kernel files the binary does not embed (the test kernels,
+/// kernels/*_tests.cl, which stay in the source tree) are read from this
+/// folder; only the tests set it. The kernel folder, when set, still wins.
+void setKernelFallbackDirectory(const std::optional<std::filesystem::path>& dir);
+
 /// The source of `file` (relative to kernels/) with every `#include "..."`
 /// expanded once, resolved against the including file's folder and then the
 /// kernels root; `#line` directives keep build logs pointing at real files.
