@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdlib>
 #include <filesystem>
 #include <map>
 #include <memory>
@@ -27,11 +28,13 @@ inline SharedDevice& sharedDevice() {
 
 /// The default device's context, shared by every test in the binary. The
 /// test kernels, which the binary does not embed, are read from the source
-/// tree.
+/// tree; the program cache lives in the build tree unless
+/// WAVETRACE_CACHE_DIR says otherwise (tests never write to ~/.cache).
 inline Context& deviceContext() {
   SharedDevice& shared = sharedDevice();
   if (!shared.context) {
     setKernelFallbackDirectory(std::filesystem::path(WT_SOURCE_DIR) / "kernels");
+    setenv("WAVETRACE_CACHE_DIR", (std::filesystem::path(WT_TEST_BINARY_DIR) / "wavetrace-cache").c_str(), 0);
     shared.context = std::make_unique<Context>(selectDevice(""), /*profiling=*/true);
   }
   return *shared.context;

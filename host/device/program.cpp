@@ -1,6 +1,7 @@
 #include "device/program.h"
 
 #include "core/embedded.h"
+#include "device/program_cache.h"
 #include "geometry/primitives.h"
 
 #include <algorithm>
@@ -161,19 +162,7 @@ cl::Program buildProgram(Context& context, const KernelFeatures& features, const
   // the initialisation of .hi of 16-wide vectors (tests/oclgrind/upper_half.cl).
   if (context.underOclgrind())
     options += " -D WT_AVOID_BITREVERSE=1 -D WT_FOLD_THROUGH_MEMORY=1 -D WT_NO_PREFETCH=1 -D WT_NO_CTZ=1";
-  cl::Program program(context.context(), source);
-  try {
-    program.build({context.info().device}, options.c_str());
-  } catch (const cl::Error& e) {
-    std::string log;
-    try {
-      log = program.getBuildInfo<CL_PROGRAM_BUILD_LOG>(context.info().device);
-    } catch (const cl::Error&) {
-    }
-    throw DeviceError("building kernels for '" + context.info().name + "' failed (" +
-                      clErrorName(e.err()) + "), options: " + options + "\n" + log);
-  }
-  return program;
+  return buildCachedProgram(context, source, options, root).program;
 }
 
 }  // namespace wt

@@ -91,7 +91,8 @@ void setKernelFallbackDirectory(const std::optional<std::filesystem::path>& dir)
 std::string expandKernelSource(const std::string& file);
 
 /// Build kernels/<root> (the renderer's program by default) for the
-/// context's device. Throws DeviceError carrying the device's build log.
+/// context's device, through the program cache (device/program_cache.h).
+/// Throws DeviceError carrying the device's build log.
 cl::Program buildProgram(Context& context, const KernelFeatures& features,
                          const std::string& root = "wavetrace.cl");
 
