@@ -28,13 +28,14 @@ inline SharedDevice& sharedDevice() {
 
 /// The default device's context, shared by every test in the binary. The
 /// test kernels, which the binary does not embed, are read from the source
-/// tree; the program cache lives in the build tree unless
-/// WAVETRACE_CACHE_DIR says otherwise (tests never write to ~/.cache).
+/// tree; the program cache is off unless WAVETRACE_CACHE_DIR says otherwise
+/// (tests never write to ~/.cache; tests/device/test_program_cache.cpp
+/// chooses folders of its own).
 inline Context& deviceContext() {
   SharedDevice& shared = sharedDevice();
   if (!shared.context) {
     setKernelFallbackDirectory(std::filesystem::path(WT_SOURCE_DIR) / "kernels");
-    setenv("WAVETRACE_CACHE_DIR", (std::filesystem::path(WT_TEST_BINARY_DIR) / "wavetrace-cache").c_str(), 0);
+    setenv("WAVETRACE_CACHE_DIR", "off", 0);
     shared.context = std::make_unique<Context>(selectDevice(""), /*profiling=*/true);
   }
   return *shared.context;

@@ -33,6 +33,12 @@ endfunction()
 render(first "program wavetrace.cl: cache miss, compiled in [0-9.]+ s, binary [0-9.]+ MB" ${cached})
 expect_one_entry("after the first run")
 render(second "program wavetrace.cl: cache hit, loaded [0-9.]+ MB in [0-9.]+ s" ${cached})
+# the loaded program renders the same image
+file(SHA256 "${SCRATCH}/first.png" compiled)
+file(SHA256 "${SCRATCH}/second.png" loaded)
+if(NOT compiled STREQUAL loaded)
+  message(FATAL_ERROR "second: the image from the cached binary differs from the compiled program's")
+endif()
 
 # two processes started together on an empty cache
 file(REMOVE_RECURSE "${cache}")

@@ -218,6 +218,15 @@ void setProgramCacheDirectory(const std::string& dir) {
     g_directoryOverride = dir;
 }
 
+bool programCacheDirectoryChosen() {
+  const char* env = std::getenv("WAVETRACE_CACHE_DIR");
+  return g_directoryOverride || (env && *env);
+}
+
+bool ownCacheMakesBinariesDear(const DeviceInfo& device) {
+  return device.isCpu && device.platformName.find("Portable Computing Language") != std::string::npos;
+}
+
 std::optional<std::filesystem::path> programCacheDirectory() {
   auto chosen = [](const std::string& dir) -> std::optional<std::filesystem::path> {
     if (dir == "off") return std::nullopt;
@@ -270,13 +279,18 @@ CachedProgram buildCachedProgram(Context& context, const std::string& source, co
                                  const std::string& label) {
   const auto start = std::chrono::steady_clock::now();
   CachedProgram result;
-  // Oclgrind checks the kernels as they are compiled: a binary would skip that
+  // Oclgrind checks the kernels as they are compiled: a binary would skip that.
+  // PoCL's CPU device compiles every kernel once more to hand out a binary,
+  // and keeps its own kernel cache: there only a folder the user chose is used.
+  const bool dear = ownCacheMakesBinariesDear(context.info()) && !programCacheDirectoryChosen();
   const std::optional<std::filesystem::path> dir =
-      context.underOclgrind() ? std::nullopt : programCacheDirectory();
+      context.underOclgrind() || dear ? std::nullopt : programCacheDirectory();
   if (!dir) {
     result.program = compile(context, source, options, label);
     result.seconds = secondsSince(start);
-    log::debug("program " + label + ": cache off, compiled in " + secondsText(result.seconds));
+    log::debug("program " + label + ": cache off" +
+               (dear ? " (PoCL's CPU device keeps its own; --kernel-cache DIR uses ours)" : "") + ", compiled in " +
+               secondsText(result.seconds));
     return result;
   }
 
@@ -303,6 +317,7 @@ CachedProgram buildCachedProgram(Context& context, const std::string& source, co
   }
 
   result.program = compile(context, source, options, label);
+  const double compileSeconds = secondsSince(start);
   std::vector<std::vector<unsigned char>> binaries;
   try {
     binaries = result.program.getInfo<CL_PROGRAM_BINARIES>();
@@ -319,7 +334,9 @@ CachedProgram buildCachedProgram(Context& context, const std::string& source, co
   result.seconds = secondsSince(start);
   log::debug("program " + label + ": cache " + cacheOutcomeName(result.outcome) + ", compiled in " +
              secondsText(result.seconds) +
-             (result.binaryBytes ? ", binary " + megabytes(result.binaryBytes) : std::string()));
+             (result.binaryBytes ? ", binary " + megabytes(result.binaryBytes) + " (fetched and stored in " +
+                                       secondsText(result.seconds - compileSeconds) + ")"
+                                 : std::string()));
   return result;
 }
 

@@ -27,6 +27,12 @@ std::string toHex(const Digest& digest);
 std::optional<std::filesystem::path> programCacheDirectory();
 /// Override the folder; "off" turns the cache off, "" restores the default.
 void setProgramCacheDirectory(const std::string& dir);
+/// Whether the folder was chosen (flag or variable) rather than the default.
+bool programCacheDirectoryChosen();
+/// PoCL's CPU device: handing out a binary compiles every kernel once more
+/// (for any work-group size), and PoCL caches compiled kernels itself, so
+/// the default folder is not used there; a chosen one is.
+bool ownCacheMakesBinariesDear(const DeviceInfo& device);
 
 /// What happened to one program.
 enum class CacheOutcome {
@@ -49,7 +55,8 @@ struct CachedProgram {
 /// device's name and version, the driver version and the platform.
 Digest programCacheKey(const DeviceInfo& device, std::string_view source, std::string_view options);
 
-/// Build `source` with `options` for the context's device through the cache:
+/// Build `source` with `options` for the context's device through the cache
+/// (none under Oclgrind, nor on PoCL's CPU device unless the folder was chosen):
 /// load a valid entry, else compile and store one (written to a temporary
 /// file in the same folder and renamed, so concurrent processes never see a
 /// partial entry). `label` names the program in messages. Throws DeviceError

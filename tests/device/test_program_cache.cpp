@@ -246,6 +246,23 @@ TEST(ProgramCache, FolderFollowsFlagVariableAndXdg) {
   EXPECT_FALSE(programCacheDirectory().has_value()) << "no HOME and no XDG_CACHE_HOME: nowhere to cache";
 }
 
+// PoCL's CPU device hands out a binary only after compiling every kernel
+// once more, and caches kernels itself: the default folder is not used there.
+TEST(ProgramCache, PoclCpuUsesOnlyAChosenFolder) {
+  if (!ownCacheMakesBinariesDear(test::deviceContext().info()))
+    GTEST_SKIP() << "not PoCL's CPU device: the default folder is used";
+  ScratchCache cache("pocl_default");
+  ScopedEnv home("HOME", cache.dir.c_str());
+  ScopedEnv xdg("XDG_CACHE_HOME", nullptr);
+  ScopedEnv var("WAVETRACE_CACHE_DIR", nullptr);
+  setProgramCacheDirectory("");
+  EXPECT_FALSE(programCacheDirectoryChosen());
+  CachedProgram built = build();
+  EXPECT_EQ(built.outcome, CacheOutcome::kOff) << cacheOutcomeName(built.outcome);
+  EXPECT_FALSE(fs::exists(cache.dir / ".cache" / "wavetrace"));
+  expectRuns(built, 1);
+}
+
 TEST(ProgramCache, OffCompilesWithoutAnEntry) {
   ScratchCache cache("off");
   setProgramCacheDirectory("off");
