@@ -322,6 +322,7 @@ CachedProgram buildCachedProgram(Context& context, const std::string& source, co
   try {
     binaries = result.program.getInfo<CL_PROGRAM_BINARIES>();
   } catch (const cl::Error&) {
+    // no binary to keep: compiled each time, as below
   }
   if (binaries.size() == 1 && !binaries[0].empty()) {
     result.binaryBytes = binaries[0].size();
@@ -333,7 +334,7 @@ CachedProgram buildCachedProgram(Context& context, const std::string& source, co
   }
   result.seconds = secondsSince(start);
   log::debug("program " + label + ": cache " + cacheOutcomeName(result.outcome) + ", compiled in " +
-             secondsText(result.seconds) +
+             secondsText(compileSeconds) +
              (result.binaryBytes ? ", binary " + megabytes(result.binaryBytes) + " (fetched and stored in " +
                                        secondsText(result.seconds - compileSeconds) + ")"
                                  : std::string()));
