@@ -1,5 +1,6 @@
 // Ray batches outside the wavefront loop, for tests and benchmarks: rays in,
-// closest hits or occlusion flags out.
+// closest hits or occlusion flags out. A program of its own (Tracer), built
+// only where rays are traced outside a render.
 #include "bvh.cl"
 #include "bvh_packet.cl"
 #include "bvh_stream.cl"

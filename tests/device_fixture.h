@@ -6,6 +6,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdlib>
+#include <filesystem>
 #include <map>
 #include <memory>
 #include <string>
@@ -24,10 +26,18 @@ inline SharedDevice& sharedDevice() {
   return shared;
 }
 
-/// The default device's context, shared by every test in the binary.
+/// The default device's context, shared by every test in the binary. The
+/// test kernels, which the binary does not embed, are read from the source
+/// tree; the program cache is off unless WAVETRACE_CACHE_DIR says otherwise
+/// (tests never write to ~/.cache; tests/device/test_program_cache.cpp
+/// chooses folders of its own).
 inline Context& deviceContext() {
   SharedDevice& shared = sharedDevice();
-  if (!shared.context) shared.context = std::make_unique<Context>(selectDevice(""), /*profiling=*/true);
+  if (!shared.context) {
+    setKernelFallbackDirectory(std::filesystem::path(WT_SOURCE_DIR) / "kernels");
+    setenv("WAVETRACE_CACHE_DIR", "off", 0);
+    shared.context = std::make_unique<Context>(selectDevice(""), /*profiling=*/true);
+  }
   return *shared.context;
 }
 

@@ -5,6 +5,7 @@
 #include "core/log.h"
 #include "device/context.h"
 #include "device/program.h"
+#include "device/program_cache.h"
 #include "output/image_io.h"
 #include "render/image_error.h"
 #include "render/renderer.h"
@@ -383,7 +384,14 @@ int main(int argc, char** argv) {
                       "in double precision, so it renders the same far from the world origin)");
   renderCmd->add_option("--kernel-dir", render.kernelDir, "Developer option: read kernels from this folder");
   renderCmd->add_flag("-q,--quiet", render.quiet, "No progress output");
-  renderCmd->add_flag("-v,--verbose", render.verbose, "Timings of the scene set-up (BVH build phases)");
+  renderCmd->add_flag("-v,--verbose", render.verbose,
+                      "Timings of the scene set-up (BVH build phases) and of each program's build (kernel cache hit or miss)");
+  // one folder for whichever command runs: only the given subcommand's option is parsed
+  std::string kernelCache;
+  const char* kernelCacheHelp =
+      "Folder of compiled kernels (default: $WAVETRACE_CACHE_DIR, else $XDG_CACHE_HOME/wavetrace/kernels, "
+      "else ~/.cache/wavetrace/kernels); 'off': compile every time";
+  renderCmd->add_option("--kernel-cache", kernelCache, kernelCacheHelp);
 
   CLI::App* devicesCmd = app.add_subcommand("devices", "List OpenCL platforms and devices");
 
@@ -392,6 +400,7 @@ int main(int argc, char** argv) {
   benchCmd->add_option("scenes", bench.scenes,
                        "Scene files, .gltf, .glb or .json (default: built-in Cornell box, MetalRoughSpheresNoTextures and DamagedHelmet "
                        "from the asset folder, a generated 1M-triangle mesh)");
+  benchCmd->add_option("--kernel-cache", kernelCache, kernelCacheHelp);
   benchCmd->add_option("--assets", bench.assetsDir, "Asset folder (default: ../shared/assets beside the source, or from here)");
   benchCmd->add_option("--device", bench.device, "Device index or name substring");
   benchCmd->add_flag("--json", bench.json, "Machine-readable output");
@@ -468,6 +477,7 @@ int main(int argc, char** argv) {
                         "accumulation, non-finite (repeatable)");
   stressCmd->add_option("--device", stressDevice, "Device index or name substring");
   stressCmd->add_flag("--json", stressJson, "Machine-readable output");
+  stressCmd->add_option("--kernel-cache", kernelCache, kernelCacheHelp);
 
   try {
     app.parse(argc, argv);
@@ -483,6 +493,7 @@ int main(int argc, char** argv) {
   // set before PoCL starts, and never over the user's own setting
   // (docs/lab/2026-12-02-performance-log.md, "PoCL's worker threads").
   if (*benchCmd) setenv("POCL_AFFINITY", "1", 0);
+  if (!kernelCache.empty()) wt::setProgramCacheDirectory(kernelCache);
 
   try {
     if (*renderCmd) {

@@ -1,6 +1,7 @@
 #include "device/program.h"
 
 #include "core/embedded.h"
+#include "device/program_cache.h"
 #include "geometry/primitives.h"
 
 #include <algorithm>
@@ -14,6 +15,7 @@ namespace {
 
 std::optional<std::filesystem::path> g_kernelDir;
 bool g_kernelDirFromEnv = false;
+std::optional<std::filesystem::path> g_fallbackDir;
 
 }  // namespace
 
@@ -29,16 +31,21 @@ std::optional<std::filesystem::path> kernelDirectory() {
 
 namespace {
 
-/// A kernel file by its path relative to kernels/, from disk or embedded.
+/// The whole file, or nothing where it cannot be read.
+std::optional<std::string> readFrom(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return std::nullopt;
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+/// A kernel file by its path relative to kernels/: from the kernel folder
+/// when one is set, else embedded, else from the fallback folder.
 std::optional<std::string> readKernelFile(const std::string& rel) {
-  if (auto dir = kernelDirectory()) {
-    std::ifstream in(*dir / rel, std::ios::binary);
-    if (!in) return std::nullopt;
-    std::ostringstream ss;
-    ss << in.rdbuf();
-    return ss.str();
-  }
+  if (auto dir = kernelDirectory()) return readFrom(*dir / rel);
   if (auto contents = embedded::find("kernels/" + rel)) return std::string(*contents);
+  if (g_fallbackDir) return readFrom(*g_fallbackDir / rel);
   return std::nullopt;
 }
 
@@ -85,6 +92,8 @@ void setKernelDirectory(const std::optional<std::filesystem::path>& dir) {
   g_kernelDir = dir;
   g_kernelDirFromEnv = true;
 }
+
+void setKernelFallbackDirectory(const std::optional<std::filesystem::path>& dir) { g_fallbackDir = dir; }
 
 std::string expandKernelSource(const std::string& file) {
   std::set<std::string> seen;
@@ -153,19 +162,7 @@ cl::Program buildProgram(Context& context, const KernelFeatures& features, const
   // the initialisation of .hi of 16-wide vectors (tests/oclgrind/upper_half.cl).
   if (context.underOclgrind())
     options += " -D WT_AVOID_BITREVERSE=1 -D WT_FOLD_THROUGH_MEMORY=1 -D WT_NO_PREFETCH=1 -D WT_NO_CTZ=1";
-  cl::Program program(context.context(), source);
-  try {
-    program.build({context.info().device}, options.c_str());
-  } catch (const cl::Error& e) {
-    std::string log;
-    try {
-      log = program.getBuildInfo<CL_PROGRAM_BUILD_LOG>(context.info().device);
-    } catch (const cl::Error&) {
-    }
-    throw DeviceError("building kernels for '" + context.info().name + "' failed (" +
-                      clErrorName(e.err()) + "), options: " + options + "\n" + log);
-  }
-  return program;
+  return buildCachedProgram(context, source, options, root).program;
 }
 
 }  // namespace wt

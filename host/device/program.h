@@ -77,13 +77,19 @@ void setKernelDirectory(const std::optional<std::filesystem::path>& dir);
 /// none: the embedded copies.
 std::optional<std::filesystem::path> kernelDirectory();
 
+/// Kernel files the binary does not embed (the test kernels,
+/// kernels/*_tests.cl, which stay in the source tree) are read from this
+/// folder; only the tests set it. The kernel folder, when set, still wins.
+void setKernelFallbackDirectory(const std::optional<std::filesystem::path>& dir);
+
 /// The source of `file` (relative to kernels/) with every `#include "..."`
 /// expanded once, resolved against the including file's folder and then the
 /// kernels root; `#line` directives keep build logs pointing at real files.
 std::string expandKernelSource(const std::string& file);
 
 /// Build kernels/<root> (the renderer's program by default) for the
-/// context's device. Throws DeviceError carrying the device's build log.
+/// context's device, through the program cache (device/program_cache.h).
+/// Throws DeviceError carrying the device's build log.
 cl::Program buildProgram(Context& context, const KernelFeatures& features,
                          const std::string& root = "wavetrace.cl");
 

@@ -24,7 +24,7 @@ Tracer::Tracer(Context& context, const Scene& scene, const BvhBuildOptions& opti
   features.alpha = m_scene->hasAlpha();
   features.textures = features.alpha && m_scene->hasTextures();
   features.vertexColors = features.alpha && m_scene->hasVertexColors();
-  m_program = buildProgram(context, features);
+  m_program = buildProgram(context, features, "trace.cl");
   m_closest = cl::Kernel(m_program, "trace_closest");
   m_occluded = cl::Kernel(m_program, "trace_occluded");
   m_closestPacket = cl::Kernel(m_program, "trace_closest_packet");

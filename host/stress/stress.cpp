@@ -18,7 +18,7 @@ namespace {
 
 std::string format(const char* fmt, double v) { return stressFormat(fmt, v); }
 
-/// Worst relative error of `samples` running-mean updates (kernels/unit_tests.cl,
+/// Worst relative error of `samples` running-mean updates (kernels/stress.cl,
 /// test_accumulate) over `items` work-items, against the same sum in double.
 double accumulationError(Context& context, cl::Program& program, cl_uint mode, cl_uint distribution, cl_uint samples,
                          cl_uint items) {
@@ -48,7 +48,7 @@ std::string stressFormat(const char* fmt, double v) {
 }
 
 std::vector<StressRow> stressAccumulation(Context& context, const StressOptions& options) {
-  cl::Program program = buildProgram(context, KernelFeatures{}, "unit_tests.cl");
+  cl::Program program = buildProgram(context, KernelFeatures{}, "stress.cl");
   const cl_uint samples = options.quick ? 1u << 16 : 1u << 20, items = options.quick ? 4 : 16;
   const std::string count = options.quick ? "2^16" : "2^20";
   struct Mode {

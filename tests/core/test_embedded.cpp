@@ -1,5 +1,6 @@
 // Kernels and the default scene are compiled into the binary, and kernel
-// includes expand from the embedded copies.
+// includes expand from the embedded copies. The test kernels are not
+// embedded, and each program holds its own kernels only.
 #include "core/embedded.h"
 #include "device/program.h"
 #include "scene/generators.h"
@@ -7,16 +8,45 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <filesystem>
 #include <vector>
 
 namespace wt {
 namespace {
 
 TEST(Embedded, KernelsAndDefaultSceneArePresent) {
-  EXPECT_TRUE(embedded::find("kernels/wavetrace.cl").has_value());
+  for (const char* root : {"wavetrace.cl", "trace.cl", "stress.cl"})
+    EXPECT_TRUE(embedded::find(std::string("kernels/") + root).has_value()) << root;
   EXPECT_TRUE(embedded::find("kernels/shared/types.h").has_value());
   EXPECT_TRUE(embedded::find("scenes/cornell.gltf").has_value());
   EXPECT_FALSE(embedded::find("kernels/nope.cl").has_value());
+}
+
+TEST(Embedded, TestKernelsAreNotShipped) {
+  for (const embedded::File& file : embedded::files())
+    EXPECT_EQ(std::string(file.path).find("_tests.cl"), std::string::npos) << file.path << " is embedded";
+  for (const char* root : {"unit_tests.cl", "env_tests.cl", "texture_tests.cl"}) {
+    EXPECT_FALSE(embedded::find(std::string("kernels/") + root).has_value()) << root;
+    EXPECT_TRUE(std::filesystem::exists(std::filesystem::path(WT_SOURCE_DIR) / "kernels" / root))
+        << root << ": the tests read it from the source tree";
+  }
+}
+
+// The render program holds the wavefront stages; the tracers (with the
+// stream traversal) and the stress kernels are programs of their own.
+TEST(Embedded, ProgramsHoldTheirOwnKernelsOnly) {
+  const std::string render = expandKernelSource("wavetrace.cl");
+  for (const char* stage : {"generate(", "extend(", "shade(", "connect(", "accumulate(", "tonemap("})
+    EXPECT_NE(render.find(std::string("WT_KERNEL void ") + stage), std::string::npos) << stage;
+  for (const char* foreign : {"#line 1 \"trace.cl\"", "#line 1 \"bvh_stream.cl\"", "#line 1 \"stress.cl\"",
+                              "WT_KERNEL void trace_", "WT_KERNEL void test_"})
+    EXPECT_EQ(render.find(foreign), std::string::npos) << foreign << " in the render program";
+  const std::string trace = expandKernelSource("trace.cl");
+  EXPECT_NE(trace.find("WT_KERNEL void trace_occluded_stream("), std::string::npos);
+  EXPECT_EQ(trace.find("WT_KERNEL void shade("), std::string::npos);
+  const std::string stress = expandKernelSource("stress.cl");
+  EXPECT_NE(stress.find("WT_KERNEL void test_accumulate("), std::string::npos);
+  EXPECT_EQ(stress.find("WT_KERNEL void shade("), std::string::npos);
 }
 
 TEST(Embedded, IncludesExpandOnceWithLineMarkers) {
@@ -34,11 +64,14 @@ TEST(Embedded, IncludesExpandOnceWithLineMarkers) {
 // (kernels/common.h): without it Intel's CPU runtime vectorises the kernel
 // across work-items and got shading wrong, which PoCL (and so CI) never shows.
 TEST(Embedded, EveryKernelIsWtKernel) {
-  for (const char* root : {"wavetrace.cl", "unit_tests.cl", "env_tests.cl", "texture_tests.cl"}) {
+  setKernelFallbackDirectory(std::filesystem::path(WT_SOURCE_DIR) / "kernels");  // the test kernels' folder
+  for (const char* root :
+       {"wavetrace.cl", "trace.cl", "stress.cl", "unit_tests.cl", "env_tests.cl", "texture_tests.cl"}) {
     const std::string source = expandKernelSource(root);
     EXPECT_NE(source.find("WT_KERNEL void "), std::string::npos) << root;
     EXPECT_EQ(source.find("__kernel void"), std::string::npos) << root << ": a kernel not declared WT_KERNEL";
   }
+  setKernelFallbackDirectory(std::nullopt);
 }
 
 TEST(Embedded, MissingKernelFileIsAClearError) {

@@ -37,11 +37,17 @@ TEST(Program, KernelDirectoryOverridesEmbeddedSources) {
   EXPECT_NE(source.find("// from disk"), std::string::npos);
 }
 
+// The render program holds the stages; the tracers are a program of their own.
 TEST(Program, EmbeddedKernelsBuild) {
   cl::Program program = buildProgram(test::deviceContext(), KernelFeatures{});
-  for (const char* name : {"generate", "extend", "shade", "accumulate", "tonemap", "trace_closest", "trace_occluded",
-                           "extend_packet", "connect_packet", "trace_closest_packet", "trace_occluded_packet"})
+  for (const char* name :
+       {"generate", "extend", "shade", "connect", "accumulate", "tonemap", "extend_packet", "connect_packet"})
     EXPECT_NO_THROW(cl::Kernel(program, name)) << name;
+  EXPECT_THROW(cl::Kernel(program, "trace_closest"), cl::Error) << "the tracers are not render stages";
+  cl::Program trace = buildProgram(test::deviceContext(), KernelFeatures{}, "trace.cl");
+  for (const char* name : {"trace_closest", "trace_occluded", "trace_closest_packet", "trace_occluded_packet",
+                           "trace_occluded_stream"})
+    EXPECT_NO_THROW(cl::Kernel(trace, name)) << name;
 }
 
 }  // namespace

@@ -1,0 +1,344 @@
+#include "device/program_cache.h"
+
+#include "core/log.h"
+
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <random>
+#include <sstream>
+#include <system_error>
+
+#include <unistd.h>
+
+namespace wt {
+namespace {
+
+// sha-256 (FIPS 180-4)
+constexpr std::uint32_t kSha256Round[64] = {
+    0x428a2f98, 0x71374491, 0xb5c0fbcf, 0xe9b5dba5, 0x3956c25b, 0x59f111f1, 0x923f82a4, 0xab1c5ed5,
+    0xd807aa98, 0x12835b01, 0x243185be, 0x550c7dc3, 0x72be5d74, 0x80deb1fe, 0x9bdc06a7, 0xc19bf174,
+    0xe49b69c1, 0xefbe4786, 0x0fc19dc6, 0x240ca1cc, 0x2de92c6f, 0x4a7484aa, 0x5cb0a9dc, 0x76f988da,
+    0x983e5152, 0xa831c66d, 0xb00327c8, 0xbf597fc7, 0xc6e00bf3, 0xd5a79147, 0x06ca6351, 0x14292967,
+    0x27b70a85, 0x2e1b2138, 0x4d2c6dfc, 0x53380d13, 0x650a7354, 0x766a0abb, 0x81c2c92e, 0x92722c85,
+    0xa2bfe8a1, 0xa81a664b, 0xc24b8b70, 0xc76c51a3, 0xd192e819, 0xd6990624, 0xf40e3585, 0x106aa070,
+    0x19a4c116, 0x1e376c08, 0x2748774c, 0x34b0bcb5, 0x391c0cb3, 0x4ed8aa4a, 0x5b9cca4f, 0x682e6ff3,
+    0x748f82ee, 0x78a5636f, 0x84c87814, 0x8cc70208, 0x90befffa, 0xa4506ceb, 0xbef9a3f7, 0xc67178f2};
+
+inline std::uint32_t rotr(std::uint32_t x, int n) { return (x >> n) | (x << (32 - n)); }
+
+void sha256Block(std::uint32_t h[8], const std::uint8_t* block) {
+  std::uint32_t w[64];
+  for (int i = 0; i < 16; ++i)
+    w[i] = std::uint32_t(block[4 * i]) << 24 | std::uint32_t(block[4 * i + 1]) << 16 |
+           std::uint32_t(block[4 * i + 2]) << 8 | std::uint32_t(block[4 * i + 3]);
+  for (int i = 16; i < 64; ++i) {
+    std::uint32_t s0 = rotr(w[i - 15], 7) ^ rotr(w[i - 15], 18) ^ (w[i - 15] >> 3);
+    std::uint32_t s1 = rotr(w[i - 2], 17) ^ rotr(w[i - 2], 19) ^ (w[i - 2] >> 10);
+    w[i] = w[i - 16] + s0 + w[i - 7] + s1;
+  }
+  std::uint32_t a = h[0], b = h[1], c = h[2], d = h[3], e = h[4], f = h[5], g = h[6], k = h[7];
+  for (int i = 0; i < 64; ++i) {
+    std::uint32_t t1 = k + (rotr(e, 6) ^ rotr(e, 11) ^ rotr(e, 25)) + ((e & f) ^ (~e & g)) + kSha256Round[i] + w[i];
+    std::uint32_t t2 = (rotr(a, 2) ^ rotr(a, 13) ^ rotr(a, 22)) + ((a & b) ^ (a & c) ^ (b & c));
+    k = g, g = f, f = e, e = d + t1, d = c, c = b, b = a, a = t1 + t2;
+  }
+  h[0] += a, h[1] += b, h[2] += c, h[3] += d, h[4] += e, h[5] += f, h[6] += g, h[7] += k;
+}
+
+// entry layout: the header, then the payload (the device binary)
+constexpr char kMagic[8] = {'W', 'T', 'K', 'C', 'A', 'C', 'H', 'E'};
+constexpr std::uint32_t kFormatVersion = 1;
+struct EntryHeader {
+  char magic[8];
+  std::uint32_t formatVersion;
+  std::uint32_t headerBytes;
+  std::uint8_t key[32];
+  std::uint64_t payloadBytes;
+  std::uint8_t checksum[32];  ///< sha256 of the payload
+};
+static_assert(sizeof(EntryHeader) == 88, "the header is written as it is laid out");
+
+std::optional<std::string> g_directoryOverride;  // set by --kernel-cache
+
+double secondsSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+std::string megabytes(std::size_t bytes) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.2f MB", double(bytes) / 1e6);
+  return buf;
+}
+
+std::string secondsText(double seconds) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.3f s", seconds);
+  return buf;
+}
+
+/// Why the entry's bytes cannot be used, or nothing when they can.
+std::optional<std::string> checkEntry(const std::string& bytes, const Digest& key) {
+  if (bytes.size() < sizeof(EntryHeader)) return "truncated (" + std::to_string(bytes.size()) + " bytes, no full header)";
+  EntryHeader header;
+  std::memcpy(&header, bytes.data(), sizeof header);
+  if (std::memcmp(header.magic, kMagic, sizeof kMagic) != 0) return std::string("not a wavetrace kernel cache entry");
+  if (header.formatVersion != kFormatVersion || header.headerBytes != sizeof(EntryHeader))
+    return "stale (format version " + std::to_string(header.formatVersion) + ", expected " +
+           std::to_string(kFormatVersion) + ")";
+  if (std::memcmp(header.key, key.data(), key.size()) != 0) return std::string("stale (its key is not its name's)");
+  const std::uint64_t payload = bytes.size() - sizeof header;
+  if (payload < header.payloadBytes)
+    return "truncated (" + std::to_string(payload) + " of " + std::to_string(header.payloadBytes) + " payload bytes)";
+  if (payload > header.payloadBytes)
+    return "corrupt (" + std::to_string(payload - header.payloadBytes) + " bytes past the payload)";
+  const Digest sum = sha256(std::string_view(bytes).substr(sizeof header));
+  if (std::memcmp(header.checksum, sum.data(), sum.size()) != 0) return std::string("corrupt (checksum mismatch)");
+  return std::nullopt;
+}
+
+std::optional<std::string> readFile(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return std::nullopt;
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+/// Write the entry beside its final name and rename it there: a reader sees
+/// the old entry or the whole new one, never a partial file.
+void storeEntry(const std::filesystem::path& dir, const std::filesystem::path& entry, const Digest& key,
+                const std::vector<unsigned char>& binary) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec) {
+    log::warnOnce("kernel cache: cannot create " + dir.string() + " (" + ec.message() + "); kernels are not cached");
+    return;
+  }
+  EntryHeader header{};
+  std::memcpy(header.magic, kMagic, sizeof kMagic);
+  header.formatVersion = kFormatVersion;
+  header.headerBytes = sizeof header;
+  std::memcpy(header.key, key.data(), key.size());
+  header.payloadBytes = binary.size();
+  const Digest sum = sha256(std::string_view(reinterpret_cast<const char*>(binary.data()), binary.size()));
+  std::memcpy(header.checksum, sum.data(), sum.size());
+
+  std::random_device random;
+  const std::filesystem::path temp =
+      entry.string() + ".tmp." + std::to_string(::getpid()) + "." + std::to_string(random());
+  {
+    std::ofstream out(temp, std::ios::binary | std::ios::trunc);
+    out.write(reinterpret_cast<const char*>(&header), sizeof header);
+    out.write(reinterpret_cast<const char*>(binary.data()), std::streamsize(binary.size()));
+    out.close();
+    if (!out) {
+      std::filesystem::remove(temp, ec);
+      log::warnOnce("kernel cache: cannot write in " + dir.string() + "; kernels are not cached");
+      return;
+    }
+  }
+  std::filesystem::rename(temp, entry, ec);
+  if (ec) {
+    std::filesystem::remove(temp, ec);
+    log::warnOnce("kernel cache: cannot write " + entry.string() + " (" + ec.message() + "); kernels are not cached");
+  }
+}
+
+cl::Program compile(Context& context, const std::string& source, const std::string& options,
+                    const std::string& label) {
+  cl::Program program(context.context(), source);
+  try {
+    program.build({context.info().device}, options.c_str());
+  } catch (const cl::Error& e) {
+    std::string buildLog;
+    try {
+      buildLog = program.getBuildInfo<CL_PROGRAM_BUILD_LOG>(context.info().device);
+    } catch (const cl::Error&) {
+    }
+    throw DeviceError("building kernels (" + label + ") for '" + context.info().name + "' failed (" +
+                      clErrorName(e.err()) + "), options: " + options + "\n" + buildLog);
+  }
+  return program;
+}
+
+/// The program from an entry's payload, or nothing where the device refuses it.
+std::optional<cl::Program> load(Context& context, std::string_view payload, const std::string& options) {
+  cl_device_id device = context.info().device();
+  const std::size_t length = payload.size();
+  const auto* bytes = reinterpret_cast<const unsigned char*>(payload.data());
+  cl_int status = CL_SUCCESS, err = CL_SUCCESS;
+  cl_program raw = clCreateProgramWithBinary(context.context()(), 1, &device, &length, &bytes, &status, &err);
+  if (err != CL_SUCCESS || status != CL_SUCCESS) {
+    if (raw) clReleaseProgram(raw);
+    return std::nullopt;
+  }
+  cl::Program program(raw);  // takes the reference
+  if (clBuildProgram(raw, 1, &device, options.c_str(), nullptr, nullptr) != CL_SUCCESS) return std::nullopt;
+  return program;
+}
+
+}  // namespace
+
+Digest sha256(std::string_view data) {
+  std::uint32_t h[8] = {0x6a09e667, 0xbb67ae85, 0x3c6ef372, 0xa54ff53a,
+                        0x510e527f, 0x9b05688c, 0x1f83d9ab, 0x5be0cd19};
+  const auto* p = reinterpret_cast<const std::uint8_t*>(data.data());
+  std::size_t n = data.size();
+  std::size_t full = n / 64 * 64;
+  for (std::size_t i = 0; i < full; i += 64) sha256Block(h, p + i);
+  // the tail, the 0x80 marker and the bit length, in one or two blocks
+  std::uint8_t tail[128] = {};
+  std::size_t rest = n - full;
+  std::memcpy(tail, p + full, rest);
+  tail[rest] = 0x80;
+  std::size_t blocks = rest + 9 <= 64 ? 1 : 2;
+  std::uint64_t bits = std::uint64_t(n) * 8;
+  for (int i = 0; i < 8; ++i) tail[blocks * 64 - 1 - i] = std::uint8_t(bits >> (8 * i));
+  for (std::size_t b = 0; b < blocks; ++b) sha256Block(h, tail + 64 * b);
+  Digest digest;
+  for (int i = 0; i < 8; ++i)
+    for (int j = 0; j < 4; ++j) digest[4 * i + j] = std::uint8_t(h[i] >> (24 - 8 * j));
+  return digest;
+}
+
+std::string toHex(const Digest& digest) {
+  static const char* kHex = "0123456789abcdef";
+  std::string s;
+  for (std::uint8_t b : digest) s += kHex[b >> 4], s += kHex[b & 15];
+  return s;
+}
+
+void setProgramCacheDirectory(const std::string& dir) {
+  if (dir.empty())
+    g_directoryOverride.reset();
+  else
+    g_directoryOverride = dir;
+}
+
+bool programCacheDirectoryChosen() {
+  const char* env = std::getenv("WAVETRACE_CACHE_DIR");
+  return g_directoryOverride || (env && *env);
+}
+
+bool ownCacheMakesBinariesDear(const DeviceInfo& device) {
+  return device.isCpu && device.platformName.find("Portable Computing Language") != std::string::npos;
+}
+
+std::optional<std::filesystem::path> programCacheDirectory() {
+  auto chosen = [](const std::string& dir) -> std::optional<std::filesystem::path> {
+    if (dir == "off") return std::nullopt;
+    return std::filesystem::path(dir);
+  };
+  if (g_directoryOverride) return chosen(*g_directoryOverride);
+  if (const char* env = std::getenv("WAVETRACE_CACHE_DIR"); env && *env) return chosen(env);
+  if (const char* xdg = std::getenv("XDG_CACHE_HOME"); xdg && *xdg)
+    return std::filesystem::path(xdg) / "wavetrace" / "kernels";
+  if (const char* home = std::getenv("HOME"); home && *home)
+    return std::filesystem::path(home) / ".cache" / "wavetrace" / "kernels";
+  return std::nullopt;
+}
+
+const char* cacheOutcomeName(CacheOutcome outcome) {
+  switch (outcome) {
+    case CacheOutcome::kOff: return "off";
+    case CacheOutcome::kHit: return "hit";
+    case CacheOutcome::kMiss: return "miss";
+    case CacheOutcome::kRejected: return "rejected";
+  }
+  return "?";
+}
+
+Digest programCacheKey(const DeviceInfo& device, std::string_view source, std::string_view options) {
+  std::string material;
+  auto field = [&](std::string_view name, std::string_view value) {
+    // length-prefixed, so no two field lists hash the same text
+    material += std::string(name) + ":" + std::to_string(value.size()) + ":" + std::string(value) + "\n";
+  };
+  field("format", std::to_string(kFormatVersion));
+  field("source", toHex(sha256(source)));
+  field("options", options);
+  field("device", device.name);
+  field("device version", device.version);
+  std::string driver, platformVersion;
+  try {
+    driver = device.device.getInfo<CL_DRIVER_VERSION>();
+    platformVersion = device.platform.getInfo<CL_PLATFORM_VERSION>();
+  } catch (const cl::Error&) {
+    // a device that cannot say keeps an empty field: the rest still tell builds apart
+  }
+  field("driver version", driver);
+  field("platform", device.platformName);
+  field("platform version", platformVersion);
+  return sha256(material);
+}
+
+CachedProgram buildCachedProgram(Context& context, const std::string& source, const std::string& options,
+                                 const std::string& label) {
+  const auto start = std::chrono::steady_clock::now();
+  CachedProgram result;
+  // Oclgrind checks the kernels as they are compiled: a binary would skip that.
+  // PoCL's CPU device compiles every kernel once more to hand out a binary,
+  // and keeps its own kernel cache: there only a folder the user chose is used.
+  const bool dear = ownCacheMakesBinariesDear(context.info()) && !programCacheDirectoryChosen();
+  const std::optional<std::filesystem::path> dir =
+      context.underOclgrind() || dear ? std::nullopt : programCacheDirectory();
+  if (!dir) {
+    result.program = compile(context, source, options, label);
+    result.seconds = secondsSince(start);
+    log::debug("program " + label + ": cache off" +
+               (dear ? " (PoCL's CPU device keeps its own; --kernel-cache DIR uses ours)" : "") + ", compiled in " +
+               secondsText(result.seconds));
+    return result;
+  }
+
+  const Digest key = programCacheKey(context.info(), source, options);
+  result.entry = *dir / (toHex(key) + ".bin");
+  result.outcome = CacheOutcome::kMiss;
+  if (std::optional<std::string> bytes = readFile(result.entry)) {
+    std::optional<std::string> problem = checkEntry(*bytes, key);
+    if (!problem) {
+      std::string_view payload = std::string_view(*bytes).substr(sizeof(EntryHeader));
+      if (std::optional<cl::Program> program = load(context, payload, options)) {
+        result.program = std::move(*program);
+        result.outcome = CacheOutcome::kHit;
+        result.binaryBytes = payload.size();
+        result.seconds = secondsSince(start);
+        log::debug("program " + label + ": cache hit, loaded " + megabytes(result.binaryBytes) + " in " +
+                   secondsText(result.seconds) + " (" + result.entry.string() + ")");
+        return result;
+      }
+      problem = "refused by the device";
+    }
+    log::warnOnce("kernel cache: " + result.entry.string() + " is " + *problem + "; rebuilding it");
+    result.outcome = CacheOutcome::kRejected;
+  }
+
+  result.program = compile(context, source, options, label);
+  const double compileSeconds = secondsSince(start);
+  std::vector<std::vector<unsigned char>> binaries;
+  try {
+    binaries = result.program.getInfo<CL_PROGRAM_BINARIES>();
+  } catch (const cl::Error&) {
+    // no binary to keep: compiled each time, as below
+  }
+  if (binaries.size() == 1 && !binaries[0].empty()) {
+    result.binaryBytes = binaries[0].size();
+    storeEntry(*dir, result.entry, key, binaries[0]);
+  } else {
+    log::debug("program " + label + ": the device gives no binary; not cached");
+    result.outcome = CacheOutcome::kOff;
+    result.entry.clear();
+  }
+  result.seconds = secondsSince(start);
+  log::debug("program " + label + ": cache " + cacheOutcomeName(result.outcome) + ", compiled in " +
+             secondsText(compileSeconds) +
+             (result.binaryBytes ? ", binary " + megabytes(result.binaryBytes) + " (fetched and stored in " +
+                                       secondsText(result.seconds - compileSeconds) + ")"
+                                 : std::string()));
+  return result;
+}
+
+}  // namespace wt

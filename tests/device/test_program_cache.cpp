@@ -1,0 +1,277 @@
+// The program cache (host/device/program_cache.cpp): a second build loads
+// the entry; a truncated, bit-flipped or stale entry is detected, warned
+// about and rebuilt; other options miss; an unwritable folder only warns.
+// Two processes at once: tests/program_cache_check.cmake.
+#include "device/program_cache.h"
+#include "device_fixture.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <cstdlib>
+#include <fstream>
+#include <functional>
+#include <optional>
+#include <vector>
+
+namespace wt {
+namespace {
+
+namespace fs = std::filesystem;
+
+// a tiny program, so each build takes a fraction of a second
+const std::string kSource =
+    "__kernel void twice(__global uint* out, uint count) {\n"
+    "  uint i = get_global_id(0);\n"
+    "  if (i >= count) return;\n"
+    "  out[i] = 2u * i + OFFSET;\n"
+    "}\n";
+
+/// A fresh cache folder for one test, set as the cache; the default is
+/// restored when it goes.
+struct ScratchCache {
+  fs::path dir;
+  explicit ScratchCache(const std::string& name)
+      : dir(fs::path(WT_TEST_BINARY_DIR) / "scratch" / "program_cache" / name) {
+    fs::remove_all(dir);
+    setProgramCacheDirectory(dir.string());
+  }
+  ~ScratchCache() { setProgramCacheDirectory(""); }
+};
+
+/// Run `twice` and check what it wrote: a loaded program must work, not just load.
+void expectRuns(CachedProgram& built, cl_uint offset) {
+  Context& ctx = test::deviceContext();
+  const cl_uint count = 100;
+  cl::Buffer out(ctx.context(), CL_MEM_WRITE_ONLY, count * sizeof(cl_uint));
+  cl::Kernel k(built.program, "twice");
+  k.setArg(0, out), k.setArg(1, count);
+  ctx.launch("twice", k, count, 64);
+  std::vector<cl_uint> got(count);
+  ctx.queue().enqueueReadBuffer(out, CL_TRUE, 0, count * sizeof(cl_uint), got.data());
+  for (cl_uint i = 0; i < count; ++i) ASSERT_EQ(got[i], 2u * i + offset) << "item " << i;
+}
+
+CachedProgram build(cl_uint offset = 1) {
+  return buildCachedProgram(test::deviceContext(), kSource, "-cl-std=CL1.2 -D OFFSET=" + std::to_string(offset),
+                            "test");
+}
+
+/// Build while capturing stderr; returns what was printed.
+std::string buildCapturing(CachedProgram& built) {
+  testing::internal::CaptureStderr();
+  built = build();
+  return testing::internal::GetCapturedStderr();
+}
+
+/// Build once, damage the entry with `damage`, then require the next build
+/// to reject it with a warning naming `reason`, to work, and to leave an
+/// entry the build after loads.
+void expectRebuilt(const std::string& name, const std::function<void(const fs::path&)>& damage,
+                   const std::string& reason) {
+  ScratchCache cache(name);
+  CachedProgram first = build();
+  ASSERT_EQ(first.outcome, CacheOutcome::kMiss);
+  ASSERT_TRUE(fs::exists(first.entry));
+  damage(first.entry);
+  CachedProgram second;
+  const std::string err = buildCapturing(second);
+  EXPECT_EQ(second.outcome, CacheOutcome::kRejected) << cacheOutcomeName(second.outcome);
+  EXPECT_NE(err.find("warning: kernel cache: " + first.entry.string() + " is " + reason), std::string::npos) << err;
+  expectRuns(second, 1);
+  CachedProgram third = build();
+  EXPECT_EQ(third.outcome, CacheOutcome::kHit) << "the rebuilt entry is valid";
+  expectRuns(third, 1);
+}
+
+std::string readAll(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+void writeAll(const fs::path& path, const std::string& bytes) {
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  out.write(bytes.data(), std::streamsize(bytes.size()));
+}
+
+TEST(ProgramCache, Sha256MatchesTheStandardVectors) {
+  EXPECT_EQ(toHex(sha256("")), "e3b0c44298fc1c149afbf4c8996fb92427ae41e4649b934ca495991b7852b855");
+  EXPECT_EQ(toHex(sha256("abc")), "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad");
+  // 56 bytes: the length no longer fits the first padding block
+  EXPECT_EQ(toHex(sha256("abcdbcdecdefdefgefghfghighijhijkijkljklmklmnlmnomnopnopq")),
+            "248d6a61d20638b8e5c026930c3e6039a33ce45964ff2167f6ecedd419db06c1");
+}
+
+TEST(ProgramCache, SecondBuildLoadsTheEntry) {
+  if (test::deviceContext().underOclgrind()) GTEST_SKIP() << "the cache is off under Oclgrind";
+  ScratchCache cache("second_build");
+  CachedProgram first = build();
+  EXPECT_EQ(first.outcome, CacheOutcome::kMiss);
+  ASSERT_TRUE(fs::exists(first.entry)) << first.entry;
+  EXPECT_EQ(first.entry.parent_path(), cache.dir);
+  EXPECT_GT(first.binaryBytes, 0u);
+  expectRuns(first, 1);
+  CachedProgram second = build();
+  EXPECT_EQ(second.outcome, CacheOutcome::kHit);
+  EXPECT_EQ(second.entry, first.entry);
+  EXPECT_EQ(second.binaryBytes, first.binaryBytes);
+  expectRuns(second, 1);
+}
+
+TEST(ProgramCache, OtherOptionsMiss) {
+  if (test::deviceContext().underOclgrind()) GTEST_SKIP() << "the cache is off under Oclgrind";
+  ScratchCache cache("other_options");
+  CachedProgram one = build(1);
+  CachedProgram two = build(5);
+  EXPECT_EQ(one.outcome, CacheOutcome::kMiss);
+  EXPECT_EQ(two.outcome, CacheOutcome::kMiss) << "a build with other options must not load the first's binary";
+  EXPECT_NE(one.entry, two.entry);
+  expectRuns(two, 5);
+  CachedProgram again = build(1);
+  EXPECT_EQ(again.outcome, CacheOutcome::kHit);
+  expectRuns(again, 1);
+}
+
+TEST(ProgramCache, KeyCoversSourceOptionsAndDevice) {
+  const DeviceInfo& device = test::deviceContext().info();
+  const Digest key = programCacheKey(device, kSource, "-D OFFSET=1");
+  EXPECT_EQ(key, programCacheKey(device, kSource, "-D OFFSET=1"));
+  EXPECT_NE(key, programCacheKey(device, kSource + " ", "-D OFFSET=1"));
+  EXPECT_NE(key, programCacheKey(device, kSource, "-D OFFSET=2"));
+  DeviceInfo other = device;
+  other.name += "x";
+  EXPECT_NE(key, programCacheKey(other, kSource, "-D OFFSET=1"));
+  other = device;
+  other.version += "x";
+  EXPECT_NE(key, programCacheKey(other, kSource, "-D OFFSET=1"));
+  other = device;
+  other.platformName += "x";
+  EXPECT_NE(key, programCacheKey(other, kSource, "-D OFFSET=1"));
+}
+
+TEST(ProgramCache, TruncatedEntryIsRebuilt) {
+  if (test::deviceContext().underOclgrind()) GTEST_SKIP() << "the cache is off under Oclgrind";
+  expectRebuilt("truncated", [](const fs::path& entry) { fs::resize_file(entry, fs::file_size(entry) / 2); },
+                "truncated");
+}
+
+TEST(ProgramCache, EntryCutInsideItsHeaderIsRebuilt) {
+  if (test::deviceContext().underOclgrind()) GTEST_SKIP() << "the cache is off under Oclgrind";
+  expectRebuilt("header_cut", [](const fs::path& entry) { fs::resize_file(entry, 20); }, "truncated");
+}
+
+TEST(ProgramCache, BitFlippedEntryIsRebuilt) {
+  if (test::deviceContext().underOclgrind()) GTEST_SKIP() << "the cache is off under Oclgrind";
+  expectRebuilt(
+      "bit_flip",
+      [](const fs::path& entry) {
+        std::string bytes = readAll(entry);
+        bytes[bytes.size() * 3 / 4] ^= 0x10;  // in the payload: only the checksum can tell
+        writeAll(entry, bytes);
+      },
+      "corrupt (checksum mismatch)");
+}
+
+TEST(ProgramCache, EntryWithAnotherKeyIsStale) {
+  if (test::deviceContext().underOclgrind()) GTEST_SKIP() << "the cache is off under Oclgrind";
+  expectRebuilt(
+      "stale_key",
+      [](const fs::path& entry) {
+        std::string bytes = readAll(entry);
+        bytes[16] ^= 0x01;  // the key's first byte (after magic, version, header size)
+        writeAll(entry, bytes);
+      },
+      "stale");
+}
+
+TEST(ProgramCache, EntryOfAnotherFormatIsStale) {
+  if (test::deviceContext().underOclgrind()) GTEST_SKIP() << "the cache is off under Oclgrind";
+  expectRebuilt(
+      "stale_format",
+      [](const fs::path& entry) {
+        std::string bytes = readAll(entry);
+        bytes[8] = 99;  // the format version's low byte
+        writeAll(entry, bytes);
+      },
+      "stale (format version 99");
+}
+
+TEST(ProgramCache, UnwritableFolderIsAWarning) {
+  if (test::deviceContext().underOclgrind()) GTEST_SKIP() << "the cache is off under Oclgrind";
+  ScratchCache cache("unwritable");
+  fs::create_directories(cache.dir);
+  writeAll(cache.dir / "file", "a file where the cache folder should be");
+  setProgramCacheDirectory((cache.dir / "file" / "kernels").string());
+  CachedProgram built;
+  const std::string err = buildCapturing(built);
+  EXPECT_NE(err.find("warning: kernel cache: cannot create"), std::string::npos) << err;
+  expectRuns(built, 1);
+}
+
+/// Set or unset an environment variable for a scope.
+struct ScopedEnv {
+  std::string name;
+  std::optional<std::string> before;
+  ScopedEnv(std::string n, const char* value) : name(std::move(n)) {
+    if (const char* old = std::getenv(name.c_str())) before = old;
+    if (value) setenv(name.c_str(), value, 1);
+    else unsetenv(name.c_str());
+  }
+  ~ScopedEnv() {
+    if (before) setenv(name.c_str(), before->c_str(), 1);
+    else unsetenv(name.c_str());
+  }
+};
+
+TEST(ProgramCache, FolderFollowsFlagVariableAndXdg) {
+  ScopedEnv home("HOME", "/home/someone");
+  ScopedEnv xdg("XDG_CACHE_HOME", nullptr);
+  ScopedEnv var("WAVETRACE_CACHE_DIR", nullptr);
+  setProgramCacheDirectory("");
+  EXPECT_EQ(programCacheDirectory(), fs::path("/home/someone/.cache/wavetrace/kernels"));
+  {
+    ScopedEnv set("XDG_CACHE_HOME", "/xdg");
+    EXPECT_EQ(programCacheDirectory(), fs::path("/xdg/wavetrace/kernels"));
+    ScopedEnv chosen("WAVETRACE_CACHE_DIR", "/chosen");
+    EXPECT_EQ(programCacheDirectory(), fs::path("/chosen"));
+    setProgramCacheDirectory("/flag");
+    EXPECT_EQ(programCacheDirectory(), fs::path("/flag")) << "the flag wins over the variable";
+    setProgramCacheDirectory("off");
+    EXPECT_FALSE(programCacheDirectory().has_value());
+    setProgramCacheDirectory("");
+    ScopedEnv off("WAVETRACE_CACHE_DIR", "off");
+    EXPECT_FALSE(programCacheDirectory().has_value());
+  }
+  ScopedEnv noHome("HOME", nullptr);
+  EXPECT_FALSE(programCacheDirectory().has_value()) << "no HOME and no XDG_CACHE_HOME: nowhere to cache";
+}
+
+// PoCL's CPU device hands out a binary only after compiling every kernel
+// once more, and caches kernels itself: the default folder is not used there.
+TEST(ProgramCache, PoclCpuUsesOnlyAChosenFolder) {
+  if (!ownCacheMakesBinariesDear(test::deviceContext().info()))
+    GTEST_SKIP() << "not PoCL's CPU device: the default folder is used";
+  ScratchCache cache("pocl_default");
+  ScopedEnv home("HOME", cache.dir.c_str());
+  ScopedEnv xdg("XDG_CACHE_HOME", nullptr);
+  ScopedEnv var("WAVETRACE_CACHE_DIR", nullptr);
+  setProgramCacheDirectory("");
+  EXPECT_FALSE(programCacheDirectoryChosen());
+  CachedProgram built = build();
+  EXPECT_EQ(built.outcome, CacheOutcome::kOff) << cacheOutcomeName(built.outcome);
+  EXPECT_FALSE(fs::exists(cache.dir / ".cache" / "wavetrace"));
+  expectRuns(built, 1);
+}
+
+TEST(ProgramCache, OffCompilesWithoutAnEntry) {
+  ScratchCache cache("off");
+  setProgramCacheDirectory("off");
+  CachedProgram built = build();
+  EXPECT_EQ(built.outcome, CacheOutcome::kOff);
+  EXPECT_TRUE(built.entry.empty());
+  EXPECT_FALSE(fs::exists(cache.dir));
+  expectRuns(built, 1);
+}
+
+}  // namespace
+}  // namespace wt

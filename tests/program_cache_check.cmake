@@ -1,0 +1,78 @@
+# The program cache through the command line (`wavetrace render -v`): the
+# first run on an empty cache compiles and stores, the second loads; two
+# processes started together on an empty cache both succeed and leave one
+# valid entry; other build options (the minimal integrator) miss.
+# Inputs: EXE (wavetrace), SCRATCH (a folder this test may empty).
+set(cache "${SCRATCH}/kernels")
+file(REMOVE_RECURSE "${SCRATCH}")
+file(MAKE_DIRECTORY "${SCRATCH}")
+set(tiny --width 8 --height 8 --spp 1 -v)
+set(cached ${tiny} --kernel-cache "${cache}")
+
+function(render name pattern)
+  execute_process(COMMAND ${EXE} render -o "${SCRATCH}/${name}.png" ${ARGN}
+                  RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err TIMEOUT 300)
+  message("${name}: exit status ${rc}\n${out}${err}")
+  if(NOT rc EQUAL 0)
+    message(FATAL_ERROR "${name}: expected success, got exit status ${rc}")
+  endif()
+  if(NOT "${out}${err}" MATCHES "${pattern}")
+    message(FATAL_ERROR "${name}: output does not match '${pattern}'")
+  endif()
+endfunction()
+
+function(expect_one_entry when)
+  file(GLOB entries "${cache}/*")
+  list(LENGTH entries count)
+  if(NOT count EQUAL 1 OR NOT entries MATCHES "/[0-9a-f]+\\.bin$")
+    message(FATAL_ERROR "${when}: expected one entry and no temporary files in ${cache}, found: ${entries}")
+  endif()
+endfunction()
+
+# empty cache: compiled and stored; then loaded
+render(first "program wavetrace.cl: cache miss, compiled in [0-9.]+ s, binary [0-9.]+ MB" ${cached})
+expect_one_entry("after the first run")
+render(second "program wavetrace.cl: cache hit, loaded [0-9.]+ MB in [0-9.]+ s" ${cached})
+# the loaded program renders the same image
+file(SHA256 "${SCRATCH}/first.png" compiled)
+file(SHA256 "${SCRATCH}/second.png" loaded)
+if(NOT compiled STREQUAL loaded)
+  message(FATAL_ERROR "second: the image from the cached binary differs from the compiled program's")
+endif()
+
+# two processes started together on an empty cache
+file(REMOVE_RECURSE "${cache}")
+string(REPLACE ";" " " args "${cached}")
+execute_process(
+  COMMAND sh -c "'${EXE}' render ${args} -o '${SCRATCH}/together_a.png' & a=$!
+                 '${EXE}' render ${args} -o '${SCRATCH}/together_b.png' & b=$!
+                 wait $a; ra=$?; wait $b; echo \"exit statuses $ra $?\""
+  RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err TIMEOUT 300)
+message("together:\n${out}${err}")
+if(NOT out MATCHES "exit statuses 0 0")
+  message(FATAL_ERROR "together: expected both to succeed")
+endif()
+string(REGEX MATCHALL "program wavetrace.cl: cache miss" misses "${err}")
+list(LENGTH misses miss_count)
+if(NOT miss_count EQUAL 2)
+  message(FATAL_ERROR "together: expected both processes to find the cache empty and compile")
+endif()
+if(NOT EXISTS "${SCRATCH}/together_a.png" OR NOT EXISTS "${SCRATCH}/together_b.png")
+  message(FATAL_ERROR "together: an image is missing")
+endif()
+if("${err}" MATCHES "warning: kernel cache")
+  message(FATAL_ERROR "together: a process found a damaged entry")
+endif()
+expect_one_entry("after two runs at once")
+render(after_together "program wavetrace.cl: cache hit" ${cached})
+
+# other build options: a miss, not the first entry
+render(minimal "program wavetrace.cl: cache miss" ${cached} --integrator minimal)
+render(minimal_again "program wavetrace.cl: cache hit" ${cached} --integrator minimal)
+
+# off: compiled, nothing stored
+file(REMOVE_RECURSE "${cache}")
+render(off "program wavetrace.cl: cache off" ${tiny} --kernel-cache off)
+if(EXISTS "${cache}")
+  message(FATAL_ERROR "off: the cache folder was created")
+endif()
