@@ -49,17 +49,14 @@
 #endif
 // A leaf that at most this many lanes enter is tested lane by lane, four
 // triangles at a time (bvh_closest's and bvh_occluded's leaf test), instead
-// of one triangle at a time on every lane. Packets of 8 only: they are the
-// width where a sample has fewer than 3 camera rays per triangle
-// (packetWidthFor), so leaves are small against a packet's footprint.
+// of one triangle at a time on every lane (WT_PACKET_LEAF_LANES, declared in
+// switches.h). Packets of 8 only: they are the width of large scenes and of
+// 8-wide devices (packetWidthFor), so leaves are small against a packet's footprint.
 // Measured 2026-12-04 (in-process A/B): camera rays 1.03-1.09x on the bumpy
 // grid and 1.00-1.05x on MetalRoughSpheres (5 rounds), shadow rays in
 // packets 1.12-1.17x and 1.08-1.10x (3 rounds); with packets of 16, 4 lanes
 // alone measured 0.85-1.04x on DamagedHelmet's camera rays ("Leaves that
 // few lanes enter" in docs/performance.md).
-#ifndef WT_PACKET_LEAF_LANES
-#define WT_PACKET_LEAF_LANES (WT_PACKET == 8 ? 2 : 0)
-#endif
 
 /// Lane masks normalised to all ones or zero. Comparisons are folded with
 /// this before any select or ~, never trusted for their sign bit:

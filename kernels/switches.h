@@ -84,6 +84,26 @@
 #error "WT_HAS_INSTANCES must be 0 or 1"
 #endif
 
+// Not features (the image is the same either way), so they may be left out
+// and take these values: workarounds for the kernel checker, set by
+// buildProgram under Oclgrind only, and the packet leaf test's lane limit,
+// which kernel A/B runs may override (kernels/bvh_packet.cl says why 2 for 8).
+#ifndef WT_AVOID_BITREVERSE
+#define WT_AVOID_BITREVERSE 0
+#endif
+#ifndef WT_FOLD_THROUGH_MEMORY
+#define WT_FOLD_THROUGH_MEMORY 0
+#endif
+#ifndef WT_NO_PREFETCH
+#define WT_NO_PREFETCH 0
+#endif
+#ifndef WT_NO_CTZ
+#define WT_NO_CTZ 0
+#endif
+#ifndef WT_PACKET_LEAF_LANES
+#define WT_PACKET_LEAF_LANES (WT_PACKET_WIDTH == 8 ? 2 : 0)
+#endif
+
 // The same switches as typed constants, for code that branches in C rather
 // than in the preprocessor (the compiler folds the dead branch either way).
 constant bool kWtIntegratorMinimal = WT_INTEGRATOR_MINIMAL;

@@ -567,8 +567,8 @@ int main(int argc, char** argv) {
                        "else single")
       ->check(CLI::IsMember({"single", "packet", "stream", "auto"}));
   benchCmd->add_option("--packet-width", bench.packetWidth,
-                       "Rays per packet: 8 or 16; 0 picks by the device (16 where its native float vector is 16 wide and "
-                       "the camera rays are at least 3 per triangle)")
+                       "Rays per packet: 8 or 16; 0 picks by the device and the scene (16 where its native float vector "
+                       "is 16 wide and the scene has at most 349525 triangles)")
       ->check(CLI::IsMember({0, 8, 16}))->capture_default_str();
   benchCmd->add_option("--max-leaf-size", bench.maxLeafSize, "Every tree: no leaf holds more triangles (0: 16, as render); the collapse to 4 wide chooses the leaves up to it")
       ->check(CLI::Range(0, 64));
