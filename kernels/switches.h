@@ -1,7 +1,9 @@
 // Every compile-time switch the kernels read, declared once. Each comes from
 // the host (kernelDefines in host/device/program.cpp, from the scene's
 // feature set in host/render/feature_set.h); a build without one fails here,
-// naming it, so no switch can silently take a default.
+// naming it, so no switch can silently take a default, and one out of its
+// type's range (a boolean not 0 or 1, a packet width not 8 or 16) fails too.
+// Kernels test them with #if, so code for an absent feature is not compiled.
 #ifndef WT_SWITCHES_H
 #define WT_SWITCHES_H
 
@@ -103,14 +105,5 @@
 #ifndef WT_PACKET_LEAF_LANES
 #define WT_PACKET_LEAF_LANES (WT_PACKET_WIDTH == 8 ? 2 : 0)
 #endif
-
-// The same switches as typed constants, for code that branches in C rather
-// than in the preprocessor (the compiler folds the dead branch either way).
-constant bool kWtIntegratorMinimal = WT_INTEGRATOR_MINIMAL;
-constant int kWtBvhStackSize = WT_BVH_STACK_SIZE;
-constant int kWtPacketWidth = WT_PACKET_WIDTH;
-constant bool kWtHasPbr = WT_HAS_PBR;
-constant bool kWtHasTextures = WT_HAS_TEXTURES;
-constant bool kWtHasAlpha = WT_HAS_ALPHA;
 
 #endif  // WT_SWITCHES_H
