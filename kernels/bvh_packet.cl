@@ -47,14 +47,11 @@
 #endif
 // A leaf that at most this many lanes enter is tested lane by lane, four
 // triangles at a time (bvh_closest's and bvh_occluded's leaf test), instead
-// of one triangle at a time on every lane. Packets of 8 only: they are the
-// width where a sample has fewer than 3 camera rays per triangle
-// (packetWidthFor), so leaves are small against a packet's footprint; with
-// packets of 16 it did not pay (docs/lab/2026-12-04-performance-log.md,
-// "Leaves that few lanes enter").
-#ifndef WT_PACKET_LEAF_LANES
-#define WT_PACKET_LEAF_LANES (WT_PACKET == 8 ? 2 : 0)
-#endif
+// of one triangle at a time on every lane (WT_PACKET_LEAF_LANES, declared in
+// switches.h). Packets of 8 only: they are the width of large scenes and of
+// 8-wide devices (packetWidthFor), so leaves are small against a packet's
+// footprint; with packets of 16 it did not pay
+// (docs/lab/2026-12-04-performance-log.md, "Leaves that few lanes enter").
 
 /// Lane masks normalised to all ones or zero. Comparisons are folded with
 /// this before any select or ~, never trusted for their sign bit:

@@ -21,7 +21,7 @@
 // host asks for it (WT_STREAM_PREFETCH: the scene does not fit in the
 // device's cache, streamPrefetchFor), never under Oclgrind, which lacks the
 // intrinsic (WT_NO_PREFETCH, tests/oclgrind/prefetch.cl).
-#if defined(WT_STREAM_PREFETCH) && WT_STREAM_PREFETCH && !(defined(WT_NO_PREFETCH) && WT_NO_PREFETCH)
+#if WT_STREAM_PREFETCH && !(defined(WT_NO_PREFETCH) && WT_NO_PREFETCH)
 #define WT_STREAM_REQUESTS 1
 #else
 #define WT_STREAM_REQUESTS 0
@@ -234,7 +234,7 @@ inline void bvh_occluded_window(BvhScene scene, uint first, uint end, __global c
   uint n = end - first;
   uint rays[WT_STREAM_WINDOW], order[WT_STREAM_WINDOW];
   for (uint i = 0; i < n; ++i) rays[i] = first + i;
-#if defined(WT_STREAM_PREFETCH) && WT_STREAM_PREFETCH
+#if WT_STREAM_PREFETCH
   for (uint i = 0; i < n; ++i) order[i] = rays[i];
 #else
   stream_sort_by_octant(rays, n, ray_d, order);

@@ -1,19 +1,12 @@
-// Device-side helpers every stage includes: typed feature switches, vector
+// Device-side helpers every stage includes: the feature switches (switches.h), vector
 // conversions, robust ray spawning and shading frames.
 #ifndef WT_COMMON_H
 #define WT_COMMON_H
 
+#include "switches.h"
 #include "shared/types.h"
 #include "shared/rng.h"
 #include "shared/spawn.h"
-
-// Feature switches come from the host (host/device/program.cpp, kernelDefines).
-#ifndef WT_INTEGRATOR_MINIMAL
-#error "WT_INTEGRATOR_MINIMAL is not defined: build options must come from kernelDefines()"
-#endif
-#ifndef WT_BVH_STACK_SIZE
-#error "WT_BVH_STACK_SIZE is not defined: build options must come from kernelDefines()"
-#endif
 
 // Products must round separately: a fused multiply-add in the edge functions
 // of the watertight triangle test breaks its exactness on shared edges.

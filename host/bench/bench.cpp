@@ -409,7 +409,7 @@ struct SceneResult {
   std::size_t copiesPlaced = 0;  ///< copies given their geometry's shared tree (--bvh auto)
   std::size_t flatRegions = 0;   ///< regions the LBVH keyed with their thin axis last
   bool shadowToEmitters = false;
-  int packetWidth = 0;  ///< rays per packet for this scene (packetWidthFor, by camera rays per triangle)
+  int packetWidth = 0;  ///< rays per packet for this scene (packetWidthFor, by the device and the triangles)
   bool streamPrefetch = false;  ///< the streams ask for a node's children early (streamPrefetchFor)
   double embreeBuildSeconds = 0.0;
   /// The other geometry types (host/geometry/primitives.h): primitives per
@@ -420,6 +420,10 @@ struct SceneResult {
   double bytesPerPrimitive = 0.0;
   std::vector<SetResult> sets;
   double pathMrays = 0.0;
+  /// Time per path sample with the scene's specialised program and with the
+  /// general one (every switch on), samples interleaved; their builds
+  double pathMsPerSample = 0.0, pathMsPerSampleGeneral = 0.0;
+  double programSeconds = 0.0, programSecondsGeneral = 0.0;
   std::vector<TreeResult> trees;  ///< --compare-bvh, in that order
 };
 
@@ -761,10 +765,8 @@ SceneResult benchScene(Context& context, const std::string& name, const Scene& s
   bvh = {};
   bvh4 = {};
 
-  // packets of 16 only where the camera rays are dense enough on the triangles (as the renderer)
-  result.packetWidth =
-      packetWidthFor(context.info(), options.packetWidth,
-                     std::size_t(options.primaryWidth) * std::size_t(options.primaryWidth), scene.triangles.size());
+  // packets of 16 only on scenes of few enough triangles (as the renderer)
+  result.packetWidth = packetWidthFor(context.info(), options.packetWidth, scene.triangles.size());
   Tracer tracer(context, scene, bvhOptions, result.packetWidth);
   result.streamPrefetch = tracer.streamPrefetch();
   result.bytesPerTriangle =
@@ -825,12 +827,30 @@ SceneResult benchScene(Context& context, const std::string& name, const Scene& s
   settings.instancing = bvhOptions.instancing;
   settings.packetWidth = options.packetWidth;
   Renderer renderer(context, scene, settings);
+  RenderSettings generalSettings = settings;
+  generalSettings.generalProgram = true;
+  Renderer general(context, scene, generalSettings);
+  result.programSeconds = renderer.stats().programSeconds;
+  result.programSecondsGeneral = general.stats().programSeconds;
   renderer.renderSample();  // warm-up
+  general.renderSample();
   std::uint64_t raysBefore = renderer.stats().raysTraced;
-  double secondsBefore = renderer.stats().seconds;
-  for (int s = 0; s < options.pathSamples; ++s) renderer.renderSample();
+  double secondsBefore = renderer.stats().seconds, generalBefore = general.stats().seconds;
+  // interleaved, so that both programs see the same machine load; on for a
+  // second at least, since a few samples of a small scene are milliseconds
+  // that one busy moment of the machine can double
+  constexpr double kPathMinSeconds = 1.0;
+  int samples = 0;
+  while (samples < options.pathSamples ||
+         (renderer.stats().seconds - secondsBefore < kPathMinSeconds && samples < 64 * options.pathSamples)) {
+    renderer.renderSample();
+    general.renderSample();
+    ++samples;
+  }
   result.pathMrays = double(renderer.stats().raysTraced - raysBefore) /
                      (renderer.stats().seconds - secondsBefore) * 1e-6;
+  result.pathMsPerSample = (renderer.stats().seconds - secondsBefore) / samples * 1e3;
+  result.pathMsPerSampleGeneral = (general.stats().seconds - generalBefore) / samples * 1e3;
   return result;
 }
 
@@ -955,11 +975,13 @@ int runBench(const BenchOptions& options) {
                   "\"bvh_nodes\": %zu, \"bvh_sah\": %.3f, \"bvh4_nodes\": %zu, \"bvh4_sah\": %.3f, \"bvh4_collapse_s\": %.6f, "
                   "\"bvh4_mtris_per_s\": %.3f, \"bytes_per_triangle\": %.1f, \"instances\": %zu, \"leaf_misfits\": %zu, \"bvh_copies_placed\": %zu, "
                   "\"bvh_flat_regions\": %zu, \"packet_width\": %d, \"stream_prefetch\": %s, \"embree_build_s\": %.6f, "
-                  "\"shadow_targets\": \"%s\", \"path_mrays\": %.3f,\n",
+                  "\"shadow_targets\": \"%s\", \"path_mrays\": %.3f, \"path_ms_per_sample\": %.3f, "
+                  "\"path_ms_per_sample_general\": %.3f, \"program_build_s\": %.3f, \"program_build_general_s\": %.3f,\n",
                   jsonString(r.name).c_str(), r.triangles, r.buildSeconds,
                   r.buildSeconds > 0 ? r.triangles / r.buildSeconds * 1e-6 : 0.0, r.nodes, r.sah,
                   r.nodes4, r.sah4, r.collapseSeconds, traversableRate(r), r.bytesPerTriangle, r.instances, r.leafMisfits,
-                  r.copiesPlaced, r.flatRegions, r.packetWidth, r.streamPrefetch ? "true" : "false", r.embreeBuildSeconds, r.shadowToEmitters ? "emitters" : "bounds", r.pathMrays);
+                  r.copiesPlaced, r.flatRegions, r.packetWidth, r.streamPrefetch ? "true" : "false", r.embreeBuildSeconds, r.shadowToEmitters ? "emitters" : "bounds", r.pathMrays,
+                  r.pathMsPerSample, r.pathMsPerSampleGeneral, r.programSeconds, r.programSecondsGeneral);
       std::printf("   \"primitives\": {");
       for (std::uint32_t type = 0, n = 0; type < WT_PRIM_TYPES; ++type)
         if (*primTypeName(type)) std::printf("%s\"%s\": %zu", n++ ? ", " : "", primTypeName(type), r.primitives[type]);
@@ -1024,15 +1046,14 @@ int runBench(const BenchOptions& options) {
   }
 
   char rule[96];
-  std::snprintf(rule, sizeof rule, " (8 for a scene with fewer than %g camera rays per triangle)",
-                kWidePacketRaysPerTriangle);
+  std::snprintf(rule, sizeof rule, " (8 for a scene of more than %zu triangles)", kWidePacketMaxTriangles);
   const std::string widePacketRule = rule;
   std::printf("device: %s (%s); reference: %s; bvh: %s; instancing: %s; packets of %d rays%s\n", device.name.c_str(),
               device.platformName.c_str(), embreeText.c_str(), options.bvh.c_str(), options.instancing.c_str(), packetWidth,
               options.packetWidth == 0 && packetWidth == 16 ? widePacketRule.c_str() : "");
   std::printf("rays: primary %dx%d through pixel centres; diffuse and shadow rays from their hits; "
-              "median of %d or more runs (%g s at least) after a warm-up\npaths: %dx%d, %d spp, up to 8 bounces, "
-              "extend rays counted\n",
+              "median of %d or more runs (%g s at least) after a warm-up\npaths: %dx%d, %d spp (more, up to a second, "
+              "for the general-program comparison), up to 8 bounces, extend rays counted\n",
               options.primaryWidth, options.primaryWidth, options.repetitions, options.minSeconds, options.pathWidth,
               options.pathWidth, options.pathSamples);
   for (const auto& [name, reason] : skipped) std::printf("skipped %s: %s\n", name.c_str(), reason.c_str());
@@ -1049,6 +1070,14 @@ int runBench(const BenchOptions& options) {
                 r.nodes, r.sah, r.collapseSeconds * 1e3, traversableRate(r), r.nodes4, r.sah4, r.bytesPerTriangle,
                 embreeMs, r.pathMrays);
   }
+
+  // the scene's specialised program against the general one (every switch on), same samples
+  std::printf("\n%-28s %14s %14s %8s %10s %10s\n", "scene", "special ms/spl", "general ms/spl", "speed-up",
+              "build s", "general s");
+  for (const SceneResult& r : results)
+    std::printf("%-28s %14.2f %14.2f %8.3f %10.2f %10.2f\n", r.name.c_str(), r.pathMsPerSample,
+                r.pathMsPerSampleGeneral, r.pathMsPerSample > 0 ? r.pathMsPerSampleGeneral / r.pathMsPerSample : 0.0,
+                r.programSeconds, r.programSecondsGeneral);
 
   // the other geometry types: their one BVH (leaves of typed ids), built and collapsed
   bool anyPrimitives = false;

@@ -46,6 +46,10 @@ struct BvhBuildOptions {
   /// binned SAH pass builds the tree above them; 0: PLOC up to the root.
   int plocTopPrims = 16;
   Instancing instancing = Instancing::Off;  ///< read by SceneBuffers only
+  /// Read by SceneBuffers only: per-vertex texture coordinates, tangents,
+  /// COLOR_0 and the alpha bits for every vertex and triangle even where no
+  /// material reads them, for the general program (generalKernelFeatures).
+  bool allSurfaceAttributes = false;
 };
 
 /// Primitives [first, first + count) are a placed copy of `geometry`: the

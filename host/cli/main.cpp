@@ -1,5 +1,5 @@
 // wavetrace: the command line. `render` (the default scene when no file is
-// named), `devices`, `bench`.
+// named), `info`, `devices`, `bench`.
 #include "bench/bench.h"
 #include "bvh/builders.h"
 #include "core/log.h"
@@ -7,6 +7,8 @@
 #include "device/program.h"
 #include "device/program_cache.h"
 #include "output/image_io.h"
+#include "device/scene_buffers.h"
+#include "render/feature_set.h"
 #include "render/image_error.h"
 #include "render/renderer.h"
 #include "scene/default_scene.h"
@@ -108,6 +110,34 @@ void applySceneSettings(const wt::SceneFileSettings& file, const std::string& sc
     wt::log::info(sceneName + ": from the scene file: " + taken + " (command-line options take precedence)");
 }
 
+/// The render settings the options say (after applySceneSettings): one
+/// place, so that `render` and `info` see the same feature set.
+wt::RenderSettings renderSettings(const RenderOptions& options) {
+  wt::RenderSettings settings = options.settings;
+  for (float c : options.background)
+    if (!(c >= 0.0f) || !std::isfinite(c)) throw std::invalid_argument("--background: components must be finite and >= 0");
+  settings.background = glm::vec3(options.background[0], options.background[1], options.background[2]);
+  settings.integrator = options.integrator == "minimal" ? wt::Integrator::Minimal : wt::Integrator::Path;
+  settings.useNee = !options.noNee;
+  settings.useMis = !options.noMis;
+  if (options.stopOnNan) settings.stopOnNonFinite = true;
+  settings.useRussianRoulette = !options.noRr;
+  settings.powerHeuristic = options.misHeuristic == "power";
+  settings.sobol = options.sampler == "sobol";
+  settings.textureFootprint = options.textureFilter == "footprint";
+  settings.lightSampler = options.lightSampler == "power" ? wt::LightSampler::Power
+                          : options.lightSampler == "tree" ? wt::LightSampler::Tree
+                                                           : wt::LightSampler::Auto;
+  settings.accumulation = options.accumulation == "single"   ? WT_ACCUMULATE_SINGLE
+                          : options.accumulation == "double" ? WT_ACCUMULATE_DOUBLE
+                                                             : WT_ACCUMULATE_KAHAN;
+  settings.bvhBuilder = *wt::parseBvhBuilder(options.bvh);
+  settings.instancing = *wt::parseInstancing(options.instancing);
+  settings.packets = options.traversal == "auto";
+  settings.packetWidth = options.packetWidth;
+  return settings;
+}
+
 int runRender(RenderOptions options) {
   wt::log::setQuiet(options.quiet);
   wt::log::setVerbose(options.verbose);
@@ -132,28 +162,7 @@ int runRender(RenderOptions options) {
 
   wt::DeviceInfo device = wt::selectDevice(options.device);
   wt::Context context(device);
-  wt::RenderSettings settings = options.settings;
-  for (float c : options.background)
-    if (!(c >= 0.0f) || !std::isfinite(c)) throw std::invalid_argument("--background: components must be finite and >= 0");
-  settings.background = glm::vec3(options.background[0], options.background[1], options.background[2]);
-  settings.integrator = options.integrator == "minimal" ? wt::Integrator::Minimal : wt::Integrator::Path;
-  settings.useNee = !options.noNee;
-  settings.useMis = !options.noMis;
-  if (options.stopOnNan) settings.stopOnNonFinite = true;
-  settings.useRussianRoulette = !options.noRr;
-  settings.powerHeuristic = options.misHeuristic == "power";
-  settings.sobol = options.sampler == "sobol";
-  settings.textureFootprint = options.textureFilter == "footprint";
-  settings.lightSampler = options.lightSampler == "power" ? wt::LightSampler::Power
-                          : options.lightSampler == "tree" ? wt::LightSampler::Tree
-                                                           : wt::LightSampler::Auto;
-  settings.accumulation = options.accumulation == "single"   ? WT_ACCUMULATE_SINGLE
-                          : options.accumulation == "double" ? WT_ACCUMULATE_DOUBLE
-                                                             : WT_ACCUMULATE_KAHAN;
-  settings.bvhBuilder = *wt::parseBvhBuilder(options.bvh);
-  settings.instancing = *wt::parseInstancing(options.instancing);
-  settings.packets = options.traversal == "auto";
-  settings.packetWidth = options.packetWidth;
+  wt::RenderSettings settings = renderSettings(options);
   wt::Renderer renderer(context, scene, settings);
   if (std::size_t left = renderer.sceneBuffers().skippedPrimitives())
     wt::log::warnOnce(scene.sourceName + ": " + std::to_string(left) +
@@ -193,6 +202,13 @@ int runRender(RenderOptions options) {
                     scene.textureSeconds * 1e3, buffers.textureUploadSeconds * 1e3);
       wt::log::debug(line);
     }
+  }
+
+  {
+    std::string names;
+    for (const std::string& n : wt::featureNames(renderer.features())) names += " " + n;
+    wt::log::debug("features:" + names + (settings.generalProgram ? " (general program: every switch on)" : "") +
+                   "; program built in " + std::to_string(int(renderer.stats().programSeconds * 1e3)) + " ms");
   }
 
   // error against a reference at power-of-two sample counts (not timed)
@@ -240,6 +256,10 @@ int runRender(RenderOptions options) {
   }
 
   if (errorOut && errorOut != stdout) std::fclose(errorOut);
+  if (renderer.stats().samplesDone > 0)
+    wt::log::debug("rendered " + std::to_string(renderer.stats().samplesDone) + " samples in " +
+                   std::to_string(renderer.stats().seconds) + " s: " +
+                   std::to_string(renderer.stats().seconds / renderer.stats().samplesDone * 1e3) + " ms per sample");
 
   // Whatever happened, keep what was accumulated.
   if (renderer.stats().samplesDone > 0) {
@@ -263,6 +283,100 @@ int runRender(RenderOptions options) {
                    " samples; the image so far was written");
     return 130;
   }
+  return 0;
+}
+
+/// `wavetrace info`: the scene's feature set (as `render` would derive it
+/// with the same options), the switches it compiles in, and its statistics.
+int runInfo(RenderOptions options) {
+  wt::log::setQuiet(options.quiet);
+  wt::GltfLoadOptions loadOptions;
+  loadOptions.sceneIndex = options.sceneIndex;
+  loadOptions.cameraIndex = options.camera;
+  loadOptions.recenter = !options.noRecenter;
+  wt::SceneFile loaded = wt::loadSceneAny(options.scene, loadOptions);
+  wt::Scene& scene = loaded.scene;
+  applySceneSettings(loaded.settings, scene.sourceName, options);
+  for (const std::string& w : scene.warnings) wt::log::warnOnce(scene.sourceName + ": " + w);
+  wt::DeviceInfo device = wt::selectDevice(options.device);
+  wt::Context context(device);
+  const wt::RenderSettings settings = renderSettings(options);
+  wt::BvhBuildOptions bvhOptions;  // as the renderer builds it
+  bvhOptions.builder = settings.bvhBuilder;
+  bvhOptions.maxLeafSize = 0;
+  bvhOptions.instancing = settings.instancing;
+  wt::SceneBuffers buffers(context, scene, bvhOptions);
+  const wt::FeatureSet features = wt::sceneFeatures(scene, buffers, settings);
+
+  std::printf("scene: %s\n", options.scene.c_str());
+  std::printf("features:");
+  for (const std::string& name : wt::featureNames(features)) std::printf(" %s", name.c_str());
+  std::printf("\nswitches (on %s):", device.name.c_str());
+  for (const std::string& d : wt::kernelDefines(wt::kernelFeaturesFor(features, device, settings.packetWidth)))
+    std::printf(" %s", d.substr(3).c_str());  // without "-D "
+  std::printf("\n");
+
+  // geometry
+  std::size_t curvePoints = 0;
+  for (const wt::Curve& c : scene.curves) curvePoints += c.pointCount;
+  std::printf("primitives: %zu triangles, %zu spheres, %zu curves (%zu points), %zu vertices\n",
+              scene.triangles.size(), scene.spheres.size(), scene.curves.size(), curvePoints,
+              scene.positions.size());
+  std::printf("instances: %zu mesh copies in the file; instancing %s: %zu instances, %zu triangles in instanced copies\n",
+              scene.instances.size(), options.instancing.c_str(), buffers.instanceCount(),
+              buffers.instancedTriangles());
+  // materials
+  std::size_t lambertian = 0, pbr = 0, mask = 0, blend = 0;
+  for (const WtMaterial& m : scene.materials) {
+    (m.model == WT_MATERIAL_PBR ? pbr : lambertian) += 1;
+    mask += m.alpha_mode == WT_ALPHA_MASK;
+    blend += m.alpha_mode == WT_ALPHA_BLEND;
+  }
+  std::printf("materials: %zu (%zu lambertian, %zu metallic-roughness; alpha: %zu mask, %zu blend; %zu triangles "
+              "alpha-tested)\n",
+              scene.materials.size(), lambertian, pbr, mask, blend, buffers.alphaTriangles());
+  // lights
+  std::size_t kinds[WT_LIGHT_DIRECTIONAL + 1] = {};
+  for (const wt::PunctualLight& l : scene.lights)
+    if (l.type >= WT_LIGHT_POINT && l.type <= WT_LIGHT_DIRECTIONAL) ++kinds[l.type];
+  auto emitting = [&](std::uint32_t material) {
+    if (material >= scene.materials.size()) return false;
+    const WtVec4& e = scene.materials[material].emission;
+    return e.x > 0.0f || e.y > 0.0f || e.z > 0.0f;
+  };
+  std::size_t emissiveTriangles = 0, emissiveSpheres = 0, emissiveCurves = 0;
+  for (const WtTriangle& t : scene.triangles) emissiveTriangles += emitting(t.material);
+  for (const wt::Sphere& sp : scene.spheres) emissiveSpheres += emitting(sp.material);
+  for (const wt::Curve& c : scene.curves) emissiveCurves += emitting(c.material);
+  std::string environment = "none";
+  if (features.environmentMap)
+    environment = "map " + settings.environmentMap;
+  else if (features.constantSky)
+    environment = "constant (" + std::to_string(settings.background.x) + ", " + std::to_string(settings.background.y) +
+                  ", " + std::to_string(settings.background.z) + ")";
+  std::printf("lights: %zu punctual (%zu point, %zu spot, %zu directional), %zu emissive triangles, %zu emissive "
+              "spheres, %zu emissive curves; environment: %s\n",
+              scene.lights.size(), kinds[WT_LIGHT_POINT], kinds[WT_LIGHT_SPOT], kinds[WT_LIGHT_DIRECTIONAL],
+              emissiveTriangles, emissiveSpheres, emissiveCurves, environment.c_str());
+  // textures: the images' finest levels
+  const wt::TextureSet& ts = scene.textures;
+  std::printf("textures: %zu images, %zu textures, %.2f MiB with mips (%.2f MiB on the device)",
+              ts.imageCount(), ts.textures.size(), double(ts.bytes()) / (1 << 20),
+              double(buffers.textureBytes) / (1 << 20));
+  std::vector<bool> seen(ts.levels.size(), false);
+  std::string sizes;
+  for (const WtTexture& t : ts.textures) {
+    if (t.first_level >= ts.levels.size() || seen[t.first_level]) continue;
+    seen[t.first_level] = true;
+    const WtTextureLevel& l = ts.levels[t.first_level];
+    sizes += (sizes.empty() ? "" : ", ") + std::to_string(l.width) + "x" + std::to_string(l.height);
+  }
+  std::printf("%s%s\n", sizes.empty() ? "" : ": ", sizes.c_str());
+  // acceleration structures
+  const wt::Bvh4Stats& bvh = buffers.bvh4Stats();
+  std::printf("bvh: %zu nodes, depth %d (4-wide, triangles); %zu nodes, depth %d (other primitives); stack %d entries\n",
+              bvh.nodeCount, bvh.maxDepth, buffers.primitiveBvhStats().nodeCount,
+              buffers.primitiveBvhStats().maxDepth, features.bvhStackSize);
   return 0;
 }
 
@@ -356,7 +470,7 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"auto", "single"}))->capture_default_str();
   renderCmd->add_option("--packet-width", render.packetWidth,
                         "Pixels per packet with --traversal auto: 8 or 16; 0 picks by the device (16 where its native "
-                        "float vector is 16 wide and the image has at least 3 pixels per triangle)")
+                        "float vector is 16 wide and the scene has at most 349525 triangles; never by the image size)")
       ->check(CLI::IsMember({0, 8, 16}))->capture_default_str();
   renderCmd->add_option("--reference", render.reference,
                         "EXR of the converged image: log the error at 1, 2, 4, ... samples (see --error-log)");
@@ -383,6 +497,9 @@ int main(int argc, char** argv) {
                       "Keep the file's world coordinates (default: the scene is stored relative to the camera, "
                       "in double precision, so it renders the same far from the world origin)");
   renderCmd->add_option("--kernel-dir", render.kernelDir, "Developer option: read kernels from this folder");
+  renderCmd->add_flag("--general-program", render.settings.generalProgram,
+                      "Developer option: build every kernel switch on instead of the scene's feature set (the same "
+                      "image; for comparisons)");
   renderCmd->add_flag("-q,--quiet", render.quiet, "No progress output");
   renderCmd->add_flag("-v,--verbose", render.verbose,
                       "Timings of the scene set-up (BVH build phases) and of each program's build (kernel cache hit or miss)");
@@ -392,6 +509,21 @@ int main(int argc, char** argv) {
       "Folder of compiled kernels (default: $WAVETRACE_CACHE_DIR, else $XDG_CACHE_HOME/wavetrace/kernels, "
       "else ~/.cache/wavetrace/kernels); 'off': compile every time";
   renderCmd->add_option("--kernel-cache", kernelCache, kernelCacheHelp);
+
+  RenderOptions info;
+  info.instancing = "auto";
+  CLI::App* infoCmd =
+      app.add_subcommand("info", "Print a scene's feature set (what its program compiles in) and its statistics");
+  infoCmd->add_option("scene", info.scene, "glTF (.gltf/.glb) or scene file (.json)")->required();
+  infoCmd->add_option("--device", info.device, "Device index or name substring");
+  infoCmd->add_option("--integrator", info.integrator, "path or minimal, as for render")
+      ->check(CLI::IsMember({"path", "minimal"}));
+  infoCmd->add_option("--env-map", info.settings.environmentMap, "Environment map, as for render");
+  infoCmd->add_option("--background", info.background, "Constant environment radiance, as for render")
+      ->expected(3);
+  infoCmd->add_option("--instancing", info.instancing, "off, on or auto, as for render")
+      ->check(CLI::IsMember({"off", "on", "auto"}));
+  infoCmd->add_option("--scene-index", info.sceneIndex, "glTF scene (default: the file's default scene)");
 
   CLI::App* devicesCmd = app.add_subcommand("devices", "List OpenCL platforms and devices");
 
@@ -444,8 +576,8 @@ int main(int argc, char** argv) {
                        "else single")
       ->check(CLI::IsMember({"single", "packet", "stream", "auto"}));
   benchCmd->add_option("--packet-width", bench.packetWidth,
-                       "Rays per packet: 8 or 16; 0 picks by the device (16 where its native float vector is 16 wide and "
-                       "the camera rays are at least 3 per triangle)")
+                       "Rays per packet: 8 or 16; 0 picks by the device and the scene (16 where its native float vector "
+                       "is 16 wide and the scene has at most 349525 triangles)")
       ->check(CLI::IsMember({0, 8, 16}))->capture_default_str();
   benchCmd->add_option("--max-leaf-size", bench.maxLeafSize, "Every tree: no leaf holds more triangles (0: 16, as render); the collapse to 4 wide chooses the leaves up to it")
       ->check(CLI::Range(0, 64));
@@ -503,6 +635,11 @@ int main(int argc, char** argv) {
                       given("--exposure"), given("--integrator"), given("--background"), given("--env-map"),
                       given("--env-intensity"), given("--env-rotation"), given("--env-hidden")};
       return runRender(render);
+    }
+    if (*infoCmd) {
+      info.given = {false, false, false, false, false, false, infoCmd->count("--integrator") > 0,
+                    infoCmd->count("--background") > 0, infoCmd->count("--env-map") > 0};
+      return runInfo(info);
     }
     if (*devicesCmd) return runDevices();
     if (*benchCmd) return wt::runBench(bench);

@@ -107,14 +107,18 @@ void setMaterialFeatures(KernelFeatures& features, std::span<const WtMaterial> m
     return std::any_of(materials.begin(), materials.end(),
                        [&](const WtMaterial& m) { return m.model == WT_MATERIAL_PBR && pred(m); });
   };
+  // the dielectric share is reachable where metallic is below 1 somewhere:
+  // its factor, or a metallic-roughness texture that multiplies it
+  auto dielectric = [](const WtMaterial& m) {
+    return m.base_color.w < 1.0f || (m.texture_mask & (1u << WT_TEXTURE_SLOT_METALLIC_ROUGHNESS)) != 0u;
+  };
   features.pbr = any([](const WtMaterial&) { return true; });
-  features.transmission = any([](const WtMaterial& m) { return m.transmission > 0.0f && m.base_color.w < 1.0f; });
+  features.transmission = any([&](const WtMaterial& m) { return m.transmission > 0.0f && dielectric(m); });
   // the opaque dielectric's F0 departs from 0.04 (ior on its opaque share), or the specular extension weighs or tints it
-  features.specular = any([](const WtMaterial& m) {
+  features.specular = any([&](const WtMaterial& m) {
     bool tinted = m.specular.x != 1.0f || m.specular.y != 1.0f || m.specular.z != 1.0f;
     const bool textured = m.texture_mask & ((1u << WT_TEXTURE_SLOT_SPECULAR) | (1u << WT_TEXTURE_SLOT_SPECULAR_COLOR));
-    return m.base_color.w < 1.0f &&
-           (m.specular.w != 1.0f || tinted || textured || (m.ior != 1.5f && m.transmission < 1.0f));
+    return dielectric(m) && (m.specular.w != 1.0f || tinted || textured || (m.ior != 1.5f && m.transmission < 1.0f));
   });
   features.clearcoat = any([](const WtMaterial& m) { return m.clearcoat > 0.0f; });
   features.sheen = any([](const WtMaterial& m) { return m.sheen.x > 0.0f || m.sheen.y > 0.0f || m.sheen.z > 0.0f; });
@@ -144,13 +148,12 @@ bool streamPrefetchFor(const DeviceInfo& device, std::size_t sceneBytes) {
   return device.globalCacheBytes == 0 || sceneBytes > device.globalCacheBytes;
 }
 
-int packetWidthFor(const DeviceInfo& device, int requested, std::size_t cameraRays, std::size_t triangles) {
+int packetWidthFor(const DeviceInfo& device, int requested, std::size_t triangles) {
   if (requested == 8 || requested == 16) return requested;
   if (requested != 0)
     throw DeviceError("packet width " + std::to_string(requested) + " is not supported (8 or 16)");
   if (device.nativeFloatWidth < 16) return 8;
-  const bool sparse = triangles > 0 && double(cameraRays) < kWidePacketRaysPerTriangle * double(triangles);
-  return sparse ? 8 : 16;
+  return triangles > kWidePacketMaxTriangles ? 8 : 16;
 }
 
 cl::Program buildProgram(Context& context, const KernelFeatures& features, const std::string& root) {

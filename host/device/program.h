@@ -15,8 +15,10 @@
 
 namespace wt {
 
-/// What a scene needs compiled in; becomes -D options (kernelDefines). Keep
-/// the set coarse so few variants exist and PoCL's cache keeps them warm.
+/// What a program compiles in; becomes -D options (kernelDefines), every one
+/// always set (kernels/switches.h fails the build on a missing one). Made from
+/// the scene's feature set by kernelFeaturesFor (host/render/feature_set.h).
+/// Keep the set coarse so few variants exist and PoCL's cache keeps them warm.
 struct KernelFeatures {
   bool integratorMinimal = true;  ///< the brute-force reference (--integrator minimal), else the path integrator
   int bvhStackSize = 64;          ///< traversal stack entries; >= BVH depth + 1, rounded up to 32
@@ -34,7 +36,7 @@ struct KernelFeatures {
   /// The geometry types beside triangles compiled in, by WT_PRIM_* (each
   /// primitiveTypes() entry's define; SceneBuffers::primitiveTypesPresent)
   std::array<bool, WT_PRIM_TYPES> primitives{};
-  int packetWidth = 8;            ///< rays per packet (WT_PACKET_WIDTH): 8 or 16, packetWidthFor
+  int packetWidth = 8;            ///< rays per packet (WT_PACKET_WIDTH): 8 or 16, packetWidthFor (device and scene only)
   /// WT_STREAM_PREFETCH: streams ask for a node's children as it arrives, and
   /// keep their rays' order (streamPrefetchFor)
   bool streamPrefetch = false;
@@ -49,19 +51,21 @@ struct KernelFeatures {
 /// data asked for early").
 bool streamPrefetchFor(const DeviceInfo& device, std::size_t sceneBytes);
 
-/// Camera rays per triangle below which a 16-wide device still gets packets
-/// of 8: a packet's rays then spread over several leaves, and 16 lanes pay
-/// for the union (docs/lab/2026-12-01-performance-log.md, "Packet width by
-/// camera rays per triangle").
-constexpr double kWidePacketRaysPerTriangle = 3.0;
+/// Triangles above which a 16-wide device still gets packets of 8: a
+/// packet's camera rays then spread over several leaves, and 16 lanes pay
+/// for the union. Fixed by the scene, never by the image size, so that a
+/// resolution change never recompiles: the rule it replaces (camera rays per
+/// triangle below 3) evaluated at a reference image of 1024x1024 pixels,
+/// where the packets of 8 were measured faster on the 1 M-triangle scenes
+/// (docs/lab/2026-12-05-features.md).
+constexpr std::size_t kWidePacketMaxTriangles = (std::size_t{1024} * 1024) / 3;
 
-/// Rays per packet for a device: `requested` (8 or 16) when non-zero, else
-/// 16 where the device's native float vector is 16 wide (AVX-512 CPUs) and
-/// a sample's `cameraRays` are at least kWidePacketRaysPerTriangle per
-/// triangle of the scene (`triangles`; 0: not known, 16), else 8. Throws
-/// DeviceError for any other request.
-int packetWidthFor(const DeviceInfo& device, int requested = 0, std::size_t cameraRays = 0,
-                   std::size_t triangles = 0);
+/// Rays per packet for a device and a scene: `requested` (8 or 16) when
+/// non-zero, else 16 where the device's native float vector is 16 wide
+/// (AVX-512 CPUs) and the scene has at most kWidePacketMaxTriangles
+/// triangles (`triangles`; 0: not known, 16), else 8. Throws DeviceError for
+/// any other request.
+int packetWidthFor(const DeviceInfo& device, int requested = 0, std::size_t triangles = 0);
 
 /// Set pbr, transmission, specular, clearcoat and sheen from the materials
 /// a scene holds: only scenes that use a material layer compile it in.

@@ -163,7 +163,8 @@ std::optional<Instancing> parseInstancing(std::string_view name) {
   return std::nullopt;
 }
 
-SceneBuffers::SceneBuffers(Context& context, const Scene& scene, const BvhBuildOptions& options) {
+SceneBuffers::SceneBuffers(Context& context, const Scene& scene, const BvhBuildOptions& options)
+    : m_allSurfaceAttributes(options.allSurfaceAttributes) {
   // Zero-area and non-finite triangles never enter the BVH: they cannot be
   // hit meaningfully, and in float a ray through a collinear triangle can
   // still produce a spurious hit.
@@ -406,6 +407,8 @@ void SceneBuffers::uploadAlpha(Context& context, const Scene& scene) {
     }
     if (m_alphaTriangles == 0) bits.clear();
   }
+  // the general program tests every triangle's bit
+  if (bits.empty() && m_allSurfaceAttributes) bits.assign((m_leafToScene.size() + 31) / 32, 0u);
   alphaBits = upload(context, bits, m_attributeBytes);
   // each material's row; a texture whose alpha is 1 everywhere is left out
   std::vector<WtAlphaMaterial> rows;
@@ -437,7 +440,7 @@ void SceneBuffers::uploadSurface(Context& context, const Scene& scene) {
                               [](const WtMaterial& m) { return m.texture_mask != 0u; });
   m_hasVertexColors = !scene.colors.empty();
   std::vector<WtVec4> uv, color, tangent;
-  if (m_hasTextures) {
+  if (m_hasTextures || m_allSurfaceAttributes) {
     uv.resize(scene.positions.size());
     for (std::size_t v = 0; v < uv.size(); ++v) {
       glm::vec2 a = v < scene.texcoords.size() ? scene.texcoords[v] : glm::vec2(0.0f);
@@ -448,7 +451,7 @@ void SceneBuffers::uploadSurface(Context& context, const Scene& scene) {
     for (std::size_t v = 0; v < std::min(tangent.size(), scene.tangents.size()); ++v)
       tangent[v] = {scene.tangents[v].x, scene.tangents[v].y, scene.tangents[v].z, scene.tangents[v].w};
   }
-  if (m_hasVertexColors) {
+  if (m_hasVertexColors || m_allSurfaceAttributes) {
     color.resize(scene.positions.size(), WtVec4{1.0f, 1.0f, 1.0f, 1.0f});
     for (std::size_t v = 0; v < std::min(color.size(), scene.colors.size()); ++v)
       color[v] = {scene.colors[v].x, scene.colors[v].y, scene.colors[v].z, scene.colors[v].w};

@@ -201,6 +201,7 @@ class SceneBuffers {
   void uploadAlpha(Context& context, const Scene& scene);
 
   bool m_hasTextures = false, m_hasVertexColors = false;
+  bool m_allSurfaceAttributes = false;  ///< BvhBuildOptions::allSurfaceAttributes
   std::size_t m_alphaTriangles = 0;
   BvhBuildStats m_bvhStats;
   Bvh4Stats m_bvh4Stats;

@@ -1,6 +1,8 @@
 #include "device/tracer.h"
 
 #include "device/program.h"
+#include "render/feature_set.h"
+#include "render/renderer.h"
 
 #include <algorithm>
 #include <cmath>
@@ -12,18 +14,17 @@ namespace wt {
 Tracer::Tracer(Context& context, const Scene& scene, const BvhBuildOptions& options, int packetWidth,
                StreamPrefetch prefetch)
     : m_context(context), m_scene(std::make_unique<SceneBuffers>(context, scene, options)),
-      m_packetWidth(packetWidthFor(context.info(), packetWidth)),
+      m_packetWidth(packetWidthFor(context.info(), packetWidth, scene.triangles.size())),
       m_streamPrefetch(prefetch == StreamPrefetch::kAuto ? streamPrefetchFor(context.info(), m_scene->uploadedBytes)
                                                          : prefetch == StreamPrefetch::kOn) {
-  KernelFeatures features;
-  features.bvhStackSize = m_scene->stackSize();
-  features.packetWidth = m_packetWidth;
-  features.streamPrefetch = m_streamPrefetch;
-  features.primitives = m_scene->primitiveTypesPresent();
+  // the scene's switches (sceneFeatures), less what tracing without shading never reads
+  KernelFeatures features =
+      kernelFeaturesFor(sceneFeatures(scene, *m_scene, RenderSettings{}), context.info(), m_packetWidth);
+  features.pbr = features.transmission = features.specular = features.clearcoat = features.sheen = false;
   // the alpha test reads the surface: texture coordinates, COLOR_0 and textures
-  features.alpha = m_scene->hasAlpha();
-  features.textures = features.alpha && m_scene->hasTextures();
-  features.vertexColors = features.alpha && m_scene->hasVertexColors();
+  features.textures = features.alpha && features.textures;
+  features.vertexColors = features.alpha && features.vertexColors;
+  features.streamPrefetch = m_streamPrefetch;
   m_program = buildProgram(context, features, "trace.cl");
   m_closest = cl::Kernel(m_program, "trace_closest");
   m_occluded = cl::Kernel(m_program, "trace_occluded");

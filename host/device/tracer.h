@@ -55,7 +55,7 @@ enum class StreamPrefetch { kAuto, kOn, kOff };
 /// packets of `width` consecutive rays, of the length of their unit
 /// directions' mean. 1 when every packet's rays are parallel; about 0.33 for
 /// directions drawn uniformly from the sphere (for packets of 8); 0 for no rays.
-double packetCoherence(std::span<const Ray> rays, std::size_t width = WT_PACKET_WIDTH);
+double packetCoherence(std::span<const Ray> rays, std::size_t width = 8);
 
 class Tracer {
  public:
@@ -87,7 +87,7 @@ class Tracer {
 
   Context& m_context;
   std::unique_ptr<SceneBuffers> m_scene;
-  int m_packetWidth = WT_PACKET_WIDTH;
+  int m_packetWidth = 8;
   bool m_streamPrefetch = false;
   cl::Program m_program;
   cl::Kernel m_closest, m_occluded, m_closestPacket, m_occludedPacket, m_occludedStream;

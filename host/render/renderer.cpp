@@ -55,6 +55,7 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
   bvhOptions.builder = settings.bvhBuilder;
   bvhOptions.maxLeafSize = 0;  // leaves of up to kBvh4MaxLeafSize, chosen by the collapse
   bvhOptions.instancing = settings.instancing;
+  bvhOptions.allSurfaceAttributes = settings.generalProgram;
   m_scene = std::make_unique<SceneBuffers>(context, scene, bvhOptions);
   m_environment = settings.environmentMap.empty()
                       ? constantEnvironment(settings.background)
@@ -64,18 +65,14 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
   m_lights = buildLightList(scene, *m_scene, envLum > 0.0 ? environmentPowerEstimate(scene, envLum) : 0.0,
                             settings.lightSampler);
 
-  KernelFeatures features;
-  features.integratorMinimal = settings.integrator == Integrator::Minimal;
-  features.bvhStackSize = m_scene->stackSize();
-  m_packetWidth = packetWidthFor(context.info(), settings.packetWidth,
-                                 std::size_t(settings.width) * std::size_t(settings.height), scene.triangles.size());
-  features.packetWidth = m_packetWidth;
-  setMaterialFeatures(features, scene.materials);
-  features.primitives = m_scene->primitiveTypesPresent();
-  features.textures = m_scene->hasTextures();
-  features.vertexColors = m_scene->hasVertexColors();
-  features.alpha = m_scene->hasAlpha();
+  m_features = sceneFeatures(scene, *m_scene, settings);
+  m_kernelFeatures = settings.generalProgram ? generalKernelFeatures(m_features, context.info(), settings.packetWidth)
+                                             : kernelFeaturesFor(m_features, context.info(), settings.packetWidth);
+  m_packetWidth = m_kernelFeatures.packetWidth;
+  const KernelFeatures& features = m_kernelFeatures;
+  const auto buildStart = std::chrono::steady_clock::now();
   m_program = buildProgram(context, features);
+  m_stats.programSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - buildStart).count();
   m_generate = cl::Kernel(m_program, "generate");
   m_extend = cl::Kernel(m_program, "extend");
   m_extendPacket = cl::Kernel(m_program, "extend_packet");
@@ -225,7 +222,7 @@ void Renderer::renderSample() {
     extend.setArg(1, inSlot);
     extend.setArg(2, *queueIn);
     // stochastic transparency: numbers of their own per sample, bounce and stage
-    if (m_scene->hasAlpha())
+    if (m_kernelFeatures.alpha)
       extend.setArg(kAlphaArg, rng_alpha_key(cl_uint(sample), cl_uint(bounce), WT_DIM_ALPHA_EXTEND, m_settings.seed));
     if (packets)
       m_context.launch("extend_packet", extend, (alive + m_packetWidth - 1) / m_packetWidth);
@@ -244,7 +241,7 @@ void Renderer::renderSample() {
 
     // connect: shadow rays of this bounce (count read on the device)
     if (m_lights.sampleable) {
-      if (m_scene->hasAlpha())
+      if (m_kernelFeatures.alpha)
         (packets ? m_connectPacket : m_connect)
             .setArg(kAlphaArg, rng_alpha_key(cl_uint(sample), cl_uint(bounce), WT_DIM_ALPHA_SHADOW, m_settings.seed));
       if (packets)

@@ -5,7 +5,9 @@
 #pragma once
 
 #include "device/context.h"
+#include "device/program.h"
 #include "device/scene_buffers.h"
+#include "render/feature_set.h"
 #include "render/light_list.h"
 #include "scene/environment.h"
 #include "scene/scene.h"
@@ -57,7 +59,11 @@ struct RenderSettings {
   /// bounces, incoherent, one ray per work-item. The same hits either way
   /// (of two at exactly the same distance, another may win).
   bool packets = true;
-  int packetWidth = 0;  ///< rays per packet, 8 or 16; 0: by the device (packetWidthFor)
+  int packetWidth = 0;  ///< rays per packet, 8 or 16; 0: by the device and the scene (packetWidthFor)
+  /// Developer setting (--general-program): build every kernel switch on
+  /// (generalKernelFeatures) instead of the scene's; the same image, for the
+  /// specialised-vs-general tests and the bench.
+  bool generalProgram = false;
 #ifdef NDEBUG
   bool stopOnNonFinite = false;  ///< throw NonFiniteSampleError at the first NaN/Inf shade makes (on in debug builds)
 #else
@@ -89,6 +95,7 @@ struct RenderStats {
   std::uint64_t raysTraced = 0;       ///< extend rays (camera and bounce rays)
   std::uint64_t nonFiniteSamples = 0; ///< discarded NaN/Inf samples
   double seconds = 0.0;               ///< wall time in renderSample()
+  double programSeconds = 0.0;        ///< building (or PoCL's cache loading) the program, in the constructor
 };
 
 class Renderer {
@@ -107,12 +114,18 @@ class Renderer {
   /// The light list NEE picks from (built from the scene at construction).
   const LightList& lights() const { return m_lights; }
   const Environment& environment() const { return m_environment; }
+  /// What the scene and settings use (sceneFeatures), and the switches the
+  /// program was built with.
+  const FeatureSet& features() const { return m_features; }
+  const KernelFeatures& kernelFeatures() const { return m_kernelFeatures; }
 
  private:
   [[noreturn]] void throwNonFinite(int sample, std::uint32_t path, std::uint32_t where);
   Context& m_context;
   RenderSettings m_settings;
-  int m_packetWidth = WT_PACKET_WIDTH;  ///< rays per packet (packetWidthFor)
+  int m_packetWidth = 8;  ///< rays per packet (m_kernelFeatures.packetWidth)
+  FeatureSet m_features;
+  KernelFeatures m_kernelFeatures;
   WtCamera m_camera;
   std::unique_ptr<SceneBuffers> m_scene;
   cl::Program m_program;

@@ -18,20 +18,11 @@
 // sampling) needs textured.cl whether instances are compiled in or not.
 #include "bvh.cl"
 
-#ifndef WT_HAS_SPHERES
-#error "WT_HAS_SPHERES is not defined: build options must come from kernelDefines()"
-#endif
 #if WT_HAS_SPHERES
 #include "geometry/sphere.cl"
 #endif
-#ifndef WT_HAS_CURVES
-#error "WT_HAS_CURVES is not defined: build options must come from kernelDefines()"
-#endif
 #if WT_HAS_CURVES
 #include "geometry/curve.cl"
-#endif
-#ifndef WT_HAS_INSTANCES
-#error "WT_HAS_INSTANCES is not defined: build options must come from kernelDefines()"
 #endif
 #if WT_HAS_INSTANCES
 #include "geometry/instance.cl"

@@ -27,10 +27,6 @@
 // appears (expandKernelSource), whatever the preprocessor later keeps
 #include "materials/textured.cl"
 
-#ifndef WT_HAS_ALPHA
-#error "WT_HAS_ALPHA is not defined: build options must come from kernelDefines()"
-#endif
-
 #if WT_HAS_ALPHA
 
 /// The kernel parameters the alpha test reads, after WT_GEOMETRY_PARAMS

@@ -75,11 +75,6 @@
 #include "shared/materials.h"
 #include "shared/sheen.h"
 
-#if !defined(WT_HAS_PBR) || !defined(WT_HAS_TRANSMISSION) || !defined(WT_HAS_SPECULAR) || \
-    !defined(WT_HAS_CLEARCOAT) || !defined(WT_HAS_SHEEN)
-#error "WT_HAS_PBR / _TRANSMISSION / _SPECULAR / _CLEARCOAT / _SHEEN are not defined: build options must come from kernelDefines()"
-#endif
-
 #define WT_LOBE_DIFFUSE 1u       ///< the Lambertian base and the sheen (any cosine-sampled direction)
 #define WT_LOBE_SPECULAR 2u      ///< reflection: GGX (base and clear coat), its multiple scattering, the mirrors, the interface's reflection
 #define WT_LOBE_DELTA 4u         ///< set on a sample: the direction came from a mirror or a smooth interface

@@ -11,10 +11,6 @@
 #include "common.h"
 #include "materials/texture.cl"
 
-#if !defined(WT_HAS_TEXTURES) || !defined(WT_HAS_VERTEX_COLORS)
-#error "WT_HAS_TEXTURES / WT_HAS_VERTEX_COLORS are not defined: build options must come from kernelDefines()"
-#endif
-
 /// The per-vertex attributes and textures (SceneBuffers::bindSurface): a
 /// kernel that takes WT_SURFACE_PARAMS makes its SurfaceScene with
 /// WT_SURFACE_SCENE. Buffers a scene does not use hold one dummy entry.

@@ -99,13 +99,6 @@ typedef struct WtGeometry {
   wt_uint emitter_first[WT_PRIM_TYPES];  ///< per type: its first emitter slot (emitter_pdf_area)
 } WtGeometry;
 
-/// Rays per work-item of the packet traversal (kernels/bvh_packet.cl), one
-/// vector lane each: 8 or 16, set per device by the program build
-/// (KernelFeatures::packetWidth); 8 where nothing sets it.
-#ifndef WT_PACKET_WIDTH
-#define WT_PACKET_WIDTH 8
-#endif
-
 /// Stream traversal of any-hit queries (kernels/bvh_stream.cl): a work-item
 /// takes WT_STREAM_WINDOW consecutive rays, groups them by the octant of
 /// their direction and walks the tree once per WT_STREAM_RAYS of them (one

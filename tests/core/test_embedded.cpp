@@ -118,6 +118,9 @@ TEST(Embedded, MaterialFeaturesFollowTheMaterials) {
   EXPECT_FALSE(features({withTransmission(dense, 1.0f, 2.0f)}).specular) << "all of it is the interface, which reads ior itself";
   WtMaterial metal = withSpecular(makePbrMaterial(glm::vec3(0.5f), 1.0f, 0.5f), 0.0f);
   EXPECT_FALSE(features({metal}).specular) << "a metal has no dielectric";
+  metal.texture_mask |= 1u << WT_TEXTURE_SLOT_METALLIC_ROUGHNESS;
+  EXPECT_TRUE(features({metal}).specular) << "a metallic texture can lower metallic below 1";
+  EXPECT_TRUE(features({withTransmission(metal, 1.0f)}).transmission) << "the same for transmission";
   WtMaterial lambert = withClearcoat(withSheen(makeMaterial(glm::vec3(0.5f)), glm::vec3(1.0f), 0.5f), 1.0f, 0.5f);
   lambert.model = WT_MATERIAL_DIFFUSE;
   KernelFeatures none = features({lambert});

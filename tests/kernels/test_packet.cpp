@@ -282,23 +282,20 @@ TEST(PacketTraversalEdges, WidthByDevice) {
   EXPECT_THROW(packetWidthFor(device, 32), DeviceError);
 }
 
-TEST(PacketTraversalEdges, WidthByCameraRaysPerTriangle) {
-  // a 16-wide device gets packets of 8 when a sample's camera rays are
-  // fewer than kWidePacketRaysPerTriangle per triangle; an explicit width
-  // and a narrower device are not affected; no triangle count, no rule
+TEST(PacketTraversalEdges, WidthByTheDeviceAndTheSceneOnly) {
+  // a 16-wide device gets packets of 8 on scenes of more than
+  // kWidePacketMaxTriangles triangles, whatever the image size; an explicit
+  // width and a narrower device are not affected; no triangle count, no rule
   DeviceInfo device = test::deviceContext().info();
   device.nativeFloatWidth = 16;
-  const std::size_t megaRays = 1024 * 1024;
-  EXPECT_EQ(packetWidthFor(device, 0, megaRays, 1040409), 8);  // MetalRoughSpheres at 1024x1024
-  EXPECT_EQ(packetWidthFor(device, 0, megaRays, 15452), 16);   // DamagedHelmet
-  EXPECT_EQ(packetWidthFor(device, 0, 4 * megaRays, 1040409), 16);
-  const auto limit = std::size_t(kWidePacketRaysPerTriangle * 1000);
-  EXPECT_EQ(packetWidthFor(device, 0, limit - 1, 1000), 8);
-  EXPECT_EQ(packetWidthFor(device, 0, limit, 1000), 16);
-  EXPECT_EQ(packetWidthFor(device, 0, megaRays, 0), 16);
-  EXPECT_EQ(packetWidthFor(device, 16, megaRays, 1040409), 16);
+  EXPECT_EQ(packetWidthFor(device, 0, 1040409), 8);   // MetalRoughSpheresNoTextures
+  EXPECT_EQ(packetWidthFor(device, 0, 15452), 16);    // DamagedHelmet
+  EXPECT_EQ(packetWidthFor(device, 0, kWidePacketMaxTriangles), 16);
+  EXPECT_EQ(packetWidthFor(device, 0, kWidePacketMaxTriangles + 1), 8);
+  EXPECT_EQ(packetWidthFor(device, 0, 0), 16);
+  EXPECT_EQ(packetWidthFor(device, 16, 1040409), 16);
   device.nativeFloatWidth = 8;
-  EXPECT_EQ(packetWidthFor(device, 0, 4 * megaRays, 1000), 8);
+  EXPECT_EQ(packetWidthFor(device, 0, 1000), 8);
 }
 
 

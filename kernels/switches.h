@@ -1,0 +1,109 @@
+// Every compile-time switch the kernels read, declared once. Each comes from
+// the host (kernelDefines in host/device/program.cpp, from the scene's
+// feature set in host/render/feature_set.h); a build without one fails here,
+// naming it, so no switch can silently take a default, and one out of its
+// type's range (a boolean not 0 or 1, a packet width not 8 or 16) fails too.
+// Kernels test them with #if, so code for an absent feature is not compiled.
+#ifndef WT_SWITCHES_H
+#define WT_SWITCHES_H
+
+// A boolean switch: defined, and 0 or 1.
+#define WT_SWITCH_IS_BOOL(x) ((x) == 0 || (x) == 1)
+
+#ifndef WT_INTEGRATOR_MINIMAL
+#error "WT_INTEGRATOR_MINIMAL not set (kernelDefines)"
+#elif !WT_SWITCH_IS_BOOL(WT_INTEGRATOR_MINIMAL)
+#error "WT_INTEGRATOR_MINIMAL must be 0 or 1"
+#endif
+#ifndef WT_BVH_STACK_SIZE
+#error "WT_BVH_STACK_SIZE not set (kernelDefines)"
+#elif WT_BVH_STACK_SIZE < 32 || WT_BVH_STACK_SIZE % 32 != 0
+#error "WT_BVH_STACK_SIZE must be a positive multiple of 32"
+#endif
+#ifndef WT_PACKET_WIDTH
+#error "WT_PACKET_WIDTH not set (kernelDefines)"
+#elif WT_PACKET_WIDTH != 8 && WT_PACKET_WIDTH != 16
+#error "WT_PACKET_WIDTH must be 8 or 16"
+#endif
+#ifndef WT_STREAM_PREFETCH
+#error "WT_STREAM_PREFETCH not set (kernelDefines)"
+#elif !WT_SWITCH_IS_BOOL(WT_STREAM_PREFETCH)
+#error "WT_STREAM_PREFETCH must be 0 or 1"
+#endif
+#ifndef WT_HAS_PBR
+#error "WT_HAS_PBR not set (kernelDefines)"
+#elif !WT_SWITCH_IS_BOOL(WT_HAS_PBR)
+#error "WT_HAS_PBR must be 0 or 1"
+#endif
+#ifndef WT_HAS_TRANSMISSION
+#error "WT_HAS_TRANSMISSION not set (kernelDefines)"
+#elif !WT_SWITCH_IS_BOOL(WT_HAS_TRANSMISSION)
+#error "WT_HAS_TRANSMISSION must be 0 or 1"
+#endif
+#ifndef WT_HAS_SPECULAR
+#error "WT_HAS_SPECULAR not set (kernelDefines)"
+#elif !WT_SWITCH_IS_BOOL(WT_HAS_SPECULAR)
+#error "WT_HAS_SPECULAR must be 0 or 1"
+#endif
+#ifndef WT_HAS_CLEARCOAT
+#error "WT_HAS_CLEARCOAT not set (kernelDefines)"
+#elif !WT_SWITCH_IS_BOOL(WT_HAS_CLEARCOAT)
+#error "WT_HAS_CLEARCOAT must be 0 or 1"
+#endif
+#ifndef WT_HAS_SHEEN
+#error "WT_HAS_SHEEN not set (kernelDefines)"
+#elif !WT_SWITCH_IS_BOOL(WT_HAS_SHEEN)
+#error "WT_HAS_SHEEN must be 0 or 1"
+#endif
+#ifndef WT_HAS_TEXTURES
+#error "WT_HAS_TEXTURES not set (kernelDefines)"
+#elif !WT_SWITCH_IS_BOOL(WT_HAS_TEXTURES)
+#error "WT_HAS_TEXTURES must be 0 or 1"
+#endif
+#ifndef WT_HAS_VERTEX_COLORS
+#error "WT_HAS_VERTEX_COLORS not set (kernelDefines)"
+#elif !WT_SWITCH_IS_BOOL(WT_HAS_VERTEX_COLORS)
+#error "WT_HAS_VERTEX_COLORS must be 0 or 1"
+#endif
+#ifndef WT_HAS_ALPHA
+#error "WT_HAS_ALPHA not set (kernelDefines)"
+#elif !WT_SWITCH_IS_BOOL(WT_HAS_ALPHA)
+#error "WT_HAS_ALPHA must be 0 or 1"
+#endif
+#ifndef WT_HAS_SPHERES
+#error "WT_HAS_SPHERES not set (kernelDefines)"
+#elif !WT_SWITCH_IS_BOOL(WT_HAS_SPHERES)
+#error "WT_HAS_SPHERES must be 0 or 1"
+#endif
+#ifndef WT_HAS_CURVES
+#error "WT_HAS_CURVES not set (kernelDefines)"
+#elif !WT_SWITCH_IS_BOOL(WT_HAS_CURVES)
+#error "WT_HAS_CURVES must be 0 or 1"
+#endif
+#ifndef WT_HAS_INSTANCES
+#error "WT_HAS_INSTANCES not set (kernelDefines)"
+#elif !WT_SWITCH_IS_BOOL(WT_HAS_INSTANCES)
+#error "WT_HAS_INSTANCES must be 0 or 1"
+#endif
+
+// Not features (the image is the same either way), so they may be left out
+// and take these values: workarounds for the kernel checker, set by
+// buildProgram under Oclgrind only, and the packet leaf test's lane limit,
+// which kernel A/B runs may override (kernels/bvh_packet.cl says why 2 for 8).
+#ifndef WT_AVOID_BITREVERSE
+#define WT_AVOID_BITREVERSE 0
+#endif
+#ifndef WT_FOLD_THROUGH_MEMORY
+#define WT_FOLD_THROUGH_MEMORY 0
+#endif
+#ifndef WT_NO_PREFETCH
+#define WT_NO_PREFETCH 0
+#endif
+#ifndef WT_NO_CTZ
+#define WT_NO_CTZ 0
+#endif
+#ifndef WT_PACKET_LEAF_LANES
+#define WT_PACKET_LEAF_LANES (WT_PACKET_WIDTH == 8 ? 2 : 0)
+#endif
+
+#endif  // WT_SWITCHES_H

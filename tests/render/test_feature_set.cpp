@@ -1,0 +1,394 @@
+// The scene's feature set (host/render/feature_set.h): scenes made to hold
+// exactly one feature yield exactly that feature; the switches never depend
+// on the image size or the sample count; and the specialised program renders
+// the same image as the general one (every switch on).
+#include "output/image_io.h"
+#include "render/feature_set.h"
+#include "render/render_helpers.h"
+#include "scene/default_scene.h"
+#include "test_util.h"
+#include "texture_helpers.h"
+
+#include <gtest/gtest.h>
+
+#include <glm/gtc/matrix_transform.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <functional>
+#include <set>
+
+namespace wt {
+namespace {
+
+using Names = std::set<std::string>;
+
+/// The feature set of `scene` with `settings`, as the renderer derives it.
+Names featuresOf(const Scene& scene, const RenderSettings& settings) {
+  BvhBuildOptions options;
+  options.maxLeafSize = 0;
+  options.instancing = settings.instancing;
+  SceneBuffers buffers(test::deviceContext(), scene, options);
+  std::vector<std::string> names = featureNames(sceneFeatures(scene, buffers, settings));
+  return Names(names.begin(), names.end());
+}
+
+/// Two Lambertian triangles and nothing else: the base every case adds one feature to.
+Scene lambertFloor() { return test::makeFloor(1.0f, 0.0f, makeMaterial(glm::vec3(0.5f))); }
+Scene pbrFloor() { return test::makeFloor(1.0f, 0.0f, makePbrMaterial(glm::vec3(0.5f), 0.0f, 0.5f)); }
+
+const Names kPath = {"path_integrator", "nee", "mis", "russian_roulette", "independent_sampler"};
+Names with(Names base, std::initializer_list<const char*> more) {
+  for (const char* m : more) base.insert(m);
+  return base;
+}
+Names lambertBase() { return with(kPath, {"triangles", "lambertian"}); }
+Names pbrBase() { return with(kPath, {"triangles", "pbr"}); }
+
+struct OneFeature {
+  const char* name;
+  std::function<Scene()> scene;
+  std::function<void(RenderSettings&)> settings;
+  std::function<Names()> expected;
+};
+
+void noSettings(RenderSettings&) {}
+
+std::filesystem::path tinyEnvironmentMap() {
+  const std::filesystem::path path = std::filesystem::path(WT_TEST_BINARY_DIR) / "feature_set_env.exr";
+  Image image;
+  image.width = 4, image.height = 2;
+  image.rgb.assign(4 * 2 * 3, 0.5f);
+  image.rgbVariance.assign(image.rgb.size(), 0.0f);
+  image.samples.assign(8, 1u);
+  image.srgba.assign(8 * 4, 255);
+  writeImage(path, image);
+  return path;
+}
+
+const OneFeature kCases[] = {
+    {"triangle_only_lambertian", lambertFloor, noSettings, lambertBase},
+    {"sphere",
+     [] {
+       Scene s = lambertFloor();
+       s.spheres.push_back({glm::vec3(0.0f, 0.5f, 0.0f), 0.25f, 0});
+       return s;
+     },
+     noSettings, [] { return with(lambertBase(), {"spheres"}); }},
+    {"curve",
+     [] {
+       Scene s = lambertFloor();
+       s.curvePoints = {{0.0f, 0.1f, 0.0f, 0.02f}, {0.0f, 0.6f, 0.0f, 0.02f}};
+       s.curves.push_back({0, 2, 0, CurveBasis::kLinear});
+       return s;
+     },
+     noSettings, [] { return with(lambertBase(), {"curves"}); }},
+    {"instance",
+     [] {
+       const glm::mat4 copies[2] = {glm::mat4(1.0f), glm::translate(glm::mat4(1.0f), glm::vec3(3.0f, 0.0f, 0.0f))};
+       // 2 * 8^2 triangles: enough for a geometry to be stored once (SceneBuffers::kMinInstanceTriangles)
+       const Scene grid = makeGrid(8, glm::vec3(0.0f), 1.0f, glm::vec3(1, 0, 0), glm::vec3(0, 0, 1),
+                                   makeMaterial(glm::vec3(0.5f)));
+       return placeCopies(grid, copies);
+     },
+     [](RenderSettings& s) { s.instancing = Instancing::On; }, [] { return with(lambertBase(), {"instances"}); }},
+    {"environment_map", lambertFloor, [](RenderSettings& s) { s.environmentMap = tinyEnvironmentMap().string(); },
+     [] { return with(lambertBase(), {"environment_map"}); }},
+    {"constant_sky", lambertFloor, [](RenderSettings& s) { s.background = glm::vec3(1.0f); },
+     [] { return with(lambertBase(), {"constant_sky"}); }},
+    {"alpha_mask",
+     [] {
+       Scene s = lambertFloor();
+       s.materials[0].alpha_mode = WT_ALPHA_MASK;
+       s.materials[0].alpha = 0.25f;
+       s.materials[0].alpha_cutoff = 0.5f;
+       return s;
+     },
+     noSettings, [] { return with(lambertBase(), {"alpha_mask", "alpha_test"}); }},
+    {"alpha_blend",
+     [] {
+       Scene s = lambertFloor();
+       s.materials[0].alpha_mode = WT_ALPHA_BLEND;
+       s.materials[0].alpha = 0.5f;
+       return s;
+     },
+     noSettings, [] { return with(lambertBase(), {"alpha_blend", "alpha_test"}); }},
+    {"texture",
+     [] {
+       Scene s = lambertFloor();
+       test::setBaseColorTexture(s, 0, test::addCheckerTexture(s, 4));
+       return s;
+     },
+     noSettings, [] { return with(lambertBase(), {"textures", "texture:base_color"}); }},
+    {"normal_map",
+     [] {
+       Scene s = lambertFloor();
+       test::setMaterialTexture(s, 0, WT_TEXTURE_SLOT_NORMAL, test::addCheckerTexture(s, 4));
+       return s;
+     },
+     noSettings, [] { return with(lambertBase(), {"textures", "texture:normal", "normal_maps"}); }},
+    {"vertex_colors",
+     [] {
+       Scene s = lambertFloor();
+       s.colors.assign(s.positions.size(), glm::vec4(1.0f, 0.5f, 0.5f, 1.0f));
+       return s;
+     },
+     noSettings, [] { return with(lambertBase(), {"vertex_colors"}); }},
+    {"emissive_triangle",
+     [] {
+       Scene s = lambertFloor();
+       s.materials[0] = makeMaterial(glm::vec3(0.5f), glm::vec3(2.0f));
+       return s;
+     },
+     noSettings, [] { return with(lambertBase(), {"emissive_triangles"}); }},
+    {"emissive_sphere",
+     [] {
+       Scene s = lambertFloor();
+       s.materials.push_back(makeMaterial(glm::vec3(0.0f), glm::vec3(2.0f)));
+       s.materialNames.push_back("light");
+       s.spheres.push_back({glm::vec3(0.0f, 0.5f, 0.0f), 0.25f, 1});
+       return s;
+     },
+     noSettings, [] { return with(lambertBase(), {"spheres", "emissive_primitives"}); }},
+    {"punctual_light",
+     [] {
+       Scene s = lambertFloor();
+       PunctualLight light;
+       light.position = glm::vec3(0.0f, 1.0f, 0.0f);
+       s.lights.push_back(light);
+       return s;
+     },
+     noSettings, [] { return with(lambertBase(), {"punctual_lights"}); }},
+    {"pbr", pbrFloor, noSettings, pbrBase},
+    {"transmission",
+     [] {
+       Scene s = pbrFloor();
+       s.materials[0] = withTransmission(s.materials[0], 1.0f);
+       return s;
+     },
+     noSettings, [] { return with(pbrBase(), {"transmission"}); }},
+    {"transmission_behind_a_metallic_texture",
+     [] {
+       // metallic factor 1, but a metallic-roughness texture can lower it: the
+       // transmitting dielectric is reachable (LightsPunctualLamp's glass)
+       Scene s = pbrFloor();
+       s.materials[0] = withTransmission(makePbrMaterial(glm::vec3(0.5f), 1.0f, 0.5f), 1.0f);
+       test::setMaterialTexture(s, 0, WT_TEXTURE_SLOT_METALLIC_ROUGHNESS, test::addCheckerTexture(s, 4));
+       return s;
+     },
+     noSettings, [] { return with(pbrBase(), {"transmission", "textures", "texture:metallic_roughness"}); }},
+    {"clearcoat",
+     [] {
+       Scene s = pbrFloor();
+       s.materials[0] = withClearcoat(s.materials[0], 1.0f, 0.1f);
+       return s;
+     },
+     noSettings, [] { return with(pbrBase(), {"clearcoat"}); }},
+    {"sheen",
+     [] {
+       Scene s = pbrFloor();
+       s.materials[0] = withSheen(s.materials[0], glm::vec3(0.5f), 0.5f);
+       return s;
+     },
+     noSettings, [] { return with(pbrBase(), {"sheen"}); }},
+    {"specular",
+     [] {
+       Scene s = pbrFloor();
+       s.materials[0] = withSpecular(s.materials[0], 0.5f);
+       return s;
+     },
+     noSettings, [] { return with(pbrBase(), {"specular"}); }},
+    {"minimal_integrator", lambertFloor, [](RenderSettings& s) { s.integrator = Integrator::Minimal; },
+     [] { return Names{"triangles", "lambertian", "minimal_integrator", "independent_sampler"}; }},
+    {"no_nee", lambertFloor, [](RenderSettings& s) { s.useNee = false; },
+     [] { return Names{"triangles", "lambertian", "path_integrator", "russian_roulette", "independent_sampler"}; }},
+    {"sobol", lambertFloor, [](RenderSettings& s) { s.sobol = true; },
+     [] {
+       Names n = with(lambertBase(), {"sobol"});
+       n.erase("independent_sampler");
+       return n;
+     }},
+    {"no_diffuse_bounces", lambertFloor, [](RenderSettings& s) { s.maxDiffuseBounces = 0; },
+     [] { return with(lambertBase(), {"no_diffuse_bounces"}); }},
+};
+
+class FeatureDetection : public ::testing::TestWithParam<OneFeature> {};
+
+TEST_P(FeatureDetection, TheSceneHoldsExactlyItsFeature) {
+  const OneFeature& c = GetParam();
+  RenderSettings settings;
+  c.settings(settings);
+  const Names got = featuresOf(c.scene(), settings);
+  const Names expected = c.expected();
+  std::string gotText, expectedText;
+  for (const std::string& n : got) gotText += n + " ";
+  for (const std::string& n : expected) expectedText += n + " ";
+  EXPECT_EQ(got, expected) << c.name << ": got " << gotText << "\nexpected " << expectedText;
+}
+
+INSTANTIATE_TEST_SUITE_P(OneEach, FeatureDetection, ::testing::ValuesIn(kCases),
+                         [](const ::testing::TestParamInfo<OneFeature>& info) { return std::string(info.param.name); });
+
+TEST(FeatureSwitches, EachFeatureTurnsOnItsSwitchOnly) {
+  // the kernel switches follow the feature set: one feature, one switch
+  RenderSettings settings;
+  BvhBuildOptions options;
+  options.maxLeafSize = 0;
+  auto defines = [&](const Scene& scene, const RenderSettings& s) {
+    BvhBuildOptions o = options;
+    o.instancing = s.instancing;
+    SceneBuffers buffers(test::deviceContext(), scene, o);
+    return kernelDefines(kernelFeaturesFor(sceneFeatures(scene, buffers, s), test::deviceContext().info()));
+  };
+  const std::vector<std::string> base = defines(lambertFloor(), settings);
+  for (const std::string& d : base)
+    if (d.find("WT_HAS_") != std::string::npos) EXPECT_NE(d.back(), '1') << d << " is on for a triangle-only Lambertian scene";
+  auto changed = [&](const Scene& scene) {
+    std::vector<std::string> diff, got = defines(scene, settings);
+    for (std::size_t i = 0; i < got.size(); ++i)
+      if (got[i] != base[i]) diff.push_back(got[i]);
+    return diff;
+  };
+  Scene sphere = lambertFloor();
+  sphere.spheres.push_back({glm::vec3(0.0f, 0.5f, 0.0f), 0.25f, 0});
+  EXPECT_EQ(changed(sphere), std::vector<std::string>{"-D WT_HAS_SPHERES=1"});
+  Scene mask = lambertFloor();
+  mask.materials[0].alpha_mode = WT_ALPHA_MASK;
+  mask.materials[0].alpha = 0.25f;
+  EXPECT_EQ(changed(mask), std::vector<std::string>{"-D WT_HAS_ALPHA=1"});
+  Scene textured = lambertFloor();
+  test::setBaseColorTexture(textured, 0, test::addCheckerTexture(textured, 4));
+  EXPECT_EQ(changed(textured), std::vector<std::string>{"-D WT_HAS_TEXTURES=1"});
+  Scene coat = pbrFloor();
+  coat.materials[0] = withClearcoat(coat.materials[0], 1.0f, 0.1f);
+  EXPECT_EQ(changed(coat), (std::vector<std::string>{"-D WT_HAS_PBR=1", "-D WT_HAS_CLEARCOAT=1"}));
+}
+
+TEST(FeatureSwitches, NeverDependOnTheImageSizeOrTheSampleCount) {
+  // 20000 triangles: at 64x64 pixels a sample's camera rays are 0.2 per
+  // triangle, at 512x512 13 per triangle (a rule by rays per triangle would
+  // pick two packet widths on a 16-wide device)
+  Scene scene = makeTriangleSoup(20000, 7);
+  scene.camera = defaultCamera(scene.bounds());
+  auto defines = [&](int width, int height, int spp) {
+    RenderSettings settings;
+    settings.width = width, settings.height = height, settings.samplesPerPixel = spp;
+    Renderer renderer(test::deviceContext(), scene, settings);
+    return kernelDefines(renderer.kernelFeatures());
+  };
+  const std::vector<std::string> small = defines(64, 64, 1);
+  EXPECT_EQ(defines(512, 512, 1), small) << "the image size changed the build options";
+  EXPECT_EQ(defines(64, 64, 1024), small) << "the sample count changed the build options";
+  EXPECT_EQ(defines(640, 32, 7), small);
+}
+
+
+// specialised vs general program
+
+/// Render `loaded` at a small size with its own feature set's program and
+/// with the general program (every switch on), same seed, and compare.
+/// The random numbers are a pure function of pixel, sample, bounce and
+/// dimension, and a switch only compiles out code a scene cannot reach, so
+/// the two programs do the same arithmetic, up to the compiler's choices.
+void expectSpecialisedEqualsGeneral(const SceneFile& loaded, const std::string& name) {
+  RenderSettings settings;
+  settings.width = 40, settings.height = 30;
+  settings.maxBounces = 6;
+  settings.seed = 11;
+  if (const auto& env = loaded.settings.environment) {
+    if (env->color) settings.background = *env->color;
+    else settings.environmentMap = env->map, settings.environmentIntensity = env->intensity;
+  }
+  const int spp = 4;
+  auto renderWith = [&](bool general, KernelFeatures* used) {
+    RenderSettings s = settings;
+    s.generalProgram = general;
+    Renderer renderer(test::deviceContext(), loaded.scene, s);
+    *used = renderer.kernelFeatures();
+    for (int i = 0; i < spp; ++i) renderer.renderSample();
+    return renderer.readImage();
+  };
+  KernelFeatures specialisedSwitches, generalSwitches;
+  const Image specialised = renderWith(false, &specialisedSwitches);
+  const Image general = renderWith(true, &generalSwitches);
+  EXPECT_TRUE(generalSwitches.pbr && generalSwitches.textures && generalSwitches.alpha &&
+              generalSwitches.primitives[WT_PRIM_SPHERE] && generalSwitches.primitives[WT_PRIM_INSTANCE])
+      << "the general program is not every switch on";
+  ASSERT_EQ(specialised.rgb.size(), general.rgb.size());
+  // Bitwise where possible; PoCL's compiler may order the same float
+  // operations differently once more code is compiled in (a last-bit
+  // difference), and such a difference can flip a later decision of one
+  // sample (roulette, which of two equally distant hits), which moves that
+  // pixel's mean by up to one sample's value over spp. So: every channel
+  // within rounding (relative 1e-4) except at most 1% of them, and the
+  // image means within 4 standard errors of their difference (the per-pixel
+  // variances; the two renders are not independent, so this is generous).
+  std::size_t bitwise = 0, beyondRounding = 0, first = specialised.rgb.size();
+  double sumDifference = 0.0, varianceOfSum = 0.0, maxRelative = 0.0;
+  for (std::size_t i = 0; i < specialised.rgb.size(); ++i) {
+    const float a = specialised.rgb[i], b = general.rgb[i];
+    if (std::memcmp(&a, &b, sizeof(float)) != 0) ++bitwise;
+    const double relative = std::fabs(double(a) - double(b)) / std::max(1e-6, std::fabs(double(a)));
+    maxRelative = std::max(maxRelative, relative);
+    if (relative > 1e-4) {
+      ++beyondRounding;
+      first = std::min(first, i);
+    }
+    sumDifference += double(a) - double(b);
+    const std::uint32_t n = std::max<std::uint32_t>(1, specialised.samples[i / 3]);
+    varianceOfSum += (double(specialised.rgbVariance[i]) + double(general.rgbVariance[i])) / n;
+  }
+  ASSERT_TRUE(std::isfinite(sumDifference));
+  EXPECT_LE(beyondRounding, specialised.rgb.size() / 100)
+      << name << ": " << beyondRounding << " of " << specialised.rgb.size()
+      << " channel values differ beyond rounding between the specialised and the general program; first at pixel "
+      << first / 3 << " (" << (first < specialised.rgb.size() ? specialised.rgb[first] : 0.0f) << " vs "
+      << (first < general.rgb.size() ? general.rgb[first] : 0.0f) << ")";
+  EXPECT_LE(std::fabs(sumDifference), 4.0 * std::sqrt(varianceOfSum) + 1e-9)
+      << name << ": the image means differ by more than the noise allows";
+  std::printf("%s: %zu of %zu channel values not bitwise equal, %zu beyond relative 1e-4, max relative %.3g\n",
+              name.c_str(), bitwise, specialised.rgb.size(), beyondRounding, maxRelative);
+}
+
+class SpecialisedProgram : public ::testing::TestWithParam<const char*> {};
+
+TEST_P(SpecialisedProgram, RendersTheSameImageAsTheGeneralProgram) {
+  const std::string path = std::string(WT_SOURCE_DIR) + "/scenes/" + GetParam();
+  expectSpecialisedEqualsGeneral(loadSceneAny(path), GetParam());
+}
+
+INSTANTIATE_TEST_SUITE_P(ExampleScenes, SpecialisedProgram,
+                         ::testing::Values("cornell.gltf", "cornell_small_light.gltf", "corridor.gltf",
+                                           "glass_tube.json", "hair.json", "mixed.json", "spheres.json"),
+                         [](const ::testing::TestParamInfo<const char*>& info) {
+                           std::string n = info.param;
+                           std::replace(n.begin(), n.end(), '.', '_');
+                           return n;
+                         });
+
+class SpecialisedProgramAssets : public ::testing::TestWithParam<const char*> {};
+
+TEST_P(SpecialisedProgramAssets, RendersTheSameImageAsTheGeneralProgram) {
+  WT_REQUIRE_ASSET(path, GetParam());
+  expectSpecialisedEqualsGeneral(loadSceneAny(path.string()), GetParam());
+}
+
+INSTANTIATE_TEST_SUITE_P(SharedGltf, SpecialisedProgramAssets,
+                         ::testing::Values("gltf/DamagedHelmet/glTF/DamagedHelmet.gltf",
+                                           "gltf/AlphaBlendModeTest/glTF/AlphaBlendModeTest.gltf",
+                                           "gltf/ClearCoatTest/glTF/ClearCoatTest.gltf",
+                                           "gltf/TransmissionTest/glTF/TransmissionTest.gltf",
+                                           "gltf/BoxVertexColors/glTF/BoxVertexColors.gltf",
+                                           "gltf/LightsPunctualLamp/glTF/LightsPunctualLamp.gltf",
+                                           "cornell/saschawillems_CornellBox-Original/CornellBox-Original.gltf"),
+                         [](const ::testing::TestParamInfo<const char*>& info) {
+                           std::string n = std::filesystem::path(info.param).stem().string();
+                           std::replace(n.begin(), n.end(), '-', '_');
+                           return n;
+                         });
+
+}  // namespace
+}  // namespace wt
