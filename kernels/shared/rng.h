@@ -12,6 +12,7 @@
 #ifndef WT_SHARED_RNG_H
 #define WT_SHARED_RNG_H
 
+#include "shared/dims.h"
 #include "shared/types.h"
 
 #ifdef __OPENCL_C_VERSION__
@@ -36,9 +37,8 @@ WT_INLINE float rng_uniform(wt_uint pixel, wt_uint sample, wt_uint bounce, wt_ui
 
 /// Stochastic transparency's numbers (kernels/materials/alpha.cl): a key per
 /// launch (the host computes it: sample, bounce, stage dimension, seed), a
-/// stream per ray of the launch, and one uniform per triangle the ray meets.
-#define WT_DIM_ALPHA_EXTEND 10u
-#define WT_DIM_ALPHA_SHADOW 11u
+/// stream per ray of the launch, and one uniform per triangle the ray meets
+/// (the stage dimensions: WT_DIM_ALPHA_EXTEND and WT_DIM_ALPHA_SHADOW, shared/dims.h).
 WT_INLINE wt_uint rng_alpha_key(wt_uint sample, wt_uint bounce, wt_uint dim, wt_uint seed) {
   return rng_hash(seed ^ rng_hash(sample ^ rng_hash((bounce << 8u) + dim)));
 }
