@@ -2,13 +2,11 @@
 // dimension, seed), so the image never depends on scheduling or device
 // count. Shared by host (tests) and kernels.
 //
-// Dimension allocation: bounce 0, dims 0-1: pixel jitter. Every bounce:
-// dims 2-3: BSDF direction; 4-5: point on the light; 6: light selection;
-// 7: Russian roulette; 8: BSDF lobe; 9: light tree descent. Pairs (2k, 2k+1) are stratified
-// together by the Sobol sampler. Later features take the next free dimensions.
-// Stochastic transparency (kernels/materials/alpha.cl) keys its numbers by
-// dimension 10 (extend) and 11 (shadow rays): one per (ray, triangle), which
-// the sampler's fixed dimensions cannot give.
+// Dimensions are named in shared/dims.h (WT_DIM_*), one per use; a new use
+// takes the next free one there. Stochastic transparency
+// (kernels/materials/alpha.cl) keys its numbers by WT_DIM_ALPHA_EXTEND and
+// WT_DIM_ALPHA_SHADOW: one per (ray, triangle), which the sampler's fixed
+// dimensions cannot give.
 #ifndef WT_SHARED_RNG_H
 #define WT_SHARED_RNG_H
 
