@@ -1,4 +1,4 @@
-// The device's side of the layout test (tests/kernels/test_layout.cpp): the
+// The device's side of the layout test (tests/contract/test_layout.cpp): the
 // size of every shared struct and the offset of each of its fields, in the
 // order of WT_SHARED_LAYOUT.
 #include "common.h"

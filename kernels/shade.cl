@@ -51,8 +51,10 @@ WT_KERNEL void shade(WtFrameParams frame, WtEnvironment environment, __global co
   // Without WT_FLAG_COMPACT_SHADOWS entry i of the shadow queue is this
   // item's shadow ray, if it makes one: no atomic counter, whose increments
   // from the two threads contended (docs/performance.md, "Queue atomics").
+  // Without WT_FLAG_SHADOW_QUEUE the host runs no connect stage and the
+  // shadow buffers hold one entry: nothing may be written there.
   const bool compact_shadows = (frame.flags & WT_FLAG_COMPACT_SHADOWS) != 0u;
-  if (!compact_shadows) shadow_queue[i] = WT_NO_HIT;
+  if (!compact_shadows && (frame.flags & WT_FLAG_SHADOW_QUEUE)) shadow_queue[i] = WT_NO_HIT;
   uint path = queue_in[i];
   float4 hit = hits[path];
   uint prim = as_uint(hit.w);

@@ -2,7 +2,7 @@
 // sample, bounce, dimension, seed), and each use has its own dimension here,
 // for host and kernels alike. The Sobol sampler stratifies pairs (2k, 2k+1)
 // together (shared/sampler.h), so the two halves of a 2D sample share a pair.
-// tests/kernels/test_sampler_dims.cpp checks that the values are distinct and
+// tests/contract/test_sampler_dims.cpp checks that the values are distinct and
 // that no kernel passes a literal dimension.
 #ifndef WT_SHARED_DIMS_H
 #define WT_SHARED_DIMS_H

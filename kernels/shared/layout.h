@@ -1,6 +1,6 @@
 // Every struct host and kernels share (kernels/shared/*.h), field by field,
 // as an X-macro: S(type) opens a struct, F(type, field) names a field. The
-// layout test (tests/kernels/test_layout.cpp, kernels/layout_tests.cl)
+// layout test (tests/contract/test_layout.cpp, kernels/layout_tests.cl)
 // compares sizeof and offsetof of each on both compilers, and checks that
 // this list names every field the headers declare.
 #ifndef WT_SHARED_LAYOUT_H
