@@ -63,7 +63,7 @@ constexpr std::array<KernelParam, N> paramsIf(ParamIf when, std::array<KernelPar
   return list;
 }
 
-/// WT_GEOMETRY_PARAMS (kernels/geometry/geometry.cl).
+/// WT_GEOMETRY_PARAMS (kernels/geometry/geometry.cl): the same names in the same order.
 inline constexpr auto kGeometryParams = params("geometry", "prim_nodes", "prim_refs", "prim_data", "prim_info");
 /// WT_SURFACE_PARAMS (kernels/materials/textured.cl).
 inline constexpr auto kSurfaceParams = params("vertex_uv", "vertex_color", "vertex_tangent", "material_textures",

@@ -49,14 +49,16 @@ struct PathState {
   cl::Buffer throughput;      ///< float4: xyz throughput, w the last BSDF pdf
   cl::Buffer radiance;        ///< float4: this sample's radiance so far
   cl::Buffer bounceCounts;    ///< ushort4: diffuse, specular, transmission bounces
-  cl::Buffer raySkip;         ///< uint: the triangle the next ray leaves
+  cl::Buffer raySkip;         ///< uint: the triangle the next ray leaves (never hit)
   cl::Buffer prevNormal;      ///< float4: the last vertex's normal for the light tree's pmf
-  cl::Buffer hitInstance;     ///< uint: the instance of the last hit
-  cl::Buffer rayCone;         ///< float2: footprint spread, cone angle
+  /// uint: the instance of the last hit (WT_NO_HIT: none), written by
+  /// extend; the path's next rays leave (ray_skip or shadow_skip.x, this instance)
+  cl::Buffer hitInstance;
+  cl::Buffer rayCone;         ///< float2: footprint spread so far, cone angle of the ray (materials/textured.cl)
   cl::Buffer queueA, queueB;  ///< uint: the paths of a bounce, in and out by turns
   cl::Buffer shadowQueue;     ///< uint: the shadow rays of a bounce
   cl::Buffer shadowO, shadowD, shadowRadiance;  ///< float4: the shadow ray and what it carries if unblocked
-  cl::Buffer shadowSkip;      ///< uint2: the triangle it leaves, the emitter it aims at
+  cl::Buffer shadowSkip;      ///< uint2: the triangle it leaves, the emitter it aims at (neither hit)
   cl::Buffer state;           ///< float4[4]: accumulation state (accumulate.cl)
   cl::Buffer mean, m2;        ///< float4: resolved mean and second moment
   cl::Buffer sampleCount;     ///< uint: samples folded in

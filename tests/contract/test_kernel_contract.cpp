@@ -4,6 +4,7 @@
 // and that a swapped, missing or unset argument is an error naming both.
 #include "device/kernel_args.h"
 #include "device/program.h"
+#include "device/trace_params.h"
 #include "device_fixture.h"
 #include "render/path_state.h"
 #include "render/stage_params.h"
@@ -60,6 +61,12 @@ TEST(KernelContract, RenderStagesMatchTheirHostDeclarations) {
   for (bool alpha : {false, true})
     expectAll<stage::Generate, stage::Extend, stage::ExtendPacket, stage::Shade, stage::Connect,
               stage::ConnectPacket, stage::Accumulate, stage::Resolve, stage::Tonemap>(alpha);
+}
+
+TEST(KernelContract, TraceKernelsMatchTheirHostDeclarations) {
+  for (bool alpha : {false, true})
+    expectAll<trace::Closest, trace::ClosestPacket, trace::Occluded, trace::OccludedPacket, trace::OccludedStream>(
+        alpha);
 }
 
 // what the checks must catch: a declaration that swaps, drops or leaves an argument unset
