@@ -113,6 +113,8 @@ class Renderer {
   /// The light list NEE picks from (built from the scene at construction).
   const LightList& lights() const { return m_lights; }
   const Environment& environment() const { return m_environment; }
+  /// Bytes of the per-pixel buffers (PathState) on the device.
+  std::size_t pathStateBytes() const { return m_path.bytes; }
 
  private:
   [[noreturn]] void throwNonFinite(int sample, std::uint32_t path, std::uint32_t where);

@@ -14,6 +14,7 @@
 #include <cstring>
 #include <filesystem>
 #include <string>
+#include <utility>
 
 namespace wt {
 namespace {
@@ -80,6 +81,39 @@ TEST(StageSkipping, CornellBoxWithEveryIntegratorSwitch) {
     p.packets = false;
     expectSkippingChangesNothing(scene, p);
   }
+}
+
+/// Launches of `stage` while rendering `settings`' samples of `scene`, and
+/// the bytes of its per-pixel buffers.
+std::pair<std::size_t, std::size_t> launchesAndBytes(const Scene& scene, const RenderSettings& settings,
+                                                     const std::string& stage) {
+  Context& ctx = test::deviceContext();
+  ctx.finish();
+  ctx.resetStageTimes();
+  Renderer renderer(ctx, scene, settings);
+  for (int s = 0; s < settings.samplesPerPixel; ++s) renderer.renderSample();
+  ctx.finish();
+  const auto& launches = ctx.stageTimes().launches;
+  return {launches.count(stage) ? launches.at(stage) : 0u, renderer.pathStateBytes()};
+}
+
+TEST(StageSkipping, NoConnectStageOrShadowBuffersWithoutLightSampling) {
+  const Scene scene = loadDefaultScene();
+  RenderSettings s = smallSettings();
+  s.packets = false;  // every bounce's shadow rays through `connect`
+  s.maxBounces = 3;
+  const auto [withNee, bytesWithNee] = launchesAndBytes(scene, s, "connect");
+  // one launch per bounce that can make shadow rays: all but the last
+  EXPECT_EQ(withNee, std::size_t(s.samplesPerPixel * s.maxBounces));
+  s.useNee = false;
+  const auto [withoutNee, bytesWithoutNee] = launchesAndBytes(scene, s, "connect");
+  EXPECT_EQ(withoutNee, 0u);
+  std::size_t shadowBytesPerPixel = 0;
+  for (const PathBufferDesc& b : PathState::kBuffers)
+    if (b.need == PathNeed::Shadows) shadowBytesPerPixel += b.elementBytes;
+  const std::size_t pixels = std::size_t(s.width) * std::size_t(s.height);
+  // each shadow buffer shrinks to one element
+  EXPECT_EQ(bytesWithNee - bytesWithoutNee, shadowBytesPerPixel * (pixels - 1));
 }
 
 TEST(StageSkipping, ExampleSceneFiles) {
