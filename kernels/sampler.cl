@@ -4,6 +4,7 @@
 #define WT_SAMPLER_CL
 
 #include "common.h"
+#include "shared/dims.h"
 #include "shared/sampler.h"
 
 inline float sampler_get(WtFrameParams frame, uint pixel, uint dim) {

@@ -51,8 +51,10 @@ WT_KERNEL void shade(WtFrameParams frame, WtEnvironment environment, __global co
   // Without WT_FLAG_COMPACT_SHADOWS entry i of the shadow queue is this
   // item's shadow ray, if it makes one: no atomic counter, whose increments
   // from the two threads contended (docs/lab/2026-12-02-performance-log.md, "Queue atomics").
+  // Without WT_FLAG_SHADOW_QUEUE the host runs no connect stage and the
+  // shadow buffers hold one entry: nothing may be written there.
   const bool compact_shadows = (frame.flags & WT_FLAG_COMPACT_SHADOWS) != 0u;
-  if (!compact_shadows) shadow_queue[i] = WT_NO_HIT;
+  if (!compact_shadows && (frame.flags & WT_FLAG_SHADOW_QUEUE)) shadow_queue[i] = WT_NO_HIT;
   uint path = queue_in[i];
   float4 hit = hits[path];
   uint prim = as_uint(hit.w);
@@ -186,7 +188,7 @@ WT_KERNEL void shade(WtFrameParams frame, WtEnvironment environment, __global co
   uint nee_count = WT_INTEGRATOR_MINIMAL ? frame.analytic_count
                                          : ((frame.flags & WT_FLAG_NEE) ? frame.light_count : 0u);
   if (nee_count > 0u) {
-    float u_pick = sampler_get(frame, path, 6u);
+    float u_pick = sampler_get(frame, path, WT_DIM_LIGHT_PICK);
     float pmf;
     uint index;
     if (WT_INTEGRATOR_MINIMAL) {
@@ -197,13 +199,14 @@ WT_KERNEL void shade(WtFrameParams frame, WtEnvironment environment, __global co
       // the light tree entry: an emitter by its importance here
       if (ls.lights[index].type == WT_LIGHT_TREE) {
         float pmf_tree;
-        index = light_tree_pick(light_tree, origin, tree_normal, sampler_get(frame, path, 9u), &pmf_tree);
+        index = light_tree_pick(light_tree, origin, tree_normal, sampler_get(frame, path, WT_DIM_LIGHT_TREE),
+                                &pmf_tree);
         pmf *= pmf_tree;
       }
     }
     LightSample s;
-    float u1 = sampler_get(frame, path, 4u);
-    float u2 = sampler_get(frame, path, 5u);
+    float u1 = sampler_get(frame, path, WT_DIM_LIGHT_U);
+    float u2 = sampler_get(frame, path, WT_DIM_LIGHT_V);
     float3 f_cos = (float3)(0.0f);
     float pdf_bsdf = 0.0f;
     if (pmf > 0.0f && light_sample(ls, index, p, u1, u2, &s) && (dot(ng, s.wi) > 0.0f || through)) {
@@ -247,8 +250,8 @@ WT_KERNEL void shade(WtFrameParams frame, WtEnvironment environment, __global co
 
   // the next direction from the BSDF; one below the geometric surface is absorbed
   BsdfSample bs;
-  if (!bsdf_sample(bsdf, wo_local, lobes, sampler_get(frame, path, 8u), sampler_get(frame, path, 2u),
-                   sampler_get(frame, path, 3u), &bs))
+  if (!bsdf_sample(bsdf, wo_local, lobes, sampler_get(frame, path, WT_DIM_BSDF_LOBE),
+                   sampler_get(frame, path, WT_DIM_BSDF_U), sampler_get(frame, path, WT_DIM_BSDF_V), &bs))
     return;
   float3 wi = bs.wi.x * frame_t + bs.wi.y * frame_b + bs.wi.z * ns;
   bool crossed = (bs.lobe & WT_LOBE_TRANSMISSION) != 0u;
@@ -261,7 +264,7 @@ WT_KERNEL void shade(WtFrameParams frame, WtEnvironment environment, __global co
   // Russian roulette: survive with probability from the throughput, reweight
   if (!WT_INTEGRATOR_MINIMAL && (frame.flags & WT_FLAG_RR) && frame.bounce >= frame.rr_min_depth) {
     float q = fmin(fmax(beta.x, fmax(beta.y, beta.z)), 0.95f);
-    if (sampler_get(frame, path, 7u) >= q) return;
+    if (sampler_get(frame, path, WT_DIM_RUSSIAN_ROULETTE) >= q) return;
     beta /= q;
   }
   shade_check_finite(frame, counters, path, beta, WT_NONFINITE_THROUGHPUT);

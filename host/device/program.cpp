@@ -158,7 +158,8 @@ int packetWidthFor(const DeviceInfo& device, int requested, std::size_t triangle
 
 cl::Program buildProgram(Context& context, const KernelFeatures& features, const std::string& root) {
   std::string source = expandKernelSource(root);
-  std::string options = "-cl-std=CL1.2";
+  // argument names let KernelBinding check each kernel against its host declaration at start-up
+  std::string options = "-cl-std=CL1.2 -cl-kernel-arg-info";
   for (const std::string& d : kernelDefines(features)) options += " " + d;
   // Oclgrind (the kernel checker) lacks the llvm.bitreverse, llvm.prefetch
   // and llvm.cttz intrinsics (tests/oclgrind/prefetch.cl, ctz.cl), and loses

@@ -426,14 +426,6 @@ void SceneBuffers::uploadAlpha(Context& context, const Scene& scene) {
   alphaMaterials = upload(context, rows, m_attributeBytes);
 }
 
-void SceneBuffers::bindAlpha(cl::Kernel& kernel, int first, std::uint32_t key) const {
-  kernel.setArg(first, cl_uint(key));
-  kernel.setArg(first + 1, alphaBits);
-  kernel.setArg(first + 2, triangleInfo);
-  kernel.setArg(first + 3, alphaMaterials);
-  bindSurface(kernel, first + 4);
-}
-
 void SceneBuffers::uploadSurface(Context& context, const Scene& scene) {
   m_hasTextures = !scene.materialTextures.empty() &&
                   std::any_of(scene.materials.begin(), scene.materials.end(),
@@ -469,11 +461,6 @@ void SceneBuffers::uploadSurface(Context& context, const Scene& scene) {
   texels = upload(context, m_hasTextures ? scene.textures.texels : std::vector<wt_uint>{}, bytes);
   textureBytes = m_hasTextures ? bytes : 0;
   textureUploadSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
-
-void SceneBuffers::bindSurface(cl::Kernel& kernel, int first) const {
-  for (const cl::Buffer* b : {&vertexUv, &vertexColor, &vertexTangent, &materialTextures, &textures, &textureLevels, &texels})
-    kernel.setArg(first++, *b);
 }
 
 PrimitiveTree buildPrimitiveTree(const PrimitiveRows& rows, const BvhBuildOptions& options) {
@@ -517,14 +504,6 @@ void SceneBuffers::uploadPrimitives(Context& context, const Scene& scene, const 
   primRefs = upload(context, tree.refs, primitiveBytes);
   primData = upload(context, rows.data, primitiveBytes);
   primInfo = upload(context, rows.info, primitiveBytes);
-}
-
-void SceneBuffers::bindGeometry(cl::Kernel& kernel, int first) const {
-  kernel.setArg(first, geometry);
-  kernel.setArg(first + 1, primNodes);
-  kernel.setArg(first + 2, primRefs);
-  kernel.setArg(first + 3, primData);
-  kernel.setArg(first + 4, primInfo);
 }
 
 std::uint32_t SceneBuffers::sceneTriangle(std::uint32_t leafIndex, std::uint32_t instance) const {

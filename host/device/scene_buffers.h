@@ -96,8 +96,6 @@ class SceneBuffers {
   cl::Buffer vertexUv, vertexColor, vertexTangent, materialTextures, textures, textureLevels, texels;
   std::size_t textureBytes = 0;  ///< textures, levels and texels on the device
   double textureUploadSeconds = 0.0;
-  /// Set the kernel's WT_SURFACE_PARAMS, arguments first .. first + 6.
-  void bindSurface(cl::Kernel& kernel, int first) const;
   /// Whether a material reads a texture / the vertices have COLOR_0 (KernelFeatures).
   bool hasTextures() const { return m_hasTextures; }
   bool hasVertexColors() const { return m_hasVertexColors; }
@@ -117,11 +115,6 @@ class SceneBuffers {
   std::size_t alphaTriangles() const { return m_alphaTriangles; }
   /// Whether the alpha test is needed at all (KernelFeatures::alpha).
   bool hasAlpha() const { return m_alphaTriangles > 0; }
-  /// Set the kernel's WT_ALPHA_PARAMS, arguments first .. first + 10: the
-  /// launch's key for stochastic transparency (rng_alpha_key, set again per
-  /// launch where it changes), alphaBits, triangleInfo, alphaMaterials and
-  /// the surface (bindSurface). Only kernels built with WT_HAS_ALPHA have them.
-  void bindAlpha(cl::Kernel& kernel, int first, std::uint32_t key = 0) const;
   std::uint32_t nodeCount = 0;
   std::size_t uploadedBytes = 0;  ///< nodes + triangle data (tri_verts, tri_info)
 
@@ -131,8 +124,6 @@ class SceneBuffers {
   cl::Buffer primNodes, primRefs, primData, primInfo;
   WtGeometry geometry{};
   std::size_t primitiveBytes = 0;  ///< primNodes + primRefs + primData + primInfo
-  /// Set the kernel's WT_GEOMETRY_PARAMS, arguments first .. first + 4.
-  void bindGeometry(cl::Kernel& kernel, int first) const;
   /// Primitives of `type` (WT_PRIM_*) the scene has, left out or not.
   std::size_t primitiveCount(std::uint32_t type) const { return m_primitiveCount[type]; }
   /// Which types beside triangles the scene has (KernelFeatures::primitives).

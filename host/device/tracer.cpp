@@ -1,6 +1,7 @@
 #include "device/tracer.h"
 
 #include "device/program.h"
+#include "device/scene_args.h"
 #include "render/feature_set.h"
 #include "render/renderer.h"
 
@@ -26,11 +27,13 @@ Tracer::Tracer(Context& context, const Scene& scene, const BvhBuildOptions& opti
   features.vertexColors = features.alpha && features.vertexColors;
   features.streamPrefetch = m_streamPrefetch;
   m_program = buildProgram(context, features, "trace.cl");
-  m_closest = cl::Kernel(m_program, "trace_closest");
-  m_occluded = cl::Kernel(m_program, "trace_occluded");
-  m_closestPacket = cl::Kernel(m_program, "trace_closest_packet");
-  m_occludedPacket = cl::Kernel(m_program, "trace_occluded_packet");
-  m_occludedStream = cl::Kernel(m_program, "trace_occluded_stream");
+  m_alpha = features.alpha;
+  const ParamFeatures built{features.alpha};
+  m_closest = {m_program, built};
+  m_occluded = {m_program, built};
+  m_closestPacket = {m_program, built};
+  m_occludedPacket = {m_program, built};
+  m_occludedStream = {m_program, built};
 }
 
 Tracer::~Tracer() = default;
@@ -88,19 +91,24 @@ void Tracer::uploadRays(std::span<const Ray> rays) {
   }
 }
 
-void Tracer::run(cl::Kernel& kernel, const char* name, std::size_t rays, Traversal traversal) {
-  int a = 0;
-  kernel.setArg(a++, cl_uint(rays));
-  kernel.setArg(a++, m_rayO);
-  kernel.setArg(a++, m_rayD);
-  kernel.setArg(a++, m_scene->nodes);
-  kernel.setArg(a++, m_scene->nodeCount);
-  kernel.setArg(a++, m_scene->triVerts);
-  kernel.setArg(a++, m_out);
-  kernel.setArg(a++, m_skip);
-  kernel.setArg(a++, m_instances);
-  m_scene->bindGeometry(kernel, a);
-  if (m_scene->hasAlpha()) m_scene->bindAlpha(kernel, a + 5, m_alphaKey);
+template <class Decl>
+void Tracer::run(KernelArgs<Decl>& kernel, std::size_t rays, Traversal traversal) {
+  const char* name = Decl::kName.data();
+  kernel.set("count", cl_uint(rays))
+      .set("ray_o", m_rayO)
+      .set("ray_d", m_rayD)
+      .set("nodes", m_scene->nodes)
+      .set("node_count", m_scene->nodeCount)
+      .set("tri_verts", m_scene->triVerts)
+      .set("skip", m_skip)
+      .set("instances", m_instances);
+  if constexpr (findParam(Decl::kParams, "hits").has_value())
+    kernel.set("hits", m_out);
+  else
+    kernel.set("occluded", m_out);
+  bindGeometry(kernel, *m_scene);
+  if (m_alpha) bindAlpha(kernel, *m_scene, m_alphaKey);
+  kernel.requireBound();
   const std::size_t kPacket = std::size_t(m_packetWidth);
   std::size_t items = rays, localSize = Context::kLocalSize;
   if (traversal == Traversal::kPacket) {
@@ -111,7 +119,7 @@ void Tracer::run(cl::Kernel& kernel, const char* name, std::size_t rays, Travers
     localSize = Context::kStreamLocalSize;
   }
   m_context.resetStageTimes();
-  m_context.launch(name, kernel, items, localSize);
+  m_context.launch(name, kernel.kernel(), items, localSize);
   m_context.finish();
   m_lastKernelSeconds =
       m_context.stageTimes().seconds.count(name) ? m_context.stageTimes().seconds.at(name) : 0.0;
@@ -120,9 +128,9 @@ void Tracer::run(cl::Kernel& kernel, const char* name, std::size_t rays, Travers
 std::vector<RayHit> Tracer::traceClosest(std::span<const Ray> rays, Traversal traversal) {
   uploadRays(rays);
   if (traversal == Traversal::kPacket)
-    run(m_closestPacket, "trace_closest_packet", rays.size(), traversal);
+    run(m_closestPacket, rays.size(), traversal);
   else
-    run(m_closest, "trace_closest", rays.size(), Traversal::kSingle);  // kStream: any hit only
+    run(m_closest, rays.size(), Traversal::kSingle);  // kStream: any hit only
   std::vector<float> raw(4 * rays.size());
   if (!rays.empty())
     m_context.queue().enqueueReadBuffer(m_out, CL_TRUE, 0, raw.size() * 4, raw.data());
@@ -150,11 +158,11 @@ std::vector<RayHit> Tracer::traceClosest(std::span<const Ray> rays, Traversal tr
 std::vector<std::uint8_t> Tracer::traceOccluded(std::span<const Ray> rays, Traversal traversal) {
   uploadRays(rays);
   if (traversal == Traversal::kPacket)
-    run(m_occludedPacket, "trace_occluded_packet", rays.size(), traversal);
+    run(m_occludedPacket, rays.size(), traversal);
   else if (traversal == Traversal::kStream)
-    run(m_occludedStream, "trace_occluded_stream", rays.size(), traversal);
+    run(m_occludedStream, rays.size(), traversal);
   else
-    run(m_occluded, "trace_occluded", rays.size(), traversal);
+    run(m_occluded, rays.size(), traversal);
   std::vector<cl_uint> raw(rays.size());
   if (!rays.empty())
     m_context.queue().enqueueReadBuffer(m_out, CL_TRUE, 0, raw.size() * 4, raw.data());

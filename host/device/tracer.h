@@ -4,6 +4,7 @@
 
 #include "device/context.h"
 #include "device/scene_buffers.h"
+#include "device/trace_params.h"
 #include "scene/scene.h"
 
 #include <glm/glm.hpp>
@@ -83,14 +84,20 @@ class Tracer {
  private:
   void uploadRays(std::span<const Ray> rays);
   /// Runs one of the five kernels over the uploaded rays; returns its kernel seconds.
-  void run(cl::Kernel& kernel, const char* name, std::size_t rays, Traversal traversal);
+  template <class Decl>
+  void run(KernelArgs<Decl>& kernel, std::size_t rays, Traversal traversal);
 
   Context& m_context;
   std::unique_ptr<SceneBuffers> m_scene;
   int m_packetWidth = 8;
   bool m_streamPrefetch = false;
+  bool m_alpha = false;  ///< the program has the alpha test (its kernels take WT_ALPHA_PARAMS)
   cl::Program m_program;
-  cl::Kernel m_closest, m_occluded, m_closestPacket, m_occludedPacket, m_occludedStream;
+  KernelArgs<trace::Closest> m_closest;
+  KernelArgs<trace::Occluded> m_occluded;
+  KernelArgs<trace::ClosestPacket> m_closestPacket;
+  KernelArgs<trace::OccludedPacket> m_occludedPacket;
+  KernelArgs<trace::OccludedStream> m_occludedStream;
   cl::Buffer m_rayO, m_rayD, m_skip, m_out;
   cl::Buffer m_instances;  ///< per ray: in, the instance of the surface it leaves; out, the instance hit
   std::size_t m_capacity = 0;

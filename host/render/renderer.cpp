@@ -1,6 +1,7 @@
 #include "render/renderer.h"
 
 #include "device/program.h"
+#include "device/scene_args.h"
 #include "render/material_tables.h"
 #include "shared/rng.h"
 
@@ -11,10 +12,6 @@
 
 namespace wt {
 namespace {
-
-/// Where WT_ALPHA_PARAMS start in extend, extend_packet, connect and
-/// connect_packet: after their 11 arguments and WT_GEOMETRY_PARAMS (5).
-constexpr int kAlphaArg = 16;
 
 WtFrameParams frameParams(const RenderSettings& s, const LightList& lights, int sample, int bounce) {
   WtFrameParams p{};
@@ -73,33 +70,34 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
   const auto buildStart = std::chrono::steady_clock::now();
   m_program = buildProgram(context, features);
   m_stats.programSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - buildStart).count();
-  m_generate = cl::Kernel(m_program, "generate");
-  m_extend = cl::Kernel(m_program, "extend");
-  m_extendPacket = cl::Kernel(m_program, "extend_packet");
-  m_shade = cl::Kernel(m_program, "shade");
-  m_connect = cl::Kernel(m_program, "connect");
-  m_connectPacket = cl::Kernel(m_program, "connect_packet");
-  m_accumulate = cl::Kernel(m_program, "accumulate");
-  m_resolve = cl::Kernel(m_program, "accumulate_resolve");
   if (settings.accumulation == WT_ACCUMULATE_DOUBLE && !context.info().fp64)
     throw DeviceError("double-precision accumulation needs fp64, which '" + context.info().name + "' lacks");
-  m_tonemap = cl::Kernel(m_program, "tonemap");
+  const ParamFeatures built{features.alpha};
+  m_generate = {m_program, built};
+  m_extend = {m_program, built};
+  m_extendPacket = {m_program, built};
+  m_shade = {m_program, built};
+  m_connect = {m_program, built};
+  m_connectPacket = {m_program, built};
+  m_accumulate = {m_program, built};
+  m_resolve = {m_program, built};
+  m_tonemap = {m_program, built};
+
+  // connect runs only where shade can queue shadow rays: the same count of
+  // lights shade's next-event estimation draws from
+  const WtFrameParams first = frameParams(settings, m_lights, 0, 0);
+  const cl_uint neeCount = features.integratorMinimal ? first.analytic_count
+                                                      : ((first.flags & WT_FLAG_NEE) ? first.light_count : 0u);
+  m_connectStage = neeCount > 0 || !settings.skipUnusedStages;
 
   std::size_t pixels = std::size_t(settings.width) * std::size_t(settings.height);
   cl::Context& ctx = context.context();
-  auto make = [&](std::size_t bytesPerPixel) {
-    return cl::Buffer(ctx, CL_MEM_READ_WRITE, pixels * bytesPerPixel);
-  };
-  m_rayO = make(16), m_rayD = make(16), m_hits = make(16);
-  m_throughput = make(16), m_radiance = make(16);
-  m_queueA = make(4), m_queueB = make(4);
+  PathNeeds needs;
+  needs.shadows = m_connectStage;
+  needs.instances = features.primitives[WT_PRIM_INSTANCE];
+  needs.textures = features.textures;
+  m_path.allocate(ctx, pixels, needs);
   m_counters = cl::Buffer(ctx, CL_MEM_READ_WRITE, WT_COUNTER_COUNT * sizeof(cl_uint));
-  m_state = make(64), m_mean = make(16), m_m2 = make(16), m_sampleCount = make(4), m_pixels = make(4);
-  m_shadowQueue = make(4), m_shadowO = make(16), m_shadowD = make(16), m_shadowRadiance = make(16);
-  m_bounceCounts = make(8);  // ushort4: diffuse, specular, transmission bounces
-  m_raySkip = make(4), m_shadowSkip = make(8), m_prevNormal = make(16);
-  m_hitInstance = features.primitives[WT_PRIM_INSTANCE] ? make(4) : cl::Buffer(ctx, CL_MEM_READ_WRITE, 4);
-  m_rayCone = features.textures ? make(8) : cl::Buffer(ctx, CL_MEM_READ_WRITE, 8);
   auto upload = [&](const auto& data) {
     using T = typename std::decay_t<decltype(data)>::value_type;
     std::size_t bytes = std::max<std::size_t>(data.size(), 1) * sizeof(T);
@@ -125,71 +123,57 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
 
   cl::CommandQueue& q = context.queue();
   // zero bits are 0.0f as well
-  context.fill(m_state, 0u, 0, pixels * 64);
-  context.fill(m_sampleCount, 0u, 0, pixels * 4);
+  context.fill(m_path.state, 0u, 0, pixels * 64);
+  context.fill(m_path.sampleCount, 0u, 0, pixels * 4);
   context.fill(m_counters, 0u, 0, WT_COUNTER_COUNT * sizeof(cl_uint));
   context.fill(m_counters, 0xffffffffu, WT_COUNTER_FIRST_NONFINITE * sizeof(cl_uint), sizeof(cl_uint));
   q.finish();
 
-  // Arguments that never change; per-launch ones are set in renderSample().
-  int a = 2;  // generate: frame, camera set per pass
-  for (cl::Buffer* b : {&m_rayO, &m_rayD, &m_throughput, &m_radiance, &m_queueA, &m_counters, &m_bounceCounts,
-                        &m_raySkip, &m_rayCone})
-    m_generate.setArg(a++, *b);
+  // Arguments that never change, by name; per-launch ones are set in
+  // renderSample() and readImage(). The path state binds itself to every
+  // parameter named after one of its buffers.
+  m_path.bind(m_generate);
+  m_generate.set("queue", m_path.queueA).set("counters", m_counters);
 
-  for (cl::Kernel* k : {&m_extend, &m_extendPacket}) {
-    k->setArg(0, m_counters);
-    k->setArg(3, m_rayO);
-    k->setArg(4, m_rayD);
-    k->setArg(5, m_scene->nodes);
-    k->setArg(6, m_scene->nodeCount);
-    k->setArg(7, m_scene->triVerts);
-    k->setArg(8, m_hits);
-    k->setArg(9, m_raySkip);
-    k->setArg(10, m_hitInstance);
-    m_scene->bindGeometry(*k, 11);
-    if (features.alpha) m_scene->bindAlpha(*k, kAlphaArg);
-  }
+  // extend and connect (and their packet forms) trace against the same scene
+  auto bindTracing = [&](auto& k) {
+    m_path.bind(k);
+    k.set("counters", m_counters)
+        .set("nodes", m_scene->nodes)
+        .set("node_count", m_scene->nodeCount)
+        .set("tri_verts", m_scene->triVerts);
+    bindGeometry(k, *m_scene);
+    if (features.alpha) bindAlpha(k, *m_scene);
+  };
+  bindTracing(m_extend);
+  bindTracing(m_extendPacket);
 
-  // shade: 0 frame, 1 environment, 2-4 its arrays, 5 counters, 6-9 queues (per bounce), 10- fixed
-  m_shade.setArg(1, m_environment.header);
-  m_shade.setArg(2, m_envTexels);
-  m_shade.setArg(3, m_envMarginal);
-  m_shade.setArg(4, m_envConditional);
-  m_shade.setArg(5, m_counters);
-  a = 10;
-  for (cl::Buffer* b : {&m_rayO, &m_rayD, &m_hits, &m_throughput, &m_radiance, &m_scene->triangleInfo,
-                        &m_scene->triVerts, &m_scene->normals, &m_scene->materials, &m_lightBuffer,
-                        &m_aliasBuffer, &m_emitterPdfBuffer, &m_shadowQueue, &m_shadowO, &m_shadowD,
-                        &m_shadowRadiance, &m_pbrTable, &m_bounceCounts, &m_raySkip, &m_shadowSkip,
-                        &m_lightTree, &m_emitterLeaf, &m_prevNormal, &m_hitInstance})
-    m_shade.setArg(a++, *b);
-  m_scene->bindGeometry(m_shade, a);
-  m_shade.setArg(a + 5, m_rayCone);
-  m_scene->bindSurface(m_shade, a + 6);
+  m_path.bind(m_shade);
+  m_shade.set("environment", m_environment.header)
+      .set("env_texels", m_envTexels)
+      .set("env_marginal_cdf", m_envMarginal)
+      .set("env_conditional_cdf", m_envConditional)
+      .set("counters", m_counters)
+      .set("tri_info", m_scene->triangleInfo)
+      .set("tri_verts", m_scene->triVerts)
+      .set("normals", m_scene->normals)
+      .set("materials", m_scene->materials)
+      .set("lights", m_lightBuffer)
+      .set("alias", m_aliasBuffer)
+      .set("emitter_pdf_area", m_emitterPdfBuffer)
+      .set("pbr_table", m_pbrTable)
+      .set("light_tree", m_lightTree)
+      .set("emitter_leaf", m_emitterLeaf);
+  bindGeometry(m_shade, *m_scene);
+  bindSurface(m_shade, *m_scene);
 
-  for (cl::Kernel* k : {&m_connect, &m_connectPacket}) {
-    a = 0;
-    for (cl::Buffer* b : {&m_counters, &m_shadowQueue, &m_shadowO, &m_shadowD, &m_shadowRadiance, &m_scene->nodes})
-      k->setArg(a++, *b);
-    k->setArg(a++, m_scene->nodeCount);
-    k->setArg(a++, m_scene->triVerts);
-    k->setArg(a++, m_radiance);
-    k->setArg(a++, m_shadowSkip);
-    k->setArg(a++, m_hitInstance);
-    m_scene->bindGeometry(*k, a);
-    if (features.alpha) m_scene->bindAlpha(*k, kAlphaArg);
-  }
+  bindTracing(m_connect);
+  bindTracing(m_connectPacket);
 
-  a = 1;
-  for (cl::Buffer* b : {&m_radiance, &m_state, &m_sampleCount, &m_counters})
-    m_accumulate.setArg(a++, *b);
-  m_resolve.setArg(1, m_state);
-  m_resolve.setArg(2, m_mean);
-  m_resolve.setArg(3, m_m2);
-
-  m_tonemap.setArg(1, m_mean);
-  m_tonemap.setArg(2, m_pixels);
+  m_path.bind(m_accumulate);
+  m_accumulate.set("counters", m_counters);
+  m_path.bind(m_resolve);
+  m_path.bind(m_tonemap);
 }
 
 Renderer::~Renderer() = default;
@@ -201,12 +185,11 @@ void Renderer::renderSample() {
   cl::CommandQueue& q = m_context.queue();
 
   // generate: every pixel's path enters queue A
-  m_generate.setArg(0, frameParams(m_settings, m_lights, sample, 0));
-  m_generate.setArg(1, m_camera);
-  m_context.launch("generate", m_generate, pixels);
+  m_generate.set("frame", frameParams(m_settings, m_lights, sample, 0)).set("camera", m_camera);
+  launch(m_generate, pixels);
 
-  cl::Buffer* queueIn = &m_queueA;
-  cl::Buffer* queueOut = &m_queueB;
+  cl::Buffer* queueIn = &m_path.queueA;
+  cl::Buffer* queueOut = &m_path.queueB;
   cl_uint inSlot = WT_COUNTER_QUEUE_A, outSlot = WT_COUNTER_QUEUE_B;
   std::size_t alive = pixels;
   for (int bounce = 0; bounce <= m_settings.maxBounces && alive > 0; ++bounce) {
@@ -218,36 +201,45 @@ void Renderer::renderSample() {
     // counter from 0); otherwise shade writes entry i for its item i
     // (WT_NO_HIT: no shadow ray) and the queue has the bounce's path count.
     m_context.fill(m_counters, packets ? 0u : cl_uint(alive), WT_COUNTER_SHADOW * sizeof(cl_uint), sizeof(cl_uint));
-    cl::Kernel& extend = packets ? m_extendPacket : m_extend;
-    extend.setArg(1, inSlot);
-    extend.setArg(2, *queueIn);
     // stochastic transparency: numbers of their own per sample, bounce and stage
-    if (m_kernelFeatures.alpha)
-      extend.setArg(kAlphaArg, rng_alpha_key(cl_uint(sample), cl_uint(bounce), WT_DIM_ALPHA_EXTEND, m_settings.seed));
+    // the general program takes the alpha key whether or not the scene has holes
+    const bool alpha = m_kernelFeatures.alpha;
+    auto extend = [&](auto& k, std::size_t items) {
+      k.set("queue_slot", inSlot).set("queue", *queueIn);
+      if (alpha)
+        k.set("alpha_key", rng_alpha_key(cl_uint(sample), cl_uint(bounce), WT_DIM_ALPHA_EXTEND, m_settings.seed));
+      launch(k, items);
+    };
     if (packets)
-      m_context.launch("extend_packet", extend, (alive + m_packetWidth - 1) / m_packetWidth);
+      extend(m_extendPacket, (alive + m_packetWidth - 1) / m_packetWidth);
     else
-      m_context.launch("extend", extend, alive);
+      extend(m_extend, alive);
 
     // shade: emission and the next direction; survivors go to the other queue
     WtFrameParams shadeParams = frameParams(m_settings, m_lights, sample, bounce);
     if (packets) shadeParams.flags |= WT_FLAG_COMPACT_SHADOWS;
-    m_shade.setArg(0, shadeParams);
-    m_shade.setArg(6, inSlot);
-    m_shade.setArg(7, outSlot);
-    m_shade.setArg(8, *queueIn);
-    m_shade.setArg(9, *queueOut);
-    m_context.launch("shade", m_shade, alive);
+    if (m_connectStage) shadeParams.flags |= WT_FLAG_SHADOW_QUEUE;
+    m_shade.set("frame", shadeParams)
+        .set("in_slot", inSlot)
+        .set("out_slot", outSlot)
+        .set("queue_in", *queueIn)
+        .set("queue_out", *queueOut);
+    launch(m_shade, alive);
 
-    // connect: shadow rays of this bounce (count read on the device)
-    if (m_lights.sampleable) {
-      if (m_kernelFeatures.alpha)
-        (packets ? m_connectPacket : m_connect)
-            .setArg(kAlphaArg, rng_alpha_key(cl_uint(sample), cl_uint(bounce), WT_DIM_ALPHA_SHADOW, m_settings.seed));
+    // connect: shadow rays of this bounce (count read on the device); shade
+    // makes none at the last bounce, which it shades for emission only
+    const bool connect = m_settings.skipUnusedStages ? m_connectStage && bounce < m_settings.maxBounces
+                                                     : m_lights.sampleable;
+    if (connect) {
+      auto run = [&](auto& k, std::size_t items) {
+        if (alpha)
+          k.set("alpha_key", rng_alpha_key(cl_uint(sample), cl_uint(bounce), WT_DIM_ALPHA_SHADOW, m_settings.seed));
+        launch(k, items);
+      };
       if (packets)
-        m_context.launch("connect_packet", m_connectPacket, (alive + m_packetWidth - 1) / m_packetWidth);
+        run(m_connectPacket, (alive + m_packetWidth - 1) / m_packetWidth);
       else
-        m_context.launch("connect", m_connect, alive);
+        run(m_connect, alive);
     }
 
     // end of the bounce: the only point where the host reads a count back
@@ -261,8 +253,8 @@ void Renderer::renderSample() {
   }
 
   // accumulate: fold the pass into the running mean
-  m_accumulate.setArg(0, frameParams(m_settings, m_lights, sample, 0));
-  m_context.launch("accumulate", m_accumulate, pixels);
+  m_accumulate.set("frame", frameParams(m_settings, m_lights, sample, 0));
+  launch(m_accumulate, pixels);
   m_context.finish();
   ++m_stats.samplesDone;
   m_stats.seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -285,10 +277,10 @@ void Renderer::throwNonFinite(int sample, std::uint32_t path, std::uint32_t wher
 Image Renderer::readImage() {
   const std::size_t pixels = std::size_t(m_settings.width) * std::size_t(m_settings.height);
   cl::CommandQueue& q = m_context.queue();
-  m_resolve.setArg(0, frameParams(m_settings, m_lights, m_stats.samplesDone, 0));
-  m_context.launch("accumulate_resolve", m_resolve, pixels);
-  m_tonemap.setArg(0, frameParams(m_settings, m_lights, m_stats.samplesDone, 0));
-  m_context.launch("tonemap", m_tonemap, pixels);
+  m_resolve.set("frame", frameParams(m_settings, m_lights, m_stats.samplesDone, 0));
+  launch(m_resolve, pixels);
+  m_tonemap.set("frame", frameParams(m_settings, m_lights, m_stats.samplesDone, 0));
+  launch(m_tonemap, pixels);
 
   std::vector<float> mean(4 * pixels), m2(4 * pixels);
   Image image;
@@ -296,10 +288,10 @@ Image Renderer::readImage() {
   image.height = m_settings.height;
   image.samples.resize(pixels);
   image.srgba.resize(4 * pixels);
-  q.enqueueReadBuffer(m_mean, CL_FALSE, 0, mean.size() * 4, mean.data());
-  q.enqueueReadBuffer(m_m2, CL_FALSE, 0, m2.size() * 4, m2.data());
-  q.enqueueReadBuffer(m_sampleCount, CL_FALSE, 0, pixels * 4, image.samples.data());
-  q.enqueueReadBuffer(m_pixels, CL_FALSE, 0, pixels * 4, image.srgba.data());
+  q.enqueueReadBuffer(m_path.mean, CL_FALSE, 0, mean.size() * 4, mean.data());
+  q.enqueueReadBuffer(m_path.m2, CL_FALSE, 0, m2.size() * 4, m2.data());
+  q.enqueueReadBuffer(m_path.sampleCount, CL_FALSE, 0, pixels * 4, image.samples.data());
+  q.enqueueReadBuffer(m_path.pixels, CL_FALSE, 0, pixels * 4, image.srgba.data());
   cl_uint counters[WT_COUNTER_COUNT];
   q.enqueueReadBuffer(m_counters, CL_FALSE, 0, sizeof(counters), counters);
   m_context.finish();

@@ -8,6 +8,8 @@
 #include "device/program.h"
 #include "device/scene_buffers.h"
 #include "render/feature_set.h"
+#include "render/path_state.h"
+#include "render/stage_params.h"
 #include "render/light_list.h"
 #include "scene/environment.h"
 #include "scene/scene.h"
@@ -64,6 +66,10 @@ struct RenderSettings {
   /// (generalKernelFeatures) instead of the scene's; the same image, for the
   /// specialised-vs-general tests and the bench.
   bool generalProgram = false;
+  /// Stages and buffers the scene and settings cannot use are neither
+  /// allocated nor launched (the connect stage without light sampling);
+  /// false runs and allocates them all, for tests that the image is the same.
+  bool skipUnusedStages = true;
 #ifdef NDEBUG
   bool stopOnNonFinite = false;  ///< throw NonFiniteSampleError at the first NaN/Inf shade makes (on in debug builds)
 #else
@@ -118,6 +124,8 @@ class Renderer {
   /// program was built with.
   const FeatureSet& features() const { return m_features; }
   const KernelFeatures& kernelFeatures() const { return m_kernelFeatures; }
+  /// Bytes of the per-pixel buffers (PathState) on the device.
+  std::size_t pathStateBytes() const { return m_path.bytes; }
 
  private:
   [[noreturn]] void throwNonFinite(int sample, std::uint32_t path, std::uint32_t where);
@@ -129,26 +137,31 @@ class Renderer {
   WtCamera m_camera;
   std::unique_ptr<SceneBuffers> m_scene;
   cl::Program m_program;
-  cl::Kernel m_generate, m_extend, m_extendPacket, m_shade, m_connect, m_connectPacket, m_accumulate, m_resolve,
-      m_tonemap;
+  KernelArgs<stage::Generate> m_generate;
+  KernelArgs<stage::Extend> m_extend;
+  KernelArgs<stage::ExtendPacket> m_extendPacket;
+  KernelArgs<stage::Shade> m_shade;
+  KernelArgs<stage::Connect> m_connect;
+  KernelArgs<stage::ConnectPacket> m_connectPacket;
+  KernelArgs<stage::Accumulate> m_accumulate;
+  KernelArgs<stage::Resolve> m_resolve;
+  KernelArgs<stage::Tonemap> m_tonemap;
+  /// Launch a stage whose every argument is set (else DeviceError naming it).
+  template <class Decl>
+  void launch(KernelArgs<Decl>& k, std::size_t count) {
+    k.requireBound();
+    m_context.launch(Decl::kName.data(), k.kernel(), count);
+  }
+  /// Whether shade can queue shadow rays, so connect and its buffers exist.
+  bool m_connectStage = true;
   LightList m_lights;
   Environment m_environment;
   cl::Buffer m_envTexels, m_envMarginal, m_envConditional;
   cl::Buffer m_lightBuffer, m_aliasBuffer, m_emitterPdfBuffer;
-  cl::Buffer m_shadowQueue, m_shadowO, m_shadowD, m_shadowRadiance;
-  cl::Buffer m_pbrTable, m_bounceCounts;
-  cl::Buffer m_raySkip, m_shadowSkip;
-  /// per path: the instance of its last hit (WT_NO_HIT: none), written by
-  /// extend; its next rays leave (ray_skip or shadow_skip.x, this instance).
-  /// One element when the scene has no instances (never read).
-  cl::Buffer m_hitInstance;
-  cl::Buffer m_rayCone;  ///< float2 per path: footprint spread so far, cone angle of its ray (materials/textured.cl)
-  cl::Buffer m_lightTree, m_emitterLeaf, m_prevNormal;  ///< the triangle each ray leaves (and the emitter a shadow ray aims at): never hit
-  // path state (structure of arrays, one entry per pixel)
-  cl::Buffer m_rayO, m_rayD, m_hits, m_throughput, m_radiance;
-  cl::Buffer m_queueA, m_queueB, m_counters;
-  // accumulation
-  cl::Buffer m_state, m_mean, m_m2, m_sampleCount, m_pixels;
+  cl::Buffer m_pbrTable;
+  cl::Buffer m_lightTree, m_emitterLeaf;
+  PathState m_path;      ///< per pixel: path state, queues, shadow rays, accumulation
+  cl::Buffer m_counters;  ///< WT_COUNTER_*
   RenderStats m_stats;
 };
 

@@ -40,7 +40,8 @@ typedef struct GeometryScene {
   __global const uint4* info;        ///< per type's rows (WtGeometry::info_first); x = material
 } GeometryScene;
 
-/// The kernel parameters that carry a GeometryScene (host: SceneBuffers::bindGeometry).
+/// The kernel parameters that carry a GeometryScene (host: bindGeometry, device/scene_args.h;
+/// declared as kGeometryParams in device/kernel_args.h).
 #define WT_GEOMETRY_PARAMS                                                                                    \
   WtGeometry geometry, __global const WtBvh4Node *prim_nodes, __global const uint *prim_refs,                 \
       __global const float4 *prim_data, __global const uint4 *prim_info

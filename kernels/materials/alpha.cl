@@ -30,7 +30,7 @@
 #if WT_HAS_ALPHA
 
 /// The kernel parameters the alpha test reads, after WT_GEOMETRY_PARAMS
-/// (host: SceneBuffers::bindAlpha): the launch's key for stochastic
+/// (host: bindAlpha, device/scene_args.h, by name): the launch's key for stochastic
 /// transparency (rng_alpha_key), the flag bits, tri_info, the materials and
 /// the surface attributes. They exist only where WT_HAS_ALPHA is set, so
 /// kernels without it keep their arguments.

@@ -11,7 +11,7 @@
 #include "common.h"
 #include "materials/texture.cl"
 
-/// The per-vertex attributes and textures (SceneBuffers::bindSurface): a
+/// The per-vertex attributes and textures (host: bindSurface, device/scene_args.h): a
 /// kernel that takes WT_SURFACE_PARAMS makes its SurfaceScene with
 /// WT_SURFACE_SCENE. Buffers a scene does not use hold one dummy entry.
 #define WT_SURFACE_PARAMS                                                                                    \

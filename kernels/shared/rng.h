@@ -2,16 +2,15 @@
 // dimension, seed), so the image never depends on scheduling or device
 // count. Shared by host (tests) and kernels.
 //
-// Dimension allocation: bounce 0, dims 0-1: pixel jitter. Every bounce:
-// dims 2-3: BSDF direction; 4-5: point on the light; 6: light selection;
-// 7: Russian roulette; 8: BSDF lobe; 9: light tree descent. Pairs (2k, 2k+1) are stratified
-// together by the Sobol sampler. Later features take the next free dimensions.
-// Stochastic transparency (kernels/materials/alpha.cl) keys its numbers by
-// dimension 10 (extend) and 11 (shadow rays): one per (ray, triangle), which
-// the sampler's fixed dimensions cannot give.
+// Dimensions are named in shared/dims.h (WT_DIM_*), one per use; a new use
+// takes the next free one there. Stochastic transparency
+// (kernels/materials/alpha.cl) keys its numbers by WT_DIM_ALPHA_EXTEND and
+// WT_DIM_ALPHA_SHADOW: one per (ray, triangle), which the sampler's fixed
+// dimensions cannot give.
 #ifndef WT_SHARED_RNG_H
 #define WT_SHARED_RNG_H
 
+#include "shared/dims.h"
 #include "shared/types.h"
 
 #ifdef __OPENCL_C_VERSION__
@@ -36,9 +35,8 @@ WT_INLINE float rng_uniform(wt_uint pixel, wt_uint sample, wt_uint bounce, wt_ui
 
 /// Stochastic transparency's numbers (kernels/materials/alpha.cl): a key per
 /// launch (the host computes it: sample, bounce, stage dimension, seed), a
-/// stream per ray of the launch, and one uniform per triangle the ray meets.
-#define WT_DIM_ALPHA_EXTEND 10u
-#define WT_DIM_ALPHA_SHADOW 11u
+/// stream per ray of the launch, and one uniform per triangle the ray meets
+/// (the stage dimensions: WT_DIM_ALPHA_EXTEND and WT_DIM_ALPHA_SHADOW, shared/dims.h).
 WT_INLINE wt_uint rng_alpha_key(wt_uint sample, wt_uint bounce, wt_uint dim, wt_uint seed) {
   return rng_hash(seed ^ rng_hash(sample ^ rng_hash((bounce << 8u) + dim)));
 }

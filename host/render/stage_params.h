@@ -1,0 +1,69 @@
+// The render stages' parameter lists, declared once: each must match its
+// kernel's signature in kernels/*.cl, name for name and in order
+// (KernelBinding checks the count at start-up, tests/contract/test_kernel_contract.cpp
+// the names and the path-state element types).
+#pragma once
+
+#include "device/kernel_args.h"
+
+namespace wt::stage {
+
+struct Generate {
+  static constexpr std::string_view kName = "generate";
+  static constexpr auto kParams = params("frame", "camera", "ray_o", "ray_d", "throughput", "radiance", "queue",
+                                         "counters", "bounce_counts", "ray_skip", "ray_cone");
+};
+
+/// extend and extend_packet: the same parameters.
+inline constexpr auto kExtendParams =
+    concatParams(params("counters", "queue_slot", "queue", "ray_o", "ray_d", "nodes", "node_count", "tri_verts",
+                        "hits", "ray_skip", "hit_instance"),
+                 kGeometryParams, kAlphaParams);
+struct Extend {
+  static constexpr std::string_view kName = "extend";
+  static constexpr auto kParams = kExtendParams;
+};
+struct ExtendPacket {
+  static constexpr std::string_view kName = "extend_packet";
+  static constexpr auto kParams = kExtendParams;
+};
+
+struct Shade {
+  static constexpr std::string_view kName = "shade";
+  static constexpr auto kParams = concatParams(
+      params("frame", "environment", "env_texels", "env_marginal_cdf", "env_conditional_cdf", "counters", "in_slot",
+             "out_slot", "queue_in", "queue_out", "ray_o", "ray_d", "hits", "throughput", "radiance", "tri_info",
+             "tri_verts", "normals", "materials", "lights", "alias", "emitter_pdf_area", "shadow_queue", "shadow_o",
+             "shadow_d", "shadow_radiance", "pbr_table", "bounce_counts", "ray_skip", "shadow_skip", "light_tree",
+             "emitter_leaf", "prev_normal", "hit_instance"),
+      kGeometryParams, params("ray_cone"), kSurfaceParams);
+};
+
+/// connect and connect_packet: the same parameters.
+inline constexpr auto kConnectParams =
+    concatParams(params("counters", "shadow_queue", "shadow_o", "shadow_d", "shadow_radiance", "nodes", "node_count",
+                        "tri_verts", "radiance", "shadow_skip", "hit_instance"),
+                 kGeometryParams, kAlphaParams);
+struct Connect {
+  static constexpr std::string_view kName = "connect";
+  static constexpr auto kParams = kConnectParams;
+};
+struct ConnectPacket {
+  static constexpr std::string_view kName = "connect_packet";
+  static constexpr auto kParams = kConnectParams;
+};
+
+struct Accumulate {
+  static constexpr std::string_view kName = "accumulate";
+  static constexpr auto kParams = params("frame", "radiance", "state", "sample_count", "counters");
+};
+struct Resolve {
+  static constexpr std::string_view kName = "accumulate_resolve";
+  static constexpr auto kParams = params("frame", "state", "mean", "m2");
+};
+struct Tonemap {
+  static constexpr std::string_view kName = "tonemap";
+  static constexpr auto kParams = params("frame", "mean", "pixels");
+};
+
+}  // namespace wt::stage
