@@ -17,24 +17,25 @@
 namespace wt {
 namespace {
 
-/// The render program as the renderer builds it (with argument info), once
-/// per binary, released with the shared device (device_fixture.h).
-cl::Program programFor(bool alpha) {
+/// A program (`root`: the render program, or the tracers' trace.cl) as the
+/// product builds it (with argument info), once per binary, released with
+/// the shared device (device_fixture.h).
+cl::Program programFor(bool alpha, const std::string& root) {
   auto& programs = test::sharedDevice().programs;
-  const std::string key = alpha ? "wavetrace.cl with alpha" : "wavetrace.cl";
+  const std::string key = root + (alpha ? " with alpha" : "");
   auto it = programs.find(key);
   if (it == programs.end()) {
     KernelFeatures features;
     features.alpha = alpha;
-    it = programs.emplace(key, buildProgram(test::deviceContext(), features)).first;
+    it = programs.emplace(key, buildProgram(test::deviceContext(), features, root)).first;
   }
   return it->second;
 }
 
 template <class Decl>
-void expectContract(bool alpha) {
+void expectContract(bool alpha, const std::string& root) {
   SCOPED_TRACE(std::string(Decl::kName) + (alpha ? " with alpha" : " without alpha"));
-  const cl::Program program = programFor(alpha);
+  const cl::Program program = programFor(alpha, root);
   KernelArgs<Decl> args;
   // the constructor compares the count and, with argument info, every name
   ASSERT_NO_THROW(args = KernelArgs<Decl>(program, ParamFeatures{alpha}));
@@ -53,20 +54,20 @@ void expectContract(bool alpha) {
 }
 
 template <class... Decls>
-void expectAll(bool alpha) {
-  (expectContract<Decls>(alpha), ...);
+void expectAll(bool alpha, const std::string& root) {
+  (expectContract<Decls>(alpha, root), ...);
 }
 
 TEST(KernelContract, RenderStagesMatchTheirHostDeclarations) {
   for (bool alpha : {false, true})
     expectAll<stage::Generate, stage::Extend, stage::ExtendPacket, stage::Shade, stage::Connect,
-              stage::ConnectPacket, stage::Accumulate, stage::Resolve, stage::Tonemap>(alpha);
+              stage::ConnectPacket, stage::Accumulate, stage::Resolve, stage::Tonemap>(alpha, "wavetrace.cl");
 }
 
 TEST(KernelContract, TraceKernelsMatchTheirHostDeclarations) {
   for (bool alpha : {false, true})
     expectAll<trace::Closest, trace::ClosestPacket, trace::Occluded, trace::OccludedPacket, trace::OccludedStream>(
-        alpha);
+        alpha, "trace.cl");
 }
 
 // what the checks must catch: a declaration that swaps, drops or leaves an argument unset
@@ -89,19 +90,19 @@ std::string errorOf(const std::function<void()>& f) {
 }
 
 TEST(KernelContract, ASwappedArgumentIsAStartUpErrorNamingKernelAndArgument) {
-  const std::string what = errorOf([] { KernelArgs<SwappedTonemap>(programFor(false), {}); });
+  const std::string what = errorOf([] { KernelArgs<SwappedTonemap>(programFor(false, "wavetrace.cl"), {}); });
   EXPECT_NE(what.find("'tonemap'"), std::string::npos) << what;
   EXPECT_NE(what.find("'mean'"), std::string::npos) << what;
   EXPECT_NE(what.find("'pixels'"), std::string::npos) << what;
 }
 
 TEST(KernelContract, AMissingArgumentIsAStartUpError) {
-  const std::string what = errorOf([] { KernelArgs<ShortTonemap>(programFor(false), {}); });
+  const std::string what = errorOf([] { KernelArgs<ShortTonemap>(programFor(false, "wavetrace.cl"), {}); });
   EXPECT_NE(what.find("'tonemap' takes 3 arguments, its host declaration 2"), std::string::npos) << what;
 }
 
 TEST(KernelContract, AnArgumentNeverSetIsAnErrorAtLaunch) {
-  KernelArgs<stage::Tonemap> args(programFor(false), {});
+  KernelArgs<stage::Tonemap> args(programFor(false, "wavetrace.cl"), {});
   cl::Buffer b(test::deviceContext().context(), CL_MEM_READ_WRITE, 16);
   args.set("frame", WtFrameParams{}).set("pixels", b);
   const std::string what = errorOf([&] { args.requireBound(); });
@@ -111,7 +112,7 @@ TEST(KernelContract, AnArgumentNeverSetIsAnErrorAtLaunch) {
 }
 
 TEST(KernelContract, AFeatureGatedArgumentIsAbsentWithoutItsFeature) {
-  KernelArgs<stage::Extend> args(programFor(false), {});
+  KernelArgs<stage::Extend> args(programFor(false, "wavetrace.cl"), {});
   const std::string what = errorOf([&] { args.set("alpha_key", cl_uint(0)); });
   EXPECT_NE(what.find("'extend' has no argument 'alpha_key'"), std::string::npos) << what;
 }

@@ -71,7 +71,9 @@ std::map<std::string, std::vector<std::string>> declaredFields(const std::string
 
 TEST(SharedLayout, TheListNamesEveryFieldOfEverySharedStruct) {
   // layout_tests.cl includes shared/layout.h, which includes every header
-  // with shared structs: its expanded source holds them all
+  // with shared structs: its expanded source holds them all (the test
+  // kernels are read from the source tree, which the device fixture names)
+  test::deviceContext();
   const auto declared = declaredFields(expandKernelSource("layout_tests.cl"));
   ASSERT_GE(declared.size(), 10u) << "the struct parser found too few shared structs";
   std::map<std::string, std::vector<std::string>> listed;
