@@ -34,7 +34,7 @@ TEST(Embedded, IncludesExpandOnceWithLineMarkers) {
 // (kernels/common.h): without it Intel's CPU runtime vectorises the kernel
 // across work-items and got shading wrong, which PoCL (and so CI) never shows.
 TEST(Embedded, EveryKernelIsWtKernel) {
-  for (const char* root : {"wavetrace.cl", "unit_tests.cl", "env_tests.cl", "texture_tests.cl"}) {
+  for (const char* root : {"wavetrace.cl", "unit_tests.cl", "env_tests.cl", "texture_tests.cl", "tonemap.cl", "tonemap_tests.cl"}) {
     const std::string source = expandKernelSource(root);
     EXPECT_NE(source.find("WT_KERNEL void "), std::string::npos) << root;
     EXPECT_EQ(source.find("__kernel void"), std::string::npos) << root << ": a kernel not declared WT_KERNEL";

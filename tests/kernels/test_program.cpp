@@ -39,7 +39,7 @@ TEST(Program, KernelDirectoryOverridesEmbeddedSources) {
 
 TEST(Program, EmbeddedKernelsBuild) {
   cl::Program program = buildProgram(test::deviceContext(), KernelFeatures{});
-  for (const char* name : {"generate", "extend", "shade", "accumulate", "tonemap", "trace_closest", "trace_occluded",
+  for (const char* name : {"generate", "extend", "shade", "accumulate", "tonemap", "tonemap_log_luminance", "tonemap_exposure", "trace_closest", "trace_occluded",
                            "extend_packet", "connect_packet", "trace_closest_packet", "trace_occluded_packet"})
     EXPECT_NO_THROW(cl::Kernel(program, name)) << name;
 }

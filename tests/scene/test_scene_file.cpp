@@ -818,7 +818,7 @@ const BadFile kBadFiles[] = {
                 "render.integrator: must be \"path\" or \"minimal\", got \"fast\""},
         BadFile{"RenderSeed", doc(R"("render": {"seed": -1})"), "render.seed: must be an integer in [0, 4294967295], got -1"},
         BadFile{"RenderUnknown", doc(R"("render": {"samples": 4})"),
-                "render.samples: unknown field (expected one of: width, height, spp, max_bounces, seed, exposure, integrator)"},
+                "render.samples: unknown field (expected one of: width, height, spp, max_bounces, seed, exposure, integrator, tonemap)"},
         // materials
         BadFile{"MaterialsNotAnObject", doc(R"("materials": [])"), "materials: must be an object, got []"},
         BadFile{"MaterialBaseColor", material(R"("base_color": [0.5, 1.2, 0.5])"),
