@@ -211,6 +211,25 @@ TEST(Tonemap, OperatorsMatchTheirClosedFormsInDouble) {
   }
 }
 
+TEST(Tonemap, HostBuildOfTheHeaderMatchesTheDevice) {
+  // the same shared/tonemap.h compiled by g++: float code, a few ulp apart
+  // from the device's library functions, far inside kOperatorTolerance
+  std::vector<Rgb> colours = greyRamp(65);
+  colours.push_back({4.0, 0.5, 0.01});
+  colours.push_back({0.0, 20.0, 0.3});
+  for (std::uint32_t op : allOperators()) {
+    const float white = defaultTonemapWhite(op);
+    const std::vector<Rgb> got = onDevice(op, colours, white);
+    for (std::size_t i = 0; i < colours.size(); ++i) {
+      const TonemapRgb host =
+          tonemap_apply(op, tonemap_rgb(float(colours[i][0]), float(colours[i][1]), float(colours[i][2])), white);
+      EXPECT_NEAR(host.r, got[i][0], 1e-5) << tonemapOperatorName(op) << " colour " << i;
+      EXPECT_NEAR(host.g, got[i][1], 1e-5) << tonemapOperatorName(op) << " colour " << i;
+      EXPECT_NEAR(host.b, got[i][2], 1e-5) << tonemapOperatorName(op) << " colour " << i;
+    }
+  }
+}
+
 TEST(Tonemap, AgxSigmoidConstantsAreItsDefinitionsScales) {
   EXPECT_NEAR(WT_TONEMAP_AGX_X_PIVOT, agxXPivot(), 1e-7);
   EXPECT_NEAR(WT_TONEMAP_AGX_Y_PIVOT, agxYPivot(), 1e-7);
