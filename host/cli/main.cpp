@@ -17,6 +17,7 @@
 #include <CLI/CLI.hpp>
 
 #include <atomic>
+#include <tuple>
 #include <chrono>
 #include <cmath>
 #include <csignal>
@@ -36,8 +37,74 @@ extern "C" void onInterrupt(int) { g_interrupted = true; }
 struct GivenOptions {
   bool width = false, height = false, spp = false, maxBounces = false, seed = false, exposure = false;
   bool integrator = false, background = false, envMap = false, envIntensity = false, envRotation = false,
-       envHidden = false;
+       envHidden = false, tonemap = false;
 };
+
+/// The tone mapping options `render` and `tonemap` share, as given.
+struct TonemapOptions {
+  std::string op = "pbr-neutral";
+  std::string exposure = "0";  ///< stops, or auto, auto+STOPS, auto-STOPS
+  float aperture = 1.0f, shutter = 1.0f, iso = 100.0f;
+  float white = 0.0f;
+  float whiteBalance = 0.0f;
+  bool noDither = false;
+  bool physical = false;  ///< --aperture, --shutter or --iso given
+};
+
+void addTonemapOptions(CLI::App* cmd, TonemapOptions& t) {
+  cmd->add_option("--tonemap", t.op,
+                  "Tone mapping operator for PNG output: " + wt::tonemapOperatorList() +
+                      " (docs/tonemapping.md; the EXR stays linear)")
+      ->check(CLI::IsMember(std::vector<std::string>(wt::kTonemapOperatorNames.begin(), wt::kTonemapOperatorNames.end())))
+      ->capture_default_str();
+  cmd->add_option("--exposure", t.exposure,
+                  "Exposure for PNG output: stops (2^stops), or auto (the image's log-average luminance to middle "
+                  "grey 0.18), or auto+STOPS / auto-STOPS")
+      ->capture_default_str();
+  cmd->add_option("--aperture", t.aperture, "Physical exposure: f-number N (scale ISO t / (100 N^2))")
+      ->check(CLI::Range(0.1f, 100.0f));
+  cmd->add_option("--shutter", t.shutter, "Physical exposure: shutter time t in seconds")
+      ->check(CLI::Range(1e-6f, 3600.0f));
+  cmd->add_option("--iso", t.iso, "Physical exposure: film speed (ISO)")->check(CLI::Range(1.0f, 409600.0f));
+  cmd->add_option("--tonemap-white", t.white,
+                  "reinhard-modified: the luminance mapped to white (default 4); hable: the linear white (default 11.2)")
+      ->check(CLI::Range(0.01f, 1e6f));
+  cmd->add_option("--white-balance", t.whiteBalance,
+                  "Balance from light of this colour temperature (kelvin, 1905-25000) to D65 white (von Kries in LMS)")
+      ->check(CLI::Range(1905.0f, 25000.0f));
+  cmd->add_flag("--no-dither", t.noDither, "Quantise to 8 bits without the per-pixel dither");
+}
+
+/// The settings the options give, and the exposure in stops; contradictions are errors.
+std::pair<wt::TonemapSettings, float> resolveTonemap(const TonemapOptions& t) {
+  wt::TonemapSettings s;
+  s.op = *wt::parseTonemapOperator(t.op);
+  s.fNumber = t.aperture, s.shutterSeconds = t.shutter, s.iso = t.iso;
+  s.white = t.white;
+  s.whiteBalanceKelvin = t.whiteBalance;
+  s.dither = !t.noDither;
+  std::string stops = t.exposure;
+  if (stops.rfind("auto", 0) == 0) {
+    s.autoExposure = true;
+    stops = stops.substr(4);
+    if (stops.empty()) stops = "0";
+    else if (stops[0] != '+' && stops[0] != '-')
+      throw std::invalid_argument("--exposure: '" + t.exposure + "' is not auto, auto+STOPS or auto-STOPS");
+    if (t.physical)
+      throw std::invalid_argument("--exposure auto contradicts --aperture/--shutter/--iso (a physical exposure)");
+  }
+  std::size_t used = 0;
+  float value = 0.0f;
+  try {
+    value = std::stof(stops, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used != stops.size() || stops.empty() || !std::isfinite(value) || std::fabs(value) > 1000.0f)
+    throw std::invalid_argument("--exposure: '" + t.exposure +
+                                "' is not a number of stops in [-1000, 1000], auto, auto+STOPS or auto-STOPS");
+  return {s, value};
+}
 
 struct RenderOptions {
   std::string scene;
@@ -64,6 +131,7 @@ struct RenderOptions {
   std::string kernelDir;
   bool quiet = false;
   bool verbose = false;
+  TonemapOptions tonemap;
   GivenOptions given;
 };
 
@@ -89,7 +157,8 @@ void applySceneSettings(const wt::SceneFileSettings& file, const std::string& sc
     s.maxBounces = *file.maxBounces, note("max_bounces " + std::to_string(*file.maxBounces));
   if (file.seed && !given.seed) s.seed = *file.seed, note("seed " + std::to_string(*file.seed));
   if (file.exposureStops && !given.exposure)
-    s.exposureStops = *file.exposureStops, note("exposure " + std::to_string(*file.exposureStops));
+    options.tonemap.exposure = std::to_string(*file.exposureStops), note("exposure " + std::to_string(*file.exposureStops));
+  if (file.tonemap && !given.tonemap) options.tonemap.op = *file.tonemap, note("tonemap " + *file.tonemap);
   if (file.integrator && !given.integrator) options.integrator = *file.integrator, note("integrator " + *file.integrator);
   if (const auto& env = file.environment) {
     // --background or --env-map replaces the file's environment as a whole
@@ -114,6 +183,7 @@ void applySceneSettings(const wt::SceneFileSettings& file, const std::string& sc
 /// place, so that `render` and `info` see the same feature set.
 wt::RenderSettings renderSettings(const RenderOptions& options) {
   wt::RenderSettings settings = options.settings;
+  std::tie(settings.tonemap, settings.exposureStops) = resolveTonemap(options.tonemap);
   for (float c : options.background)
     if (!(c >= 0.0f) || !std::isfinite(c)) throw std::invalid_argument("--background: components must be finite and >= 0");
   settings.background = glm::vec3(options.background[0], options.background[1], options.background[2]);
@@ -265,6 +335,11 @@ int runRender(RenderOptions options) {
   if (renderer.stats().samplesDone > 0) {
     wt::Image image = renderer.readImage();
     writeOutputs(options, image);
+    if (settings.tonemap.autoExposure) {
+      const float scale = renderer.autoExposure();
+      wt::log::info("auto exposure: scale " + std::to_string(scale) + " (log-average luminance " +
+                    std::to_string(WT_TONEMAP_MIDDLE_GREY / scale) + ")");
+    }
     if (renderer.stats().nonFiniteSamples > 0) {
       // a pixel that lost samples has fewer than the passes rendered
       std::size_t pixels = 0;
@@ -380,6 +455,35 @@ int runInfo(RenderOptions options) {
   return 0;
 }
 
+struct TonemapCommand {
+  std::string input;
+  std::vector<std::string> outputs;
+  std::string device;
+  TonemapOptions tonemap;
+};
+
+/// `wavetrace tonemap IN.exr -o OUT.png`: the render's tonemap stage on a linear EXR.
+int runTonemap(const TonemapCommand& cmd) {
+  for (const std::string& out : cmd.outputs) {
+    if (wt::imageFormatFor(out) != wt::ImageFormat::Png)
+      throw std::invalid_argument(out + ": tonemap writes PNG (the EXR is the linear input)");
+    wt::checkWritable(out);
+  }
+  auto [settings, stops] = resolveTonemap(cmd.tonemap);
+  wt::Image image = wt::readExr(cmd.input);
+  wt::Context context(wt::selectDevice(cmd.device));
+  float scale = 1.0f;
+  wt::tonemapImage(context, image, settings, stops, &scale);
+  for (const std::string& out : cmd.outputs) {
+    wt::writeImage(out, image);
+    std::printf("wrote %s (%s)\n", out.c_str(), wt::tonemapOperatorName(settings.op).c_str());
+  }
+  if (settings.autoExposure)
+    wt::log::info("auto exposure: scale " + std::to_string(scale) + " (log-average luminance " +
+                  std::to_string(WT_TONEMAP_MIDDLE_GREY / scale) + ")");
+  return 0;
+}
+
 int runDevices() {
   std::vector<wt::DeviceInfo> devices = wt::listDevices();
   if (devices.empty()) {
@@ -426,8 +530,7 @@ int main(int argc, char** argv) {
                         "Transmission bounces (refraction, thin-walled transmission) a path may take (default: --max-bounces)")
       ->check(CLI::Range(0, 1024));
   renderCmd->add_option("--seed", render.settings.seed, "Random seed")->capture_default_str();
-  renderCmd->add_option("--exposure", render.settings.exposureStops, "Exposure in stops for PNG output")
-      ->capture_default_str();
+  addTonemapOptions(renderCmd, render.tonemap);
   renderCmd->add_option("--background", render.background,
                         "Constant environment radiance R,G,B seen by rays that leave the scene")
       ->delimiter(',')->expected(3)->capture_default_str();
@@ -526,6 +629,13 @@ int main(int argc, char** argv) {
   infoCmd->add_option("--scene-index", info.sceneIndex, "glTF scene (default: the file's default scene)");
 
   CLI::App* devicesCmd = app.add_subcommand("devices", "List OpenCL platforms and devices");
+
+  TonemapCommand tonemapArgs;
+  CLI::App* tonemapCmd = app.add_subcommand("tonemap", "Tone-map a linear EXR (e.g. a render's) to an 8-bit sRGB PNG");
+  tonemapCmd->add_option("input", tonemapArgs.input, "Linear EXR")->required()->check(CLI::ExistingFile);
+  tonemapCmd->add_option("-o,--output", tonemapArgs.outputs, "Output PNG(s)")->required();
+  tonemapCmd->add_option("--device", tonemapArgs.device, "Device index or name substring");
+  addTonemapOptions(tonemapCmd, tonemapArgs.tonemap);
 
   wt::BenchOptions bench;
   CLI::App* benchCmd = app.add_subcommand("bench", "BVH build and ray throughput benchmark");
@@ -633,7 +743,8 @@ int main(int argc, char** argv) {
       auto given = [&](const char* name) { return renderCmd->count(name) > 0; };
       render.given = {given("--width"), given("--height"), given("--spp"), given("--max-bounces"), given("--seed"),
                       given("--exposure"), given("--integrator"), given("--background"), given("--env-map"),
-                      given("--env-intensity"), given("--env-rotation"), given("--env-hidden")};
+                      given("--env-intensity"), given("--env-rotation"), given("--env-hidden"), given("--tonemap")};
+      render.tonemap.physical = given("--aperture") || given("--shutter") || given("--iso");
       return runRender(render);
     }
     if (*infoCmd) {
@@ -642,6 +753,11 @@ int main(int argc, char** argv) {
       return runInfo(info);
     }
     if (*devicesCmd) return runDevices();
+    if (*tonemapCmd) {
+      tonemapArgs.tonemap.physical =
+          tonemapCmd->count("--aperture") + tonemapCmd->count("--shutter") + tonemapCmd->count("--iso") > 0;
+      return runTonemap(tonemapArgs);
+    }
     if (*benchCmd) return wt::runBench(bench);
     if (*stressCmd) return wt::runStressCommand(stress, stressDevice, stressJson);
   } catch (const cl::Error& e) {

@@ -25,7 +25,7 @@ WtFrameParams frameParams(const RenderSettings& s, const LightList& lights, int 
   p.max_specular_bounces = lobeLimit(s.maxSpecularBounces);
   p.max_transmission_bounces = lobeLimit(s.maxTransmissionBounces);
   p.seed = s.seed;
-  p.exposure = std::exp2(s.exposureStops);
+  p.exposure = exposureScale(s.tonemap, s.exposureStops);
   p.light_count = lights.sampleable ? cl_uint(lights.alias.size()) : 0u;
   p.analytic_count = lights.analyticCount;
   p.env_pmf = lights.environmentPmf;
@@ -81,7 +81,7 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
   m_connectPacket = {m_program, built};
   m_accumulate = {m_program, built};
   m_resolve = {m_program, built};
-  m_tonemap = {m_program, built};
+  m_tonemapper = Tonemapper(context, m_program, built, std::size_t(settings.width) * std::size_t(settings.height));
 
   // connect runs only where shade can queue shadow rays: the same count of
   // lights shade's next-event estimation draws from
@@ -173,7 +173,6 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
   m_path.bind(m_accumulate);
   m_accumulate.set("counters", m_counters);
   m_path.bind(m_resolve);
-  m_path.bind(m_tonemap);
 }
 
 Renderer::~Renderer() = default;
@@ -279,8 +278,8 @@ Image Renderer::readImage() {
   cl::CommandQueue& q = m_context.queue();
   m_resolve.set("frame", frameParams(m_settings, m_lights, m_stats.samplesDone, 0));
   launch(m_resolve, pixels);
-  m_tonemap.set("frame", frameParams(m_settings, m_lights, m_stats.samplesDone, 0));
-  launch(m_tonemap, pixels);
+  m_tonemapper.run(frameParams(m_settings, m_lights, m_stats.samplesDone, 0), tonemapParams(m_settings.tonemap),
+                   m_path.mean, m_path.pixels);
 
   std::vector<float> mean(4 * pixels), m2(4 * pixels);
   Image image;

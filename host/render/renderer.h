@@ -11,6 +11,7 @@
 #include "render/path_state.h"
 #include "render/stage_params.h"
 #include "render/light_list.h"
+#include "render/tonemap.h"
 #include "scene/environment.h"
 #include "scene/scene.h"
 
@@ -38,7 +39,8 @@ struct RenderSettings {
   int maxSpecularBounces = -1;      ///< specular (GGX, mirror) bounces; -1: maxBounces
   int maxTransmissionBounces = -1;  ///< transmission (refraction, thin-walled) bounces; -1: maxBounces
   std::uint32_t seed = 0;
-  float exposureStops = 0.0f;
+  float exposureStops = 0.0f;  ///< exposure compensation (PNG only): the image scaled by 2^stops
+  TonemapSettings tonemap;     ///< operator, physical or auto exposure, white balance, dither (PNG only)
   glm::vec3 background{0.0f};  ///< constant environment radiance seen by escaping paths (without environmentMap)
   std::string environmentMap;  ///< equirectangular .hdr/.exr lighting the scene (replaces background)
   float environmentIntensity = 1.0f;
@@ -126,6 +128,8 @@ class Renderer {
   const KernelFeatures& kernelFeatures() const { return m_kernelFeatures; }
   /// Bytes of the per-pixel buffers (PathState) on the device.
   std::size_t pathStateBytes() const { return m_path.bytes; }
+  /// The scale auto exposure gave the last readImage() (1 without it).
+  float autoExposure() { return m_settings.tonemap.autoExposure ? m_tonemapper.autoExposure() : 1.0f; }
 
  private:
   [[noreturn]] void throwNonFinite(int sample, std::uint32_t path, std::uint32_t where);
@@ -145,7 +149,7 @@ class Renderer {
   KernelArgs<stage::ConnectPacket> m_connectPacket;
   KernelArgs<stage::Accumulate> m_accumulate;
   KernelArgs<stage::Resolve> m_resolve;
-  KernelArgs<stage::Tonemap> m_tonemap;
+  Tonemapper m_tonemapper;
   /// Launch a stage whose every argument is set (else DeviceError naming it).
   template <class Decl>
   void launch(KernelArgs<Decl>& k, std::size_t count) {

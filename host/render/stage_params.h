@@ -63,7 +63,16 @@ struct Resolve {
 };
 struct Tonemap {
   static constexpr std::string_view kName = "tonemap";
-  static constexpr auto kParams = params("frame", "mean", "pixels");
+  static constexpr auto kParams = params("frame", "tonemap", "exposure", "mean", "pixels");
+};
+/// Auto exposure (kernels/tonemap.cl): log-luminance partial sums, then the scale.
+struct LogLuminance {
+  static constexpr std::string_view kName = "tonemap_log_luminance";
+  static constexpr auto kParams = params("frame", "mean", "partials");
+};
+struct TonemapExposure {
+  static constexpr std::string_view kName = "tonemap_exposure";
+  static constexpr auto kParams = params("frame", "partials", "exposure");
 };
 
 }  // namespace wt::stage

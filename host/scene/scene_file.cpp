@@ -8,6 +8,7 @@
 #include "scene/generators.h"
 #include "scene/hair_loader.h"
 #include "scene/ply.h"
+#include "render/tonemap_names.h"
 
 #include <nlohmann/json.hpp>
 
@@ -351,7 +352,7 @@ class Loader {
 
   void readRender(const Json& v, const std::string& path) {
     object(v, path);
-    checkKeys(v, path, {"width", "height", "spp", "max_bounces", "seed", "exposure", "integrator"});
+    checkKeys(v, path, {"width", "height", "spp", "max_bounces", "seed", "exposure", "integrator", "tonemap"});
     SceneFileSettings& s = m_result.settings;
     if (const Json* x = find(v, "width")) s.width = int(integer(*x, member(path, "width"), 1, kMaxImageSide));
     if (const Json* x = find(v, "height")) s.height = int(integer(*x, member(path, "height"), 1, kMaxImageSide));
@@ -370,6 +371,12 @@ class Loader {
       if (name != "path" && name != "minimal")
         fail(member(path, "integrator"), "must be \"path\" or \"minimal\", got " + describe(*x));
       s.integrator = name;
+    }
+    if (const Json* x = find(v, "tonemap")) {
+      const std::string name = string(*x, member(path, "tonemap"));
+      if (!parseTonemapOperator(name))
+        fail(member(path, "tonemap"), "must be one of " + tonemapOperatorList() + ", got " + describe(*x));
+      s.tonemap = name;
     }
   }
 

@@ -34,6 +34,7 @@ struct SceneFileSettings {
   std::optional<std::uint32_t> seed;
   std::optional<float> exposureStops;
   std::optional<std::string> integrator;  ///< "path" or "minimal"
+  std::optional<std::string> tonemap;     ///< a --tonemap operator name (render/tonemap_names.h)
   std::optional<SceneEnvironment> environment;
 };
 

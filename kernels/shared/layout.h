@@ -10,6 +10,7 @@
 #include "shared/environment.h"
 #include "shared/lights.h"
 #include "shared/textures.h"
+#include "shared/tonemap.h"
 #include "shared/types.h"
 
 #define WT_SHARED_LAYOUT(S, F) \
@@ -49,6 +50,8 @@
   F(WtFrameParams, max_diffuse_bounces) F(WtFrameParams, light_count) F(WtFrameParams, analytic_count) \
   F(WtFrameParams, flags) F(WtFrameParams, rr_min_depth) F(WtFrameParams, env_pmf) \
   F(WtFrameParams, accumulate_mode) F(WtFrameParams, max_specular_bounces) \
-  F(WtFrameParams, max_transmission_bounces)
+  F(WtFrameParams, max_transmission_bounces) \
+  S(WtTonemapParams) F(WtTonemapParams, op) F(WtTonemapParams, flags) F(WtTonemapParams, white) \
+  F(WtTonemapParams, pad0) F(WtTonemapParams, balance_r) F(WtTonemapParams, balance_g) F(WtTonemapParams, balance_b)
 
 #endif  // WT_SHARED_LAYOUT_H

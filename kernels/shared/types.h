@@ -185,7 +185,7 @@ typedef struct WtFrameParams {
   wt_uint bounce;       ///< bounce of this extend/shade pair (0 = camera ray)
   wt_uint max_bounces;  ///< last bounce whose hit is shaded
   wt_uint seed;         ///< user seed
-  float exposure;       ///< tonemap scale, 2^stops
+  float exposure;       ///< tonemap scale: 2^stops times the physical camera's (host/render/tonemap.h)
   wt_uint max_diffuse_bounces;   ///< diffuse bounces a path may take (cosine-sampled directions)
   wt_uint light_count;     ///< entries in the light list (0: no light sampling)
   wt_uint analytic_count;  ///< lights [0, analytic_count) are point, spot or directional

@@ -8,6 +8,7 @@
 #include "device_fixture.h"
 #include "render/path_state.h"
 #include "render/stage_params.h"
+#include "shared/tonemap.h"
 
 #include <gtest/gtest.h>
 
@@ -61,7 +62,8 @@ void expectAll(bool alpha, const std::string& root) {
 TEST(KernelContract, RenderStagesMatchTheirHostDeclarations) {
   for (bool alpha : {false, true})
     expectAll<stage::Generate, stage::Extend, stage::ExtendPacket, stage::Shade, stage::Connect,
-              stage::ConnectPacket, stage::Accumulate, stage::Resolve, stage::Tonemap>(alpha, "wavetrace.cl");
+              stage::ConnectPacket, stage::Accumulate, stage::Resolve, stage::Tonemap, stage::LogLuminance,
+              stage::TonemapExposure>(alpha, "wavetrace.cl");
 }
 
 TEST(KernelContract, TraceKernelsMatchTheirHostDeclarations) {
@@ -73,7 +75,7 @@ TEST(KernelContract, TraceKernelsMatchTheirHostDeclarations) {
 // what the checks must catch: a declaration that swaps, drops or leaves an argument unset
 struct SwappedTonemap {
   static constexpr std::string_view kName = "tonemap";
-  static constexpr auto kParams = params("frame", "pixels", "mean");
+  static constexpr auto kParams = params("frame", "tonemap", "exposure", "pixels", "mean");
 };
 struct ShortTonemap {
   static constexpr std::string_view kName = "tonemap";
@@ -98,15 +100,15 @@ TEST(KernelContract, ASwappedArgumentIsAStartUpErrorNamingKernelAndArgument) {
 
 TEST(KernelContract, AMissingArgumentIsAStartUpError) {
   const std::string what = errorOf([] { KernelArgs<ShortTonemap>(programFor(false, "wavetrace.cl"), {}); });
-  EXPECT_NE(what.find("'tonemap' takes 3 arguments, its host declaration 2"), std::string::npos) << what;
+  EXPECT_NE(what.find("'tonemap' takes 5 arguments, its host declaration 2"), std::string::npos) << what;
 }
 
 TEST(KernelContract, AnArgumentNeverSetIsAnErrorAtLaunch) {
   KernelArgs<stage::Tonemap> args(programFor(false, "wavetrace.cl"), {});
   cl::Buffer b(test::deviceContext().context(), CL_MEM_READ_WRITE, 16);
-  args.set("frame", WtFrameParams{}).set("pixels", b);
+  args.set("frame", WtFrameParams{}).set("tonemap", WtTonemapParams{}).set("exposure", b).set("pixels", b);
   const std::string what = errorOf([&] { args.requireBound(); });
-  EXPECT_NE(what.find("'tonemap' launched with argument 'mean' (1) never set"), std::string::npos) << what;
+  EXPECT_NE(what.find("'tonemap' launched with argument 'mean' (3) never set"), std::string::npos) << what;
   args.set("mean", b);
   EXPECT_NO_THROW(args.requireBound());
 }

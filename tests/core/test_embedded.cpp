@@ -65,8 +65,8 @@ TEST(Embedded, IncludesExpandOnceWithLineMarkers) {
 // across work-items and got shading wrong, which PoCL (and so CI) never shows.
 TEST(Embedded, EveryKernelIsWtKernel) {
   setKernelFallbackDirectory(std::filesystem::path(WT_SOURCE_DIR) / "kernels");  // the test kernels' folder
-  for (const char* root :
-       {"wavetrace.cl", "trace.cl", "stress.cl", "unit_tests.cl", "env_tests.cl", "texture_tests.cl"}) {
+  for (const char* root : {"wavetrace.cl", "trace.cl", "stress.cl", "tonemap.cl", "unit_tests.cl", "env_tests.cl",
+                           "texture_tests.cl", "tonemap_tests.cl"}) {
     const std::string source = expandKernelSource(root);
     EXPECT_NE(source.find("WT_KERNEL void "), std::string::npos) << root;
     EXPECT_EQ(source.find("__kernel void"), std::string::npos) << root << ": a kernel not declared WT_KERNEL";

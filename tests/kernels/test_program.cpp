@@ -40,8 +40,8 @@ TEST(Program, KernelDirectoryOverridesEmbeddedSources) {
 // The render program holds the stages; the tracers are a program of their own.
 TEST(Program, EmbeddedKernelsBuild) {
   cl::Program program = buildProgram(test::deviceContext(), KernelFeatures{});
-  for (const char* name :
-       {"generate", "extend", "shade", "connect", "accumulate", "tonemap", "extend_packet", "connect_packet"})
+  for (const char* name : {"generate", "extend", "shade", "connect", "accumulate", "tonemap", "tonemap_log_luminance",
+                           "tonemap_exposure", "extend_packet", "connect_packet"})
     EXPECT_NO_THROW(cl::Kernel(program, name)) << name;
   EXPECT_THROW(cl::Kernel(program, "trace_closest"), cl::Error) << "the tracers are not render stages";
   cl::Program trace = buildProgram(test::deviceContext(), KernelFeatures{}, "trace.cl");

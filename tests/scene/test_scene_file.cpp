@@ -267,7 +267,7 @@ TEST(SceneFile, RenderSettingsAndEnvironment) {
   writeFile(testDir() / "maps" / "sky.hdr", "not read by the loader");
   SceneFile f = loadText(doc(R"(
     "render": {"width": 320, "height": 200, "spp": 16, "max_bounces": 3, "seed": 4000000000, "exposure": -1.5,
-               "integrator": "minimal"},
+               "integrator": "minimal", "tonemap": "agx"},
     "environment": {"map": "maps/sky.hdr", "intensity": 2, "rotation": 90, "hidden": true})"));
   const SceneFileSettings& s = f.settings;
   EXPECT_EQ(s.width, 320);
@@ -277,6 +277,7 @@ TEST(SceneFile, RenderSettingsAndEnvironment) {
   EXPECT_EQ(s.seed, 4000000000u);
   EXPECT_EQ(s.exposureStops, -1.5f);
   EXPECT_EQ(s.integrator, "minimal");
+  EXPECT_EQ(s.tonemap, "agx");
   ASSERT_TRUE(s.environment.has_value());
   EXPECT_FALSE(s.environment->color.has_value());
   // resolved against the scene file's folder
@@ -867,9 +868,12 @@ const BadFile kBadFiles[] = {
         BadFile{"RenderSppFraction", doc(R"("render": {"spp": 1.5})"), "render.spp: must be an integer, got 1.5"},
         BadFile{"RenderIntegrator", doc(R"("render": {"integrator": "fast"})"),
                 "render.integrator: must be \"path\" or \"minimal\", got \"fast\""},
+        BadFile{"RenderTonemap", doc(R"("render": {"tonemap": "filmic"})"),
+                "render.tonemap: must be one of linear, reinhard, reinhard-modified, hable, aces, aces-narkowicz, agx, "
+                "pbr-neutral, got \"filmic\""},
         BadFile{"RenderSeed", doc(R"("render": {"seed": -1})"), "render.seed: must be an integer in [0, 4294967295], got -1"},
         BadFile{"RenderUnknown", doc(R"("render": {"samples": 4})"),
-                "render.samples: unknown field (expected one of: width, height, spp, max_bounces, seed, exposure, integrator)"},
+                "render.samples: unknown field (expected one of: width, height, spp, max_bounces, seed, exposure, integrator, tonemap)"},
         // materials
         BadFile{"MaterialsNotAnObject", doc(R"("materials": [])"), "materials: must be an object, got []"},
         BadFile{"MaterialBaseColor", material(R"("base_color": [0.5, 1.2, 0.5])"),
