@@ -5,6 +5,7 @@
 #pragma once
 
 #include "device/context.h"
+#include "device/program.h"
 #include "device/scene_buffers.h"
 #include "render/path_state.h"
 #include "render/stage_params.h"
@@ -90,6 +91,18 @@ struct Image {
   std::vector<std::uint8_t> srgba;     ///< tone-mapped 8-bit sRGB, alpha 255
 };
 
+/// The running accumulation exactly as the device holds it: what a
+/// checkpoint saves and a resume restores (host/render/checkpoint.h).
+struct Accumulation {
+  int samplesDone = 0;                   ///< sample passes folded in (the next pass's sample index)
+  std::uint64_t nonFiniteSamples = 0;    ///< NaN/Inf samples discarded so far
+  std::vector<std::uint8_t> state;       ///< kAccumulationStateBytes per pixel (accumulate.cl's state)
+  std::vector<std::uint32_t> samples;    ///< samples folded into each pixel
+};
+
+/// Bytes of accumulation state per pixel (PathState::state: float4[4]).
+constexpr std::size_t kAccumulationStateBytes = 64;
+
 struct RenderStats {
   int samplesDone = 0;
   std::uint64_t raysTraced = 0;       ///< extend rays (camera and bounce rays)
@@ -106,6 +119,17 @@ class Renderer {
   void renderSample();
   /// Read the accumulated image (and tone-map it on the device).
   Image readImage();
+  /// The mean, variance and sample counts only (no tone mapping, srgba
+  /// left empty): the cheaper read the halting criteria make.
+  Image readRadiance();
+  /// The running accumulation, for a checkpoint.
+  Accumulation saveAccumulation();
+  /// Continue from a saved accumulation of the same scene and settings:
+  /// the next pass renders sample `saved.samplesDone`. Throws
+  /// std::invalid_argument when its size is not this image's.
+  void restoreAccumulation(const Accumulation& saved);
+  /// What the kernels were compiled with (the checkpoint's identity).
+  const KernelFeatures& kernelFeatures() const { return m_features; }
 
   const RenderStats& stats() const { return m_stats; }
   const RenderSettings& settings() const { return m_settings; }
@@ -117,12 +141,16 @@ class Renderer {
   std::size_t pathStateBytes() const { return m_path.bytes; }
 
  private:
+  /// Resolve the accumulation state into mean and m2, and read them with
+  /// the per-pixel counts into `image` (srgba untouched).
+  void readResolved(Image& image, bool tonemap);
   [[noreturn]] void throwNonFinite(int sample, std::uint32_t path, std::uint32_t where);
   Context& m_context;
   RenderSettings m_settings;
   int m_packetWidth = WT_PACKET_WIDTH;  ///< rays per packet (packetWidthFor)
   WtCamera m_camera;
   std::unique_ptr<SceneBuffers> m_scene;
+  KernelFeatures m_features;
   cl::Program m_program;
   KernelArgs<stage::Generate> m_generate;
   KernelArgs<stage::Extend> m_extend;
