@@ -78,9 +78,11 @@ void Fnv64::bytes(const void* data, std::size_t size) {
     std::memcpy(&w, p, 8);
     word(w);
   }
-  // here m_tailSize == 0 and size < 8
-  std::memcpy(m_tail, p, size);
-  m_tailSize = size;
+  // a rest here means m_tailSize == 0 and size < 8
+  if (size > 0) {
+    std::memcpy(m_tail, p, size);
+    m_tailSize = size;
+  }
 }
 
 std::uint64_t Fnv64::value() const {
