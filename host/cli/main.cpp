@@ -329,6 +329,11 @@ int runRender(RenderOptions options) {
       }
       std::printf(" (relative RMS error of the pixel means)\n");
     }
+    if (halting.errorChecks() > 0)
+      wt::log::debug(std::to_string(halting.errorChecks()) + " error estimates read back in " +
+                     std::to_string(halting.errorCheckSeconds()) + " s, " +
+                     std::to_string(100.0 * halting.errorCheckSeconds() / std::max(1e-9, renderer.stats().seconds)) +
+                     " % of the " + std::to_string(renderer.stats().seconds) + " s of sample passes");
     std::fflush(stdout);
   }
 
