@@ -38,10 +38,13 @@ void Halting::recordError(int samplesDone, double relError, double readSeconds, 
   m_lastErrorSamples = samplesDone;
   ++m_checks;
   m_checkSeconds += readSeconds;
-  // space read-backs so that they cost at most kErrorCheckShare of the passes between them
+  // Space read-backs so that they cost at most kErrorCheckShare of the
+  // passes between them, by the cheapest one seen: the first includes
+  // building the resolve kernel, so the second follows at once.
+  m_minReadSeconds = m_checks == 1 ? readSeconds : std::min(m_minReadSeconds, readSeconds);
   int spacing = 1;
-  if (secondsPerSample > 0.0)
-    spacing = int(std::clamp(std::ceil(readSeconds / (kErrorCheckShare * secondsPerSample)), 1.0, 1e6));
+  if (secondsPerSample > 0.0 && m_checks > 1)
+    spacing = int(std::clamp(std::ceil(m_minReadSeconds / (kErrorCheckShare * secondsPerSample)), 1.0, 1e6));
   int next = samplesDone + spacing;
   // the error falls as 1/sqrt(n): look again where that trend crosses the target, if sooner
   if (m_criteria.targetError > 0.0 && std::isfinite(relError) && relError > m_criteria.targetError) {

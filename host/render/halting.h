@@ -40,8 +40,9 @@ enum class HaltReason { None, Samples, Time, TargetError };
 
 /// Decides after each pass whether to stop, and when to estimate the
 /// error: read-backs spaced so that they cost at most kErrorCheckShare of
-/// the render time, and earlier when the error's 1/sqrt(n) trend says the
-/// target will be crossed before then.
+/// the render time (by the cheapest read-back seen, from the second on),
+/// and earlier when the error's 1/sqrt(n) trend says the target will be
+/// crossed before then.
 class Halting {
  public:
   /// `samplesDone`: samples already accumulated (a resumed checkpoint's).
@@ -74,6 +75,7 @@ class Halting {
   int m_lastErrorSamples = 0;
   int m_checks = 0;
   double m_checkSeconds = 0.0;
+  double m_minReadSeconds = 0.0;
 };
 
 /// "12.5 s", "3 min 05 s", "1 h 02 min".

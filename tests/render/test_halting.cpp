@@ -53,11 +53,17 @@ TEST(Halting, SampleCountTimeAndTargetStopWhicheverComesFirst) {
 }
 
 TEST(Halting, ReadBacksCostAtMostTheirShareOfRenderTime) {
-  // a read-back of 10 ms against 50 ms passes: one every 10 ms / (2% of 50 ms) = 10 passes
+  // the first read-back (with the kernel's build in it) says nothing of the cost: the next follows
   Halting h({kUnboundedSamples, 0.0, 0.001}, 0);
-  h.recordError(20, 0.5, 0.010, 0.050);
-  for (int n = 21; n < 30; ++n) EXPECT_FALSE(h.wantsErrorEstimate(n)) << n;
-  EXPECT_TRUE(h.wantsErrorEstimate(30));
+  h.recordError(20, 0.5, 0.500, 0.050);
+  EXPECT_TRUE(h.wantsErrorEstimate(21));
+  // a read-back of 10 ms against 50 ms passes: one every 10 ms / (2% of 50 ms) = 10 passes
+  h.recordError(21, 0.5, 0.010, 0.050);
+  for (int n = 22; n < 31; ++n) EXPECT_FALSE(h.wantsErrorEstimate(n)) << n;
+  EXPECT_TRUE(h.wantsErrorEstimate(31));
+  // spaced by the cheapest seen: a slow one (another process on the machine) does not stretch it
+  h.recordError(31, 0.5, 0.100, 0.050);
+  EXPECT_TRUE(h.wantsErrorEstimate(41));
   // a cheap read-back: every pass
   Halting cheap({kUnboundedSamples, 0.0, 0.001}, 0);
   cheap.recordError(20, 0.5, 1e-6, 0.050);
@@ -68,6 +74,7 @@ TEST(Halting, TheErrorTrendBringsTheNextEstimateForward) {
   // 0.051 at 100 samples against 0.05: 1/sqrt(n) crosses at 100 * 1.0404 = 105 samples,
   // before the 100 passes the read-back's cost would space
   Halting h({kUnboundedSamples, 0.0, 0.05}, 0);
+  h.recordError(99, 0.052, 0.010, 0.005);
   h.recordError(100, 0.051, 0.010, 0.005);
   EXPECT_FALSE(h.wantsErrorEstimate(104));
   EXPECT_TRUE(h.wantsErrorEstimate(105));
