@@ -223,7 +223,12 @@ int runRender(RenderOptions options) {
   // checkpoints beside the first output; a resumed render must be the same render
   const std::filesystem::path checkpointPath = wt::checkpointPathFor(options.outputs.front());
   std::vector<wt::CheckpointField> identity;
-  if (options.resume || options.checkpointSeconds > 0.0) identity = wt::checkpointIdentity(scene, renderer);
+  if (options.resume || options.checkpointSeconds > 0.0) {
+    auto start = std::chrono::steady_clock::now();
+    identity = wt::checkpointIdentity(scene, renderer);
+    wt::log::debug("checkpoint identity (scene, environment and kernel hashes) in " +
+                   std::to_string(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count()) + " s");
+  }
   if (options.resume) {
     wt::Checkpoint saved = wt::readCheckpoint(checkpointPath);
     wt::requireSameRender(checkpointPath, saved, identity);
