@@ -281,7 +281,7 @@ int runRender(RenderOptions options) {
     const wt::RenderStats& st = renderer.stats();
     const int rendered = st.samplesDone - resumedSamples;
     const std::string line = wt::progressLine(halting, st.samplesDone, st.seconds > 0.0 ? st.raysTraced / st.seconds * 1e-6 : 0.0,
-                                              since(loopStart), rendered > 0 ? st.seconds / rendered : 0.0);
+                                              since(loopStart), rendered > 0 ? st.seconds / rendered : 0.0, last);
     // pad over the longer line it replaces
     std::fprintf(stderr, tty ? "\r%-78s%s" : "%s%s\n", line.c_str(), tty && last ? "\n" : "");
     std::fflush(stderr);

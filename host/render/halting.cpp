@@ -90,7 +90,7 @@ std::string formatDuration(double seconds) {
 }
 
 std::string progressLine(const Halting& halting, int samplesDone, double mraysPerSecond, double seconds,
-                         double secondsPerSample) {
+                         double secondsPerSample, bool final) {
   const HaltCriteria& c = halting.criteria();
   char text[256];
   std::string line = "sample " + std::to_string(samplesDone);
@@ -106,7 +106,7 @@ std::string progressLine(const Halting& halting, int samplesDone, double mraysPe
     }
   }
   const double eta = halting.eta(samplesDone, seconds, secondsPerSample);
-  if (eta >= 0.0) line += "  ETA " + formatDuration(eta);
+  if (eta >= 0.0 && !final) line += "  ETA " + formatDuration(eta);
   return line;
 }
 

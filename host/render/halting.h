@@ -82,8 +82,9 @@ class Halting {
 std::string formatDuration(double seconds);
 
 /// The progress line: samples done (of the count when one bounds the
-/// render), Mrays/s, elapsed time, the last error estimate, and the ETA.
+/// render), Mrays/s, elapsed time, the last error estimate, and the ETA
+/// (not on the `final` line).
 std::string progressLine(const Halting& halting, int samplesDone, double mraysPerSecond, double seconds,
-                         double secondsPerSample);
+                         double secondsPerSample, bool final = false);
 
 }  // namespace wt

@@ -97,6 +97,7 @@ TEST(Halting, ProgressLineNamesSamplesRateTimeErrorAndEta) {
   EXPECT_EQ(line, "sample 16  1.50 Mrays/s  8.0 s  error 0.1000 (target 0.05)  ETA 24.0 s");
   Halting bounded({64, 0.0, 0.0}, 0);
   EXPECT_EQ(progressLine(bounded, 4, 2.0, 130.0, 0.5), "sample 4/64  2.00 Mrays/s  2 min 10 s  ETA 30.0 s");
+  EXPECT_EQ(progressLine(bounded, 64, 2.0, 130.0, 0.5, /*final=*/true), "sample 64/64  2.00 Mrays/s  2 min 10 s");
 }
 
 }  // namespace
