@@ -69,7 +69,8 @@ double Halting::eta(int samplesDone, double seconds, double secondsPerSample) co
   auto offer = [&](double t) {
     if (t >= 0.0 && std::isfinite(t) && (best < 0.0 || t < best)) best = t;
   };
-  if (secondsPerSample > 0.0) offer((m_criteria.samplesPerPixel - samplesDone) * secondsPerSample);
+  if (secondsPerSample > 0.0 && m_criteria.samplesPerPixel < kUnboundedSamples)
+    offer((m_criteria.samplesPerPixel - samplesDone) * secondsPerSample);
   if (m_criteria.seconds > 0.0) offer(std::max(0.0, m_criteria.seconds - seconds));
   if (m_criteria.targetError > 0.0 && m_lastError > 0.0 && secondsPerSample > 0.0) {
     const double ratio = m_lastError / m_criteria.targetError;

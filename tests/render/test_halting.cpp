@@ -87,7 +87,7 @@ TEST(Halting, EtaIsTheNearestCriterion) {
   EXPECT_NEAR(h.eta(100, 1.0, 0.01), 1.0, 1e-9);   // 100 samples of 10 ms before 9 s left
   EXPECT_NEAR(h.eta(100, 9.5, 0.01), 0.5, 1e-9);   // the budget first
   Halting none({kUnboundedSamples, 0.0, 0.05}, 0);
-  EXPECT_LT(none.eta(10, 1.0, 0.0), 0.0);          // nothing known yet
+  EXPECT_LT(none.eta(10, 1.0, 0.01), 0.0);         // no error estimated yet, and no sample limit
 }
 
 TEST(Halting, ProgressLineNamesSamplesRateTimeErrorAndEta) {
