@@ -9,6 +9,8 @@
 #include "output/image_io.h"
 #include "device/scene_buffers.h"
 #include "render/feature_set.h"
+#include "render/checkpoint.h"
+#include "render/halting.h"
 #include "render/image_error.h"
 #include "render/renderer.h"
 #include "scene/default_scene.h"
@@ -132,6 +134,10 @@ struct RenderOptions {
   bool quiet = false;
   bool verbose = false;
   TonemapOptions tonemap;
+  double timeSeconds = 0.0;        ///< --time; 0: none
+  double targetError = 0.0;        ///< --target-error; 0: none
+  double checkpointSeconds = 0.0;  ///< --checkpoint; 0: none
+  bool resume = false;
   GivenOptions given;
 };
 
@@ -301,28 +307,126 @@ int runRender(RenderOptions options) {
     std::fflush(errorOut);
   };
 
+  // checkpoints beside the first output; a resumed render must be the same render
+  const std::filesystem::path checkpointPath = wt::checkpointPathFor(options.outputs.front());
+  std::vector<wt::CheckpointField> identity;
+  if (options.resume || options.checkpointSeconds > 0.0) {
+    auto start = std::chrono::steady_clock::now();
+    identity = wt::checkpointIdentity(scene, renderer);
+    wt::log::debug("checkpoint identity (scene, environment and kernel hashes) in " +
+                   std::to_string(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count()) + " s");
+  }
+  if (options.resume) {
+    wt::Checkpoint saved = wt::readCheckpoint(checkpointPath);
+    wt::requireSameRender(checkpointPath, saved, identity);
+    if (saved.device != device.name)
+      wt::log::warnOnce(checkpointPath.string() + ": rendered on '" + saved.device + "', resumed on '" + device.name +
+                        "': rounding may differ from an uninterrupted render");
+    renderer.restoreAccumulation(saved.accumulation);
+    wt::log::info("resumed from " + checkpointPath.string() + " at " + std::to_string(saved.accumulation.samplesDone) +
+                  " samples");
+  }
+  const int resumedSamples = renderer.stats().samplesDone;
+  int checkpointSamples = resumedSamples;
+  auto saveCheckpoint = [&]() {
+    auto start = std::chrono::steady_clock::now();
+    wt::Checkpoint c;
+    c.identity = identity;
+    c.device = device.name;
+    c.pixels = std::uint64_t(settings.width) * std::uint64_t(settings.height);
+    c.accumulation = renderer.saveAccumulation();
+    wt::writeCheckpoint(checkpointPath, c);
+    checkpointSamples = c.accumulation.samplesDone;
+    wt::log::debug("checkpoint " + checkpointPath.string() + " at " + std::to_string(checkpointSamples) +
+                   " samples written in " +
+                   std::to_string(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count()) + " s");
+  };
+
+  // a render only --time or --target-error bounds has no sample limit
+  int spp = options.settings.samplesPerPixel;
+  if ((options.timeSeconds > 0.0 || options.targetError > 0.0) && !options.given.spp && !loaded.settings.samplesPerPixel)
+    spp = wt::kUnboundedSamples;
+  wt::Halting halting({spp, options.timeSeconds, options.targetError}, resumedSamples);
+  auto estimateError = [&]() {
+    auto start = std::chrono::steady_clock::now();
+    const double e = std::sqrt(wt::estimatedRelMse(renderer.readRadiance()));
+    const double readSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const int rendered = renderer.stats().samplesDone - resumedSamples;
+    halting.recordError(renderer.stats().samplesDone, e, readSeconds,
+                        rendered > 0 ? renderer.stats().seconds / rendered : 0.0);
+  };
+
   std::signal(SIGINT, onInterrupt);
   std::signal(SIGTERM, onInterrupt);
   const bool tty = isatty(STDERR_FILENO);
-  const int spp = options.settings.samplesPerPixel;
-  auto lastReport = std::chrono::steady_clock::now();
+  const auto loopStart = std::chrono::steady_clock::now();
+  auto lastReport = loopStart, lastCheckpoint = loopStart;
+  auto since = [](std::chrono::steady_clock::time_point t) {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+  };
+  auto progress = [&](bool last) {
+    const wt::RenderStats& st = renderer.stats();
+    const int rendered = st.samplesDone - resumedSamples;
+    const std::string line = wt::progressLine(halting, st.samplesDone, st.seconds > 0.0 ? st.raysTraced / st.seconds * 1e-6 : 0.0,
+                                              since(loopStart), rendered > 0 ? st.seconds / rendered : 0.0, last);
+    // pad over the longer line it replaces
+    std::fprintf(stderr, tty ? "\r%-78s%s" : "%s%s\n", line.c_str(), tty && last ? "\n" : "");
+    std::fflush(stderr);
+    lastReport = std::chrono::steady_clock::now();
+  };
+  wt::HaltReason reason = wt::HaltReason::None;
   std::string failure;
   try {
-    for (int s = 0; s < spp && !g_interrupted; ++s) {
+    while (!g_interrupted) {
+      reason = halting.check(renderer.stats().samplesDone, since(loopStart));
+      if (reason != wt::HaltReason::None) break;
       renderer.renderSample();
       int done = renderer.stats().samplesDone;
       if (reference && ((done & (done - 1)) == 0 || done == spp)) logError();
-      auto now = std::chrono::steady_clock::now();
-      bool last = s + 1 == spp;
-      if (!options.quiet && (tty || last || now - lastReport > std::chrono::seconds(5))) {
-        const wt::RenderStats& st = renderer.stats();
-        std::fprintf(stderr, "%ssample %d/%d  %.2f Mrays/s  %.1f s%s", tty ? "\r" : "", st.samplesDone,
-                     spp, st.raysTraced / st.seconds * 1e-6, st.seconds, tty && !last ? "" : "\n");
-        lastReport = now;
+      if (halting.wantsErrorEstimate(done)) estimateError();
+      if (options.checkpointSeconds > 0.0 && since(lastCheckpoint) >= options.checkpointSeconds) {
+        saveCheckpoint();
+        lastCheckpoint = std::chrono::steady_clock::now();
       }
+      // a terminal line redrawn ten times a second; elsewhere a line every 5 s
+      if (!options.quiet && since(lastReport) > (tty ? 0.1 : 5.0)) progress(false);
     }
   } catch (const std::exception& e) {
     failure = e.what();
+  }
+  if (!options.quiet && renderer.stats().samplesDone > resumedSamples) progress(true);
+  const int done = renderer.stats().samplesDone;
+  if (failure.empty() && options.checkpointSeconds > 0.0 && done > checkpointSamples) {
+    try {
+      saveCheckpoint();
+    } catch (const std::exception& e) {
+      failure = e.what();
+    }
+  }
+
+  // why it stopped, and the error there
+  if (failure.empty() && done > 0) {
+    const char* why = reason == wt::HaltReason::Time          ? "--time budget reached"
+                      : reason == wt::HaltReason::TargetError ? "--target-error reached"
+                      : reason == wt::HaltReason::Samples     ? "--spp reached"
+                                                              : "interrupted";
+    std::printf("stopped after %d samples (%s), %s of rendering\n", done, why, wt::formatDuration(since(loopStart)).c_str());
+    if (options.targetError > 0.0 || reference) {
+      if (halting.lastErrorSamples() != done) estimateError();
+      std::printf("error at %d samples: estimated %.5f", done, halting.lastError());
+      if (reference) {
+        wt::ImageError e = wt::imageError(renderer.readRadiance(), *reference);
+        std::printf(", measured %.5f against %s", std::sqrt(std::max(0.0, e.relMse)), options.reference.c_str());
+        if ((done & (done - 1)) != 0 && done != spp) logError();
+      }
+      std::printf(" (relative RMS error of the pixel means)\n");
+    }
+    if (halting.errorChecks() > 0)
+      wt::log::debug(std::to_string(halting.errorChecks()) + " error estimates read back in " +
+                     std::to_string(halting.errorCheckSeconds()) + " s, " +
+                     std::to_string(100.0 * halting.errorCheckSeconds() / std::max(1e-9, renderer.stats().seconds)) +
+                     " % of the " + std::to_string(renderer.stats().seconds) + " s of sample passes");
+    std::fflush(stdout);
   }
 
   if (errorOut && errorOut != stdout) std::fclose(errorOut);
@@ -603,6 +707,22 @@ int main(int argc, char** argv) {
   renderCmd->add_flag("--general-program", render.settings.generalProgram,
                       "Developer option: build every kernel switch on instead of the scene's feature set (the same "
                       "image; for comparisons)");
+  renderCmd->add_option("--time", render.timeSeconds,
+                        "Stop after the sample pass that crosses this many seconds of rendering (scene loading and "
+                        "kernel builds not counted); without --spp, no sample limit")
+      ->check(CLI::PositiveNumber);
+  renderCmd->add_option("--target-error", render.targetError,
+                        "Stop when the estimated relative error of the pixel means (RMS over pixels and channels of "
+                        "standard error / (mean^2 + 0.01)^0.5, from each pixel's variance) falls below this, e.g. "
+                        "0.02; estimated from 16 samples on; without --spp, no sample limit")
+      ->check(CLI::PositiveNumber);
+  renderCmd->add_option("--checkpoint", render.checkpointSeconds,
+                        "Every this many seconds (and at the end) write the running accumulation to OUTPUT.wtckpt "
+                        "beside the first output, atomically")
+      ->check(CLI::PositiveNumber);
+  renderCmd->add_flag("--resume", render.resume,
+                      "Continue from OUTPUT.wtckpt: the same image as an uninterrupted render of the same total "
+                      "--spp; refused for another scene or other settings");
   renderCmd->add_flag("-q,--quiet", render.quiet, "No progress output");
   renderCmd->add_flag("-v,--verbose", render.verbose,
                       "Timings of the scene set-up (BVH build phases) and of each program's build (kernel cache hit or miss)");

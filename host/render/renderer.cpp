@@ -274,23 +274,37 @@ void Renderer::throwNonFinite(int sample, std::uint32_t path, std::uint32_t wher
 }
 
 Image Renderer::readImage() {
+  Image image;
+  readResolved(image, true);
+  return image;
+}
+
+Image Renderer::readRadiance() {
+  Image image;
+  readResolved(image, false);
+  return image;
+}
+
+void Renderer::readResolved(Image& image, bool tonemap) {
   const std::size_t pixels = std::size_t(m_settings.width) * std::size_t(m_settings.height);
   cl::CommandQueue& q = m_context.queue();
   m_resolve.set("frame", frameParams(m_settings, m_lights, m_stats.samplesDone, 0));
   launch(m_resolve, pixels);
-  m_tonemapper.run(frameParams(m_settings, m_lights, m_stats.samplesDone, 0), tonemapParams(m_settings.tonemap),
-                   m_path.mean, m_path.pixels);
+  if (tonemap)
+    m_tonemapper.run(frameParams(m_settings, m_lights, m_stats.samplesDone, 0), tonemapParams(m_settings.tonemap),
+                     m_path.mean, m_path.pixels);
 
   std::vector<float> mean(4 * pixels), m2(4 * pixels);
-  Image image;
   image.width = m_settings.width;
   image.height = m_settings.height;
   image.samples.resize(pixels);
-  image.srgba.resize(4 * pixels);
   q.enqueueReadBuffer(m_path.mean, CL_FALSE, 0, mean.size() * 4, mean.data());
   q.enqueueReadBuffer(m_path.m2, CL_FALSE, 0, m2.size() * 4, m2.data());
   q.enqueueReadBuffer(m_path.sampleCount, CL_FALSE, 0, pixels * 4, image.samples.data());
-  q.enqueueReadBuffer(m_path.pixels, CL_FALSE, 0, pixels * 4, image.srgba.data());
+  if (tonemap) {
+    image.srgba.resize(4 * pixels);
+    q.enqueueReadBuffer(m_path.pixels, CL_FALSE, 0, pixels * 4, image.srgba.data());
+  }
   cl_uint counters[WT_COUNTER_COUNT];
   q.enqueueReadBuffer(m_counters, CL_FALSE, 0, sizeof(counters), counters);
   m_context.finish();
@@ -305,7 +319,37 @@ Image Renderer::readImage() {
       image.rgbVariance[3 * i + c] = n > 1 ? m2[4 * i + c] / float(n - 1) : 0.0f;
     }
   }
-  return image;
+}
+
+Accumulation Renderer::saveAccumulation() {
+  const std::size_t pixels = std::size_t(m_settings.width) * std::size_t(m_settings.height);
+  cl::CommandQueue& q = m_context.queue();
+  Accumulation a;
+  a.samplesDone = m_stats.samplesDone;
+  a.state.resize(pixels * kAccumulationStateBytes);
+  a.samples.resize(pixels);
+  cl_uint counters[WT_COUNTER_COUNT];
+  q.enqueueReadBuffer(m_path.state, CL_FALSE, 0, a.state.size(), a.state.data());
+  q.enqueueReadBuffer(m_path.sampleCount, CL_FALSE, 0, pixels * 4, a.samples.data());
+  q.enqueueReadBuffer(m_counters, CL_FALSE, 0, sizeof(counters), counters);
+  m_context.finish();
+  a.nonFiniteSamples = counters[WT_COUNTER_NONFINITE];
+  return a;
+}
+
+void Renderer::restoreAccumulation(const Accumulation& saved) {
+  const std::size_t pixels = std::size_t(m_settings.width) * std::size_t(m_settings.height);
+  if (saved.state.size() != pixels * kAccumulationStateBytes || saved.samples.size() != pixels || saved.samplesDone < 0)
+    throw std::invalid_argument("saved accumulation holds " + std::to_string(saved.samples.size()) +
+                                " pixels, the image " + std::to_string(pixels));
+  cl::CommandQueue& q = m_context.queue();
+  q.enqueueWriteBuffer(m_path.state, CL_FALSE, 0, saved.state.size(), saved.state.data());
+  q.enqueueWriteBuffer(m_path.sampleCount, CL_FALSE, 0, pixels * 4, saved.samples.data());
+  const cl_uint nonFinite = cl_uint(saved.nonFiniteSamples);
+  q.enqueueWriteBuffer(m_counters, CL_FALSE, WT_COUNTER_NONFINITE * sizeof(cl_uint), sizeof(cl_uint), &nonFinite);
+  m_context.finish();
+  m_stats.samplesDone = saved.samplesDone;
+  m_stats.nonFiniteSamples = saved.nonFiniteSamples;
 }
 
 }  // namespace wt

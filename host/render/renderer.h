@@ -98,6 +98,18 @@ struct Image {
   std::vector<std::uint8_t> srgba;     ///< tone-mapped 8-bit sRGB, alpha 255
 };
 
+/// The running accumulation exactly as the device holds it: what a
+/// checkpoint saves and a resume restores (host/render/checkpoint.h).
+struct Accumulation {
+  int samplesDone = 0;                   ///< sample passes folded in (the next pass's sample index)
+  std::uint64_t nonFiniteSamples = 0;    ///< NaN/Inf samples discarded so far
+  std::vector<std::uint8_t> state;       ///< kAccumulationStateBytes per pixel (accumulate.cl's state)
+  std::vector<std::uint32_t> samples;    ///< samples folded into each pixel
+};
+
+/// Bytes of accumulation state per pixel (PathState::state: float4[4]).
+constexpr std::size_t kAccumulationStateBytes = 64;
+
 struct RenderStats {
   int samplesDone = 0;
   std::uint64_t raysTraced = 0;       ///< extend rays (camera and bounce rays)
@@ -115,7 +127,15 @@ class Renderer {
   void renderSample();
   /// Read the accumulated image (and tone-map it on the device).
   Image readImage();
-
+  /// The mean, variance and sample counts only (no tone mapping, srgba
+  /// left empty): the cheaper read the halting criteria make.
+  Image readRadiance();
+  /// The running accumulation, for a checkpoint.
+  Accumulation saveAccumulation();
+  /// Continue from a saved accumulation of the same scene and settings:
+  /// the next pass renders sample `saved.samplesDone`. Throws
+  /// std::invalid_argument when its size is not this image's.
+  void restoreAccumulation(const Accumulation& saved);
   const RenderStats& stats() const { return m_stats; }
   const RenderSettings& settings() const { return m_settings; }
   const SceneBuffers& sceneBuffers() const { return *m_scene; }
@@ -123,7 +143,7 @@ class Renderer {
   const LightList& lights() const { return m_lights; }
   const Environment& environment() const { return m_environment; }
   /// What the scene and settings use (sceneFeatures), and the switches the
-  /// program was built with.
+  /// program was built with (also the checkpoint's identity).
   const FeatureSet& features() const { return m_features; }
   const KernelFeatures& kernelFeatures() const { return m_kernelFeatures; }
   /// Bytes of the per-pixel buffers (PathState) on the device.
@@ -132,6 +152,9 @@ class Renderer {
   float autoExposure() { return m_settings.tonemap.autoExposure ? m_tonemapper.autoExposure() : 1.0f; }
 
  private:
+  /// Resolve the accumulation state into mean and m2, and read them with
+  /// the per-pixel counts into `image` (srgba untouched).
+  void readResolved(Image& image, bool tonemap);
   [[noreturn]] void throwNonFinite(int sample, std::uint32_t path, std::uint32_t where);
   Context& m_context;
   RenderSettings m_settings;
