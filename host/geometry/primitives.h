@@ -97,6 +97,21 @@ CurveSegment curveSegment(const PrimitiveRows& rows, std::uint32_t index);
 glm::vec3 curvePoint(const CurveSegment& segment, glm::vec3 o, glm::vec3 d, float t, glm::vec3* error,
                      glm::vec3* normal);
 
+/// Whether an SDF grid is stored sparse: as it says, else by size (kSdfSparseAboveCells).
+bool sdfGridSparse(const SdfGrid& grid);
+/// Whether an SDF grid can be drawn: 1 .. kSdfMaxCells cells per axis, one
+/// value per corner, a finite invertible placement. The others are left out.
+bool sdfGridUsable(const SdfGrid& grid);
+
+/// SDF grids (WT_PRIM_SDF_GRID): WT_SDF_GRID_ROWS data rows per grid, then
+/// the values (a dense grid's corners once; a sparse grid's bricks'
+/// (WT_SDF_BRICK + 1)^3 corners each); one primitive per brick of
+/// WT_SDF_BRICK^3 cells that the surface crosses (a cell whose corners all
+/// lie on one side holds no surface: the interpolant is their convex
+/// combination), boxed around those cells, grid by grid, bricks x fastest.
+/// count: the bricks kept.
+void gatherSdfGrids(const Scene& scene, PrimitiveRows& rows);
+
 /// A placed copy of a triangle geometry stored once (WT_PRIM_INSTANCE,
 /// kernels/geometry/instance.cl), as SceneBuffers laid it out.
 struct InstanceDesc {

@@ -7,6 +7,7 @@
 
 #include "scene/generators.h"
 #include "scene/hair_loader.h"
+#include "scene/sdf_volume.h"
 
 #include <nlohmann/json.hpp>
 
@@ -44,6 +45,8 @@ constexpr int kMaxSamples = 1 << 24;
 constexpr int kMaxBounces = 1024;
 /// Curve points a scene may hold, children included (28-bit primitive ids).
 constexpr std::uint64_t kMaxCurvePoints = std::uint64_t(1) << 28;
+/// Cells per axis of a procedural SDF grid at most (its corners take 4 bytes each on the host).
+constexpr std::int64_t kMaxSdfResolution = 512;
 constexpr std::int64_t kMaxChildren = 100000;
 
 // paths and values in messages
@@ -182,6 +185,12 @@ struct WorldSphere {
   double radius;
   std::uint32_t material;
   std::string path;  ///< "objects[2]" or "objects[2].centers[5]"
+};
+
+/// An "sdf" object, its lattice placed in world coordinates (before the origin is subtracted).
+struct WorldSdf {
+  SdfGrid grid;
+  std::string path;  ///< "objects[2]"
 };
 
 /// A "curves" object in world coordinates, before the origin is subtracted.
@@ -542,13 +551,79 @@ class Loader {
 
   void readObject(const Json& v, const std::string& path) {
     object(v, path);
-    const std::string type = string(require(v, path, "type", ": gltf, sphere, spheres or curves"), member(path, "type"));
+    const std::string type = string(require(v, path, "type", ": gltf, sphere, spheres, curves or sdf"), member(path, "type"));
     if (type == "gltf") readGltf(v, path);
     else if (type == "sphere") readSphere(v, path);
     else if (type == "spheres") readSpheres(v, path);
     else if (type == "curves") readCurves(v, path);
+    else if (type == "sdf") readSdf(v, path);
     else
-      fail(member(path, "type"), "unknown type \"" + type + "\" (expected one of: gltf, sphere, spheres, curves)");
+      fail(member(path, "type"), "unknown type \"" + type + "\" (expected one of: gltf, sphere, spheres, curves, sdf)");
+  }
+
+  /// A grid of signed distances: a procedural shape at a resolution, or a .vol file.
+  void readSdf(const Json& v, const std::string& path) {
+    checkKeys(v, path, {"type", "shape", "resolution", "radius", "minor_radius", "half_size", "amplitude", "frequency",
+                        "file", "storage", "transform", "material"});
+    const Json* shapeValue = find(v, "shape");
+    const Json* file = find(v, "file");
+    if (shapeValue && file) fail(path, "give \"shape\" (procedural) or \"file\" (a .vol grid), not both");
+    if (!shapeValue && !file) fail(member(path, "shape"), "missing (required: \"shape\", or a \"file\" of a .vol grid)");
+    SdfVolume volume;
+    if (shapeValue) {
+      const std::string where = member(path, "shape");
+      const std::string name = string(*shapeValue, where);
+      SdfShape shape;
+      if (name == "sphere") shape = SdfShape::kSphere;
+      else if (name == "torus") shape = SdfShape::kTorus;
+      else if (name == "box") shape = SdfShape::kBox;
+      else if (name == "noisy_sphere") shape = SdfShape::kNoisySphere;
+      else fail(where, "unknown shape " + describe(*shapeValue) + " (expected one of: sphere, torus, box, noisy_sphere)");
+      const auto resolution = std::uint32_t(integer(require(v, path, "resolution", ": cells per axis"),
+                                                    member(path, "resolution"), 2, kMaxSdfResolution));
+      SdfShapeParams params;
+      auto optional = [&](const char* key, double& to) {
+        if (const Json* x = find(v, key)) to = positive(*x, member(path, key));
+      };
+      optional("radius", params.radius);
+      optional("minor_radius", params.minorRadius);
+      optional("half_size", params.halfSize);
+      optional("amplitude", params.amplitude);
+      optional("frequency", params.frequency);
+      volume = makeSdfShape(shape, params, resolution);
+    } else {
+      for (const char* key : {"resolution", "radius", "minor_radius", "half_size", "amplitude", "frequency"})
+        if (find(v, key)) fail(member(path, key), "applies only to a procedural \"shape\", not to a \"file\"");
+      const std::string where = member(path, "file");
+      const std::string name = string(*file, where);
+      if (name.empty()) fail(where, "must name a file, got \"\"");
+      const fs::path resolved = resolve(name);
+      if (lowerExtension(resolved) != ".vol") fail(where, "must be a .vol grid, got " + describe(*file));
+      requireFile(resolved, where);
+      try {
+        volume = loadVolFile(resolved.string(), resolved.filename().string());
+      } catch (const SceneError& e) {
+        fail(where, e.what());
+      }
+    }
+    WorldSdf sdf;
+    sdf.path = path;
+    sdf.grid.cells = volume.cells;
+    if (const Json* x = find(v, "storage")) {
+      const std::string where = member(path, "storage");
+      const std::string storage = string(*x, where);
+      if (storage == "dense") sdf.grid.storage = SdfStorage::kDense;
+      else if (storage == "sparse") sdf.grid.storage = SdfStorage::kSparse;
+      else if (storage != "auto") fail(where, "must be \"dense\", \"sparse\" or \"auto\", got " + describe(*x));
+    }
+    const std::string problem = sdfSurfaceProblem(volume.values);
+    if (!problem.empty()) m_result.scene.addWarning(path + " " + problem + "; it draws nothing");
+    sdf.grid.values = std::move(volume.values);
+    glm::dmat4 transform(1.0);
+    if (const Json* t = find(v, "transform")) transform = readTransform(*t, member(path, "transform"));
+    sdf.grid.latticeToScene = transform * volume.latticeToObject();
+    sdf.grid.material = materialOf(v, path);
+    m_sdfs.push_back(std::move(sdf));
   }
 
   void readCurves(const Json& v, const std::string& path) {
@@ -857,6 +932,16 @@ class Loader {
       scene.spheres.push_back({center, radius, s.material});
     }
     for (const WorldCurves& c : m_curves) placeCurves(c, origin);
+    for (WorldSdf& sdf : m_sdfs) {
+      SdfGrid grid = std::move(sdf.grid);
+      grid.latticeToScene[3] -= glm::dvec4(origin, 0.0);
+      for (int corner = 0; corner < 8; ++corner) {
+        const glm::dvec3 c((corner & 1) ? grid.cells.x : 0u, (corner & 2) ? grid.cells.y : 0u, (corner & 4) ? grid.cells.z : 0u);
+        if (!isFinite(glm::vec3(glm::dvec3(grid.latticeToScene * glm::dvec4(c, 1.0)))))
+          fail(sdf.path, "the grid's box lies beyond the range of a float from the scene's origin");
+      }
+      scene.sdfGrids.push_back(std::move(grid));
+    }
     if (scene.materials.empty()) {
       scene.materials.push_back(makePbrMaterial(glm::vec3(0.8f), 0.0f, 0.5f));
       scene.materialNames.push_back("(default)");
@@ -886,6 +971,14 @@ class Loader {
       for (const glm::dvec4& p : c.points) {
         lo = glm::min(lo, glm::dvec3(p) - p.w);
         hi = glm::max(hi, glm::dvec3(p) + p.w);
+      }
+    for (const WorldSdf& s : m_sdfs)
+      for (int corner = 0; corner < 8; ++corner) {
+        const glm::dvec3 c((corner & 1) ? s.grid.cells.x : 0u, (corner & 2) ? s.grid.cells.y : 0u,
+                           (corner & 4) ? s.grid.cells.z : 0u);
+        const glm::dvec3 w(s.grid.latticeToScene * glm::dvec4(c, 1.0));
+        lo = glm::min(lo, w);
+        hi = glm::max(hi, w);
       }
     const double kFloatMax = std::numeric_limits<float>::max();
     if (lo.x <= hi.x && lo.y <= hi.y && lo.z <= hi.z && isFinite(lo) && isFinite(hi) &&
@@ -1003,6 +1096,7 @@ class Loader {
   std::vector<Placement> m_placements;
   std::vector<WorldSphere> m_spheres;
   std::vector<WorldCurves> m_curves;
+  std::vector<WorldSdf> m_sdfs;
   std::uint64_t m_curvePoints = 0;  ///< children included
   std::uint32_t m_nextGeometry = 0;
 };
