@@ -112,6 +112,14 @@ bool sdfGridUsable(const SdfGrid& grid);
 /// count: the bricks kept.
 void gatherSdfGrids(const Scene& scene, PrimitiveRows& rows);
 
+/// sdf_surface (kernels/geometry/sdf_grid.cl) on the host: where ray (o, d)
+/// crossed brick `index` (a WT_PRIM_SDF_GRID typed id's index) at t in
+/// brick-local cell `cell` (the hit's first parameter, RayHit::b1), o + t d,
+/// with its error bound; *normal is the interpolant's unit gradient (zero
+/// where it vanishes).
+glm::vec3 sdfGridPoint(const PrimitiveRows& rows, std::uint32_t index, glm::vec3 o, glm::vec3 d, float t, float cell,
+                       glm::vec3* error, glm::vec3* normal);
+
 /// A placed copy of a triangle geometry stored once (WT_PRIM_INSTANCE,
 /// kernels/geometry/instance.cl), as SceneBuffers laid it out.
 struct InstanceDesc {

@@ -133,4 +133,46 @@ void gatherSdfGrids(const Scene& scene, PrimitiveRows& rows) {
   }
 }
 
+glm::vec3 sdfGridPoint(const PrimitiveRows& rows, std::uint32_t index, glm::vec3 o, glm::vec3 d, float t, float cell,
+                       glm::vec3* error, glm::vec3* normal) {
+  const WtVec4* base = rows.data.data() + rows.dataFirst[WT_PRIM_SDF_GRID];
+  const std::array<std::uint32_t, 4>& info = rows.info[rows.infoFirst[WT_PRIM_SDF_GRID] + index];
+  const WtVec4* grid = base + WT_SDF_GRID_ROWS * info[1];
+  const glm::vec3 m[3] = {{grid[0].x, grid[0].y, grid[0].z}, {grid[1].x, grid[1].y, grid[1].z}, {grid[2].x, grid[2].y, grid[2].z}};
+  const glm::vec3 shift(grid[0].w, grid[1].w, grid[2].w);
+  const std::uint32_t nx = std::uint32_t(grid[3].x) + 1, ny = std::uint32_t(grid[3].y) + 1;
+  const bool sparse = (info[3] & WT_SDF_SPARSE) != 0;
+  const std::uint32_t sx = sparse ? WT_SDF_BRICK + 1 : nx, sxy = sparse ? (WT_SDF_BRICK + 1) * (WT_SDF_BRICK + 1) : nx * ny;
+  const glm::ivec3 lo(int(info[3] & 511u) * WT_SDF_BRICK, int((info[3] >> 9) & 511u) * WT_SDF_BRICK,
+                      int((info[3] >> 18) & 511u) * WT_SDF_BRICK);
+  const auto id = std::uint32_t(cell);
+  const glm::ivec3 c(int(id % WT_SDF_BRICK), int((id / WT_SDF_BRICK) % WT_SDF_BRICK), int(id / (WT_SDF_BRICK * WT_SDF_BRICK)));
+  const float* v = reinterpret_cast<const float*>(base) + info[2] + c.x + c.y * sx + c.z * sxy;
+  auto s = [&](int x, int y, int z) { return v[x + y * sx + z * sxy]; };
+  const glm::vec3 p = o + t * d;
+  const glm::vec3 pl(glm::dot(m[0], p) + shift.x, glm::dot(m[1], p) + shift.y, glm::dot(m[2], p) + shift.z);
+  const glm::vec3 q = pl - glm::vec3(lo + c);
+  glm::vec3 grad(0.0f);
+  float scale = 0.0f;
+  for (int z = 0; z < 2; ++z)
+    for (int y = 0; y < 2; ++y)
+      for (int x = 0; x < 2; ++x) {
+        const float w = s(x, y, z), wx = x ? q.x : 1 - q.x, wy = y ? q.y : 1 - q.y, wz = z ? q.z : 1 - q.z;
+        grad += w * glm::vec3((x ? 1.0f : -1.0f) * wy * wz, wx * (y ? 1.0f : -1.0f) * wz, wx * wy * (z ? 1.0f : -1.0f));
+        scale += std::fabs(w);
+      }
+  const glm::vec3 n = grad.x * m[0] + grad.y * m[1] + grad.z * m[2];
+  const float len = glm::length(n);
+  *normal = len > 0.0f && std::isfinite(len) ? n / len : glm::vec3(0.0f);
+  // as the kernel's bound: the ray's rounding into the lattice and the interpolant's, into the scene
+  constexpr float kEps = 1.1920929e-7f;
+  const glm::vec3 apl = glm::abs(pl);
+  const float glen = glm::length(grad);
+  const float offLattice = 8.0f * kEps * (std::max(apl.x, std::max(apl.y, apl.z)) + 1.0f) +
+                           (glen > 0.0f ? 64.0f * kEps * 4.0f * scale / glen : 1.0f);
+  const float gamma3 = 3.0f * 0.5f * kEps / (1.0f - 3.0f * 0.5f * kEps);
+  *error = gamma3 * (glm::abs(o) + glm::abs(t * d)) + glm::vec3(grid[3].w * offLattice);
+  return p;
+}
+
 }  // namespace wt
