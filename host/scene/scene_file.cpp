@@ -564,7 +564,7 @@ class Loader {
   /// A grid of signed distances: a procedural shape at a resolution, or a .vol file.
   void readSdf(const Json& v, const std::string& path) {
     checkKeys(v, path, {"type", "shape", "resolution", "radius", "minor_radius", "half_size", "amplitude", "frequency",
-                        "file", "storage", "transform", "material"});
+                        "file", "box", "storage", "transform", "material"});
     const Json* shapeValue = find(v, "shape");
     const Json* file = find(v, "file");
     if (shapeValue && file) fail(path, "give \"shape\" (procedural) or \"file\" (a .vol grid), not both");
@@ -581,6 +581,7 @@ class Loader {
       else fail(where, "unknown shape " + describe(*shapeValue) + " (expected one of: sphere, torus, box, noisy_sphere)");
       const auto resolution = std::uint32_t(integer(require(v, path, "resolution", ": cells per axis"),
                                                     member(path, "resolution"), 2, kMaxSdfResolution));
+      if (find(v, "box")) fail(member(path, "box"), "applies only to a .raw grid (a shape spans [-1, 1]^3: place it by \"transform\")");
       SdfShapeParams params;
       auto optional = [&](const char* key, double& to) {
         if (const Json* x = find(v, key)) to = positive(*x, member(path, key));
@@ -592,16 +593,42 @@ class Loader {
       optional("frequency", params.frequency);
       volume = makeSdfShape(shape, params, resolution);
     } else {
-      for (const char* key : {"resolution", "radius", "minor_radius", "half_size", "amplitude", "frequency"})
+      for (const char* key : {"radius", "minor_radius", "half_size", "amplitude", "frequency"})
         if (find(v, key)) fail(member(path, key), "applies only to a procedural \"shape\", not to a \"file\"");
       const std::string where = member(path, "file");
       const std::string name = string(*file, where);
       if (name.empty()) fail(where, "must name a file, got \"\"");
       const fs::path resolved = resolve(name);
-      if (lowerExtension(resolved) != ".vol") fail(where, "must be a .vol grid, got " + describe(*file));
+      const std::string ext = lowerExtension(resolved);
+      if (ext != ".vol" && ext != ".raw")
+        fail(where, "must be a .vol grid or a .raw grid of float32, got " + describe(*file));
+      const bool raw = ext == ".raw";
+      // a .raw file is bare values: its shape and box come from the object
+      glm::uvec3 cells(0);
+      glm::dvec3 lo(-1.0), hi(1.0);
+      if (raw) {
+        const std::string resPath = member(path, "resolution");
+        const Json& res = require(v, path, "resolution", ": cells per axis [x, y, z] of a .raw grid");
+        array(res, resPath, 3, "integers (cells per axis)");
+        for (std::size_t a = 0; a < 3; ++a)
+          cells[int(a)] = std::uint32_t(integer(res[a], element(resPath, a), 1, kSdfMaxCells));
+        if (const Json* box = find(v, "box")) {
+          const std::string boxPath = member(path, "box");
+          array(*box, boxPath, 6, "numbers (min x, y, z, max x, y, z)");
+          for (std::size_t a = 0; a < 3; ++a) {
+            lo[int(a)] = number((*box)[a], element(boxPath, a));
+            hi[int(a)] = number((*box)[a + 3], element(boxPath, a + 3));
+            if (!(hi[int(a)] > lo[int(a)])) fail(boxPath, "the maximum must exceed the minimum on every axis");
+          }
+        }
+      } else {
+        for (const char* key : {"resolution", "box"})
+          if (find(v, key)) fail(member(path, key), "applies only to a procedural \"shape\" or a .raw grid (a .vol file says its own)");
+      }
       requireFile(resolved, where);
       try {
-        volume = loadVolFile(resolved.string(), resolved.filename().string());
+        volume = raw ? loadRawSdf(resolved.string(), resolved.filename().string(), cells, lo, hi)
+                     : loadVolFile(resolved.string(), resolved.filename().string());
       } catch (const SceneError& e) {
         fail(where, e.what());
       }

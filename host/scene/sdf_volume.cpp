@@ -71,6 +71,23 @@ float readFloat(const unsigned char* p) {
   return v;
 }
 
+/// The values from the box's units to voxel units (over the shortest cell
+/// edge), refusing a NaN or infinite one by its index and corner.
+template <typename Fail>
+void toVoxelUnits(SdfVolume& v, Fail&& fail) {
+  const glm::dvec3 edge = (v.hi - v.lo) / glm::dvec3(v.cells);
+  const double unit = std::min(edge.x, std::min(edge.y, edge.z));
+  const std::size_t nx = v.cells.x + 1, ny = v.cells.y + 1;
+  for (std::size_t i = 0; i < v.values.size(); ++i) {
+    if (!std::isfinite(v.values[i])) {
+      const std::size_t x = i % nx, y = (i / nx) % ny, z = i / (nx * ny);
+      fail("value " + std::to_string(i) + " (x " + std::to_string(x) + ", y " + std::to_string(y) + ", z " +
+           std::to_string(z) + ") is " + (std::isnan(v.values[i]) ? "NaN" : "infinite"));
+    }
+    v.values[i] = float(double(v.values[i]) / unit);
+  }
+}
+
 }  // namespace
 
 SdfVolume loadVolFile(const std::string& path, const std::string& name) {
@@ -108,17 +125,28 @@ SdfVolume loadVolFile(const std::string& path, const std::string& name) {
     fail("truncated: " + std::to_string(res[0]) + " x " + std::to_string(res[1]) + " x " + std::to_string(res[2]) +
          " values take " + std::to_string(count * sizeof(float)) + " bytes after the header, the file has " +
          std::to_string(in.gcount()));
-  // voxel units: the box's distances over the shortest cell edge
-  const glm::dvec3 edge = (v.hi - v.lo) / glm::dvec3(v.cells);
-  const double unit = std::min(edge.x, std::min(edge.y, edge.z));
-  for (std::size_t i = 0; i < count; ++i) {
-    if (!std::isfinite(v.values[i])) {
-      const std::size_t x = i % res[0], y = (i / res[0]) % res[1], z = i / (std::size_t(res[0]) * res[1]);
-      fail("value " + std::to_string(i) + " (x " + std::to_string(x) + ", y " + std::to_string(y) + ", z " +
-           std::to_string(z) + ") is " + (std::isnan(v.values[i]) ? "NaN" : "infinite"));
-    }
-    v.values[i] = float(double(v.values[i]) / unit);
-  }
+  toVoxelUnits(v, fail);
+  return v;
+}
+
+SdfVolume loadRawSdf(const std::string& path, const std::string& name, glm::uvec3 cells, glm::dvec3 lo, glm::dvec3 hi) {
+  auto fail = [&](const std::string& problem) { throw SceneError(name + ": " + problem); };
+  std::ifstream in(path, std::ios::binary | std::ios::ate);
+  if (!in) fail("cannot open " + path);
+  const auto size = std::uint64_t(in.tellg());
+  SdfVolume v;
+  v.cells = cells;
+  v.lo = lo;
+  v.hi = hi;
+  const std::uint64_t count = std::uint64_t(cells.x + 1) * (cells.y + 1) * (cells.z + 1);
+  if (size != count * sizeof(float))
+    fail("has " + std::to_string(size) + " bytes; " + std::to_string(cells.x + 1) + " x " + std::to_string(cells.y + 1) +
+         " x " + std::to_string(cells.z + 1) + " float32 corner values take " + std::to_string(count * sizeof(float)));
+  in.seekg(0);
+  v.values.resize(count);
+  in.read(reinterpret_cast<char*>(v.values.data()), std::streamsize(count * sizeof(float)));
+  if (std::uint64_t(in.gcount()) != count * sizeof(float)) fail("cannot read " + path);
+  toVoxelUnits(v, fail);
   return v;
 }
 

@@ -47,6 +47,12 @@ SdfVolume makeSdfShape(SdfShape shape, const SdfShapeParams& params, std::uint32
 /// SceneError naming `name` and what is wrong.
 SdfVolume loadVolFile(const std::string& path, const std::string& name);
 
+/// A raw grid: (cells + 1) corner values per axis as little-endian float32,
+/// x fastest, nothing else, in the units of the box [lo, hi] the corners
+/// span; scaled to voxel units here. A file of another size, or a NaN or
+/// infinite value, throws SceneError naming `name`.
+SdfVolume loadRawSdf(const std::string& path, const std::string& name, glm::uvec3 cells, glm::dvec3 lo, glm::dvec3 hi);
+
 /// Writes a float32 single-channel .vol file (values as given).
 void writeVolFile(const std::string& path, glm::uvec3 corners, const std::vector<float>& values, glm::dvec3 lo,
                   glm::dvec3 hi);

@@ -106,6 +106,31 @@ TEST(SdfScene, VolFilesReadBackInVoxelUnits) {
   EXPECT_GT(rows.count[WT_PRIM_SDF_GRID], 0u);
 }
 
+TEST(SdfScene, RawGridsReadBackInTheirBox) {
+  // a sphere of radius 0.3 in the unit box, 10 cells a side, in box units
+  const std::vector<float> values = sphereValues(11);
+  std::ofstream(testDir() / "ball.raw", std::ios::binary)
+      .write(reinterpret_cast<const char*>(values.data()), std::streamsize(values.size() * 4));
+  const SceneFile f = loadObject(
+      R"({"type": "sdf", "file": "ball.raw", "resolution": [10, 10, 10], "box": [0, 0, 0, 1, 1, 1]})");
+  ASSERT_EQ(f.scene.sdfGrids.size(), 1u);
+  const SdfGrid& g = f.scene.sdfGrids[0];
+  EXPECT_EQ(g.cells, glm::uvec3(10));
+  EXPECT_NEAR(g.values[5 + 11 * (5 + 11 * 5)], -3.0f, 1e-5f);
+  const glm::dvec3 top = glm::dvec3(g.latticeToScene * glm::dvec4(10.0, 10.0, 10.0, 1.0)) + f.scene.origin;
+  EXPECT_NEAR(top.x, 1.0, 1e-9);
+  // the wrong shape for the file's size, a missing resolution, a box on a .vol
+  const std::string wrong = errorOf(R"({"type": "sdf", "file": "ball.raw", "resolution": [10, 10, 9]})");
+  EXPECT_CONTAINS(wrong, "objects[0].file: ball.raw: has 5324 bytes; 11 x 11 x 10 float32 corner values take 4840");
+  EXPECT_CONTAINS(errorOf(R"({"type": "sdf", "file": "ball.raw"})"), "objects[0].resolution: missing");
+  EXPECT_CONTAINS(errorOf(R"({"type": "sdf", "file": "ball.raw", "resolution": [10, 10, 10], "box": [0, 0, 0, 1, 0, 1]})"),
+                  "objects[0].box");
+  writeVolFile((testDir() / "ball.vol").string(), glm::uvec3(11), values, glm::dvec3(0.0), glm::dvec3(1.0));
+  EXPECT_CONTAINS(errorOf(R"({"type": "sdf", "file": "ball.vol", "box": [0, 0, 0, 1, 1, 1]})"), "objects[0].box");
+  EXPECT_CONTAINS(errorOf(R"({"type": "sdf", "shape": "box", "resolution": 4, "box": [0, 0, 0, 1, 1, 1]})"),
+                  "objects[0].box");
+}
+
 /// Writes `bytes` as bad.vol and returns the error of loading it.
 std::string volError(const std::string& bytes) {
   std::ofstream(testDir() / "bad.vol", std::ios::binary).write(bytes.data(), std::streamsize(bytes.size()));
@@ -147,7 +172,7 @@ TEST(SdfScene, BadVolFilesAreRefusedNamingTheFileAndTheProblem) {
   EXPECT_CONTAINS(nanError, "value 13 (x 1, y 1, z 1) is NaN");
   EXPECT_CONTAINS(nanError, "bad.vol");
   EXPECT_CONTAINS(errorOf(R"({"type": "sdf", "file": "missing.vol"})"), "objects[0].file");
-  EXPECT_CONTAINS(errorOf(R"({"type": "sdf", "file": "ball.raw"})"), "must be a .vol grid");
+  EXPECT_CONTAINS(errorOf(R"({"type": "sdf", "file": "ball.npy"})"), "must be a .vol grid or a .raw grid");
 }
 
 TEST(SdfScene, BadFieldsAreRefusedNamingThem) {
