@@ -702,9 +702,9 @@ const BadFile kBadFiles[] = {
         BadFile{"CenterElement", objects(R"({"type": "sphere", "center": [0, true, 0], "radius": 1})"),
                 "objects[0].center[1]: must be a number, got true"},
         BadFile{"MissingType", objects(R"({"center": [0, 0, 0]})"),
-                "objects[0].type: missing (required: gltf, sphere, spheres or curves)"},
+                "objects[0].type: missing (required: gltf, sphere, spheres, curves or sdf)"},
         BadFile{"UnknownType", objects(R"({"type": "cube"})"),
-                "objects[0].type: unknown type \"cube\" (expected one of: gltf, sphere, spheres, curves)"},
+                "objects[0].type: unknown type \"cube\" (expected one of: gltf, sphere, spheres, curves, sdf)"},
         // curves
         BadFile{"CurvesFileAndStrands", objects(R"({"type": "curves", "file": "a.hair", "strands": []})"),
                 "objects[0]: give \"file\" (a .hair or .ply file) or \"strands\" (points), not both"},
