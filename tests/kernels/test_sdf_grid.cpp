@@ -1,6 +1,7 @@
 // SDF grids (kernels/geometry/sdf_grid.cl) against a long-double reference of
 // the same trilinear interpolant on random rays (hit or miss, t, normal),
-// every brick tested without the BVH and then through every traversal;
+// on an uneven lattice whose bricks end short of 8 cells, every brick tested
+// without the BVH and then through every traversal;
 // dense against sparse storage; any hit against closest hit; rays spawned
 // from a hit; and rays aimed at the faces and edges between cells and bricks.
 #include "device/tracer.h"
@@ -34,6 +35,28 @@ Scene sdfScene(SdfShape shape, std::uint32_t resolution, const glm::dmat4& place
   g.cells = v.cells;
   g.values = std::move(v.values);
   g.latticeToScene = place * v.latticeToObject();
+  g.storage = storage;
+  scene.sdfGrids.push_back(std::move(g));
+  return scene;
+}
+
+/// A shape sampled on an uneven lattice of `cells` over [-1, 1]^3 (cells
+/// of different edges per axis, bricks cut short at the far faces), values
+/// in units of the shortest edge.
+Scene unevenSdfScene(SdfShape shape, glm::uvec3 cells, const glm::dmat4& place, SdfStorage storage) {
+  Scene scene;
+  scene.materials.push_back(makeMaterial(glm::vec3(0.5f)));
+  SdfGrid g;
+  g.cells = cells;
+  const glm::dvec3 edge = 2.0 / glm::dvec3(cells);
+  const double unit = std::min(edge.x, std::min(edge.y, edge.z));
+  for (std::uint32_t z = 0; z <= cells.z; ++z)
+    for (std::uint32_t y = 0; y <= cells.y; ++y)
+      for (std::uint32_t x = 0; x <= cells.x; ++x) {
+        const glm::dvec3 p = glm::dvec3(-1.0) + edge * glm::dvec3(x, y, z);
+        g.values.push_back(float(sdfShapeDistance(shape, SdfShapeParams{}, p) / unit));
+      }
+  g.latticeToScene = place * glm::scale(glm::translate(glm::dmat4(1.0), glm::dvec3(-1.0)), edge);
   g.storage = storage;
   scene.sdfGrids.push_back(std::move(g));
   return scene;
@@ -155,7 +178,8 @@ RefHit reference(const SdfGrid& g, const Ray& ray) {
 }
 
 /// Rays from around the grid's box aimed into it (many near the surface), some
-/// from inside it, some with a short tmax.
+/// from inside it, some with a short tmax. The box is [-1, 1]^3 before the
+/// grid's placement, whatever its cells.
 std::vector<Ray> raysAtGrid(const SdfGrid& g, std::size_t count, std::uint32_t seed) {
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> unit(-1.0, 1.0), u01(0.0, 1.0);
@@ -233,7 +257,7 @@ Real tTolerance(const SdfGrid& g, const Ray& ray, const RefHit& want) {
 class SdfStorages : public ::testing::TestWithParam<SdfStorage> {};
 
 TEST_P(SdfStorages, KernelMatchesLongDoubleReference) {
-  const Scene scene = sdfScene(SdfShape::kNoisySphere, 24, skewedPlacement(), GetParam());
+  const Scene scene = unevenSdfScene(SdfShape::kNoisySphere, glm::uvec3(21, 14, 27), skewedPlacement(), GetParam());
   const SdfGrid& g = scene.sdfGrids[0];
   const std::vector<Ray> rays = raysAtGrid(g, test::testSize(6000, 600), 11);
   const std::vector<KernelHit> got = kernelClosest(scene, rays);
