@@ -169,7 +169,7 @@ glm::vec3 sdfGridPoint(const PrimitiveRows& rows, std::uint32_t index, glm::vec3
   const glm::vec3 apl = glm::abs(pl);
   const float glen = glm::length(grad);
   const float offLattice = 8.0f * kEps * (std::max(apl.x, std::max(apl.y, apl.z)) + 1.0f) +
-                           (glen > 0.0f ? 64.0f * kEps * 4.0f * scale / glen : 1.0f);
+                           (glen > 0.0f ? std::min(64.0f * kEps * 4.0f * scale / glen, 0.25f) : 0.25f);
   const float gamma3 = 3.0f * 0.5f * kEps / (1.0f - 3.0f * 0.5f * kEps);
   *error = gamma3 * (glm::abs(o) + glm::abs(t * d)) + glm::vec3(grid[3].w * offLattice);
   return p;

@@ -244,8 +244,10 @@ inline void sdf_surface(__global const float4* rows, uint4 info, float3 o, float
   // lattice (relative to the position there) and the interpolant's rounding
   // (relative to its coefficients, over its slope); then into the scene
   float3 apl = fabs(pl);
+  // (at most a quarter cell: where the gradient all but vanishes the bound
+  // would carry the ray past thin features rather than off the surface)
   float off_lattice = 8.0f * FLT_EPSILON * (fmax(fmax(apl.x, apl.y), apl.z) + 1.0f) +
-                      (glen > 0.0f ? 64.0f * FLT_EPSILON * scale / glen : 1.0f);
+                      (glen > 0.0f ? fmin(64.0f * FLT_EPSILON * scale / glen, 0.25f) : 0.25f);
   *p_error = spawn_gamma(3) * (fabs(o) + fabs(t * d)) + (float3)(k.grid[3].w * off_lattice);
   float3 dims = k.grid[3].xyz;
   *uv = (float2)(pl.x / dims.x, pl.y / dims.y);
