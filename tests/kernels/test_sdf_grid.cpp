@@ -367,11 +367,14 @@ TEST(SdfGrids, AnyHitAgreesWithClosestHitInEveryTraversal) {
 }
 
 TEST(SdfGrids, SpawnedRaysLeaveTheSurfaceOrCrossIt) {
-  // a sphere of radius 0.8 in a 32^3 grid: rays spawned outward (within 60
-  // degrees of the normal) from its hits meet nothing, since the surface
-  // cannot bend back that far within the grid; rays spawned inward meet the
-  // far side, a chord of at least 2 r cos 60 away (less its discretisation)
-  const Scene scene = sdfScene(SdfShape::kSphere, 32, glm::dmat4(1.0), SdfStorage::kSparse);
+  // a sphere of radius 0.8 in a 256^3 grid off the origin (lattice
+  // coordinates up to 256, whose rounding the spawn offset must cover): rays
+  // spawned outward (within 60 degrees of the normal) from its hits meet
+  // nothing, since the surface cannot bend back that far within the grid;
+  // rays spawned inward meet the far side, a chord of at least 2 r cos 60
+  // away (less its discretisation)
+  const glm::dmat4 place = glm::translate(glm::dmat4(1.0), glm::dvec3(3.0, -2.0, 1.0));
+  const Scene scene = sdfScene(SdfShape::kSphere, 256, place, SdfStorage::kSparse);
   const std::vector<Ray> rays = raysAtGrid(scene.sdfGrids[0], test::testSize(6000, 600), 15);
   const std::vector<KernelHit> hits = kernelClosest(scene, rays);
   std::mt19937 rng(16);
