@@ -17,7 +17,7 @@ WT_KERNEL void test_sdf_closest(uint count, uint bricks, __global const float4* 
   float cell = 0.0f;
   for (uint b = 0; b < bricks; ++b) {
     float t, c;
-    if (sdf_intersect(rows, info[b], o, d, tmin, best, &t, &c)) {
+    if (sdf_intersect(rows, info + WT_SDF_INFO_ROWS * b, o, d, tmin, best, &t, &c)) {
       best = t;
       hit = b;
       cell = c;
@@ -30,7 +30,7 @@ WT_KERNEL void test_sdf_closest(uint count, uint bricks, __global const float4* 
   }
   float3 p, p_error, n, dpdu;
   float2 uv;
-  sdf_surface(rows, info[hit], o, d, best, cell, &p, &p_error, &n, &uv, &dpdu);
+  sdf_surface(rows, info[WT_SDF_INFO_ROWS * hit], o, d, best, cell, &p, &p_error, &n, &uv, &dpdu);
   out[2 * i] = (float4)(best, n);
   out[2 * i + 1] = (float4)(p_error, as_float(hit));
 }

@@ -105,7 +105,8 @@ bool sdfGridUsable(const SdfGrid& grid);
 
 /// SDF grids (WT_PRIM_SDF_GRID): WT_SDF_GRID_ROWS data rows per grid, then
 /// the values (a dense grid's corners once; a sparse grid's bricks'
-/// (WT_SDF_BRICK + 1)^3 corners each); one primitive per brick of
+/// (WT_SDF_BRICK + 1)^3 corners each); WT_SDF_INFO_ROWS info rows per
+/// brick (its row and its cells' crossing mask); one primitive per brick of
 /// WT_SDF_BRICK^3 cells that the surface crosses (a cell whose corners all
 /// lie on one side holds no surface: the interpolant is their convex
 /// combination), boxed around those cells, grid by grid, bricks x fastest.

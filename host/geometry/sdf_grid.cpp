@@ -80,12 +80,15 @@ void gatherSdfGrids(const Scene& scene, PrimitiveRows& rows) {
           const glm::uvec3 hi = glm::min(lo + B, g.cells);
           // the box of the cells the surface crosses, in the lattice
           glm::uvec3 cmin(~0u), cmax(0u);
+          std::array<std::uint32_t, 16> crossed{};
           for (std::uint32_t z = lo.z; z < hi.z; ++z)
             for (std::uint32_t y = lo.y; y < hi.y; ++y)
               for (std::uint32_t x = lo.x; x < hi.x; ++x)
                 if (cellCrossed(g, x, y, z)) {
                   cmin = glm::min(cmin, glm::uvec3(x, y, z));
                   cmax = glm::max(cmax, glm::uvec3(x, y, z));
+                  const std::uint32_t bit = (x - lo.x) + B * ((y - lo.y) + B * (z - lo.z));
+                  crossed[bit >> 5] |= 1u << (bit & 31u);
                 }
           if (cmin.x > cmax.x) continue;
           Aabb box;
@@ -121,6 +124,8 @@ void gatherSdfGrids(const Scene& scene, PrimitiveRows& rows) {
           }
           const std::uint32_t packed = bx | (by << 9) | (bz << 18) | (sparse ? WT_SDF_SPARSE : 0u);
           rows.info.push_back({g.material, std::uint32_t(gi), std::uint32_t(offset), packed});
+          for (std::size_t w = 0; w < crossed.size(); w += 4)
+            rows.info.push_back({crossed[w], crossed[w + 1], crossed[w + 2], crossed[w + 3]});
           rows.bounds.push_back(box);
           rows.ids.push_back(primId(WT_PRIM_SDF_GRID, bricks++));
         }
@@ -136,7 +141,7 @@ void gatherSdfGrids(const Scene& scene, PrimitiveRows& rows) {
 glm::vec3 sdfGridPoint(const PrimitiveRows& rows, std::uint32_t index, glm::vec3 o, glm::vec3 d, float t, float cell,
                        glm::vec3* error, glm::vec3* normal) {
   const WtVec4* base = rows.data.data() + rows.dataFirst[WT_PRIM_SDF_GRID];
-  const std::array<std::uint32_t, 4>& info = rows.info[rows.infoFirst[WT_PRIM_SDF_GRID] + index];
+  const std::array<std::uint32_t, 4>& info = rows.info[rows.infoFirst[WT_PRIM_SDF_GRID] + WT_SDF_INFO_ROWS * index];
   const WtVec4* grid = base + WT_SDF_GRID_ROWS * info[1];
   const glm::vec3 m[3] = {{grid[0].x, grid[0].y, grid[0].z}, {grid[1].x, grid[1].y, grid[1].z}, {grid[2].x, grid[2].y, grid[2].z}};
   const glm::vec3 shift(grid[0].w, grid[1].w, grid[2].w);

@@ -126,7 +126,8 @@ inline bool geometry_intersect(GeometryScene g, uint prim, float3 o, float3 d, f
 #if WT_HAS_SDF_GRIDS
     case WT_PRIM_SDF_GRID:
       return sdf_intersect(g.data + g.header.data_first[WT_PRIM_SDF_GRID],
-                           g.info[g.header.info_first[WT_PRIM_SDF_GRID] + prim_index(prim)], o, d, tmin, tmax, t, u);
+                           g.info + g.header.info_first[WT_PRIM_SDF_GRID] + WT_SDF_INFO_ROWS * prim_index(prim), o, d,
+                           tmin, tmax, t, u);
 #endif
     default:
       return false;
@@ -181,7 +182,7 @@ inline SurfaceHit geometry_surface(GeometryScene g, __global const float4* tri_v
 #endif
 #if WT_HAS_SDF_GRIDS
     case WT_PRIM_SDF_GRID: {
-      uint4 info = g.info[g.header.info_first[WT_PRIM_SDF_GRID] + prim_index(prim)];
+      uint4 info = g.info[g.header.info_first[WT_PRIM_SDF_GRID] + WT_SDF_INFO_ROWS * prim_index(prim)];
       sdf_surface(g.data + g.header.data_first[WT_PRIM_SDF_GRID], info, o, d, hit.x, hit.y, &s.p, &s.p_error, &s.ng,
                   &s.uv, &s.dpdu);
       s.ns = s.ng;

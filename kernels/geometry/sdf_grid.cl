@@ -40,17 +40,6 @@ inline SdfCell sdf_cell(__global const float* v, uint idx, uint sx, uint sxy) {
   return k;
 }
 
-/// Whether the surface crosses a cell: some corner inside (< 0) and some not.
-/// The interpolant is a convex combination of the corners, so a cell whose
-/// corners share a side has no surface in it.
-inline bool sdf_cell_crossed(__global const float* v, uint idx, uint sx, uint sxy) {
-  float s[8] = {v[idx], v[idx + 1], v[idx + sx], v[idx + sx + 1],
-                v[idx + sxy], v[idx + sxy + 1], v[idx + sxy + sx], v[idx + sxy + sx + 1]};
-  float lo = s[0], hi = s[0];
-  for (int i = 1; i < 8; ++i) lo = fmin(lo, s[i]), hi = fmax(hi, s[i]);
-  return lo < 0.0f && hi >= 0.0f;
-}
-
 /// The cell's interpolant along q + t d (q, d in the cell's unit cube's frame).
 inline SdfCubic sdf_cell_cubic(SdfCell k, float3 q, float3 d) {
   SdfCubic r;
@@ -148,7 +137,7 @@ inline float3 sdf_to_lattice(__global const float4* grid, float3 p, float w) {
                   dot(grid[2].xyz, p) + w * grid[2].w);
 }
 
-/// Ray (o, d) against brick `info` in (tmin, tmax): the first crossing, its
+/// Ray (o, d) against `brick` (its WT_SDF_INFO_ROWS prim_info rows) in (tmin, tmax): the first crossing, its
 /// t and the brick-local cell it lies in (x + B y + B^2 z, as a float, in
 /// *cell). Each cell's span along the ray is widened by a sliver on both
 /// sides (never past tmin or tmax): a crossing on a face between cells or
@@ -156,9 +145,10 @@ inline float3 sdf_to_lattice(__global const float4* grid, float3 p, float w) {
 /// interpolants of neighbouring cells agree on their shared face. A ray that
 /// leaves this surface needs no special case: shade spawns it past the
 /// hit's error bound (sdf_surface), on the side it heads to.
-inline bool sdf_intersect(__global const float4* rows, uint4 info, float3 o, float3 d, float tmin, float tmax,
-                          float* t_hit, float* cell_id) {
-  SdfBrick k = sdf_brick(rows, info);
+inline bool sdf_intersect(__global const float4* rows, __global const uint4* brick, float3 o, float3 d, float tmin,
+                          float tmax, float* t_hit, float* cell_id) {
+  SdfBrick k = sdf_brick(rows, brick[0]);
+  __global const uint* crossed = (__global const uint*)(brick + 1);
   float3 ol = sdf_to_lattice(k.grid, o, 1.0f);
   float3 dl = sdf_to_lattice(k.grid, d, 0.0f);
   const float kTiny = 1e-30f;
@@ -182,8 +172,9 @@ inline bool sdf_intersect(__global const float4* rows, uint4 info, float3 o, flo
     float3 tnext = select((face - ol) * inv, (float3)(INFINITY), fabs(dl) < kTiny);
     float tc1 = fmin(fmin(fmin(tnext.x, tnext.y), tnext.z), tb);
     int3 c = cell - k.lo;
-    uint idx = (uint)c.x + (uint)c.y * k.sx + (uint)c.z * k.sxy;
-    if (sdf_cell_crossed(k.values, idx, k.sx, k.sxy)) {
+    uint bit = (uint)(c.x + WT_SDF_BRICK * (c.y + WT_SDF_BRICK * c.z));
+    if ((crossed[bit >> 5] >> (bit & 31u)) & 1u) {
+      uint idx = (uint)c.x + (uint)c.y * k.sx + (uint)c.z * k.sxy;
       float pad = 1e-4f * (tc1 - tc0) + 1e-6f * fabs(tc1);
       float ts = fmax(tc0 - pad, tmin), te = fmin(tc1 + pad, tmax);
       if (te > ts) {
@@ -195,7 +186,7 @@ inline bool sdf_intersect(__global const float4* rows, uint4 info, float3 o, flo
           float t = ts + r;
           if (t > tmin && t < tmax) {
             *t_hit = t;
-            *cell_id = (float)(c.x + WT_SDF_BRICK * (c.y + WT_SDF_BRICK * c.z));
+            *cell_id = (float)bit;
             return true;
           }
         }
