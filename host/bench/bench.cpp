@@ -118,6 +118,13 @@ std::optional<SurfacePoint> surfacePoint(const Scene& scene, const PrimitiveRows
     if (glm::dot(n, ray.direction) > 0.0f) n = -n;
     return SurfacePoint{offsetRayOrigin(p, error, n), n, p, error};
   }
+  if (primType(hit.prim) == WT_PRIM_SDF_GRID) {
+    glm::vec3 error, n;
+    glm::vec3 p = sdfGridPoint(rows, primIndex(hit.prim), ray.origin, ray.direction, hit.t, hit.b1, &error, &n);
+    if (!(glm::dot(n, n) > 0.0f)) return std::nullopt;
+    if (glm::dot(n, ray.direction) > 0.0f) n = -n;
+    return SurfacePoint{offsetRayOrigin(p, error, n), n, p, error};
+  }
   if (primType(hit.prim) != WT_PRIM_TRIANGLE) return std::nullopt;
   const WtTriangle& tri = scene.triangles[hit.triangle];
   glm::vec3 p0 = position(scene, tri.v0), p1 = position(scene, tri.v1), p2 = position(scene, tri.v2);
@@ -417,6 +424,7 @@ struct SceneResult {
   /// uploaded for them (nodes, typed ids, rows) per primitive.
   std::array<std::size_t, WT_PRIM_TYPES> primitives{};
   double primitiveBuildSeconds = 0.0;
+  double primitiveGatherSeconds = 0.0;  ///< gatherPrimitives: boxes and rows (an SDF grid's bricks found and packed)
   double bytesPerPrimitive = 0.0;
   std::vector<SetResult> sets;
   double pathMrays = 0.0;
@@ -727,7 +735,9 @@ SceneResult benchScene(Context& context, const std::string& name, const Scene& s
   const std::vector<BvhInstance> instances = bvhInstances(scene, allTriangles);
   BvhBuildOptions bvhOptions = benchBvhOptions(*parseBvhBuilder(options.bvh), options);
   // the other geometry types' tree, built as the renderer builds it
+  const auto gatherStart = Clock::now();
   const PrimitiveRows rows = gatherPrimitives(scene);
+  result.primitiveGatherSeconds = std::chrono::duration<double>(Clock::now() - gatherStart).count();
   std::size_t otherPrimitives = 0;
   for (std::uint32_t type = 0; type < WT_PRIM_TYPES; ++type) {
     result.primitives[type] = type == WT_PRIM_TRIANGLE ? scene.triangles.size() : rows.count[type];
@@ -779,6 +789,9 @@ SceneResult benchScene(Context& context, const std::string& name, const Scene& s
   result.bytesPerPrimitive = others ? double(tracer.sceneBuffers().primitiveBytes) / double(others) : 0.0;
   std::unique_ptr<Reference> embree;
 #ifdef WT_HAVE_EMBREE
+  // Embree has no SDF grid: a scene with one is not compared
+  if (!scene.sdfGrids.empty()) log::info("bench: " + name + ": Embree has no SDF grid primitive; not compared");
+  else {
   EmbreeOptions embreeOptions;
   const bool fastest = options.embreeApi == "fastest";
   if (!fastest) embreeOptions.api = parseEmbreeApi(options.embreeApi);
@@ -799,6 +812,7 @@ SceneResult benchScene(Context& context, const std::string& name, const Scene& s
     embree->apis.push_back(options.embreeApi);
   embree->setApi = [reference](const std::string& api) { reference->setApi(parseEmbreeApi(api)); };
   embree->lastTraceSeconds = [reference] { return reference->lastTraceSeconds(); };
+  }
 #endif
 
   // the three ray sets, made once from the camera rays' hits
@@ -937,7 +951,8 @@ int runBench(const BenchOptions& options) {
       continue;
     }
     log::info("bench: " + source.name + " (" + std::to_string(scene.triangles.size()) + " triangles, " +
-              std::to_string(scene.spheres.size()) + " spheres, " + std::to_string(scene.curves.size()) + " curves)");
+              std::to_string(scene.spheres.size()) + " spheres, " + std::to_string(scene.curves.size()) + " curves, " +
+              std::to_string(scene.sdfGrids.size()) + " SDF grids)");
     results.push_back(benchScene(context, source.name, scene, options));
   }
   std::string embreeText = "Embree not found at build time; no comparison";
@@ -985,7 +1000,8 @@ int runBench(const BenchOptions& options) {
       std::printf("   \"primitives\": {");
       for (std::uint32_t type = 0, n = 0; type < WT_PRIM_TYPES; ++type)
         if (*primTypeName(type)) std::printf("%s\"%s\": %zu", n++ ? ", " : "", primTypeName(type), r.primitives[type]);
-      std::printf("}, \"primitive_bvh_build_s\": %.6f, \"bytes_per_primitive\": %.1f,\n", r.primitiveBuildSeconds,
+      std::printf("}, \"primitive_gather_s\": %.6f", r.primitiveGatherSeconds);
+      std::printf(", \"primitive_bvh_build_s\": %.6f, \"bytes_per_primitive\": %.1f,\n", r.primitiveBuildSeconds,
                   r.bytesPerPrimitive);
       std::printf("   \"bvh_builder\": \"%s\", \"trees\": [", options.bvh.c_str());
       const TreeResult* sahTree = nullptr;
@@ -1083,16 +1099,16 @@ int runBench(const BenchOptions& options) {
   bool anyPrimitives = false;
   for (const SceneResult& r : results) anyPrimitives |= r.primitiveBuildSeconds > 0.0;
   if (anyPrimitives) {
-    std::printf("\n%-28s %10s %10s %10s %9s %9s %8s\n", "scene", "spheres", "curve segs", "triangles", "build ms",
-                "Mprims/s", "B/prim");
+    std::printf("\n%-28s %10s %10s %10s %10s %9s %9s %9s %8s\n", "scene", "spheres", "curve segs", "SDF bricks",
+                "triangles", "gather ms", "build ms", "Mprims/s", "B/prim");
     for (const SceneResult& r : results) {
       if (!(r.primitiveBuildSeconds > 0.0)) continue;
       std::size_t others = 0;
       for (std::uint32_t type = 0; type < WT_PRIM_TYPES; ++type)
         if (type != WT_PRIM_TRIANGLE) others += r.primitives[type];
-      std::printf("%-28s %10zu %10zu %10zu %9.2f %9.2f %8.1f\n", r.name.c_str(), r.primitives[WT_PRIM_SPHERE],
-                  r.primitives[WT_PRIM_CURVE], r.triangles,
-                  r.primitiveBuildSeconds * 1e3, double(others) / r.primitiveBuildSeconds * 1e-6, r.bytesPerPrimitive);
+      std::printf("%-28s %10zu %10zu %10zu %10zu %9.2f %9.2f %9.2f %8.1f\n", r.name.c_str(), r.primitives[WT_PRIM_SPHERE],
+                  r.primitives[WT_PRIM_CURVE], r.primitives[WT_PRIM_SDF_GRID], r.triangles,
+                  r.primitiveGatherSeconds * 1e3, r.primitiveBuildSeconds * 1e3, double(others) / r.primitiveBuildSeconds * 1e-6, r.bytesPerPrimitive);
     }
   }
 

@@ -242,11 +242,16 @@ int runRender(RenderOptions options) {
   wt::Renderer renderer(context, scene, settings);
   if (std::size_t left = renderer.sceneBuffers().skippedPrimitives())
     wt::log::warnOnce(scene.sourceName + ": " + std::to_string(left) +
-                      " primitives left out (a sphere of radius <= 0, a curve segment of radius 0, or non-finite values)");
+                      " primitives left out (a sphere of radius <= 0, a curve segment of radius 0, an SDF grid without cells or "
+                      "with a singular placement, or non-finite values)");
   const wt::BvhBuildStats& bvh = renderer.sceneBuffers().bvhStats();
   wt::log::info("scene " + scene.sourceName + ": " + std::to_string(scene.triangles.size()) + " triangles" +
                 (scene.spheres.empty() ? std::string() : ", " + std::to_string(scene.spheres.size()) + " spheres") +
                 (scene.curves.empty() ? std::string() : ", " + std::to_string(scene.curves.size()) + " curves") +
+                (scene.sdfGrids.empty() ? std::string()
+                                        : ", " + std::to_string(scene.sdfGrids.size()) + " SDF grids (" +
+                                              std::to_string(renderer.sceneBuffers().primitiveCount(WT_PRIM_SDF_GRID)) +
+                                              " bricks)") +
                 ", loaded in " + std::to_string(int(loadSeconds * 1e3)) + " ms; BVH (" +
                 wt::bvhBuilderName(settings.bvhBuilder) + ") " +
                 std::to_string(bvh.nodeCount) + " nodes built in " +

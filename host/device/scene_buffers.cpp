@@ -540,5 +540,6 @@ static_assert(sizeof(WtFrameParams) == 64);
 static_assert(sizeof(WtLight) == 64);
 static_assert(sizeof(WtAliasSlot) == 16);
 static_assert(sizeof(WtLightNode) == 64);
-static_assert(sizeof(WtGeometry) == 64 && offsetof(WtGeometry, data_first) == 16 &&
-              offsetof(WtGeometry, info_first) == 32 && offsetof(WtGeometry, emitter_first) == 48);
+static_assert(sizeof(WtGeometry) == 16 + 12 * WT_PRIM_TYPES && offsetof(WtGeometry, data_first) == 16 &&
+              offsetof(WtGeometry, info_first) == 16 + 4 * WT_PRIM_TYPES &&
+              offsetof(WtGeometry, emitter_first) == 16 + 8 * WT_PRIM_TYPES);

@@ -97,6 +97,30 @@ CurveSegment curveSegment(const PrimitiveRows& rows, std::uint32_t index);
 glm::vec3 curvePoint(const CurveSegment& segment, glm::vec3 o, glm::vec3 d, float t, glm::vec3* error,
                      glm::vec3* normal);
 
+/// Whether an SDF grid is stored sparse: as it says, else by size (kSdfSparseAboveCells).
+bool sdfGridSparse(const SdfGrid& grid);
+/// Whether an SDF grid can be drawn: 1 .. kSdfMaxCells cells per axis, one
+/// value per corner, a finite invertible placement. The others are left out.
+bool sdfGridUsable(const SdfGrid& grid);
+
+/// SDF grids (WT_PRIM_SDF_GRID): WT_SDF_GRID_ROWS data rows per grid, then
+/// the values (a dense grid's corners once; a sparse grid's bricks'
+/// (WT_SDF_BRICK + 1)^3 corners each); WT_SDF_INFO_ROWS info rows per
+/// brick (its row and its cells' crossing mask); one primitive per brick of
+/// WT_SDF_BRICK^3 cells that the surface crosses (a cell whose corners all
+/// lie on one side holds no surface: the interpolant is their convex
+/// combination), boxed around those cells, grid by grid, bricks x fastest.
+/// count: the bricks kept.
+void gatherSdfGrids(const Scene& scene, PrimitiveRows& rows);
+
+/// sdf_surface (kernels/geometry/sdf_grid.cl) on the host: where ray (o, d)
+/// crossed brick `index` (a WT_PRIM_SDF_GRID typed id's index) at t in
+/// brick-local cell `cell` (the hit's first parameter, RayHit::b1), o + t d,
+/// with its error bound; *normal is the interpolant's unit gradient (zero
+/// where it vanishes).
+glm::vec3 sdfGridPoint(const PrimitiveRows& rows, std::uint32_t index, glm::vec3 o, glm::vec3 d, float t, float cell,
+                       glm::vec3* error, glm::vec3* normal);
+
 /// A placed copy of a triangle geometry stored once (WT_PRIM_INSTANCE,
 /// kernels/geometry/instance.cl), as SceneBuffers laid it out.
 struct InstanceDesc {

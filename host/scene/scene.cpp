@@ -23,6 +23,12 @@ Aabb Scene::bounds() const {
     box.extend(c - glm::vec3(std::fabs(p.w)));
     box.extend(c + glm::vec3(std::fabs(p.w)));
   }
+  for (const SdfGrid& g : sdfGrids)
+    for (int corner = 0; corner < 8; ++corner) {
+      const glm::dvec3 c((corner & 1) ? g.cells.x : 0u, (corner & 2) ? g.cells.y : 0u, (corner & 4) ? g.cells.z : 0u);
+      const glm::vec3 w(glm::dvec3(g.latticeToScene * glm::dvec4(c, 1.0)));
+      if (std::isfinite(w.x + w.y + w.z)) box.extend(w);
+    }
   return box;
 }
 

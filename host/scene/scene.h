@@ -87,6 +87,33 @@ struct Curve {
   CurveBasis basis = CurveBasis::kLinear;
 };
 
+/// How an SDF grid's values are stored on the device.
+enum class SdfStorage : std::uint32_t {
+  kAuto,    ///< sparse above kSdfSparseAboveCells cells, dense up to it
+  kDense,   ///< every corner value of the grid, once (Falcor's normalized dense grid)
+  kSparse,  ///< only the bricks the surface crosses, each with its own corners (Falcor's sparse brick set)
+};
+
+/// Grids of more cells than this are stored sparse unless the scene says otherwise.
+constexpr std::uint64_t kSdfSparseAboveCells = 64ull * 64ull * 64ull;
+/// Cells per axis at most: a brick's coordinates take 9 bits (WT_SDF_BRICK each).
+constexpr std::uint32_t kSdfMaxCells = 4096;
+
+/// A grid of signed distances (kernels/geometry/sdf_grid.cl): values at the
+/// corners of cells.x * cells.y * cells.z cells, x fastest, interpolated
+/// trilinearly; negative inside, the surface where the sign changes. Values
+/// are in voxel units (a distance of one cell's shortest edge is 1), as
+/// Falcor normalises its grids; only their sign and ratios matter to the
+/// surface and its normal. Corner (i, j, k) sits at lattice point (i, j, k);
+/// latticeToScene places the lattice.
+struct SdfGrid {
+  glm::uvec3 cells{0};             ///< per axis, 1 .. kSdfMaxCells
+  std::vector<float> values;       ///< (cells.x + 1) (cells.y + 1) (cells.z + 1) corner values, x fastest
+  glm::dmat4 latticeToScene{1.0};  ///< lattice -> scene (world less Scene::origin), affine, invertible
+  std::uint32_t material = 0;      ///< index into Scene::materials
+  SdfStorage storage = SdfStorage::kAuto;
+};
+
 struct Scene {
   std::vector<WtVec4> positions;   ///< world space, w = 0
   std::vector<WtVec4> normals;     ///< world space, unit; (0,0,0) = none, use the geometric normal. Same size as positions.
@@ -99,6 +126,7 @@ struct Scene {
   std::vector<Sphere> spheres;            ///< analytic spheres (scene files only: glTF has none)
   std::vector<Curve> curves;              ///< round curves (scene files, .hair and .ply strands)
   std::vector<WtVec4> curvePoints;        ///< the curves' points: xyz world relative to origin, w = radius (world units, >= 0)
+  std::vector<SdfGrid> sdfGrids;          ///< grids of signed distances (scene files, or made in code)
   std::vector<WtMaterial> materials;      ///< never empty after loading (a default grey is added when needed)
   /// WT_TEXTURE_SLOTS per material (empty: no material is textured); slot s
   /// of material m, at m * WT_TEXTURE_SLOTS + s, counts where bit s of its
@@ -113,7 +141,7 @@ struct Scene {
   std::string sourceName;                 ///< file the scene came from, for messages
   glm::dvec3 origin{0.0};                 ///< world position of the scene's (0,0,0): every position, light and camera here is relative to it (GltfLoadOptions::recenter)
 
-  /// Bounds of every triangle, sphere and curve point (with its radius).
+  /// Bounds of every triangle, sphere, curve point (with its radius) and SDF grid's box.
   Aabb bounds() const;
   /// Bounds of one triangle.
   Aabb triangleBounds(std::uint32_t tri) const;

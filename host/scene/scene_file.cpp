@@ -9,6 +9,7 @@
 #include "scene/hair_loader.h"
 #include "scene/ply.h"
 #include "render/tonemap_names.h"
+#include "scene/sdf_volume.h"
 
 #include <nlohmann/json.hpp>
 
@@ -46,6 +47,8 @@ constexpr int kMaxSamples = 1 << 24;
 constexpr int kMaxBounces = 1024;
 /// Curve points a scene may hold, children included (28-bit primitive ids).
 constexpr std::uint64_t kMaxCurvePoints = std::uint64_t(1) << 28;
+/// Cells per axis of a procedural SDF grid at most (its corners take 4 bytes each on the host).
+constexpr std::int64_t kMaxSdfResolution = 512;
 constexpr std::int64_t kMaxChildren = 100000;
 
 // paths and values in messages
@@ -184,6 +187,12 @@ struct WorldSphere {
   double radius;
   std::uint32_t material;
   std::string path;  ///< "objects[2]" or "objects[2].centers[5]"
+};
+
+/// An "sdf" object, its lattice placed in world coordinates (before the origin is subtracted).
+struct WorldSdf {
+  SdfGrid grid;
+  std::string path;  ///< "objects[2]"
 };
 
 /// A "curves" object in world coordinates, before the origin is subtracted.
@@ -551,14 +560,107 @@ class Loader {
   void readObject(const Json& v, const std::string& path) {
     object(v, path);
     const std::string type =
-        string(require(v, path, "type", ": gltf, mesh, sphere, spheres or curves"), member(path, "type"));
+        string(require(v, path, "type", ": gltf, mesh, sphere, spheres, curves or sdf"), member(path, "type"));
     if (type == "gltf") readGltf(v, path);
     else if (type == "mesh") readMesh(v, path);
     else if (type == "sphere") readSphere(v, path);
     else if (type == "spheres") readSpheres(v, path);
     else if (type == "curves") readCurves(v, path);
+    else if (type == "sdf") readSdf(v, path);
     else
-      fail(member(path, "type"), "unknown type \"" + type + "\" (expected one of: gltf, mesh, sphere, spheres, curves)");
+      fail(member(path, "type"), "unknown type \"" + type + "\" (expected one of: gltf, mesh, sphere, spheres, curves, sdf)");
+  }
+
+  /// A grid of signed distances: a procedural shape at a resolution, or a .vol file.
+  void readSdf(const Json& v, const std::string& path) {
+    checkKeys(v, path, {"type", "shape", "resolution", "radius", "minor_radius", "half_size", "amplitude", "frequency",
+                        "file", "box", "storage", "transform", "material"});
+    const Json* shapeValue = find(v, "shape");
+    const Json* file = find(v, "file");
+    if (shapeValue && file) fail(path, "give \"shape\" (procedural) or \"file\" (a .vol grid), not both");
+    if (!shapeValue && !file) fail(member(path, "shape"), "missing (required: \"shape\", or a \"file\" of a .vol grid)");
+    SdfVolume volume;
+    if (shapeValue) {
+      const std::string where = member(path, "shape");
+      const std::string name = string(*shapeValue, where);
+      SdfShape shape;
+      if (name == "sphere") shape = SdfShape::kSphere;
+      else if (name == "torus") shape = SdfShape::kTorus;
+      else if (name == "box") shape = SdfShape::kBox;
+      else if (name == "noisy_sphere") shape = SdfShape::kNoisySphere;
+      else fail(where, "unknown shape " + describe(*shapeValue) + " (expected one of: sphere, torus, box, noisy_sphere)");
+      const auto resolution = std::uint32_t(integer(require(v, path, "resolution", ": cells per axis"),
+                                                    member(path, "resolution"), 2, kMaxSdfResolution));
+      if (find(v, "box")) fail(member(path, "box"), "applies only to a .raw grid (a shape spans [-1, 1]^3: place it by \"transform\")");
+      SdfShapeParams params;
+      auto optional = [&](const char* key, double& to) {
+        if (const Json* x = find(v, key)) to = positive(*x, member(path, key));
+      };
+      optional("radius", params.radius);
+      optional("minor_radius", params.minorRadius);
+      optional("half_size", params.halfSize);
+      optional("amplitude", params.amplitude);
+      optional("frequency", params.frequency);
+      volume = makeSdfShape(shape, params, resolution);
+    } else {
+      for (const char* key : {"radius", "minor_radius", "half_size", "amplitude", "frequency"})
+        if (find(v, key)) fail(member(path, key), "applies only to a procedural \"shape\", not to a \"file\"");
+      const std::string where = member(path, "file");
+      const std::string name = string(*file, where);
+      if (name.empty()) fail(where, "must name a file, got \"\"");
+      const fs::path resolved = resolve(name);
+      const std::string ext = lowerExtension(resolved);
+      if (ext != ".vol" && ext != ".raw")
+        fail(where, "must be a .vol grid or a .raw grid of float32, got " + describe(*file));
+      const bool raw = ext == ".raw";
+      // a .raw file is bare values: its shape and box come from the object
+      glm::uvec3 cells(0);
+      glm::dvec3 lo(-1.0), hi(1.0);
+      if (raw) {
+        const std::string resPath = member(path, "resolution");
+        const Json& res = require(v, path, "resolution", ": cells per axis [x, y, z] of a .raw grid");
+        array(res, resPath, 3, "integers (cells per axis)");
+        for (std::size_t a = 0; a < 3; ++a)
+          cells[int(a)] = std::uint32_t(integer(res[a], element(resPath, a), 1, kSdfMaxCells));
+        if (const Json* box = find(v, "box")) {
+          const std::string boxPath = member(path, "box");
+          array(*box, boxPath, 6, "numbers (min x, y, z, max x, y, z)");
+          for (std::size_t a = 0; a < 3; ++a) {
+            lo[int(a)] = number((*box)[a], element(boxPath, a));
+            hi[int(a)] = number((*box)[a + 3], element(boxPath, a + 3));
+            if (!(hi[int(a)] > lo[int(a)])) fail(boxPath, "the maximum must exceed the minimum on every axis");
+          }
+        }
+      } else {
+        for (const char* key : {"resolution", "box"})
+          if (find(v, key)) fail(member(path, key), "applies only to a procedural \"shape\" or a .raw grid (a .vol file says its own)");
+      }
+      requireFile(resolved, where);
+      try {
+        volume = raw ? loadRawSdf(resolved.string(), resolved.filename().string(), cells, lo, hi)
+                     : loadVolFile(resolved.string(), resolved.filename().string());
+      } catch (const SceneError& e) {
+        fail(where, e.what());
+      }
+    }
+    WorldSdf sdf;
+    sdf.path = path;
+    sdf.grid.cells = volume.cells;
+    if (const Json* x = find(v, "storage")) {
+      const std::string where = member(path, "storage");
+      const std::string storage = string(*x, where);
+      if (storage == "dense") sdf.grid.storage = SdfStorage::kDense;
+      else if (storage == "sparse") sdf.grid.storage = SdfStorage::kSparse;
+      else if (storage != "auto") fail(where, "must be \"dense\", \"sparse\" or \"auto\", got " + describe(*x));
+    }
+    const std::string problem = sdfSurfaceProblem(volume.values);
+    if (!problem.empty()) m_result.scene.addWarning(path + " " + problem + "; it draws nothing");
+    sdf.grid.values = std::move(volume.values);
+    glm::dmat4 transform(1.0);
+    if (const Json* t = find(v, "transform")) transform = readTransform(*t, member(path, "transform"));
+    sdf.grid.latticeToScene = transform * volume.latticeToObject();
+    sdf.grid.material = materialOf(v, path);
+    m_sdfs.push_back(std::move(sdf));
   }
 
   void readCurves(const Json& v, const std::string& path) {
@@ -922,6 +1024,16 @@ class Loader {
       scene.spheres.push_back({center, radius, s.material});
     }
     for (const WorldCurves& c : m_curves) placeCurves(c, origin);
+    for (WorldSdf& sdf : m_sdfs) {
+      SdfGrid grid = std::move(sdf.grid);
+      grid.latticeToScene[3] -= glm::dvec4(origin, 0.0);
+      for (int corner = 0; corner < 8; ++corner) {
+        const glm::dvec3 c((corner & 1) ? grid.cells.x : 0u, (corner & 2) ? grid.cells.y : 0u, (corner & 4) ? grid.cells.z : 0u);
+        if (!isFinite(glm::vec3(glm::dvec3(grid.latticeToScene * glm::dvec4(c, 1.0)))))
+          fail(sdf.path, "the grid's box lies beyond the range of a float from the scene's origin");
+      }
+      scene.sdfGrids.push_back(std::move(grid));
+    }
     if (scene.materials.empty()) {
       scene.materials.push_back(makePbrMaterial(glm::vec3(0.8f), 0.0f, 0.5f));
       scene.materialNames.push_back("(default)");
@@ -951,6 +1063,14 @@ class Loader {
       for (const glm::dvec4& p : c.points) {
         lo = glm::min(lo, glm::dvec3(p) - p.w);
         hi = glm::max(hi, glm::dvec3(p) + p.w);
+      }
+    for (const WorldSdf& s : m_sdfs)
+      for (int corner = 0; corner < 8; ++corner) {
+        const glm::dvec3 c((corner & 1) ? s.grid.cells.x : 0u, (corner & 2) ? s.grid.cells.y : 0u,
+                           (corner & 4) ? s.grid.cells.z : 0u);
+        const glm::dvec3 w(s.grid.latticeToScene * glm::dvec4(c, 1.0));
+        lo = glm::min(lo, w);
+        hi = glm::max(hi, w);
       }
     const double kFloatMax = std::numeric_limits<float>::max();
     if (lo.x <= hi.x && lo.y <= hi.y && lo.z <= hi.z && isFinite(lo) && isFinite(hi) &&
@@ -1068,6 +1188,7 @@ class Loader {
   std::vector<Placement> m_placements;
   std::vector<WorldSphere> m_spheres;
   std::vector<WorldCurves> m_curves;
+  std::vector<WorldSdf> m_sdfs;
   std::uint64_t m_curvePoints = 0;  ///< children included
   std::uint32_t m_nextGeometry = 0;
 };

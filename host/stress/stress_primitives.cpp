@@ -12,9 +12,14 @@
 #include "render/renderer.h"
 #include "scene/generators.h"
 #include "scene/scene_file.h"
+#include "scene/sdf_volume.h"
+
+#include <glm/gtc/matrix_transform.hpp>
 
 #include <chrono>
 #include <cmath>
+#include <filesystem>
+#include <limits>
 #include <random>
 #include <sstream>
 
@@ -392,6 +397,159 @@ std::vector<StressRow> curveDegenerate(Context& context, const StressOptions& op
   return rows;
 }
 
+/// An SDF torus and a noisy SDF sphere (64^3 cells, one sparse, one dense)
+/// on a ground sphere under a sphere light, scaled by `scale` and moved by
+/// `translate` on every axis, as a scene file.
+std::string sdfSceneJson(double translate, double scale) {
+  auto p = [&](double x, double y, double z) {
+    std::ostringstream out;
+    out.precision(17);
+    out << "[" << translate + scale * x << ", " << translate + scale * y << ", " << translate + scale * z << "]";
+    return out.str();
+  };
+  auto r = [&](double v) {
+    std::ostringstream out;
+    out.precision(17);
+    out << scale * v;
+    return out.str();
+  };
+  return R"({"version": 1,
+  "camera": {"from": )" + p(0, 1.2, 4) + R"(, "to": )" + p(0, 0.4, 0) + R"(, "fov": 40},
+  "materials": {
+    "ground": {"type": "lambert", "base_color": [0.6, 0.6, 0.6]},
+    "metal": {"base_color": [0.9, 0.6, 0.3], "metallic": 1, "roughness": 0.3},
+    "white": {"type": "lambert", "base_color": [0.8, 0.8, 0.8]},
+    "light": {"type": "lambert", "base_color": [0, 0, 0], "emission": [20, 18, 15]}},
+  "objects": [
+    {"type": "sphere", "center": )" + p(0, -1000, 0) + R"(, "radius": )" + r(1000) + R"(, "material": "ground"},
+    {"type": "sdf", "shape": "torus", "resolution": 64, "storage": "sparse", "material": "metal",
+     "transform": {"translate": )" + p(-0.6, 0.3, 0) + R"(, "scale": )" + r(0.6) + R"(}},
+    {"type": "sdf", "shape": "noisy_sphere", "resolution": 64, "storage": "dense", "material": "white",
+     "transform": {"translate": )" + p(0.6, 0.45, 0.2) + R"(, "scale": )" + r(0.5) + R"(}},
+    {"type": "sphere", "center": )" + p(-1.5, 2.5, 1.5) + R"(, "radius": )" + r(0.3) + R"(, "material": "light"}]})";
+}
+
+/// The SDF scene translated to 1e6 and scaled from 1e-4 to 1e4 renders the
+/// untransformed image within noise.
+std::vector<StressRow> sdfTransforms(Context& context, const StressOptions& options) {
+  std::vector<StressRow> rows;
+  const int size = options.quick ? 32 : 48, spp = options.quick ? 64 : 256, blocks = options.quick ? 4 : 6;
+  const double zLimit = bonferroniZ(blocks * blocks * 3, 1e-3);
+  RenderSettings settings;
+  settings.width = settings.height = size;
+  settings.samplesPerPixel = spp;
+  settings.maxBounces = 4;
+  settings.seed = 1;
+  settings.background = glm::vec3(0.1f, 0.12f, 0.15f);
+  auto renderCase = [&](double translate, double scale) {
+    return render(context, loadSceneFileFromMemory(sdfSceneJson(translate, scale), "sdf (stress)", ".").scene, settings);
+  };
+  const Rendered reference = renderCase(0.0, 1.0);
+  struct Case {
+    std::string name;
+    double translate, scale;
+  };
+  std::vector<Case> cases = {{"translated by 1e+06 (recentred)", 1e6, 1.0},
+                             {"scaled by 1e-04", 0.0, 1e-4},
+                             {"scaled by 1e+04", 0.0, 1e4}};
+  if (options.quick) cases.resize(2);
+  for (const Case& c : cases) {
+    const auto start = std::chrono::steady_clock::now();
+    const Rendered r = renderCase(c.translate, c.scale);
+    const ImageAgreement a = compareImages(r.image, reference.image, blocks);
+    StressRow row;
+    row.group = "primitives";
+    row.name = "SDF grids (a sparse torus, a dense noisy sphere, 64^3): " + c.name;
+    row.figure = "max |z| " + stressFormat("%.2f", a.maxAbsZ) + " over " + std::to_string(a.tests) + " blocks";
+    if (r.nonFinite) row.figure += ", " + std::to_string(r.nonFinite) + " NaN/Inf samples";
+    row.criterion = "max |z| < " + stressFormat("%.2f", zLimit) + " against the untransformed scene, no NaN";
+    row.pass = a.maxAbsZ < zLimit && a.exactMismatches == 0 && r.nonFinite == 0;
+    row.seconds = secondsSince(start);
+    rows.push_back(row);
+  }
+  return rows;
+}
+
+/// SDF grids with NaN, no surface, or an unusable shape: a NaN in a .vol
+/// file is refused naming the file; a constant grid in a scene file loads
+/// with a warning; grids made in code (constant, all negative, NaN, no
+/// cells, a singular placement) are left out or draw nothing, never a crash
+/// or a NaN, while a good emitter renders.
+std::vector<StressRow> sdfDegenerate(Context& context, const StressOptions& options) {
+  std::vector<StressRow> rows;
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  {
+    const auto start = std::chrono::steady_clock::now();
+    const std::string path = (std::filesystem::temp_directory_path() / "wt-stress-nan.vol").string();
+    std::vector<float> values(4 * 4 * 4, 1.0f);
+    values[21] = nan;
+    writeVolFile(path, glm::uvec3(4), values, glm::dvec3(0.0), glm::dvec3(1.0));
+    std::string error;
+    try {
+      loadSceneFileFromMemory(R"({"version": 1, "objects": [{"type": "sdf", "file": ")" + path + R"("}]})", "nan.json", ".");
+    } catch (const SceneError& e) {
+      error = e.what();
+    }
+    std::filesystem::remove(path);
+    StressRow row;
+    row.group = "primitives";
+    row.name = "scene file, an SDF .vol grid with a NaN value";
+    row.figure = error.empty() ? "loaded" : "error: " + error;
+    row.criterion = "an error naming the scene file, objects[0].file, the .vol file and the value";
+    row.pass = error.find("nan.json") != std::string::npos && error.find("objects[0].file") != std::string::npos &&
+               error.find("wt-stress-nan.vol") != std::string::npos && error.find("NaN") != std::string::npos;
+    row.seconds = secondsSince(start);
+    rows.push_back(row);
+  }
+  {
+    const auto start = std::chrono::steady_clock::now();
+    std::string warnings, error;
+    try {
+      const SceneFile f = loadSceneFileFromMemory(
+          R"({"version": 1, "objects": [{"type": "sdf", "shape": "sphere", "radius": 5, "resolution": 8}]})",
+          "constant.json", ".");
+      for (const std::string& w : f.scene.warnings) warnings += w;
+    } catch (const SceneError& e) {
+      error = e.what();
+    }
+    StressRow row;
+    row.group = "primitives";
+    row.name = "scene file, an SDF grid all inside (a sphere larger than its box)";
+    row.figure = error.empty() ? "warnings: " + warnings : "error: " + error;
+    row.criterion = "loads, warning that objects[0] has no surface";
+    row.pass = error.empty() && warnings.find("objects[0]") != std::string::npos &&
+               warnings.find("no surface") != std::string::npos;
+    row.seconds = secondsSince(start);
+    rows.push_back(row);
+  }
+  const auto start = std::chrono::steady_clock::now();
+  Scene scene;
+  scene.materials.push_back(makeMaterial(glm::vec3(0.5f), glm::vec3(1.0f)));
+  auto grid = [](float value) {
+    SdfGrid g;
+    g.cells = glm::uvec3(4);
+    g.values.assign(5 * 5 * 5, value);
+    g.latticeToScene = glm::translate(glm::dmat4(1.0), glm::dvec3(-2.0, -2.0, -3.0));
+    return g;
+  };
+  scene.sdfGrids.push_back(grid(0.0f));
+  scene.sdfGrids.push_back(grid(-1.0f));
+  scene.sdfGrids.push_back(grid(nan));
+  SdfGrid empty = grid(1.0f);
+  empty.cells = glm::uvec3(0);
+  scene.sdfGrids.push_back(empty);
+  SdfGrid flat = grid(-1.0f);
+  flat.values[0] = 1.0f;
+  flat.latticeToScene[2] = glm::dvec4(0.0);  // singular
+  scene.sdfGrids.push_back(flat);
+  scene.spheres.push_back({glm::vec3(0.0f, 0.0f, -6.0f), 1.0f, 0});
+  rows.push_back(leftOutRow(context, options, scene, start,
+                            "SDF grids made in code: constant 0, all inside, all NaN (no bricks), no cells and a "
+                            "singular placement (left out), behind them a good emitter",
+                            2));
+  return rows;
+}
+
 }  // namespace
 
 std::vector<StressRow> stressPrimitives(Context& context, const StressOptions& options) {
@@ -400,6 +558,8 @@ std::vector<StressRow> stressPrimitives(Context& context, const StressOptions& o
   for (StressRow& row : sphereDegenerate(context, options)) rows.push_back(std::move(row));
   rows.push_back(curveSelfIntersection(context, options));
   for (StressRow& row : curveDegenerate(context, options)) rows.push_back(std::move(row));
+  for (StressRow& row : sdfTransforms(context, options)) rows.push_back(std::move(row));
+  for (StressRow& row : sdfDegenerate(context, options)) rows.push_back(std::move(row));
   return rows;
 }
 

@@ -27,9 +27,15 @@
 #if WT_HAS_INSTANCES
 #include "geometry/instance.cl"
 #endif
+#ifndef WT_HAS_SDF_GRIDS
+#error "WT_HAS_SDF_GRIDS is not defined: build options must come from kernelDefines()"
+#endif
+#if WT_HAS_SDF_GRIDS
+#include "geometry/sdf_grid.cl"
+#endif
 
 /// Whether any type beside triangles is compiled in (the primitive BVH is traversed).
-#define WT_HAS_PRIMITIVES (WT_HAS_SPHERES || WT_HAS_CURVES || WT_HAS_INSTANCES)
+#define WT_HAS_PRIMITIVES (WT_HAS_SPHERES || WT_HAS_CURVES || WT_HAS_INSTANCES || WT_HAS_SDF_GRIDS)
 
 /// The non-triangle primitives as the kernels see them (WtGeometry).
 typedef struct GeometryScene {
@@ -109,6 +115,12 @@ inline bool geometry_intersect(GeometryScene g, uint prim, float3 o, float3 d, f
       return curve_intersect(g.data + g.header.data_first[WT_PRIM_CURVE], prim_index(prim), o, d, tmin, tmax,
                              leaving, t, u);
 #endif
+#if WT_HAS_SDF_GRIDS
+    case WT_PRIM_SDF_GRID:
+      return sdf_intersect(g.data + g.header.data_first[WT_PRIM_SDF_GRID],
+                           g.info + g.header.info_first[WT_PRIM_SDF_GRID] + WT_SDF_INFO_ROWS * prim_index(prim), o, d,
+                           tmin, tmax, t, u);
+#endif
     default:
       return false;
   }
@@ -155,6 +167,16 @@ inline SurfaceHit geometry_surface(GeometryScene g, __global const float4* tri_v
       uint4 info = g.info[g.header.info_first[WT_PRIM_CURVE] + prim_index(prim)];
       curve_surface(g.data + g.header.data_first[WT_PRIM_CURVE], prim_index(prim), info, o, d, hit.x, &s.p,
                     &s.p_error, &s.ng, &s.uv, &s.dpdu);
+      s.ns = s.ng;
+      s.material = info.x;
+      return s;
+    }
+#endif
+#if WT_HAS_SDF_GRIDS
+    case WT_PRIM_SDF_GRID: {
+      uint4 info = g.info[g.header.info_first[WT_PRIM_SDF_GRID] + WT_SDF_INFO_ROWS * prim_index(prim)];
+      sdf_surface(g.data + g.header.data_first[WT_PRIM_SDF_GRID], info, o, d, hit.x, hit.y, &s.p, &s.p_error, &s.ng,
+                  &s.uv, &s.dpdu);
       s.ns = s.ng;
       s.material = info.x;
       return s;

@@ -85,7 +85,22 @@ typedef struct WtBvh4Node {
 /// y = WT_INSTANCE_* flags.
 #define WT_INSTANCE_ROWS 6
 #define WT_INSTANCE_MIRRORED 1u  ///< the transform's determinant is negative (the copy's corners 1 and 2 swapped)
-#define WT_PRIM_TYPES 4      ///< type slots in WtGeometry
+/// A brick of up to WT_SDF_BRICK^3 cells of a grid of signed distances that
+/// the surface crosses (kernels/geometry/sdf_grid.cl). prim_data: per grid
+/// WT_SDF_GRID_ROWS rows (lattice-from-scene as a 3x4 matrix, then (cells
+/// x, y, z, the longest world edge of a cell)), then the grids' corner
+/// values, four floats a row. prim_info per brick, WT_SDF_INFO_ROWS rows:
+/// x = material, y = grid, z = its first value (floats from the type's
+/// first row), w = the brick's coordinates (9 bits each, x lowest) and
+/// WT_SDF_SPARSE; then which of its cells the surface crosses, 512 bits
+/// (cell x + 8 y + 64 z at bit i & 31 of word i >> 5), so the walk skips the
+/// others without reading their corners. Slot 4 is left to displaced meshes.
+#define WT_PRIM_SDF_GRID 5u
+#define WT_SDF_BRICK 8          ///< cells per brick edge
+#define WT_SDF_GRID_ROWS 4      ///< prim_data rows per grid
+#define WT_SDF_INFO_ROWS 5      ///< prim_info rows per brick: its row, then its cells' crossing mask
+#define WT_SDF_SPARSE (1u << 27)  ///< the brick's values are its own (WT_SDF_BRICK + 1)^3 corners, x fastest; else the grid's dense array
+#define WT_PRIM_TYPES 6      ///< type slots in WtGeometry
 
 /// The primitives other than triangles (kernels/geometry/geometry.cl): one
 /// BVH over all of them whose leaves are ranges of prim_refs (typed ids),

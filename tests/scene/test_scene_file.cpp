@@ -748,9 +748,9 @@ const BadFile kBadFiles[] = {
         BadFile{"CenterElement", objects(R"({"type": "sphere", "center": [0, true, 0], "radius": 1})"),
                 "objects[0].center[1]: must be a number, got true"},
         BadFile{"MissingType", objects(R"({"center": [0, 0, 0]})"),
-                "objects[0].type: missing (required: gltf, mesh, sphere, spheres or curves)"},
+                "objects[0].type: missing (required: gltf, mesh, sphere, spheres, curves or sdf)"},
         BadFile{"UnknownType", objects(R"({"type": "cube"})"),
-                "objects[0].type: unknown type \"cube\" (expected one of: gltf, mesh, sphere, spheres, curves)"},
+                "objects[0].type: unknown type \"cube\" (expected one of: gltf, mesh, sphere, spheres, curves, sdf)"},
         // meshes
         BadFile{"MeshFileType", objects(R"({"type": "mesh", "file": "head.obj"})"),
                 "objects[0].file: must be a .ply file, got \"head.obj\""},
