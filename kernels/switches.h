@@ -85,6 +85,11 @@
 #elif !WT_SWITCH_IS_BOOL(WT_HAS_INSTANCES)
 #error "WT_HAS_INSTANCES must be 0 or 1"
 #endif
+#ifndef WT_HAS_SDF_GRIDS
+#error "WT_HAS_SDF_GRIDS not set (kernelDefines)"
+#elif !WT_SWITCH_IS_BOOL(WT_HAS_SDF_GRIDS)
+#error "WT_HAS_SDF_GRIDS must be 0 or 1"
+#endif
 
 // Not features (the image is the same either way), so they may be left out
 // and take these values: workarounds for the kernel checker, set by

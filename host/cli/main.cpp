@@ -503,8 +503,8 @@ int runInfo(RenderOptions options) {
   // geometry
   std::size_t curvePoints = 0;
   for (const wt::Curve& c : scene.curves) curvePoints += c.pointCount;
-  std::printf("primitives: %zu triangles, %zu spheres, %zu curves (%zu points), %zu vertices\n",
-              scene.triangles.size(), scene.spheres.size(), scene.curves.size(), curvePoints,
+  std::printf("primitives: %zu triangles, %zu spheres, %zu curves (%zu points), %zu SDF grids, %zu vertices\n",
+              scene.triangles.size(), scene.spheres.size(), scene.curves.size(), curvePoints, scene.sdfGrids.size(),
               scene.positions.size());
   std::printf("instances: %zu mesh copies in the file; instancing %s: %zu instances, %zu triangles in instanced copies\n",
               scene.instances.size(), options.instancing.c_str(), buffers.instanceCount(),

@@ -1,8 +1,7 @@
 // Checkpoints of a running render (--checkpoint, --resume): the
 // accumulation as the device holds it, with what it depends on (scene
 // content, image settings, kernels), written atomically and checked on
-// reading. The format is documented in docs/command-line.md, "Checkpoint
-// file format".
+// reading. The format is documented in docs/halting.md, "File format".
 #pragma once
 
 #include "render/renderer.h"

@@ -25,6 +25,7 @@ FeatureSet sceneFeatures(const Scene& scene, const SceneBuffers& buffers, const 
   const std::array<bool, WT_PRIM_TYPES> present = buffers.primitiveTypesPresent();
   f.spheres = present[WT_PRIM_SPHERE];
   f.curves = present[WT_PRIM_CURVE];
+  f.sdfGrids = present[WT_PRIM_SDF_GRID];
   f.instances = present[WT_PRIM_INSTANCE];
   f.bvhStackSize = buffers.stackSize();
 
@@ -97,6 +98,7 @@ std::vector<std::string> featureNames(const FeatureSet& f) {
   add(f.triangles, "triangles");
   add(f.spheres, "spheres");
   add(f.curves, "curves");
+  add(f.sdfGrids, "sdf_grids");
   add(f.instances, "instances");
   add(f.punctualLights, "punctual_lights");
   add(f.emissiveTriangles, "emissive_triangles");
@@ -147,6 +149,7 @@ KernelFeatures kernelFeaturesFor(const FeatureSet& f, const DeviceInfo& device, 
   k.alpha = f.alphaTest;
   k.primitives[WT_PRIM_SPHERE] = f.spheres;
   k.primitives[WT_PRIM_CURVE] = f.curves;
+  k.primitives[WT_PRIM_SDF_GRID] = f.sdfGrids;
   k.primitives[WT_PRIM_INSTANCE] = f.instances;
   k.packetWidth = packetWidthFor(device, requestedPacketWidth, f.triangleCount);
   k.streamPrefetch = false;  // the renderer traces no streams (the bench's Tracer decides its own)

@@ -25,6 +25,7 @@ struct FeatureSet {
   std::size_t triangleCount = 0;  ///< for the packet width (packetWidthFor); a statistic, not a switch
   bool spheres = false;    ///< analytic spheres
   bool curves = false;     ///< round curves
+  bool sdfGrids = false;   ///< grids of signed distances
   bool instances = false;  ///< geometry stored once and placed by instances (SceneBuffers decided)
   int bvhStackSize = 64;   ///< traversal stack entries the BVH needs (SceneBuffers::stackSize)
   // lights

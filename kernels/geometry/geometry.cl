@@ -27,9 +27,6 @@
 #if WT_HAS_INSTANCES
 #include "geometry/instance.cl"
 #endif
-#ifndef WT_HAS_SDF_GRIDS
-#error "WT_HAS_SDF_GRIDS is not defined: build options must come from kernelDefines()"
-#endif
 #if WT_HAS_SDF_GRIDS
 #include "geometry/sdf_grid.cl"
 #endif

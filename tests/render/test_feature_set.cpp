@@ -6,6 +6,7 @@
 #include "render/feature_set.h"
 #include "render/render_helpers.h"
 #include "scene/default_scene.h"
+#include "scene/sdf_volume.h"
 #include "test_util.h"
 #include "texture_helpers.h"
 
@@ -86,6 +87,19 @@ const OneFeature kCases[] = {
        return s;
      },
      noSettings, [] { return with(lambertBase(), {"curves"}); }},
+    {"sdf_grid",
+     [] {
+       Scene s = lambertFloor();
+       SdfVolume v = makeSdfShape(SdfShape::kSphere, {}, 8);
+       SdfGrid g;
+       g.cells = v.cells;
+       g.values = std::move(v.values);
+       g.latticeToScene = glm::translate(glm::dmat4(1.0), glm::dvec3(0.0, 0.5, 0.0)) *
+                          glm::scale(glm::dmat4(1.0), glm::dvec3(0.25)) * v.latticeToObject();
+       s.sdfGrids.push_back(std::move(g));
+       return s;
+     },
+     noSettings, [] { return with(lambertBase(), {"sdf_grids"}); }},
     {"instance",
      [] {
        const glm::mat4 copies[2] = {glm::mat4(1.0f), glm::translate(glm::mat4(1.0f), glm::vec3(3.0f, 0.0f, 0.0f))};
@@ -362,7 +376,7 @@ TEST_P(SpecialisedProgram, RendersTheSameImageAsTheGeneralProgram) {
 
 INSTANTIATE_TEST_SUITE_P(ExampleScenes, SpecialisedProgram,
                          ::testing::Values("cornell.gltf", "cornell_small_light.gltf", "corridor.gltf",
-                                           "glass_tube.json", "hair.json", "mixed.json", "spheres.json"),
+                                           "glass_tube.json", "mixed.json", "sdf.json", "spheres.json"),
                          [](const ::testing::TestParamInfo<const char*>& info) {
                            std::string n = info.param;
                            std::replace(n.begin(), n.end(), '.', '_');
@@ -375,6 +389,22 @@ TEST_P(SpecialisedProgramAssets, RendersTheSameImageAsTheGeneralProgram) {
   WT_REQUIRE_ASSET(path, GetParam());
   expectSpecialisedEqualsGeneral(loadSceneAny(path.string()), GetParam());
 }
+
+// example scenes that read ../shared/assets
+class SpecialisedProgramExampleAssets : public ::testing::TestWithParam<const char*> {};
+
+TEST_P(SpecialisedProgramExampleAssets, RendersTheSameImageAsTheGeneralProgram) {
+  WT_REQUIRE_ASSET(hair, "curves/hairutil_testdata/Bangs_100.hair");
+  const std::string path = std::string(WT_SOURCE_DIR) + "/scenes/" + GetParam();
+  expectSpecialisedEqualsGeneral(loadSceneAny(path), GetParam());
+}
+
+INSTANTIATE_TEST_SUITE_P(ExampleScenes, SpecialisedProgramExampleAssets, ::testing::Values("hair.json"),
+                         [](const ::testing::TestParamInfo<const char*>& info) {
+                           std::string n = info.param;
+                           std::replace(n.begin(), n.end(), '.', '_');
+                           return n;
+                         });
 
 INSTANTIATE_TEST_SUITE_P(SharedGltf, SpecialisedProgramAssets,
                          ::testing::Values("gltf/DamagedHelmet/glTF/DamagedHelmet.gltf",
