@@ -36,17 +36,6 @@ std::string formatFloat(float v) {
   return buffer;
 }
 
-std::vector<std::uint8_t> readFile(const std::string& path, const std::string& name) {
-  std::error_code ec;
-  if (!fs::is_regular_file(path, ec))
-    fail(name, "cannot open " + path + (fs::exists(path, ec) ? " (not a regular file)" : " (no such file)"));
-  std::ifstream in(path, std::ios::binary);
-  if (!in) fail(name, "cannot open " + path);
-  std::vector<std::uint8_t> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  if (in.bad()) fail(name, "cannot read " + path);
-  return bytes;
-}
-
 std::string fileName(const std::string& path) {
   const std::string name = fs::path(path).filename().string();
   return name.empty() ? path : name;
@@ -208,13 +197,13 @@ StrandSet loadPlyStrandsFromMemory(std::span<const std::uint8_t> bytes, const st
 
 StrandSet loadHairFile(const std::string& path) {
   const std::string name = fileName(path);
-  const std::vector<std::uint8_t> bytes = readFile(path, name);
+  const std::vector<std::uint8_t> bytes = readFileBytes(path, name);
   return loadHairFromMemory(bytes, name);
 }
 
 StrandSet loadPlyStrands(const std::string& path) {
   const std::string name = fileName(path);
-  const std::vector<std::uint8_t> bytes = readFile(path, name);
+  const std::vector<std::uint8_t> bytes = readFileBytes(path, name);
   return loadPlyStrandsFromMemory(bytes, name);
 }
 

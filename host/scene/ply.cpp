@@ -102,7 +102,9 @@ std::string fileName(const std::string& path) {
   return name.empty() ? path : name;
 }
 
-std::vector<std::uint8_t> readFile(const std::string& path, const std::string& name) {
+}  // namespace
+
+std::vector<std::uint8_t> readFileBytes(const std::string& path, const std::string& name) {
   std::error_code ec;
   if (!fs::is_regular_file(path, ec))
     fail(name, "cannot open " + path + (fs::exists(path, ec) ? " (not a regular file)" : " (no such file)"));
@@ -112,8 +114,6 @@ std::vector<std::uint8_t> readFile(const std::string& path, const std::string& n
   if (in.bad()) fail(name, "cannot read " + path);
   return bytes;
 }
-
-}  // namespace
 
 const PlyData::Property* PlyData::Element::scalar(const std::string& property) const {
   for (const Property& p : properties)
@@ -333,7 +333,7 @@ PlyMesh readPlyMesh(std::span<const std::uint8_t> bytes, const std::string& name
 
 PlyMesh loadPlyMesh(const std::string& path) {
   const std::string name = fileName(path);
-  return readPlyMesh(readFile(path, name), name);
+  return readPlyMesh(readFileBytes(path, name), name);
 }
 
 }  // namespace wt

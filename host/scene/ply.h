@@ -40,6 +40,10 @@ struct PlyData {
   const Element* find(const std::string& element) const;
 };
 
+/// The bytes of the file at `path`; a SceneError naming `name` (the file's
+/// name in messages) when it is missing, not a regular file or unreadable.
+std::vector<std::uint8_t> readFileBytes(const std::string& path, const std::string& name);
+
 /// Parse a PLY file; `name` prefixes every error (SceneError). `checkHeader`
 /// sees the elements and properties (no values yet) before the body is read,
 /// so that a file missing what the caller needs fails on that, not on a value.
