@@ -86,6 +86,14 @@
 #error "WT_HAS_INSTANCES must be 0 or 1"
 #endif
 
+// Arbitrary output variables (kernels/aov.cl): shade and accumulate record
+// them only when a render asks (RenderSettings::aovs); off, no code exists.
+#ifndef WT_AOV
+#error "WT_AOV not set (kernelDefines)"
+#elif !WT_SWITCH_IS_BOOL(WT_AOV)
+#error "WT_AOV must be 0 or 1"
+#endif
+
 // Not features (the image is the same either way), so they may be left out
 // and take these values: workarounds for the kernel checker, set by
 // buildProgram under Oclgrind only, and the packet leaf test's lane limit,

@@ -40,6 +40,9 @@ struct KernelFeatures {
   /// WT_STREAM_PREFETCH: streams ask for a node's children as it arrives, and
   /// keep their rays' order (streamPrefetchFor)
   bool streamPrefetch = false;
+  /// WT_AOV: shade and accumulate record the AOVs (kernels/aov.cl); set by
+  /// the renderer from RenderSettings::aovs, never by the scene
+  bool aov = false;
 };
 
 /// Whether streams (kernels/bvh_stream.cl) should ask for a node's children
