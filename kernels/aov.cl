@@ -27,8 +27,12 @@ inline bool aov_specular_only(WtMaterial m) {
   if (m.model != WT_MATERIAL_PBR || m.roughness >= WT_PBR_MIN_ROUGHNESS) return false;
   if (m.sheen.x > 0.0f || m.sheen.y > 0.0f || m.sheen.z > 0.0f) return false;
   if (m.clearcoat > 0.0f && m.clearcoat_roughness >= WT_PBR_MIN_ROUGHNESS) return false;
-  float metallic = m.base_color.w;
-  return metallic >= 1.0f || (WT_HAS_TRANSMISSION && m.transmission >= 1.0f);
+  if (m.base_color.w >= 1.0f) return true;  // metallic
+#if WT_HAS_TRANSMISSION
+  return m.transmission >= 1.0f;
+#else
+  return false;
+#endif
 }
 
 /// Every sample starts with nothing found (shade at the camera ray).
