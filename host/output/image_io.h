@@ -28,7 +28,7 @@ ImageFormat imageFormatFor(const std::filesystem::path& path);
 /// folder exists and accepts a new file. Throws OutputError naming the path.
 void checkWritable(const std::filesystem::path& path);
 
-/// The AOVs `render --aov` writes (docs/command-line.md, "AOVs"), each an
+/// The AOVs `render --aov` writes (docs/command-line.md: --aov), each an
 /// EXR layer of that name (variance: the mean_variance layer every EXR has).
 enum class Aov : std::uint8_t { Albedo, Normal, Depth, Position, Material, Instance, Variance };
 inline constexpr Aov kAllAovs[] = {Aov::Albedo,   Aov::Normal,   Aov::Depth,   Aov::Position,
