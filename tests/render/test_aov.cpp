@@ -12,6 +12,8 @@
 #include <ImfHeader.h>
 #include <ImfInputFile.h>
 
+#include <glm/gtc/matrix_transform.hpp>
+
 #include <cstring>
 
 namespace wt {
@@ -120,6 +122,38 @@ TEST(Aov, AlbedoStopsAtARoughMirror) {
       ASSERT_NEAR(a.albedo[3 * p + c], mirror[c], 1e-6f) << "albedo at " << p;
       ASSERT_NEAR(a.normal[3 * p + c], c == 1 ? 1.0f : 0.0f, 1e-6f) << "normal at " << p;
     }
+}
+
+TEST(Aov, InstanceIdsTellTheCopiesApart) {
+  // one grid stored once and placed twice, side by side: the left half of the
+  // view sees one instance, the right half the other
+  Scene grid = makeGrid(8, glm::vec3(0.0f), 0.5f, glm::vec3(1, 0, 0), glm::vec3(0, 0, 1),
+                        makeMaterial(glm::vec3(0.5f)));
+  const glm::mat4 copies[] = {glm::translate(glm::mat4(1.0f), glm::vec3(-0.5f, 0.0f, 0.0f)),
+                              glm::translate(glm::mat4(1.0f), glm::vec3(0.5f, 0.0f, 0.0f))};
+  Scene scene = placeCopies(grid, copies);
+  scene.camera = test::topDownCamera(glm::vec3(0.0f, kHeight, 0.0f), kHalfView);
+  RenderSettings settings = aovSettings(true);
+  settings.instancing = Instancing::On;
+  Renderer renderer(test::deviceContext(), scene, settings);
+  ASSERT_EQ(renderer.sceneBuffers().instanceCount(), 2u);
+  renderer.renderSample();
+  const Aovs a = renderer.readImage().aovs;
+  // rows kSize/4 + 1 .. 3 kSize/4 - 2 lie on the copies (z in [-0.5, 0.5]); the others miss
+  const std::uint32_t left = a.instance[std::size_t(kSize / 2) * kSize + 1];
+  const std::uint32_t right = a.instance[std::size_t(kSize / 2) * kSize + kSize - 2];
+  EXPECT_NE(left, Aovs::kNoId);
+  EXPECT_NE(right, Aovs::kNoId);
+  EXPECT_NE(left, right);
+  for (int y = kSize / 4 + 1; y < 3 * kSize / 4 - 1; ++y)
+    for (int x = 0; x < kSize; ++x) {
+      if (x == kSize / 2 - 1 || x == kSize / 2) continue;  // the seam: jittered across it
+      const std::size_t p = std::size_t(y) * kSize + x;
+      ASSERT_EQ(a.instance[p], x < kSize / 2 ? left : right) << x << "," << y;
+      ASSERT_NE(a.primitive[p], Aovs::kNoId) << x << "," << y;
+    }
+  EXPECT_EQ(a.instance[0], Aovs::kNoId);  // a corner: no hit
+  EXPECT_EQ(a.material[0], Aovs::kNoId);
 }
 
 TEST(Aov, RenderWithoutAovsIsUnchangedAndAllocatesNone) {
