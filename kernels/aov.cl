@@ -9,14 +9,17 @@
 #define WT_AOV_CL
 
 #include "common.h"
+#include "shared/materials.h"
 
 // aov_sample: 4 float4 per pixel
 //   [0] albedo rgb, w: 1 once found (0 while the path is on a specular chain)
 //   [1] normal xyz (world, shading, facing the ray), w: surfaces hit (path length)
 //   [2] camera hit's world position xyz, w: its distance along the camera ray (INFINITY: a miss)
-//   [3] camera hit's texture coordinates xy (barycentrics without TEXCOORD_0), z unused, w: 1 if the camera ray hit
+//   [3] camera hit's texture coordinates xy (barycentrics without TEXCOORD_0), z: nodes the
+//       camera ray visited (WT_BVH_COST, written by extend; else 0), w: 1 if the camera ray hit
 // aov_accum: the same four summed over samples, except [0].w the sample
 // count and [2], [3].xy, [3].w summed over the samples whose camera ray hit.
+// extend.cl includes this file for WT_AOV_SAMPLE_SLOTS.
 #define WT_AOV_SAMPLE_SLOTS 4u
 
 #if WT_AOV
@@ -40,7 +43,11 @@ inline void aov_begin(__global float4* a) {
   a[0] = (float4)(0.0f);
   a[1] = (float4)(0.0f);
   a[2] = (float4)(0.0f, 0.0f, 0.0f, INFINITY);
+#if WT_BVH_COST
+  a[3] = (float4)(0.0f, 0.0f, a[3].z, 0.0f);  // z: extend's count for this sample's camera ray
+#else
   a[3] = (float4)(0.0f);
+#endif
 }
 
 /// The path escaped with radiance `le` from the environment (0 where hidden).
@@ -69,7 +76,7 @@ inline void aov_surface(__global float4* a, WtMaterial m, float3 n) {
 /// The camera ray's hit: where, how far, and its surface coordinates.
 inline void aov_camera_hit(__global float4* a, float3 p, float distance, float2 uv) {
   a[2] = (float4)(p, distance);
-  a[3] = (float4)(uv, 0.0f, 1.0f);
+  a[3] = (float4)(uv, a[3].z, 1.0f);
 }
 
 /// Add this sample's values to the pixel's sums.
@@ -80,6 +87,8 @@ inline void aov_fold(__global const float4* a, __global float4* sum) {
   if (uv.w != 0.0f) {
     sum[2] += hit;
     sum[3] += uv;
+  } else {
+    sum[3].z += uv.z;
   }
 }
 

@@ -99,6 +99,7 @@ void parseAovOptions(RenderOptions& options) {
   }
   const bool onlyVariance = options.aovs.size() == 1 && options.aovs[0] == wt::Aov::Variance;
   options.settings.aovs = (!options.aovs.empty() && !onlyVariance) || options.debugView != wt::DebugView::None;
+  options.settings.bvhCost = options.debugView == wt::DebugView::BvhCost;
   for (const std::string& out : options.outputs)
     if (!options.aovs.empty() && wt::imageFormatFor(out) == wt::ImageFormat::Png && options.aovOut.empty())
       wt::log::warnOnce(out + ": a PNG holds no AOV layers (write an .exr, or use --aov-out)");
@@ -533,7 +534,7 @@ int main(int argc, char** argv) {
                         "position, material, instance, variance, or all (docs/command-line.md)");
   renderCmd->add_option("--aov-out", render.aovOut, "Also write each --aov as its own EXR in this folder (NAME.exr)");
   renderCmd->add_option("--debug", render.debug,
-                        "Render a debug view instead of the image: normals, albedo, uv, depth or bounces");
+                        "Render a debug view instead of the image: normals, albedo, uv, depth, bounces or bvh-cost");
   renderCmd->add_option("--kernel-dir", render.kernelDir, "Developer option: read kernels from this folder");
   renderCmd->add_flag("--general-program", render.settings.generalProgram,
                       "Developer option: build every kernel switch on instead of the scene's feature set (the same "

@@ -30,8 +30,9 @@ DebugView parseDebugView(std::string_view name) {
   if (name == "uv") return DebugView::Uv;
   if (name == "depth") return DebugView::Depth;
   if (name == "bounces") return DebugView::Bounces;
+  if (name == "bvh-cost") return DebugView::BvhCost;
   throw std::invalid_argument("--debug: unknown view '" + std::string(name) +
-                              "' (known: normals, albedo, uv, depth, bounces)");
+                              "' (known: normals, albedo, uv, depth, bounces, bvh-cost)");
 }
 
 void applyDebugView(Image& image, DebugView view) {
@@ -39,10 +40,11 @@ void applyDebugView(Image& image, DebugView view) {
   const Aovs& a = image.aovs;
   if (a.empty()) throw std::invalid_argument("--debug: the render recorded no AOVs");
   const std::size_t pixels = std::size_t(image.width) * std::size_t(image.height);
-  float depthMin = INFINITY, depthMax = 0.0f, bouncesMax = 0.0f;
+  float depthMin = INFINITY, depthMax = 0.0f, bouncesMax = 0.0f, costMax = 0.0f;
   for (std::size_t i = 0; i < pixels; ++i) {
     if (std::isfinite(a.depth[i])) depthMin = std::min(depthMin, a.depth[i]), depthMax = std::max(depthMax, a.depth[i]);
     bouncesMax = std::max(bouncesMax, a.bounces[i]);
+    costMax = std::max(costMax, a.bvhCost[i]);
   }
   image.rgb.assign(3 * pixels, 0.0f);
   image.srgba.assign(4 * pixels, 255);
@@ -75,6 +77,10 @@ void applyDebugView(Image& image, DebugView view) {
       case DebugView::Bounces:
         rgb[0] = rgb[1] = rgb[2] = a.bounces[i];
         heat(bouncesMax > 0.0f ? a.bounces[i] / bouncesMax : 0.0f, display);
+        break;
+      case DebugView::BvhCost:
+        rgb[0] = rgb[1] = rgb[2] = a.bvhCost[i];
+        heat(costMax > 0.0f ? a.bvhCost[i] / costMax : 0.0f, display);
         break;
       case DebugView::None: break;
     }

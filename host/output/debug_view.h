@@ -9,9 +9,9 @@
 
 namespace wt {
 
-enum class DebugView : std::uint8_t { None, Normals, Albedo, Uv, Depth, Bounces };
+enum class DebugView : std::uint8_t { None, Normals, Albedo, Uv, Depth, Bounces, BvhCost };
 
-/// "normals", "albedo", "uv", "depth", "bounces". Throws std::invalid_argument naming an unknown view.
+/// "normals", "albedo", "uv", "depth", "bounces", "bvh-cost". Throws std::invalid_argument naming an unknown view.
 DebugView parseDebugView(std::string_view name);
 
 /// Replace the image's radiance and 8-bit pixels by the view of its AOVs
@@ -20,7 +20,8 @@ DebugView parseDebugView(std::string_view name);
 /// and bounces as grey values of the distance and the mean surfaces hit;
 /// pixels (PNG): normals mapped from [-1, 1] to [0, 1], depth near-bright
 /// over the image's depth range, bounces a heat map from 0 to the image's
-/// maximum. The variance is dropped (it belongs to the radiance).
+/// maximum; bvh-cost likewise for the nodes the camera ray visited (which
+/// needs RenderSettings::bvhCost). The variance is dropped (it belongs to the radiance).
 void applyDebugView(Image& image, DebugView view);
 
 }  // namespace wt

@@ -66,6 +66,7 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
   m_kernelFeatures = settings.generalProgram ? generalKernelFeatures(m_features, context.info(), settings.packetWidth)
                                              : kernelFeaturesFor(m_features, context.info(), settings.packetWidth);
   m_kernelFeatures.aov = settings.aovs;
+  m_kernelFeatures.bvhCost = settings.aovs && settings.bvhCost;
   m_packetWidth = m_kernelFeatures.packetWidth;
   const KernelFeatures& features = m_kernelFeatures;
   const auto buildStart = std::chrono::steady_clock::now();
@@ -199,7 +200,7 @@ void Renderer::renderSample() {
     m_stats.raysTraced += alive;
     m_context.fill(m_counters, 0u, outSlot * sizeof(cl_uint), sizeof(cl_uint));
     // extend: closest hit of every queued path; camera rays in packets
-    const bool packets = m_settings.packets && bounce == 0;
+    const bool packets = m_settings.packets && !m_kernelFeatures.bvhCost && bounce == 0;
     // Shadow rays traced in packets are appended to a dense queue (an atomic
     // counter from 0); otherwise shade writes entry i for its item i
     // (WT_NO_HIT: no shadow ray) and the queue has the bounce's path count.
@@ -329,6 +330,7 @@ void Renderer::readAovs(Image& image) {
   a.uv.resize(2 * pixels);
   a.depth.resize(pixels);
   a.bounces.resize(pixels);
+  a.bvhCost.resize(pixels);
   a.material.resize(pixels);
   a.instance.resize(pixels);
   a.primitive.resize(pixels);
@@ -341,6 +343,7 @@ void Renderer::readAovs(Image& image) {
       a.position[3 * i + c] = hits > 0.0f ? s[8 + c] / hits : 0.0f;
     }
     a.bounces[i] = n > 0.0f ? s[7] / n : 0.0f;
+    a.bvhCost[i] = n > 0.0f ? s[14] / n : 0.0f;
     a.depth[i] = hits > 0.0f ? s[11] / hits : INFINITY;
     a.uv[2 * i] = hits > 0.0f ? s[12] / hits : 0.0f;
     a.uv[2 * i + 1] = hits > 0.0f ? s[13] / hits : 0.0f;

@@ -73,6 +73,10 @@ struct RenderSettings {
   /// Record the AOVs (Image::aovs, kernels/aov.cl): compiled in and their
   /// buffers allocated only when set.
   bool aovs = false;
+  /// With aovs: traversal counts the nodes each camera ray visits
+  /// (Aovs::bvhCost; WT_BVH_COST, kernels compiled for the debug view only).
+  /// Counted by single-ray traversal: camera rays are not traced in packets.
+  bool bvhCost = false;
 #ifdef NDEBUG
   bool stopOnNonFinite = false;  ///< throw NonFiniteSampleError at the first NaN/Inf shade makes (on in debug builds)
 #else
@@ -105,6 +109,7 @@ struct Aovs {
   std::vector<float> position;  ///< xyz, world space
   std::vector<float> uv;        ///< TEXCOORD_0 of the camera hit (barycentrics without one)
   std::vector<float> bounces;   ///< surfaces the path hit, mean over samples
+  std::vector<float> bvhCost;   ///< triangle-tree nodes the camera ray visited, mean over samples (0 without RenderSettings::bvhCost)
   std::vector<std::uint32_t> material;   ///< material index
   std::vector<std::uint32_t> instance;   ///< instance index (kNoId: geometry not instanced)
   std::vector<std::uint32_t> primitive;  ///< typed primitive id of the hit (its geometry's, for an instance)

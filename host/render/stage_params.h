@@ -17,7 +17,7 @@ struct Generate {
 /// extend and extend_packet: the same parameters.
 inline constexpr auto kExtendParams =
     concatParams(params("counters", "queue_slot", "queue", "ray_o", "ray_d", "nodes", "node_count", "tri_verts",
-                        "hits", "ray_skip", "hit_instance"),
+                        "hits", "ray_skip", "hit_instance", "aov_sample"),
                  kGeometryParams, kAlphaParams);
 struct Extend {
   static constexpr std::string_view kName = "extend";

@@ -156,6 +156,29 @@ TEST(Aov, InstanceIdsTellTheCopiesApart) {
   EXPECT_EQ(a.material[0], Aovs::kNoId);
 }
 
+TEST(Aov, BvhCostCountsTheNodesACameraRayVisits) {
+  // two triangles: a tree of one node, which every camera ray visits once
+  RenderSettings settings = aovSettings(true);
+  settings.bvhCost = true;
+  Image image = test::render(floorScene(makeMaterial(glm::vec3(0.5f))), settings, 2);
+  ASSERT_EQ(image.aovs.bvhCost.size(), std::size_t(kSize) * kSize);
+  for (float c : image.aovs.bvhCost) ASSERT_EQ(c, 1.0f);
+  // a grid of 32 x 32 quads has a deeper tree: more than the root, never more than it has nodes
+  Scene grid = makeGrid(32, glm::vec3(0.0f), 2.0f, glm::vec3(0, 0, 1), glm::vec3(1, 0, 0), makeMaterial(glm::vec3(0.5f)));
+  grid.camera = test::topDownCamera(glm::vec3(0.0f, kHeight, 0.0f), kHalfView);
+  Renderer renderer(test::deviceContext(), grid, settings);
+  renderer.renderSample();
+  const Aovs a = renderer.readImage().aovs;
+  const float nodes = float(renderer.sceneBuffers().nodeCount);
+  for (float c : a.bvhCost) {
+    ASSERT_GT(c, 1.0f);
+    ASSERT_LE(c, nodes);
+  }
+  // without the switch nothing is counted
+  Image plain = test::render(floorScene(makeMaterial(glm::vec3(0.5f))), aovSettings(true), 1);
+  for (float c : plain.aovs.bvhCost) ASSERT_EQ(c, 0.0f);
+}
+
 TEST(Aov, RenderWithoutAovsIsUnchangedAndAllocatesNone) {
   // The same image with and without the AOV code compiled in, bit for bit;
   // without AOVs their buffers hold one element each.
@@ -220,6 +243,7 @@ TEST(Aov, ListParsingNamesTheUnknown) {
   }
   EXPECT_THROW(parseAovList("albedo,"), std::invalid_argument);
   EXPECT_THROW(parseDebugView("bvh"), std::invalid_argument);
+  EXPECT_EQ(parseDebugView("bvh-cost"), DebugView::BvhCost);
 }
 
 TEST(Aov, AovLayersWithoutRecordedAovsAreAnError) {
