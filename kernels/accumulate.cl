@@ -9,6 +9,7 @@
 #define WT_ACCUMULATE_CL
 
 #include "common.h"
+#include "aov.cl"
 
 /// One Welford update in single precision.
 inline void accumulate_single(float4 x, float n, float4* mean, float4* m2) {
@@ -46,9 +47,13 @@ inline void accumulate_double(float4 x, double n, double4* mean, double4* m2) {
 
 WT_KERNEL void accumulate(WtFrameParams frame, __global const float4* radiance,
                           __global float4* state, __global uint* sample_count,
-                          __global uint* counters) {
+                          __global uint* counters, __global const float4* aov_sample,
+                          __global float4* aov_accum) {
   uint i = get_global_id(0);
   if (i >= frame.width * frame.height) return;
+#if WT_AOV
+  aov_fold(aov_sample + WT_AOV_SAMPLE_SLOTS * i, aov_accum + WT_AOV_SAMPLE_SLOTS * i);
+#endif
   float4 value = radiance[i];
   if (!all(isfinite(value.xyz))) {
     atomic_inc(&counters[WT_COUNTER_NONFINITE]);

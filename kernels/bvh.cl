@@ -22,6 +22,9 @@ typedef struct Hit {
   float t;
   float b1, b2;
   uint prim;  ///< leaf-order triangle index, or WT_NO_HIT
+#if WT_BVH_COST
+  uint cost;  ///< nodes of the triangle tree visited (instances' and other primitives' trees not counted)
+#endif
 } Hit;
 
 // Avoid 0 * inf = NaN in the slab test for axis-parallel rays.
@@ -140,6 +143,9 @@ inline Hit bvh_closest_root(BvhScene scene, uint root, float3 org, float3 dir, f
   hit.t = tmax;
   hit.b1 = hit.b2 = 0.0f;
   hit.prim = WT_NO_HIT;
+#if WT_BVH_COST
+  hit.cost = 0u;
+#endif
   if (scene.node_count == 0 || !bvh_ray_is_finite(org, dir)) return hit;
   __global const WtBvh4Node* nodes = (__global const WtBvh4Node*)scene.nodes;
 
@@ -153,6 +159,9 @@ inline Hit bvh_closest_root(BvhScene scene, uint root, float3 org, float3 dir, f
   uint node = root;
   for (;;) {
     __global const WtBvh4Node* n = &nodes[node];
+#if WT_BVH_COST
+    ++hit.cost;
+#endif
     float4 t4;
     int4 hit4 = bvh4_box_hit(n, planes, org, inv_d, tmin, hit.t, &t4);
     float t_child[4] = {t4.s0, t4.s1, t4.s2, t4.s3};

@@ -1,12 +1,14 @@
 // Stage 2: closest hit for every path in the input queue.
 #include "bvh_packet.cl"
 #include "bvh_prims.cl"
+#include "aov.cl"
 
 WT_KERNEL void extend(__global const uint* counters, uint queue_slot, __global const uint* queue,
                       __global const float4* ray_o, __global const float4* ray_d,
                       __global const WtBvhNode* nodes, uint node_count,
                       __global const float4* tri_verts, __global float4* hits,
-                      __global const uint* ray_skip, __global uint* hit_instance, WT_GEOMETRY_PARAMS WT_ALPHA_PARAMS) {
+                      __global const uint* ray_skip, __global uint* hit_instance, __global float4* aov_sample,
+                      WT_GEOMETRY_PARAMS WT_ALPHA_PARAMS) {
   uint i = get_global_id(0);
   if (i >= counters[queue_slot]) return;
   uint path = queue[i];
@@ -23,6 +25,10 @@ WT_KERNEL void extend(__global const uint* counters, uint queue_slot, __global c
 #if WT_HAS_INSTANCES
   hit_instance[path] = instance;
 #endif
+#if WT_BVH_COST
+  // a camera ray (the only rays that leave no surface): its count for the bvh-cost view
+  if (ray_skip[path] == WT_NO_HIT) aov_sample[WT_AOV_SAMPLE_SLOTS * path + 3u].z = (float)hit.cost;
+#endif
 }
 
 /// extend for queue entries [n i, n i + n), n = WT_PACKET_WIDTH, traced as
@@ -32,7 +38,8 @@ WT_KERNEL void extend_packet(__global const uint* counters, uint queue_slot, __g
                              __global const float4* ray_o, __global const float4* ray_d,
                              __global const WtBvhNode* nodes, uint node_count,
                              __global const float4* tri_verts, __global float4* hits,
-                             __global const uint* ray_skip, __global uint* hit_instance, WT_GEOMETRY_PARAMS WT_ALPHA_PARAMS) {
+                             __global const uint* ray_skip, __global uint* hit_instance, __global float4* aov_sample,
+                      WT_GEOMETRY_PARAMS WT_ALPHA_PARAMS) {
   uint first = get_global_id(0) * WT_PACKET;
   uint count = counters[queue_slot];
   if (first >= count) return;

@@ -9,6 +9,7 @@
 #include "sampler.cl"
 #include "materials/bsdf.cl"
 #include "materials/textured.cl"
+#include "aov.cl"
 
 /// Weight of emission found by BSDF sampling (pdf_bsdf, solid angle) from a
 /// light that NEE could also have sampled with pdf_light (0: NEE cannot).
@@ -45,7 +46,8 @@ WT_KERNEL void shade(WtFrameParams frame, WtEnvironment environment, __global co
                      __global uint* ray_skip, __global uint2* shadow_skip,
                      __global const WtLightNode* light_tree, __global const uint* emitter_leaf,
                      __global float4* prev_normal, __global const uint* hit_instance, WT_GEOMETRY_PARAMS,
-                     __global float2* ray_cone, WT_SURFACE_PARAMS) {
+                     __global float2* ray_cone, __global float4* aov_sample, __global uint4* aov_ids,
+                     WT_SURFACE_PARAMS) {
   uint i = get_global_id(0);
   if (i >= counters[in_slot]) return;
   // Without WT_FLAG_COMPACT_SHADOWS entry i of the shadow queue is this
@@ -68,8 +70,19 @@ WT_KERNEL void shade(WtFrameParams frame, WtEnvironment environment, __global co
   SurfaceScene ss = WT_SURFACE_SCENE;
   LightScene ls = {lights, alias, frame.light_count, tri_verts, env, g, tri_info, ss};
 
+#if WT_AOV
+  __global float4* aov = aov_sample + WT_AOV_SAMPLE_SLOTS * path;
+  if (frame.bounce == 0u) {
+    aov_begin(aov);
+    if (frame.sample == 0u) aov_ids[path] = (uint4)(WT_NO_HIT);
+  }
+#endif
+
   // miss: the environment (camera rays see it unless it is hidden)
   if (prim == WT_NO_HIT) {
+#if WT_AOV
+    aov_miss(aov, frame.bounce == 0u && (frame.flags & WT_FLAG_ENV_HIDDEN) ? (float3)(0.0f) : env_eval(env, dir));
+#endif
     if (frame.bounce == 0 && (frame.flags & WT_FLAG_ENV_HIDDEN)) return;
     float3 le = env_eval(env, dir);
     float w = shade_emission_weight(frame, pdf_prev, frame.env_pmf * env_pdf(env, dir));
@@ -99,6 +112,9 @@ WT_KERNEL void shade(WtFrameParams frame, WtEnvironment environment, __global co
     cone_angle = cone.y;
   }
 #endif
+#if WT_AOV
+  float2 aov_uv = (float2)(hit.y, hit.z);  // barycentrics unless the triangle has TEXCOORD_0
+#endif
 #if WT_HAS_TEXTURES || WT_HAS_VERTEX_COLORS
   // triangles (an instance's too) carry vertex attributes and textures
   if (prim_type(prim) == WT_PRIM_TRIANGLE) {
@@ -114,6 +130,9 @@ WT_KERNEL void shade(WtFrameParams frame, WtEnvironment environment, __global co
       sp.tangent = normalize(instance_vector(to_world, sp.tangent));
       if (geometry_instance_info(g, instance).y & WT_INSTANCE_MIRRORED) sp.sign = -sp.sign;
     }
+#endif
+#if WT_AOV && WT_HAS_TEXTURES
+    aov_uv = sp.uv.xy;
 #endif
     material = material_at(ss, surface.material, material, sp, &ns);
   }
@@ -154,6 +173,18 @@ WT_KERNEL void shade(WtFrameParams frame, WtEnvironment environment, __global co
     shade_check_finite(frame, counters, path, emitted, WT_NONFINITE_EMISSION);
     radiance[path] += (float4)(emitted, 0.0f);
   }
+#if WT_AOV
+  {
+    // the guides' normal faces the ray, as the shading frame below does
+    float3 n_aov = ns;
+    if (dot(n_aov, dir) > 0.0f) n_aov = -n_aov;
+    aov_surface(aov, material, n_aov);
+    if (frame.bounce == 0u) {
+      aov_camera_hit(aov, p, hit.x * length(dir), aov_uv);
+      if (frame.sample == 0u) aov_ids[path] = (uint4)(surface.material, instance, prim, 0u);
+    }
+  }
+#endif
   if (frame.bounce >= frame.max_bounces) return;
 
   float3 wo = -dir;

@@ -91,6 +91,23 @@
 #error "WT_HAS_SDF_GRIDS must be 0 or 1"
 #endif
 
+// Arbitrary output variables (kernels/aov.cl): shade and accumulate record
+// them only when a render asks (RenderSettings::aovs); off, no code exists.
+#ifndef WT_AOV
+#error "WT_AOV not set (kernelDefines)"
+#elif !WT_SWITCH_IS_BOOL(WT_AOV)
+#error "WT_AOV must be 0 or 1"
+#endif
+// The bvh-cost debug view: closest-hit traversal counts the nodes it visits
+// (Hit::cost), extend records a camera ray's count; off, no code exists.
+#ifndef WT_BVH_COST
+#error "WT_BVH_COST not set (kernelDefines)"
+#elif !WT_SWITCH_IS_BOOL(WT_BVH_COST)
+#error "WT_BVH_COST must be 0 or 1"
+#elif WT_BVH_COST && !WT_AOV
+#error "WT_BVH_COST needs WT_AOV (the count goes to aov_sample)"
+#endif
+
 // Not features (the image is the same either way), so they may be left out
 // and take these values: workarounds for the kernel checker, set by
 // buildProgram under Oclgrind only, and the packet leaf test's lane limit,

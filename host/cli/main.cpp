@@ -6,6 +6,7 @@
 #include "device/context.h"
 #include "device/program.h"
 #include "device/program_cache.h"
+#include "output/debug_view.h"
 #include "output/image_io.h"
 #include "device/scene_buffers.h"
 #include "render/feature_set.h"
@@ -138,14 +139,48 @@ struct RenderOptions {
   double targetError = 0.0;        ///< --target-error; 0: none
   double checkpointSeconds = 0.0;  ///< --checkpoint; 0: none
   bool resume = false;
+  std::string aov;     ///< --aov: names, comma-separated, or "all"
+  std::string aovOut;  ///< --aov-out: folder for one EXR per AOV
+  std::string debug;   ///< --debug: a view (output/debug_view.h)
+  std::vector<wt::Aov> aovs;               ///< parsed --aov
+  wt::DebugView debugView = wt::DebugView::None;  ///< parsed --debug
   GivenOptions given;
 };
 
 void writeOutputs(const RenderOptions& options, const wt::Image& image) {
   for (const std::string& out : options.outputs) {
-    wt::writeImage(out, image);
+    wt::writeImage(out, image, options.aovs);
     std::printf("wrote %s\n", out.c_str());
   }
+  if (!options.aovOut.empty())
+    for (wt::Aov aov : options.aovs) {
+      std::filesystem::path out = std::filesystem::path(options.aovOut) / (std::string(wt::aovName(aov)) + ".exr");
+      wt::writeAovImage(out, image, aov);
+      std::printf("wrote %s\n", out.c_str());
+    }
+}
+
+/// Parse --aov and --debug, check --aov-out; the AOVs are recorded where either asks.
+void parseAovOptions(RenderOptions& options) {
+  if (!options.aov.empty()) options.aovs = wt::parseAovList(options.aov);
+  if (!options.debug.empty()) options.debugView = wt::parseDebugView(options.debug);
+  if (!options.aovOut.empty()) {
+    if (options.aovs.empty()) throw std::invalid_argument("--aov-out: names no AOVs to write (add --aov)");
+    std::error_code ec;
+    if (!std::filesystem::is_directory(options.aovOut, ec))
+      throw std::invalid_argument("--aov-out: folder '" + options.aovOut + "' does not exist");
+    wt::checkWritable(std::filesystem::path(options.aovOut) / "albedo.exr");
+  }
+  const bool onlyVariance = options.aovs.size() == 1 && options.aovs[0] == wt::Aov::Variance;
+  options.settings.aovs = (!options.aovs.empty() && !onlyVariance) || options.debugView != wt::DebugView::None;
+  options.settings.bvhCost = options.debugView == wt::DebugView::BvhCost;
+  // a checkpoint holds the image's accumulation only: AOVs would restart at zero on --resume
+  if (options.settings.aovs && (options.checkpointSeconds > 0.0 || options.resume))
+    throw std::invalid_argument(std::string(options.resume ? "--resume" : "--checkpoint") +
+                                ": checkpoints do not hold AOVs yet; render AOVs (--aov, --debug) without it");
+  for (const std::string& out : options.outputs)
+    if (!options.aovs.empty() && wt::imageFormatFor(out) == wt::ImageFormat::Png && options.aovOut.empty())
+      wt::log::warnOnce(out + ": a PNG holds no AOV layers (write an .exr, or use --aov-out)");
 }
 
 /// The scene file's render settings and environment, except where the
@@ -219,8 +254,9 @@ int runRender(RenderOptions options) {
   wt::log::setVerbose(options.verbose);
   if (!options.kernelDir.empty()) wt::setKernelDirectory(std::filesystem::path(options.kernelDir));
 
-  // Fail on an unwritable output before spending any time rendering.
+  // Fail on an unwritable output or a bad AOV before spending any time rendering.
   for (const std::string& out : options.outputs) wt::checkWritable(out);
+  parseAovOptions(options);
 
   wt::GltfLoadOptions loadOptions;
   loadOptions.sceneIndex = options.sceneIndex;
@@ -443,6 +479,7 @@ int runRender(RenderOptions options) {
   // Whatever happened, keep what was accumulated.
   if (renderer.stats().samplesDone > 0) {
     wt::Image image = renderer.readImage();
+    wt::applyDebugView(image, options.debugView);
     writeOutputs(options, image);
     if (settings.tonemap.autoExposure) {
       const float scale = renderer.autoExposure();
@@ -708,6 +745,12 @@ int main(int argc, char** argv) {
   renderCmd->add_flag("--no-recenter", render.noRecenter,
                       "Keep the file's world coordinates (default: the scene is stored relative to the camera, "
                       "in double precision, so it renders the same far from the world origin)");
+  renderCmd->add_option("--aov", render.aov,
+                        "AOVs to write as layers of the EXR output, comma-separated: albedo, normal, depth, "
+                        "position, material, instance, variance, or all (docs/command-line.md)");
+  renderCmd->add_option("--aov-out", render.aovOut, "Also write each --aov as its own EXR in this folder (NAME.exr)");
+  renderCmd->add_option("--debug", render.debug,
+                        "Render a debug view instead of the image: normals, albedo, uv, depth, bounces or bvh-cost");
   renderCmd->add_option("--kernel-dir", render.kernelDir, "Developer option: read kernels from this folder");
   renderCmd->add_flag("--general-program", render.settings.generalProgram,
                       "Developer option: build every kernel switch on instead of the scene's feature set (the same "

@@ -138,6 +138,8 @@ std::vector<std::string> kernelDefines(const KernelFeatures& features) {
       "-D WT_HAS_ALPHA=" + std::string(features.alpha ? "1" : "0"),
       "-D WT_PACKET_WIDTH=" + std::to_string(features.packetWidth),
       "-D WT_STREAM_PREFETCH=" + std::string(features.streamPrefetch ? "1" : "0"),
+      "-D WT_AOV=" + std::string(features.aov ? "1" : "0"),
+      "-D WT_BVH_COST=" + std::string(features.aov && features.bvhCost ? "1" : "0"),
   };
   for (const PrimitiveType& type : primitiveTypes())
     defines.push_back("-D " + std::string(type.define) + "=" + (features.primitives[type.id] ? "1" : "0"));

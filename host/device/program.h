@@ -40,6 +40,12 @@ struct KernelFeatures {
   /// WT_STREAM_PREFETCH: streams ask for a node's children as it arrives, and
   /// keep their rays' order (streamPrefetchFor)
   bool streamPrefetch = false;
+  /// WT_AOV: shade and accumulate record the AOVs (kernels/aov.cl); set by
+  /// the renderer from RenderSettings::aovs, never by the scene
+  bool aov = false;
+  /// WT_BVH_COST: traversal counts the nodes a ray visits (the bvh-cost
+  /// debug view only; needs aov)
+  bool bvhCost = false;
 };
 
 /// Whether streams (kernels/bvh_stream.cl) should ask for a node's children

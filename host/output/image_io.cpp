@@ -45,9 +45,39 @@ void writeAtomically(const std::filesystem::path& path, Writer writer) {
   }
 }
 
-void writeExr(const std::filesystem::path& path, const Image& image) {
-  // Beside RGB, the variance of each pixel's mean (sample variance / samples)
-  // as a layer, so the image can serve as a reference with known noise.
+/// One channel of an EXR: `base` points at pixel 0's value, `stride` bytes apart.
+struct ExrChannel {
+  std::string name;
+  Imf::PixelType type;
+  const void* base;
+  std::size_t stride;
+};
+
+void writeExrChannels(const std::filesystem::path& path, int width, int height, const std::vector<ExrChannel>& channels) {
+  try {
+    Imf::Header header(width, height);
+    for (const ExrChannel& c : channels) header.channels().insert(c.name, Imf::Channel(c.type));
+    Imf::OutputFile file(path.c_str(), header);
+    Imf::FrameBuffer fb;
+    for (const ExrChannel& c : channels)
+      fb.insert(c.name, Imf::Slice(c.type, static_cast<char*>(const_cast<void*>(c.base)), c.stride,
+                                   c.stride * std::size_t(width)));
+    file.setFrameBuffer(fb);
+    file.writePixels(height);
+  } catch (const std::exception& e) {
+    throw OutputError(path.string() + ": writing EXR failed: " + e.what());
+  }
+}
+
+/// Channels named prefix + names[k] of `components`-float pixels.
+void addFloatChannels(std::vector<ExrChannel>& out, const std::string& prefix, const std::vector<float>& data,
+                      std::initializer_list<const char*> names) {
+  std::size_t k = 0;
+  for (const char* n : names) out.push_back({prefix + n, Imf::FLOAT, data.data() + k++, names.size() * sizeof(float)});
+}
+
+/// The variance of each pixel's mean (sample variance / samples); empty without the variance.
+std::vector<float> meanVarianceOf(const Image& image) {
   const std::size_t pixels = std::size_t(image.width) * std::size_t(std::max(image.height, 0));
   std::vector<float> meanVariance;
   if (image.rgbVariance.size() == 3 * pixels && image.samples.size() == pixels) {
@@ -56,30 +86,54 @@ void writeExr(const std::filesystem::path& path, const Image& image) {
       for (int c = 0; c < 3; ++c)
         meanVariance[3 * p + c] = image.samples[p] > 0 ? image.rgbVariance[3 * p + c] / float(image.samples[p]) : 0.0f;
   }
-  try {
-    Imf::Header header(image.width, image.height);
-    for (const char* name : {"R", "G", "B"}) header.channels().insert(name, Imf::Channel(Imf::FLOAT));
-    if (!meanVariance.empty())
-      for (const char* name : {"mean_variance.R", "mean_variance.G", "mean_variance.B"})
-        header.channels().insert(name, Imf::Channel(Imf::FLOAT));
-    Imf::OutputFile file(path.c_str(), header);
-    Imf::FrameBuffer fb;
-    const std::size_t xStride = 3 * sizeof(float), yStride = xStride * image.width;
-    char* base = reinterpret_cast<char*>(const_cast<float*>(image.rgb.data()));
-    fb.insert("R", Imf::Slice(Imf::FLOAT, base + 0, xStride, yStride));
-    fb.insert("G", Imf::Slice(Imf::FLOAT, base + 4, xStride, yStride));
-    fb.insert("B", Imf::Slice(Imf::FLOAT, base + 8, xStride, yStride));
-    if (!meanVariance.empty()) {
-      char* var = reinterpret_cast<char*>(meanVariance.data());
-      fb.insert("mean_variance.R", Imf::Slice(Imf::FLOAT, var + 0, xStride, yStride));
-      fb.insert("mean_variance.G", Imf::Slice(Imf::FLOAT, var + 4, xStride, yStride));
-      fb.insert("mean_variance.B", Imf::Slice(Imf::FLOAT, var + 8, xStride, yStride));
-    }
-    file.setFrameBuffer(fb);
-    file.writePixels(image.height);
-  } catch (const std::exception& e) {
-    throw OutputError(path.string() + ": writing EXR failed: " + e.what());
+  return meanVariance;
+}
+
+/// The channels of `aov` named prefix + channel; meanVariance the image's (meanVarianceOf).
+void addAovChannels(std::vector<ExrChannel>& out, const std::filesystem::path& path, const Image& image, Aov aov,
+                    const std::string& prefix, const std::vector<float>& meanVariance) {
+  const Aovs& a = image.aovs;
+  if (aov == Aov::Variance) {
+    if (meanVariance.empty())
+      throw OutputError(path.string() + ": the image has no variance for the AOV 'variance'");
+    addFloatChannels(out, prefix, meanVariance, {"R", "G", "B"});
+    return;
   }
+  if (a.empty())
+    throw OutputError(path.string() + ": the render recorded no AOVs, so '" + std::string(aovName(aov)) +
+                      "' cannot be written");
+  switch (aov) {
+    case Aov::Albedo: addFloatChannels(out, prefix, a.albedo, {"R", "G", "B"}); break;
+    case Aov::Normal:
+    case Aov::Position: {
+      // a separate image is RGB, so that any viewer and OIDN's tools read it
+      const bool layer = !prefix.empty();
+      addFloatChannels(out, prefix, aov == Aov::Normal ? a.normal : a.position,
+                       layer ? std::initializer_list<const char*>{"X", "Y", "Z"}
+                             : std::initializer_list<const char*>{"R", "G", "B"});
+      break;
+    }
+    case Aov::Depth: addFloatChannels(out, prefix, a.depth, {"Z"}); break;
+    case Aov::Material: out.push_back({prefix + "id", Imf::UINT, a.material.data(), sizeof(std::uint32_t)}); break;
+    case Aov::Instance:
+      out.push_back({prefix + "id", Imf::UINT, a.instance.data(), sizeof(std::uint32_t)});
+      out.push_back({prefix + "primitive", Imf::UINT, a.primitive.data(), sizeof(std::uint32_t)});
+      break;
+    case Aov::Variance: break;
+  }
+}
+
+void writeExr(const std::filesystem::path& path, const Image& image, std::span<const Aov> aovs) {
+  // Beside RGB, the variance of each pixel's mean as a layer, so the image
+  // can serve as a reference with known noise; then the AOVs asked for.
+  const std::vector<float> meanVariance = meanVarianceOf(image);
+  std::vector<ExrChannel> channels;
+  addFloatChannels(channels, "", image.rgb, {"R", "G", "B"});
+  if (!meanVariance.empty()) addFloatChannels(channels, "mean_variance.", meanVariance, {"R", "G", "B"});
+  for (Aov aov : aovs)
+    if (aov != Aov::Variance)  // the mean_variance layer above
+      addAovChannels(channels, path, image, aov, std::string(aovName(aov)) + ".", meanVariance);
+  writeExrChannels(path, image.width, image.height, channels);
 }
 
 void writePng(const std::filesystem::path& path, const Image& image) {
@@ -114,13 +168,68 @@ void checkWritable(const std::filesystem::path& path) {
   std::filesystem::remove(probe, ec);
 }
 
-void writeImage(const std::filesystem::path& path, const Image& image) {
+std::string_view aovName(Aov aov) {
+  switch (aov) {
+    case Aov::Albedo: return "albedo";
+    case Aov::Normal: return "normal";
+    case Aov::Depth: return "depth";
+    case Aov::Position: return "position";
+    case Aov::Material: return "material";
+    case Aov::Instance: return "instance";
+    case Aov::Variance: return "variance";
+  }
+  return "?";
+}
+
+std::vector<Aov> parseAovList(std::string_view list) {
+  std::vector<bool> asked(std::size(kAllAovs), false);
+  std::size_t start = 0;
+  while (start <= list.size()) {
+    std::size_t end = std::min(list.find(',', start), list.size());
+    std::string_view name = list.substr(start, end - start);
+    if (name == "all") {
+      asked.assign(asked.size(), true);
+    } else {
+      std::size_t k = 0;
+      while (k < std::size(kAllAovs) && aovName(kAllAovs[k]) != name) ++k;
+      if (k == std::size(kAllAovs)) {
+        std::string known;
+        for (Aov a : kAllAovs) known += std::string(aovName(a)) + ", ";
+        throw std::invalid_argument(name.empty() ? "--aov: an empty name in '" + std::string(list) + "'"
+                                                 : "--aov: unknown AOV '" + std::string(name) + "' (known: " +
+                                                       known + "all)");
+      }
+      asked[k] = true;
+    }
+    start = end + 1;
+  }
+  std::vector<Aov> out;
+  for (std::size_t k = 0; k < asked.size(); ++k)
+    if (asked[k]) out.push_back(kAllAovs[k]);
+  return out;
+}
+
+void writeImage(const std::filesystem::path& path, const Image& image, std::span<const Aov> aovs) {
   ImageFormat format = imageFormatFor(path);
+  for (Aov aov : aovs)
+    if (aov != Aov::Variance && image.aovs.empty())
+      throw OutputError(path.string() + ": the render recorded no AOVs, so '" + std::string(aovName(aov)) +
+                        "' cannot be written");
   writeAtomically(path, [&](const std::filesystem::path& tmp) {
     if (format == ImageFormat::Exr)
-      writeExr(tmp, image);
+      writeExr(tmp, image, aovs);
     else
       writePng(tmp, image);
+  });
+}
+
+void writeAovImage(const std::filesystem::path& path, const Image& image, Aov aov) {
+  if (imageFormatFor(path) != ImageFormat::Exr) throw OutputError(path.string() + ": an AOV image is written as .exr");
+  std::vector<float> meanVariance = meanVarianceOf(image);
+  std::vector<ExrChannel> channels;
+  addAovChannels(channels, path, image, aov, "", meanVariance);
+  writeAtomically(path, [&](const std::filesystem::path& tmp) {
+    writeExrChannels(tmp, image.width, image.height, channels);
   });
 }
 

@@ -5,9 +5,13 @@
 
 #include "render/renderer.h"
 
+#include <cstdint>
 #include <filesystem>
+#include <span>
 #include <stdexcept>
 #include <string>
+#include <string_view>
+#include <vector>
 
 namespace wt {
 
@@ -24,8 +28,25 @@ ImageFormat imageFormatFor(const std::filesystem::path& path);
 /// folder exists and accepts a new file. Throws OutputError naming the path.
 void checkWritable(const std::filesystem::path& path);
 
-/// Write the image in the path's format. Throws OutputError.
-void writeImage(const std::filesystem::path& path, const Image& image);
+/// The AOVs `render --aov` writes (docs/command-line.md: --aov), each an
+/// EXR layer of that name (variance: the mean_variance layer every EXR has).
+enum class Aov : std::uint8_t { Albedo, Normal, Depth, Position, Material, Instance, Variance };
+inline constexpr Aov kAllAovs[] = {Aov::Albedo,   Aov::Normal,   Aov::Depth,   Aov::Position,
+                                   Aov::Material, Aov::Instance, Aov::Variance};
+/// "albedo", "normal", ... (the layer's name).
+std::string_view aovName(Aov aov);
+/// A comma-separated list of names, or "all"; each once, in kAllAovs' order.
+/// Throws std::invalid_argument naming an unknown or empty entry.
+std::vector<Aov> parseAovList(std::string_view list);
+
+/// Write the image in the path's format; an EXR gets the layers of `aovs`
+/// (which need image.aovs, else OutputError; a PNG holds none). Throws OutputError.
+void writeImage(const std::filesystem::path& path, const Image& image, std::span<const Aov> aovs = {});
+
+/// One AOV as an EXR of its own, its channels without the layer's prefix
+/// (albedo, normal, position, variance: R, G, B; depth: Z; material: id;
+/// instance: id, primitive). Throws OutputError.
+void writeAovImage(const std::filesystem::path& path, const Image& image, Aov aov);
 
 /// Read an EXR (tests, reference images): RGB floats, and when the file has
 /// wavetrace's mean_variance layer, the variance of each pixel's mean in

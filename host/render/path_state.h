@@ -21,15 +21,18 @@ enum class PathNeed : std::uint8_t {
   Shadows,    ///< the connect stage runs (some light can be sampled)
   Instances,  ///< the scene has instances (hit_instance)
   Textures,   ///< textures are read at the path's footprint (ray_cone)
+  Aovs,       ///< the render records AOVs (RenderSettings::aovs, kernels/aov.cl)
 };
 
 struct PathNeeds {
   bool shadows = true;
   bool instances = false;
   bool textures = false;
+  bool aovs = false;
   bool has(PathNeed n) const {
     return n == PathNeed::Always || (n == PathNeed::Shadows && shadows) ||
-           (n == PathNeed::Instances && instances) || (n == PathNeed::Textures && textures);
+           (n == PathNeed::Instances && instances) || (n == PathNeed::Textures && textures) ||
+           (n == PathNeed::Aovs && aovs);
   }
 };
 
@@ -63,9 +66,12 @@ struct PathState {
   cl::Buffer mean, m2;        ///< float4: resolved mean and second moment
   cl::Buffer sampleCount;     ///< uint: samples folded in
   cl::Buffer pixels;          ///< uchar4: tone-mapped sRGB
+  cl::Buffer aovSample;       ///< float4[4]: this sample's AOVs (kernels/aov.cl)
+  cl::Buffer aovAccum;        ///< float4[4]: the AOVs summed over samples
+  cl::Buffer aovIds;          ///< uint4: the first sample's material, instance, primitive at the camera hit
 
   /// Every buffer above, once.
-  static const std::array<PathBufferDesc, 22> kBuffers;
+  static const std::array<PathBufferDesc, 25> kBuffers;
 
   /// Allocate every buffer for `pixels` pixels (one element where `needs` lacks its need).
   void allocate(const cl::Context& context, std::size_t pixels, const PathNeeds& needs);
@@ -79,7 +85,7 @@ struct PathState {
   }
 };
 
-inline const std::array<PathBufferDesc, 22> PathState::kBuffers{{
+inline const std::array<PathBufferDesc, 25> PathState::kBuffers{{
     {"ray_o", "float4", 16, &PathState::rayO, PathNeed::Always},
     {"ray_d", "float4", 16, &PathState::rayD, PathNeed::Always},
     {"hits", "float4", 16, &PathState::hits, PathNeed::Always},
@@ -103,6 +109,9 @@ inline const std::array<PathBufferDesc, 22> PathState::kBuffers{{
     {"m2", "float4", 16, &PathState::m2, PathNeed::Always},
     {"sample_count", "uint", 4, &PathState::sampleCount, PathNeed::Always},
     {"pixels", "uchar4", 4, &PathState::pixels, PathNeed::Always},
+    {"aov_sample", "float4", 64, &PathState::aovSample, PathNeed::Aovs},
+    {"aov_accum", "float4", 64, &PathState::aovAccum, PathNeed::Aovs},
+    {"aov_ids", "uint4", 16, &PathState::aovIds, PathNeed::Aovs},
 }};
 
 inline void PathState::allocate(const cl::Context& context, std::size_t pixelCount, const PathNeeds& needs) {

@@ -65,6 +65,8 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
   m_features = sceneFeatures(scene, *m_scene, settings);
   m_kernelFeatures = settings.generalProgram ? generalKernelFeatures(m_features, context.info(), settings.packetWidth)
                                              : kernelFeaturesFor(m_features, context.info(), settings.packetWidth);
+  m_kernelFeatures.aov = settings.aovs;
+  m_kernelFeatures.bvhCost = settings.aovs && settings.bvhCost;
   m_packetWidth = m_kernelFeatures.packetWidth;
   const KernelFeatures& features = m_kernelFeatures;
   const auto buildStart = std::chrono::steady_clock::now();
@@ -96,6 +98,7 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
   needs.shadows = m_connectStage;
   needs.instances = features.primitives[WT_PRIM_INSTANCE];
   needs.textures = features.textures;
+  needs.aovs = settings.aovs;
   m_path.allocate(ctx, pixels, needs);
   m_counters = cl::Buffer(ctx, CL_MEM_READ_WRITE, WT_COUNTER_COUNT * sizeof(cl_uint));
   auto upload = [&](const auto& data) {
@@ -125,6 +128,7 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
   // zero bits are 0.0f as well
   context.fill(m_path.state, 0u, 0, pixels * 64);
   context.fill(m_path.sampleCount, 0u, 0, pixels * 4);
+  if (settings.aovs) context.fill(m_path.aovAccum, 0u, 0, pixels * 64);
   context.fill(m_counters, 0u, 0, WT_COUNTER_COUNT * sizeof(cl_uint));
   context.fill(m_counters, 0xffffffffu, WT_COUNTER_FIRST_NONFINITE * sizeof(cl_uint), sizeof(cl_uint));
   q.finish();
@@ -195,7 +199,7 @@ void Renderer::renderSample() {
     m_stats.raysTraced += alive;
     m_context.fill(m_counters, 0u, outSlot * sizeof(cl_uint), sizeof(cl_uint));
     // extend: closest hit of every queued path; camera rays in packets
-    const bool packets = m_settings.packets && bounce == 0;
+    const bool packets = m_settings.packets && !m_kernelFeatures.bvhCost && bounce == 0;
     // Shadow rays traced in packets are appended to a dense queue (an atomic
     // counter from 0); otherwise shade writes entry i for its item i
     // (WT_NO_HIT: no shadow ray) and the queue has the bounce's path count.
@@ -310,6 +314,8 @@ void Renderer::readResolved(Image& image, bool tonemap) {
   m_context.finish();
   m_stats.nonFiniteSamples = counters[WT_COUNTER_NONFINITE];
 
+  if (m_settings.aovs) readAovs(image);
+
   image.rgb.resize(3 * pixels);
   image.rgbVariance.resize(3 * pixels);
   for (std::size_t i = 0; i < pixels; ++i) {
@@ -350,6 +356,44 @@ void Renderer::restoreAccumulation(const Accumulation& saved) {
   m_context.finish();
   m_stats.samplesDone = saved.samplesDone;
   m_stats.nonFiniteSamples = saved.nonFiniteSamples;
+}
+
+void Renderer::readAovs(Image& image) {
+  const std::size_t pixels = std::size_t(m_settings.width) * std::size_t(m_settings.height);
+  std::vector<float> sum(16 * pixels);
+  std::vector<std::uint32_t> ids(4 * pixels);
+  cl::CommandQueue& q = m_context.queue();
+  q.enqueueReadBuffer(m_path.aovAccum, CL_FALSE, 0, sum.size() * 4, sum.data());
+  q.enqueueReadBuffer(m_path.aovIds, CL_FALSE, 0, ids.size() * 4, ids.data());
+  m_context.finish();
+  Aovs& a = image.aovs;
+  a.albedo.resize(3 * pixels);
+  a.normal.resize(3 * pixels);
+  a.position.resize(3 * pixels);
+  a.uv.resize(2 * pixels);
+  a.depth.resize(pixels);
+  a.bounces.resize(pixels);
+  a.bvhCost.resize(pixels);
+  a.material.resize(pixels);
+  a.instance.resize(pixels);
+  a.primitive.resize(pixels);
+  for (std::size_t i = 0; i < pixels; ++i) {
+    const float* s = &sum[16 * i];  // kernels/aov.cl: albedo+samples, normal+bounces, position+depth, uv+hits
+    const float n = s[3], hits = s[15];
+    for (int c = 0; c < 3; ++c) {
+      a.albedo[3 * i + c] = n > 0.0f ? s[c] / n : 0.0f;
+      a.normal[3 * i + c] = n > 0.0f ? s[4 + c] / n : 0.0f;
+      a.position[3 * i + c] = hits > 0.0f ? s[8 + c] / hits : 0.0f;
+    }
+    a.bounces[i] = n > 0.0f ? s[7] / n : 0.0f;
+    a.bvhCost[i] = n > 0.0f ? s[14] / n : 0.0f;
+    a.depth[i] = hits > 0.0f ? s[11] / hits : INFINITY;
+    a.uv[2 * i] = hits > 0.0f ? s[12] / hits : 0.0f;
+    a.uv[2 * i + 1] = hits > 0.0f ? s[13] / hits : 0.0f;
+    a.material[i] = ids[4 * i];
+    a.instance[i] = ids[4 * i + 1];
+    a.primitive[i] = ids[4 * i + 2];
+  }
 }
 
 }  // namespace wt

@@ -72,6 +72,13 @@ struct RenderSettings {
   /// allocated nor launched (the connect stage without light sampling);
   /// false runs and allocates them all, for tests that the image is the same.
   bool skipUnusedStages = true;
+  /// Record the AOVs (Image::aovs, kernels/aov.cl): compiled in and their
+  /// buffers allocated only when set.
+  bool aovs = false;
+  /// With aovs: traversal counts the nodes each camera ray visits
+  /// (Aovs::bvhCost; WT_BVH_COST, kernels compiled for the debug view only).
+  /// Counted by single-ray traversal: camera rays are not traced in packets.
+  bool bvhCost = false;
 #ifdef NDEBUG
   bool stopOnNonFinite = false;  ///< throw NonFiniteSampleError at the first NaN/Inf shade makes (on in debug builds)
 #else
@@ -89,6 +96,28 @@ struct NonFiniteSampleError : std::runtime_error {
   int bounce;  ///< 0: the camera ray's hit
 };
 
+/// Arbitrary output variables, per pixel, row-major from the top (empty
+/// unless RenderSettings::aovs). Albedo and normal are a denoiser's guides:
+/// those of the first hit that is no perfect mirror or smooth glass, the
+/// environment's radiance (albedo) and a zero normal where the path escapes
+/// first; averaged over the samples. Depth, position and uv average the
+/// samples whose camera ray hit (depth infinity, position and uv 0 where
+/// none did); the ids are the first sample's (kNoId: a miss).
+struct Aovs {
+  static constexpr std::uint32_t kNoId = 0xffffffffu;
+  std::vector<float> albedo;    ///< rgb
+  std::vector<float> normal;    ///< xyz, world space, shading normal facing the camera (not renormalised)
+  std::vector<float> depth;     ///< distance along the camera ray to its hit
+  std::vector<float> position;  ///< xyz, world space
+  std::vector<float> uv;        ///< TEXCOORD_0 of the camera hit (barycentrics without one)
+  std::vector<float> bounces;   ///< surfaces the path hit, mean over samples
+  std::vector<float> bvhCost;   ///< triangle-tree nodes the camera ray visited, mean over samples (0 without RenderSettings::bvhCost)
+  std::vector<std::uint32_t> material;   ///< material index
+  std::vector<std::uint32_t> instance;   ///< instance index (kNoId: geometry not instanced)
+  std::vector<std::uint32_t> primitive;  ///< typed primitive id of the hit (its geometry's, for an instance)
+  bool empty() const { return albedo.empty(); }
+};
+
 /// The accumulated image read back from the device.
 struct Image {
   int width = 0, height = 0;
@@ -96,6 +125,7 @@ struct Image {
   std::vector<float> rgbVariance;      ///< per-pixel sample variance of the radiance (unbiased)
   std::vector<std::uint32_t> samples;  ///< samples folded into each pixel
   std::vector<std::uint8_t> srgba;     ///< tone-mapped 8-bit sRGB, alpha 255
+  Aovs aovs;                           ///< with RenderSettings::aovs
 };
 
 /// The running accumulation exactly as the device holds it: what a
@@ -155,6 +185,7 @@ class Renderer {
   /// Resolve the accumulation state into mean and m2, and read them with
   /// the per-pixel counts into `image` (srgba untouched).
   void readResolved(Image& image, bool tonemap);
+  void readAovs(Image& image);
   [[noreturn]] void throwNonFinite(int sample, std::uint32_t path, std::uint32_t where);
   Context& m_context;
   RenderSettings m_settings;

@@ -17,7 +17,7 @@ struct Generate {
 /// extend and extend_packet: the same parameters.
 inline constexpr auto kExtendParams =
     concatParams(params("counters", "queue_slot", "queue", "ray_o", "ray_d", "nodes", "node_count", "tri_verts",
-                        "hits", "ray_skip", "hit_instance"),
+                        "hits", "ray_skip", "hit_instance", "aov_sample"),
                  kGeometryParams, kAlphaParams);
 struct Extend {
   static constexpr std::string_view kName = "extend";
@@ -36,7 +36,7 @@ struct Shade {
              "tri_verts", "normals", "materials", "lights", "alias", "emitter_pdf_area", "shadow_queue", "shadow_o",
              "shadow_d", "shadow_radiance", "pbr_table", "bounce_counts", "ray_skip", "shadow_skip", "light_tree",
              "emitter_leaf", "prev_normal", "hit_instance"),
-      kGeometryParams, params("ray_cone"), kSurfaceParams);
+      kGeometryParams, params("ray_cone", "aov_sample", "aov_ids"), kSurfaceParams);
 };
 
 /// connect and connect_packet: the same parameters.
@@ -55,7 +55,7 @@ struct ConnectPacket {
 
 struct Accumulate {
   static constexpr std::string_view kName = "accumulate";
-  static constexpr auto kParams = params("frame", "radiance", "state", "sample_count", "counters");
+  static constexpr auto kParams = params("frame", "radiance", "state", "sample_count", "counters", "aov_sample", "aov_accum");
 };
 struct Resolve {
   static constexpr std::string_view kName = "accumulate_resolve";

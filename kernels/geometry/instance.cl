@@ -43,6 +43,9 @@ inline bool instance_closest(BvhScene scene, __global const float4* rows, uint r
                              float tmin, float tmax, uint skip, Hit* hit) {
   Hit h = bvh_closest_root(scene, root, instance_point(rows, org), instance_vector(rows, dir), tmin, tmax, skip);
   if (h.prim == WT_NO_HIT) return false;
+#if WT_BVH_COST
+  h.cost = hit->cost;  // the scene tree's count so far (the copy's own tree is not counted)
+#endif
   *hit = h;
   return true;
 }
