@@ -95,7 +95,10 @@ std::string progressLine(const Halting& halting, int samplesDone, double mraysPe
   const HaltCriteria& c = halting.criteria();
   char text[256];
   std::string line = "sample " + std::to_string(samplesDone);
-  if (c.samplesPerPixel < kUnboundedSamples) line += "/" + std::to_string(c.samplesPerPixel);
+  if (c.samplesPerPixel < kUnboundedSamples) {
+    line += '/';  // appended apart: GCC 12 warns (-Wrestrict, falsely) on "/" + std::string at -O3
+    line += std::to_string(c.samplesPerPixel);
+  }
   std::snprintf(text, sizeof text, "  %.2f Mrays/s  %s", mraysPerSecond, formatDuration(seconds).c_str());
   line += text;
   if (halting.lastError() >= 0.0) {
