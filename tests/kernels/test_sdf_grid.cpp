@@ -396,7 +396,7 @@ TEST(SdfGrids, SpawnedRaysLeaveTheSurfaceOrCrossIt) {
     r.direction = -w;
     in.push_back(r);
   }
-  ASSERT_GT(out.size(), 500u);
+  ASSERT_GT(out.size(), rays.size() / 12);  // most rays hit (the floor scales with WT_TEST_SMALL)
   Tracer tracer(test::deviceContext(), scene);
   const std::vector<RayHit> again = tracer.traceClosest(out), through = tracer.traceClosest(in);
   int selfHits = 0, lost = 0;
