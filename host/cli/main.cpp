@@ -14,6 +14,7 @@
 #include "render/halting.h"
 #include "render/image_error.h"
 #include "render/renderer.h"
+#include "scene/camera_override.h"
 #include "scene/default_scene.h"
 #include "stress/stress.h"
 
@@ -129,6 +130,9 @@ struct RenderOptions {
   int packetWidth = 0;
   int sceneIndex = -1;
   int camera = 0;
+  std::vector<double> lookFrom, lookAt, up;  ///< --look-from, --look-at, --up: empty or x,y,z
+  double fovDegrees = 0.0;                   ///< --fov; 0: the camera's own
+  bool frame = false;
   bool noRecenter = false;
   bool stopOnNan = false;
   std::string kernelDir;
@@ -146,6 +150,22 @@ struct RenderOptions {
   wt::DebugView debugView = wt::DebugView::None;  ///< parsed --debug
   GivenOptions given;
 };
+
+std::optional<glm::dvec3> point(const std::vector<double>& v) {
+  if (v.empty()) return std::nullopt;
+  return glm::dvec3(v[0], v[1], v[2]);
+}
+
+/// --look-from, --look-at, --up, --fov and --frame over the scene's camera.
+void applyCameraOptions(const RenderOptions& options, wt::Scene& scene) {
+  wt::CameraOverride o;
+  o.from = point(options.lookFrom);
+  o.at = point(options.lookAt);
+  o.up = point(options.up);
+  if (options.fovDegrees != 0.0) o.fovDegrees = options.fovDegrees;
+  o.frame = options.frame;
+  wt::applyCameraOverride(scene, o);
+}
 
 void writeOutputs(const RenderOptions& options, const wt::Image& image) {
   for (const std::string& out : options.outputs) {
@@ -267,6 +287,7 @@ int runRender(RenderOptions options) {
                                                : wt::loadSceneAny(options.scene, loadOptions);
   wt::Scene& scene = loaded.scene;
   applySceneSettings(loaded.settings, scene.sourceName, options);
+  applyCameraOptions(options, scene);
   for (const std::string& w : scene.warnings) wt::log::warnOnce(scene.sourceName + ": " + w);
   if (scene.triangles.empty() && scene.spheres.empty() && scene.curves.empty())
     wt::log::warnOnce(scene.sourceName + ": the scene has no geometry");
@@ -737,6 +758,17 @@ int main(int argc, char** argv) {
   renderCmd->add_option("--device", render.device, "Device index or name substring (see 'wavetrace devices')");
   renderCmd->add_option("--scene-index", render.sceneIndex, "glTF scene to render (default: the file's default scene)")
       ->check(CLI::Range(-1, 1 << 20));
+  renderCmd->add_option("--look-from", render.lookFrom, "Camera position X,Y,Z in the file's world coordinates")
+      ->delimiter(',')->expected(3);
+  renderCmd->add_option("--look-at", render.lookAt,
+                        "Point X,Y,Z the camera looks at (alone: the camera turns in place; --look-from alone keeps "
+                        "its view direction)")
+      ->delimiter(',')->expected(3);
+  renderCmd->add_option("--up", render.up, "Camera up direction X,Y,Z (default: the camera's own up)")
+      ->delimiter(',')->expected(3);
+  renderCmd->add_option("--fov", render.fovDegrees, "Vertical field of view in degrees (perspective cameras)");
+  renderCmd->add_flag("--frame", render.frame,
+                      "Replace the scene's camera by one framing the scene's bounds (from +Z, a little above)");
   renderCmd->add_option("--camera", render.camera, "Camera to use, by order in the scene")
       ->check(CLI::Range(0, 1 << 20))->capture_default_str();
   renderCmd->add_flag("--stop-on-nan", render.stopOnNan,

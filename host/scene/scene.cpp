@@ -45,10 +45,10 @@ void Scene::addWarning(const std::string& text) {
     warnings.push_back(text);
 }
 
-CameraDesc defaultCamera(const Aabb& bounds) {
+CameraDesc defaultCamera(const Aabb& bounds, float yfov) {
   CameraDesc desc;
   desc.name = "default (framing the scene bounds)";
-  desc.yfov = glm::radians(45.0f);
+  desc.yfov = yfov;
   glm::vec3 center = bounds.empty() ? glm::vec3(0.0f) : bounds.center();
   float radius = bounds.empty() ? 1.0f : std::max(0.5f * glm::length(bounds.extent()), 1e-6f);
   // Distance at which a sphere of that radius fills the vertical field of view.

@@ -149,8 +149,8 @@ struct Scene {
 };
 
 /// A camera looking at the bounds from +Z (and a little above), far enough
-/// that the whole box fits the vertical field of view.
-CameraDesc defaultCamera(const Aabb& bounds);
+/// that the whole box fits the vertical field of view (radians).
+CameraDesc defaultCamera(const Aabb& bounds, float yfov = 0.7853982f);
 
 /// A camera transform with rigid axes: -Z keeps its direction, +Y is made
 /// perpendicular to it, X last (on its side, so a mirroring transform still
