@@ -217,8 +217,14 @@ void applySceneSettings(const wt::SceneFileSettings& file, const std::string& sc
   if (file.maxBounces && !given.maxBounces)
     s.maxBounces = *file.maxBounces, note("max_bounces " + std::to_string(*file.maxBounces));
   if (file.seed && !given.seed) s.seed = *file.seed, note("seed " + std::to_string(*file.seed));
-  if (file.exposureStops && !given.exposure)
-    options.tonemap.exposure = std::to_string(*file.exposureStops), note("exposure " + std::to_string(*file.exposureStops));
+  if (file.exposureStops && !given.exposure && !options.tonemap.physical) {
+    char text[64];
+    if (file.autoExposure)
+      std::snprintf(text, sizeof text, *file.exposureStops == 0.0f ? "auto" : "auto%+g", double(*file.exposureStops));
+    else
+      std::snprintf(text, sizeof text, "%g", double(*file.exposureStops));
+    options.tonemap.exposure = text, note(std::string("exposure ") + text);
+  }
   if (file.tonemap && !given.tonemap) options.tonemap.op = *file.tonemap, note("tonemap " + *file.tonemap);
   if (file.integrator && !given.integrator) options.integrator = *file.integrator, note("integrator " + *file.integrator);
   if (const auto& env = file.environment) {

@@ -371,8 +371,26 @@ class Loader {
     if (const Json* x = find(v, "seed"))
       s.seed = std::uint32_t(integer(*x, member(path, "seed"), 0, std::numeric_limits<std::uint32_t>::max()));
     if (const Json* x = find(v, "exposure")) {
-      const double stops = number(*x, member(path, "exposure"));
-      if (std::fabs(stops) > 1000.0) fail(member(path, "exposure"), "must be in [-1000, 1000] stops, got " + describe(*x));
+      const std::string where = member(path, "exposure");
+      const char* expected = "must be a number of stops in [-1000, 1000], \"auto\", \"auto+STOPS\" or \"auto-STOPS\", got ";
+      double stops = 0.0;
+      if (x->is_string()) {
+        const std::string text = x->get<std::string>();
+        if (text.rfind("auto", 0) != 0) fail(where, expected + describe(*x));
+        s.autoExposure = true;
+        if (text.size() > 4) {
+          std::size_t used = 0;
+          try {
+            if (text[4] == '+' || text[4] == '-') stops = std::stod(text.substr(4), &used);
+          } catch (const std::exception&) {
+            used = 0;
+          }
+          if (used != text.size() - 4) fail(where, expected + describe(*x));
+        }
+      } else {
+        stops = number(*x, where);
+      }
+      if (!(std::fabs(stops) <= 1000.0)) fail(where, expected + describe(*x));
       s.exposureStops = float(stops);
     }
     if (const Json* x = find(v, "integrator")) {

@@ -32,7 +32,8 @@ struct SceneFileSettings {
   std::optional<int> samplesPerPixel;  ///< [1, 2^24]
   std::optional<int> maxBounces;       ///< [0, 1024]
   std::optional<std::uint32_t> seed;
-  std::optional<float> exposureStops;
+  std::optional<float> exposureStops;     ///< fixed stops, or with autoExposure the offset from auto
+  bool autoExposure = false;              ///< "auto", "auto+STOPS", "auto-STOPS"
   std::optional<std::string> integrator;  ///< "path" or "minimal"
   std::optional<std::string> tonemap;     ///< a --tonemap operator name (render/tonemap_names.h)
   std::optional<SceneEnvironment> environment;

@@ -263,6 +263,14 @@ TEST(SceneFile, MaterialLayers) {
   EXPECT_CONTAINS(errorOf(doc(R"("materials": {"m": {"clearcoat": 1.5}})")), "materials.m.clearcoat: must be in [0, 1]");
 }
 
+TEST(SceneFile, AutoExposureWithAnOffset) {
+  for (auto [text, stops] : {std::pair<const char*, float>{"auto", 0.0f}, {"auto+1.5", 1.5f}, {"auto-2", -2.0f}}) {
+    SceneFile f = loadText(doc(std::string(R"("render": {"exposure": ")") + text + "\"}"));
+    EXPECT_TRUE(f.settings.autoExposure) << text;
+    EXPECT_EQ(f.settings.exposureStops, stops) << text;
+  }
+}
+
 TEST(SceneFile, RenderSettingsAndEnvironment) {
   writeFile(testDir() / "maps" / "sky.hdr", "not read by the loader");
   SceneFile f = loadText(doc(R"(
@@ -276,6 +284,7 @@ TEST(SceneFile, RenderSettingsAndEnvironment) {
   EXPECT_EQ(s.maxBounces, 3);
   EXPECT_EQ(s.seed, 4000000000u);
   EXPECT_EQ(s.exposureStops, -1.5f);
+  EXPECT_FALSE(s.autoExposure);
   EXPECT_EQ(s.integrator, "minimal");
   EXPECT_EQ(s.tonemap, "agx");
   ASSERT_TRUE(s.environment.has_value());
@@ -872,6 +881,12 @@ const BadFile kBadFiles[] = {
                 "render.tonemap: must be one of linear, reinhard, reinhard-modified, hable, aces, aces-narkowicz, agx, "
                 "pbr-neutral, got \"filmic\""},
         BadFile{"RenderSeed", doc(R"("render": {"seed": -1})"), "render.seed: must be an integer in [0, 4294967295], got -1"},
+        BadFile{"RenderExposureWord", doc(R"("render": {"exposure": "bright"})"),
+                "render.exposure: must be a number of stops in [-1000, 1000], \"auto\", \"auto+STOPS\" or "
+                "\"auto-STOPS\", got \"bright\""},
+        BadFile{"RenderExposureAutoSuffix", doc(R"("render": {"exposure": "auto*2"})"), "render.exposure: must be"},
+        BadFile{"RenderExposureAutoHuge", doc(R"("render": {"exposure": "auto+1e9"})"), "render.exposure: must be"},
+        BadFile{"RenderExposureHuge", doc(R"("render": {"exposure": -2000})"), "render.exposure: must be"},
         BadFile{"RenderUnknown", doc(R"("render": {"samples": 4})"),
                 "render.samples: unknown field (expected one of: width, height, spp, max_bounces, seed, exposure, integrator, tonemap)"},
         // materials
