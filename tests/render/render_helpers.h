@@ -6,9 +6,11 @@
 #include "render/renderer.h"
 #include "scene/generators.h"
 
+#include <glm/gtc/matrix_transform.hpp>
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <functional>
 #include <string>
 
 namespace wt::test {
@@ -119,6 +121,36 @@ inline double expectSameImage(const Image& a, const Image& b, int blocks, double
       }
   EXPECT_EQ(failures, 0) << what;
   return worst;
+}
+
+/// The scene the tests that render one sphere in several representations
+/// share: a grey floor, the unit ball at the origin as `addBall` places it
+/// (material and geometry), a small sphere light above, seen from the front.
+inline Scene ballOnFloor(const std::function<void(Scene&)>& addBall) {
+  Scene s = makeFloor(4.0f, -1.0f, makeMaterial(glm::vec3(0.6f)));
+  addBall(s);
+  s.materials.push_back(makeMaterial(glm::vec3(0.0f), glm::vec3(30.0f)));
+  s.materialNames.push_back("light");
+  s.spheres.push_back({glm::vec3(1.5f, 2.5f, 1.0f), 0.3f, std::uint32_t(s.materials.size() - 1)});
+  CameraDesc camera;
+  camera.cameraToWorld =
+      glm::inverse(glm::lookAt(glm::vec3(0.0f, 1.0f, 4.0f), glm::vec3(0.0f, -0.2f, 0.0f), glm::vec3(0, 1, 0)));
+  s.camera = camera;
+  return s;
+}
+
+/// Two ballOnFloor scenes render the same 32x32 image within noise (256
+/// samples each, independent seeds, 4x4 blocks at z 4.5).
+inline void expectSameBallImage(const Scene& a, const Scene& b, const std::string& what) {
+  RenderSettings settings;
+  settings.width = settings.height = 32;
+  settings.maxBounces = 3;
+  settings.background = glm::vec3(0.05f);
+  settings.seed = 5;
+  const Image first = render(a, settings, 256);
+  settings.seed = 6;
+  const Image second = render(b, settings, 256);
+  expectSameImage(first, second, 4, 4.5, what);
 }
 
 }  // namespace wt::test

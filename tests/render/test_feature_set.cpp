@@ -259,7 +259,9 @@ TEST(FeatureSwitches, EachFeatureTurnsOnItsSwitchOnly) {
   };
   const std::vector<std::string> base = defines(lambertFloor(), settings);
   for (const std::string& d : base) {
-    if (d.find("WT_HAS_") != std::string::npos) EXPECT_NE(d.back(), '1') << d << " is on for a triangle-only Lambertian scene";
+    if (d.find("WT_HAS_") != std::string::npos) {
+      EXPECT_NE(d.back(), '1') << d << " is on for a triangle-only Lambertian scene";
+    }
   }
   auto changed = [&](const Scene& scene) {
     std::vector<std::string> diff, got = defines(scene, settings);

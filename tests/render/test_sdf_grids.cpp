@@ -110,31 +110,16 @@ TEST(SdfVersusAnalyticSphere, SameImageWithinNoiseAndDiscretisation) {
     worst = std::max(worst, std::abs(0.5 * (lo + hi) - 1.0));
   }
   EXPECT_LT(worst, 1e-3) << "the SDF sphere's surface strays from the radius";
-  auto scene = [&](bool analytic) {
-    Scene s = test::makeFloor(4.0f, -1.0f, makeMaterial(glm::vec3(0.6f)));
-    s.materials.push_back(ball);
-    s.materialNames.push_back("ball");
-    if (analytic) s.spheres.push_back({glm::vec3(0.0f), 1.0f, 1});
-    else s.sdfGrids.push_back(grid);
-    s.materials.push_back(makeMaterial(glm::vec3(0.0f), glm::vec3(30.0f)));
-    s.materialNames.push_back("light");
-    s.spheres.push_back({glm::vec3(1.5f, 2.5f, 1.0f), 0.3f, std::uint32_t(s.materials.size() - 1)});
-    CameraDesc camera;
-    camera.cameraToWorld =
-        glm::inverse(glm::lookAt(glm::vec3(0.0f, 1.0f, 4.0f), glm::vec3(0.0f, -0.2f, 0.0f), glm::vec3(0, 1, 0)));
-    s.camera = camera;
-    return s;
+  auto withBall = [&](bool analytic) {
+    return test::ballOnFloor([&](Scene& s) {
+      s.materials.push_back(ball);
+      s.materialNames.push_back("ball");
+      if (analytic) s.spheres.push_back({glm::vec3(0.0f), 1.0f, 1});
+      else s.sdfGrids.push_back(grid);
+    });
   };
-  RenderSettings settings;
-  settings.width = settings.height = 32;
-  settings.maxBounces = 3;
-  settings.background = glm::vec3(0.05f);
-  settings.seed = 5;
-  const Image analytic = test::render(scene(true), settings, 256);
-  settings.seed = 6;
-  const Image sdf = test::render(scene(false), settings, 256);
   // a shift of 1e-3 of the radius moves the silhouette by 0.01 pixel here: below the noise
-  test::expectSameImage(analytic, sdf, 4, 4.5, "analytic sphere against an SDF grid of it");
+  test::expectSameBallImage(withBall(true), withBall(false), "analytic sphere against an SDF grid of it");
 }
 
 }  // namespace

@@ -171,32 +171,14 @@ TEST(SphereVersusTessellation, SameImageWithinNoise) {
   // analytic and once as an icosphere of 81 920 triangles (its facets stray
   // from the sphere by 3e-5 of the radius, far below the noise)
   const WtMaterial ball = makePbrMaterial(glm::vec3(0.8f, 0.5f, 0.3f), 0.0f, 0.4f);
-  auto scene = [&](bool analytic) {
-    Scene s = test::makeFloor(4.0f, -1.0f, makeMaterial(glm::vec3(0.6f)));
-    if (analytic) {
-      s.materials.push_back(ball);
-      s.materialNames.push_back("ball");
-      s.spheres.push_back({glm::vec3(0.0f), 1.0f, 1});
-    } else {
-      appendScene(s, makeIcosphere(6, glm::vec3(0.0f), 1.0f, ball));
-    }
-    s.materials.push_back(makeMaterial(glm::vec3(0.0f), glm::vec3(30.0f)));
-    s.materialNames.push_back("light");
-    s.spheres.push_back({glm::vec3(1.5f, 2.5f, 1.0f), 0.3f, std::uint32_t(s.materials.size() - 1)});
-    CameraDesc camera;
-    camera.cameraToWorld = glm::inverse(glm::lookAt(glm::vec3(0.0f, 1.0f, 4.0f), glm::vec3(0.0f, -0.2f, 0.0f), glm::vec3(0, 1, 0)));
-    s.camera = camera;
-    return s;
-  };
-  RenderSettings settings;
-  settings.width = settings.height = 32;
-  settings.maxBounces = 3;
-  settings.background = glm::vec3(0.05f);
-  settings.seed = 5;
-  const Image analytic = test::render(scene(true), settings, 256);
-  settings.seed = 6;
-  const Image tessellated = test::render(scene(false), settings, 256);
-  test::expectSameImage(analytic, tessellated, 4, 4.5, "analytic sphere against an icosphere");
+  const Scene analytic = test::ballOnFloor([&](Scene& s) {
+    s.materials.push_back(ball);
+    s.materialNames.push_back("ball");
+    s.spheres.push_back({glm::vec3(0.0f), 1.0f, 1});
+  });
+  const Scene tessellated =
+      test::ballOnFloor([&](Scene& s) { appendScene(s, makeIcosphere(6, glm::vec3(0.0f), 1.0f, ball)); });
+  test::expectSameBallImage(analytic, tessellated, "analytic sphere against an icosphere");
 }
 
 }  // namespace
