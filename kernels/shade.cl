@@ -49,19 +49,14 @@ WT_KERNEL void shade(WtFrameParams frame, WtEnvironment environment, __global co
                      __global float2* ray_cone, __global float4* aov_sample, __global uint4* aov_ids,
                      WT_SURFACE_PARAMS) {
   uint i = get_global_id(0);
+  if (i >= counters[in_slot]) return;
   // Without WT_FLAG_COMPACT_SHADOWS entry i of the shadow queue is this
   // item's shadow ray, if it makes one: no atomic counter, whose increments
   // from the two threads contended (docs/lab/2026-12-02-performance-log.md, "Queue atomics").
   // Without WT_FLAG_SHADOW_QUEUE the host runs no connect stage and the
   // shadow buffers hold one entry: nothing may be written there.
   const bool compact_shadows = (frame.flags & WT_FLAG_COMPACT_SHADOWS) != 0u;
-  const bool sparse_shadows = !compact_shadows && (frame.flags & WT_FLAG_SHADOW_QUEUE);
-  // the sparse shadow queue has this bounce's path count, which only the
-  // device knows (the host launches an upper bound and never reads it back
-  // between stages); item 0 sets it whether or not any path is queued
-  if (i == 0u && sparse_shadows) counters[WT_COUNTER_SHADOW] = counters[in_slot];
-  if (i >= counters[in_slot]) return;
-  if (sparse_shadows) shadow_queue[i] = WT_NO_HIT;
+  if (!compact_shadows && (frame.flags & WT_FLAG_SHADOW_QUEUE)) shadow_queue[i] = WT_NO_HIT;
   uint path = queue_in[i];
   float4 hit = hits[path];
   uint prim = as_uint(hit.w);

@@ -15,7 +15,6 @@ namespace wt {
 /// One bounce, summed over the sample passes that reached it.
 struct BounceProfile {
   std::uint64_t passes = 0;      ///< sample passes that reached this bounce (some path alive)
-  std::uint64_t launched = 0;    ///< sample passes that launched it (on a bound: perhaps with no path alive)
   std::uint64_t paths = 0;       ///< paths extended and shaded (the queue's size)
   std::uint64_t shadowRays = 0;  ///< shadow rays shade queued for connect (timed profiles only)
   double extendSeconds = 0.0;    ///< kernel time (profiling events)
@@ -33,10 +32,9 @@ struct RenderProfile {
   double wallSeconds = 0.0;    ///< host wall time of the sample passes, profiling's own reads taken out
   double generateSeconds = 0.0, accumulateSeconds = 0.0;  ///< kernel time
   double otherIdleSeconds = 0.0;  ///< device idle before generate and accumulate
-  double hostWaitSeconds = 0.0;   ///< host blocked on the count read-backs (kernels still running included)
+  double hostWaitSeconds = 0.0;   ///< host blocked in the count read-backs (kernels still running included)
   double profileReadSeconds = 0.0;  ///< profiling's own reads (the shadow queue's count), not in wallSeconds
-  std::uint64_t kernelLaunches = 0, fills = 0;
-  std::uint64_t blockingReads = 0;  ///< times the host waited for a count read-back mid-pass
+  std::uint64_t kernelLaunches = 0, fills = 0, blockingReads = 0;
   std::vector<BounceProfile> bounces;
 
   double kernelSeconds() const;    ///< every kernel, every bounce

@@ -213,13 +213,7 @@ void Renderer::renderSample() {
     ++m_profile.fills;
   };
   double hostWait = 0.0;
-  // the count read-backs, one per bounce; the host reads bounce b's while
-  // the device runs bounce b + 1 (storage the queue may still write into
-  // if a launch throws, hence members)
-  const int bounces = m_settings.maxBounces + 1;
-  m_counts.assign(std::size_t(bounces), {});
-  std::vector<cl::Event> countsRead(static_cast<std::size_t>(bounces));
-  m_shadowEntries.assign(std::size_t(bounces), {});
+  std::vector<std::pair<int, std::vector<cl_uint>>> shadowEntries;  // profiled: each bounce's shadow queue
 
   // generate: every pixel's path enters queue A
   m_generate.set("frame", frameParams(m_settings, m_lights, sample, 0)).set("camera", m_camera);
@@ -228,25 +222,19 @@ void Renderer::renderSample() {
   cl::Buffer* queueIn = &m_path.queueA;
   cl::Buffer* queueOut = &m_path.queueB;
   cl_uint inSlot = WT_COUNTER_QUEUE_A, outSlot = WT_COUNTER_QUEUE_B;
-  // Paths entering each bounce, as far as the host knows: queues only
-  // shrink, so the last count read back bounds every later queue. Stages
-  // launch that bound and read the true count on the device; the host
-  // never waits for the bounce it just queued.
-  std::vector<std::size_t> entering(std::size_t(bounces) + 1, 0);
-  entering[0] = pixels;
-  std::size_t bound = pixels;
-  int launched = 0;
-  bool compactConnect = false;  // connect_packet traced a dense shadow queue (bounce 0)
-  for (int bounce = 0; bounce < bounces && bound > 0; ++bounce, ++launched) {
+  std::size_t alive = pixels;
+  for (int bounce = 0; bounce <= m_settings.maxBounces && alive > 0; ++bounce) {
+    m_stats.raysTraced += alive;
     if (m_profile.bounces.size() <= std::size_t(bounce)) m_profile.bounces.resize(bounce + 1);
-    m_profile.bounces[bounce].launched += 1;
+    m_profile.bounces[bounce].passes += 1;
+    m_profile.bounces[bounce].paths += alive;
     fill(0u, outSlot, bounce);
     // extend: closest hit of every queued path; camera rays in packets
     const bool packets = m_settings.packets && !m_kernelFeatures.bvhCost && bounce == 0;
     // Shadow rays traced in packets are appended to a dense queue (an atomic
     // counter from 0); otherwise shade writes entry i for its item i
-    // (WT_NO_HIT: no shadow ray) and sets the queue's count itself.
-    if (packets) fill(0u, WT_COUNTER_SHADOW, bounce);
+    // (WT_NO_HIT: no shadow ray) and the queue has the bounce's path count.
+    fill(packets ? 0u : cl_uint(alive), WT_COUNTER_SHADOW, bounce);
     // stochastic transparency: numbers of their own per sample, bounce and stage
     // the general program takes the alpha key whether or not the scene has holes
     const bool alpha = m_kernelFeatures.alpha;
@@ -257,9 +245,9 @@ void Renderer::renderSample() {
       launch(k, items, event(Command::Extend, bounce));
     };
     if (packets)
-      extend(m_extendPacket, (bound + m_packetWidth - 1) / m_packetWidth);
+      extend(m_extendPacket, (alive + m_packetWidth - 1) / m_packetWidth);
     else
-      extend(m_extend, bound);
+      extend(m_extend, alive);
 
     // shade: emission and the next direction; survivors go to the other queue
     WtFrameParams shadeParams = frameParams(m_settings, m_lights, sample, bounce);
@@ -270,7 +258,7 @@ void Renderer::renderSample() {
         .set("out_slot", outSlot)
         .set("queue_in", *queueIn)
         .set("queue_out", *queueOut);
-    launch(m_shade, bound, event(Command::Shade, bounce));
+    launch(m_shade, alive, event(Command::Shade, bounce));
 
     // connect: shadow rays of this bounce (count read on the device); shade
     // makes none at the last bounce, which it shades for emission only
@@ -283,51 +271,29 @@ void Renderer::renderSample() {
         launch(k, items, event(Command::Connect, bounce));
       };
       if (packets)
-        run(m_connectPacket, (bound + m_packetWidth - 1) / m_packetWidth);
+        run(m_connectPacket, (alive + m_packetWidth - 1) / m_packetWidth);
       else
-        run(m_connect, bound);
-      compactConnect = compactConnect || packets;
+        run(m_connect, alive);
       // profiled: the sparse queue's shadow rays, counted on the host after the pass
       if (profile && !packets && m_connectStage) {
-        m_shadowEntries[std::size_t(bounce)].assign(bound, 0xffffffffu);
-        q.enqueueReadBuffer(m_path.shadowQueue, CL_FALSE, 0, bound * sizeof(cl_uint),
-                            m_shadowEntries[std::size_t(bounce)].data(), nullptr,
-                            event(Command::ProfileRead, bounce));
+        shadowEntries.emplace_back(bounce, std::vector<cl_uint>(alive));
+        q.enqueueReadBuffer(m_path.shadowQueue, CL_FALSE, 0, alive * sizeof(cl_uint), shadowEntries.back().second.data(),
+                            nullptr, event(Command::ProfileRead, bounce));
       }
     }
 
-    // the counts after this bounce, read back while the next bounce runs
-    q.enqueueReadBuffer(m_counters, CL_FALSE, 0, sizeof(cl_uint) * WT_COUNTER_COUNT, m_counts[std::size_t(bounce)].data(),
-                        nullptr, &countsRead[std::size_t(bounce)]);
-    if (profile) timed.push_back({Command::Transfer, bounce, countsRead[std::size_t(bounce)]});
-    // The next bounce's bound: the previous bounce's count (read by now,
-    // the device still busy with this one's), else this one's bound.
-    if (m_settings.syncEachBounce) {
-      const auto waitStart = std::chrono::steady_clock::now();
-      countsRead[std::size_t(bounce)].wait();
-      hostWait += std::chrono::duration<double>(std::chrono::steady_clock::now() - waitStart).count();
-      ++m_profile.blockingReads;
-      bound = m_counts[std::size_t(bounce)][outSlot];
-    } else if (bounce > 0) {
-      const auto waitStart = std::chrono::steady_clock::now();
-      countsRead[std::size_t(bounce - 1)].wait();
-      hostWait += std::chrono::duration<double>(std::chrono::steady_clock::now() - waitStart).count();
-      ++m_profile.blockingReads;
-      const auto& c = m_counts[std::size_t(bounce - 1)];
-      if (m_settings.stopOnNonFinite && c[WT_COUNTER_FIRST_NONFINITE] != 0xffffffffu)
-        throwNonFinite(sample, c[WT_COUNTER_FIRST_NONFINITE], c[WT_COUNTER_NONFINITE_WHERE]);
-      bound = c[inSlot];  // the paths that entered this bounce (the previous one's output queue)
-    }
+    // end of the bounce: the only point where the host reads a count back
+    cl_uint counters[WT_COUNTER_COUNT];
+    const auto readStart = std::chrono::steady_clock::now();
+    q.enqueueReadBuffer(m_counters, CL_TRUE, 0, sizeof(counters), counters, nullptr, event(Command::Transfer, bounce));
+    hostWait += std::chrono::duration<double>(std::chrono::steady_clock::now() - readStart).count();
+    ++m_profile.blockingReads;
+    if (profile && connect && packets) m_profile.bounces[bounce].shadowRays += counters[WT_COUNTER_SHADOW];
+    alive = counters[outSlot];
+    if (m_settings.stopOnNonFinite && counters[WT_COUNTER_FIRST_NONFINITE] != 0xffffffffu)
+      throwNonFinite(sample, counters[WT_COUNTER_FIRST_NONFINITE], counters[WT_COUNTER_NONFINITE_WHERE]);
     std::swap(queueIn, queueOut);
     std::swap(inSlot, outSlot);
-  }
-
-  // a non-finite value stops the render before its sample is accumulated
-  if (m_settings.stopOnNonFinite && launched > 0) {
-    countsRead[std::size_t(launched - 1)].wait();
-    const auto& c = m_counts[std::size_t(launched - 1)];
-    if (c[WT_COUNTER_FIRST_NONFINITE] != 0xffffffffu)
-      throwNonFinite(sample, c[WT_COUNTER_FIRST_NONFINITE], c[WT_COUNTER_NONFINITE_WHERE]);
   }
 
   // accumulate: fold the pass into the running mean
@@ -335,18 +301,6 @@ void Renderer::renderSample() {
   launch(m_accumulate, pixels, event(Command::Accumulate, 0));
   m_context.finish();
   ++m_stats.samplesDone;
-  // the true queue sizes, now that every read is in: bounce b's output queue
-  // is B for even b, A for odd
-  for (int b = 0; b < launched; ++b)
-    entering[std::size_t(b) + 1] = m_counts[std::size_t(b)][b % 2 == 0 ? WT_COUNTER_QUEUE_B : WT_COUNTER_QUEUE_A];
-  for (int b = 0; b < launched; ++b) {
-    if (entering[std::size_t(b)] == 0) continue;  // launched on a bound, and found no path
-    m_stats.raysTraced += entering[std::size_t(b)];
-    m_profile.bounces[std::size_t(b)].passes += 1;
-    m_profile.bounces[std::size_t(b)].paths += entering[std::size_t(b)];
-  }
-  // the dense queue's count is the number of shadow rays appended
-  if (profile && compactConnect) m_profile.bounces[0].shadowRays += m_counts[0][WT_COUNTER_SHADOW];
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   m_stats.seconds += wall;
   m_profile.pixels = pixels;
@@ -381,10 +335,10 @@ void Renderer::renderSample() {
       case Command::ProfileRead: profileReads += seconds, b.idleSeconds += gap; break;
     }
   }
-  // WT_NO_HIT (all ones): the item made no shadow ray, or lay past the bounce's count
-  for (std::size_t b = 0; b < m_shadowEntries.size(); ++b)
-    for (std::size_t i = 0; i < std::min(m_shadowEntries[b].size(), entering[b]); ++i)
-      m_profile.bounces[b].shadowRays += m_shadowEntries[b][i] != 0xffffffffu;
+  // WT_NO_HIT (all ones): the item made no shadow ray
+  for (const auto& [bounce, entries] : shadowEntries)
+    m_profile.bounces[std::size_t(bounce)].shadowRays +=
+        std::size_t(std::count_if(entries.begin(), entries.end(), [](cl_uint e) { return e != 0xffffffffu; }));
   m_profile.profileReadSeconds += profileReads;
   m_profile.wallSeconds += wall - profileReads;
 }

@@ -18,7 +18,6 @@
 
 #include <glm/glm.hpp>
 
-#include <array>
 #include <cstdint>
 #include <stdexcept>
 #include <string>
@@ -85,11 +84,6 @@ struct RenderSettings {
   /// shadow rays (Renderer::profile()): needs a Context made with profiling
   /// (else DeviceError); off, the renderer makes no events at all.
   bool profile = false;
-  /// Developer setting (wt_render_ab): the host waits for each bounce's
-  /// path count before queuing the next and launches exactly that many, as
-  /// the renderer did before it read the counts back one bounce late; the
-  /// same image.
-  bool syncEachBounce = false;
 #ifdef NDEBUG
   bool stopOnNonFinite = false;  ///< throw NonFiniteSampleError at the first NaN/Inf shade makes (on in debug builds)
 #else
@@ -237,11 +231,6 @@ class Renderer {
   cl::Buffer m_counters;  ///< WT_COUNTER_*
   RenderStats m_stats;
   RenderProfile m_profile;
-  /// Each bounce's counters as read back (renderSample), and with
-  /// RenderSettings::profile its sparse shadow queue; members because a
-  /// read may still be pending when a launch throws.
-  std::vector<std::array<cl_uint, WT_COUNTER_COUNT>> m_counts;
-  std::vector<std::vector<cl_uint>> m_shadowEntries;
 };
 
 }  // namespace wt

@@ -10,8 +10,7 @@
 //                [--a-OPTION V | --b-OPTION V ...]
 //
 // Per-configuration options (prefix --a- or --b-): kernel-dir DIR (kernels
-// from that folder), sync-bounces 0|1, rr-depth D, sampler independent|sobol,
-// rr 0|1.
+// from that folder), rr-depth D, sampler independent|sobol, rr 0|1.
 #include "device/context.h"
 #include "device/program.h"
 #include "output/image_io.h"
@@ -53,7 +52,6 @@ int toInt(const std::string& option, const std::string& v) {
 
 void setOption(Config& c, const std::string& name, const std::string& v) {
   if (name == "kernel-dir") c.kernelDir = v;
-  else if (name == "sync-bounces") c.settings.syncEachBounce = toInt(name, v) != 0;
   else if (name == "rr-depth") c.settings.rrMinDepth = toInt(name, v);
   else if (name == "rr") c.settings.useRussianRoulette = toInt(name, v) != 0;
   else if (name == "sampler") {

@@ -233,7 +233,7 @@ typedef struct WtFrameParams {
 #define WT_COUNTER_QUEUE_A 0      ///< paths in queue A
 #define WT_COUNTER_QUEUE_B 1      ///< paths in queue B
 #define WT_COUNTER_NONFINITE 2    ///< samples discarded as NaN/Inf
-#define WT_COUNTER_SHADOW 3       ///< entries of the shadow queue: shadow rays appended (WT_FLAG_COMPACT_SHADOWS), else the bounce's path count (set by shade's item 0)
+#define WT_COUNTER_SHADOW 3       ///< entries of the shadow queue: shadow rays appended (WT_FLAG_COMPACT_SHADOWS), else the bounce's path count (set by the host)
 #define WT_COUNTER_FIRST_NONFINITE 4  ///< path (= pixel) of the first NaN/Inf shade made; 0xffffffff: none (WT_FLAG_CHECK_NONFINITE)
 #define WT_COUNTER_NONFINITE_WHERE 5  ///< its bounce (low 16 bits) and quantity (WT_NONFINITE_* << 16)
 #define WT_COUNTER_COUNT 6
