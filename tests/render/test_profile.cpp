@@ -60,7 +60,9 @@ void expectConsistent(const RenderProfile& p, const RenderSettings& settings, co
     EXPECT_GE(s.paths, s.passes);  // a pass reaches a bounce only with some path alive
     // at most one shadow ray per shaded path, none at the last bounce (emission only)
     EXPECT_LE(s.shadowRays, s.paths);
-    if (int(b) == settings.maxBounces) EXPECT_EQ(s.shadowRays, 0u);
+    if (int(b) == settings.maxBounces) {
+      EXPECT_EQ(s.shadowRays, 0u);
+    }
     paths += s.paths;
     passes += s.passes;
     const bool connect = int(b) < settings.maxBounces;  // the box has a light: NEE at every bounce but the last
