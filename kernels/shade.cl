@@ -208,8 +208,6 @@ WT_KERNEL void shade(WtFrameParams frame, WtEnvironment environment, __global co
                ((uint)counts.y < frame.max_specular_bounces ? WT_LOBE_SPECULAR : 0u) |
                ((uint)counts.z < frame.max_transmission_bounces ? WT_LOBE_TRANSMISSION : 0u);
   if (lobes == 0u) return;
-  // the view's lookups, once for the light sample's evaluation and the BSDF sample
-  const BsdfView view = bsdf_view(bsdf, wo_local, lobes);
   // light may come through the surface: lights behind it count, rays leave from its far side,
   // and the light tree gives up its receiver-normal bound (a zero normal)
   bool through = bsdf_transmits(bsdf) && (lobes & WT_LOBE_TRANSMISSION);
@@ -244,7 +242,7 @@ WT_KERNEL void shade(WtFrameParams frame, WtEnvironment environment, __global co
     float pdf_bsdf = 0.0f;
     if (pmf > 0.0f && light_sample(ls, index, p, u1, u2, &s) && (dot(ng, s.wi) > 0.0f || through)) {
       float3 wi_local = (float3)(dot(s.wi, frame_t), dot(s.wi, frame_b), dot(s.wi, ns));
-      f_cos = bsdf_eval_view(bsdf, view, wo_local, wi_local, lobes, &pdf_bsdf);
+      f_cos = bsdf_eval(bsdf, wo_local, wi_local, lobes, &pdf_bsdf);
     }
     if (f_cos.x > 0.0f || f_cos.y > 0.0f || f_cos.z > 0.0f) {
       float pdf_light = s.pdf * pmf;
@@ -283,8 +281,8 @@ WT_KERNEL void shade(WtFrameParams frame, WtEnvironment environment, __global co
 
   // the next direction from the BSDF; one below the geometric surface is absorbed
   BsdfSample bs;
-  if (!bsdf_sample_view(bsdf, view, wo_local, lobes, sampler_get(frame, path, WT_DIM_BSDF_LOBE),
-                        sampler_get(frame, path, WT_DIM_BSDF_U), sampler_get(frame, path, WT_DIM_BSDF_V), &bs))
+  if (!bsdf_sample(bsdf, wo_local, lobes, sampler_get(frame, path, WT_DIM_BSDF_LOBE),
+                   sampler_get(frame, path, WT_DIM_BSDF_U), sampler_get(frame, path, WT_DIM_BSDF_V), &bs))
     return;
   float3 wi = bs.wi.x * frame_t + bs.wi.y * frame_b + bs.wi.z * ns;
   bool crossed = (bs.lobe & WT_LOBE_TRANSMISSION) != 0u;

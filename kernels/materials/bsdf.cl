@@ -282,23 +282,6 @@ inline Techniques bsdf_techniques(Bsdf b, PbrView v, uint lobes) {
   return t;
 }
 
-/// What evaluating and sampling at one wo share: the view and the
-/// techniques' probabilities. Shade computes them once for its light
-/// sample's evaluation and its BSDF sample (with that sample's evaluation):
-/// once instead of three times.
-typedef struct BsdfView {
-  PbrView v;
-  Techniques t;
-} BsdfView;
-
-/// The view of local wo (z > 0) for the allowed lobes.
-inline BsdfView bsdf_view(Bsdf b, float3 wo, uint lobes) {
-  BsdfView w;
-  w.v = b.model == WT_MATERIAL_PBR ? pbr_view(b, wo.z) : pbr_view_none();
-  w.t = bsdf_techniques(b, w.v, lobes);
-  return w;
-}
-
 /// Probability that the interface reflects rather than transmits, at
 /// Fresnel reflectance f, restricted to the allowed lobes.
 inline float interface_reflect_probability(float f, uint lobes) {
@@ -366,12 +349,11 @@ inline float3 interface_eval(Bsdf b, float3 wo, float3 wi, uint lobes, float* pd
 
 /// f |cos| of the continuous part (no mirror, no smooth interface) for local
 /// wo, wi, restricted to `lobes`; *pdf: the mixture's density of sampling wi.
-/// `view`: bsdf_view(b, wo, lobes).
-inline float3 pbr_eval_view(Bsdf b, BsdfView view, float3 wo, float3 wi, uint lobes, float* pdf) {
+inline float3 pbr_eval(Bsdf b, float3 wo, float3 wi, uint lobes, float* pdf) {
   *pdf = 0.0f;
   if (wo.z <= 0.0f || wi.z == 0.0f) return (float3)(0.0f);
-  const PbrView v = view.v;
-  const Techniques t = view.t;
+  PbrView v = pbr_view(b, wo.z);
+  Techniques t = bsdf_techniques(b, v, lobes);
   float3 f = (float3)(0.0f);       // the base, before the layers above take their share
   float3 f_layers = (float3)(0.0f);  // the coat and the sheen
   float pdf_spec = 0.0f, pdf_diffuse = 0.0f, pdf_interface = 0.0f, pdf_coat = 0.0f;
@@ -435,33 +417,14 @@ inline float3 pbr_eval_view(Bsdf b, BsdfView view, float3 wo, float3 wi, uint lo
   return f_layers + v.w_base * f;
 }
 
-inline float3 pbr_eval(Bsdf b, float3 wo, float3 wi, uint lobes, float* pdf) {
-  *pdf = 0.0f;
-  if (wo.z <= 0.0f || wi.z == 0.0f) return (float3)(0.0f);
-  return pbr_eval_view(b, bsdf_view(b, wo, lobes), wo, wi, lobes, pdf);
-}
-
-/// The Lambertian model's f |cos| and pdf.
-inline float3 lambert_eval(Bsdf b, float3 wo, float3 wi, uint lobes, float* pdf) {
-  bool ok = (lobes & WT_LOBE_DIFFUSE) && wo.z > 0.0f && wi.z > 0.0f;
-  *pdf = ok ? wi.z / WT_PI : 0.0f;
-  return ok ? b.base * (wi.z / WT_PI) : (float3)(0.0f);
-}
-
 /// f |cos| of the continuous part for local wo, wi; *pdf as pbr_eval.
-/// `view`: bsdf_view(b, wo, lobes).
-inline float3 bsdf_eval_view(Bsdf b, BsdfView view, float3 wo, float3 wi, uint lobes, float* pdf) {
-#if WT_HAS_PBR
-  if (b.model == WT_MATERIAL_PBR) return pbr_eval_view(b, view, wo, wi, lobes, pdf);
-#endif
-  return lambert_eval(b, wo, wi, lobes, pdf);
-}
-
 inline float3 bsdf_eval(Bsdf b, float3 wo, float3 wi, uint lobes, float* pdf) {
 #if WT_HAS_PBR
   if (b.model == WT_MATERIAL_PBR) return pbr_eval(b, wo, wi, lobes, pdf);
 #endif
-  return lambert_eval(b, wo, wi, lobes, pdf);
+  bool ok = (lobes & WT_LOBE_DIFFUSE) && wo.z > 0.0f && wi.z > 0.0f;
+  *pdf = ok ? wi.z / WT_PI : 0.0f;
+  return ok ? b.base * (wi.z / WT_PI) : (float3)(0.0f);
 }
 
 /// The delta reflections towards the mirror direction of wo that the
@@ -514,12 +477,10 @@ inline bool interface_direction(Bsdf b, float3 wo, float3 h, float p_reflect, fl
 
 /// Draw a direction for local wo with uniforms u_lobe, u1, u2. False when
 /// nothing is scattered (no allowed lobe, a direction on the wrong side).
-/// `view`: bsdf_view(b, wo, lobes).
-inline bool bsdf_sample_view(Bsdf b, BsdfView view, float3 wo, uint lobes, float u_lobe, float u1, float u2,
-                             BsdfSample* s) {
+inline bool bsdf_sample(Bsdf b, float3 wo, uint lobes, float u_lobe, float u1, float u2, BsdfSample* s) {
   if (wo.z <= 0.0f || !(lobes & (WT_LOBE_DIFFUSE | WT_LOBE_SPECULAR | WT_LOBE_TRANSMISSION))) return false;
-  const PbrView v = view.v;
-  const Techniques t = view.t;
+  PbrView v = b.model == WT_MATERIAL_PBR ? pbr_view(b, wo.z) : pbr_view_none();
+  Techniques t = bsdf_techniques(b, v, lobes);
   // the techniques in order: coat, base GGX, interface, cosine (diffuse and sheen)
   float below_spec = t.clearcoat, below_interface = below_spec + t.specular;
   float below_cosine = below_interface + t.interface;
@@ -573,15 +534,10 @@ inline bool bsdf_sample_view(Bsdf b, BsdfView view, float3 wo, uint lobes, float
   }
   // reflection stays on wo's side, transmission crosses
   if ((s->lobe & WT_LOBE_TRANSMISSION) ? !(s->wi.z < 0.0f) : !(s->wi.z > 0.0f)) return false;
-  float3 f_cos = bsdf_eval_view(b, view, wo, s->wi, lobes, &s->pdf);
+  float3 f_cos = bsdf_eval(b, wo, s->wi, lobes, &s->pdf);
   if (!(s->pdf > 0.0f) || !(f_cos.x > 0.0f || f_cos.y > 0.0f || f_cos.z > 0.0f)) return false;
   s->weight = f_cos / s->pdf;
   return true;
-}
-
-inline bool bsdf_sample(Bsdf b, float3 wo, uint lobes, float u_lobe, float u1, float u2, BsdfSample* s) {
-  if (wo.z <= 0.0f || !(lobes & (WT_LOBE_DIFFUSE | WT_LOBE_SPECULAR | WT_LOBE_TRANSMISSION))) return false;
-  return bsdf_sample_view(b, bsdf_view(b, wo, lobes), wo, lobes, u_lobe, u1, u2, s);
 }
 
 #endif  // WT_MATERIALS_BSDF_CL
