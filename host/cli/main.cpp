@@ -29,6 +29,7 @@
 #include <optional>
 #include <cstdio>
 #include <cstdlib>
+#include <fstream>
 #include <unistd.h>
 
 namespace {
@@ -120,7 +121,7 @@ struct RenderOptions {
   std::string integrator = "path";
   std::string misHeuristic = "balance";
   bool noNee = false, noMis = false, noRr = false;
-  std::string sampler = "independent";
+  std::string sampler = "sobol";  ///< chosen by efficiency, 1 / (relMSE x time) (docs/integrators.md, "Samplers")
   std::string textureFilter = "footprint";
   std::string lightSampler = "auto";
   std::string reference, errorLog;
@@ -139,6 +140,8 @@ struct RenderOptions {
   std::string kernelDir;
   bool quiet = false;
   bool verbose = false;
+  bool profile = false;     ///< --profile: stage times per bounce (a profiling queue)
+  std::string profileJson;  ///< --profile-json FILE (implies --profile)
   TonemapOptions tonemap;
   double timeSeconds = 0.0;        ///< --time; 0: none
   double targetError = 0.0;        ///< --target-error; 0: none
@@ -300,9 +303,18 @@ int runRender(RenderOptions options) {
     wt::log::warnOnce(scene.sourceName + ": the scene has no geometry");
   double loadSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - loadStart).count();
 
+  if (!options.profileJson.empty()) {
+    options.profile = true;
+    const std::filesystem::path folder = std::filesystem::absolute(options.profileJson).parent_path();
+    std::error_code ec;
+    if (!std::filesystem::is_directory(folder, ec))
+      throw std::invalid_argument("--profile-json: folder '" + folder.string() + "' does not exist");
+  }
   wt::DeviceInfo device = wt::selectDevice(options.device);
-  wt::Context context(device);
+  // profiling events only when asked: without them the queue has no profiling property
+  wt::Context context(device, options.profile);
   wt::RenderSettings settings = renderSettings(options);
+  settings.profile = options.profile;
   wt::Renderer renderer(context, scene, settings);
   if (std::size_t left = renderer.sceneBuffers().skippedPrimitives())
     wt::log::warnOnce(scene.sourceName + ": " + std::to_string(left) +
@@ -498,6 +510,21 @@ int runRender(RenderOptions options) {
     std::fflush(stdout);
   }
 
+  if (renderer.stats().samplesDone > resumedSamples) {
+    const wt::RenderProfile& profile = renderer.profile();
+    if (options.profile) {
+      std::printf("%s", wt::profileTable(profile).c_str());
+      std::fflush(stdout);
+    } else {
+      wt::log::debug(wt::profileSummary(profile));
+    }
+    if (!options.profileJson.empty()) {
+      std::ofstream out(options.profileJson);
+      out << wt::profileJson(profile);
+      if (!out.flush()) throw std::runtime_error(options.profileJson + ": cannot write the profile");
+      std::printf("wrote %s\n", options.profileJson.c_str());
+    }
+  }
   if (errorOut && errorOut != stdout) std::fclose(errorOut);
   if (renderer.stats().samplesDone > 0)
     wt::log::debug("rendered " + std::to_string(renderer.stats().samplesDone) + " samples in " +
@@ -750,7 +777,8 @@ int main(int argc, char** argv) {
   renderCmd->add_option("--mis-heuristic", render.misHeuristic, "path: balance or power")
       ->check(CLI::IsMember({"balance", "power"}))->capture_default_str();
   renderCmd->add_flag("--no-rr", render.noRr, "path: no Russian roulette");
-  renderCmd->add_option("--sampler", render.sampler, "independent (hashed) or sobol (Owen-scrambled Sobol)")
+  renderCmd->add_option("--sampler", render.sampler,
+                        "sobol (Owen-scrambled Sobol; the default, for its error per unit of time) or independent (hashed)")
       ->check(CLI::IsMember({"independent", "sobol"}))->capture_default_str();
   renderCmd->add_option("--texture-filter", render.textureFilter,
                          "footprint: textures read at the mip level of the path's footprint (ray cone at the camera hit, "
@@ -844,9 +872,14 @@ int main(int argc, char** argv) {
   renderCmd->add_flag("--resume", render.resume,
                       "Continue from OUTPUT.wtckpt: the same image as an uninterrupted render of the same total "
                       "--spp; refused for another scene or other settings");
+  renderCmd->add_flag("--profile", render.profile,
+                      "After the render, print the time of every stage at every bounce (OpenCL profiling events), "
+                      "the queue sizes, rays per second per stage and the share of wall time outside kernels");
+  renderCmd->add_option("--profile-json", render.profileJson, "Write the --profile figures as JSON to this file (implies --profile)");
   renderCmd->add_flag("-q,--quiet", render.quiet, "No progress output");
   renderCmd->add_flag("-v,--verbose", render.verbose,
-                      "Timings of the scene set-up (BVH build phases) and of each program's build (kernel cache hit or miss)");
+                      "Timings of the scene set-up (BVH build phases) and of each program's build (kernel cache hit or miss), "
+                      "and the paths alive per bounce");
   // one folder for whichever command runs: only the given subcommand's option is parsed
   std::string kernelCache;
   const char* kernelCacheHelp =

@@ -88,7 +88,8 @@ Context::Context(const DeviceInfo& device, bool profiling)
   }
 }
 
-void Context::launch(const char* stage, cl::Kernel& kernel, std::size_t count, std::size_t localSize) {
+void Context::launch(const char* stage, cl::Kernel& kernel, std::size_t count, std::size_t localSize,
+                     cl::Event* out) {
   if (count == 0) return;
   std::size_t global = (count + localSize - 1) / localSize * localSize;
   cl::Event event;
@@ -103,7 +104,10 @@ void Context::launch(const char* stage, cl::Kernel& kernel, std::size_t count, s
     throw DeviceError(std::string("launching stage '") + stage + "' failed: " + e.what() + " (" +
                       clErrorName(e.err()) + ")");
   }
-  if (m_profiling) m_pending.emplace_back(stage, event);
+  if (m_profiling) {
+    m_pending.emplace_back(stage, event);
+    if (out) *out = event;
+  }
 }
 
 void Context::finish() {
@@ -117,12 +121,12 @@ void Context::finish() {
   m_pending.clear();
 }
 
-void Context::fill(cl::Buffer& buffer, cl_uint word, std::size_t offset, std::size_t bytes) {
+void Context::fill(cl::Buffer& buffer, cl_uint word, std::size_t offset, std::size_t bytes, cl::Event* event) {
   if (offset % sizeof(cl_uint) != 0 || bytes % sizeof(cl_uint) != 0)
     throw DeviceError("fill: offset " + std::to_string(offset) + " and size " + std::to_string(bytes) +
                       " must be multiples of 4 bytes");
   if (!m_oclgrind) {
-    m_queue.enqueueFillBuffer(buffer, word, offset, bytes);
+    m_queue.enqueueFillBuffer(buffer, word, offset, bytes, nullptr, m_profiling ? event : nullptr);
     return;
   }
   // Oclgrind 21.10's uninitialised-value checker records a host write by

@@ -58,19 +58,23 @@ class Context {
   /// Enqueue `kernel` over `count` work-items in groups of `localSize`
   /// (global size rounded up; kernels guard with `if (i >= count) return`).
   /// With profiling on, the kernel time is added to stageTimes()[stage].
+  /// `event`, where given and profiling is on, receives the launch's event
+  /// (no event at all with profiling off: that path must cost nothing).
   void launch(const char* stage, cl::Kernel& kernel, std::size_t count,
-              std::size_t localSize = kLocalSize);
+              std::size_t localSize = kLocalSize, cl::Event* event = nullptr);
   /// Wait for the queue and fold pending profiling events into the totals.
   void finish();
 
   /// Set `bytes` bytes of `buffer` from `offset` (both multiples of 4) to
   /// copies of `word`, in queue order. Every buffer fill goes through here.
-  void fill(cl::Buffer& buffer, cl_uint word, std::size_t offset, std::size_t bytes);
+  void fill(cl::Buffer& buffer, cl_uint word, std::size_t offset, std::size_t bytes, cl::Event* event = nullptr);
 
   /// The device is Oclgrind's simulator (scripts/oclgrind), which needs a
   /// few accommodations; each is documented where it is made.
   bool underOclgrind() const { return m_oclgrind; }
 
+  /// The queue was made with CL_QUEUE_PROFILING_ENABLE.
+  bool profiling() const { return m_profiling; }
   const StageTimes& stageTimes() const { return m_times; }
   void resetStageTimes() { m_times = {}; }
 

@@ -91,6 +91,8 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
   const cl_uint neeCount = features.integratorMinimal ? first.analytic_count
                                                       : ((first.flags & WT_FLAG_NEE) ? first.light_count : 0u);
   m_connectStage = neeCount > 0 || !settings.skipUnusedStages;
+  if (settings.profile && !context.profiling())
+    throw DeviceError("a profiled render needs a device queue made with profiling (Context(device, true))");
 
   std::size_t pixels = std::size_t(settings.width) * std::size_t(settings.height);
   cl::Context& ctx = context.context();
@@ -181,15 +183,41 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
 
 Renderer::~Renderer() = default;
 
+namespace {
+
+/// What a profiled command was (RenderSettings::profile).
+enum class Command : std::uint8_t { Generate, Extend, Shade, Connect, Accumulate, Transfer, ProfileRead };
+struct TimedCommand {
+  Command command;
+  int bounce;
+  cl::Event event;
+};
+
+}  // namespace
+
 void Renderer::renderSample() {
   auto start = std::chrono::steady_clock::now();
   const int sample = m_stats.samplesDone;
   const std::size_t pixels = std::size_t(m_settings.width) * std::size_t(m_settings.height);
   cl::CommandQueue& q = m_context.queue();
+  // profiled: every command's event, in queue order; otherwise no events at all
+  const bool profile = m_settings.profile;
+  std::vector<TimedCommand> timed;
+  auto event = [&](Command c, int bounce) -> cl::Event* {
+    if (!profile) return nullptr;
+    timed.push_back({c, bounce, {}});
+    return &timed.back().event;
+  };
+  auto fill = [&](cl_uint word, std::size_t slot, int bounce) {
+    m_context.fill(m_counters, word, slot * sizeof(cl_uint), sizeof(cl_uint), event(Command::Transfer, bounce));
+    ++m_profile.fills;
+  };
+  double hostWait = 0.0;
+  std::vector<std::pair<int, std::vector<cl_uint>>> shadowEntries;  // profiled: each bounce's shadow queue
 
   // generate: every pixel's path enters queue A
   m_generate.set("frame", frameParams(m_settings, m_lights, sample, 0)).set("camera", m_camera);
-  launch(m_generate, pixels);
+  launch(m_generate, pixels, event(Command::Generate, 0));
 
   cl::Buffer* queueIn = &m_path.queueA;
   cl::Buffer* queueOut = &m_path.queueB;
@@ -197,13 +225,16 @@ void Renderer::renderSample() {
   std::size_t alive = pixels;
   for (int bounce = 0; bounce <= m_settings.maxBounces && alive > 0; ++bounce) {
     m_stats.raysTraced += alive;
-    m_context.fill(m_counters, 0u, outSlot * sizeof(cl_uint), sizeof(cl_uint));
+    if (m_profile.bounces.size() <= std::size_t(bounce)) m_profile.bounces.resize(bounce + 1);
+    m_profile.bounces[bounce].passes += 1;
+    m_profile.bounces[bounce].paths += alive;
+    fill(0u, outSlot, bounce);
     // extend: closest hit of every queued path; camera rays in packets
     const bool packets = m_settings.packets && !m_kernelFeatures.bvhCost && bounce == 0;
     // Shadow rays traced in packets are appended to a dense queue (an atomic
     // counter from 0); otherwise shade writes entry i for its item i
     // (WT_NO_HIT: no shadow ray) and the queue has the bounce's path count.
-    m_context.fill(m_counters, packets ? 0u : cl_uint(alive), WT_COUNTER_SHADOW * sizeof(cl_uint), sizeof(cl_uint));
+    fill(packets ? 0u : cl_uint(alive), WT_COUNTER_SHADOW, bounce);
     // stochastic transparency: numbers of their own per sample, bounce and stage
     // the general program takes the alpha key whether or not the scene has holes
     const bool alpha = m_kernelFeatures.alpha;
@@ -211,7 +242,7 @@ void Renderer::renderSample() {
       k.set("queue_slot", inSlot).set("queue", *queueIn);
       if (alpha)
         k.set("alpha_key", rng_alpha_key(cl_uint(sample), cl_uint(bounce), WT_DIM_ALPHA_EXTEND, m_settings.seed));
-      launch(k, items);
+      launch(k, items, event(Command::Extend, bounce));
     };
     if (packets)
       extend(m_extendPacket, (alive + m_packetWidth - 1) / m_packetWidth);
@@ -227,7 +258,7 @@ void Renderer::renderSample() {
         .set("out_slot", outSlot)
         .set("queue_in", *queueIn)
         .set("queue_out", *queueOut);
-    launch(m_shade, alive);
+    launch(m_shade, alive, event(Command::Shade, bounce));
 
     // connect: shadow rays of this bounce (count read on the device); shade
     // makes none at the last bounce, which it shades for emission only
@@ -237,17 +268,27 @@ void Renderer::renderSample() {
       auto run = [&](auto& k, std::size_t items) {
         if (alpha)
           k.set("alpha_key", rng_alpha_key(cl_uint(sample), cl_uint(bounce), WT_DIM_ALPHA_SHADOW, m_settings.seed));
-        launch(k, items);
+        launch(k, items, event(Command::Connect, bounce));
       };
       if (packets)
         run(m_connectPacket, (alive + m_packetWidth - 1) / m_packetWidth);
       else
         run(m_connect, alive);
+      // profiled: the sparse queue's shadow rays, counted on the host after the pass
+      if (profile && !packets && m_connectStage) {
+        shadowEntries.emplace_back(bounce, std::vector<cl_uint>(alive));
+        q.enqueueReadBuffer(m_path.shadowQueue, CL_FALSE, 0, alive * sizeof(cl_uint), shadowEntries.back().second.data(),
+                            nullptr, event(Command::ProfileRead, bounce));
+      }
     }
 
     // end of the bounce: the only point where the host reads a count back
     cl_uint counters[WT_COUNTER_COUNT];
-    q.enqueueReadBuffer(m_counters, CL_TRUE, 0, sizeof(counters), counters);
+    const auto readStart = std::chrono::steady_clock::now();
+    q.enqueueReadBuffer(m_counters, CL_TRUE, 0, sizeof(counters), counters, nullptr, event(Command::Transfer, bounce));
+    hostWait += std::chrono::duration<double>(std::chrono::steady_clock::now() - readStart).count();
+    ++m_profile.blockingReads;
+    if (profile && connect && packets) m_profile.bounces[bounce].shadowRays += counters[WT_COUNTER_SHADOW];
     alive = counters[outSlot];
     if (m_settings.stopOnNonFinite && counters[WT_COUNTER_FIRST_NONFINITE] != 0xffffffffu)
       throwNonFinite(sample, counters[WT_COUNTER_FIRST_NONFINITE], counters[WT_COUNTER_NONFINITE_WHERE]);
@@ -257,10 +298,49 @@ void Renderer::renderSample() {
 
   // accumulate: fold the pass into the running mean
   m_accumulate.set("frame", frameParams(m_settings, m_lights, sample, 0));
-  launch(m_accumulate, pixels);
+  launch(m_accumulate, pixels, event(Command::Accumulate, 0));
   m_context.finish();
   ++m_stats.samplesDone;
-  m_stats.seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  m_stats.seconds += wall;
+  m_profile.pixels = pixels;
+  m_profile.maxBounces = m_settings.maxBounces;
+  m_profile.samples += 1;
+  m_profile.hostWaitSeconds += hostWait;
+  if (!profile) {
+    m_profile.wallSeconds += wall;
+    return;
+  }
+
+  // the pass's device timeline: each command's time by stage and bounce, and
+  // the gap before it (the device waiting on the host) against its bounce
+  m_profile.timed = true;
+  double profileReads = 0.0;
+  cl_ulong lastEnd = 0;
+  for (const TimedCommand& t : timed) {
+    if (!t.event()) continue;  // a fill made without an event (Context::fill under Oclgrind)
+    const cl_ulong begin = t.event.getProfilingInfo<CL_PROFILING_COMMAND_START>();
+    const cl_ulong end = t.event.getProfilingInfo<CL_PROFILING_COMMAND_END>();
+    const double seconds = end > begin ? double(end - begin) * 1e-9 : 0.0;
+    const double gap = lastEnd != 0 && begin > lastEnd ? double(begin - lastEnd) * 1e-9 : 0.0;
+    lastEnd = std::max(lastEnd, end);
+    BounceProfile& b = m_profile.bounces[std::size_t(t.bounce)];
+    switch (t.command) {
+      case Command::Generate: m_profile.generateSeconds += seconds, m_profile.otherIdleSeconds += gap; break;
+      case Command::Accumulate: m_profile.accumulateSeconds += seconds, m_profile.otherIdleSeconds += gap; break;
+      case Command::Extend: b.extendSeconds += seconds, b.idleSeconds += gap; break;
+      case Command::Shade: b.shadeSeconds += seconds, b.idleSeconds += gap; break;
+      case Command::Connect: b.connectSeconds += seconds, b.idleSeconds += gap; break;
+      case Command::Transfer: b.transferSeconds += seconds, b.idleSeconds += gap; break;
+      case Command::ProfileRead: profileReads += seconds, b.idleSeconds += gap; break;
+    }
+  }
+  // WT_NO_HIT (all ones): the item made no shadow ray
+  for (const auto& [bounce, entries] : shadowEntries)
+    m_profile.bounces[std::size_t(bounce)].shadowRays +=
+        std::size_t(std::count_if(entries.begin(), entries.end(), [](cl_uint e) { return e != 0xffffffffu; }));
+  m_profile.profileReadSeconds += profileReads;
+  m_profile.wallSeconds += wall - profileReads;
 }
 
 void Renderer::throwNonFinite(int sample, std::uint32_t path, std::uint32_t where) {

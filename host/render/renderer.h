@@ -11,6 +11,7 @@
 #include "render/path_state.h"
 #include "render/stage_params.h"
 #include "render/light_list.h"
+#include "render/render_profile.h"
 #include "render/tonemap.h"
 #include "scene/environment.h"
 #include "scene/scene.h"
@@ -79,6 +80,10 @@ struct RenderSettings {
   /// (Aovs::bvhCost; WT_BVH_COST, kernels compiled for the debug view only).
   /// Counted by single-ray traversal: camera rays are not traced in packets.
   bool bvhCost = false;
+  /// Time every stage of every bounce from profiling events and count the
+  /// shadow rays (Renderer::profile()): needs a Context made with profiling
+  /// (else DeviceError); off, the renderer makes no events at all.
+  bool profile = false;
 #ifdef NDEBUG
   bool stopOnNonFinite = false;  ///< throw NonFiniteSampleError at the first NaN/Inf shade makes (on in debug builds)
 #else
@@ -167,6 +172,8 @@ class Renderer {
   /// std::invalid_argument when its size is not this image's.
   void restoreAccumulation(const Accumulation& saved);
   const RenderStats& stats() const { return m_stats; }
+  /// Paths per bounce, and with RenderSettings::profile the stage times.
+  const RenderProfile& profile() const { return m_profile; }
   const RenderSettings& settings() const { return m_settings; }
   const SceneBuffers& sceneBuffers() const { return *m_scene; }
   /// The light list NEE picks from (built from the scene at construction).
@@ -205,10 +212,12 @@ class Renderer {
   KernelArgs<stage::Resolve> m_resolve;
   Tonemapper m_tonemapper;
   /// Launch a stage whose every argument is set (else DeviceError naming it).
+  /// `event`: its profiling event (RenderSettings::profile).
   template <class Decl>
-  void launch(KernelArgs<Decl>& k, std::size_t count) {
+  void launch(KernelArgs<Decl>& k, std::size_t count, cl::Event* event = nullptr) {
     k.requireBound();
-    m_context.launch(Decl::kName.data(), k.kernel(), count);
+    m_context.launch(Decl::kName.data(), k.kernel(), count, Context::kLocalSize, event);
+    ++m_profile.kernelLaunches;
   }
   /// Whether shade can queue shadow rays, so connect and its buffers exist.
   bool m_connectStage = true;
@@ -221,6 +230,7 @@ class Renderer {
   PathState m_path;      ///< per pixel: path state, queues, shadow rays, accumulation
   cl::Buffer m_counters;  ///< WT_COUNTER_*
   RenderStats m_stats;
+  RenderProfile m_profile;
 };
 
 }  // namespace wt
