@@ -723,7 +723,7 @@ void groupRenderOptions(CLI::App* cmd) {
       {"Device, BVH and kernels",
        {"--device", "--bvh", "--instancing", "--traversal", "--packet-width", "--kernel-dir", "--kernel-cache",
         "--general-program"}},
-      {"Messages", {"--quiet", "--verbose"}},
+      {"Messages and profiling", {"--quiet", "--verbose", "--profile", "--profile-json"}},
   };
   for (CLI::Option* opt : cmd->get_options()) {
     const std::string name = opt->get_name();
