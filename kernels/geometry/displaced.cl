@@ -206,36 +206,62 @@ inline void disp_node_corners(uint node, uint level_l, int2* c) {
   }
 }
 
-/// Slab test of box [lo, hi] against the ray in (tmin, tmax), widened for
-/// rounding as the BVH's; the entry distance or INFINITY for a miss.
-inline float disp_box_hit(float3 lo, float3 hi, float3 o, float3 inv_d, float tmin, float tmax) {
-  float3 t0 = (lo - o) * inv_d, t1 = (hi - o) * inv_d;
+/// A shell's bound: a box and a slab along the base triangle's face
+/// normal (the range of dot(x, fn) over the shell's six corners). The slab
+/// cuts the box down where the sub-triangle lies slanted to the axes.
+typedef struct DispShell {
+  float3 lo, hi;   ///< box, world
+  float slo, shi;  ///< slab: dot(x, fn) in [slo, shi]
+} DispShell;
+
+/// The per-ray constants of the shell test.
+typedef struct DispRay {
+  float3 o, inv_d;
+  float on, inv_dn;  ///< dot(o, fn) and 1 / dot(d, fn) (+-1e30 for a ray along the slab)
+} DispRay;
+
+/// The ray's entry into the shell in (tmin, tmax), widened for rounding
+/// as the BVH's slab tests; INFINITY for a miss.
+inline float disp_shell_hit(DispShell sh, DispRay r, float tmin, float tmax) {
+  float3 t0 = (sh.lo - r.o) * r.inv_d, t1 = (sh.hi - r.o) * r.inv_d;
   float3 tn = fmin(t0, t1), tf = fmax(t0, t1);
-  float ta = fmax(fmax(fmax(tn.x, tn.y), tn.z), tmin);
-  float tb = fmin(fmin(fmin(tf.x, tf.y), tf.z), tmax) * (1.0f + 2.0f * spawn_gamma(3));
+  float s0 = (sh.slo - r.on) * r.inv_dn, s1 = (sh.shi - r.on) * r.inv_dn;
+  float ta = fmax(fmax(fmax(tn.x, tn.y), fmax(tn.z, fmin(s0, s1))), tmin);
+  float tb = fmin(fmin(fmin(tf.x, tf.y), fmin(tf.z, fmax(s0, s1))), tmax) * (1.0f + 2.0f * spawn_gamma(3));
   return ta <= tb ? ta : INFINITY;
 }
 
-/// The shell of the sub-triangle with corners (k0, k1, k2) among the six
-/// points (positions p, normals nn, uv) as a box: each corner moved by the
-/// least and the largest displacement over its texels, widened past the
-/// micro-vertices' rounding.
-inline void disp_shell(DispMesh m, const float3* p, const float3* nn, const float2* uv, int k0, int k1, int k2,
-                       float3* lo, float3* hi) {
+/// The shell of the sub-triangle with corners (k0, k1, k2) among the
+/// points (positions p, normals nn, uv): each corner moved by the least and
+/// the largest displacement over its texels, as a box and a slab along fn,
+/// widened past the micro-vertices' rounding.
+inline DispShell disp_shell(DispMesh m, float3 fn, const float3* p, const float3* nn, const float2* uv, int k0, int k1,
+                            int k2) {
   float2 ulo = fmin(fmin(uv[k0], uv[k1]), uv[k2]), uhi = fmax(fmax(uv[k0], uv[k1]), uv[k2]);
   float2 r = disp_map_range(m, ulo, uhi);
   float d0 = m.scale * r.x + m.offset, d1 = m.scale * r.y + m.offset;
   float dlo = fmin(d0, d1), dhi = fmax(d0, d1);
   int ks[3] = {k0, k1, k2};
   float3 a = (float3)(INFINITY), b = (float3)(-INFINITY);
+  float slo = INFINITY, shi = -INFINITY, mag = 0.0f;
+  float3 afn = fabs(fn);
   for (int q = 0; q < 3; ++q) {
     float3 x = p[ks[q]] + dlo * nn[ks[q]], y = p[ks[q]] + dhi * nn[ks[q]];
     a = fmin(a, fmin(x, y));
     b = fmax(b, fmax(x, y));
+    float sx = dot(x, fn), sy = dot(y, fn);
+    slo = fmin(slo, fmin(sx, sy));
+    shi = fmax(shi, fmax(sx, sy));
+    mag = fmax(mag, fmax(dot(fabs(x), afn), dot(fabs(y), afn)));
   }
+  DispShell sh;
   float3 pad = 4e-6f * fmax(fabs(a), fabs(b)) + 1e-6f * (b - a);
-  *lo = a - pad;
-  *hi = b + pad;
+  sh.lo = a - pad;
+  sh.hi = b + pad;
+  float spad = 8e-6f * mag + 1e-6f * (shi - slo);
+  sh.slo = slo - spad;
+  sh.shi = shi + spad;
+  return sh;
 }
 
 /// Ray (o, d) against displaced base triangle `tri` (its WT_DISP_INFO_ROWS
@@ -251,11 +277,28 @@ inline bool displaced_intersect(__global const float4* rows, __global const uint
   int n = 1 << level_l;
   float inv_n = 1.0f / (float)n;
   RayShear shear = triangle_ray_shear(d);
-  float3 inv_d = 1.0f / select(d, copysign((float3)(1e-30f), d), fabs(d) < 1e-30f);
+  float3 fn = cross(t.p[1] - t.p[0], t.p[2] - t.p[0]);
+  DispRay ray;
+  ray.o = o;
+  ray.inv_d = 1.0f / select(d, copysign((float3)(1e-30f), d), fabs(d) < 1e-30f);
+  ray.on = dot(o, fn);
+  float dn = dot(d, fn);
+  ray.inv_dn = 1.0f / (fabs(dn) < 1e-30f ? copysign(1e-30f, dn) : dn);
   float best = tmax;
   bool found = false;
   uint stack[3 * WT_DISP_MAX_LEVEL + 4];
   float stack_t[3 * WT_DISP_MAX_LEVEL + 4];
+  // the whole triangle's shell first: most triangles the BVH's box lets through stop here
+  {
+    float3 p[3], nn[3];
+    float2 uv[3];
+    for (int k = 0; k < 3; ++k) {
+      p[k] = t.p[k];
+      nn[k] = t.n[k];
+      uv[k] = t.uv[k];
+    }
+    if (disp_shell_hit(disp_shell(m, fn, p, nn, uv, 0, 1, 2), ray, tmin, tmax) == INFINITY) return false;
+  }
   int sp = 0;
   stack[sp] = disp_node(0u, 0u, 0u, 0u);
   stack_t[sp++] = tmin;
@@ -312,9 +355,8 @@ inline bool displaced_intersect(__global const float4* rows, __global const uint
     float kt[4];
     int count = 0;
     for (int k = 0; k < 4; ++k) {
-      float3 lo, hi;
-      disp_shell(m, p, nn, uv, child_k[3 * k], child_k[3 * k + 1], child_k[3 * k + 2], &lo, &hi);
-      float te = disp_box_hit(lo, hi, o, inv_d, tmin, best);
+      float te = disp_shell_hit(disp_shell(m, fn, p, nn, uv, child_k[3 * k], child_k[3 * k + 1], child_k[3 * k + 2]),
+                                ray, tmin, best);
       if (te == INFINITY) continue;
       uint di = (uint)(inverted ? inv_di[k] : up_di[k]), dj = (uint)(inverted ? inv_dj[k] : up_dj[k]);
       uint kid_inv = (k == 3) ? 1u - inverted : inverted;
