@@ -836,6 +836,10 @@ int main(int argc, char** argv) {
   benchCmd->add_flag("--json", bench.json, "Machine-readable output");
   benchCmd->add_option("--primary-width", bench.primaryWidth, "Primary ray set is N x N")
       ->check(CLI::Range(1, 8192))->capture_default_str();
+  benchCmd->add_option("--path-width", bench.pathWidth, "The path-tracing figure renders N x N pixels")
+      ->check(CLI::Range(1, 4096))->capture_default_str();
+  benchCmd->add_option("--path-spp", bench.pathSamples, "The path-tracing figure's samples per pixel (at least)")
+      ->check(CLI::Range(1, 1024))->capture_default_str();
   benchCmd->add_option("--tessellate", bench.tessellate,
                        "Each scene with displaced meshes gains a row: the same meshes as triangles, N per base edge "
                        "(N = 2^L is the displaced surface itself)")
