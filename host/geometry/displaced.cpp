@@ -267,10 +267,14 @@ void gatherDisplaced(const Scene& scene, PrimitiveRows& rows) {
         ++rows.skipped;
         continue;
       }
-      rows.info.push_back({m.material, std::uint32_t(WT_DISP_MESH_ROWS * mi), std::uint32_t(mi), std::uint32_t(ti)});
+      // the displacement's range, rounded outwards: the kernel's whole-shell test reads it
+      const float dlo = std::nextafter(float(std::min(d0, d1)), -std::numeric_limits<float>::infinity());
+      const float dhi = std::nextafter(float(std::max(d0, d1)), std::numeric_limits<float>::infinity());
+      rows.info.push_back({m.material, std::uint32_t(WT_DISP_MESH_ROWS * mi), std::bit_cast<std::uint32_t>(dlo),
+                           std::bit_cast<std::uint32_t>(dhi)});
       rows.info.push_back({std::uint32_t(vertexRow[mi] + WT_DISP_VERTEX_ROWS * t[0]),
                            std::uint32_t(vertexRow[mi] + WT_DISP_VERTEX_ROWS * t[1]),
-                           std::uint32_t(vertexRow[mi] + WT_DISP_VERTEX_ROWS * t[2]), 0u});
+                           std::uint32_t(vertexRow[mi] + WT_DISP_VERTEX_ROWS * t[2]), std::uint32_t(ti)});
       rows.bounds.push_back(box);
       rows.ids.push_back(primId(WT_PRIM_DISPLACED, prims++));
     }
@@ -285,8 +289,8 @@ void gatherDisplaced(const Scene& scene, PrimitiveRows& rows) {
 }
 
 DisplacedTriangleRef displacedTriangle(const PrimitiveRows& rows, std::uint32_t index) {
-  const std::array<std::uint32_t, 4>& info = rows.info[rows.infoFirst[WT_PRIM_DISPLACED] + WT_DISP_INFO_ROWS * index];
-  return {info[2], info[3]};
+  const std::size_t row = rows.infoFirst[WT_PRIM_DISPLACED] + WT_DISP_INFO_ROWS * std::size_t(index);
+  return {rows.info[row][1] / WT_DISP_MESH_ROWS, rows.info[row + 1][3]};
 }
 
 glm::vec3 displacedPoint(const DisplacedMesh& mesh, std::uint32_t triangle, float li, float lj, glm::vec3* error,

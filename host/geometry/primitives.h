@@ -134,7 +134,7 @@ bool displacedMeshUsable(const DisplacedMesh& mesh);
 /// Displaced meshes (WT_PRIM_DISPLACED): WT_DISP_MESH_ROWS data rows per
 /// mesh, WT_DISP_VERTEX_ROWS per vertex, then each map's texels (NaN
 /// written as 0) and min-max pyramid; WT_DISP_INFO_ROWS info rows per base
-/// triangle ((material, mesh row, mesh, triangle), then its corners' rows),
+/// triangle ((material, mesh row, displacement range), corners' rows, index),
 /// one primitive per base triangle boxed around its shell (its corners
 /// moved by the least and the largest displacement over its texels). A
 /// triangle with a corner out of range or not finite is left out. count:

@@ -276,7 +276,6 @@ inline bool displaced_intersect(__global const float4* rows, __global const uint
   uint level_l = m.level;
   int n = 1 << level_l;
   float inv_n = 1.0f / (float)n;
-  RayShear shear = triangle_ray_shear(d);
   float3 fn = cross(t.p[1] - t.p[0], t.p[2] - t.p[0]);
   DispRay ray;
   ray.o = o;
@@ -288,17 +287,32 @@ inline bool displaced_intersect(__global const float4* rows, __global const uint
   bool found = false;
   uint stack[3 * WT_DISP_MAX_LEVEL + 4];
   float stack_t[3 * WT_DISP_MAX_LEVEL + 4];
-  // the whole triangle's shell first: most triangles the BVH's box lets through stop here
+  // the whole triangle's shell first, from its stored displacement range:
+  // most triangles the BVH's box lets through stop here
   {
-    float3 p[3], nn[3];
-    float2 uv[3];
+    float dlo = as_float(info.z), dhi = as_float(info.w);
+    float3 a = (float3)(INFINITY), b = (float3)(-INFINITY);
+    float slo = INFINITY, shi = -INFINITY, mag = 0.0f;
+    float3 afn = fabs(fn);
     for (int k = 0; k < 3; ++k) {
-      p[k] = t.p[k];
-      nn[k] = t.n[k];
-      uv[k] = t.uv[k];
+      float3 x = t.p[k] + dlo * t.n[k], y = t.p[k] + dhi * t.n[k];
+      a = fmin(a, fmin(x, y));
+      b = fmax(b, fmax(x, y));
+      float sx = dot(x, fn), sy = dot(y, fn);
+      slo = fmin(slo, fmin(sx, sy));
+      shi = fmax(shi, fmax(sx, sy));
+      mag = fmax(mag, fmax(dot(fabs(x), afn), dot(fabs(y), afn)));
     }
-    if (disp_shell_hit(disp_shell(m, fn, p, nn, uv, 0, 1, 2), ray, tmin, tmax) == INFINITY) return false;
+    DispShell sh;
+    float3 pad = 4e-6f * fmax(fabs(a), fabs(b)) + 1e-6f * (b - a);
+    sh.lo = a - pad;
+    sh.hi = b + pad;
+    float spad = 8e-6f * mag + 1e-6f * (shi - slo);
+    sh.slo = slo - spad;
+    sh.shi = shi + spad;
+    if (disp_shell_hit(sh, ray, tmin, tmax) == INFINITY) return false;
   }
+  RayShear shear = triangle_ray_shear(d);
   int sp = 0;
   stack[sp] = disp_node(0u, 0u, 0u, 0u);
   stack_t[sp++] = tmin;

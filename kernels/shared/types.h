@@ -94,9 +94,9 @@ typedef struct WtBvh4Node {
 /// ceil(w / 2^k) per row); then per vertex WT_DISP_VERTEX_ROWS rows
 /// (position xyz and u, normal xyz and v); then the maps' texels and
 /// pyramids. Float offsets and row indices count from the type's first
-/// row. prim_info per base triangle, WT_DISP_INFO_ROWS rows: (material,
-/// its mesh's first row, 0, 0), then its corners' first rows in winding
-/// order and 0.
+/// row. prim_info per base triangle, WT_DISP_INFO_ROWS rows: (material, its mesh's first row,
+/// its least and largest displacement as float bits), then its corners' first rows in
+/// winding order and its index in its mesh (mesh = first row / WT_DISP_MESH_ROWS).
 #define WT_PRIM_DISPLACED 4u
 #define WT_DISP_MESH_ROWS 6       ///< prim_data rows per displaced mesh
 #define WT_DISP_VERTEX_ROWS 2     ///< prim_data rows per vertex
