@@ -90,6 +90,11 @@
 #elif !WT_SWITCH_IS_BOOL(WT_HAS_SDF_GRIDS)
 #error "WT_HAS_SDF_GRIDS must be 0 or 1"
 #endif
+#ifndef WT_HAS_DISPLACED
+#error "WT_HAS_DISPLACED not set (kernelDefines)"
+#elif !WT_SWITCH_IS_BOOL(WT_HAS_DISPLACED)
+#error "WT_HAS_DISPLACED must be 0 or 1"
+#endif
 
 // Arbitrary output variables (kernels/aov.cl): shade and accumulate record
 // them only when a render asks (RenderSettings::aovs); off, no code exists.

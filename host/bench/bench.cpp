@@ -125,6 +125,14 @@ std::optional<SurfacePoint> surfacePoint(const Scene& scene, const PrimitiveRows
     if (glm::dot(n, ray.direction) > 0.0f) n = -n;
     return SurfacePoint{offsetRayOrigin(p, error, n), n, p, error};
   }
+  if (primType(hit.prim) == WT_PRIM_DISPLACED) {
+    const DisplacedTriangleRef ref = displacedTriangle(rows, primIndex(hit.prim));
+    glm::vec3 error, n;
+    glm::vec3 p = displacedPoint(scene.displacedMeshes[ref.mesh], ref.triangle, hit.b1, hit.b2, &error, &n);
+    if (!(glm::dot(n, n) > 0.0f)) return std::nullopt;
+    if (glm::dot(n, ray.direction) > 0.0f) n = -n;
+    return SurfacePoint{offsetRayOrigin(p, error, n), n, p, error};
+  }
   if (primType(hit.prim) != WT_PRIM_TRIANGLE) return std::nullopt;
   const WtTriangle& tri = scene.triangles[hit.triangle];
   glm::vec3 p0 = position(scene, tri.v0), p1 = position(scene, tri.v1), p2 = position(scene, tri.v2);
@@ -426,6 +434,7 @@ struct SceneResult {
   double primitiveBuildSeconds = 0.0;
   double primitiveGatherSeconds = 0.0;  ///< gatherPrimitives: boxes and rows (an SDF grid's bricks found and packed)
   double bytesPerPrimitive = 0.0;
+  double tessellateSeconds = 0.0;  ///< --tessellate: making the triangles (before the BVH build)
   std::vector<SetResult> sets;
   double pathMrays = 0.0;
   /// Time per path sample with the scene's specialised program and with the
@@ -791,6 +800,8 @@ SceneResult benchScene(Context& context, const std::string& name, const Scene& s
 #ifdef WT_HAVE_EMBREE
   // Embree has no SDF grid: a scene with one is not compared
   if (!scene.sdfGrids.empty()) log::info("bench: " + name + ": Embree has no SDF grid primitive; not compared");
+  else if (!scene.displacedMeshes.empty())
+    log::info("bench: " + name + ": Embree's displaced meshes tessellate; not compared (--tessellate gives that row)");
   else {
   EmbreeOptions embreeOptions;
   const bool fastest = options.embreeApi == "fastest";
@@ -952,8 +963,19 @@ int runBench(const BenchOptions& options) {
     }
     log::info("bench: " + source.name + " (" + std::to_string(scene.triangles.size()) + " triangles, " +
               std::to_string(scene.spheres.size()) + " spheres, " + std::to_string(scene.curves.size()) + " curves, " +
-              std::to_string(scene.sdfGrids.size()) + " SDF grids)");
+              std::to_string(scene.sdfGrids.size()) + " SDF grids, " + std::to_string(scene.displacedMeshes.size()) +
+              " displaced meshes)");
     results.push_back(benchScene(context, source.name, scene, options));
+    if (options.tessellate > 0 && !scene.displacedMeshes.empty()) {
+      // the same meshes pre-tessellated, in the same run: the ratios compare like with like
+      const auto start = Clock::now();
+      const std::size_t made = tessellateDisplaced(scene, options.tessellate);
+      const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
+      log::info("bench: " + source.name + ": --tessellate " + std::to_string(options.tessellate) + " made " +
+                std::to_string(made) + " triangles in " + std::to_string(seconds * 1e3) + " ms");
+      results.push_back(benchScene(context, source.name + " tess" + std::to_string(options.tessellate), scene, options));
+      results.back().tessellateSeconds = seconds;
+    }
   }
   std::string embreeText = "Embree not found at build time; no comparison";
 #ifdef WT_HAVE_EMBREE
@@ -1001,8 +1023,8 @@ int runBench(const BenchOptions& options) {
       for (std::uint32_t type = 0, n = 0; type < WT_PRIM_TYPES; ++type)
         if (*primTypeName(type)) std::printf("%s\"%s\": %zu", n++ ? ", " : "", primTypeName(type), r.primitives[type]);
       std::printf("}, \"primitive_gather_s\": %.6f", r.primitiveGatherSeconds);
-      std::printf(", \"primitive_bvh_build_s\": %.6f, \"bytes_per_primitive\": %.1f,\n", r.primitiveBuildSeconds,
-                  r.bytesPerPrimitive);
+      std::printf(", \"primitive_bvh_build_s\": %.6f, \"bytes_per_primitive\": %.1f, \"tessellate_s\": %.6f,\n",
+                  r.primitiveBuildSeconds, r.bytesPerPrimitive, r.tessellateSeconds);
       std::printf("   \"bvh_builder\": \"%s\", \"trees\": [", options.bvh.c_str());
       const TreeResult* sahTree = nullptr;
       for (const TreeResult& t : r.trees)
@@ -1099,15 +1121,16 @@ int runBench(const BenchOptions& options) {
   bool anyPrimitives = false;
   for (const SceneResult& r : results) anyPrimitives |= r.primitiveBuildSeconds > 0.0;
   if (anyPrimitives) {
-    std::printf("\n%-28s %10s %10s %10s %10s %9s %9s %9s %8s\n", "scene", "spheres", "curve segs", "SDF bricks",
-                "triangles", "gather ms", "build ms", "Mprims/s", "B/prim");
+    std::printf("\n%-28s %10s %10s %10s %10s %10s %9s %9s %9s %8s\n", "scene", "spheres", "curve segs", "SDF bricks",
+                "displaced", "triangles", "gather ms", "build ms", "Mprims/s", "B/prim");
     for (const SceneResult& r : results) {
       if (!(r.primitiveBuildSeconds > 0.0)) continue;
       std::size_t others = 0;
       for (std::uint32_t type = 0; type < WT_PRIM_TYPES; ++type)
         if (type != WT_PRIM_TRIANGLE) others += r.primitives[type];
-      std::printf("%-28s %10zu %10zu %10zu %10zu %9.2f %9.2f %9.2f %8.1f\n", r.name.c_str(), r.primitives[WT_PRIM_SPHERE],
-                  r.primitives[WT_PRIM_CURVE], r.primitives[WT_PRIM_SDF_GRID], r.triangles,
+      std::printf("%-28s %10zu %10zu %10zu %10zu %10zu %9.2f %9.2f %9.2f %8.1f\n", r.name.c_str(),
+                  r.primitives[WT_PRIM_SPHERE], r.primitives[WT_PRIM_CURVE], r.primitives[WT_PRIM_SDF_GRID],
+                  r.primitives[WT_PRIM_DISPLACED], r.triangles,
                   r.primitiveGatherSeconds * 1e3, r.primitiveBuildSeconds * 1e3, double(others) / r.primitiveBuildSeconds * 1e-6, r.bytesPerPrimitive);
     }
   }

@@ -25,6 +25,9 @@ struct BenchOptions {
   /// few milliseconds.
   double minSeconds = 0.5;
   int meshTriangles = 1000000;      ///< size of the generated mesh
+  /// > 0: a scene with displaced meshes gains a row, the same meshes
+  /// pre-tessellated into this many triangles per base edge (tessellateDisplaced)
+  int tessellate = 0;
   int sphereCount = 100000;         ///< spheres of the generated sphere field (makeSphereField); 0: none
   int hairGuides = 100;             ///< guide strands of the generated head of hair (makeHairScene), 100 children each; 0: none
   /// single, packet8, packet16, stream (host/bench/embree_reference.h), or

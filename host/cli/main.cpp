@@ -9,6 +9,7 @@
 #include "output/debug_view.h"
 #include "output/image_io.h"
 #include "device/scene_buffers.h"
+#include "geometry/primitives.h"
 #include "render/feature_set.h"
 #include "render/checkpoint.h"
 #include "render/halting.h"
@@ -136,6 +137,7 @@ struct RenderOptions {
   double fovDegrees = 0.0;                   ///< --fov; 0: the camera's own
   bool frame = false;
   bool noRecenter = false;
+  int tessellate = 0;  ///< --tessellate: displaced meshes as triangles, this many per base edge (0: displaced)
   bool stopOnNan = false;
   std::string kernelDir;
   bool quiet = false;
@@ -299,7 +301,13 @@ int runRender(RenderOptions options) {
   applySceneSettings(loaded.settings, scene.sourceName, options);
   applyCameraOptions(options, scene);
   for (const std::string& w : scene.warnings) wt::log::warnOnce(scene.sourceName + ": " + w);
-  if (scene.triangles.empty() && scene.spheres.empty() && scene.curves.empty())
+  if (options.tessellate > 0 && !scene.displacedMeshes.empty()) {
+    const std::size_t made = wt::tessellateDisplaced(scene, options.tessellate);
+    wt::log::info("--tessellate " + std::to_string(options.tessellate) + ": the displaced meshes as " +
+                  std::to_string(made) + " triangles");
+  }
+  if (scene.triangles.empty() && scene.spheres.empty() && scene.curves.empty() && scene.sdfGrids.empty() &&
+      scene.displacedMeshes.empty())
     wt::log::warnOnce(scene.sourceName + ": the scene has no geometry");
   double loadSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - loadStart).count();
 
@@ -328,6 +336,11 @@ int runRender(RenderOptions options) {
                                         : ", " + std::to_string(scene.sdfGrids.size()) + " SDF grids (" +
                                               std::to_string(renderer.sceneBuffers().primitiveCount(WT_PRIM_SDF_GRID)) +
                                               " bricks)") +
+                (scene.displacedMeshes.empty()
+                     ? std::string()
+                     : ", " + std::to_string(scene.displacedMeshes.size()) + " displaced meshes (" +
+                           std::to_string(renderer.sceneBuffers().primitiveCount(WT_PRIM_DISPLACED)) +
+                           " base triangles, level " + std::to_string(wt::displacedLevel(scene.displacedMeshes[0])) + ")") +
                 ", loaded in " + std::to_string(int(loadSeconds * 1e3)) + " ms; BVH (" +
                 wt::bvhBuilderName(settings.bvhBuilder) + ") " +
                 std::to_string(bvh.nodeCount) + " nodes built in " +
@@ -595,9 +608,12 @@ int runInfo(RenderOptions options) {
   // geometry
   std::size_t curvePoints = 0;
   for (const wt::Curve& c : scene.curves) curvePoints += c.pointCount;
-  std::printf("primitives: %zu triangles, %zu spheres, %zu curves (%zu points), %zu SDF grids, %zu vertices\n",
+  std::size_t baseTriangles = 0;
+  for (const wt::DisplacedMesh& m : scene.displacedMeshes) baseTriangles += m.triangles.size();
+  std::printf("primitives: %zu triangles, %zu spheres, %zu curves (%zu points), %zu SDF grids, %zu displaced meshes "
+              "(%zu base triangles), %zu vertices\n",
               scene.triangles.size(), scene.spheres.size(), scene.curves.size(), curvePoints, scene.sdfGrids.size(),
-              scene.positions.size());
+              scene.displacedMeshes.size(), baseTriangles, scene.positions.size());
   std::printf("instances: %zu mesh copies in the file; instancing %s: %zu instances, %zu triangles in instanced copies\n",
               scene.instances.size(), options.instancing.c_str(), buffers.instanceCount(),
               buffers.instancedTriangles());
@@ -707,7 +723,7 @@ int runDevices() {
 void groupRenderOptions(CLI::App* cmd) {
   static const std::pair<const char*, std::vector<std::string>> kGroups[] = {
       {"Scene and camera",
-       {"--scene-index", "--camera", "--look-from", "--look-at", "--up", "--fov", "--frame", "--no-recenter",
+       {"--scene-index", "--camera", "--look-from", "--look-at", "--up", "--fov", "--frame", "--no-recenter", "--tessellate",
         "--background", "--env-map", "--env-intensity", "--env-rotation", "--env-hidden"}},
       {"Image and sampling", {"--output", "--width", "--height", "--spp", "--seed", "--sampler", "--accumulation"}},
       {"Light transport",
@@ -843,6 +859,10 @@ int main(int argc, char** argv) {
   renderCmd->add_flag("--stop-on-nan", render.stopOnNan,
                       "Stop at the first NaN/Inf a path makes and name its pixel, sample and bounce "
                       "(always on in debug builds); the samples before it are still written");
+  renderCmd->add_option("--tessellate", render.tessellate,
+                        "Comparison only: turn displaced meshes into triangles, N per base edge (N^2 per base "
+                        "triangle; N = 2^L is the displaced surface itself)")
+      ->check(CLI::Range(0, 1024));
   renderCmd->add_flag("--no-recenter", render.noRecenter,
                       "Keep the file's world coordinates (default: the scene is stored relative to the camera, "
                       "in double precision, so it renders the same far from the world origin)");
@@ -923,6 +943,14 @@ int main(int argc, char** argv) {
   benchCmd->add_flag("--json", bench.json, "Machine-readable output");
   benchCmd->add_option("--primary-width", bench.primaryWidth, "Primary ray set is N x N")
       ->check(CLI::Range(1, 8192))->capture_default_str();
+  benchCmd->add_option("--path-width", bench.pathWidth, "The path-tracing figure renders N x N pixels")
+      ->check(CLI::Range(1, 4096))->capture_default_str();
+  benchCmd->add_option("--path-spp", bench.pathSamples, "The path-tracing figure's samples per pixel (at least)")
+      ->check(CLI::Range(1, 1024))->capture_default_str();
+  benchCmd->add_option("--tessellate", bench.tessellate,
+                       "Each scene with displaced meshes gains a row: the same meshes as triangles, N per base edge "
+                       "(N = 2^L is the displaced surface itself)")
+      ->check(CLI::Range(0, 1024));
   benchCmd->add_option("--mesh-triangles", bench.meshTriangles, "Size of the generated mesh")
       ->check(CLI::Range(2, 1 << 26))->capture_default_str();
   benchCmd->add_option("--spheres", bench.sphereCount, "Spheres of the generated sphere field (0: none)")

@@ -6,11 +6,12 @@
 namespace wt {
 
 std::span<const PrimitiveType> primitiveTypes() {
-  static constexpr std::array<PrimitiveType, 4> kTypes = {{
+  static constexpr std::array<PrimitiveType, 5> kTypes = {{
       {WT_PRIM_SPHERE, "spheres", "WT_HAS_SPHERES", gatherSpheres},
       {WT_PRIM_CURVE, "curve segments", "WT_HAS_CURVES", gatherCurves},
       {WT_PRIM_INSTANCE, "instances", "WT_HAS_INSTANCES", nullptr},
       {WT_PRIM_SDF_GRID, "SDF bricks", "WT_HAS_SDF_GRIDS", gatherSdfGrids},
+      {WT_PRIM_DISPLACED, "displaced triangles", "WT_HAS_DISPLACED", gatherDisplaced},
   }};
   return kTypes;
 }

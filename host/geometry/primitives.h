@@ -121,6 +121,51 @@ void gatherSdfGrids(const Scene& scene, PrimitiveRows& rows);
 glm::vec3 sdfGridPoint(const PrimitiveRows& rows, std::uint32_t index, glm::vec3 o, glm::vec3 d, float t, float cell,
                        glm::vec3* error, glm::vec3* normal);
 
+/// A displaced mesh's level L (2^L micro-edges per base edge): its own
+/// when it gives one, else the least with micro-edges of at most one texel
+/// along either axis of the map on the longest base edge, capped at
+/// WT_DISP_MAX_LEVEL.
+std::uint32_t displacedLevel(const DisplacedMesh& mesh);
+/// Whether a displaced mesh can be drawn: one normal and uv per position, a
+/// map of mapWidth x mapHeight (1 .. 65536 each) values, finite scale and
+/// offset, a level of at most WT_DISP_MAX_LEVEL. The others are left out.
+bool displacedMeshUsable(const DisplacedMesh& mesh);
+
+/// Displaced meshes (WT_PRIM_DISPLACED): WT_DISP_MESH_ROWS data rows per
+/// mesh, WT_DISP_VERTEX_ROWS per vertex, then each map's texels (NaN
+/// written as 0) and min-max pyramid; WT_DISP_INFO_ROWS info rows per base
+/// triangle ((material, mesh row, displacement range), corners' rows, index),
+/// one primitive per base triangle boxed around its shell (its corners
+/// moved by the least and the largest displacement over its texels). A
+/// triangle with a corner out of range or not finite is left out. count:
+/// the base triangles kept.
+void gatherDisplaced(const Scene& scene, PrimitiveRows& rows);
+
+/// Which mesh and base triangle a WT_PRIM_DISPLACED typed id's index is.
+struct DisplacedTriangleRef {
+  std::uint32_t mesh = 0, triangle = 0;
+};
+DisplacedTriangleRef displacedTriangle(const PrimitiveRows& rows, std::uint32_t index);
+
+/// displaced_surface (kernels/geometry/displaced.cl) on the host: the
+/// point of base triangle `triangle` at lattice point (li, lj) (the hit's
+/// parameters, RayHit::b1 and b2) from its micro-triangle, with its error
+/// bound; *normal the micro-triangle's unit normal on the winding's side;
+/// *shading (if given) the displaced surface's unit normal.
+glm::vec3 displacedPoint(const DisplacedMesh& mesh, std::uint32_t triangle, float li, float lj, glm::vec3* error,
+                         glm::vec3* normal, glm::vec3* shading = nullptr);
+
+/// Micro-vertex (i, j) of base triangle `triangle` cut `perEdge` times per
+/// edge (weights (perEdge - i - j, i, j) / perEdge on its corners), as the
+/// kernel computes it for perEdge = 2^L.
+glm::vec3 displacedVertex(const DisplacedMesh& mesh, std::uint32_t triangle, int perEdge, int i, int j);
+
+/// Pre-tessellation, for comparison only: every displaced mesh turned into
+/// triangles, perEdge^2 per base triangle (the kernel's surface exactly
+/// when perEdge = 2^L), with the displaced surface's normals at the
+/// vertices; Scene::displacedMeshes is emptied. Returns the triangles made.
+std::size_t tessellateDisplaced(Scene& scene, int perEdge);
+
 /// A placed copy of a triangle geometry stored once (WT_PRIM_INSTANCE,
 /// kernels/geometry/instance.cl), as SceneBuffers laid it out.
 struct InstanceDesc {

@@ -26,6 +26,7 @@ FeatureSet sceneFeatures(const Scene& scene, const SceneBuffers& buffers, const 
   f.spheres = present[WT_PRIM_SPHERE];
   f.curves = present[WT_PRIM_CURVE];
   f.sdfGrids = present[WT_PRIM_SDF_GRID];
+  f.displaced = present[WT_PRIM_DISPLACED];
   f.instances = present[WT_PRIM_INSTANCE];
   f.bvhStackSize = buffers.stackSize();
 
@@ -99,6 +100,7 @@ std::vector<std::string> featureNames(const FeatureSet& f) {
   add(f.spheres, "spheres");
   add(f.curves, "curves");
   add(f.sdfGrids, "sdf_grids");
+  add(f.displaced, "displaced_meshes");
   add(f.instances, "instances");
   add(f.punctualLights, "punctual_lights");
   add(f.emissiveTriangles, "emissive_triangles");
@@ -150,6 +152,7 @@ KernelFeatures kernelFeaturesFor(const FeatureSet& f, const DeviceInfo& device, 
   k.primitives[WT_PRIM_SPHERE] = f.spheres;
   k.primitives[WT_PRIM_CURVE] = f.curves;
   k.primitives[WT_PRIM_SDF_GRID] = f.sdfGrids;
+  k.primitives[WT_PRIM_DISPLACED] = f.displaced;
   k.primitives[WT_PRIM_INSTANCE] = f.instances;
   k.packetWidth = packetWidthFor(device, requestedPacketWidth, f.triangleCount);
   k.streamPrefetch = false;  // the renderer traces no streams (the bench's Tracer decides its own)

@@ -26,6 +26,7 @@ struct FeatureSet {
   bool spheres = false;    ///< analytic spheres
   bool curves = false;     ///< round curves
   bool sdfGrids = false;   ///< grids of signed distances
+  bool displaced = false;  ///< displaced triangle meshes
   bool instances = false;  ///< geometry stored once and placed by instances (SceneBuffers decided)
   int bvhStackSize = 64;   ///< traversal stack entries the BVH needs (SceneBuffers::stackSize)
   // lights

@@ -119,6 +119,38 @@ Scene makeIcosphere(int subdivisions, glm::vec3 center, float radius, const WtMa
   return scene;
 }
 
+Scene makeDisplacedSphere(int subdivisions, glm::vec3 center, float radius, std::uint32_t mapSize, float scale,
+                          float offset, int level, const WtMaterial& material) {
+  const Scene base = makeIcosphere(subdivisions, center, radius, material);
+  Scene scene;
+  scene.sourceName = "displaced icosphere";
+  DisplacedMesh mesh;
+  for (std::size_t i = 0; i < base.positions.size(); ++i) {
+    const WtVec4 p = base.positions[i], n = base.normals[i];
+    mesh.positions.emplace_back(p.x, p.y, p.z);
+    mesh.normals.emplace_back(n.x, n.y, n.z);
+    mesh.texcoords.emplace_back(0.5f + 0.5f * n.x, 0.5f + 0.5f * n.y);
+  }
+  for (const WtTriangle& t : base.triangles) mesh.triangles.push_back({t.v0, t.v1, t.v2});
+  const std::uint32_t size = std::max<std::uint32_t>(mapSize, 1);
+  mesh.mapWidth = mesh.mapHeight = size;
+  for (std::uint32_t y = 0; y < size; ++y)
+    for (std::uint32_t x = 0; x < size; ++x) {
+      const double u = (x + 0.5) / size, v = (y + 0.5) / size;
+      const double waves = 0.5 + 0.3 * std::sin(6.283185307179586 * 3.0 * u) * std::cos(6.283185307179586 * 2.0 * v);
+      const bool checker = ((x * 8 / size) + (y * 8 / size)) % 2 == 1;
+      mesh.map.push_back(float(waves + (checker ? 0.15 : 0.0)));
+    }
+  mesh.scale = scale;
+  mesh.offset = offset;
+  mesh.level = level;
+  mesh.material = 0;
+  scene.displacedMeshes.push_back(std::move(mesh));
+  scene.materials.push_back(material);
+  scene.materialNames.push_back("displaced");
+  return scene;
+}
+
 Scene makeBox(glm::vec3 lo, glm::vec3 hi, const WtMaterial& material) {
   Scene scene;
   scene.sourceName = "box";

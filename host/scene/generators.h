@@ -14,6 +14,15 @@ namespace wt {
 /// Outward winding, per-vertex normals, one material.
 Scene makeIcosphere(int subdivisions, glm::vec3 center, float radius, const WtMaterial& material);
 
+/// A displaced icosphere (Scene::displacedMeshes, one mesh, no triangles):
+/// the icosphere's shared vertices and normals, uv = the unit direction's
+/// (x, y) / 2 + 1/2 (one uv per vertex: no uv seams, so the mesh stays
+/// closed), a procedural mapSize^2 map in [0, 1] (smooth waves plus a
+/// checker of sharp steps), displacement scale h + offset, level -1 (from
+/// the texel density) or as given.
+Scene makeDisplacedSphere(int subdivisions, glm::vec3 center, float radius, std::uint32_t mapSize, float scale,
+                          float offset, int level, const WtMaterial& material);
+
 /// A closed axis-aligned box of 12 triangles over 8 shared corners, wound
 /// outwards, one material.
 Scene makeBox(glm::vec3 lo, glm::vec3 hi, const WtMaterial& material);

@@ -29,6 +29,20 @@ Aabb Scene::bounds() const {
       const glm::vec3 w(glm::dvec3(g.latticeToScene * glm::dvec4(c, 1.0)));
       if (std::isfinite(w.x + w.y + w.z)) box.extend(w);
     }
+  for (const DisplacedMesh& m : displacedMeshes) {
+    // the largest displacement any texel makes
+    float reach = std::fabs(m.offset);
+    for (float h : m.map)
+      if (std::isfinite(h)) reach = std::max(reach, std::fabs(m.scale * h + m.offset));
+    for (const auto& t : m.triangles)
+      for (std::uint32_t v : t) {
+        if (v >= m.positions.size()) continue;
+        const glm::vec3 p = m.positions[v];
+        if (!std::isfinite(p.x + p.y + p.z) || !std::isfinite(reach)) continue;
+        box.extend(p - glm::vec3(reach));
+        box.extend(p + glm::vec3(reach));
+      }
+  }
   return box;
 }
 

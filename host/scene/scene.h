@@ -10,6 +10,7 @@
 
 #include <glm/glm.hpp>
 
+#include <array>
 #include <cstdint>
 #include <optional>
 #include <stdexcept>
@@ -114,6 +115,24 @@ struct SdfGrid {
   SdfStorage storage = SdfStorage::kAuto;
 };
 
+/// A triangle mesh displaced along its interpolated normal by a scalar map
+/// (kernels/geometry/displaced.cl): a point of a base triangle moves by
+/// scale h(uv) + offset times the corners' normals interpolated linearly,
+/// h the map sampled bilinearly between texel centres, repeating. Drawn as
+/// the level-L micro-mesh (2^L micro-edges per base edge) without storing it.
+struct DisplacedMesh {
+  std::vector<glm::vec3> positions;   ///< world, relative to Scene::origin
+  std::vector<glm::vec3> normals;     ///< unit, one per position
+  std::vector<glm::vec2> texcoords;   ///< one per position, glTF's convention (v = 0 the map's top row)
+  std::vector<std::array<std::uint32_t, 3>> triangles;  ///< counter-clockwise
+  std::uint32_t mapWidth = 0, mapHeight = 0;
+  std::vector<float> map;             ///< mapWidth * mapHeight values, row-major from the top; NaN is drawn as 0
+  float scale = 1.0f;                 ///< world units per map unit
+  float offset = 0.0f;                ///< world units, added after the scale
+  int level = -1;                     ///< L in [0, WT_DISP_MAX_LEVEL]; -1: from the map's texel density (displacedLevel)
+  std::uint32_t material = 0;         ///< index into Scene::materials
+};
+
 struct Scene {
   std::vector<WtVec4> positions;   ///< world space, w = 0
   std::vector<WtVec4> normals;     ///< world space, unit; (0,0,0) = none, use the geometric normal. Same size as positions.
@@ -127,6 +146,7 @@ struct Scene {
   std::vector<Curve> curves;              ///< round curves (scene files, .hair and .ply strands)
   std::vector<WtVec4> curvePoints;        ///< the curves' points: xyz world relative to origin, w = radius (world units, >= 0)
   std::vector<SdfGrid> sdfGrids;          ///< grids of signed distances (scene files, or made in code)
+  std::vector<DisplacedMesh> displacedMeshes;  ///< displaced triangle meshes (scene files, or made in code)
   std::vector<WtMaterial> materials;      ///< never empty after loading (a default grey is added when needed)
   /// WT_TEXTURE_SLOTS per material (empty: no material is textured); slot s
   /// of material m, at m * WT_TEXTURE_SLOTS + s, counts where bit s of its
@@ -141,7 +161,8 @@ struct Scene {
   std::string sourceName;                 ///< file the scene came from, for messages
   glm::dvec3 origin{0.0};                 ///< world position of the scene's (0,0,0): every position, light and camera here is relative to it (GltfLoadOptions::recenter)
 
-  /// Bounds of every triangle, sphere, curve point (with its radius) and SDF grid's box.
+  /// Bounds of every triangle, sphere, curve point (with its radius), SDF
+  /// grid's box and displaced mesh (its vertices moved by the largest |d|).
   Aabb bounds() const;
   /// Bounds of one triangle.
   Aabb triangleBounds(std::uint32_t tri) const;

@@ -5,7 +5,9 @@
 // is known, and only then written as floats relative to it.
 #include "scene/scene_file.h"
 
+#include "output/image_io.h"
 #include "scene/generators.h"
+#include "scene/gltf_loader.h"
 #include "scene/hair_loader.h"
 #include "scene/ply.h"
 #include "render/tonemap_names.h"
@@ -193,6 +195,13 @@ struct WorldSphere {
 struct WorldSdf {
   SdfGrid grid;
   std::string path;  ///< "objects[2]"
+};
+
+/// A "displaced" object, its mesh in world coordinates (before the origin is subtracted).
+struct WorldDisplaced {
+  DisplacedMesh mesh;                   ///< all but the positions
+  std::vector<glm::dvec3> positions;    ///< world
+  std::string path;                     ///< "objects[2]"
 };
 
 /// A "curves" object in world coordinates, before the origin is subtracted.
@@ -578,15 +587,138 @@ class Loader {
   void readObject(const Json& v, const std::string& path) {
     object(v, path);
     const std::string type =
-        string(require(v, path, "type", ": gltf, mesh, sphere, spheres, curves or sdf"), member(path, "type"));
+        string(require(v, path, "type", ": gltf, mesh, sphere, spheres, curves, sdf or displaced"), member(path, "type"));
     if (type == "gltf") readGltf(v, path);
     else if (type == "mesh") readMesh(v, path);
     else if (type == "sphere") readSphere(v, path);
     else if (type == "spheres") readSpheres(v, path);
     else if (type == "curves") readCurves(v, path);
     else if (type == "sdf") readSdf(v, path);
+    else if (type == "displaced") readDisplaced(v, path);
     else
-      fail(member(path, "type"), "unknown type \"" + type + "\" (expected one of: gltf, mesh, sphere, spheres, curves, sdf)");
+      fail(member(path, "type"),
+           "unknown type \"" + type + "\" (expected one of: gltf, mesh, sphere, spheres, curves, sdf, displaced)");
+  }
+
+  /// A triangle mesh (glTF or PLY) displaced along its normals by a map (PNG, JPEG or EXR).
+  void readDisplaced(const Json& v, const std::string& path) {
+    checkKeys(v, path, {"type", "mesh", "displacement", "scale", "offset", "level", "transform", "material"});
+    WorldDisplaced out;
+    out.path = path;
+    DisplacedMesh& mesh = out.mesh;
+    mesh.scale = float(number(require(v, path, "scale", ": world units per unit of the map"), member(path, "scale")));
+    if (const Json* x = find(v, "offset")) mesh.offset = float(number(*x, member(path, "offset")));
+    if (!std::isfinite(mesh.scale) || !std::isfinite(mesh.offset))
+      fail(path, "scale and offset must be within the range of a float");
+    if (const Json* x = find(v, "level")) mesh.level = int(integer(*x, member(path, "level"), 0, WT_DISP_MAX_LEVEL));
+    glm::dmat4 transform(1.0);
+    if (const Json* t = find(v, "transform")) transform = readTransform(*t, member(path, "transform"));
+
+    // the base mesh, in the file's world
+    const std::string meshWhere = member(path, "mesh");
+    const Json& meshValue = require(v, path, "mesh", ": a .gltf, .glb or .ply file");
+    const std::string meshName = string(meshValue, meshWhere);
+    if (meshName.empty()) fail(meshWhere, "must name a file, got \"\"");
+    const fs::path meshFile = resolve(meshName);
+    const std::string meshExt = lowerExtension(meshFile);
+    if (meshExt != ".gltf" && meshExt != ".glb" && meshExt != ".ply")
+      fail(meshWhere, "must be a .gltf, .glb or .ply file, got " + describe(meshValue));
+    const std::string mapWhere = member(path, "displacement");
+    const Json& mapValue = require(v, path, "displacement", ": a .png, .jpg or .exr map");
+    const std::string mapName = string(mapValue, mapWhere);
+    if (mapName.empty()) fail(mapWhere, "must name a file, got \"\"");
+    const fs::path mapFile = resolve(mapName);
+    const std::string mapExt = lowerExtension(mapFile);
+    if (mapExt != ".png" && mapExt != ".jpg" && mapExt != ".jpeg" && mapExt != ".exr")
+      fail(mapWhere, "must be a .png, .jpg or .exr file, got " + describe(mapValue));
+    requireFile(meshFile, meshWhere);
+    requireFile(mapFile, mapWhere);
+    std::vector<glm::dvec3> local;
+    bool hasUv = true;
+    try {
+      if (meshExt == ".ply") {
+        PlyMesh ply = loadPlyMesh(meshFile.string());
+        hasUv = !ply.texcoords.empty();
+        local = std::move(ply.positions);
+        mesh.normals = std::move(ply.normals);
+        mesh.texcoords = std::move(ply.texcoords);
+        mesh.triangles = std::move(ply.triangles);
+      } else {
+        GltfLoadOptions include;
+        include.recenter = false;
+        include.maxVertices = m_options.maxVertices;
+        include.maxTriangles = m_options.maxTriangles;
+        Scene loaded = loadGltf(meshFile.string(), include);
+        hasUv = false;
+        for (const glm::vec2& t : loaded.texcoords) hasUv |= t.x != 0.0f || t.y != 0.0f;
+        for (std::size_t i = 0; i < loaded.positions.size(); ++i) {
+          const WtVec4& p = loaded.positions[i];
+          local.push_back(glm::dvec3(p.x, p.y, p.z) + loaded.origin);
+          mesh.normals.push_back(glm::vec3(loaded.normals[i].x, loaded.normals[i].y, loaded.normals[i].z));
+          mesh.texcoords.push_back(loaded.texcoords[i]);
+        }
+        for (const WtTriangle& t : loaded.triangles) mesh.triangles.push_back({t.v0, t.v1, t.v2});
+        for (const std::string& w : loaded.warnings) m_result.scene.addWarning(meshFile.filename().string() + ": " + w);
+      }
+    } catch (const SceneError& e) {
+      fail(meshWhere, e.what());
+    }
+    if (!hasUv)
+      fail(meshWhere, meshFile.filename().string() +
+                          (meshExt == ".ply" ? " has no texture coordinates (the map needs them)"
+                                             : " has no TEXCOORD_0 (the map needs it)"));
+    if (mesh.triangles.empty()) fail(meshWhere, meshFile.filename().string() + " has no triangles");
+    // vertices without a normal take the area-weighted mean of their triangles'
+    std::vector<glm::dvec3> made(local.size(), glm::dvec3(0.0));
+    for (const auto& t : mesh.triangles)
+      made[t[0]] += glm::cross(local[t[1]] - local[t[0]], local[t[2]] - local[t[0]]),
+          made[t[1]] += glm::cross(local[t[2]] - local[t[1]], local[t[0]] - local[t[1]]),
+          made[t[2]] += glm::cross(local[t[0]] - local[t[2]], local[t[1]] - local[t[2]]);
+    const glm::dmat3 linear(transform);
+    const glm::dmat3 normalMatrix = glm::transpose(glm::inverse(linear));
+    const bool flip = glm::determinant(linear) < 0.0;
+    for (std::size_t i = 0; i < local.size(); ++i) {
+      glm::dvec3 n(mesh.normals[i]);
+      if (!(glm::dot(n, n) > 0.0)) n = made[i];
+      n = normalMatrix * n;
+      const double len = glm::length(n);
+      mesh.normals[i] = len > 0.0 && std::isfinite(len) ? glm::vec3(n / len) : glm::vec3(0.0f);
+      out.positions.push_back(glm::dvec3(transform * glm::dvec4(local[i], 1.0)));
+    }
+    if (flip)
+      for (auto& t : mesh.triangles) std::swap(t[1], t[2]);
+
+    // the map: the first channel, 8- and 16-bit images scaled to [0, 1], EXR as stored
+    const std::string label = mapFile.filename().string();
+    try {
+      if (mapExt == ".exr") {
+        const Image image = readExr(mapFile);
+        mesh.mapWidth = std::uint32_t(image.width);
+        mesh.mapHeight = std::uint32_t(image.height);
+        mesh.map.resize(std::size_t(image.width) * image.height);
+        for (std::size_t i = 0; i < mesh.map.size(); ++i) mesh.map[i] = image.rgb[3 * i];
+      } else {
+        const std::vector<std::uint8_t> bytes = readFileBytes(mapFile.string(), label);
+        const DecodedImage image = decodeImage(bytes.data(), bytes.size(), label);
+        mesh.mapWidth = image.width;
+        mesh.mapHeight = image.height;
+        mesh.map.resize(std::size_t(image.width) * image.height);
+        for (std::size_t i = 0; i < mesh.map.size(); ++i)
+          mesh.map[i] = image.sixteenBit ? float(image.rgba16[4 * i]) / 65535.0f : float(image.rgba8[4 * i]) / 255.0f;
+      }
+    } catch (const SceneError& e) {
+      fail(mapWhere, e.what());
+    } catch (const std::exception& e) {
+      fail(mapWhere, e.what());
+    }
+    if (mesh.mapWidth < 1 || mesh.mapHeight < 1) fail(mapWhere, label + " has no texels");
+    for (std::size_t i = 0; i < mesh.map.size(); ++i)
+      if (!std::isfinite(mesh.map[i]))
+        fail(mapWhere, label + ": texel (" + std::to_string(i % mesh.mapWidth) + ", " +
+                           std::to_string(i / mesh.mapWidth) + ") is " + (std::isnan(mesh.map[i]) ? "NaN" : "infinite") +
+                           " (displacements must be finite)");
+    mesh.material = materialOf(v, path);
+    m_displaced.push_back(std::move(out));
   }
 
   /// A grid of signed distances: a procedural shape at a resolution, or a .vol file.
@@ -1052,6 +1184,16 @@ class Loader {
       }
       scene.sdfGrids.push_back(std::move(grid));
     }
+    for (WorldDisplaced& d : m_displaced) {
+      DisplacedMesh mesh = std::move(d.mesh);
+      mesh.positions.reserve(d.positions.size());
+      for (std::size_t i = 0; i < d.positions.size(); ++i) {
+        const glm::vec3 q(d.positions[i] - origin);
+        if (!isFinite(q)) fail(d.path, "vertex " + std::to_string(i) + " lies beyond the range of a float from the scene's origin");
+        mesh.positions.push_back(q);
+      }
+      scene.displacedMeshes.push_back(std::move(mesh));
+    }
     if (scene.materials.empty()) {
       scene.materials.push_back(makePbrMaterial(glm::vec3(0.8f), 0.0f, 0.5f));
       scene.materialNames.push_back("(default)");
@@ -1089,6 +1231,11 @@ class Loader {
         const glm::dvec3 w(s.grid.latticeToScene * glm::dvec4(c, 1.0));
         lo = glm::min(lo, w);
         hi = glm::max(hi, w);
+      }
+    for (const WorldDisplaced& d : m_displaced)
+      for (const glm::dvec3& p : d.positions) {
+        lo = glm::min(lo, p);
+        hi = glm::max(hi, p);
       }
     const double kFloatMax = std::numeric_limits<float>::max();
     if (lo.x <= hi.x && lo.y <= hi.y && lo.z <= hi.z && isFinite(lo) && isFinite(hi) &&
@@ -1207,6 +1354,7 @@ class Loader {
   std::vector<WorldSphere> m_spheres;
   std::vector<WorldCurves> m_curves;
   std::vector<WorldSdf> m_sdfs;
+  std::vector<WorldDisplaced> m_displaced;
   std::uint64_t m_curvePoints = 0;  ///< children included
   std::uint32_t m_nextGeometry = 0;
 };

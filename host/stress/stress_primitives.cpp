@@ -560,6 +560,7 @@ std::vector<StressRow> stressPrimitives(Context& context, const StressOptions& o
   for (StressRow& row : curveDegenerate(context, options)) rows.push_back(std::move(row));
   for (StressRow& row : sdfTransforms(context, options)) rows.push_back(std::move(row));
   for (StressRow& row : sdfDegenerate(context, options)) rows.push_back(std::move(row));
+  for (StressRow& row : stressDisplaced(context, options)) rows.push_back(std::move(row));
   return rows;
 }
 

@@ -30,9 +30,12 @@
 #if WT_HAS_SDF_GRIDS
 #include "geometry/sdf_grid.cl"
 #endif
+#if WT_HAS_DISPLACED
+#include "geometry/displaced.cl"
+#endif
 
 /// Whether any type beside triangles is compiled in (the primitive BVH is traversed).
-#define WT_HAS_PRIMITIVES (WT_HAS_SPHERES || WT_HAS_CURVES || WT_HAS_INSTANCES || WT_HAS_SDF_GRIDS)
+#define WT_HAS_PRIMITIVES (WT_HAS_SPHERES || WT_HAS_CURVES || WT_HAS_INSTANCES || WT_HAS_SDF_GRIDS || WT_HAS_DISPLACED)
 
 /// The non-triangle primitives as the kernels see them (WtGeometry).
 typedef struct GeometryScene {
@@ -118,6 +121,12 @@ inline bool geometry_intersect(GeometryScene g, uint prim, float3 o, float3 d, f
                            g.info + g.header.info_first[WT_PRIM_SDF_GRID] + WT_SDF_INFO_ROWS * prim_index(prim), o, d,
                            tmin, tmax, t, u);
 #endif
+#if WT_HAS_DISPLACED
+    case WT_PRIM_DISPLACED:
+      return displaced_intersect(g.data + g.header.data_first[WT_PRIM_DISPLACED],
+                                 g.info + g.header.info_first[WT_PRIM_DISPLACED] + WT_DISP_INFO_ROWS * prim_index(prim),
+                                 o, d, tmin, tmax, t, u, v);
+#endif
     default:
       return false;
   }
@@ -129,7 +138,7 @@ typedef struct SurfaceHit {
   float3 p_error;  ///< rounding error bound per coordinate of p
   float3 ng;       ///< unit geometric normal: the winding's for triangles, outward for closed types; zero: degenerate
   float3 ns;       ///< unit shading normal
-  float2 uv;       ///< surface parameters: spheres by angle; curves along (0 to 1 from root to tip) and around; triangles their barycentrics (b1, b2) until texture coordinates reach the device
+  float2 uv;       ///< surface parameters: spheres by angle; curves along (0 to 1 from root to tip) and around; triangles their barycentrics (b1, b2) until texture coordinates reach the device; displaced meshes their texture coordinates
   float3 dpdu;     ///< dp/du, world (triangles: the edge p1 - p0)
   uint material;   ///< index into materials
 } SurfaceHit;
@@ -176,6 +185,15 @@ inline SurfaceHit geometry_surface(GeometryScene g, __global const float4* tri_v
                   &s.uv, &s.dpdu);
       s.ns = s.ng;
       s.material = info.x;
+      return s;
+    }
+#endif
+#if WT_HAS_DISPLACED
+    case WT_PRIM_DISPLACED: {
+      __global const uint4* tri = g.info + g.header.info_first[WT_PRIM_DISPLACED] + WT_DISP_INFO_ROWS * prim_index(prim);
+      displaced_surface(g.data + g.header.data_first[WT_PRIM_DISPLACED], tri, hit.y, hit.z, &s.p, &s.p_error, &s.ng,
+                        &s.ns, &s.uv, &s.dpdu);
+      s.material = tri[0].x;
       return s;
     }
 #endif

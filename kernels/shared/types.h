@@ -85,6 +85,24 @@ typedef struct WtBvh4Node {
 /// y = WT_INSTANCE_* flags.
 #define WT_INSTANCE_ROWS 6
 #define WT_INSTANCE_MIRRORED 1u  ///< the transform's determinant is negative (the copy's corners 1 and 2 swapped)
+/// A base triangle of a displaced mesh (kernels/geometry/displaced.cl),
+/// intersected as 4^L micro-triangles that are never stored. prim_data: per
+/// mesh WT_DISP_MESH_ROWS rows: (scale, offset, map width, map height),
+/// then as uint bits (L, the min-max pyramid's levels above the texels, the
+/// texels' first float, 0), then four rows of the pyramid levels' first
+/// floats (level k >= 1 at slot k - 1; its cells are (min, max) pairs,
+/// ceil(w / 2^k) per row); then per vertex WT_DISP_VERTEX_ROWS rows
+/// (position xyz and u, normal xyz and v); then the maps' texels and
+/// pyramids. Float offsets and row indices count from the type's first
+/// row. prim_info per base triangle, WT_DISP_INFO_ROWS rows: (material, its mesh's first row,
+/// its least and largest displacement as float bits), then its corners' first rows in
+/// winding order and its index in its mesh (mesh = first row / WT_DISP_MESH_ROWS).
+#define WT_PRIM_DISPLACED 4u
+#define WT_DISP_MESH_ROWS 6       ///< prim_data rows per displaced mesh
+#define WT_DISP_VERTEX_ROWS 2     ///< prim_data rows per vertex
+#define WT_DISP_INFO_ROWS 2       ///< prim_info rows per base triangle
+#define WT_DISP_MAX_LEVEL 10      ///< L at most: 1024 micro-edges per base edge
+#define WT_DISP_MAX_MIPS 16       ///< pyramid levels above the texels at most (maps up to 65536 per side)
 /// A brick of up to WT_SDF_BRICK^3 cells of a grid of signed distances that
 /// the surface crosses (kernels/geometry/sdf_grid.cl). prim_data: per grid
 /// WT_SDF_GRID_ROWS rows (lattice-from-scene as a 3x4 matrix, then (cells
@@ -94,7 +112,7 @@ typedef struct WtBvh4Node {
 /// first row), w = the brick's coordinates (9 bits each, x lowest) and
 /// WT_SDF_SPARSE; then which of its cells the surface crosses, 512 bits
 /// (cell x + 8 y + 64 z at bit i & 31 of word i >> 5), so the walk skips the
-/// others without reading their corners. Slot 4 is left to displaced meshes.
+/// others without reading their corners.
 #define WT_PRIM_SDF_GRID 5u
 #define WT_SDF_BRICK 8          ///< cells per brick edge
 #define WT_SDF_GRID_ROWS 4      ///< prim_data rows per grid

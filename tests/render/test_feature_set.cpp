@@ -100,6 +100,14 @@ const OneFeature kCases[] = {
        return s;
      },
      noSettings, [] { return with(lambertBase(), {"sdf_grids"}); }},
+    {"displaced",
+     [] {
+       Scene s = lambertFloor();
+       Scene d = makeDisplacedSphere(0, glm::vec3(0.0f, 0.5f, 0.0f), 0.25f, 8, 0.05f, -0.025f, 2, s.materials[0]);
+       s.displacedMeshes.push_back(std::move(d.displacedMeshes[0]));
+       return s;
+     },
+     noSettings, [] { return with(lambertBase(), {"displaced_meshes"}); }},
     {"instance",
      [] {
        const glm::mat4 copies[2] = {glm::mat4(1.0f), glm::translate(glm::mat4(1.0f), glm::vec3(3.0f, 0.0f, 0.0f))};

@@ -2,6 +2,8 @@
 // materials, camera and settings read back; glTF files placed by transforms
 // checked numerically; recentring far from the world origin; every error
 // checked for the file and the JSON path it names; mutated files never crash.
+#include "geometry/primitives.h"
+#include "output/image_io.h"
 #include "scene/default_scene.h"
 #include "scene/gltf_doc.h"
 #include "scene/scene_file.h"
@@ -681,6 +683,43 @@ TEST(SceneFile, MeshesFromPlyFiles) {
   EXPECT_NEAR(n.y, -1.0f, 1e-6f);
 }
 
+TEST(SceneFile, DisplacedMeshFromPlyAndExr) {
+  // a unit square with uv, its map a 4 x 2 EXR; a mirroring transform flips the winding
+  writeFile(testDir() / "uv_square.ply",
+            "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n"
+            "property float u\nproperty float v\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n"
+            "0 0 0 0 0\n1 0 0 1 0\n1 1 0 1 1\n0 1 0 0 1\n4 0 1 2 3\n");
+  Image map;
+  map.width = 4;
+  map.height = 2;
+  for (int i = 0; i < 8; ++i) map.rgb.insert(map.rgb.end(), {0.125f * float(i), 0.0f, 0.0f});
+  writeImage(testDir() / "uv_map.exr", map);
+  GltfLoadOptions options;
+  options.recenter = false;
+  const Scene s = loadText(doc(R"("objects": [{"type": "displaced", "mesh": "uv_square.ply", "displacement": "uv_map.exr",
+      "scale": 0.5, "offset": -0.25, "transform": {"scale": [-1, 1, 1]}}])"), options).scene;
+  ASSERT_EQ(s.displacedMeshes.size(), 1u);
+  const DisplacedMesh& m = s.displacedMeshes[0];
+  EXPECT_TRUE(s.triangles.empty());
+  ASSERT_EQ(m.positions.size(), 4u);
+  ASSERT_EQ(m.triangles.size(), 2u);
+  EXPECT_EQ(m.mapWidth, 4u);
+  EXPECT_EQ(m.mapHeight, 2u);
+  EXPECT_EQ(m.map[5], 0.625f);
+  EXPECT_EQ(m.scale, 0.5f);
+  EXPECT_EQ(m.offset, -0.25f);
+  EXPECT_EQ(m.level, -1);
+  // the longest base edge (the diagonal) spans 4 texels along u: micro-edges of a texel at level 2
+  EXPECT_EQ(displacedLevel(m), 2u);
+  // made normals: the square's +z; the mirror keeps them (x flips, z stays) and swaps two corners
+  EXPECT_NEAR(m.normals[0].z, 1.0f, 1e-6f);
+  EXPECT_NEAR(m.positions[1].x, -1.0f, 1e-6f);
+  const glm::vec3 a = m.positions[m.triangles[0][0]], b = m.positions[m.triangles[0][1]], c = m.positions[m.triangles[0][2]];
+  EXPECT_GT(glm::cross(b - a, c - a).z, 0.0f);
+  // PLY's v runs up: the loader gives glTF's (v = 0 the map's top row)
+  EXPECT_EQ(m.texcoords[0].y, 1.0f);
+}
+
 TEST(SceneFileAssets, HeadMeshLoads) {
   WT_REQUIRE_ASSET(head, "curves/hairutil_testdata/Bangs_head.ply");
   const Scene s = loadText(doc(R"("objects": [{"type": "mesh", "file": ")" + head.string() + R"("}])")).scene;
@@ -705,6 +744,8 @@ class SceneFileErrors : public ::testing::TestWithParam<BadFile> {};
 TEST_P(SceneFileErrors, NameTheFileAndTheField) {
   writeTriangle();
   writeFile(testDir() / "sky.hdr", "x");
+  writeFile(testDir() / "square.ply", plySquare());
+  writeFile(testDir() / "map.exr", "x");
   const BadFile& c = GetParam();
   EXPECT_CONTAINS(errorOf(c.json), "scene.json: " + c.message);
 }
@@ -757,9 +798,28 @@ const BadFile kBadFiles[] = {
         BadFile{"CenterElement", objects(R"({"type": "sphere", "center": [0, true, 0], "radius": 1})"),
                 "objects[0].center[1]: must be a number, got true"},
         BadFile{"MissingType", objects(R"({"center": [0, 0, 0]})"),
-                "objects[0].type: missing (required: gltf, mesh, sphere, spheres, curves or sdf)"},
+                "objects[0].type: missing (required: gltf, mesh, sphere, spheres, curves, sdf or displaced)"},
         BadFile{"UnknownType", objects(R"({"type": "cube"})"),
-                "objects[0].type: unknown type \"cube\" (expected one of: gltf, mesh, sphere, spheres, curves, sdf)"},
+                "objects[0].type: unknown type \"cube\" (expected one of: gltf, mesh, sphere, spheres, curves, sdf, "
+                "displaced)"},
+        // displaced meshes
+        BadFile{"DisplacedMissingScale", objects(R"({"type": "displaced", "mesh": "square.ply", "displacement": "map.exr"})"),
+                "objects[0].scale: missing (required: world units per unit of the map)"},
+        BadFile{"DisplacedLevel",
+                objects(R"({"type": "displaced", "mesh": "square.ply", "displacement": "map.exr", "scale": 1, "level": 11})"),
+                "objects[0].level: must be an integer in [0, 10], got 11"},
+        BadFile{"DisplacedMeshType",
+                objects(R"({"type": "displaced", "mesh": "square.obj", "displacement": "map.exr", "scale": 1})"),
+                "objects[0].mesh: must be a .gltf, .glb or .ply file, got \"square.obj\""},
+        BadFile{"DisplacedMapType",
+                objects(R"({"type": "displaced", "mesh": "square.ply", "displacement": "sky.hdr", "scale": 1})"),
+                "objects[0].displacement: must be a .png, .jpg or .exr file, got \"sky.hdr\""},
+        BadFile{"DisplacedMissingMap",
+                objects(R"({"type": "displaced", "mesh": "square.ply", "displacement": "nowhere.png", "scale": 1})"),
+                "objects[0].displacement: no such file: "},
+        BadFile{"DisplacedNoUv",
+                objects(R"({"type": "displaced", "mesh": "square.ply", "displacement": "map.exr", "scale": 1})"),
+                "objects[0].mesh: square.ply has no texture coordinates (the map needs them)"},
         // meshes
         BadFile{"MeshFileType", objects(R"({"type": "mesh", "file": "head.obj"})"),
                 "objects[0].file: must be a .ply file, got \"head.obj\""},

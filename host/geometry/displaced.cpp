@@ -1,0 +1,384 @@
+// Displaced meshes on the host: the subdivision level, the rows and base
+// triangles' shells the kernels read (kernels/geometry/displaced.cl), the
+// surface at a hit, and the pre-tessellation the benchmark compares with.
+#include "geometry/primitives.h"
+
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <limits>
+
+namespace wt {
+
+std::uint32_t displacedLevel(const DisplacedMesh& mesh) {
+  if (mesh.level >= 0) return std::uint32_t(std::min(mesh.level, WT_DISP_MAX_LEVEL));
+  // the longest base edge in texels along either axis of the map: micro-edges of a texel at most
+  double span = 0.0;
+  for (const auto& t : mesh.triangles)
+    for (int e = 0; e < 3; ++e) {
+      const std::uint32_t a = t[e], b = t[(e + 1) % 3];
+      if (a >= mesh.texcoords.size() || b >= mesh.texcoords.size()) continue;
+      const glm::dvec2 d = glm::dvec2(mesh.texcoords[b] - mesh.texcoords[a]) * glm::dvec2(mesh.mapWidth, mesh.mapHeight);
+      const double s = std::max(std::fabs(d.x), std::fabs(d.y));
+      if (std::isfinite(s)) span = std::max(span, s);
+    }
+  if (!(span > 1.0)) return 0;
+  return std::uint32_t(std::min(double(WT_DISP_MAX_LEVEL), std::ceil(std::log2(span) - 1e-9)));
+}
+
+bool displacedMeshUsable(const DisplacedMesh& m) {
+  const std::size_t v = m.positions.size();
+  if (m.normals.size() != v || m.texcoords.size() != v || m.triangles.empty()) return false;
+  if (m.mapWidth < 1 || m.mapHeight < 1 || m.mapWidth > 65536 || m.mapHeight > 65536) return false;
+  if (m.map.size() != std::size_t(m.mapWidth) * m.mapHeight) return false;
+  return std::isfinite(m.scale) && std::isfinite(m.offset) && m.level <= WT_DISP_MAX_LEVEL;
+}
+
+namespace {
+
+/// The map as the kernel reads it: NaN as 0.
+struct MapView {
+  const float* texels;
+  int w, h;
+  float at(int x, int y) const {
+    const float v = texels[std::size_t(y) * std::size_t(w) + std::size_t(x)];
+    return std::isnan(v) ? 0.0f : v;
+  }
+};
+
+int wrap(float x, int size) {
+  const float fs = float(size);
+  return int(x - fs * std::floor(x / fs));
+}
+
+/// disp_sample on the host, the same float operations.
+float sampleMap(const MapView& m, glm::vec2 uv) {
+  const float x = uv.x * float(m.w) - 0.5f, y = uv.y * float(m.h) - 0.5f;
+  if (!(std::fabs(x) < 4194304.0f && std::fabs(y) < 4194304.0f)) return 0.0f;
+  const float fx0 = std::floor(x), fy0 = std::floor(y);
+  const float fx = x - fx0, fy = y - fy0;
+  const int x0 = wrap(fx0, m.w), y0 = wrap(fy0, m.h);
+  const int x1 = x0 + 1 == m.w ? 0 : x0 + 1, y1 = y0 + 1 == m.h ? 0 : y0 + 1;
+  const float a = m.at(x0, y0), b = m.at(x1, y0), c = m.at(x0, y1), d = m.at(x1, y1);
+  return (a * (1.0f - fx) + b * fx) * (1.0f - fy) + (c * (1.0f - fx) + d * fx) * fy;
+}
+
+/// The micro-vertex at lattice point (i, j) of `perEdge`, as disp_vertex
+/// computes it (exact weights for a power of two; a correctly rounded
+/// quotient otherwise, the same from both triangles of an edge).
+glm::vec3 microVertex(const DisplacedMesh& mesh, const MapView& map, const std::array<std::uint32_t, 3>& t,
+                      int perEdge, int i, int j, glm::vec3* normal = nullptr, glm::vec2* uvOut = nullptr) {
+  const float n = float(perEdge);
+  const float wa = float(perEdge - i - j) / n, wb = float(i) / n, wc = float(j) / n;
+  const glm::vec3 pa = wa * mesh.positions[t[0]], pb = wb * mesh.positions[t[1]], pc = wc * mesh.positions[t[2]];
+  const glm::vec3 p = (pa + pb) + pc;
+  const glm::vec3 na = wa * mesh.normals[t[0]], nb = wb * mesh.normals[t[1]], nc = wc * mesh.normals[t[2]];
+  const glm::vec3 nrm = (na + nb) + nc;
+  const glm::vec2 ua = wa * mesh.texcoords[t[0]], ub = wb * mesh.texcoords[t[1]], uc = wc * mesh.texcoords[t[2]];
+  const glm::vec2 uv = (ua + ub) + uc;
+  if (normal) *normal = nrm;
+  if (uvOut) *uvOut = uv;
+  const float d = mesh.scale * sampleMap(map, uv) + mesh.offset;
+  const glm::vec3 dn = d * nrm;
+  return p + dn;
+}
+
+/// The displaced surface's unit shading normal at barycentrics (wb, wc),
+/// as disp_tangents and displaced_surface compute it: bump mapping on the
+/// smooth base (the base edges made perpendicular to the interpolated
+/// normal, tilted by the map's slope from central differences one texel
+/// apart), on the interpolated normal's side.
+glm::vec3 shadingNormal(const DisplacedMesh& mesh, const MapView& map, const std::array<std::uint32_t, 3>& t, float wb,
+                        float wc) {
+  const float wa = 1.0f - wb - wc;
+  const glm::vec2 t0 = mesh.texcoords[t[0]], t1 = mesh.texcoords[t[1]], t2 = mesh.texcoords[t[2]];
+  glm::vec3 nrm = wa * mesh.normals[t[0]] + wb * mesh.normals[t[1]] + wc * mesh.normals[t[2]];
+  const glm::vec2 uv = wa * t0 + wb * t1 + wc * t2;
+  const float nl = glm::length(nrm);
+  nrm = nl > 0.0f && std::isfinite(nl) ? nrm / nl : glm::vec3(0.0f);
+  const float du = 1.0f / float(map.w), dv = 1.0f / float(map.h);
+  const float hu = (sampleMap(map, uv + glm::vec2(du, 0.0f)) - sampleMap(map, uv - glm::vec2(du, 0.0f))) * (0.5f * float(map.w));
+  const float hv = (sampleMap(map, uv + glm::vec2(0.0f, dv)) - sampleMap(map, uv - glm::vec2(0.0f, dv))) * (0.5f * float(map.h));
+  const glm::vec2 uvb = t1 - t0, uvc = t2 - t0;
+  glm::vec3 eb = mesh.positions[t[1]] - mesh.positions[t[0]], ec = mesh.positions[t[2]] - mesh.positions[t[0]];
+  eb -= glm::dot(eb, nrm) * nrm;
+  ec -= glm::dot(ec, nrm) * nrm;
+  const glm::vec3 sb = eb + (mesh.scale * (hu * uvb.x + hv * uvb.y)) * nrm;
+  const glm::vec3 sc = ec + (mesh.scale * (hu * uvc.x + hv * uvc.y)) * nrm;
+  glm::vec3 sn = glm::cross(sb, sc);
+  const float len = glm::length(sn);
+  if (!(len > 0.0f) || !std::isfinite(len)) return glm::vec3(0.0f);
+  sn /= len;
+  return glm::dot(sn, nrm) < 0.0f ? -sn : sn;
+}
+
+/// A min-max pyramid over a map: level k >= 1 holds (min, max) pairs of
+/// ceil(w / 2^k) x ceil(h / 2^k) cells, each over the 2 x 2 cells (texels
+/// for k = 1) below it that exist.
+std::vector<std::vector<float>> minMaxPyramid(const MapView& map) {
+  std::vector<std::vector<float>> levels;
+  int w = map.w, h = map.h;
+  while (w > 1 || h > 1) {
+    const int nw = (w + 1) / 2, nh = (h + 1) / 2;
+    std::vector<float> next(std::size_t(2) * nw * nh);
+    for (int y = 0; y < nh; ++y)
+      for (int x = 0; x < nw; ++x) {
+        float lo = std::numeric_limits<float>::infinity(), hi = -lo;
+        for (int dy = 0; dy < 2; ++dy)
+          for (int dx = 0; dx < 2; ++dx) {
+            const int sx = 2 * x + dx, sy = 2 * y + dy;
+            if (sx >= w || sy >= h) continue;
+            if (levels.empty()) {
+              lo = std::min(lo, map.at(sx, sy));
+              hi = std::max(hi, map.at(sx, sy));
+            } else {
+              const std::vector<float>& below = levels.back();
+              lo = std::min(lo, below[2 * (std::size_t(sy) * w + sx)]);
+              hi = std::max(hi, below[2 * (std::size_t(sy) * w + sx) + 1]);
+            }
+          }
+        next[2 * (std::size_t(y) * nw + x)] = lo;
+        next[2 * (std::size_t(y) * nw + x) + 1] = hi;
+      }
+    levels.push_back(std::move(next));
+    w = nw;
+    h = nh;
+  }
+  return levels;
+}
+
+/// The least and largest map value over the texels a bilinear sample
+/// anywhere in the uv box reads, wider than the kernel's own query (every
+/// texel of the widened rectangle, or the whole map where it wraps).
+glm::dvec2 mapRange(const MapView& map, const std::vector<std::vector<float>>& pyramid, glm::dvec2 lo, glm::dvec2 hi) {
+  const glm::dvec2 slack = 1e-5 * (glm::abs(lo) + glm::abs(hi)) + 1e-6;
+  auto axis = [](double a, double b, int size, int* from, int* to) {
+    const double f0 = std::floor(a) - 1.0, f1 = std::floor(b) + 2.0;
+    if (!(f1 - f0 < size) || !(std::fabs(f0) < 4e6 && std::fabs(f1) < 4e6)) {
+      *from = 0, *to = size - 1;
+      return;
+    }
+    const int w0 = int(f0 - size * std::floor(f0 / size));
+    const int w1 = w0 + int(f1 - f0);
+    if (w1 >= size) *from = 0, *to = size - 1;
+    else *from = w0, *to = w1;
+  };
+  int x0, x1, y0, y1;
+  axis((lo.x - slack.x) * map.w - 0.5, (hi.x + slack.x) * map.w - 0.5, map.w, &x0, &x1);
+  axis((lo.y - slack.y) * map.h - 0.5, (hi.y + slack.y) * map.h - 0.5, map.h, &y0, &y1);
+  std::size_t k = 0;
+  while (k < pyramid.size() && (((x1 >> k) - (x0 >> k)) > 1 || ((y1 >> k) - (y0 >> k)) > 1)) ++k;
+  double vmin = std::numeric_limits<double>::infinity(), vmax = -vmin;
+  const int wk = (map.w + (1 << k) - 1) >> k;
+  for (int y = y0 >> k; y <= (y1 >> k); ++y)
+    for (int x = x0 >> k; x <= (x1 >> k); ++x) {
+      if (k == 0) {
+        vmin = std::min(vmin, double(map.at(x, y)));
+        vmax = std::max(vmax, double(map.at(x, y)));
+      } else {
+        const std::vector<float>& level = pyramid[k - 1];
+        vmin = std::min(vmin, double(level[2 * (std::size_t(y) * wk + x)]));
+        vmax = std::max(vmax, double(level[2 * (std::size_t(y) * wk + x) + 1]));
+      }
+    }
+  return {vmin, vmax};
+}
+
+bool cornersUsable(const DisplacedMesh& m, const std::array<std::uint32_t, 3>& t) {
+  for (std::uint32_t v : t) {
+    if (v >= m.positions.size()) return false;
+    const glm::vec3 p = m.positions[v], n = m.normals[v];
+    const glm::vec2 uv = m.texcoords[v];
+    if (!std::isfinite(p.x + p.y + p.z + n.x + n.y + n.z + uv.x + uv.y)) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+void gatherDisplaced(const Scene& scene, PrimitiveRows& rows) {
+  rows.dataFirst[WT_PRIM_DISPLACED] = std::uint32_t(rows.data.size());
+  rows.infoFirst[WT_PRIM_DISPLACED] = std::uint32_t(rows.info.size());
+  const std::size_t meshes = scene.displacedMeshes.size();
+  // rows from the type's first: headers, then vertices, then the maps' floats
+  std::vector<WtVec4> data(WT_DISP_MESH_ROWS * meshes, WtVec4{0, 0, 0, 0});
+  std::vector<std::size_t> vertexRow(meshes, 0);
+  for (std::size_t mi = 0; mi < meshes; ++mi) {
+    const DisplacedMesh& m = scene.displacedMeshes[mi];
+    if (!displacedMeshUsable(m)) continue;
+    vertexRow[mi] = data.size();
+    for (std::size_t v = 0; v < m.positions.size(); ++v) {
+      const glm::vec3 p = m.positions[v], n = m.normals[v];
+      const glm::vec2 uv = m.texcoords[v];
+      data.push_back({p.x, p.y, p.z, uv.x});
+      data.push_back({n.x, n.y, n.z, uv.y});
+    }
+  }
+  std::vector<float> floats;
+  const std::size_t floatBase = 4 * data.size();
+  std::uint32_t prims = 0;
+  for (std::size_t mi = 0; mi < meshes; ++mi) {
+    const DisplacedMesh& m = scene.displacedMeshes[mi];
+    if (!displacedMeshUsable(m)) {
+      rows.skipped += m.triangles.size();
+      continue;
+    }
+    const MapView map{m.map.data(), int(m.mapWidth), int(m.mapHeight)};
+    const std::vector<std::vector<float>> pyramid = minMaxPyramid(map);
+    WtVec4* header = &data[WT_DISP_MESH_ROWS * mi];
+    header[0] = {m.scale, m.offset, float(m.mapWidth), float(m.mapHeight)};
+    const std::uint32_t level = displacedLevel(m);
+    auto bits = [](std::uint32_t u) { return std::bit_cast<float>(u); };
+    header[1] = {bits(level), bits(std::uint32_t(pyramid.size())), bits(std::uint32_t(floatBase + floats.size())), 0.0f};
+    for (std::size_t y = 0; y < m.mapHeight; ++y)
+      for (std::size_t x = 0; x < m.mapWidth; ++x) floats.push_back(map.at(int(x), int(y)));
+    float* slots = &header[2].x;
+    for (std::size_t k = 0; k < pyramid.size() && k < WT_DISP_MAX_MIPS; ++k) {
+      slots[k] = bits(std::uint32_t(floatBase + floats.size()));
+      floats.insert(floats.end(), pyramid[k].begin(), pyramid[k].end());
+    }
+    for (std::size_t ti = 0; ti < m.triangles.size(); ++ti) {
+      const std::array<std::uint32_t, 3>& t = m.triangles[ti];
+      if (!cornersUsable(m, t)) {
+        ++rows.skipped;
+        continue;
+      }
+      // the shell: every corner moved by the least and the largest displacement over the triangle's texels
+      glm::dvec2 lo(std::numeric_limits<double>::infinity()), hi(-lo.x);
+      for (std::uint32_t v : t) {
+        lo = glm::min(lo, glm::dvec2(m.texcoords[v]));
+        hi = glm::max(hi, glm::dvec2(m.texcoords[v]));
+      }
+      const glm::dvec2 r = mapRange(map, pyramid, lo, hi);
+      const double d0 = double(m.scale) * r.x + m.offset, d1 = double(m.scale) * r.y + m.offset;
+      glm::dvec3 blo(std::numeric_limits<double>::infinity()), bhi(-blo.x);
+      for (std::uint32_t v : t)
+        for (double d : {d0, d1}) {
+          const glm::dvec3 q = glm::dvec3(m.positions[v]) + d * glm::dvec3(m.normals[v]);
+          blo = glm::min(blo, q);
+          bhi = glm::max(bhi, q);
+        }
+      // past the kernel's rounding of the micro-vertices and of its own shells
+      const glm::dvec3 pad = 1e-5 * glm::max(glm::abs(blo), glm::abs(bhi)) + 1e-5 * (bhi - blo);
+      Aabb box;
+      box.lo = glm::vec3(blo - pad);
+      box.hi = glm::vec3(bhi + pad);
+      if (!std::isfinite(box.lo.x + box.lo.y + box.lo.z + box.hi.x + box.hi.y + box.hi.z)) {
+        ++rows.skipped;
+        continue;
+      }
+      // the displacement's range, rounded outwards: the kernel's whole-shell test reads it
+      const float dlo = std::nextafter(float(std::min(d0, d1)), -std::numeric_limits<float>::infinity());
+      const float dhi = std::nextafter(float(std::max(d0, d1)), std::numeric_limits<float>::infinity());
+      rows.info.push_back({m.material, std::uint32_t(WT_DISP_MESH_ROWS * mi), std::bit_cast<std::uint32_t>(dlo),
+                           std::bit_cast<std::uint32_t>(dhi)});
+      rows.info.push_back({std::uint32_t(vertexRow[mi] + WT_DISP_VERTEX_ROWS * t[0]),
+                           std::uint32_t(vertexRow[mi] + WT_DISP_VERTEX_ROWS * t[1]),
+                           std::uint32_t(vertexRow[mi] + WT_DISP_VERTEX_ROWS * t[2]), std::uint32_t(ti)});
+      rows.bounds.push_back(box);
+      rows.ids.push_back(primId(WT_PRIM_DISPLACED, prims++));
+    }
+  }
+  rows.count[WT_PRIM_DISPLACED] = prims;
+  for (std::size_t i = 0; i < floats.size(); i += 4) {
+    float v[4] = {0.0f, 0.0f, 0.0f, 0.0f};
+    for (std::size_t k = 0; k < 4 && i + k < floats.size(); ++k) v[k] = floats[i + k];
+    data.push_back({v[0], v[1], v[2], v[3]});
+  }
+  rows.data.insert(rows.data.end(), data.begin(), data.end());
+}
+
+DisplacedTriangleRef displacedTriangle(const PrimitiveRows& rows, std::uint32_t index) {
+  const std::size_t row = rows.infoFirst[WT_PRIM_DISPLACED] + WT_DISP_INFO_ROWS * std::size_t(index);
+  return {rows.info[row][1] / WT_DISP_MESH_ROWS, rows.info[row + 1][3]};
+}
+
+glm::vec3 displacedPoint(const DisplacedMesh& mesh, std::uint32_t triangle, float li, float lj, glm::vec3* error,
+                         glm::vec3* normal, glm::vec3* shading) {
+  const MapView map{mesh.map.data(), int(mesh.mapWidth), int(mesh.mapHeight)};
+  const std::array<std::uint32_t, 3>& t = mesh.triangles[triangle];
+  const int n = 1 << displacedLevel(mesh);
+  // the micro-triangle holding (li, lj), as disp_micro_at
+  int i = int(std::clamp(std::floor(li), 0.0f, float(n - 1))), j = int(std::clamp(std::floor(lj), 0.0f, float(n - 1)));
+  if (i + j > n - 1) i = n - 1 - j;
+  const float x = li - float(i), y = lj - float(j);
+  glm::ivec2 c[3];
+  float b1, b2;
+  bool inverted = false;
+  if (x + y > 1.0f && i + j <= n - 2) {
+    c[0] = {i + 1, j}, c[1] = {i, j + 1}, c[2] = {i + 1, j + 1};
+    b1 = 1.0f - x;
+    b2 = y - b1;
+    inverted = true;
+  } else {
+    c[0] = {i, j}, c[1] = {i + 1, j}, c[2] = {i, j + 1};
+    b1 = x;
+    b2 = y;
+  }
+  glm::vec3 s[3];
+  for (int k = 0; k < 3; ++k) s[k] = microVertex(mesh, map, t, n, c[k].x, c[k].y);
+  const float b0 = 1.0f - b1 - b2;
+  const glm::vec3 p = b0 * s[0] + b1 * s[1] + b2 * s[2];
+  constexpr float kEps = 1.1920929e-7f;
+  const float gamma7 = 7.0f * 0.5f * kEps / (1.0f - 7.0f * 0.5f * kEps), gamma2 = 2.0f * 0.5f * kEps / (1.0f - kEps);
+  const glm::vec3 e1 = s[1] - s[0], e2 = s[2] - s[0];
+  *error = gamma7 * (glm::abs(b0 * s[0]) + glm::abs(b1 * s[1]) + glm::abs(b2 * s[2])) + gamma2 * glm::abs(s[0]) +
+           glm::vec3(4.0f * kEps * float(n) * (glm::length(e1) + glm::length(e2)));
+  glm::vec3 g = glm::cross(e1, e2);
+  const float len = glm::length(g);
+  *normal = len > 0.0f && std::isfinite(len) ? (inverted ? -g : g) / len : glm::vec3(0.0f);
+  if (shading) *shading = shadingNormal(mesh, map, t, li / float(n), lj / float(n));
+  return p;
+}
+
+glm::vec3 displacedVertex(const DisplacedMesh& mesh, std::uint32_t triangle, int perEdge, int i, int j) {
+  const MapView map{mesh.map.data(), int(mesh.mapWidth), int(mesh.mapHeight)};
+  return microVertex(mesh, map, mesh.triangles[triangle], perEdge, i, j);
+}
+
+std::size_t tessellateDisplaced(Scene& scene, int perEdge) {
+  const int n = std::max(perEdge, 1);
+  std::size_t made = 0;
+  std::uint32_t nextGeometry = 0;
+  for (const GeometryInstance& g : scene.instances) nextGeometry = std::max(nextGeometry, g.geometry + 1);
+  for (const DisplacedMesh& mesh : scene.displacedMeshes) {
+    if (!displacedMeshUsable(mesh)) continue;
+    const MapView map{mesh.map.data(), int(mesh.mapWidth), int(mesh.mapHeight)};
+    const auto firstTriangle = std::uint32_t(scene.triangles.size());
+    for (const auto& t : mesh.triangles) {
+      if (!cornersUsable(mesh, t)) continue;
+      // the lattice's vertices, row by row (j), then its upright and inverted triangles
+      const auto base = std::uint32_t(scene.positions.size());
+      std::vector<std::uint32_t> rowStart(std::size_t(n) + 2);
+      std::uint32_t count = 0;
+      for (int j = 0; j <= n; ++j) {
+        rowStart[std::size_t(j)] = count;
+        for (int i = 0; i + j <= n; ++i, ++count) {
+          glm::vec2 uv;
+          const glm::vec3 p = microVertex(mesh, map, t, n, i, j, nullptr, &uv);
+          const glm::vec3 sn = shadingNormal(mesh, map, t, float(i) / float(n), float(j) / float(n));
+          scene.positions.push_back({p.x, p.y, p.z, 0.0f});
+          scene.normals.push_back({sn.x, sn.y, sn.z, 0.0f});
+          scene.texcoords.push_back(uv);
+        }
+      }
+      auto at = [&](int i, int j) { return base + rowStart[std::size_t(j)] + std::uint32_t(i); };
+      for (int j = 0; j < n; ++j)
+        for (int i = 0; i + j < n; ++i) {
+          scene.triangles.push_back({at(i, j), at(i + 1, j), at(i, j + 1), mesh.material});
+          if (i + j + 2 <= n) scene.triangles.push_back({at(i + 1, j), at(i + 1, j + 1), at(i, j + 1), mesh.material});
+        }
+    }
+    const auto added = std::uint32_t(scene.triangles.size()) - firstTriangle;
+    made += added;
+    if (!scene.instances.empty() && added > 0) scene.instances.push_back({firstTriangle, added, nextGeometry++, glm::dmat4(1.0)});
+  }
+  // the attributes only some vertices have: every vertex gets one once any does
+  if (!scene.texcoords1.empty()) scene.texcoords1.resize(scene.positions.size(), glm::vec2(0.0f));
+  if (!scene.colors.empty()) scene.colors.resize(scene.positions.size(), glm::vec4(1.0f));
+  if (!scene.tangents.empty()) scene.tangents.resize(scene.positions.size(), glm::vec4(0.0f));
+  scene.displacedMeshes.clear();
+  return made;
+}
+
+}  // namespace wt

@@ -1,0 +1,496 @@
+// Displaced meshes (kernels/geometry/displaced.cl) against a long-double
+// reference of the same micro-mesh on random rays (hit or miss, t, normal),
+// on a displaced icosphere with a procedural map (no assets); every base
+// triangle tested without the BVH, then through every traversal; any hit
+// against closest hit; rays spawned from a hit; micro-vertices on shared
+// edges bit for bit; rays aimed at the seams between base triangles'
+// shells; zero displacement against the base mesh's triangles.
+#include "device/tracer.h"
+#include "device_fixture.h"
+#include "geometry/primitives.h"
+#include "scene/generators.h"
+#include "core/spawn.h"
+#include "test_util.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <map>
+#include <random>
+
+namespace wt {
+namespace {
+
+using Real = long double;
+using RVec = glm::vec<3, Real>;
+
+/// The test sphere: radius 1 at `center`, displaced by scale h + offset.
+Scene testSphere(int level, float scale = 0.2f, float offset = -0.1f, glm::vec3 center = glm::vec3(0.3f, -0.2f, 0.1f),
+                 int subdivisions = 1, std::uint32_t mapSize = 48) {
+  return makeDisplacedSphere(subdivisions, center, 1.0f, mapSize, scale, offset, level, makeMaterial(glm::vec3(0.5f)));
+}
+
+Real mapAt(const DisplacedMesh& m, int x, int y) {
+  const float v = m.map[std::size_t(y) * m.mapWidth + std::size_t(x)];
+  return std::isnan(v) ? 0 : Real(v);
+}
+
+/// The map at uv, bilinear between texel centres, repeating, in long double.
+Real sample(const DisplacedMesh& m, Real u, Real v) {
+  const Real x = u * m.mapWidth - 0.5L, y = v * m.mapHeight - 0.5L;
+  const Real fx0 = std::floor(x), fy0 = std::floor(y);
+  const Real fx = x - fx0, fy = y - fy0;
+  auto wrap = [](Real c, int size) { return int(c - size * std::floor(c / size)); };
+  const int x0 = wrap(fx0, int(m.mapWidth)), y0 = wrap(fy0, int(m.mapHeight));
+  const int x1 = (x0 + 1) % int(m.mapWidth), y1 = (y0 + 1) % int(m.mapHeight);
+  return (mapAt(m, x0, y0) * (1 - fx) + mapAt(m, x1, y0) * fx) * (1 - fy) +
+         (mapAt(m, x0, y1) * (1 - fx) + mapAt(m, x1, y1) * fx) * fy;
+}
+
+/// Micro-vertex (i, j) of base triangle `tri`, 2^L per edge, in long double.
+RVec microVertex(const DisplacedMesh& m, const std::array<std::uint32_t, 3>& t, int n, int i, int j) {
+  const Real w[3] = {Real(n - i - j) / n, Real(i) / n, Real(j) / n};
+  RVec p(0), nrm(0);
+  Real u = 0, v = 0;
+  for (int k = 0; k < 3; ++k) {
+    p += w[k] * RVec(m.positions[t[k]]);
+    nrm += w[k] * RVec(m.normals[t[k]]);
+    u += w[k] * Real(m.texcoords[t[k]].x);
+    v += w[k] * Real(m.texcoords[t[k]].y);
+  }
+  return p + (Real(m.scale) * sample(m, u, v) + Real(m.offset)) * nrm;
+}
+
+struct MicroTriangle {
+  RVec a, b, c;
+};
+
+/// Every micro-triangle of the mesh, wound as the base triangle.
+std::vector<MicroTriangle> microMesh(const DisplacedMesh& m) {
+  const int n = 1 << displacedLevel(m);
+  std::vector<MicroTriangle> out;
+  for (const auto& t : m.triangles)
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i + j < n; ++i) {
+        out.push_back({microVertex(m, t, n, i, j), microVertex(m, t, n, i + 1, j), microVertex(m, t, n, i, j + 1)});
+        if (i + j + 2 <= n)
+          out.push_back({microVertex(m, t, n, i + 1, j), microVertex(m, t, n, i + 1, j + 1), microVertex(m, t, n, i, j + 1)});
+      }
+  return out;
+}
+
+struct RefHit {
+  bool hit = false;
+  Real t = 0;
+  glm::dvec3 normal{0.0};  ///< unit, the micro-triangle's winding side
+  bool nearEdge = false;   ///< some micro-triangle's edge passes within kEdge (barycentric) of the ray in (tmin, tmax)
+  Real cosine = 0;
+};
+
+constexpr Real kEdge = 2e-5L;
+
+RefHit reference(const std::vector<MicroTriangle>& mesh, const Ray& ray) {
+  const RVec o(ray.origin), d(ray.direction);
+  RefHit r;
+  Real best = ray.tmax;
+  for (const MicroTriangle& m : mesh) {
+    const RVec e1 = m.b - m.a, e2 = m.c - m.a;
+    const RVec pv = glm::cross(d, e2);
+    const Real det = glm::dot(e1, pv);
+    if (det == 0) continue;
+    const RVec tv = o - m.a;
+    const Real u = glm::dot(tv, pv) / det;
+    const RVec qv = glm::cross(tv, e1);
+    const Real v = glm::dot(d, qv) / det;
+    const Real t = glm::dot(e2, qv) / det;
+    if (!(t > Real(ray.tmin) * (1 - 1e-6L) && t < Real(ray.tmax) * (1 + 1e-6L))) continue;
+    const Real margin = std::min(std::min(u, v), 1 - u - v);
+    if (std::abs(margin) < kEdge) r.nearEdge = true;
+    if (margin < 0 || !(t > ray.tmin && t < best)) continue;
+    best = t;
+    r.hit = true;
+    r.t = t;
+    const RVec g = glm::cross(e1, e2);
+    r.normal = glm::normalize(glm::dvec3(g));
+    r.cosine = std::abs(glm::dot(glm::dvec3(glm::normalize(d)), r.normal));
+  }
+  return r;
+}
+
+/// Rays from around the sphere aimed into it, a fifth from inside, some with a short tmax.
+std::vector<Ray> raysAtSphere(glm::vec3 center, std::size_t count, std::uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> unit(-1.0f, 1.0f), u01(0.0f, 1.0f);
+  std::vector<Ray> rays(count);
+  for (std::size_t i = 0; i < count; ++i) {
+    Ray& r = rays[i];
+    const float reach = i % 5 == 0 ? 0.5f : 2.5f;
+    r.origin = center + reach * glm::vec3(unit(rng), unit(rng), unit(rng));
+    const glm::vec3 target = center + 1.05f * glm::vec3(unit(rng), unit(rng), unit(rng));
+    r.direction = glm::normalize(target - r.origin);
+    if (!(glm::dot(r.direction, r.direction) > 0.5f)) r.direction = glm::vec3(0, 1, 0);
+    r.tmin = 0.0f;
+    r.tmax = i % 4 == 1 ? 3.0f * u01(rng) : 1e30f;
+  }
+  return rays;
+}
+
+struct KernelHit {
+  float t = -1.0f;
+  glm::vec3 normal{0.0f}, error{0.0f}, shading{0.0f};
+  std::uint32_t triangle = RayHit::kNoHit;
+};
+
+struct TypeRows {
+  std::vector<WtVec4> data;
+  std::vector<std::array<std::uint32_t, 4>> info;
+  std::uint32_t count = 0;
+};
+
+TypeRows typeRows(const Scene& scene) {
+  PrimitiveRows rows = gatherPrimitives(scene);
+  TypeRows t;
+  t.count = std::uint32_t(rows.count[WT_PRIM_DISPLACED]);
+  t.data.assign(rows.data.begin() + rows.dataFirst[WT_PRIM_DISPLACED], rows.data.end());
+  t.info.assign(rows.info.begin() + rows.infoFirst[WT_PRIM_DISPLACED], rows.info.end());
+  return t;
+}
+
+template <class V>
+cl::Buffer input(const V& v) {
+  return cl::Buffer(test::deviceContext().context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, v.size() * sizeof(v[0]),
+                    const_cast<void*>(static_cast<const void*>(v.data())));
+}
+
+std::vector<KernelHit> kernelClosest(const Scene& scene, const std::vector<Ray>& rays) {
+  const TypeRows rows = typeRows(scene);
+  EXPECT_GT(rows.count, 0u);
+  Context& ctx = test::deviceContext();
+  std::vector<cl_float4> o(rays.size()), d(rays.size());
+  for (std::size_t i = 0; i < rays.size(); ++i) {
+    o[i] = {{rays[i].origin.x, rays[i].origin.y, rays[i].origin.z, rays[i].tmin}};
+    d[i] = {{rays[i].direction.x, rays[i].direction.y, rays[i].direction.z, rays[i].tmax}};
+  }
+  cl::Buffer dataBuf = input(rows.data), infoBuf = input(rows.info), oBuf = input(o), dBuf = input(d);
+  cl::Buffer out(ctx.context(), CL_MEM_WRITE_ONLY, 3 * rays.size() * sizeof(cl_float4));
+  cl::Kernel k(test::testProgram("displaced_tests.cl"), "test_displaced_closest");
+  k.setArg(0, cl_uint(rays.size())), k.setArg(1, rows.count), k.setArg(2, dataBuf), k.setArg(3, infoBuf);
+  k.setArg(4, oBuf), k.setArg(5, dBuf), k.setArg(6, out);
+  ctx.launch("test_displaced_closest", k, rays.size());
+  std::vector<cl_float4> got(3 * rays.size());
+  ctx.queue().enqueueReadBuffer(out, CL_TRUE, 0, got.size() * sizeof(cl_float4), got.data());
+  std::vector<KernelHit> hits(rays.size());
+  for (std::size_t i = 0; i < rays.size(); ++i) {
+    const cl_float4 a = got[3 * i], b = got[3 * i + 1], c = got[3 * i + 2];
+    if (a.s[0] < 0.0f) continue;
+    hits[i].t = a.s[0];
+    hits[i].normal = glm::vec3(a.s[1], a.s[2], a.s[3]);
+    hits[i].error = glm::vec3(b.s[0], b.s[1], b.s[2]);
+    hits[i].shading = glm::vec3(c.s[0], c.s[1], c.s[2]);
+    std::memcpy(&hits[i].triangle, &b.s[3], 4);
+  }
+  return hits;
+}
+
+TEST(DisplacedMeshes, KernelMatchesLongDoubleReference) {
+  // level 3 over a 48^2 map: micro-edges span several texels, so the shells
+  // come from the pyramid's upper levels as well as from single texels
+  const Scene scene = testSphere(3);
+  const DisplacedMesh& mesh = scene.displacedMeshes[0];
+  const std::vector<MicroTriangle> micro = microMesh(mesh);
+  const std::vector<Ray> rays = raysAtSphere(glm::vec3(0.3f, -0.2f, 0.1f), test::testSize(3000, 300), 21);
+  const std::vector<KernelHit> got = kernelClosest(scene, rays);
+  int bad = 0, hits = 0, ambiguous = 0;
+  for (std::size_t i = 0; i < rays.size(); ++i) {
+    const RefHit want = reference(micro, rays[i]);
+    const bool hit = got[i].t >= 0.0f;
+    hits += want.hit;
+    std::string problem;
+    if (hit != want.hit) {
+      // a ray through an edge of the outline, or ending on the surface, may go either way
+      if (want.nearEdge || (want.hit && want.t >= Real(rays[i].tmax) * (1 - 1e-5L))) {
+        ++ambiguous;
+        continue;
+      }
+      problem = hit ? "kernel hit, reference missed" : "kernel missed, reference hit";
+    } else if (hit) {
+      // float micro-vertices against long double: a few ulps of the coordinates, over the slant
+      const Real dt = std::abs(Real(got[i].t) - want.t);
+      const Real tol = 1e-5L / std::max(want.cosine, Real(1e-2)) + 1e-6L * want.t;
+      if (dt > tol) problem = "t differs by " + std::to_string(double(dt));
+      else if (!want.nearEdge && glm::length(glm::dvec3(got[i].normal) - want.normal) > 1e-3)
+        problem = "normal differs by " + std::to_string(glm::length(glm::dvec3(got[i].normal) - want.normal));
+    }
+    if (!problem.empty() && ++bad <= 8)
+      ADD_FAILURE() << "ray " << i << ": " << problem << " (kernel t " << got[i].t << ", reference "
+                    << (want.hit ? std::to_string(double(want.t)) : "miss") << ")";
+  }
+  EXPECT_EQ(bad, 0);
+  EXPECT_GT(hits, int(rays.size() / 3));
+  EXPECT_LT(ambiguous, int(rays.size() / 100) + 1);
+}
+
+TEST(DisplacedMeshes, ShadingNormalsFaceOutAndFollowTheBumps) {
+  // the shading normal is the displaced surface's: unit, on the side of
+  // the vertex normals (outward) whichever way the triangles wind, and
+  // tilted from the base sphere's normal where the map slopes
+  const glm::vec3 center(0.3f, -0.2f, 0.1f);
+  for (bool reversed : {false, true}) {
+    Scene scene = testSphere(4, 0.3f, -0.15f, center);
+    if (reversed)
+      for (auto& t : scene.displacedMeshes[0].triangles) std::swap(t[1], t[2]);
+    const std::vector<Ray> rays = raysAtSphere(center, test::testSize(2000, 200), 22);
+    const std::vector<KernelHit> got = kernelClosest(scene, rays);
+    int tilted = 0, hits = 0, inward = 0;
+    for (std::size_t i = 0; i < rays.size(); ++i) {
+      if (got[i].t < 0.0f) continue;
+      ++hits;
+      const glm::vec3 p = rays[i].origin + got[i].t * rays[i].direction;
+      const glm::vec3 radial = glm::normalize(p - center);
+      EXPECT_NEAR(glm::length(got[i].shading), 1.0f, 1e-4f) << "ray " << i;
+      inward += glm::dot(got[i].shading, radial) <= 0.0f;
+      tilted += glm::dot(got[i].shading, radial) < 0.99f;
+    }
+    EXPECT_EQ(inward, 0) << (reversed ? "reversed winding" : "winding as made");
+    EXPECT_GT(tilted, hits / 4);
+  }
+}
+
+TEST(DisplacedMeshes, TraversalsFindWhatEveryTriangleFinds) {
+  const glm::vec3 center(0.3f, -0.2f, 0.1f);
+  const Scene scene = testSphere(-1, 0.2f, -0.1f, center, 2);
+  const std::vector<Ray> rays = raysAtSphere(center, test::testSize(3000, 300), 23);
+  const std::vector<KernelHit> brute = kernelClosest(scene, rays);
+  Tracer tracer(test::deviceContext(), scene);
+  for (Traversal traversal : {Traversal::kSingle, Traversal::kPacket}) {
+    const std::vector<RayHit> hits = tracer.traceClosest(rays, traversal);
+    int bad = 0;
+    for (std::size_t i = 0; i < rays.size(); ++i) {
+      const bool hit = hits[i].prim != RayHit::kNoHit;
+      bool ok = hit == (brute[i].t >= 0.0f);
+      if (ok && hit) ok = primType(hits[i].prim) == WT_PRIM_DISPLACED && hits[i].t == brute[i].t;
+      if (!ok && ++bad <= 5)
+        ADD_FAILURE() << "ray " << i << " traversal " << int(traversal) << ": t " << hits[i].t << " prim "
+                      << hits[i].prim << ", every triangle: t " << brute[i].t;
+    }
+    EXPECT_EQ(bad, 0);
+  }
+}
+
+TEST(DisplacedMeshes, AnyHitAgreesWithClosestHitInEveryTraversal) {
+  const glm::vec3 center(0.3f, -0.2f, 0.1f);
+  const Scene scene = testSphere(3, 0.2f, -0.1f, center);
+  const std::vector<MicroTriangle> micro = microMesh(scene.displacedMeshes[0]);
+  const std::vector<Ray> rays = raysAtSphere(center, test::testSize(3000, 300), 24);
+  Tracer tracer(test::deviceContext(), scene);
+  const std::vector<RayHit> closest = tracer.traceClosest(rays);
+  for (Traversal traversal : {Traversal::kSingle, Traversal::kPacket, Traversal::kStream}) {
+    const std::vector<std::uint8_t> occluded = tracer.traceOccluded(rays, traversal);
+    int bad = 0;
+    for (std::size_t i = 0; i < rays.size(); ++i) {
+      if (bool(occluded[i]) == (closest[i].prim != RayHit::kNoHit)) continue;
+      const RefHit want = reference(micro, rays[i]);
+      if (want.nearEdge || (want.hit && std::abs(want.t - Real(rays[i].tmax)) <= 1e-5L * rays[i].tmax)) continue;
+      if (++bad <= 5)
+        ADD_FAILURE() << "ray " << i << " traversal " << int(traversal) << ": occluded " << int(occluded[i])
+                      << ", closest hit " << closest[i].prim;
+    }
+    EXPECT_EQ(bad, 0);
+  }
+}
+
+TEST(DisplacedMeshes, SpawnedRaysLeaveTheSurfaceOrCrossIt) {
+  // gentle bumps (amplitude 0.02 on radius 1) far from the origin: rays
+  // spawned outward within 45 degrees of the micro-triangle's normal meet
+  // nothing (the bumps' slopes stay far below 45 degrees); rays spawned
+  // inward meet the far side, a chord well over 0.7 away
+  const glm::vec3 center(3.0f, -2.0f, 1.0f);
+  const Scene scene = testSphere(4, 0.02f, -0.01f, center);
+  const std::vector<Ray> rays = raysAtSphere(center, test::testSize(3000, 300), 25);
+  const std::vector<KernelHit> hits = kernelClosest(scene, rays);
+  std::mt19937 rng(26);
+  std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
+  std::vector<Ray> out, in;
+  for (std::size_t i = 0; i < rays.size(); ++i) {
+    if (hits[i].t < 0.0f) continue;
+    const glm::vec3 p = rays[i].origin + hits[i].t * rays[i].direction, n = hits[i].normal;
+    glm::vec3 w;
+    do w = glm::vec3(unit(rng), unit(rng), unit(rng));
+    while (glm::dot(w, w) > 1.0f || glm::dot(w, w) < 1e-3f || std::abs(glm::dot(glm::normalize(w), n)) < 0.71f);
+    w = glm::normalize(w);
+    if (glm::dot(w, n) < 0.0f) w = -w;
+    Ray r;
+    r.origin = offsetRayOrigin(p, hits[i].error, n);
+    r.direction = w;
+    out.push_back(r);
+    r.origin = offsetRayOrigin(p, hits[i].error, -n);
+    r.direction = -w;
+    in.push_back(r);
+  }
+  ASSERT_GT(out.size(), rays.size() / 12);
+  Tracer tracer(test::deviceContext(), scene);
+  const std::vector<RayHit> again = tracer.traceClosest(out), through = tracer.traceClosest(in);
+  int selfHits = 0, lost = 0;
+  for (std::size_t i = 0; i < out.size(); ++i) {
+    selfHits += again[i].prim != RayHit::kNoHit;
+    lost += through[i].prim == RayHit::kNoHit || !(through[i].t > 0.7f);
+  }
+  EXPECT_EQ(selfHits, 0) << "of " << out.size() << " rays leaving the surface";
+  EXPECT_EQ(lost, 0) << "of " << in.size() << " rays entering it";
+}
+
+TEST(DisplacedMeshes, SharedEdgesGiveTheSameMicroVerticesBitForBit) {
+  // every edge two base triangles share, every micro-vertex on it, computed
+  // by the kernel from each side: the same bits (the watertightness the
+  // seams rely on)
+  const Scene scene = testSphere(4, 0.3f, -0.15f, glm::vec3(0.3f, -0.2f, 0.1f), 2);
+  const DisplacedMesh& mesh = scene.displacedMeshes[0];
+  const int n = 1 << displacedLevel(mesh);
+  // the lattice point at fraction s/n from corner slot a to corner slot b
+  auto lattice = [&](int a, int b, int s) {
+    int w[3] = {0, 0, 0};
+    w[a] += n - s;
+    w[b] += s;
+    return glm::ivec2(w[1], w[2]);
+  };
+  std::map<std::pair<std::uint32_t, std::uint32_t>, std::pair<std::uint32_t, std::array<int, 2>>> firstSide;
+  std::vector<cl_uint4> queries;
+  for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t)
+    for (int e = 0; e < 3; ++e) {
+      const std::uint32_t va = mesh.triangles[t][e], vb = mesh.triangles[t][(e + 1) % 3];
+      const auto key = std::minmax(va, vb);
+      auto it = firstSide.find(key);
+      if (it == firstSide.end()) {
+        firstSide[key] = {t, {e, (e + 1) % 3}};
+        continue;
+      }
+      // the other triangle's slots for the same two vertices, from the lower index on both sides
+      const std::uint32_t t0 = it->second.first;
+      const int a0 = mesh.triangles[t0][it->second.second[0]] == key.first ? it->second.second[0] : it->second.second[1];
+      const int b0 = a0 == it->second.second[0] ? it->second.second[1] : it->second.second[0];
+      const int a1 = va == key.first ? e : (e + 1) % 3, b1 = a1 == e ? (e + 1) % 3 : e;
+      for (int s = 0; s <= n; ++s) {
+        const glm::ivec2 p0 = lattice(a0, b0, s), p1 = lattice(a1, b1, s);
+        queries.push_back({{t0, cl_uint(p0.x), cl_uint(p0.y), 0}});
+        queries.push_back({{t, cl_uint(p1.x), cl_uint(p1.y), 0}});
+      }
+    }
+  ASSERT_GT(queries.size(), 100u);
+  const TypeRows rows = typeRows(scene);
+  Context& ctx = test::deviceContext();
+  cl::Buffer dataBuf = input(rows.data), infoBuf = input(rows.info), qBuf = input(queries);
+  cl::Buffer out(ctx.context(), CL_MEM_WRITE_ONLY, queries.size() * sizeof(cl_float4));
+  cl::Kernel k(test::testProgram("displaced_tests.cl"), "test_displaced_vertex");
+  k.setArg(0, cl_uint(queries.size())), k.setArg(1, dataBuf), k.setArg(2, infoBuf), k.setArg(3, qBuf), k.setArg(4, out);
+  ctx.launch("test_displaced_vertex", k, queries.size());
+  std::vector<cl_float4> got(queries.size());
+  ctx.queue().enqueueReadBuffer(out, CL_TRUE, 0, got.size() * sizeof(cl_float4), got.data());
+  int differ = 0;
+  for (std::size_t q = 0; q < got.size(); q += 2)
+    if (std::memcmp(got[q].s, got[q + 1].s, 3 * sizeof(float)) != 0 && ++differ <= 5)
+      ADD_FAILURE() << "edge point " << q / 2 << ": (" << got[q].s[0] << ", " << got[q].s[1] << ", " << got[q].s[2]
+                    << ") against (" << got[q + 1].s[0] << ", " << got[q + 1].s[1] << ", " << got[q + 1].s[2] << ")";
+  EXPECT_EQ(differ, 0);
+}
+
+TEST(DisplacedMeshes, NoLeaksThroughTheSeamsBetweenShells) {
+  // the displaced sphere is closed and encloses its centre: every ray from
+  // near the centre leaves it through the surface, and every ray from far
+  // outside aimed at the centre meets it. Aimed at the base mesh's
+  // vertices and at points along its edges, where two shells meet.
+  const glm::vec3 center(0.3f, -0.2f, 0.1f);
+  const Scene scene = testSphere(-1, 0.3f, -0.15f, center, 2);
+  const DisplacedMesh& mesh = scene.displacedMeshes[0];
+  std::mt19937 rng(27);
+  std::uniform_real_distribution<float> u01(0.0f, 1.0f), unit(-1.0f, 1.0f);
+  std::vector<Ray> rays;
+  for (int i = 0; i < int(test::testSize(4000, 400)); ++i) {
+    const auto& t = mesh.triangles[std::size_t(i) % mesh.triangles.size()];
+    const int e = i % 3;
+    const glm::vec3 a = mesh.positions[t[e]], b = mesh.positions[t[(e + 1) % 3]];
+    // a vertex, or a point along an edge
+    const glm::vec3 aim = i % 7 == 0 ? a : a + u01(rng) * (b - a);
+    Ray r;
+    const glm::vec3 inner = center + 0.1f * glm::vec3(unit(rng), unit(rng), unit(rng));
+    if (i % 2 == 0) {
+      r.origin = inner;
+      r.direction = glm::normalize(aim - inner);
+    } else {
+      r.origin = center + 3.0f * glm::normalize(aim - center) + 0.05f * glm::vec3(unit(rng), unit(rng), unit(rng));
+      r.direction = glm::normalize(inner - r.origin);
+    }
+    rays.push_back(r);
+  }
+  Tracer tracer(test::deviceContext(), scene);
+  for (Traversal traversal : {Traversal::kSingle, Traversal::kPacket}) {
+    const std::vector<RayHit> hits = tracer.traceClosest(rays, traversal);
+    int leaks = 0;
+    for (std::size_t i = 0; i < rays.size(); ++i)
+      if (hits[i].prim == RayHit::kNoHit && ++leaks <= 5)
+        ADD_FAILURE() << "ray " << i << " traversal " << int(traversal) << " passed through";
+    EXPECT_EQ(leaks, 0);
+    const std::vector<std::uint8_t> blocked = tracer.traceOccluded(rays, traversal);
+    int through = 0;
+    for (std::uint8_t b : blocked) through += b == 0;
+    EXPECT_EQ(through, 0) << "traversal " << int(traversal);
+  }
+}
+
+TEST(DisplacedMeshes, ZeroDisplacementIsTheBaseMesh) {
+  // scale 0 and offset 0: the micro-triangles tile the base triangles, so
+  // every ray meets the displaced mesh where it meets the base mesh traced
+  // as triangles (bar rays through the base edges)
+  const glm::vec3 center(0.3f, -0.2f, 0.1f);
+  const Scene displaced = testSphere(3, 0.0f, 0.0f, center);
+  Scene base = makeIcosphere(1, center, 1.0f, makeMaterial(glm::vec3(0.5f)));
+  const std::vector<Ray> rays = raysAtSphere(center, test::testSize(3000, 300), 28);
+  const std::vector<KernelHit> got = kernelClosest(displaced, rays);
+  Tracer tracer(test::deviceContext(), base);
+  const std::vector<RayHit> want = tracer.traceClosest(rays);
+  int bad = 0, hits = 0;
+  for (std::size_t i = 0; i < rays.size(); ++i) {
+    const bool a = got[i].t >= 0.0f, b = want[i].prim != RayHit::kNoHit;
+    hits += b;
+    bool ok = a == b;
+    if (ok && a) {
+      ok = std::abs(got[i].t - want[i].t) <= 2e-6f * (1.0f + want[i].t);
+      const WtTriangle& tri = base.triangles[want[i].triangle];
+      auto pos = [&](std::uint32_t v) { return glm::vec3(base.positions[v].x, base.positions[v].y, base.positions[v].z); };
+      const glm::vec3 n = glm::normalize(glm::cross(pos(tri.v1) - pos(tri.v0), pos(tri.v2) - pos(tri.v0)));
+      ok = ok && glm::length(got[i].normal - n) < 1e-3f;
+    }
+    // a ray through a base edge may take either triangle: the same t, maybe the other normal
+    if (!ok && a == b && a && std::abs(got[i].t - want[i].t) <= 2e-6f * (1.0f + want[i].t)) {
+      const glm::vec2 bary(want[i].b1, want[i].b2);
+      if (std::min(std::min(bary.x, bary.y), 1.0f - bary.x - bary.y) < 1e-3f) continue;
+    }
+    if (!ok && ++bad <= 5)
+      ADD_FAILURE() << "ray " << i << ": displaced t " << got[i].t << ", base t " << want[i].t;
+  }
+  EXPECT_EQ(bad, 0);
+  EXPECT_GT(hits, int(rays.size() / 3));
+}
+
+TEST(DisplacedMeshes, TessellationAtTheSameRateIsTheSameSurface) {
+  // --tessellate 2^L makes the kernel's micro-triangles as triangles
+  const glm::vec3 center(0.3f, -0.2f, 0.1f);
+  const Scene displaced = testSphere(3, 0.2f, -0.1f, center);
+  Scene tessellated = displaced;
+  EXPECT_EQ(tessellateDisplaced(tessellated, 8), displaced.displacedMeshes[0].triangles.size() * 64);
+  EXPECT_TRUE(tessellated.displacedMeshes.empty());
+  const std::vector<Ray> rays = raysAtSphere(center, test::testSize(3000, 300), 29);
+  Tracer a(test::deviceContext(), displaced), b(test::deviceContext(), tessellated);
+  const std::vector<RayHit> ha = a.traceClosest(rays), hb = b.traceClosest(rays);
+  int bad = 0;
+  for (std::size_t i = 0; i < rays.size(); ++i) {
+    const bool x = ha[i].prim != RayHit::kNoHit, y = hb[i].prim != RayHit::kNoHit;
+    const bool ok = x == y && (!x || std::abs(ha[i].t - hb[i].t) <= 1e-5f * (1.0f + hb[i].t));
+    if (!ok && ++bad <= 5) ADD_FAILURE() << "ray " << i << ": displaced t " << ha[i].t << ", tessellated t " << hb[i].t;
+  }
+  // rays through a micro-edge may go either way where the host's and the kernel's roundings differ
+  EXPECT_LE(bad, int(rays.size() / 500));
+}
+
+}  // namespace
+}  // namespace wt
