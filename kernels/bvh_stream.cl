@@ -39,18 +39,20 @@ inline uint stream_lowest(ulong m) { return (uint)__builtin_ctzl(m); }
 
 /// Occlusion of rays index[0 .. n) of a batch (n <= WT_STREAM_RAYS): bit r
 /// of the result is set where ray index[r]'s (tmin, tmax) is blocked by a
-/// triangle other than skip[index[r]], or where the ray is not finite
+/// triangle other than the ray's skipped ones (skip_stride 1: skip[i];
+/// 2: skip[2 i] and skip[2 i + 1], the uint2 of the renderer's shadow
+/// rays), or where the ray is not finite
 /// (bvh_occluded's answers; with WT_HAS_ALPHA each ray draws from its own
 /// stream, that of ray index[r] alone, so the holes are the same too).
 inline ulong bvh_occluded_stream(BvhScene scene, const uint* index, uint n, __global const float4* ray_o,
-                                 __global const float4* ray_d, __global const uint* skip) {
+                                 __global const float4* ray_d, __global const uint* skip, uint skip_stride) {
   __global const WtBvh4Node* nodes = (__global const WtBvh4Node*)scene.nodes;
   // per-ray constants, set up once (bvh_occluded's)
   float3 org[WT_STREAM_RAYS], inv_d[WT_STREAM_RAYS], org_k[WT_STREAM_RAYS];
   float tmin[WT_STREAM_RAYS], tmax[WT_STREAM_RAYS];
   RayPlanes planes[WT_STREAM_RAYS];
   RayShear shear[WT_STREAM_RAYS];
-  uint skip_prim[WT_STREAM_RAYS];
+  uint skip_prim[WT_STREAM_RAYS], skip_other[WT_STREAM_RAYS];
 #if WT_HAS_ALPHA
   uint alpha_ray[WT_STREAM_RAYS];  // each ray's stream for the alpha test (WT_ALPHA_RAY)
 #endif
@@ -71,7 +73,8 @@ inline ulong bvh_occluded_stream(BvhScene scene, const uint* index, uint n, __gl
     shear[r] = triangle_ray_shear(d.xyz);
     org_k[r] = (float3)(vec3_component(o.xyz, shear[r].kx), vec3_component(o.xyz, shear[r].ky),
                         vec3_component(o.xyz, shear[r].kz));
-    skip_prim[r] = skip[index[r]];
+    skip_prim[r] = skip[skip_stride * index[r]];
+    skip_other[r] = skip_stride == 2u ? skip[2u * index[r] + 1u] : WT_NO_HIT;
 #if WT_HAS_ALPHA
     WT_ALPHA_RAY(scene, index[r]);
     alpha_ray[r] = scene.alpha.ray;
@@ -146,7 +149,7 @@ inline ulong bvh_occluded_stream(BvhScene scene, const uint* index, uint n, __gl
           for (uint b = first >> 2; b <= last >> 2; ++b) {
             float t, b1, b2;
             if (bvh_block_hit_k(scene, org_k[r], shear[r], tmin[r], tmax[r], b, b == first >> 2 ? first & 3u : 0u,
-                                b == last >> 2 ? (last & 3u) + 1u : 4u, skip_prim[r], WT_NO_HIT, &t, &b1,
+                                b == last >> 2 ? (last & 3u) + 1u : 4u, skip_prim[r], skip_other[r], &t, &b1,
                                 &b2) != WT_NO_HIT) {
               open &= ~(1ul << r);
               blocked |= 1ul << r;
@@ -169,7 +172,7 @@ inline ulong bvh_occluded_stream(BvhScene scene, const uint* index, uint n, __gl
             scene.alpha.ray = alpha_ray[r];
 #endif
             uint prim = bvh_block_hit_k(scene, org_k[r], shear[r], tmin[r], tmax[r], b, lo, hi, skip_prim[r],
-                                        WT_NO_HIT, &t, &b1, &b2);
+                                        skip_other[r], &t, &b1, &b2);
             hits |= prim != WT_NO_HIT ? 1ul << r : 0ul;
           }
           open &= ~hits;
@@ -241,7 +244,7 @@ inline void bvh_occluded_window(BvhScene scene, uint first, uint end, __global c
 #endif
   for (uint s = 0; s < n; s += WT_STREAM_RAYS) {
     uint m = min(n - s, (uint)WT_STREAM_RAYS);
-    ulong blocked = bvh_occluded_stream(scene, order + s, m, ray_o, ray_d, skip);
+    ulong blocked = bvh_occluded_stream(scene, order + s, m, ray_o, ray_d, skip, 1u);
     for (uint r = 0; r < m; ++r) occluded[order[s + r]] = (uint)((blocked >> r) & 1ul);
   }
 }

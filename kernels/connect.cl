@@ -2,9 +2,10 @@
 // its precomputed contribution to its path's radiance. For connect, entry i
 // of the queue is shade item i's path or WT_NO_HIT (no shadow ray) and the
 // count is the bounce's path count; connect_packet's queue is dense
-// (WT_FLAG_COMPACT_SHADOWS).
+// (WT_FLAG_COMPACT_SHADOWS); connect_stream takes either.
 #include "bvh_packet.cl"
 #include "bvh_prims.cl"
+#include "bvh_stream.cl"
 
 WT_KERNEL void connect(__global const uint* counters, __global const uint* shadow_queue,
                        __global const float4* shadow_o, __global const float4* shadow_d,
@@ -62,5 +63,57 @@ WT_KERNEL void connect_packet(__global const uint* counters, __global const uint
       continue;
 #endif
     radiance[index[l]] += shadow_radiance[index[l]];
+  }
+}
+
+/// connect for shadow-queue entries [w i, w i + w), w = WT_STREAM_WINDOW,
+/// traced as streams (kernels/bvh_stream.cl), grouped by octant as the
+/// bench's trace_occluded_stream groups them: for incoherent shadow rays on a
+/// CPU (Renderer's traversal choice). The same answers as connect.
+WT_KERNEL void connect_stream(__global const uint* counters, __global const uint* shadow_queue,
+                              __global const float4* shadow_o, __global const float4* shadow_d,
+                              __global const float4* shadow_radiance, __global const WtBvhNode* nodes,
+                              uint node_count, __global const float4* tri_verts,
+                              __global float4* radiance, __global const uint2* shadow_skip,
+                              __global const uint* hit_instance, WT_GEOMETRY_PARAMS WT_ALPHA_PARAMS) {
+  uint first = get_global_id(0) * WT_STREAM_WINDOW;
+  uint count = counters[WT_COUNTER_SHADOW];
+  if (first >= count) return;
+  uint end = min(first + (uint)WT_STREAM_WINDOW, count);
+  // the window's shadow rays (entries without one are WT_NO_HIT)
+  uint paths[WT_STREAM_WINDOW], order[WT_STREAM_WINDOW];
+  uint n = 0u;
+  for (uint i = first; i < end; ++i) {
+    uint path = shadow_queue[i];
+    if (path != WT_NO_HIT) paths[n++] = path;
+  }
+  if (n == 0u) return;
+  BvhScene scene = {nodes, node_count, tri_verts};
+  WT_ALPHA_BIND(scene, paths[0]);  // the stream sets each ray's own (bvh_occluded_stream)
+#if WT_STREAM_PREFETCH
+  for (uint i = 0; i < n; ++i) order[i] = paths[i];
+#else
+  stream_sort_by_octant(paths, n, shadow_d, order);
+#endif
+#if WT_HAS_PRIMITIVES
+  GeometryScene g = WT_GEOMETRY_SCENE;
+#endif
+  for (uint s = 0; s < n; s += WT_STREAM_RAYS) {
+    uint m = min(n - s, (uint)WT_STREAM_RAYS);
+    ulong blocked = bvh_occluded_stream(scene, order + s, m, shadow_o, shadow_d, (__global const uint*)shadow_skip, 2u);
+    for (uint r = 0; r < m; ++r) {
+      if ((blocked >> r) & 1ul) continue;
+      uint path = order[s + r];
+#if WT_HAS_PRIMITIVES
+      // the other primitive types ray by ray, for the rays no triangle blocks
+      WT_ALPHA_RAY(scene, path);
+      float4 o = shadow_o[path], d = shadow_d[path];
+      uint2 skip = shadow_skip[path];
+      if (bvh_prims_occluded(scene, g, o.xyz, d.xyz, o.w, d.w, skip.x, skip.y,
+                             WT_HAS_INSTANCES ? hit_instance[path] : WT_NO_HIT))
+        continue;
+#endif
+      radiance[path] += shadow_radiance[path];
+    }
   }
 }

@@ -1,6 +1,7 @@
 #include "bench/bench.h"
 
 #include "bench/embree_reference.h"
+#include "bench/generated_scenes.h"
 #include "bvh/builders.h"
 #include "bvh/bvh4.h"
 #include "bvh/lbvh.h"
@@ -392,6 +393,8 @@ struct SetResult {
   Agreement agreement;
   Traversal traversal = Traversal::kSingle;
   double coherence = 0.0;  ///< packetCoherence of the set's rays
+  double octantShare = 0.0;   ///< RayBatchStats::octantShare of a sample of its packets
+  double originSpread = 0.0;  ///< RayBatchStats::originSpread of that sample, in primitive scales (primitiveScale)
 };
 
 /// One builder's tree of a scene, traced on the same rays as the others.
@@ -450,27 +453,15 @@ double traversableRate(const SceneResult& r) {
   return seconds > 0.0 ? double(r.triangles) / seconds * 1e-6 : 0.0;
 }
 
-/// Below this packetCoherence, auto does not trace a set in packets. The
-/// bench's sets measure 1.0 (camera rays), 0.99 (shadow rays to the Cornell
-/// box's one small light), 0.68-0.74 (diffuse rays, and shadow rays to
-/// emitters or points spread over a big scene); packets paid only on the
-/// first two kinds (docs/lab/2026-12-01-performance-log.md, "Packets").
-/// Shadow sets sorted by octant and origin measure just over 0.9 and trace
-/// faster as streams (docs/lab/2026-12-05-performance-log.md, "Streams,
-/// 2026-12-05"): hence 0.95, not 0.9.
-constexpr double kPacketCoherence = 0.95;
-
-/// The traversal --traversal picks for a set of rays of this packetCoherence
-/// (auto: packets when the rays of a packet point nearly the same way; else,
-/// for any-hit queries on a CPU, streams; else one ray per work-item).
-/// Streams are for any hit only: a closest-hit set given "stream" is traced
-/// one ray per work-item.
-Traversal setTraversal(const BenchOptions& options, double coherence, bool occlusion, bool cpu) {
+/// The traversal --traversal picks for a set of rays: as asked, or (auto)
+/// chooseTraversal's choice from the rays' measured statistics
+/// (host/device/tracer.h). Streams are for any hit only: a closest-hit set
+/// given "stream" is traced one ray per work-item.
+Traversal setTraversal(const BenchOptions& options, const Tracer& tracer, const RayBatchStats& stats, bool occlusion) {
   if (options.traversal == "single") return Traversal::kSingle;
   if (options.traversal == "packet") return Traversal::kPacket;
   if (options.traversal == "stream") return occlusion ? Traversal::kStream : Traversal::kSingle;
-  if (coherence >= kPacketCoherence) return Traversal::kPacket;
-  return occlusion && cpu ? Traversal::kStream : Traversal::kSingle;
+  return chooseTraversal(stats, tracer.primitiveScale(), occlusion, tracer.context().info().isCpu);
 }
 
 const char* traversalName(Traversal t) {
@@ -503,9 +494,11 @@ std::vector<RayHit> benchSet(const Scene& scene, const PrimitiveRows& rows, Trac
   result.name = name;
   result.occlusion = occlusion;
   result.rays = rays.size();
+  const RayBatchStats stats = measureRays(rays, std::size_t(tracer.packetWidth()));
   result.coherence = packetCoherence(rays, std::size_t(tracer.packetWidth()));
-  const Traversal traversal = result.traversal =
-      setTraversal(options, result.coherence, occlusion, tracer.context().info().isCpu);
+  result.octantShare = stats.octantShare;
+  result.originSpread = stats.originSpread / tracer.primitiveScale();
+  const Traversal traversal = result.traversal = setTraversal(options, tracer, stats, occlusion);
   if (rays.empty()) return {};
   std::vector<RayHit> hits;
   std::vector<std::uint8_t> blocked;
@@ -672,14 +665,9 @@ void compareTrees(Context& context, const Scene& scene, std::span<const Aabb> bo
   }
   if (ab) {
     // the --bvh tree once more, traced by the kernels from that folder, in
-    // packets of that width or with that traversal
+    // packets of that width; a row per --ab-traversal, all on one tracer
     const std::optional<std::filesystem::path> before = kernelDirectory();
     if (!options.abKernelDir.empty()) setKernelDirectory(std::filesystem::path(options.abKernelDir));
-    TreeResult tree;
-    tree.builder = defaultBuilder;
-    tree.kernelDir = options.abKernelDir;
-    tree.packetWidth = options.abPacketWidth;
-    tree.traversal = options.abTraversal;
     try {
       owned.push_back(std::make_unique<Tracer>(context, scene, benchBvhOptions(defaultBuilder, options),
                                                options.abPacketWidth ? options.abPacketWidth
@@ -689,10 +677,20 @@ void compareTrees(Context& context, const Scene& scene, std::span<const Aabb> bo
       throw;
     }
     setKernelDirectory(before);
-    tracers.push_back(owned.back().get());
-    tree.nodes4 = tracers.back()->sceneBuffers().nodeCount;
-    tree.bytesPerTriangle = defaultTracer.sceneBuffers().triangleBytes() / std::max<double>(1.0, scene.triangles.size());
-    trees.push_back(tree);
+    std::vector<std::string> rows = options.abTraversal;
+    if (rows.empty()) rows.emplace_back();
+    for (const std::string& traversal : rows) {
+      TreeResult tree;
+      tree.builder = defaultBuilder;
+      tree.kernelDir = options.abKernelDir;
+      tree.packetWidth = options.abPacketWidth;
+      tree.traversal = traversal;
+      tracers.push_back(owned.back().get());
+      tree.nodes4 = tracers.back()->sceneBuffers().nodeCount;
+      tree.bytesPerTriangle =
+          defaultTracer.sceneBuffers().triangleBytes() / std::max<double>(1.0, scene.triangles.size());
+      trees.push_back(tree);
+    }
   }
   for (std::size_t set = 0; set < sets.size(); ++set) {
     const std::vector<Ray>& rays = *sets[set];
@@ -704,7 +702,7 @@ void compareTrees(Context& context, const Scene& scene, std::span<const Aabb> bo
       if (!trees[t].traversal.empty()) {
         BenchOptions forced = options;
         forced.traversal = trees[t].traversal;
-        traversal[t] = setTraversal(forced, 0.0, occlusion, true);
+        traversal[t] = setTraversal(forced, *tracers[t], RayBatchStats{}, occlusion);
       }
     for (std::size_t t = 0; t < tracers.size(); ++t) {
       // warm-up, and the answers
@@ -944,14 +942,33 @@ int runBench(const BenchOptions& options) {
     if (options.hairGuides > 0)
       sources.push_back({"head of hair " + std::to_string(options.hairGuides) + "x101 strands", "<hair>"});
   } else {
-    for (const std::string& path : options.scenes) sources.push_back({path, path});
+    for (const std::string& path : options.scenes) {
+      // gen:NAME, or gen:all for every one (generated_scenes.h)
+      if (path == "gen:all") {
+        for (const std::string& name : generatedSceneNames()) sources.push_back({"gen:" + name, "gen:" + name});
+      } else {
+        sources.push_back({path, path});
+      }
+    }
   }
 
   std::vector<SceneResult> results;
   for (const SceneSource& source : sources) {
     Scene scene;
     try {
-      scene = source.path.empty()       ? loadDefaultScene()
+      std::optional<Scene> generated;
+      if (source.path.rfind("gen:", 0) == 0) {
+        generated = makeGeneratedScene(std::string_view(source.path).substr(4), std::uint32_t(options.meshTriangles));
+        if (!generated) throw std::invalid_argument("bench: no generated scene '" + source.path + "' (gen:all, gen:" +
+                                                    [] {
+                                                      std::string list;
+                                                      for (const std::string& n : generatedSceneNames())
+                                                        list += (list.empty() ? "" : ", gen:") + n;
+                                                      return list;
+                                                    }() + ")");
+      }
+      scene = generated                 ? std::move(*generated)
+              : source.path.empty()       ? loadDefaultScene()
               : source.path == "<grid>"    ? makeBumpyGrid(std::uint32_t(options.meshTriangles))
               : source.path == "<spheres>" ? makeSphereField(std::uint32_t(options.sphereCount))
               : source.path == "<hair>"    ? makeHairScene(std::uint32_t(options.hairGuides), 100)
@@ -1057,9 +1074,9 @@ int runBench(const BenchOptions& options) {
       for (std::size_t k = 0; k < r.sets.size(); ++k) {
         const SetResult& s = r.sets[k];
         std::printf("    {\"name\": \"%s\", \"query\": \"%s\", \"rays\": %zu, \"hit_fraction\": %.6f, "
-                    "\"traversal\": \"%s\", \"coherence\": %.4f, \"wall_s\": %.6f, \"kernel_s\": %.6f, \"mrays_wall\": %.3f, \"mrays_kernel\": %.3f",
+                    "\"traversal\": \"%s\", \"coherence\": %.4f, \"octant_share\": %.4f, \"origin_spread\": %.3f, \"wall_s\": %.6f, \"kernel_s\": %.6f, \"mrays_wall\": %.3f, \"mrays_kernel\": %.3f",
                     s.name.c_str(), s.occlusion ? "any_hit" : "closest_hit", s.rays, s.hitFraction,
-                    traversalName(s.traversal), s.coherence, s.wallSeconds, s.kernelSeconds, mrays(s.rays, s.wallSeconds), mrays(s.rays, s.kernelSeconds));
+                    traversalName(s.traversal), s.coherence, s.octantShare, s.originSpread, s.wallSeconds, s.kernelSeconds, mrays(s.rays, s.wallSeconds), mrays(s.rays, s.kernelSeconds));
         if (s.embree) {
           std::printf(", \"embree_api\": \"%s\", \"embree_s\": %.6f, \"embree_mrays\": %.3f, \"embree_wall_s\": %.6f, "
                       "\"embree_mrays_wall\": %.3f, \"embree_hit_fraction\": %.6f, "
@@ -1143,11 +1160,11 @@ int runBench(const BenchOptions& options) {
       std::string what;
       if (!options.abKernelDir.empty()) what += "the kernels in " + options.abKernelDir;
       if (options.abPacketWidth) what += (what.empty() ? "" : ", ") + std::string("packets of ") + std::to_string(options.abPacketWidth);
-      if (!options.abTraversal.empty()) what += (what.empty() ? "" : ", ") + std::string("--traversal ") + options.abTraversal;
+      if (!options.abTraversal.empty()) what += (what.empty() ? "" : ", ") + std::string("a row per --ab-traversal, named after the *");
       std::printf("\n*: %s; (x) = throughput / the same tree's without", what.c_str());
     }
     std::printf("\ntree quality: kernel Mrays/s per builder on the same rays, interleaved; (x) = throughput / the sah "
-                "tree's\n%-28s %-5s %9s %8s %9s %7s %9s %7s %6s %16s %16s %16s\n",
+                "tree's\n%-28s %-12s %9s %8s %9s %7s %9s %7s %6s %16s %16s %16s\n",
                 "scene", "bvh", "build ms", "Mtris/s", "nodes", "SAH", "nodes4", "SAH4", "B/tri", "primary", "diffuse",
                 "shadow");
     for (const SceneResult& r : results) {
@@ -1156,8 +1173,8 @@ int runBench(const BenchOptions& options) {
         if (t.builder == BvhBuilder::Sah && !t.ab()) sahTree = &t;
       for (const TreeResult& t : r.trees) {
         const TreeResult* reference = t.ab() ? abBaseline(r.trees, t) : sahTree;
-        std::printf("%-28s %-5s %9.2f %8.2f %9zu %7.2f %9zu %7.2f %6.1f", r.name.c_str(),
-                    (std::string(bvhBuilderName(t.builder)) + (t.ab() ? "*" : "")).c_str(),
+        std::printf("%-28s %-12s %9.2f %8.2f %9zu %7.2f %9zu %7.2f %6.1f", r.name.c_str(),
+                    (std::string(bvhBuilderName(t.builder)) + (t.ab() ? "* " + t.traversal : "")).c_str(),
                     t.buildSeconds * 1e3, t.buildSeconds > 0 ? r.triangles / t.buildSeconds * 1e-6 : 0.0, t.nodes,
                     t.sah, t.nodes4, t.sah4, t.bytesPerTriangle);
         for (std::size_t k = 0; k < t.kernelSeconds.size(); ++k) {

@@ -60,10 +60,10 @@ struct BenchOptions {
   /// traced in packets of this many rays (8 or 16) instead of packetWidth,
   /// with --ab-kernel-dir's kernels if given; 0: none.
   int abPacketWidth = 0;
-  /// Kernel development: one more row in the tree comparison, the --bvh tree
-  /// with every set traced this way (single, packet, stream; as --traversal);
-  /// empty: none.
-  std::string abTraversal;
+  /// Kernel development: a row in the tree comparison per entry, the --bvh
+  /// tree with every set traced this way (single, packet, stream; as
+  /// --traversal); empty: none.
+  std::vector<std::string> abTraversal;
 };
 
 /// Run the benchmark and print the results to stdout. Returns an exit code.

@@ -820,8 +820,9 @@ int main(int argc, char** argv) {
                         "flattened copies would not fit the device's global memory cache (32 MiB where it reports none)")
       ->check(CLI::IsMember({"auto", "on", "off"}))->capture_default_str();
   renderCmd->add_option("--traversal", render.traversal,
-                        "auto: camera rays and their shadow rays in packets of neighbouring pixels, later bounces "
-                        "one ray per work-item; single: every ray alone")
+                        "auto: camera rays in packets of neighbouring pixels, later bounces one ray per work-item; "
+                        "each bounce's shadow rays in packets, streams (CPUs) or alone, chosen from a sample of them "
+                        "measured in the first sample (docs/performance.md); single: every ray alone")
       ->check(CLI::IsMember({"auto", "single"}))->capture_default_str();
   renderCmd->add_option("--packet-width", render.packetWidth,
                         "Pixels per packet with --traversal auto: 8 or 16; 0 picks by the device (16 where its native "
@@ -935,8 +936,9 @@ int main(int argc, char** argv) {
   wt::BenchOptions bench;
   CLI::App* benchCmd = app.add_subcommand("bench", "BVH build and ray throughput benchmark");
   benchCmd->add_option("scenes", bench.scenes,
-                       "Scene files, .gltf, .glb or .json (default: built-in Cornell box, MetalRoughSpheresNoTextures and DamagedHelmet "
-                       "from the asset folder, a generated 1M-triangle mesh)");
+                       "Scene files, .gltf, .glb or .json, or scenes made in code: gen:soup, gen:displaced-sphere, "
+                       "gen:forest, gen:many-lights, gen:all (default: built-in Cornell box, MetalRoughSpheresNoTextures "
+                       "and DamagedHelmet from the asset folder, a generated 1M-triangle mesh, sphere field, head of hair)");
   benchCmd->add_option("--kernel-cache", kernelCache, kernelCacheHelp);
   benchCmd->add_option("--assets", bench.assetsDir, "Asset folder (default: ../shared/assets beside the source, or from here)");
   benchCmd->add_option("--device", bench.device, "Device index or name substring");
@@ -984,9 +986,9 @@ int main(int argc, char** argv) {
       ->delimiter(',')->check(CLI::IsMember({"auto", "lbvh", "ploc", "sah", "none"}))->capture_default_str();
   benchCmd->add_option("--traversal", bench.traversal,
                        "single: one ray per work-item; packet: a packet of rays per work-item; stream: shadow rays "
-                       "as streams of 64 that walk the tree together; auto: packets for a set whose packets' rays "
-                       "point nearly the same way (coherence >= 0.95 in --json), else streams for shadow rays on a CPU, "
-                       "else single")
+                       "as streams of 64 that walk the tree together; auto: as the renderer chooses from the rays "
+                       "(packets where a packet's rays point nearly one way, coherence >= 0.95, and leave few leaves' "
+                       "worth of surface apart, origin_spread in --json; else streams for shadow rays on a CPU; else single)")
       ->check(CLI::IsMember({"single", "packet", "stream", "auto"}));
   benchCmd->add_option("--packet-width", bench.packetWidth,
                        "Rays per packet: 8 or 16; 0 picks by the device and the scene (16 where its native float vector "
@@ -1002,9 +1004,9 @@ int main(int argc, char** argv) {
                        "this many rays, interleaved with the --packet-width row in one process")
       ->check(CLI::IsMember({8, 16}));
   benchCmd->add_option("--ab-traversal", bench.abTraversal,
-                       "Kernel development: the tree comparison gains a row, the --bvh tree with every set traced "
-                       "this way, interleaved with the row traced as --traversal chose")
-      ->check(CLI::IsMember({"single", "packet", "stream"}));
+                       "Kernel development: the tree comparison gains a row per value (comma-separated), the --bvh "
+                       "tree with every set traced this way, interleaved with the row traced as --traversal chose")
+      ->delimiter(',')->check(CLI::IsMember({"single", "packet", "stream"}));
   benchCmd->add_option("--ploc-radius", bench.plocRadius, "ploc trees: neighbours searched on each side")
       ->check(CLI::Range(1, 64))->capture_default_str();
   benchCmd->add_option("--ploc-top-prims", bench.plocTopPrims,

@@ -17,7 +17,8 @@ Tracer::Tracer(Context& context, const Scene& scene, const BvhBuildOptions& opti
     : m_context(context), m_scene(std::make_unique<SceneBuffers>(context, scene, options)),
       m_packetWidth(packetWidthFor(context.info(), packetWidth, scene.triangles.size())),
       m_streamPrefetch(prefetch == StreamPrefetch::kAuto ? streamPrefetchFor(context.info(), m_scene->uploadedBytes)
-                                                         : prefetch == StreamPrefetch::kOn) {
+                                                         : prefetch == StreamPrefetch::kOn),
+      m_primitiveScale(wt::primitiveScale(scene)) {
   // the scene's switches (sceneFeatures), less what tracing without shading never reads
   KernelFeatures features =
       kernelFeaturesFor(sceneFeatures(scene, *m_scene, RenderSettings{}), context.info(), m_packetWidth);
@@ -58,6 +59,86 @@ double packetCoherence(std::span<const Ray> rays, std::size_t width) {
     ++packets;
   }
   return packets > 0 ? total / double(packets) : 0.0;
+}
+
+RayBatchStats measureRays(std::span<const Ray> rays, std::size_t width, std::size_t maxPackets) {
+  RayBatchStats stats;
+  const std::size_t kWidth = std::max<std::size_t>(width, 1);
+  const std::size_t packets = (rays.size() + kWidth - 1) / kWidth;
+  if (packets == 0 || maxPackets == 0) return stats;
+  // every step-th packet: the sample covers the whole batch (its pixels, its bounces)
+  const std::size_t step = std::max<std::size_t>(1, packets / maxPackets);
+  double coherence = 0.0, octants = 0.0, spread = 0.0;
+  for (std::size_t p = 0; p < packets; p += step) {
+    const std::span<const Ray> packet = rays.subspan(p * kWidth, std::min(kWidth, rays.size() - p * kWidth));
+    std::size_t inOctant[8] = {};
+    glm::dvec3 mean(0.0);
+    std::size_t finite = 0;
+    for (const Ray& r : packet) {
+      if (!std::isfinite(r.origin.x + r.origin.y + r.origin.z)) continue;
+      ++inOctant[(r.direction.x < 0.0f ? 1 : 0) | (r.direction.y < 0.0f ? 2 : 0) | (r.direction.z < 0.0f ? 4 : 0)];
+      mean += glm::dvec3(r.origin);
+      ++finite;
+    }
+    if (finite == 0) continue;
+    mean /= double(finite);
+    double squares = 0.0;
+    for (const Ray& r : packet)
+      if (std::isfinite(r.origin.x + r.origin.y + r.origin.z)) {
+        const glm::dvec3 offset = glm::dvec3(r.origin) - mean;
+        squares += glm::dot(offset, offset);
+      }
+    coherence += packetCoherence(packet, kWidth);
+    octants += double(*std::max_element(std::begin(inOctant), std::end(inOctant))) / double(finite);
+    spread += std::sqrt(squares / double(finite));
+    ++stats.packets;
+  }
+  if (stats.packets == 0) return stats;
+  stats.coherence = coherence / double(stats.packets);
+  stats.octantShare = octants / double(stats.packets);
+  stats.originSpread = spread / double(stats.packets);
+  return stats;
+}
+
+double primitiveScale(const Scene& scene) {
+  double area = 0.0;
+  std::size_t counted = 0;
+  for (const WtTriangle& t : scene.triangles) {
+    const glm::dvec3 p0(scene.positions[t.v0].x, scene.positions[t.v0].y, scene.positions[t.v0].z);
+    const glm::dvec3 p1(scene.positions[t.v1].x, scene.positions[t.v1].y, scene.positions[t.v1].z);
+    const glm::dvec3 p2(scene.positions[t.v2].x, scene.positions[t.v2].y, scene.positions[t.v2].z);
+    const double a = 0.5 * glm::length(glm::cross(p1 - p0, p2 - p0));
+    if (std::isfinite(a)) area += a, ++counted;
+  }
+  for (const Sphere& s : scene.spheres) {
+    const double a = 4.0 * 3.14159265358979 * double(s.radius) * s.radius;
+    if (std::isfinite(a)) area += a, ++counted;
+  }
+  if (counted > 0 && area > 0.0) return std::sqrt(area / double(counted));
+  // curves, SDF grids: the bounds spread over the primitives as over a surface
+  const Aabb b = scene.bounds();
+  const glm::dvec3 diagonal(double(b.hi.x) - b.lo.x, double(b.hi.y) - b.lo.y, double(b.hi.z) - b.lo.z);
+  const std::size_t prims = std::max<std::size_t>(1, scene.curves.size() + scene.sdfGrids.size());
+  const double d = glm::length(diagonal);
+  return std::isfinite(d) && d > 0.0 ? d / std::sqrt(double(prims)) : 1.0;
+}
+
+Traversal chooseTraversal(const RayBatchStats& stats, double scale, bool occlusion, bool cpu) {
+  const bool streams = occlusion && cpu;
+  const Traversal incoherent = streams ? Traversal::kStream : Traversal::kSingle;
+  if (stats.packets == 0 || stats.coherence < kPacketMinCoherence) return incoherent;
+  // the leaf neighbourhoods a packet visits at its origins: 1 for one origin,
+  // one more per leaf width of origin spread (diameter about 2 RMS radii)
+  const double leaf = kLeafScales * std::max(scale, 1e-30);
+  const double neighbourhoods = 1.0 + 2.0 * stats.originSpread / leaf;
+  // cost per ray in single-ray visits
+  const double packet = neighbourhoods * kPacketLaneCost, other = streams ? 1.0 / kStreamGain : 1.0;
+  return packet < other ? Traversal::kPacket : incoherent;
+}
+
+Traversal Tracer::chooseTraversal(std::span<const Ray> rays, bool occlusion) const {
+  return wt::chooseTraversal(measureRays(rays, std::size_t(m_packetWidth)), m_primitiveScale, occlusion,
+                             m_context.info().isCpu);
 }
 
 void Tracer::uploadRays(std::span<const Ray> rays) {

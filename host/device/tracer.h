@@ -58,6 +58,50 @@ enum class StreamPrefetch { kAuto, kOn, kOff };
 /// directions drawn uniformly from the sphere (for packets of 8); 0 for no rays.
 double packetCoherence(std::span<const Ray> rays, std::size_t width = 8);
 
+/// What chooseTraversal reads off a batch, measured on a sample of its
+/// packets of `width` consecutive rays (measureRays).
+struct RayBatchStats {
+  double coherence = 0.0;     ///< packetCoherence of the sampled packets
+  double octantShare = 0.0;   ///< mean fraction of a packet's rays in the packet's most common direction octant
+  double originSpread = 0.0;  ///< mean over packets of the RMS distance of the rays' origins from their mean, world units
+  std::size_t packets = 0;    ///< packets sampled
+};
+
+/// The statistics of up to `maxPackets` packets of `width` consecutive
+/// rays, spread evenly over the batch (a cost of O(maxPackets width), not of
+/// the batch's size).
+RayBatchStats measureRays(std::span<const Ray> rays, std::size_t width, std::size_t maxPackets = 2048);
+
+/// A scene's length scale for the traversal choice: the square root of its
+/// surfaces' mean area per primitive (triangles and spheres), or, with
+/// neither, the bounds' diagonal over the square root of the primitive count.
+double primitiveScale(const Scene& scene);
+
+/// Below this packetCoherence a packet's rays leave each other's boxes
+/// within a few levels of the root, whatever their origins: no packets.
+inline constexpr double kPacketMinCoherence = 0.95;
+/// A packet's visit of one node costs about this many single-ray visits per
+/// lane (its box tests run on all lanes, so the cost per visit grows with
+/// the width): a packet that stays together costs this fraction of single
+/// rays per ray, one that visits n leaf neighbourhoods n times it.
+inline constexpr double kPacketLaneCost = 0.2;
+/// Streams trace any-hit rays about this many times as fast as single rays
+/// on a CPU, however incoherent (a node fetched once for all the rays in it).
+inline constexpr double kStreamGain = 1.4;
+/// A 4-wide tree's leaf box spans about this many primitive scales
+/// (primitiveScale) of a surface: its leaves hold a few primitives
+/// (bvh4Options).
+inline constexpr double kLeafScales = 2.0;
+
+/// The traversal for a batch with these statistics (auto), the cheapest per
+/// ray by a cost model: a packet whose rays point nearly the same way
+/// (kPacketMinCoherence) visits n = 1 + origin diameter / (kLeafScales
+/// scale) leaf neighbourhoods at its origins, at n kPacketLaneCost single
+/// visits per ray; single rays cost 1, streams (any hit, CPU) 1 /
+/// kStreamGain. Camera rays (one origin, n = 1) always come out as packets;
+/// random directions never do.
+Traversal chooseTraversal(const RayBatchStats& stats, double scale, bool occlusion, bool cpu);
+
 class Tracer {
  public:
   /// packetWidth: rays per packet, 8 or 16; 0 picks by the device (packetWidthFor).
@@ -78,6 +122,10 @@ class Tracer {
   /// BLEND) for the next trace calls: ray i of a call draws from stream
   /// rng_alpha_ray(key, i), whichever the traversal. 0 until set.
   void setAlphaKey(std::uint32_t key) { m_alphaKey = key; }
+  /// The scene's primitiveScale, for chooseTraversal.
+  double primitiveScale() const { return m_primitiveScale; }
+  /// chooseTraversal for these rays on this tracer's scene, device and packet width.
+  Traversal chooseTraversal(std::span<const Ray> rays, bool occlusion) const;
   /// Kernel time of the last trace call (profiling events), seconds.
   double lastKernelSeconds() const { return m_lastKernelSeconds; }
 
@@ -102,6 +150,7 @@ class Tracer {
   cl::Buffer m_instances;  ///< per ray: in, the instance of the surface it leaves; out, the instance hit
   std::size_t m_capacity = 0;
   std::uint32_t m_alphaKey = 0;
+  double m_primitiveScale = 0.0;
   double m_lastKernelSeconds = 0.0;
 };
 

@@ -155,7 +155,7 @@ KernelFeatures kernelFeaturesFor(const FeatureSet& f, const DeviceInfo& device, 
   k.primitives[WT_PRIM_DISPLACED] = f.displaced;
   k.primitives[WT_PRIM_INSTANCE] = f.instances;
   k.packetWidth = packetWidthFor(device, requestedPacketWidth, f.triangleCount);
-  k.streamPrefetch = false;  // the renderer traces no streams (the bench's Tracer decides its own)
+  k.streamPrefetch = false;  // by the scene's size where it is uploaded (Renderer, Tracer: streamPrefetchFor)
   return k;
 }
 

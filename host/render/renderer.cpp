@@ -1,5 +1,6 @@
 #include "render/renderer.h"
 
+#include "core/log.h"
 #include "device/program.h"
 #include "device/scene_args.h"
 #include "render/material_tables.h"
@@ -68,6 +69,10 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
   m_kernelFeatures.aov = settings.aovs;
   m_kernelFeatures.bvhCost = settings.aovs && settings.bvhCost;
   m_packetWidth = m_kernelFeatures.packetWidth;
+  // streams ask for a node's children early where the scene outgrows the cache (as the Tracer's)
+  m_kernelFeatures.streamPrefetch = streamPrefetchFor(context.info(), m_scene->uploadedBytes);
+  m_primitiveScale = primitiveScale(scene);
+  m_shadowTraversal.assign(std::size_t(std::max(settings.maxBounces, 0)) + 1, std::nullopt);
   const KernelFeatures& features = m_kernelFeatures;
   const auto buildStart = std::chrono::steady_clock::now();
   m_program = buildProgram(context, features);
@@ -81,6 +86,7 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
   m_shade = {m_program, built};
   m_connect = {m_program, built};
   m_connectPacket = {m_program, built};
+  m_connectStream = {m_program, built};
   m_accumulate = {m_program, built};
   m_resolve = {m_program, built};
   m_tonemapper = Tonemapper(context, m_program, built, std::size_t(settings.width) * std::size_t(settings.height));
@@ -175,6 +181,7 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
 
   bindTracing(m_connect);
   bindTracing(m_connectPacket);
+  bindTracing(m_connectStream);
 
   m_path.bind(m_accumulate);
   m_accumulate.set("counters", m_counters);
@@ -194,6 +201,45 @@ struct TimedCommand {
 };
 
 }  // namespace
+
+Traversal Renderer::probeShadowRays(int bounce) {
+  // Up to kProbeRays of the dense queue's first entries, and their rays: the
+  // paths an entry names lie close together (shade appends in item order),
+  // so the span read stays near the sample's size.
+  constexpr std::size_t kProbeRays = 16384;
+  cl::CommandQueue& q = m_context.queue();
+  cl_uint count = 0;
+  q.enqueueReadBuffer(m_counters, CL_TRUE, WT_COUNTER_SHADOW * sizeof(cl_uint), sizeof(cl_uint), &count);
+  std::vector<cl_uint> queue(std::min<std::size_t>(count, kProbeRays));
+  if (queue.empty()) return Traversal::kSingle;
+  q.enqueueReadBuffer(m_path.shadowQueue, CL_TRUE, 0, queue.size() * sizeof(cl_uint), queue.data());
+  // a sample of paths no more than 16 times its size apart: fewer entries where they spread
+  std::size_t n = queue.size();
+  cl_uint lo = 0, hi = 0;
+  for (;;) {
+    lo = *std::min_element(queue.begin(), queue.begin() + std::ptrdiff_t(n));
+    hi = *std::max_element(queue.begin(), queue.begin() + std::ptrdiff_t(n));
+    if (std::size_t(hi - lo) < 16 * kProbeRays || n <= 64) break;
+    n /= 2;
+  }
+  std::vector<cl_float4> o(std::size_t(hi - lo) + 1), d(o.size());
+  q.enqueueReadBuffer(m_path.shadowO, CL_TRUE, std::size_t(lo) * sizeof(cl_float4), o.size() * sizeof(cl_float4), o.data());
+  q.enqueueReadBuffer(m_path.shadowD, CL_TRUE, std::size_t(lo) * sizeof(cl_float4), d.size() * sizeof(cl_float4), d.data());
+  std::vector<Ray> rays(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const cl_float4 &ro = o[queue[i] - lo], &rd = d[queue[i] - lo];
+    rays[i].origin = glm::vec3(ro.s[0], ro.s[1], ro.s[2]);
+    rays[i].tmin = ro.s[3];
+    rays[i].direction = glm::vec3(rd.s[0], rd.s[1], rd.s[2]);
+    rays[i].tmax = rd.s[3];
+  }
+  const RayBatchStats stats = measureRays(rays, std::size_t(m_packetWidth));
+  const Traversal choice = chooseTraversal(stats, m_primitiveScale, true, m_context.info().isCpu);
+  log::debug("shadow rays of bounce " + std::to_string(bounce) + ": coherence " + std::to_string(stats.coherence) +
+             ", origin spread " + std::to_string(stats.originSpread / m_primitiveScale) + " primitive scales: " +
+             (choice == Traversal::kPacket ? "packets" : choice == Traversal::kStream ? "streams" : "single rays"));
+  return choice;
+}
 
 void Renderer::renderSample() {
   auto start = std::chrono::steady_clock::now();
@@ -230,11 +276,20 @@ void Renderer::renderSample() {
     m_profile.bounces[bounce].paths += alive;
     fill(0u, outSlot, bounce);
     // extend: closest hit of every queued path; camera rays in packets
-    const bool packets = m_settings.packets && !m_kernelFeatures.bvhCost && bounce == 0;
-    // Shadow rays traced in packets are appended to a dense queue (an atomic
-    // counter from 0); otherwise shade writes entry i for its item i
-    // (WT_NO_HIT: no shadow ray) and the queue has the bounce's path count.
-    fill(packets ? 0u : cl_uint(alive), WT_COUNTER_SHADOW, bounce);
+    // (one origin: chooseTraversal's packets on any scene)
+    const bool choose = m_settings.packets && !m_kernelFeatures.bvhCost;
+    const bool packets = choose && bounce == 0;
+    // the shadow rays' traversal, measured on them in the first sample
+    if (choose && m_settings.shadowTraversal) m_shadowTraversal[std::size_t(bounce)] = m_settings.shadowTraversal;
+    const bool probe = choose && m_connectStage && !m_shadowTraversal[std::size_t(bounce)];
+    const Traversal shadowTraversal =
+        choose && !probe ? *m_shadowTraversal[std::size_t(bounce)] : Traversal::kSingle;
+    // Shadow rays traced in packets, or measured, are appended to a dense
+    // queue (an atomic counter from 0); otherwise shade writes entry i for
+    // its item i (WT_NO_HIT: no shadow ray) and the queue has the bounce's
+    // path count. connect and connect_stream take either.
+    const bool compactShadows = probe || shadowTraversal == Traversal::kPacket;
+    fill(compactShadows ? 0u : cl_uint(alive), WT_COUNTER_SHADOW, bounce);
     // stochastic transparency: numbers of their own per sample, bounce and stage
     // the general program takes the alpha key whether or not the scene has holes
     const bool alpha = m_kernelFeatures.alpha;
@@ -251,7 +306,7 @@ void Renderer::renderSample() {
 
     // shade: emission and the next direction; survivors go to the other queue
     WtFrameParams shadeParams = frameParams(m_settings, m_lights, sample, bounce);
-    if (packets) shadeParams.flags |= WT_FLAG_COMPACT_SHADOWS;
+    if (compactShadows) shadeParams.flags |= WT_FLAG_COMPACT_SHADOWS;
     if (m_connectStage) shadeParams.flags |= WT_FLAG_SHADOW_QUEUE;
     m_shade.set("frame", shadeParams)
         .set("in_slot", inSlot)
@@ -270,12 +325,24 @@ void Renderer::renderSample() {
           k.set("alpha_key", rng_alpha_key(cl_uint(sample), cl_uint(bounce), WT_DIM_ALPHA_SHADOW, m_settings.seed));
         launch(k, items, event(Command::Connect, bounce));
       };
-      if (packets)
+      const Traversal traversal = probe ? *(m_shadowTraversal[std::size_t(bounce)] = probeShadowRays(bounce))
+                                        : shadowTraversal;
+      if (traversal == Traversal::kPacket) {
         run(m_connectPacket, (alive + m_packetWidth - 1) / m_packetWidth);
-      else
+      } else if (traversal == Traversal::kStream) {
+        if (alpha)
+          m_connectStream.set("alpha_key",
+                              rng_alpha_key(cl_uint(sample), cl_uint(bounce), WT_DIM_ALPHA_SHADOW, m_settings.seed));
+        m_connectStream.requireBound();
+        m_context.launch(stage::ConnectStream::kName.data(), m_connectStream.kernel(),
+                         (alive + WT_STREAM_WINDOW - 1) / WT_STREAM_WINDOW, Context::kStreamLocalSize,
+                         event(Command::Connect, bounce));
+        ++m_profile.kernelLaunches;
+      } else {
         run(m_connect, alive);
+      }
       // profiled: the sparse queue's shadow rays, counted on the host after the pass
-      if (profile && !packets && m_connectStage) {
+      if (profile && !compactShadows && m_connectStage) {
         shadowEntries.emplace_back(bounce, std::vector<cl_uint>(alive));
         q.enqueueReadBuffer(m_path.shadowQueue, CL_FALSE, 0, alive * sizeof(cl_uint), shadowEntries.back().second.data(),
                             nullptr, event(Command::ProfileRead, bounce));
@@ -288,7 +355,7 @@ void Renderer::renderSample() {
     q.enqueueReadBuffer(m_counters, CL_TRUE, 0, sizeof(counters), counters, nullptr, event(Command::Transfer, bounce));
     hostWait += std::chrono::duration<double>(std::chrono::steady_clock::now() - readStart).count();
     ++m_profile.blockingReads;
-    if (profile && connect && packets) m_profile.bounces[bounce].shadowRays += counters[WT_COUNTER_SHADOW];
+    if (profile && connect && compactShadows) m_profile.bounces[bounce].shadowRays += counters[WT_COUNTER_SHADOW];
     alive = counters[outSlot];
     if (m_settings.stopOnNonFinite && counters[WT_COUNTER_FIRST_NONFINITE] != 0xffffffffu)
       throwNonFinite(sample, counters[WT_COUNTER_FIRST_NONFINITE], counters[WT_COUNTER_NONFINITE_WHERE]);

@@ -7,6 +7,7 @@
 #include "device/context.h"
 #include "device/program.h"
 #include "device/scene_buffers.h"
+#include "device/tracer.h"
 #include "render/feature_set.h"
 #include "render/path_state.h"
 #include "render/stage_params.h"
@@ -22,6 +23,7 @@
 #include <stdexcept>
 #include <string>
 #include <memory>
+#include <optional>
 #include <vector>
 
 namespace wt {
@@ -59,11 +61,17 @@ struct RenderSettings {
   std::uint32_t accumulation = WT_ACCUMULATE_KAHAN;  ///< WT_ACCUMULATE_* (double needs fp64)
   BvhBuilder bvhBuilder = BvhBuilder::Auto;  ///< which tree the scene's BVH is (host/bvh/builders.h)
   Instancing instancing = Instancing::Off;   ///< whether repeated geometry is stored once (SceneBuffers)
-  /// Camera rays and the shadow rays from their hits traced in packets of
-  /// packetWidth neighbouring pixels (kernels/bvh_packet.cl); later
-  /// bounces, incoherent, one ray per work-item. The same hits either way
-  /// (of two at exactly the same distance, another may win).
+  /// Camera rays traced in packets of packetWidth neighbouring pixels
+  /// (kernels/bvh_packet.cl), later bounces' one ray per work-item; each
+  /// bounce's shadow rays as chooseTraversal (host/device/tracer.h) picks
+  /// from a sample of them measured in the first sample: packets, streams
+  /// (kernels/bvh_stream.cl) or one ray per work-item. false: every ray
+  /// alone. The same hits either way (of two at exactly the same distance,
+  /// another may win).
   bool packets = true;
+  /// Developer setting (tests): with `packets`, every bounce's shadow rays
+  /// traced this way instead of as chooseTraversal picks; nullopt: picked.
+  std::optional<Traversal> shadowTraversal;
   int packetWidth = 0;  ///< rays per packet, 8 or 16; 0: by the device and the scene (packetWidthFor)
   /// Developer setting (--general-program): build every kernel switch on
   /// (generalKernelFeatures) instead of the scene's; the same image, for the
@@ -160,6 +168,14 @@ class Renderer {
 
   /// Render and accumulate one more sample per pixel.
   void renderSample();
+  /// How bounce `bounce`'s shadow rays are traced: chosen in the first
+  /// sample from a sample of them (chooseTraversal); nullopt before it, past
+  /// maxBounces, or where the traversal is not chosen (packets off, the
+  /// bvh-cost view, no connect stage).
+  std::optional<Traversal> shadowTraversal(int bounce) const {
+    return bounce >= 0 && std::size_t(bounce) < m_shadowTraversal.size() ? m_shadowTraversal[std::size_t(bounce)]
+                                                                          : std::nullopt;
+  }
   /// Read the accumulated image (and tone-map it on the device).
   Image readImage();
   /// The mean, variance and sample counts only (no tone mapping, srgba
@@ -208,6 +224,14 @@ class Renderer {
   KernelArgs<stage::Shade> m_shade;
   KernelArgs<stage::Connect> m_connect;
   KernelArgs<stage::ConnectPacket> m_connectPacket;
+  KernelArgs<stage::ConnectStream> m_connectStream;
+  /// How each bounce's shadow rays are traced (m_settings.packets), chosen
+  /// from a sample of them in the first sample (probeShadowRays); absent
+  /// until then. Packets only where shade appends them densely.
+  std::vector<std::optional<Traversal>> m_shadowTraversal;
+  double m_primitiveScale = 1.0;  ///< primitiveScale of the scene, for chooseTraversal
+  /// chooseTraversal for bounce `bounce`'s queued shadow rays (counters read back).
+  Traversal probeShadowRays(int bounce);
   KernelArgs<stage::Accumulate> m_accumulate;
   KernelArgs<stage::Resolve> m_resolve;
   Tonemapper m_tonemapper;

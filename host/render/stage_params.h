@@ -39,7 +39,7 @@ struct Shade {
       kGeometryParams, params("ray_cone", "aov_sample", "aov_ids"), kSurfaceParams);
 };
 
-/// connect and connect_packet: the same parameters.
+/// connect, connect_packet and connect_stream: the same parameters.
 inline constexpr auto kConnectParams =
     concatParams(params("counters", "shadow_queue", "shadow_o", "shadow_d", "shadow_radiance", "nodes", "node_count",
                         "tri_verts", "radiance", "shadow_skip", "hit_instance"),
@@ -50,6 +50,10 @@ struct Connect {
 };
 struct ConnectPacket {
   static constexpr std::string_view kName = "connect_packet";
+  static constexpr auto kParams = kConnectParams;
+};
+struct ConnectStream {
+  static constexpr std::string_view kName = "connect_stream";
   static constexpr auto kParams = kConnectParams;
 };
 

@@ -62,7 +62,7 @@ void expectAll(bool alpha, const std::string& root) {
 TEST(KernelContract, RenderStagesMatchTheirHostDeclarations) {
   for (bool alpha : {false, true})
     expectAll<stage::Generate, stage::Extend, stage::ExtendPacket, stage::Shade, stage::Connect,
-              stage::ConnectPacket, stage::Accumulate, stage::Resolve, stage::Tonemap, stage::LogLuminance,
+              stage::ConnectPacket, stage::ConnectStream, stage::Accumulate, stage::Resolve, stage::Tonemap, stage::LogLuminance,
               stage::TonemapExposure>(alpha, "wavetrace.cl");
 }
 

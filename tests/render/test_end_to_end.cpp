@@ -9,11 +9,14 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <optional>
+#include <string>
 
 namespace wt {
 namespace {
 
-Image renderCornell(std::uint32_t seed, int spp = 4, bool packets = true, int packetWidth = 0) {
+Image renderCornell(std::uint32_t seed, int spp = 4, bool packets = true, int packetWidth = 0,
+                    std::optional<Traversal> shadows = std::nullopt) {
   Scene scene = loadDefaultScene();
   RenderSettings settings;
   settings.width = 48;
@@ -22,6 +25,7 @@ Image renderCornell(std::uint32_t seed, int spp = 4, bool packets = true, int pa
   settings.seed = seed;
   settings.packets = packets;
   settings.packetWidth = packetWidth;
+  settings.shadowTraversal = shadows;
   Renderer renderer(test::deviceContext(), scene, settings);
   for (int s = 0; s < spp; ++s) renderer.renderSample();
   return renderer.readImage();
@@ -125,23 +129,55 @@ TEST(EndToEnd, DeterministicForASeed) {
   EXPECT_NE(a.rgb, c.rgb);
 }
 
+TEST(EndToEnd, ShadowTraversalIsChosenFromTheRaysInTheFirstSample) {
+  // at 256x256 the Cornell box's walls are far wider than a packet's
+  // pixels and the shadow rays of neighbouring camera hits to its one small
+  // light point nearly one way (at 48x48 they do not, and go in streams):
+  // packets; after a diffuse bounce they point every way, streams on a CPU
+  // (else single rays)
+  Scene scene = loadDefaultScene();
+  RenderSettings settings;
+  settings.width = settings.height = 256;
+  settings.maxBounces = 4;
+  Renderer renderer(test::deviceContext(), scene, settings);
+  EXPECT_FALSE(renderer.shadowTraversal(0).has_value());
+  renderer.renderSample();
+  EXPECT_EQ(renderer.shadowTraversal(0), Traversal::kPacket);
+  const Traversal incoherent = test::deviceContext().info().isCpu ? Traversal::kStream : Traversal::kSingle;
+  EXPECT_EQ(renderer.shadowTraversal(1), incoherent);
+  EXPECT_EQ(renderer.shadowTraversal(2), incoherent);
+  EXPECT_FALSE(renderer.shadowTraversal(5).has_value());
+  // --traversal single: nothing chosen
+  settings.packets = false;
+  Renderer single(test::deviceContext(), scene, settings);
+  single.renderSample();
+  EXPECT_FALSE(single.shadowTraversal(0).has_value());
+}
+
 TEST(EndToEnd, PacketsGiveTheSameImageAsSingleRays) {
   // Camera rays and their shadow rays in packets (extend_packet,
-  // connect_packet) find the same hits as one ray per work-item. Only a
-  // camera ray through a shared edge at exactly the same distance on both
-  // triangles may take the other one, changing that one pixel.
+  // connect_packet), and the later bounces' shadow rays in streams
+  // (connect_stream, ShadowTraversalIsChosenFromTheRaysInTheFirstSample),
+  // find the same hits as one ray per work-item. Only a camera ray through a
+  // shared edge at exactly the same distance on both triangles may take the
+  // other one, changing that one pixel.
   // Both packet widths, whatever this device would pick.
+  // Every bounce's shadow rays forced into packets, into streams, and as chosen.
   Image single = renderCornell(5, 4, false);
-  for (int width : {8, 16}) {
-    Image packets = renderCornell(5, 4, true, width);
-    ASSERT_EQ(packets.rgb.size(), single.rgb.size());
-    int differ = 0;
-    for (std::size_t i = 0; i < packets.rgb.size(); i += 3)
-      differ += packets.rgb[i] != single.rgb[i] || packets.rgb[i + 1] != single.rgb[i + 1] ||
-                packets.rgb[i + 2] != single.rgb[i + 2];
-    RecordProperty("pixels_differing_" + std::to_string(width), differ);
-    EXPECT_LE(differ, 2) << differ << " of " << packets.rgb.size() / 3 << " pixels differ in packets of " << width;
-  }
+  for (int width : {8, 16})
+    for (std::optional<Traversal> shadows : {std::optional<Traversal>(Traversal::kPacket),
+                                             std::optional<Traversal>(Traversal::kStream), std::optional<Traversal>()}) {
+      const std::string how = std::string(!shadows ? "chosen" : *shadows == Traversal::kPacket ? "packet" : "stream") +
+                              "_" + std::to_string(width);
+      Image packets = renderCornell(5, 4, true, width, shadows);
+      ASSERT_EQ(packets.rgb.size(), single.rgb.size());
+      int differ = 0;
+      for (std::size_t i = 0; i < packets.rgb.size(); i += 3)
+        differ += packets.rgb[i] != single.rgb[i] || packets.rgb[i + 1] != single.rgb[i + 1] ||
+                  packets.rgb[i + 2] != single.rgb[i + 2];
+      RecordProperty("pixels_differing_" + how, differ);
+      EXPECT_LE(differ, 2) << differ << " of " << packets.rgb.size() / 3 << " pixels differ, shadow rays " << how;
+    }
 }
 
 }  // namespace

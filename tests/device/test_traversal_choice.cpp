@@ -1,0 +1,133 @@
+// chooseTraversal on synthetic batches: what the measured statistics say
+// and which traversal they lead to, with no device involved.
+#include "device/tracer.h"
+#include "scene/generators.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+#include <vector>
+
+namespace wt {
+namespace {
+
+/// width x width camera rays from one eye through a 0.6-wide screen, row by row.
+std::vector<Ray> cameraRays(int width) {
+  std::vector<Ray> rays;
+  for (int y = 0; y < width; ++y)
+    for (int x = 0; x < width; ++x) {
+      Ray r;
+      r.origin = glm::vec3(0.0f, 0.0f, 3.0f);
+      r.direction = glm::normalize(glm::vec3(0.6f * ((x + 0.5f) / width - 0.5f), 0.6f * ((y + 0.5f) / width - 0.5f), -1.0f));
+      rays.push_back(r);
+    }
+  return rays;
+}
+
+/// Rays leaving a row of points `pitch` apart on the plane z = 0 towards
+/// random points of a square of half-size `half` centred 3 above: the
+/// shadow rays of neighbouring pixels to one small light.
+std::vector<Ray> shadowRays(std::size_t count, float pitch, float half) {
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> u(-half, half);
+  std::vector<Ray> rays;
+  for (std::size_t i = 0; i < count; ++i) {
+    Ray r;
+    r.origin = glm::vec3(pitch * float(i % 1024), pitch * float(i / 1024), 0.0f);
+    const glm::vec3 target(0.5f + u(rng), 0.5f + u(rng), 3.0f);
+    r.direction = glm::normalize(target - r.origin);
+    r.tmax = glm::length(target - r.origin);
+    rays.push_back(r);
+  }
+  return rays;
+}
+
+std::vector<Ray> randomRays(std::size_t count) {
+  std::mt19937 rng(7);
+  std::normal_distribution<float> gauss;
+  std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+  std::vector<Ray> rays(count);
+  for (Ray& r : rays) {
+    r.origin = glm::vec3(unit(rng), unit(rng), unit(rng));
+    r.direction = glm::normalize(glm::vec3(gauss(rng), gauss(rng), gauss(rng)));
+  }
+  return rays;
+}
+
+TEST(TraversalChoice, MeasuresCoherenceOctantsAndOriginSpread) {
+  EXPECT_EQ(measureRays({}, 8).packets, 0u);
+  // one eye: no spread, every packet in one octant, coherence near 1
+  const RayBatchStats camera = measureRays(cameraRays(64), 8);
+  EXPECT_EQ(camera.originSpread, 0.0);
+  EXPECT_GT(camera.coherence, 0.99);
+  EXPECT_GT(camera.octantShare, 0.9);  // a packet crosses an axis only at the image's middle
+  // origins at x = 0, 1, ..., 7: RMS distance from 3.5 is sqrt(5.25)
+  std::vector<Ray> row(8);
+  for (std::size_t i = 0; i < row.size(); ++i) row[i].origin = glm::vec3(float(i), 0.0f, 0.0f), row[i].direction = glm::vec3(0, 0, 1);
+  EXPECT_NEAR(measureRays(row, 8).originSpread, std::sqrt(5.25), 1e-9);
+  // uniform directions: about a third of each packet of 8 shares an octant
+  // (the largest of 8 draws from 8 bins), never all of it
+  const RayBatchStats random = measureRays(randomRays(80000), 8);
+  EXPECT_LT(random.coherence, 0.5);
+  EXPECT_LT(random.octantShare, 0.5);
+  // a sample of at most maxPackets packets
+  EXPECT_EQ(measureRays(randomRays(80000), 8, 100).packets, 100u);
+}
+
+TEST(TraversalChoice, PrimitiveScaleIsTheRootOfTheMeanArea) {
+  // a unit square as two triangles of area 1/2
+  Scene square = makeGrid(1, glm::vec3(0.0f), 0.5f, glm::vec3(1, 0, 0), glm::vec3(0, 1, 0), makeMaterial(glm::vec3(0.5f)));
+  EXPECT_NEAR(primitiveScale(square), std::sqrt(0.5), 1e-6);
+  // 100 x 100 quads on the same square: 20 000 triangles of 1/20 000
+  Scene fine = makeGrid(100, glm::vec3(0.0f), 0.5f, glm::vec3(1, 0, 0), glm::vec3(0, 1, 0), makeMaterial(glm::vec3(0.5f)));
+  EXPECT_NEAR(primitiveScale(fine), std::sqrt(1.0 / 20000.0), 1e-6);
+}
+
+TEST(TraversalChoice, CameraRaysInPacketsRandomRaysNot) {
+  for (int width : {8, 16}) {
+    // one origin: packets, whatever the scene's scale and query
+    const RayBatchStats camera = measureRays(cameraRays(64), std::size_t(width));
+    for (double scale : {1e-4, 1.0})
+      for (bool occlusion : {false, true})
+        EXPECT_EQ(chooseTraversal(camera, scale, occlusion, true), Traversal::kPacket) << width << " " << scale;
+    // random directions: streams for any hit on a CPU, else single rays
+    const RayBatchStats random = measureRays(randomRays(80000), std::size_t(width));
+    EXPECT_EQ(chooseTraversal(random, 1.0, true, true), Traversal::kStream);
+    EXPECT_EQ(chooseTraversal(random, 1.0, false, true), Traversal::kSingle);
+    EXPECT_EQ(chooseTraversal(random, 1.0, true, false), Traversal::kSingle);
+  }
+  EXPECT_EQ(chooseTraversal(RayBatchStats{}, 1.0, true, true), Traversal::kStream);
+}
+
+TEST(TraversalChoice, ShadowRaysToOneLightByOriginSpreadAgainstThePrimitives) {
+  // rays 0.01 apart to a small light point nearly one way (coherence > 0.95)
+  const std::vector<Ray> rays = shadowRays(16384, 0.01f, 0.05f);
+  const RayBatchStats stats = measureRays(rays, 16);
+  ASSERT_GT(stats.coherence, kPacketMinCoherence);
+  // a packet of 16 spans 0.15 (RMS 0.046): among big primitives (a Cornell
+  // box's walls) it stays in one leaf, packets; among primitives 0.003
+  // across (a 1 M-triangle sphere of radius 1) it spans some fifteen leaves
+  // at its origins, streams for any hit, single rays for closest hits
+  EXPECT_EQ(chooseTraversal(stats, 1.0, true, true), Traversal::kPacket);
+  EXPECT_EQ(chooseTraversal(stats, 0.003, true, true), Traversal::kStream);
+  EXPECT_EQ(chooseTraversal(stats, 0.003, false, true), Traversal::kSingle);
+  // the boundary: n = 1 + 2 spread / (kLeafScales scale) at which n kPacketLaneCost
+  // meets the other's cost, 1 / kStreamGain (streams) or 1 (single rays)
+  auto boundary = [&](double other) {
+    return 2.0 * stats.originSpread / (kLeafScales * (other / kPacketLaneCost - 1.0));
+  };
+  EXPECT_EQ(chooseTraversal(stats, 1.05 * boundary(1.0 / kStreamGain), true, true), Traversal::kPacket);
+  EXPECT_EQ(chooseTraversal(stats, 0.95 * boundary(1.0 / kStreamGain), true, true), Traversal::kStream);
+  EXPECT_EQ(chooseTraversal(stats, 1.05 * boundary(1.0), false, true), Traversal::kPacket);
+  EXPECT_EQ(chooseTraversal(stats, 0.95 * boundary(1.0), false, true), Traversal::kSingle);
+  // between the two: packets beat single rays but not streams
+  EXPECT_EQ(chooseTraversal(stats, 0.95 * boundary(1.0 / kStreamGain), false, true), Traversal::kPacket);
+  // a light so large that the directions spread: no packets however big the primitives
+  const RayBatchStats wide = measureRays(shadowRays(16384, 0.01f, 3.0f), 16);
+  EXPECT_LT(wide.coherence, kPacketMinCoherence);
+  EXPECT_EQ(chooseTraversal(wide, 10.0, true, true), Traversal::kStream);
+}
+
+}  // namespace
+}  // namespace wt
