@@ -166,6 +166,10 @@ class Renderer {
   /// the next pass renders sample `saved.samplesDone`. Throws
   /// std::invalid_argument when its size is not this image's.
   void restoreAccumulation(const Accumulation& saved);
+  /// Start an empty accumulation whose next pass renders sample
+  /// `nextSample`: a chunk of a render split over devices or processes
+  /// (render/distributed.h).
+  void resetAccumulation(int nextSample);
   const RenderStats& stats() const { return m_stats; }
   const RenderSettings& settings() const { return m_settings; }
   const SceneBuffers& sceneBuffers() const { return *m_scene; }
