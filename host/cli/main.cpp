@@ -635,7 +635,9 @@ int runScaleOutRender(RenderOptions options, wt::MpiWorld& world) {
     byRank += (r ? ", " : "") + std::to_string(result.chunksByRank[r]);
   wt::log::debug(std::to_string(result.chunks) + " chunks merged in " + std::to_string(result.mergeSeconds) +
                  " s of " + std::to_string(result.seconds) + " s" +
-                 (world.active() ? "; chunks by rank: " + byRank : std::string()));
+                 (world.active() ? "; " + std::to_string(result.bytesReceived) + " result bytes received in " +
+                                       std::to_string(result.receiveSeconds) + " s; chunks by rank: " + byRank
+                                 : std::string()));
   if (result.failure.empty() && !result.interrupted && done > 0) {
     const char* why = result.reason == wt::HaltReason::Time ? "--time budget reached" : "--spp reached";
     std::printf("stopped after %d samples (%s), %s of rendering\n", done, why,

@@ -256,6 +256,7 @@ ScaleOutResult coordinateRender(DeviceSet& devices, const ScaleOutOptions& optio
       busy = true;
       int bytes = 0;
       MPI_Get_count(&status, MPI_BYTE, &bytes);
+      const auto receiveStart = Clock::now();
       std::vector<std::uint8_t> message(std::size_t(std::max(bytes, 0)));
       MPI_Recv(message.data(), bytes, MPI_BYTE, status.MPI_SOURCE, status.MPI_TAG, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
       const int from = status.MPI_SOURCE;
@@ -270,7 +271,13 @@ ScaleOutResult coordinateRender(DeviceSet& devices, const ScaleOutOptions& optio
           }
           break;
         }
-        case kTagResult: take(unpackResult(message, pixels), from); break;
+        case kTagResult: {
+          ChunkResult r = unpackResult(message, pixels);
+          result.receiveSeconds += since(receiveStart);
+          result.bytesReceived += std::uint64_t(bytes);
+          take(std::move(r), from);
+          break;
+        }
         case kTagError: {
           ChunkResult r;
           r.error = std::string(message.begin(), message.end());

@@ -66,6 +66,8 @@ struct ScaleOutResult {
   HaltReason reason = HaltReason::None;
   double seconds = 0.0;      ///< wall time from the first chunk
   double mergeSeconds = 0.0; ///< of it, merging on this process
+  double receiveSeconds = 0.0;     ///< of it, receiving and unpacking other ranks' results
+  std::uint64_t bytesReceived = 0; ///< result bytes from other ranks
   std::uint64_t raysTraced = 0;
   int chunks = 0;            ///< chunks merged
   std::vector<int> chunksByRank;  ///< chunks each rank rendered (this process: all, in-process)
