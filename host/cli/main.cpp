@@ -634,7 +634,9 @@ int runScaleOutRender(RenderOptions options, wt::MpiWorld& world) {
   for (std::size_t r = 0; r < result.chunksByRank.size(); ++r)
     byRank += (r ? ", " : "") + std::to_string(result.chunksByRank[r]);
   wt::log::debug(std::to_string(result.chunks) + " chunks merged in " + std::to_string(result.mergeSeconds) +
-                 " s of " + std::to_string(result.seconds) + " s" +
+                 " s of " + std::to_string(result.seconds) + " s; " + std::to_string(result.localChunks) +
+                 " chunks on this process spent " + std::to_string(result.localOverheadSeconds) +
+                 " s outside sample passes" +
                  (world.active() ? "; " + std::to_string(result.bytesReceived) + " result bytes received in " +
                                        std::to_string(result.receiveSeconds) + " s; chunks by rank: " + byRank
                                  : std::string()));

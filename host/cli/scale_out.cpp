@@ -232,7 +232,7 @@ ScaleOutResult coordinateRender(DeviceSet& devices, const ScaleOutOptions& optio
     std::fflush(stderr);
     lastReport = Clock::now();
   };
-  auto take = [&](ChunkResult r, int rank) {
+  auto take = [&](ChunkResult r, int rank, bool local) {
     if (!r.error.empty()) {
       if (result.failure.empty())
         result.failure = world.active() ? "rank " + std::to_string(rank) + ", " + r.error : r.error;
@@ -240,6 +240,7 @@ ScaleOutResult coordinateRender(DeviceSet& devices, const ScaleOutOptions& optio
       return;
     }
     result.raysTraced += r.raysTraced;
+    if (local) result.localOverheadSeconds += r.overheadSeconds, ++result.localChunks;
     ++result.chunksByRank[std::size_t(rank)];
     merge.add(r.chunk.index, std::move(r.moments));
   };
@@ -247,7 +248,7 @@ ScaleOutResult coordinateRender(DeviceSet& devices, const ScaleOutOptions& optio
   DeviceThreads threads(devices, source, results, stop);
   while (true) {
     bool busy = false;
-    while (std::optional<ChunkResult> r = results.pop(0.0)) take(std::move(*r), 0), busy = true;
+    while (std::optional<ChunkResult> r = results.pop(0.0)) take(std::move(*r), 0, true), busy = true;
 #if WT_MPI
     for (int flag = 1; world.active() && flag;) {
       MPI_Status status;
@@ -275,13 +276,13 @@ ScaleOutResult coordinateRender(DeviceSet& devices, const ScaleOutOptions& optio
           ChunkResult r = unpackResult(message, pixels);
           result.receiveSeconds += since(receiveStart);
           result.bytesReceived += std::uint64_t(bytes);
-          take(std::move(r), from);
+          take(std::move(r), from, false);
           break;
         }
         case kTagError: {
           ChunkResult r;
           r.error = std::string(message.begin(), message.end());
-          take(std::move(r), from);
+          take(std::move(r), from, false);
           break;
         }
         case kTagFinished: --remoteActive; break;
@@ -309,7 +310,7 @@ ScaleOutResult coordinateRender(DeviceSet& devices, const ScaleOutOptions& optio
     if (!options.quiet && since(lastReport) > (tty ? 0.1 : 5.0)) progress(false);
     if (threads.allFinished() && remoteActive == 0) {
       // the last results may have arrived after the drain above
-      while (std::optional<ChunkResult> r = results.pop(0.0)) take(std::move(*r), 0);
+      while (std::optional<ChunkResult> r = results.pop(0.0)) take(std::move(*r), 0, true);
       break;
     }
     if (!busy) std::this_thread::sleep_for(std::chrono::milliseconds(1));

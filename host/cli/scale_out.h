@@ -67,6 +67,8 @@ struct ScaleOutResult {
   double seconds = 0.0;      ///< wall time from the first chunk
   double mergeSeconds = 0.0; ///< of it, merging on this process
   double receiveSeconds = 0.0;     ///< of it, receiving and unpacking other ranks' results
+  double localOverheadSeconds = 0.0;  ///< this process's devices' chunk time outside sample passes
+  int localChunks = 0;
   std::uint64_t bytesReceived = 0; ///< result bytes from other ranks
   std::uint64_t raysTraced = 0;
   int chunks = 0;            ///< chunks merged

@@ -211,6 +211,7 @@ void runDeviceWorker(Renderer& renderer, ChunkSource& source, ResultQueue& resul
     ChunkResult r;
     r.chunk = *chunk;
     const RenderStats before = renderer.stats();
+    const auto start = std::chrono::steady_clock::now();
     try {
       std::optional<Moments> m = renderChunk(renderer, *chunk, &stop);
       if (!m) return;  // stopped mid-chunk: its passes are dropped
@@ -222,6 +223,7 @@ void runDeviceWorker(Renderer& renderer, ChunkSource& source, ResultQueue& resul
     }
     r.raysTraced = renderer.stats().raysTraced - before.raysTraced;
     r.seconds = renderer.stats().seconds - before.seconds;
+    r.overheadSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() - r.seconds;
     results.push(std::move(r));
   }
 }

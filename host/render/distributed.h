@@ -124,6 +124,7 @@ struct ChunkResult {
   std::string error;            ///< non-empty: the device failed; moments empty
   std::uint64_t raysTraced = 0;
   double seconds = 0.0;         ///< the chunk's render time on its device
+  double overheadSeconds = 0.0; ///< of the chunk's time on its device, not rendering: reset, read-back, conversion
 };
 
 /// Thread-safe hand-over of results from device threads to the merging thread.
