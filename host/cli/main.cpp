@@ -623,13 +623,6 @@ int runScaleOutRender(RenderOptions options, wt::MpiWorld& world) {
   const int resumed = start->sampleEnd;
   wt::ScaleOutResult result = wt::coordinateRender(devices, run, std::move(*start), world);
   const int done = result.merged.sampleEnd;
-  if (options.checkpointSeconds > 0.0 && done > resumed) {
-    try {
-      saveCheckpoint(result.merged);
-    } catch (const std::exception& e) {
-      if (result.failure.empty()) result.failure = e.what();
-    }
-  }
   std::string byRank;
   for (std::size_t r = 0; r < result.chunksByRank.size(); ++r)
     byRank += (r ? ", " : "") + std::to_string(result.chunksByRank[r]);
@@ -655,6 +648,15 @@ int runScaleOutRender(RenderOptions options, wt::MpiWorld& world) {
     writeOutputs(options, image);
     if (result.merged.nonFiniteSamples > 0)
       wt::log::warnOnce(std::to_string(result.merged.nonFiniteSamples) + " NaN/Inf samples discarded");
+  }
+  // after the image: under mpirun a dying rank leaves rank 0 about a second
+  // before SIGKILL, and the checkpoint waits for the disk (fsync)
+  if (options.checkpointSeconds > 0.0 && done > resumed) {
+    try {
+      saveCheckpoint(result.merged);
+    } catch (const std::exception& e) {
+      if (result.failure.empty()) result.failure = e.what();
+    }
   }
   const std::string kept = done > 0 ? "; the " + std::to_string(done) + " merged samples were written"
                                     : "; no chunk was merged, nothing written";

@@ -246,11 +246,12 @@ ScaleOutResult coordinateRender(DeviceSet& devices, const ScaleOutOptions& optio
   };
 
   DeviceThreads threads(devices, source, results, stop);
-  while (true) {
+  while (true) try {
     bool busy = false;
     while (std::optional<ChunkResult> r = results.pop(0.0)) take(std::move(*r), 0, true), busy = true;
 #if WT_MPI
-    for (int flag = 1; world.active() && flag;) {
+    // a bounded batch: the checks below (signal, time, checkpoint) must not starve
+    for (int flag = 1, batch = 0; world.active() && flag && batch < 16; ++batch) {
       MPI_Status status;
       MPI_Iprobe(MPI_ANY_SOURCE, MPI_ANY_TAG, MPI_COMM_WORLD, &flag, &status);
       if (!flag) break;
@@ -259,8 +260,22 @@ ScaleOutResult coordinateRender(DeviceSet& devices, const ScaleOutOptions& optio
       MPI_Get_count(&status, MPI_BYTE, &bytes);
       const auto receiveStart = Clock::now();
       std::vector<std::uint8_t> message(std::size_t(std::max(bytes, 0)));
-      MPI_Recv(message.data(), bytes, MPI_BYTE, status.MPI_SOURCE, status.MPI_TAG, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
       const int from = status.MPI_SOURCE;
+      // polled, not blocking: a rank that dies mid-message must not hold rank 0
+      // past the signal mpirun then sends (a blocking receive never returns)
+      MPI_Request request;
+      int received = 0;
+      bool lost = MPI_Irecv(message.data(), bytes, MPI_BYTE, from, status.MPI_TAG, MPI_COMM_WORLD, &request) != MPI_SUCCESS;
+      while (!lost && !received) {
+        lost = MPI_Test(&request, &received, MPI_STATUS_IGNORE) != MPI_SUCCESS ||
+               (options.interrupted && options.interrupted());
+        if (!received) std::this_thread::yield();
+      }
+      if (lost) {
+        if (!(options.interrupted && options.interrupted()))
+          throw std::runtime_error("receiving a message from rank " + std::to_string(from) + " failed");
+        break;  // the interrupt is handled below
+      }
       switch (status.MPI_TAG) {
         case kTagRequest: {
           std::optional<SampleChunk> c = plan.next();
@@ -314,6 +329,10 @@ ScaleOutResult coordinateRender(DeviceSet& devices, const ScaleOutOptions& optio
       break;
     }
     if (!busy) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  } catch (const std::exception& e) {
+    // a checkpoint that cannot be written, a malformed message: stop the devices, keep what was merged
+    if (result.failure.empty()) result.failure = e.what();
+    break;
   }
   stop = true;
   plan.close();
