@@ -155,6 +155,13 @@ MpiWorld::MpiWorld([[maybe_unused]] int& argc, [[maybe_unused]] char**& argv) {
   MPI_Comm_size(MPI_COMM_WORLD, &m_size);
   // a failure is reported by the rank that sees it, not by MPI's handler
   MPI_Comm_set_errhandler(MPI_COMM_WORLD, MPI_ERRORS_RETURN);
+#else
+  // under mpirun without MPI every process would render, and write, the whole image
+  const char* size = std::getenv("OMPI_COMM_WORLD_SIZE");
+  if (!size) size = std::getenv("PMI_SIZE");
+  if (size && std::atoi(size) > 1)
+    log::warnOnce(std::string("started as one of ") + size +
+                  " MPI processes, but this wavetrace was built without MPI (WT_MPI): each renders the whole image");
 #endif
 }
 
@@ -209,7 +216,7 @@ ScaleOutResult coordinateRender(DeviceSet& devices, const ScaleOutOptions& optio
                                 const MpiWorld& world) {
   ScaleOutResult result;
   result.chunksByRank.assign(std::size_t(world.size()), 0);
-  const std::size_t pixels = start.pixels();
+  [[maybe_unused]] const std::size_t pixels = start.pixels();  // checks result messages
   const int resumed = start.sampleEnd;
   ChunkPlan plan(start.sampleEnd, options.samplesPerPixel, options.chunkSpp);
   OrderedMerge merge(std::move(start));
