@@ -24,6 +24,7 @@
 #include <filesystem>
 #include <functional>
 #include <memory>
+#include <thread>
 #include <tuple>
 #include <chrono>
 #include <cmath>
@@ -619,7 +620,35 @@ int runScaleOutRender(RenderOptions options, wt::MpiWorld& world) {
     c.accumulation = wt::accumulationFromMoments(m, settings.accumulation);
     wt::writeCheckpoint(checkpointPath, c);
   };
-  if (options.checkpointSeconds > 0.0) run.checkpoint = saveCheckpoint;
+  // periodic checkpoints on a thread of their own: the write waits for the
+  // disk (fsync), and the coordinator must keep taking results and signals
+  // (under mpirun a dying rank leaves rank 0 about a second before SIGKILL)
+  std::thread checkpointThread;
+  std::atomic<bool> checkpointBusy{false};
+  std::string checkpointError;
+  auto finishCheckpoint = [&] {
+    if (checkpointThread.joinable()) checkpointThread.join();
+  };
+  struct JoinOnExit {
+    std::thread& t;
+    ~JoinOnExit() {
+      if (t.joinable()) t.join();
+    }
+  } joinOnExit{checkpointThread};
+  if (options.checkpointSeconds > 0.0)
+    run.checkpoint = [&](const wt::Moments& m) {
+      if (checkpointBusy) return;  // the previous one is still being written: the next interval takes this
+      finishCheckpoint();
+      checkpointBusy = true;
+      checkpointThread = std::thread([&, copy = m] {
+        try {
+          saveCheckpoint(copy);
+        } catch (const std::exception& e) {
+          checkpointError = e.what();
+        }
+        checkpointBusy = false;
+      });
+    };
   const int resumed = start->sampleEnd;
   wt::ScaleOutResult result = wt::coordinateRender(devices, run, std::move(*start), world);
   const int done = result.merged.sampleEnd;
@@ -651,6 +680,8 @@ int runScaleOutRender(RenderOptions options, wt::MpiWorld& world) {
   }
   // after the image: under mpirun a dying rank leaves rank 0 about a second
   // before SIGKILL, and the checkpoint waits for the disk (fsync)
+  finishCheckpoint();
+  if (!checkpointError.empty() && result.failure.empty()) result.failure = checkpointError;
   if (options.checkpointSeconds > 0.0 && done > resumed) {
     try {
       saveCheckpoint(result.merged);
