@@ -1,6 +1,7 @@
 // wavetrace: the command line. `render` (the default scene when no file is
 // named), `info`, `devices`, `bench`.
 #include "bench/bench.h"
+#include "cli/scale_out.h"
 #include "bvh/builders.h"
 #include "core/log.h"
 #include "device/context.h"
@@ -23,6 +24,10 @@
 
 #include <algorithm>
 #include <atomic>
+#include <filesystem>
+#include <functional>
+#include <memory>
+#include <thread>
 #include <tuple>
 #include <chrono>
 #include <cmath>
@@ -36,6 +41,7 @@
 namespace {
 
 std::atomic<bool> g_interrupted{false};
+wt::MpiWorld* g_world = nullptr;  ///< this process's place in an MPI job (size 1 without one)
 
 extern "C" void onInterrupt(int) { g_interrupted = true; }
 
@@ -149,6 +155,8 @@ struct RenderOptions {
   double targetError = 0.0;        ///< --target-error; 0: none
   double checkpointSeconds = 0.0;  ///< --checkpoint; 0: none
   bool resume = false;
+  int chunkSpp = 0;    ///< --chunk-spp; 0: defaultChunkSpp
+  bool chunkSppGiven = false;
   std::string aov;     ///< --aov: names, comma-separated, or "all"
   std::string aovOut;  ///< --aov-out: folder for one EXR per AOV
   std::string debug;   ///< --debug: a view (output/debug_view.h)
@@ -281,20 +289,13 @@ wt::RenderSettings renderSettings(const RenderOptions& options) {
   return settings;
 }
 
-int runRender(RenderOptions options) {
-  wt::log::setQuiet(options.quiet);
-  wt::log::setVerbose(options.verbose);
-  if (!options.kernelDir.empty()) wt::setKernelDirectory(std::filesystem::path(options.kernelDir));
-
-  // Fail on an unwritable output or a bad AOV before spending any time rendering.
-  for (const std::string& out : options.outputs) wt::checkWritable(out);
-  parseAovOptions(options);
-
+/// The scene `render` names (the default scene without one), with the scene
+/// file's settings applied where the command line did not name them.
+wt::SceneFile loadRenderScene(RenderOptions& options) {
   wt::GltfLoadOptions loadOptions;
   loadOptions.sceneIndex = options.sceneIndex;
   loadOptions.cameraIndex = options.camera;
   loadOptions.recenter = !options.noRecenter;
-  auto loadStart = std::chrono::steady_clock::now();
   wt::SceneFile loaded = options.scene.empty() ? wt::SceneFile{wt::loadDefaultScene(loadOptions), {}}
                                                : wt::loadSceneAny(options.scene, loadOptions);
   wt::Scene& scene = loaded.scene;
@@ -309,6 +310,27 @@ int runRender(RenderOptions options) {
   if (scene.triangles.empty() && scene.spheres.empty() && scene.curves.empty() && scene.sdfGrids.empty() &&
       scene.displacedMeshes.empty())
     wt::log::warnOnce(scene.sourceName + ": the scene has no geometry");
+  return loaded;
+}
+
+int runScaleOutRender(RenderOptions options, wt::MpiWorld& world);
+
+int runRender(RenderOptions options) {
+  // several devices or ranks, or a chunked render on one (the order they share)
+  if (g_world->active() || options.device == "all" || options.device.find(',') != std::string::npos ||
+      options.chunkSppGiven)
+    return runScaleOutRender(std::move(options), *g_world);
+  wt::log::setQuiet(options.quiet);
+  wt::log::setVerbose(options.verbose);
+  if (!options.kernelDir.empty()) wt::setKernelDirectory(std::filesystem::path(options.kernelDir));
+
+  // Fail on an unwritable output or a bad AOV before spending any time rendering.
+  for (const std::string& out : options.outputs) wt::checkWritable(out);
+  parseAovOptions(options);
+
+  auto loadStart = std::chrono::steady_clock::now();
+  wt::SceneFile loaded = loadRenderScene(options);
+  wt::Scene& scene = loaded.scene;
   double loadSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - loadStart).count();
 
   if (!options.profileJson.empty()) {
@@ -577,6 +599,183 @@ int runRender(RenderOptions options) {
 
 /// `wavetrace info`: the scene's feature set (as `render` would derive it
 /// with the same options), the switches it compiles in, and its statistics.
+/// `render` split into sample chunks over several devices (--device 0,1,
+/// all) and, under an MPI launcher, several processes (cli/scale_out.h).
+/// Every rank loads the scene and builds its renderers; a rank that cannot
+/// stops the whole job at start, with its message, on rank 0.
+int runScaleOutRender(RenderOptions options, wt::MpiWorld& world) {
+  const bool root = world.rank() == 0;
+  wt::log::setQuiet(options.quiet || !root);
+  wt::log::setVerbose(options.verbose && root);
+  std::optional<wt::SceneFile> loaded;
+  wt::DeviceSet devices;
+  wt::RenderSettings settings;
+  std::vector<wt::CheckpointField> identity;
+  std::optional<wt::Moments> start;
+  const std::filesystem::path checkpointPath = wt::checkpointPathFor(options.outputs.front());
+  std::string setupError;
+  wt::Fnv64 renderHash;
+  const auto setupStart = std::chrono::steady_clock::now();
+  try {
+    if (!options.kernelDir.empty()) wt::setKernelDirectory(std::filesystem::path(options.kernelDir));
+    if (root)
+      for (const std::string& out : options.outputs) wt::checkWritable(out);
+    parseAovOptions(options);
+    // what is merged is the image's accumulation only
+    if (options.settings.aovs)
+      throw std::invalid_argument("--aov/--debug: not on several devices or ranks yet (only the image is merged)");
+    if (!options.reference.empty()) throw std::invalid_argument("--reference: not on several devices or ranks");
+    if (options.targetError > 0.0) throw std::invalid_argument("--target-error: not on several devices or ranks yet");
+    loaded = loadRenderScene(options);
+    settings = renderSettings(options);
+    const std::vector<wt::DeviceInfo> infos = wt::selectDevices(options.device);
+    for (std::size_t d = 0; d < infos.size(); ++d) {
+      devices.contexts.push_back(std::make_unique<wt::Context>(infos[d]));
+      devices.renderers.push_back(std::make_unique<wt::Renderer>(*devices.contexts.back(), loaded->scene, settings));
+      devices.names.push_back("device " + std::to_string(infos[d].index) + " (" + infos[d].name + ")");
+    }
+    identity = wt::checkpointIdentity(loaded->scene, *devices.renderers.front());
+    for (const wt::CheckpointField& f : identity) renderHash.bytes(f.key.data(), f.key.size()), renderHash.bytes(f.value.data(), f.value.size());
+    const std::size_t pixels = std::size_t(settings.width) * std::size_t(settings.height);
+    if (root && options.resume) {
+      wt::Checkpoint saved = wt::readCheckpoint(checkpointPath);
+      wt::requireSameRender(checkpointPath, saved, identity);
+      start = wt::momentsFromAccumulation(saved.accumulation, settings.accumulation, 0);
+      wt::log::info("resumed from " + checkpointPath.string() + " at " + std::to_string(start->sampleEnd) + " samples");
+    } else {
+      start = wt::emptyMoments(pixels, 0);
+    }
+  } catch (const std::exception& e) {
+    setupError = e.what();
+  }
+  try {
+    world.agreeOnStart(setupError, renderHash.value());
+  } catch (const std::exception& e) {
+    if (!root) return 1;  // rank 0 reports every rank's failure
+    throw;
+  }
+  const double setupSeconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - setupStart).count();
+  std::signal(SIGINT, onInterrupt);
+  std::signal(SIGTERM, onInterrupt);
+  const std::function<bool()> interrupted = [] { return g_interrupted.load(); };
+  if (!root) return wt::serveRender(devices, world, interrupted);
+
+  const wt::Scene& scene = loaded->scene;
+  std::string names;
+  for (const std::string& n : devices.names) names += (names.empty() ? "" : ", ") + n;
+  int spp = options.settings.samplesPerPixel;
+  if (options.timeSeconds > 0.0 && !options.given.spp && !loaded->settings.samplesPerPixel) spp = wt::kUnboundedSamples;
+  const int chunkSpp = options.chunkSpp > 0 ? options.chunkSpp : wt::defaultChunkSpp(spp);
+  wt::log::info("scene " + scene.sourceName + ": " + std::to_string(scene.triangles.size()) + " triangles; " +
+                (world.active() ? std::to_string(world.size()) + " ranks, " : std::string()) + "on " + names +
+                "; chunks of " + std::to_string(chunkSpp) + " samples; set up in " +
+                std::to_string(int(setupSeconds * 1e3)) + " ms");
+
+  wt::ScaleOutOptions run;
+  run.samplesPerPixel = spp;
+  run.chunkSpp = chunkSpp;
+  run.timeSeconds = options.timeSeconds;
+  run.quiet = options.quiet;
+  run.interrupted = interrupted;
+  run.checkpointSeconds = options.checkpointSeconds;
+  const std::size_t pixels = std::size_t(settings.width) * std::size_t(settings.height);
+  auto saveCheckpoint = [&](const wt::Moments& m) {
+    wt::Checkpoint c;
+    c.identity = identity;
+    c.device = devices.contexts.front()->info().name;
+    c.pixels = pixels;
+    c.accumulation = wt::accumulationFromMoments(m, settings.accumulation);
+    wt::writeCheckpoint(checkpointPath, c);
+  };
+  // periodic checkpoints on a thread of their own: the write waits for the
+  // disk (fsync), and the coordinator must keep taking results and signals
+  // (under mpirun a dying rank leaves rank 0 about a second before SIGKILL)
+  std::thread checkpointThread;
+  std::atomic<bool> checkpointBusy{false};
+  std::string checkpointError;
+  auto finishCheckpoint = [&] {
+    if (checkpointThread.joinable()) checkpointThread.join();
+  };
+  struct JoinOnExit {
+    std::thread& t;
+    ~JoinOnExit() {
+      if (t.joinable()) t.join();
+    }
+  } joinOnExit{checkpointThread};
+  if (options.checkpointSeconds > 0.0)
+    run.checkpoint = [&](const wt::Moments& m) {
+      if (checkpointBusy) return;  // the previous one is still being written: the next interval takes this
+      finishCheckpoint();
+      checkpointBusy = true;
+      checkpointThread = std::thread([&, copy = m] {
+        try {
+          saveCheckpoint(copy);
+        } catch (const std::exception& e) {
+          checkpointError = e.what();
+        }
+        checkpointBusy = false;
+      });
+    };
+  const int resumed = start->sampleEnd;
+  wt::ScaleOutResult result = wt::coordinateRender(devices, run, std::move(*start), world);
+  const int done = result.merged.sampleEnd;
+  std::string byRank;
+  for (std::size_t r = 0; r < result.chunksByRank.size(); ++r)
+    byRank += (r ? ", " : "") + std::to_string(result.chunksByRank[r]);
+  wt::log::debug(std::to_string(result.chunks) + " chunks merged in " + std::to_string(result.mergeSeconds) +
+                 " s of " + std::to_string(result.seconds) + " s; " + std::to_string(result.localChunks) +
+                 " chunks on this process spent " + std::to_string(result.localOverheadSeconds) +
+                 " s outside sample passes" +
+                 (world.active() ? "; " + std::to_string(result.bytesReceived) + " result bytes received in " +
+                                       std::to_string(result.receiveSeconds) + " s; chunks by rank: " + byRank
+                                 : std::string()));
+  if (result.failure.empty() && !result.interrupted && done > 0) {
+    const char* why = result.reason == wt::HaltReason::Time ? "--time budget reached" : "--spp reached";
+    std::printf("stopped after %d samples (%s), %s of rendering\n", done, why,
+                wt::formatDuration(result.seconds).c_str());
+    std::fflush(stdout);
+  }
+
+  // whatever happened, keep what was merged
+  if (done > 0) {
+    wt::Renderer& out = *devices.renderers.front();
+    out.restoreAccumulation(wt::accumulationFromMoments(result.merged, settings.accumulation));
+    wt::Image image = out.readImage();
+    writeOutputs(options, image);
+    if (result.merged.nonFiniteSamples > 0)
+      wt::log::warnOnce(std::to_string(result.merged.nonFiniteSamples) + " NaN/Inf samples discarded");
+  }
+  // after the image: under mpirun a dying rank leaves rank 0 about a second
+  // before SIGKILL, and the checkpoint waits for the disk (fsync)
+  finishCheckpoint();
+  if (!checkpointError.empty() && result.failure.empty()) result.failure = checkpointError;
+  if (options.checkpointSeconds > 0.0 && done > resumed) {
+    try {
+      saveCheckpoint(result.merged);
+    } catch (const std::exception& e) {
+      if (result.failure.empty()) result.failure = e.what();
+    }
+  }
+  const std::string kept = done > 0 ? "; the " + std::to_string(done) + " merged samples were written"
+                                    : "; no chunk was merged, nothing written";
+  if (!result.failure.empty()) {
+    wt::log::error("render failed after " + std::to_string(done) + " of " + std::to_string(spp) +
+                   " samples: " + result.failure + kept);
+    if (world.active()) world.abort(1);
+    return 1;
+  }
+  if (result.interrupted) {
+    wt::log::error("stopped by a signal after " + std::to_string(done) + " of " + std::to_string(spp) + " samples" +
+                   (world.active() ? " (under mpirun also when a rank died or was killed: mpirun then stops every rank)"
+                                   : "") +
+                   kept);
+    if (world.active()) world.abort(130);
+    return 130;
+  }
+  return 0;
+}
+
 int runInfo(RenderOptions options) {
   wt::log::setQuiet(options.quiet);
   wt::GltfLoadOptions loadOptions;
@@ -737,7 +936,7 @@ void groupRenderOptions(CLI::App* cmd) {
        {"--time", "--target-error", "--reference", "--error-log", "--checkpoint", "--resume"}},
       {"AOVs and debugging", {"--aov", "--aov-out", "--debug", "--stop-on-nan"}},
       {"Device, BVH and kernels",
-       {"--device", "--bvh", "--instancing", "--traversal", "--packet-width", "--kernel-dir", "--kernel-cache",
+       {"--device", "--chunk-spp", "--bvh", "--instancing", "--traversal", "--packet-width", "--kernel-dir", "--kernel-cache",
         "--general-program"}},
       {"Messages and profiling", {"--quiet", "--verbose", "--profile", "--profile-json"}},
   };
@@ -752,6 +951,8 @@ void groupRenderOptions(CLI::App* cmd) {
 }
 
 int main(int argc, char** argv) {
+  wt::MpiWorld world(argc, argv);
+  g_world = &world;
   CLI::App app{"wavetrace: a wavefront path tracer for OpenCL devices"};
   app.require_subcommand(1);
   app.set_version_flag("--version", "wavetrace 0.1.0");
@@ -841,7 +1042,13 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   renderCmd->add_flag("--env-hidden", render.settings.environmentHidden,
                       "Camera rays see black where they escape; the environment still lights the scene");
-  renderCmd->add_option("--device", render.device, "Device index or name substring (see 'wavetrace devices')");
+  renderCmd->add_option("--device", render.device,
+                        "Device index or name substring (see 'wavetrace devices'); a comma-separated list or 'all' "
+                        "renders on several at once, the samples shared out in chunks (docs/scale-out.md)");
+  renderCmd->add_option("--chunk-spp", render.chunkSpp,
+                        "Samples per chunk when the render is shared over devices or MPI ranks (default: spp/64, "
+                        "1 to 64); the image depends on it, not on how many devices or ranks render it")
+      ->check(CLI::Range(1, 1 << 20));
   renderCmd->add_option("--scene-index", render.sceneIndex, "glTF scene to render (default: the file's default scene)")
       ->check(CLI::Range(-1, 1 << 20));
   renderCmd->add_option("--look-from", render.lookFrom, "Camera position X,Y,Z in the file's world coordinates")
@@ -1050,6 +1257,7 @@ int main(int argc, char** argv) {
                       given("--exposure"), given("--integrator"), given("--background"), given("--env-map"),
                       given("--env-intensity"), given("--env-rotation"), given("--env-hidden"), given("--tonemap")};
       render.tonemap.physical = given("--aperture") || given("--shutter") || given("--iso");
+      render.chunkSppGiven = given("--chunk-spp");
       return runRender(render);
     }
     if (*infoCmd) {

@@ -505,6 +505,18 @@ void Renderer::restoreAccumulation(const Accumulation& saved) {
   m_stats.nonFiniteSamples = saved.nonFiniteSamples;
 }
 
+void Renderer::resetAccumulation(int nextSample) {
+  const std::size_t pixels = std::size_t(m_settings.width) * std::size_t(m_settings.height);
+  // zero bits are 0.0f (and 0.0) as well
+  m_context.fill(m_path.state, 0u, 0, pixels * kAccumulationStateBytes);
+  m_context.fill(m_path.sampleCount, 0u, 0, pixels * 4);
+  if (m_settings.aovs) m_context.fill(m_path.aovAccum, 0u, 0, pixels * 64);
+  m_context.fill(m_counters, 0u, WT_COUNTER_NONFINITE * sizeof(cl_uint), sizeof(cl_uint));
+  m_context.finish();
+  m_stats.samplesDone = nextSample;
+  m_stats.nonFiniteSamples = 0;
+}
+
 void Renderer::readAovs(Image& image) {
   const std::size_t pixels = std::size_t(m_settings.width) * std::size_t(m_settings.height);
   std::vector<float> sum(16 * pixels);

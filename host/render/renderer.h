@@ -187,6 +187,10 @@ class Renderer {
   /// the next pass renders sample `saved.samplesDone`. Throws
   /// std::invalid_argument when its size is not this image's.
   void restoreAccumulation(const Accumulation& saved);
+  /// Start an empty accumulation whose next pass renders sample
+  /// `nextSample`: a chunk of a render split over devices or processes
+  /// (render/distributed.h).
+  void resetAccumulation(int nextSample);
   const RenderStats& stats() const { return m_stats; }
   /// Paths per bounce, and with RenderSettings::profile the stage times.
   const RenderProfile& profile() const { return m_profile; }

@@ -1,0 +1,89 @@
+// `render` on several devices (--device 0,1 / all) and, in a build with
+// MPI, on several processes (mpirun -np N wavetrace render ...): the job's
+// coordinator (rank 0, or the only process) hands out sample chunks and
+// merges them in order (render/distributed.h); worker ranks render the
+// chunks rank 0 sends them. The protocol is in docs/scale-out.md.
+#pragma once
+
+#include "render/distributed.h"
+#include "render/halting.h"
+
+#include <atomic>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace wt {
+
+/// This process's place in an MPI job: size 1 when the build has no MPI or
+/// the process was not started by an MPI launcher (mpirun, srun).
+class MpiWorld {
+ public:
+  /// MPI_Init_thread (funneled: only the main thread calls MPI) when an MPI
+  /// launcher started the process.
+  MpiWorld(int& argc, char**& argv);
+  ~MpiWorld();
+  int rank() const { return m_rank; }
+  int size() const { return m_size; }
+  bool active() const { return m_size > 1; }
+  /// End every rank of the job now with `code` (a failure rank 0 has
+  /// reported; the others may be blocked or gone).
+  [[noreturn]] void abort(int code);
+  /// Every rank passes its start-up failure ("" if none) and the hash of
+  /// what it will render; all return normally only if every rank started
+  /// and all hashes agree, else every rank throws. Rank 0's exception names
+  /// each failed rank and its message; the others' is empty (rank 0 reports).
+  void agreeOnStart(const std::string& error, std::uint64_t renderHash) const;
+  static bool builtWithMpi();
+
+ private:
+  int m_rank = 0, m_size = 1;
+  bool m_initialized = false;
+};
+
+/// The devices of one process, each with its own context and renderer.
+struct DeviceSet {
+  std::vector<std::unique_ptr<Context>> contexts;
+  std::vector<std::unique_ptr<Renderer>> renderers;
+  std::vector<std::string> names;  ///< "device 1 (cpu-haswell)"
+};
+
+struct ScaleOutOptions {
+  int samplesPerPixel = 64;  ///< total, counting resumed samples
+  int chunkSpp = 0;          ///< samples per chunk
+  double timeSeconds = 0.0;  ///< stop handing out chunks after this long; 0: no limit
+  bool quiet = false;
+  double checkpointSeconds = 0.0;  ///< call `checkpoint` this often with the merged prefix; 0: never
+  std::function<void(const Moments&)> checkpoint;
+  std::function<bool()> interrupted;  ///< a signal asked the job to stop
+};
+
+struct ScaleOutResult {
+  Moments merged;            ///< the merged prefix of the samples
+  std::string failure;       ///< a device or rank failed: who and why
+  bool interrupted = false;  ///< stopped by a signal (under mpirun also: a rank died)
+  HaltReason reason = HaltReason::None;
+  double seconds = 0.0;      ///< wall time from the first chunk
+  double mergeSeconds = 0.0; ///< of it, merging on this process
+  double receiveSeconds = 0.0;     ///< of it, receiving and unpacking other ranks' results
+  double localOverheadSeconds = 0.0;  ///< this process's devices' chunk time outside sample passes
+  int localChunks = 0;
+  std::uint64_t bytesReceived = 0; ///< result bytes from other ranks
+  std::uint64_t raysTraced = 0;
+  int chunks = 0;            ///< chunks merged
+  std::vector<int> chunksByRank;  ///< chunks each rank rendered (this process: all, in-process)
+};
+
+/// Rank 0 (or the only process): hand out the chunks of
+/// [start.sampleEnd, samplesPerPixel) to this process's devices and to the
+/// other ranks, merge them in order, report progress. `start`: the moments
+/// already merged (a resumed checkpoint's, else empty).
+ScaleOutResult coordinateRender(DeviceSet& devices, const ScaleOutOptions& options, Moments start,
+                                const MpiWorld& world);
+
+/// A rank other than 0: render the chunks rank 0 sends until it says stop.
+/// Returns non-zero after a local failure (reported to rank 0).
+int serveRender(DeviceSet& devices, const MpiWorld& world, const std::function<bool()>& interrupted);
+
+}  // namespace wt

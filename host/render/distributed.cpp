@@ -1,0 +1,252 @@
+#include "render/distributed.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cstring>
+#include <stdexcept>
+
+namespace wt {
+namespace {
+
+/// float(x) - x, as a float. Out of line: inlined into the loop below, GCC
+/// 12.2 at -O3 made it 0 in two of the three channels
+/// (DistributedMerge.AccumulationStateRoundTrip fails without this).
+[[gnu::noinline]] float roundingExcess(double x) {
+  const float rounded = float(x);
+  return float(double(rounded) - x);
+}
+
+}  // namespace
+
+Moments emptyMoments(std::size_t pixels, int firstSample) {
+  Moments m;
+  m.firstSample = m.sampleEnd = firstSample;
+  m.mean.assign(3 * pixels, 0.0);
+  m.m2.assign(3 * pixels, 0.0);
+  m.count.assign(pixels, 0u);
+  return m;
+}
+
+Moments momentsFromAccumulation(const Accumulation& a, std::uint32_t mode, int firstSample) {
+  const std::size_t pixels = a.samples.size();
+  if (a.state.size() != pixels * kAccumulationStateBytes)
+    throw std::invalid_argument("accumulation state of " + std::to_string(a.state.size()) + " bytes for " +
+                                std::to_string(pixels) + " pixels");
+  Moments m = emptyMoments(pixels, firstSample);
+  m.sampleEnd = a.samplesDone;
+  m.nonFiniteSamples = a.nonFiniteSamples;
+  m.count = a.samples;
+  for (std::size_t i = 0; i < pixels; ++i) {
+    const std::uint8_t* s = a.state.data() + i * kAccumulationStateBytes;
+    if (mode == WT_ACCUMULATE_DOUBLE) {
+      double d[8];  // double4 mean, double4 m2
+      std::memcpy(d, s, sizeof d);
+      for (int c = 0; c < 3; ++c) m.mean[3 * i + c] = d[c], m.m2[3 * i + c] = d[4 + c];
+      continue;
+    }
+    float f[16];  // float4 mean, m2, and kahan's compensations
+    std::memcpy(f, s, sizeof f);
+    const bool kahan = mode == WT_ACCUMULATE_KAHAN;
+    for (int c = 0; c < 3; ++c) {
+      // kahan's compensation is the excess the stored value carries
+      m.mean[3 * i + c] = double(f[c]) - (kahan ? double(f[8 + c]) : 0.0);
+      m.m2[3 * i + c] = double(f[4 + c]) - (kahan ? double(f[12 + c]) : 0.0);
+    }
+  }
+  return m;
+}
+
+Accumulation accumulationFromMoments(const Moments& m, std::uint32_t mode) {
+  const std::size_t pixels = m.pixels();
+  Accumulation a;
+  a.samplesDone = m.sampleEnd;
+  a.nonFiniteSamples = m.nonFiniteSamples;
+  a.samples = m.count;
+  a.state.assign(pixels * kAccumulationStateBytes, 0u);
+  for (std::size_t i = 0; i < pixels; ++i) {
+    std::uint8_t* s = a.state.data() + i * kAccumulationStateBytes;
+    if (mode == WT_ACCUMULATE_DOUBLE) {
+      double d[8] = {};
+      for (int c = 0; c < 3; ++c) d[c] = m.mean[3 * i + c], d[4 + c] = m.m2[3 * i + c];
+      std::memcpy(s, d, sizeof d);
+      continue;
+    }
+    float f[16] = {};
+    for (int c = 0; c < 3; ++c) {
+      f[c] = float(m.mean[3 * i + c]);
+      f[4 + c] = float(m.m2[3 * i + c]);
+      if (mode == WT_ACCUMULATE_KAHAN) {
+        // the rounding to float, carried as the compensation (value - excess = exact)
+        f[8 + c] = roundingExcess(m.mean[3 * i + c]);
+        f[12 + c] = roundingExcess(m.m2[3 * i + c]);
+      }
+    }
+    std::memcpy(s, f, sizeof f);
+  }
+  return a;
+}
+
+void mergeMoments(Moments& into, const Moments& next) {
+  if (next.pixels() != into.pixels())
+    throw std::invalid_argument("merging moments of " + std::to_string(next.pixels()) + " pixels into " +
+                                std::to_string(into.pixels()));
+  if (next.firstSample != into.sampleEnd)
+    throw std::invalid_argument("merging samples from " + std::to_string(next.firstSample) +
+                                " into a run that ends at " + std::to_string(into.sampleEnd));
+  const std::size_t pixels = into.pixels();
+  for (std::size_t i = 0; i < pixels; ++i) {
+    const std::uint32_t nb = next.count[i];
+    if (nb == 0) continue;
+    const std::uint32_t na = into.count[i];
+    const double n = double(na) + double(nb);
+    const double wb = double(nb) / n, wab = double(na) * double(nb) / n;
+    for (int c = 0; c < 3; ++c) {
+      const std::size_t k = 3 * i + c;
+      const double delta = next.mean[k] - into.mean[k];
+      into.mean[k] += delta * wb;
+      into.m2[k] += next.m2[k] + delta * delta * wab;
+    }
+    into.count[i] = na + nb;
+  }
+  into.sampleEnd = next.sampleEnd;
+  into.nonFiniteSamples += next.nonFiniteSamples;
+}
+
+Image imageFromMoments(const Moments& m, int width, int height) {
+  Image image;
+  image.width = width;
+  image.height = height;
+  image.samples = m.count;
+  const std::size_t pixels = m.pixels();
+  image.rgb.resize(3 * pixels);
+  image.rgbVariance.resize(3 * pixels);
+  for (std::size_t i = 0; i < pixels; ++i) {
+    const std::uint32_t n = m.count[i];
+    for (int c = 0; c < 3; ++c) {
+      image.rgb[3 * i + c] = float(m.mean[3 * i + c]);
+      image.rgbVariance[3 * i + c] = n > 1 ? float(m.m2[3 * i + c] / double(n - 1)) : 0.0f;
+    }
+  }
+  return image;
+}
+
+ChunkPlan::ChunkPlan(int firstSample, int samplesPerPixel, int chunkSpp)
+    : m_first(firstSample), m_end(std::max(firstSample, samplesPerPixel)), m_chunkSpp(std::max(1, chunkSpp)) {
+  m_count = (m_end - m_first + m_chunkSpp - 1) / m_chunkSpp;
+}
+
+std::optional<SampleChunk> ChunkPlan::next() {
+  std::lock_guard<std::mutex> lock(m_mutex);
+  if (m_closed || m_next >= m_count) return std::nullopt;
+  SampleChunk c;
+  c.index = m_next++;
+  c.firstSample = m_first + c.index * m_chunkSpp;
+  c.sampleCount = std::min(m_chunkSpp, m_end - c.firstSample);
+  return c;
+}
+
+void ChunkPlan::close() {
+  std::lock_guard<std::mutex> lock(m_mutex);
+  m_closed = true;
+}
+
+bool ChunkPlan::closed() const {
+  std::lock_guard<std::mutex> lock(m_mutex);
+  return m_closed || m_next >= m_count;
+}
+
+int ChunkPlan::issued() const {
+  std::lock_guard<std::mutex> lock(m_mutex);
+  return m_next;
+}
+
+int defaultChunkSpp(int samplesPerPixel) { return std::clamp((samplesPerPixel + 63) / 64, 1, 64); }
+
+OrderedMerge::OrderedMerge(Moments start, int firstChunkIndex)
+    : m_merged(std::move(start)), m_nextIndex(firstChunkIndex) {}
+
+void OrderedMerge::add(int chunkIndex, Moments moments) {
+  const auto start = std::chrono::steady_clock::now();
+  m_waiting.emplace(chunkIndex, std::move(moments));
+  // merge in chunk order only: the same sums in the same order on any device count
+  for (auto it = m_waiting.find(m_nextIndex); it != m_waiting.end(); it = m_waiting.find(m_nextIndex)) {
+    mergeMoments(m_merged, it->second);
+    m_waiting.erase(it);
+    ++m_nextIndex;
+  }
+  m_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+std::optional<Moments> renderChunk(Renderer& renderer, const SampleChunk& chunk, const std::atomic<bool>* stop) {
+  renderer.resetAccumulation(chunk.firstSample);
+  for (int k = 0; k < chunk.sampleCount; ++k) {
+    if (stop && stop->load()) return std::nullopt;
+    renderer.renderSample();
+  }
+  return momentsFromAccumulation(renderer.saveAccumulation(), renderer.settings().accumulation, chunk.firstSample);
+}
+
+void ResultQueue::push(ChunkResult result) {
+  {
+    std::lock_guard<std::mutex> lock(m_mutex);
+    m_results.push_back(std::move(result));
+  }
+  m_cv.notify_one();
+}
+
+std::optional<ChunkResult> ResultQueue::pop(double timeoutSeconds) {
+  std::unique_lock<std::mutex> lock(m_mutex);
+  if (!m_cv.wait_for(lock, std::chrono::duration<double>(timeoutSeconds), [&] { return !m_results.empty(); }))
+    return std::nullopt;
+  ChunkResult r = std::move(m_results.front());
+  m_results.pop_front();
+  return r;
+}
+
+void runDeviceWorker(Renderer& renderer, ChunkSource& source, ResultQueue& results, const std::atomic<bool>& stop,
+                     const std::string& deviceName) {
+  while (!stop.load()) {
+    std::optional<SampleChunk> chunk = source.next();
+    if (!chunk) return;
+    ChunkResult r;
+    r.chunk = *chunk;
+    const RenderStats before = renderer.stats();
+    const auto start = std::chrono::steady_clock::now();
+    try {
+      std::optional<Moments> m = renderChunk(renderer, *chunk, &stop);
+      if (!m) return;  // stopped mid-chunk: its passes are dropped
+      r.moments = std::move(*m);
+    } catch (const std::exception& e) {
+      r.error = deviceName + ": " + e.what();
+      results.push(std::move(r));
+      return;
+    }
+    r.raysTraced = renderer.stats().raysTraced - before.raysTraced;
+    r.seconds = renderer.stats().seconds - before.seconds;
+    r.overheadSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() - r.seconds;
+    results.push(std::move(r));
+  }
+}
+
+std::vector<DeviceInfo> selectDevices(const std::string& spec) {
+  if (spec == "all") {
+    std::vector<DeviceInfo> devices = listDevices();
+    if (devices.empty())
+      throw DeviceError("--device all: no OpenCL device found (is an ICD such as pocl-opencl-icd installed?)");
+    return devices;
+  }
+  std::vector<DeviceInfo> devices;
+  std::size_t start = 0;
+  while (true) {
+    const std::size_t comma = spec.find(',', start);
+    const std::string entry = spec.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
+    if (entry.empty() && spec.find(',') != std::string::npos)
+      throw DeviceError("--device " + spec + ": an empty entry in the list");
+    devices.push_back(selectDevice(entry));
+    if (comma == std::string::npos) break;
+    start = comma + 1;
+  }
+  return devices;
+}
+
+}  // namespace wt

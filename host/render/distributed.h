@@ -1,0 +1,172 @@
+// One image on several devices and, with MPI, several processes: the
+// samples are cut into chunks of consecutive sample indices, handed out as
+// devices ask for them (dynamic balancing), each chunk accumulated from
+// zero on its device, and the chunks' moments merged on the host in chunk
+// order, in double precision. Random numbers are a pure function of
+// (pixel, sample, bounce, dimension, seed) and the merge order is the
+// chunk order, so the image does not depend on which device or process
+// rendered which chunk: for a chunk size it is the same, bit for bit, on
+// any number of devices and ranks (docs/scale-out.md).
+#pragma once
+
+#include "render/renderer.h"
+
+#include <atomic>
+#include <condition_variable>
+#include <cstdint>
+#include <deque>
+#include <map>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace wt {
+
+/// Consecutive sample indices [firstSample, firstSample + sampleCount).
+struct SampleChunk {
+  int index = 0;        ///< position in the plan: the merge order
+  int firstSample = 0;  ///< sample index of its first pass
+  int sampleCount = 0;
+};
+
+/// Per-pixel running mean and second moment of a run of consecutive
+/// samples, rgb, in double: what a chunk's device accumulation resolves to
+/// and what the merge keeps.
+struct Moments {
+  int firstSample = 0;                 ///< the run is [firstSample, sampleEnd)
+  int sampleEnd = 0;
+  std::uint64_t nonFiniteSamples = 0;  ///< NaN/Inf samples discarded in the run
+  std::vector<double> mean;            ///< 3 per pixel
+  std::vector<double> m2;              ///< 3 per pixel: sum of squared deviations from the mean
+  std::vector<std::uint32_t> count;    ///< finite samples per pixel
+  std::size_t pixels() const { return count.size(); }
+};
+
+/// An empty run of `pixels` pixels starting at sample `firstSample`.
+Moments emptyMoments(std::size_t pixels, int firstSample);
+
+/// The moments a device accumulation holds (accumulate.cl's state in
+/// `mode`, WT_ACCUMULATE_*): kahan's compensation folded into the double
+/// mean, double mode's values as they are. The run ends at
+/// accumulation.samplesDone.
+Moments momentsFromAccumulation(const Accumulation& accumulation, std::uint32_t mode, int firstSample);
+
+/// The device state in `mode` that holds `moments` (kahan: the float value
+/// and the compensation that carries its rounding), with samplesDone the
+/// run's end: what Renderer::restoreAccumulation takes, and a checkpoint.
+Accumulation accumulationFromMoments(const Moments& moments, std::uint32_t mode);
+
+/// Fold the run `next` into `into` (Chan, Golub and LeVeque's pairwise
+/// update of mean and M2), in double. `next` must start where `into` ends;
+/// throws std::invalid_argument otherwise or when the pixel counts differ.
+void mergeMoments(Moments& into, const Moments& next);
+
+/// An Image (rgb mean, unbiased variance, sample counts; no srgba) of the
+/// moments, for the error estimate.
+Image imageFromMoments(const Moments& moments, int width, int height);
+
+/// The chunks of samples [firstSample, samplesPerPixel) of chunkSpp
+/// samples each (the last may be shorter), handed out in order; thread-safe.
+class ChunkPlan {
+ public:
+  ChunkPlan(int firstSample, int samplesPerPixel, int chunkSpp);
+  /// The next chunk to render; none when every chunk is out or closed.
+  std::optional<SampleChunk> next();
+  /// Hand out no more chunks (time budget, interrupt, a failure).
+  void close();
+  bool closed() const;
+  int chunkCount() const { return m_count; }
+  int issued() const;
+
+ private:
+  int m_first, m_end, m_chunkSpp, m_count;
+  mutable std::mutex m_mutex;
+  int m_next = 0;
+  bool m_closed = false;
+};
+
+/// The chunk size when --chunk-spp is not given: a function of the sample
+/// count only, never of the device or rank count, so that the image is the
+/// same however many render it. About 64 chunks, of 1 to 64 samples.
+int defaultChunkSpp(int samplesPerPixel);
+
+/// Merges finished chunks in chunk order; chunks that arrive early wait.
+/// The merged run is always a prefix [start, samplesDone()) of the plan's
+/// samples, so what it holds is a valid image and checkpoint at any time.
+class OrderedMerge {
+ public:
+  explicit OrderedMerge(Moments start, int firstChunkIndex = 0);
+  /// Take a finished chunk (any order); merges every chunk now in order.
+  void add(int chunkIndex, Moments moments);
+  const Moments& merged() const { return m_merged; }
+  int samplesDone() const { return m_merged.sampleEnd; }
+  int mergedChunks() const { return m_nextIndex; }
+  std::size_t waiting() const { return m_waiting.size(); }
+  double mergeSeconds() const { return m_seconds; }
+
+ private:
+  Moments m_merged;
+  int m_nextIndex;
+  std::map<int, Moments> m_waiting;
+  double m_seconds = 0.0;
+};
+
+/// Render one chunk on `renderer` (its accumulation reset to the chunk's
+/// first sample) and read its moments back; none when `stop` is set
+/// between two passes.
+std::optional<Moments> renderChunk(Renderer& renderer, const SampleChunk& chunk, const std::atomic<bool>* stop);
+
+/// A finished chunk, or the failure of the device that had it.
+struct ChunkResult {
+  SampleChunk chunk;
+  Moments moments;
+  std::string error;            ///< non-empty: the device failed; moments empty
+  std::uint64_t raysTraced = 0;
+  double seconds = 0.0;         ///< the chunk's render time on its device
+  double overheadSeconds = 0.0; ///< of the chunk's time on its device, not rendering: reset, read-back, conversion
+};
+
+/// Thread-safe hand-over of results from device threads to the merging thread.
+class ResultQueue {
+ public:
+  void push(ChunkResult result);
+  /// The oldest result, waiting up to `timeoutSeconds`.
+  std::optional<ChunkResult> pop(double timeoutSeconds);
+
+ private:
+  std::mutex m_mutex;
+  std::condition_variable m_cv;
+  std::deque<ChunkResult> m_results;
+};
+
+/// Where a device thread gets its chunks: a ChunkPlan in-process, or (on an
+/// MPI worker rank) chunks that rank 0 sends.
+class ChunkSource {
+ public:
+  virtual ~ChunkSource() = default;
+  virtual std::optional<SampleChunk> next() = 0;
+};
+
+class PlanSource : public ChunkSource {
+ public:
+  explicit PlanSource(ChunkPlan& plan) : m_plan(plan) {}
+  std::optional<SampleChunk> next() override { return m_plan.next(); }
+
+ private:
+  ChunkPlan& m_plan;
+};
+
+/// The device threads' loop: take chunks from `source` until it has none or
+/// `stop` is set, render each on `renderer`, push the results (a failure is
+/// pushed as an error result and ends the loop).
+void runDeviceWorker(Renderer& renderer, ChunkSource& source, ResultQueue& results, const std::atomic<bool>& stop,
+                     const std::string& deviceName);
+
+/// The devices --device names: "" (the default device), an index or name
+/// substring, a comma-separated list of those, or "all". A device named
+/// twice gets two contexts (two queues on one device). Throws DeviceError
+/// naming the entry that matches none.
+std::vector<DeviceInfo> selectDevices(const std::string& spec);
+
+}  // namespace wt
