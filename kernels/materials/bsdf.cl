@@ -67,6 +67,12 @@
 // transmits straight through at any roughness. The clear coat, the sheen
 // and a dielectric F0 other than 0.04 are compiled in only for scenes that
 // use them (WT_HAS_CLEARCOAT, WT_HAS_SHEEN, WT_HAS_SPECULAR).
+//
+// KHR_materials_anisotropy (WT_HAS_ANISOTROPY) makes the base's GGX
+// reflection anisotropic: alpha_t = mix(alpha, 1, strength^2) along the
+// local x axis (shade turns the frame to the anisotropy direction), alpha_b
+// = alpha along y. Such a lobe scatters once and the base under it keeps 1
+// minus the mirror's Fresnel at mu_o (docs/materials.md, "Anisotropy").
 #ifndef WT_MATERIALS_BSDF_CL
 #define WT_MATERIALS_BSDF_CL
 
