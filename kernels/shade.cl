@@ -115,7 +115,10 @@ WT_KERNEL void shade(WtFrameParams frame, WtEnvironment environment, __global co
 #if WT_AOV
   float2 aov_uv = (float2)(hit.y, hit.z);  // barycentrics unless the triangle has TEXCOORD_0
 #endif
-#if WT_HAS_TEXTURES || WT_HAS_VERTEX_COLORS
+#if WT_HAS_ANISOTROPY
+  float3 aniso_dir = (float3)(0.0f);  // the anisotropy direction, world (textured.cl); zero: none
+#endif
+#if WT_HAS_TEXTURES || WT_HAS_VERTEX_COLORS || WT_HAS_ANISOTROPY
   // triangles (an instance's too) carry vertex attributes and textures
   if (prim_type(prim) == WT_PRIM_TRIANGLE) {
     float3 p0, p1, p2;
@@ -133,6 +136,9 @@ WT_KERNEL void shade(WtFrameParams frame, WtEnvironment environment, __global co
 #endif
 #if WT_AOV && WT_HAS_TEXTURES
     aov_uv = sp.uv.xy;
+#endif
+#if WT_HAS_ANISOTROPY
+    aniso_dir = anisotropy_direction(ss, surface.material, &material, sp, ns);  // before a normal map bends ns
 #endif
     material = material_at(ss, surface.material, material, sp, &ns);
   }
@@ -197,6 +203,9 @@ WT_KERNEL void shade(WtFrameParams frame, WtEnvironment environment, __global co
 #endif
   float3 frame_t, frame_b;
   frame_from_normal(ns, &frame_t, &frame_b);
+#if WT_HAS_ANISOTROPY
+  anisotropy_frame(aniso_dir, ns, &frame_t, &frame_b);
+#endif
   float3 wo_local = (float3)(dot(wo, frame_t), dot(wo, frame_b), dot(wo, ns));
   Bsdf bsdf = bsdf_make(material, pbr_table, inside);
   float3 origin = ray_offset_origin(p, p_error, ng);

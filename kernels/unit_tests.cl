@@ -130,6 +130,39 @@ WT_KERNEL void test_bsdf_eval(uint count, WtMaterial material, float4 wo, uint l
   out[i] = (float4)(f, pdf);
 }
 
+#include "materials/textured.cl"
+
+// KHR_materials_anisotropy's shading frame (materials/textured.cl) at a
+// point with `tangent` (w: the bitangent's sign) and interpolated normal n,
+// the shading normal ns: frame[0] = (t, strength), frame[1] = (b, 0); then
+// bsdf_eval in that frame for `count` world directions wi, seen from world
+// wo: out[i] = (f cos, pdf).
+WT_KERNEL void test_anisotropic_eval(uint count, WtMaterial material, float4 tangent, float4 n, float4 ns, float4 wo,
+                                     __global const float* table, __global const float4* wi, __global float4* frame,
+                                     __global float4* out) {
+  uint i = get_global_id(0);
+  if (i >= count) return;
+  SurfaceScene ss = {0, 0, 0, 0, 0, 0, 0};
+  SurfacePoint sp;
+  sp.uv = (float4)(0.0f);
+  sp.uv_scale = (float2)(0.0f);
+  sp.color = (float4)(1.0f);
+  sp.tangent = tangent.xyz;
+  sp.sign = tangent.w;
+  sp.footprint = 0.0f;
+  float3 dir = anisotropy_direction(ss, 0u, &material, sp, n.xyz);
+  float3 t, b;
+  frame_from_normal(ns.xyz, &t, &b);
+  anisotropy_frame(dir, ns.xyz, &t, &b);
+  if (i == 0) frame[0] = (float4)(t, material.anisotropy), frame[1] = (float4)(b, 0.0f);
+  float3 o = (float3)(dot(wo.xyz, t), dot(wo.xyz, b), dot(wo.xyz, ns.xyz));
+  float3 w = (float3)(dot(wi[i].xyz, t), dot(wi[i].xyz, b), dot(wi[i].xyz, ns.xyz));
+  Bsdf bsdf = bsdf_make(material, table, 0);
+  float pdf;
+  float3 f = bsdf_eval(bsdf, o, w, WT_LOBE_DIFFUSE | WT_LOBE_SPECULAR, &pdf);
+  out[i] = (float4)(f, pdf);
+}
+
 #include "lights/light_tree.cl"
 
 // light_tree_pick at (p, n) for `count` uniforms: the light index and pmf.

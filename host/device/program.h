@@ -29,6 +29,7 @@ struct KernelFeatures {
   bool specular = false;          ///< a dielectric's F0 is not 0.04 or its Fresnel is weighted (KHR_materials_specular, KHR_materials_ior)
   bool clearcoat = false;         ///< a material has a clear coat (KHR_materials_clearcoat)
   bool sheen = false;             ///< a material has a sheen (KHR_materials_sheen)
+  bool anisotropy = false;        ///< a material's specular lobe is anisotropic (KHR_materials_anisotropy)
   /// A triangle's material can have a hole (alphaMode MASK or BLEND,
   /// SceneBuffers::hasAlpha): traversal runs the alpha test
   /// (kernels/materials/alpha.cl) and its kernels take WT_ALPHA_PARAMS
@@ -73,7 +74,7 @@ constexpr std::size_t kWidePacketMaxTriangles = (std::size_t{1024} * 1024) / 3;
 /// any other request.
 int packetWidthFor(const DeviceInfo& device, int requested = 0, std::size_t triangles = 0);
 
-/// Set pbr, transmission, specular, clearcoat and sheen from the materials
+/// Set pbr, transmission, specular, clearcoat, sheen and anisotropy from the materials
 /// a scene holds: only scenes that use a material layer compile it in.
 void setMaterialFeatures(KernelFeatures& features, std::span<const WtMaterial> materials);
 

@@ -431,8 +431,11 @@ void SceneBuffers::uploadSurface(Context& context, const Scene& scene) {
                   std::any_of(scene.materials.begin(), scene.materials.end(),
                               [](const WtMaterial& m) { return m.texture_mask != 0u; });
   m_hasVertexColors = !scene.colors.empty();
+  // the anisotropy direction follows the tangents, textured or not
+  const bool anisotropic = std::any_of(scene.materials.begin(), scene.materials.end(),
+                                       [](const WtMaterial& m) { return m.anisotropy > 0.0f; });
   std::vector<WtVec4> uv, color, tangent;
-  if (m_hasTextures || m_allSurfaceAttributes) {
+  if (m_hasTextures || anisotropic || m_allSurfaceAttributes) {
     uv.resize(scene.positions.size());
     for (std::size_t v = 0; v < uv.size(); ++v) {
       glm::vec2 a = v < scene.texcoords.size() ? scene.texcoords[v] : glm::vec2(0.0f);

@@ -42,6 +42,7 @@ struct FeatureSet {
   bool specular = false;        ///< the dielectric's F0 is tinted or weighted (KHR_materials_specular, _ior)
   bool clearcoat = false;       ///< KHR_materials_clearcoat
   bool sheen = false;           ///< KHR_materials_sheen
+  bool anisotropy = false;      ///< KHR_materials_anisotropy
   bool transmission = false;    ///< KHR_materials_transmission
   bool volume = false;          ///< KHR_materials_volume (absorption inside a refracting boundary)
   bool textures = false;        ///< a material reads a texture (uploaded)

@@ -32,7 +32,7 @@ WtMaterial makeMaterial(glm::vec3 albedo, glm::vec3 emission, bool twoSided) {
   m.sheen = {0.0f, 0.0f, 0.0f, 0.0f};
   m.clearcoat = 0.0f;
   m.clearcoat_roughness = 0.0f;
-  m.pad0 = m.pad1 = 0u;
+  m.anisotropy = m.anisotropy_rotation = 0.0f;
   return m;
 }
 
@@ -69,6 +69,14 @@ WtMaterial withClearcoat(WtMaterial m, float clearcoat, float roughness) {
 WtMaterial withSheen(WtMaterial m, glm::vec3 color, float roughness) {
   m.model = WT_MATERIAL_PBR;
   m.sheen = toVec4(glm::clamp(color, glm::vec3(0.0f), glm::vec3(1.0f)), std::clamp(roughness, 0.0f, 1.0f));
+  return m;
+}
+
+WtMaterial withAnisotropy(WtMaterial m, float strength, float rotation) {
+  m.model = WT_MATERIAL_PBR;
+  m.anisotropy = std::clamp(strength, 0.0f, 1.0f);
+  // one turn is no turn: keep the angle small for the device's cos and sin
+  m.anisotropy_rotation = std::isfinite(rotation) ? std::remainder(rotation, 2.0f * float(M_PI)) : 0.0f;
   return m;
 }
 

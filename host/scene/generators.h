@@ -101,4 +101,10 @@ WtMaterial withClearcoat(WtMaterial m, float clearcoat, float roughness);
 /// [0,1]) over the material, under a clear coat; colour 0 is no sheen.
 WtMaterial withSheen(WtMaterial m, glm::vec3 color, float roughness);
 
+/// KHR_materials_anisotropy: the base's GGX lobe stretched along the
+/// tangent rotated by `rotation` radians (counter-clockwise towards the
+/// bitangent), alpha_t = mix(alpha, 1, strength^2), alpha_b = alpha, with
+/// strength clamped to [0,1]; strength 0 is isotropic.
+WtMaterial withAnisotropy(WtMaterial m, float strength, float rotation);
+
 }  // namespace wt

@@ -48,6 +48,7 @@ constexpr const char* kSpecular = "KHR_materials_specular";
 constexpr const char* kClearcoat = "KHR_materials_clearcoat";
 constexpr const char* kSheen = "KHR_materials_sheen";
 constexpr const char* kUnlit = "KHR_materials_unlit";
+constexpr const char* kAnisotropy = "KHR_materials_anisotropy";
 constexpr const char* kGpuInstancing = "EXT_mesh_gpu_instancing";
 /// Extensions whose absence changes where the geometry is or how its bytes
 /// read: a file that requires one cannot be drawn correctly without it.
@@ -319,7 +320,7 @@ class Converter {
     }
     for (const std::string& ext : m_model.extensionsUsed) {
       if (ext == kEmissiveStrength || ext == kLightsPunctual || ext == kTransmission || ext == kIor ||
-          ext == kVolume || ext == kSpecular || ext == kClearcoat || ext == kSheen || ext == kUnlit ||
+          ext == kVolume || ext == kSpecular || ext == kClearcoat || ext == kSheen || ext == kUnlit || ext == kAnisotropy ||
           ext == kGpuInstancing || ext == kTextureTransform)
         continue;
       bool required = std::find(m_model.extensionsRequired.begin(), m_model.extensionsRequired.end(),
@@ -417,6 +418,7 @@ class Converter {
       extensionSlot(kClearcoat, "clearcoatRoughnessTexture", WT_TEXTURE_SLOT_CLEARCOAT_ROUGHNESS, false, coated);
       extensionSlot(kSheen, "sheenColorTexture", WT_TEXTURE_SLOT_SHEEN_COLOR, true, sheen);
       extensionSlot(kSheen, "sheenRoughnessTexture", WT_TEXTURE_SLOT_SHEEN_ROUGHNESS, false, sheen);
+      extensionSlot(kAnisotropy, "anisotropyTexture", WT_TEXTURE_SLOT_ANISOTROPY, false, material.anisotropy > 0.0f);
       // unlit: the base colour texture colours the emission (unlitMaterial moves the slot)
       if (material.texture_mask != 0u) {
         m_scene.materialTextures.resize(m_scene.materials.size() * WT_TEXTURE_SLOTS);
@@ -670,6 +672,12 @@ class Converter {
       float roughness = extensionUnit(*ext, "sheenRoughnessFactor", 0.0, where);
       m = withSheen(m, color, roughness);
     }
+    if (const tinygltf::Value* ext = materialExtension(src, label, kAnisotropy)) {
+      const std::string where = label + " " + kAnisotropy;
+      float strength = extensionUnit(*ext, "anisotropyStrength", 0.0, where);
+      double rotation = extensionNumber(*ext, "anisotropyRotation", 0.0, where);
+      m = withAnisotropy(m, strength, float(rotation));
+    }
     return m;
   }
 
@@ -685,7 +693,7 @@ class Converter {
   /// it, and are ignored. (When material textures arrive, this material's
   /// baseColorTexture belongs in its emissive slot.)
   WtMaterial unlitMaterial(const tinygltf::Material& src, const std::string& label, const WtMaterial& m) {
-    for (const char* other : {kTransmission, kVolume, kSpecular, kClearcoat, kSheen})
+    for (const char* other : {kTransmission, kVolume, kSpecular, kClearcoat, kSheen, kAnisotropy})
       if (src.extensions.count(other))
         m_scene.addWarning(label + ": " + other + " has no effect on a " + kUnlit + " material; ignored");
     WtMaterial unlit = makeMaterial(glm::vec3(0.0f), glm::vec3(m.base_color.x, m.base_color.y, m.base_color.z), src.doubleSided);
@@ -1036,13 +1044,23 @@ class Converter {
     return out;
   }
 
-  /// Tangents for a primitive whose material has a normal map and whose file
-  /// gives none (glTF asks for MikkTSpace's); a vertex split at a mirrored
-  /// seam gets a geometry of its own, so no other primitive shares it.
+  /// Tangents for a primitive whose material has a normal map, or is
+  /// anisotropic (KHR_materials_anisotropy's direction is given in tangent
+  /// space), and whose file gives none (glTF asks for MikkTSpace's, from the
+  /// normal texture's coordinates, else TEXCOORD_0); a vertex split at a
+  /// mirrored seam gets a geometry of its own, so no other primitive shares it.
   void generateTangentsFor(const tinygltf::Material& material, DecodedPrimitive& out) {
-    if (material.normalTexture.index < 0) return;
-    const std::vector<glm::vec2>& uv = material.normalTexture.texCoord == 1 ? out.texcoords1 : out.texcoords;
-    if (uv.empty()) return;  // the texture is left out: warned where the material is read
+    const bool normalMap = material.normalTexture.index >= 0;
+    if (!normalMap && !anisotropic(material)) return;
+    const std::vector<glm::vec2>& uv =
+        normalMap && material.normalTexture.texCoord == 1 ? out.texcoords1 : out.texcoords;
+    if (uv.empty()) {
+      // a normal texture is left out, warned where the material is read; anisotropy is kept, its direction not
+      if (!normalMap)
+        m_scene.addWarning("material '" + material.name + "': " + kAnisotropy +
+                           " on a primitive without TANGENT or TEXCOORD_0; its direction there is arbitrary");
+      return;
+    }
     const std::size_t before = out.positions.size();
     std::vector<std::uint32_t> sources = generateTangents(out.positions, out.normals, uv, out.corners, out.tangents);
     if (sources.size() == before) return;
@@ -1052,6 +1070,14 @@ class Converter {
     };
     extend(out.positions), extend(out.normals), extend(out.texcoords), extend(out.texcoords1), extend(out.colors);
     out.geometry = std::uint32_t(m_geometries.size() + m_splitGeometries++ + (1u << 30));
+  }
+
+  /// Whether a material has KHR_materials_anisotropy with a strength above 0.
+  static bool anisotropic(const tinygltf::Material& material) {
+    auto it = material.extensions.find(kAnisotropy);
+    if (it == material.extensions.end() || !it->second.IsObject() || !it->second.Has("anisotropyStrength")) return false;
+    const tinygltf::Value& v = it->second.Get("anisotropyStrength");
+    return v.IsNumber() && v.GetNumberAsDouble() > 0.0;
   }
 
   /// Append one placed copy of a primitive to the scene.

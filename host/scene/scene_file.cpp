@@ -473,7 +473,8 @@ class Loader {
       checkKeys(v, path, {"type", "base_color", "metallic", "roughness", "emission", "emission_strength",
                           "double_sided", "transmission", "ior", "thin_walled", "attenuation_color",
                           "attenuation_distance", "specular", "specular_color", "clearcoat",
-                          "clearcoat_roughness", "sheen_color", "sheen_roughness"});
+                          "clearcoat_roughness", "sheen_color", "sheen_roughness", "anisotropy",
+                          "anisotropy_rotation"});
     auto read = [&](const char* key, double fallback, auto&& reader) {
       const Json* x = find(v, key);
       return x ? reader(*x, member(path, key)) : fallback;
@@ -510,6 +511,10 @@ class Loader {
     m = withSpecular(m, float(read("specular", 1.0, unit)), glm::min(specularColor, glm::vec3(1e6f)));
     m = withClearcoat(m, float(read("clearcoat", 0.0, unit)), float(read("clearcoat_roughness", 0.0, unit)));
     m = withSheen(m, sheenColor, float(read("sheen_roughness", 0.0, unit)));
+    const double rotation = read("anisotropy_rotation", 0.0, [&](const Json& x, const std::string& p) {
+      return inRange(x, p, -1e6, 1e6);
+    });
+    m = withAnisotropy(m, float(read("anisotropy", 0.0, unit)), float(rotation));
     // ior sets the dielectric's F0 ((ior - 1) / (ior + 1))^2 as well as the interface's index
     m.ior = ior;
     if (metallic >= 1.0f)

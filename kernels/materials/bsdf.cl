@@ -67,6 +67,12 @@
 // transmits straight through at any roughness. The clear coat, the sheen
 // and a dielectric F0 other than 0.04 are compiled in only for scenes that
 // use them (WT_HAS_CLEARCOAT, WT_HAS_SHEEN, WT_HAS_SPECULAR).
+//
+// KHR_materials_anisotropy (WT_HAS_ANISOTROPY) makes the base's GGX
+// reflection anisotropic: alpha_t = mix(alpha, 1, strength^2) along the
+// local x axis (shade turns the frame to the anisotropy direction), alpha_b
+// = alpha along y. Such a lobe scatters once and the base under it keeps 1
+// minus the mirror's Fresnel at mu_o (docs/materials.md, "Anisotropy").
 #ifndef WT_MATERIALS_BSDF_CL
 #define WT_MATERIALS_BSDF_CL
 
@@ -112,8 +118,57 @@ typedef struct Bsdf {
   float3 sheen;      ///< sheen colour (0 without WT_HAS_SHEEN, and inside a volume)
   float sheen_roughness;  ///< clamped to [WT_SHEEN_MIN_ROUGHNESS, 1]; alpha = roughness^2
   SheenFit sheen_fit;     ///< its visibility's Lambda fit, once per material
+#if WT_HAS_ANISOTROPY
+  float alpha_t;          ///< the base's GGX alpha along the local x axis (the anisotropy direction)
+  float alpha_b;          ///< and along y; alpha_t == alpha_b: isotropic, alpha = roughness^2
+  float lobe_roughness;   ///< the isotropic roughness whose tables stand in for the base's lobe
+#endif
   __global const float* table;  ///< directional albedos (shared/materials.h)
 } Bsdf;
+
+/// The roughness at which the base's GGX lobe reads the albedo tables: its
+/// own, or an anisotropic lobe's stand-in (bsdf_make).
+#if WT_HAS_ANISOTROPY
+#define bsdf_lobe_roughness(b) ((b).lobe_roughness)
+#else
+#define bsdf_lobe_roughness(b) ((b).roughness)
+#endif
+
+/// The base's GGX lobe (reflection, metal and dielectric): its
+/// distribution, masking and visible-normal sampling, anisotropic where
+/// KHR_materials_anisotropy makes alpha_t differ from alpha_b (an isotropic
+/// lobe runs the isotropic code, so strength 0 is exactly the old lobe).
+inline float base_ggx_d(Bsdf b, float3 h) {
+#if WT_HAS_ANISOTROPY
+  if (b.alpha_t != b.alpha_b) return ggx_d_aniso(h.x, h.y, h.z, b.alpha_t, b.alpha_b);
+#endif
+  return ggx_d(h.x, h.y, h.z, b.roughness * b.roughness);
+}
+
+inline float base_ggx_g1(Bsdf b, float3 v) {
+#if WT_HAS_ANISOTROPY
+  if (b.alpha_t != b.alpha_b) return ggx_g1_aniso(v.x, v.y, v.z, b.alpha_t, b.alpha_b);
+#endif
+  return ggx_g1(v.x, v.y, v.z, b.roughness * b.roughness);
+}
+
+inline float base_ggx_g2(Bsdf b, float3 o, float3 i) {
+#if WT_HAS_ANISOTROPY
+  if (b.alpha_t != b.alpha_b) return ggx_g2_aniso(o.x, o.y, o.z, i.x, i.y, i.z, b.alpha_t, b.alpha_b);
+#endif
+  return ggx_g2(o.x, o.y, o.z, i.x, i.y, i.z, b.roughness * b.roughness);
+}
+
+inline float3 base_ggx_sample(Bsdf b, float3 wo, float u1, float u2) {
+  float hx, hy, hz;
+#if WT_HAS_ANISOTROPY
+  ggx_sample_visible_normal_aniso(wo.x, wo.y, wo.z, b.alpha_t, b.alpha_b, u1, u2, &hx, &hy, &hz);
+#else
+  float alpha = b.roughness * b.roughness;
+  ggx_sample_visible_normal(wo.x, wo.y, wo.z, alpha, u1, u2, &hx, &hy, &hz);
+#endif
+  return (float3)(hx, hy, hz);
+}
 
 /// The outcome of sampling a direction.
 typedef struct BsdfSample {
@@ -148,6 +203,22 @@ inline Bsdf bsdf_make(WtMaterial m, __global const float* table, int inside) {
   b.sheen_roughness = 1.0f;
   b.sheen_fit = (SheenFit){0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f};
   bool pbr = m.model == WT_MATERIAL_PBR;
+#if WT_HAS_ANISOTROPY
+  b.alpha_t = b.alpha_b = m.roughness * m.roughness;
+  b.lobe_roughness = m.roughness;
+  if (pbr && m.anisotropy > 0.0f) {
+    float alpha_t, alpha_b;
+    ggx_anisotropy_alphas(m.roughness, fmin(m.anisotropy, 1.0f), &alpha_t, &alpha_b);
+    // a lobe stretched past the mirror threshold along t is no longer a mirror
+    // (the interface keeps the isotropic roughness: the extension shapes reflection)
+    if (alpha_t >= WT_GGX_MIN_ALPHA) {
+      b.alpha_t = alpha_t;
+      b.alpha_b = fmax(alpha_b, WT_GGX_MIN_ALPHA);
+      b.mirror = 0;
+      b.lobe_roughness = fmax(sqrt(sqrt(b.alpha_t * b.alpha_b)), WT_PBR_MIN_ROUGHNESS);
+    }
+  }
+#endif
 #if WT_HAS_SPECULAR
   if (pbr) {
     float r = (m.ior - 1.0f) / (m.ior + 1.0f);
@@ -227,7 +298,7 @@ inline PbrView pbr_view_none(void) {
 
 inline PbrView pbr_view(Bsdf b, float mu) {
   PbrView v;
-  float2 es = pbr_moments(b.table, mu, b.roughness);
+  float2 es = pbr_moments(b.table, mu, bsdf_lobe_roughness(b));
   v.e = es.x, v.s = es.y;
   v.spec_ss = pbr_dielectric_albedo(b, es, (DielectricColor)(0.0f));
   v.coat = v.sheen = v.sheen_lambda_o = 0.0f;
@@ -362,27 +433,46 @@ inline float3 pbr_eval(Bsdf b, float3 wo, float3 wi, uint lobes, float* pdf) {
     float3 h = normalize(wo + wi);
     float oh = fmax(dot(wo, h), 0.0f);
     float m5 = ggx_schlick(0.0f, oh);  // (1 - oh)^5
-    float2 es_i = pbr_moments(b.table, wi.z, b.roughness);
-    float e_avg = b.mirror ? 1.0f : pbr_table_average(b.table, WT_PBR_TABLE_E_AVG, b.roughness);
+    float2 es_i = pbr_moments(b.table, wi.z, bsdf_lobe_roughness(b));
+    float e_avg = b.mirror ? 1.0f : pbr_table_average(b.table, WT_PBR_TABLE_E_AVG, bsdf_lobe_roughness(b));
     DielectricColor fms = pbr_dielectric_multiscatter(b.f0 + (1.0f - b.f0) / 21.0f, e_avg);
+#if WT_HAS_ANISOTROPY
+    // an anisotropic lobe scatters once: its albedo departs from the
+    // isotropic tables (above them viewed along alpha_t at grazing angles),
+    // so a compensation read from them would add energy
+    bool multiscatter = b.alpha_t == b.alpha_b;
+    if (!multiscatter) fms = (DielectricColor)(0.0f);
+#else
+    const bool multiscatter = true;
+#endif
     if ((lobes & WT_LOBE_SPECULAR) && !b.mirror) {
-      float alpha = b.roughness * b.roughness;
-      float d = ggx_d(h.x, h.y, h.z, alpha);
-      float dv = d * ggx_g2(wo.x, wo.y, wo.z, wi.x, wi.y, wi.z, alpha) / (4.0f * wo.z * wi.z);
+      float d = base_ggx_d(b, h);
+      float dv = d * base_ggx_g2(b, wo, wi) / (4.0f * wo.z * wi.z);
       float3 f_metal = b.base + (1.0f - b.base) * m5;
       DielectricColor f_dielectric = b.specular * (b.f0 + (1.0f - b.f0) * m5);
       f += (b.metallic * f_metal + opaque * f_dielectric) * dv;
       // multiple scattering: (1 - E(mu_o)) (1 - E(mu_i)) / (pi (1 - E_avg)), by the average Fresnel
-      float ms = (1.0f - v.e) * (1.0f - es_i.x) / (WT_PI * fmax(1.0f - e_avg, 1e-6f));
-      float3 fms_metal = pbr_multiscatter_fresnel3(b.base + (1.0f - b.base) / 21.0f, e_avg);
-      f += (b.metallic * fms_metal + opaque * b.specular * fms) * ms;
-      pdf_spec = ggx_g1(wo.x, wo.y, wo.z, alpha) * d / (4.0f * wo.z);
+      if (multiscatter) {
+        float ms = (1.0f - v.e) * (1.0f - es_i.x) / (WT_PI * fmax(1.0f - e_avg, 1e-6f));
+        float3 fms_metal = pbr_multiscatter_fresnel3(b.base + (1.0f - b.base) / 21.0f, e_avg);
+        f += (b.metallic * fms_metal + opaque * b.specular * fms) * ms;
+      }
+      pdf_spec = base_ggx_g1(b, wo) * d / (4.0f * wo.z);
     }
     if (lobes & WT_LOBE_DIFFUSE) {
       // what the specular lobe (with its multiple scattering) leaves, both ways, over its average
-      float s_avg = b.mirror ? 1.0f / 21.0f : pbr_table_average(b.table, WT_PBR_TABLE_S_AVG, b.roughness);
+      float s_avg = b.mirror ? 1.0f / 21.0f : pbr_table_average(b.table, WT_PBR_TABLE_S_AVG, bsdf_lobe_roughness(b));
       DielectricColor spec_avg = b.specular * (b.f0 * e_avg + (1.0f - b.f0) * s_avg + fms * (1.0f - e_avg));
       DielectricColor spec_o = pbr_dielectric_albedo(b, (float2)(v.e, v.s), fms);
+#if WT_HAS_ANISOTROPY
+      // the base keeps 1 - spec_o whatever tables spec_i and spec_avg are
+      // read at; an anisotropic lobe's albedo departs from the isotropic
+      // tables (above them viewed along alpha_b at grazing angles), so spec_o
+      // is the mirror's, Schlick at mu_o, above the lobe's over the tested
+      // grid (WhiteAnisotropicMaterialsReflectAtMostEverything): it loses
+      // energy rather than gain it
+      if (!multiscatter) spec_o = pbr_dielectric_albedo(b, (float2)(1.0f, ggx_schlick(0.0f, wo.z)), fms);
+#endif
       DielectricColor spec_i = pbr_dielectric_albedo(b, es_i, fms);
       f += opaque * b.base * ((1.0f / WT_PI) * (1.0f - spec_o) * (1.0f - spec_i) / fmax(1.0f - spec_avg, 1e-6f));
       pdf_diffuse = wi.z / WT_PI;
@@ -497,10 +587,14 @@ inline bool bsdf_sample(Bsdf b, float3 wo, uint lobes, float u_lobe, float u1, f
       s->lobe |= WT_LOBE_DELTA;
       return p > 0.0f && (f.x > 0.0f || f.y > 0.0f || f.z > 0.0f);
     }
-    float r = coat ? b.clearcoat_roughness : b.roughness;
-    float hx, hy, hz;
-    ggx_sample_visible_normal(wo.x, wo.y, wo.z, r * r, u1, u2, &hx, &hy, &hz);
-    float3 h = (float3)(hx, hy, hz);
+    float3 h;
+    if (coat) {
+      float alpha = b.clearcoat_roughness * b.clearcoat_roughness, hx, hy, hz;
+      ggx_sample_visible_normal(wo.x, wo.y, wo.z, alpha, u1, u2, &hx, &hy, &hz);
+      h = (float3)(hx, hy, hz);
+    } else {
+      h = base_ggx_sample(b, wo, u1, u2);
+    }
     s->wi = 2.0f * dot(wo, h) * h - wo;
   } else if (u_lobe < below_cosine) {
 #if WT_HAS_TRANSMISSION

@@ -63,6 +63,9 @@ inline SurfacePoint surface_point(SurfaceScene ss, uint4 v, float b1, float b2, 
   float4 e1 = t1 - t0, e2 = t2 - t0;
   float2 uv_area = (float2)(fabs(e1.x * e2.y - e1.y * e2.x), fabs(e1.z * e2.w - e1.w * e2.z));
   if (world_area > 0.0f && isfinite(world_area)) sp.uv_scale = sqrt(uv_area / world_area);
+#endif
+#if WT_HAS_TEXTURES || WT_HAS_ANISOTROPY
+  // the tangent: normal maps and the anisotropy direction
   float4 g0 = ss.tangent[v.x], g1 = ss.tangent[v.y], g2 = ss.tangent[v.z];
   float3 t = b0 * g0.xyz + b1 * g1.xyz + b2 * g2.xyz;
   float len = length(t);
@@ -148,6 +151,42 @@ inline WtMaterial material_at(SurfaceScene ss, uint index, WtMaterial m, Surface
 #endif
   return m;
 }
+
+#if WT_HAS_ANISOTROPY
+/// KHR_materials_anisotropy at the point: m's strength times the anisotropy
+/// texture's blue, and the returned direction in world space (not unit, not
+/// yet in the shading normal's plane): the texture's rg as a direction in
+/// [-1,1]^2 of tangent-bitangent space, else the tangent (1, 0), rotated by
+/// anisotropy_rotation counter-clockwise; the bitangent sign * cross(n,
+/// tangent) with n the interpolated normal. Zero where the point has no
+/// tangent (shade then keeps its arbitrary frame).
+inline float3 anisotropy_direction(SurfaceScene ss, uint index, WtMaterial* m, SurfacePoint sp, float3 n) {
+  if (!(m->anisotropy > 0.0f)) return (float3)(0.0f);
+  float2 d = (float2)(1.0f, 0.0f);
+#if WT_HAS_TEXTURES
+  if (m->texture_mask & (1u << WT_TEXTURE_SLOT_ANISOTROPY)) {
+    float4 t = material_texture(ss, index, WT_TEXTURE_SLOT_ANISOTROPY, sp);
+    d = (float2)(2.0f * t.x - 1.0f, 2.0f * t.y - 1.0f);
+    m->anisotropy *= t.z;
+  }
+#endif
+  if (!(dot(sp.tangent, sp.tangent) > 0.0f)) return (float3)(0.0f);
+  float c = cos(m->anisotropy_rotation), s = sin(m->anisotropy_rotation);
+  float2 r = (float2)(c * d.x - s * d.y, s * d.x + c * d.y);
+  return r.x * sp.tangent + r.y * (sp.sign * cross(n, sp.tangent));
+}
+
+/// The local frame's x axis along the anisotropy direction `dir` (from
+/// anisotropy_direction) projected into the plane of the shading normal
+/// `ns`; *t and *b unchanged where it has no length there.
+inline void anisotropy_frame(float3 dir, float3 ns, float3* t, float3* b) {
+  float3 x = dir - ns * dot(ns, dir);
+  float len = length(x);
+  if (!(len > 1e-6f) || !isfinite(len)) return;
+  *t = x / len;
+  *b = cross(ns, *t);
+}
+#endif
 
 /// A normal map can tilt the shading normal `ns` so far that the mirror
 /// direction of wo falls below the surface (ng, on wo's side), where a

@@ -74,14 +74,51 @@ WT_GGX_INLINE float ggx_fresnel_dielectric(float cos_i, float eta) {
 /// Hemispherical average of Schlick's Fresnel weighted by cos: F0 + (1 - F0) / 21.
 WT_GGX_INLINE float ggx_schlick_average(float f0) { return f0 + (1.0f - f0) / 21.0f; }
 
+/// Anisotropic GGX (Heitz 2014), alpha_x along the frame's x axis (the
+/// tangent) and alpha_y along y. Written so that alpha_x == alpha_y gives
+/// the isotropic forms above; callers with an isotropic lobe keep those.
+/// D(h) = 1 / (pi ax ay ((hx / ax)^2 + (hy / ay)^2 + hz^2)^2).
+WT_GGX_INLINE float ggx_d_aniso(float hx, float hy, float hz, float ax, float ay) {
+  if (hz <= 0.0f) return 0.0f;
+  float t = hx * hx / (ax * ax) + hy * hy / (ay * ay) + hz * hz;
+  return 1.0f / (WT_GGX_PI * ax * ay * t * t);
+}
+
+/// Smith's Lambda of the anisotropic lobe: the isotropic one with
+/// alpha^2 tan^2 = (ax^2 vx^2 + ay^2 vy^2) / vz^2.
+WT_GGX_INLINE float ggx_lambda_aniso(float vx, float vy, float vz, float ax, float ay) {
+  float z2 = vz * vz;
+  if (z2 <= 0.0f) return INFINITY;
+  float a2_tan2 = (ax * ax * vx * vx + ay * ay * vy * vy) / z2;
+  return 0.5f * (sqrt(1.0f + a2_tan2) - 1.0f);
+}
+
+WT_GGX_INLINE float ggx_g1_aniso(float vx, float vy, float vz, float ax, float ay) {
+  return 1.0f / (1.0f + ggx_lambda_aniso(vx, vy, vz, ax, ay));
+}
+
+WT_GGX_INLINE float ggx_g2_aniso(float ox, float oy, float oz, float ix, float iy, float iz, float ax, float ay) {
+  return 1.0f / (1.0f + ggx_lambda_aniso(ox, oy, oz, ax, ay) + ggx_lambda_aniso(ix, iy, iz, ax, ay));
+}
+
+/// The KHR_materials_anisotropy roughnesses of perceptual roughness r and
+/// strength s: alpha_t = mix(r^2, 1, s^2) along the anisotropy direction,
+/// alpha_b = r^2 across it.
+WT_GGX_INLINE void ggx_anisotropy_alphas(float roughness, float strength, float* alpha_t, float* alpha_b) {
+  float a = roughness * roughness;
+  *alpha_t = a + (1.0f - a) * strength * strength;
+  *alpha_b = a;
+}
+
 /// A microfacet normal h drawn from the normals visible from unit direction
 /// v (vz > 0), given two uniforms (Heitz 2018, "Sampling the GGX
 /// Distribution of Visible Normals"). Its density over h is
-/// G1(v) max(0, v.h) D(h) / vz.
-WT_GGX_INLINE void ggx_sample_visible_normal(float vx, float vy, float vz, float alpha, float u1, float u2,
-                                             float* hx, float* hy, float* hz) {
+/// G1(v) max(0, v.h) D(h) / vz; ggx_sample_visible_normal_aniso stretches
+/// x and y by their own alphas.
+WT_GGX_INLINE void ggx_sample_visible_normal_aniso(float vx, float vy, float vz, float ax, float ay, float u1, float u2,
+                                                   float* hx, float* hy, float* hz) {
   // the view direction stretched to the hemisphere configuration
-  float sx = alpha * vx, sy = alpha * vy, sz = vz;
+  float sx = ax * vx, sy = ay * vy, sz = vz;
   float len = sqrt(sx * sx + sy * sy + sz * sz);
   sx /= len, sy /= len, sz /= len;
   // an orthonormal basis around it
@@ -102,9 +139,14 @@ WT_GGX_INLINE void ggx_sample_visible_normal(float vx, float vy, float vz, float
   float ny = p1 * t1y + p2 * t2y + p3 * sy;
   float nz = p2 * t2z + p3 * sz;
   // back to the ellipsoid configuration
-  float ex = alpha * nx, ey = alpha * ny, ez = fmax(nz, 0.0f);
+  float ex = ax * nx, ey = ay * ny, ez = fmax(nz, 0.0f);
   float elen = sqrt(ex * ex + ey * ey + ez * ez);
   *hx = ex / elen, *hy = ey / elen, *hz = ez / elen;
+}
+
+WT_GGX_INLINE void ggx_sample_visible_normal(float vx, float vy, float vz, float alpha, float u1, float u2,
+                                             float* hx, float* hy, float* hz) {
+  ggx_sample_visible_normal_aniso(vx, vy, vz, alpha, alpha, u1, u2, hx, hy, hz);
 }
 
 #endif  // WT_SHARED_GGX_H

@@ -159,7 +159,8 @@ typedef struct WtMaterial {
   WtVec4 sheen;       ///< KHR_materials_sheen: xyz sheenColorFactor in [0,1] (linear RGB; 0: no sheen), w sheenRoughnessFactor in [0,1] (PBR only)
   float clearcoat;           ///< KHR_materials_clearcoat clearcoatFactor in [0,1] (0: no coat; PBR only)
   float clearcoat_roughness; ///< clearcoatRoughnessFactor in [0,1], alpha = roughness^2
-  wt_uint pad0, pad1;
+  float anisotropy;          ///< KHR_materials_anisotropy anisotropyStrength in [0,1] (0: isotropic; PBR only)
+  float anisotropy_rotation; ///< anisotropyRotation: radians counter-clockwise from the tangent, in the tangent-bitangent plane
 } WtMaterial;
 
 #define WT_ALPHA_OPAQUE 0u  ///< alpha is ignored
@@ -180,7 +181,8 @@ typedef struct WtMaterial {
 #define WT_TEXTURE_SLOT_CLEARCOAT_NORMAL 9u    ///< tangent-space normal of the coat, xy scaled by WtTextureRef::scale
 #define WT_TEXTURE_SLOT_SHEEN_COLOR 10u        ///< rgb: KHR_materials_sheen sheenColorFactor (sRGB)
 #define WT_TEXTURE_SLOT_SHEEN_ROUGHNESS 11u    ///< a: sheenRoughnessFactor
-#define WT_TEXTURE_SLOTS 16u                   ///< slots 12..15 are free
+#define WT_TEXTURE_SLOT_ANISOTROPY 12u         ///< rg: direction in [-1,1] tangent-bitangent space (rotated by anisotropy_rotation), b: strength
+#define WT_TEXTURE_SLOTS 16u                   ///< slots 13..15 are free
 
 /// One textured slot of a material: which texture (WtTexture, shared/textures.h),
 /// read at which texture coordinate set, moved by KHR_texture_transform.

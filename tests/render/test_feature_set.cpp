@@ -216,6 +216,13 @@ const OneFeature kCases[] = {
        return s;
      },
      noSettings, [] { return with(pbrBase(), {"sheen"}); }},
+    {"anisotropy",
+     [] {
+       Scene s = pbrFloor();
+       s.materials[0] = withAnisotropy(s.materials[0], 0.5f, 0.3f);
+       return s;
+     },
+     noSettings, [] { return with(pbrBase(), {"anisotropy"}); }},
     {"specular",
      [] {
        Scene s = pbrFloor();

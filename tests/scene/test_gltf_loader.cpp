@@ -957,6 +957,53 @@ TEST(GltfLoader, LayerExtensionsReadTheirFactors) {
   EXPECT_EQ(t.materials[0].texture_mask, (1u << WT_TEXTURE_SLOT_SPECULAR) | (1u << WT_TEXTURE_SLOT_SHEEN_ROUGHNESS));
 }
 
+// KHR_materials_anisotropy: strength and rotation (defaults 0), the
+// texture with its texCoord, listed among the scene's features; a primitive
+// without TEXCOORD_0 gets no generated tangents and says its direction is arbitrary.
+TEST(GltfLoader, AnisotropyReadsStrengthRotationAndTexture) {
+  GltfDoc doc = triangleDoc();
+  doc.extensionsUsed = "[\"KHR_materials_anisotropy\"]";
+  doc.images.push_back(
+      "{\"uri\":\"data:image/png;base64,"
+      "iVBORw0KGgoAAAANSUhEUgAAAAEAAAABCAYAAAAfFcSJAAAADUlEQVR42mNk+M9QDwADhgGAWjR9awAAAABJRU5ErkJggg==\"}");
+  doc.textures.push_back("{\"source\":0}");
+  doc.materials.push_back(
+      "{\"name\":\"brushed\",\"pbrMetallicRoughness\":{\"metallicFactor\":1,\"roughnessFactor\":0.2},"
+      "\"extensions\":{\"KHR_materials_anisotropy\":{\"anisotropyStrength\":0.6,\"anisotropyRotation\":1.25,"
+      "\"anisotropyTexture\":{\"index\":0,\"texCoord\":1}}}}");
+  doc.materials.push_back("{\"name\":\"defaults\",\"extensions\":{\"KHR_materials_anisotropy\":{}}}");
+  doc.meshes[0] = "{\"primitives\":[{\"attributes\":{\"POSITION\":0},\"material\":0},"
+                  "{\"attributes\":{\"POSITION\":0},\"material\":1}]}";
+  Scene s = loadDoc(doc);
+  expectConsistent(s);
+  ASSERT_EQ(s.materials.size(), 2u);
+  EXPECT_FLOAT_EQ(s.materials[0].anisotropy, 0.6f);
+  EXPECT_FLOAT_EQ(s.materials[0].anisotropy_rotation, 1.25f);
+  EXPECT_EQ(s.materials[0].texture_mask, 1u << WT_TEXTURE_SLOT_ANISOTROPY);
+  ASSERT_GE(s.materialTextures.size(), std::size_t(WT_TEXTURE_SLOTS));
+  EXPECT_EQ(s.materialTextures[WT_TEXTURE_SLOT_ANISOTROPY].texcoord, 1u);
+  EXPECT_EQ(s.materials[1].anisotropy, 0.0f);
+  EXPECT_EQ(s.materials[1].anisotropy_rotation, 0.0f);
+  EXPECT_EQ(s.materials[1].texture_mask, 0u);
+  ASSERT_EQ(s.warnings.size(), 1u);
+  EXPECT_CONTAINS(s.warnings[0], "material 'brushed': KHR_materials_anisotropy on a primitive without TANGENT or TEXCOORD_0");
+  KernelFeatures features;
+  setMaterialFeatures(features, s.materials);
+  EXPECT_TRUE(features.anisotropy);
+  bool defined = false;
+  for (const std::string& d : kernelDefines(features)) defined |= d == "-D WT_HAS_ANISOTROPY=1";
+  EXPECT_TRUE(defined);
+  // out-of-range strength is clamped with a warning; a rotation that is not a number is an error naming it
+  GltfDoc bad = triangleDoc();
+  bad.materials.push_back("{\"name\":\"m\",\"extensions\":{\"KHR_materials_anisotropy\":{\"anisotropyStrength\":1.5}}}");
+  bad.meshes[0] = "{\"primitives\":[{\"attributes\":{\"POSITION\":0},\"material\":0}]}";
+  Scene clamped = loadDoc(bad);
+  EXPECT_EQ(clamped.materials[0].anisotropy, 1.0f);
+  EXPECT_CONTAINS(clamped.warnings.at(0), "material 0 'm' KHR_materials_anisotropy anisotropyStrength 1.500000 is outside [0,1]; clamped");
+  bad.materials[0] = "{\"name\":\"m\",\"extensions\":{\"KHR_materials_anisotropy\":{\"anisotropyRotation\":\"x\"}}}";
+  EXPECT_CONTAINS(docError(bad), "material 0 'm' KHR_materials_anisotropy: anisotropyRotation is not a finite number");
+}
+
 TEST(GltfLoader, BadLayerValuesAreClampedOrRefused) {
   auto load = [](const std::string& extensions, float metallic = 0.0f) {
     GltfDoc doc = triangleDoc();
@@ -1085,7 +1132,7 @@ TEST(GltfLoader, UnsupportedFeaturesWarnOnceEach) {
                          [&](const std::string& w) { return w.find(part) != std::string::npos; });
   };
   EXPECT_EQ(count("KHR_materials_iridescence is not supported; ignored"), 1);
-  EXPECT_EQ(count("KHR_materials_anisotropy is not supported; ignored"), 1);
+  EXPECT_EQ(count("KHR_materials_anisotropy"), 0);  // drawn
   EXPECT_EQ(count("KHR_materials_clearcoat"), 0);  // drawn (factors only: textures warn as above)
   EXPECT_EQ(count("KHR_materials_sheen"), 0);
   EXPECT_EQ(count("KHR_materials_specular"), 0);

@@ -263,6 +263,12 @@ TEST(SceneFile, MaterialLayers) {
   EXPECT_TRUE(s.warnings.empty()) << s.warnings.at(0);
   EXPECT_CONTAINS(errorOf(doc(R"("materials": {"m": {"sheen_color": [2, 0, 0]}})")), "materials.m.sheen_color");
   EXPECT_CONTAINS(errorOf(doc(R"("materials": {"m": {"clearcoat": 1.5}})")), "materials.m.clearcoat: must be in [0, 1]");
+  // KHR_materials_anisotropy's strength and rotation (a whole turn less, for the device's cos and sin)
+  SceneFile a = loadText(doc(R"("materials": {"brushed": {"metallic": 1, "anisotropy": 0.6, "anisotropy_rotation": 7}})"));
+  EXPECT_FLOAT_EQ(a.scene.materials[0].anisotropy, 0.6f);
+  EXPECT_NEAR(a.scene.materials[0].anisotropy_rotation, 7.0f - 2.0f * float(M_PI), 1e-5f);
+  EXPECT_EQ(p.anisotropy, 0.0f);
+  EXPECT_CONTAINS(errorOf(doc(R"("materials": {"m": {"anisotropy": -0.1}})")), "materials.m.anisotropy: must be in [0, 1]");
 }
 
 TEST(SceneFile, AutoExposureWithAnOffset) {
