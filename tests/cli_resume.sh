@@ -6,14 +6,16 @@
 # a bit-flipped, an other-scene and an other-settings checkpoint must each be
 # refused with its message, before anything is rendered or written.
 #
-# usage: cli_resume.sh WAVETRACE SCRATCH_DIR [single|kahan|double]
+# usage: cli_resume.sh WAVETRACE SCRATCH_DIR [single|kahan|double][_aov]
+# (_aov: with every AOV, whose layers must resume exactly as well)
 set -u
 exe=$1
 dir=$2
 mode=${3:-kahan}
 mkdir -p "$dir"
 rm -f "$dir"/*
-common=(--width 16 --height 16 --accumulation "$mode")
+common=(--width 16 --height 16 --accumulation "${mode%_aov}")
+[ "$mode" != "${mode%_aov}" ] && common+=(--aov all)
 fail() {
   echo "FAIL: $*"
   exit 1

@@ -208,10 +208,6 @@ void parseAovOptions(RenderOptions& options) {
   const bool onlyVariance = options.aovs.size() == 1 && options.aovs[0] == wt::Aov::Variance;
   options.settings.aovs = (!options.aovs.empty() && !onlyVariance) || options.debugView != wt::DebugView::None;
   options.settings.bvhCost = options.debugView == wt::DebugView::BvhCost;
-  // a checkpoint holds the image's accumulation only: AOVs would restart at zero on --resume
-  if (options.settings.aovs && (options.checkpointSeconds > 0.0 || options.resume))
-    throw std::invalid_argument(std::string(options.resume ? "--resume" : "--checkpoint") +
-                                ": checkpoints do not hold AOVs yet; render AOVs (--aov, --debug) without it");
   for (const std::string& out : options.outputs)
     if (!options.aovs.empty() && wt::imageFormatFor(out) == wt::ImageFormat::Png && options.aovOut.empty())
       wt::log::warnOnce(out + ": a PNG holds no AOV layers (write an .exr, or use --aov-out)");

@@ -174,7 +174,9 @@ std::filesystem::path checkpointPathFor(const std::filesystem::path& output) {
 
 void writeCheckpoint(const std::filesystem::path& path, const Checkpoint& c) {
   const Accumulation& a = c.accumulation;
-  if (a.state.size() != c.pixels * kAccumulationStateBytes || a.samples.size() != c.pixels)
+  const std::size_t aovBytesPerPixel = a.aovs.empty() ? 0 : kAovSumBytes + kAovIdBytes;
+  if (a.state.size() != c.pixels * kAccumulationStateBytes || a.samples.size() != c.pixels ||
+      a.aovs.size() != c.pixels * aovBytesPerPixel)
     fail(path, "internal: accumulation of " + std::to_string(a.samples.size()) + " pixels, header says " +
                    std::to_string(c.pixels));
   std::string header;
@@ -183,11 +185,12 @@ void writeCheckpoint(const std::filesystem::path& path, const Checkpoint& c) {
   line("nonfinite_samples", std::to_string(a.nonFiniteSamples));
   line("pixels", std::to_string(c.pixels));
   line("state_bytes", std::to_string(kAccumulationStateBytes));
+  line("aov_bytes", std::to_string(aovBytesPerPixel));
   line("device", c.device);
   for (const CheckpointField& f : c.identity) line(f.key, f.value);
 
   const std::uint32_t version = kCheckpointVersion, headerBytes = std::uint32_t(header.size());
-  const std::uint64_t payloadBytes = a.state.size() + a.samples.size() * sizeof(std::uint32_t);
+  const std::uint64_t payloadBytes = a.state.size() + a.samples.size() * sizeof(std::uint32_t) + a.aovs.size();
   Fnv64 sum;
   const std::filesystem::path temp = path.string() + ".tmp" + std::to_string(getpid());
   std::FILE* f = std::fopen(temp.c_str(), "wb");
@@ -204,6 +207,7 @@ void writeCheckpoint(const std::filesystem::path& path, const Checkpoint& c) {
   put(&payloadBytes, 8);
   put(a.state.data(), a.state.size());
   put(a.samples.data(), a.samples.size() * sizeof(std::uint32_t));
+  put(a.aovs.data(), a.aovs.size());
   const std::uint64_t checksum = sum.value();
   ok = ok && std::fwrite(&checksum, 1, 8, f) == 8;
   // on disk before the rename, so a power cut cannot leave a renamed empty file
@@ -236,7 +240,8 @@ Checkpoint readCheckpoint(const std::filesystem::path& path) {
   std::uint32_t version = 0, headerBytes = 0;
   std::memcpy(&version, file.data() + 8, 4);
   std::memcpy(&headerBytes, file.data() + 12, 4);
-  if (version != kCheckpointVersion)
+  // version 1 is version 2 without AOVs (no aov_bytes line)
+  if (version != kCheckpointVersion && version != 1)
     fail(path, "checkpoint format version " + std::to_string(version) + "; this build reads version " +
                    std::to_string(kCheckpointVersion));
   if (std::uint64_t(headerBytes) + kFixed > file.size())
@@ -273,7 +278,7 @@ Checkpoint readCheckpoint(const std::filesystem::path& path) {
     if (space == std::string::npos || space == 0) fail(path, "corrupt checkpoint header line '" + text + "'");
     const std::string key = text.substr(0, space), value = text.substr(space + 1);
     if (key == "samples_done" || key == "nonfinite_samples" || key == "pixels" || key == "state_bytes" ||
-        key == "device")
+        key == "aov_bytes" || key == "device")
       meta[key] = value;
     else
       c.identity.push_back({key, value});
@@ -300,13 +305,20 @@ Checkpoint readCheckpoint(const std::filesystem::path& path) {
   if (samplesDone > (1u << 30)) fail(path, "checkpoint header: samples_done " + meta["samples_done"] + " out of range");
   c.accumulation.samplesDone = int(samplesDone);
   c.device = meta.count("device") ? meta["device"] : std::string();
-  if (c.pixels > payloadBytes || payloadBytes != c.pixels * (kAccumulationStateBytes + sizeof(std::uint32_t)))
+  const std::uint64_t aovBytes = meta.count("aov_bytes") ? integer("aov_bytes") : 0;
+  if (aovBytes != 0 && aovBytes != kAovSumBytes + kAovIdBytes)
+    fail(path, "checkpoint of " + meta["aov_bytes"] + " AOV bytes per pixel; this build keeps " +
+                   std::to_string(kAovSumBytes + kAovIdBytes));
+  if (c.pixels > payloadBytes ||
+      payloadBytes != c.pixels * (kAccumulationStateBytes + sizeof(std::uint32_t) + aovBytes))
     fail(path, "corrupt checkpoint: " + std::to_string(payloadBytes) + " payload bytes for " +
                    std::to_string(c.pixels) + " pixels");
   const char* payload = file.data() + 16 + headerBytes + 8;
   c.accumulation.state.assign(payload, payload + c.pixels * kAccumulationStateBytes);
   c.accumulation.samples.resize(c.pixels);
   std::memcpy(c.accumulation.samples.data(), payload + c.pixels * kAccumulationStateBytes, c.pixels * 4);
+  const char* aovs = payload + c.pixels * (kAccumulationStateBytes + 4);
+  c.accumulation.aovs.assign(aovs, aovs + c.pixels * aovBytes);
   return c;
 }
 

@@ -20,7 +20,7 @@ struct CheckpointError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-constexpr std::uint32_t kCheckpointVersion = 1;
+constexpr std::uint32_t kCheckpointVersion = 2;  ///< 2 added the AOVs (aov_bytes)
 
 /// One thing the accumulation depends on, as key and printable value.
 struct CheckpointField {

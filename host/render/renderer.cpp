@@ -485,6 +485,11 @@ Accumulation Renderer::saveAccumulation() {
   q.enqueueReadBuffer(m_path.state, CL_FALSE, 0, a.state.size(), a.state.data());
   q.enqueueReadBuffer(m_path.sampleCount, CL_FALSE, 0, pixels * 4, a.samples.data());
   q.enqueueReadBuffer(m_counters, CL_FALSE, 0, sizeof(counters), counters);
+  if (m_settings.aovs) {
+    a.aovs.resize(pixels * (kAovSumBytes + kAovIdBytes));
+    q.enqueueReadBuffer(m_path.aovAccum, CL_FALSE, 0, pixels * kAovSumBytes, a.aovs.data());
+    q.enqueueReadBuffer(m_path.aovIds, CL_FALSE, 0, pixels * kAovIdBytes, a.aovs.data() + pixels * kAovSumBytes);
+  }
   m_context.finish();
   a.nonFiniteSamples = counters[WT_COUNTER_NONFINITE];
   return a;
@@ -495,7 +500,15 @@ void Renderer::restoreAccumulation(const Accumulation& saved) {
   if (saved.state.size() != pixels * kAccumulationStateBytes || saved.samples.size() != pixels || saved.samplesDone < 0)
     throw std::invalid_argument("saved accumulation holds " + std::to_string(saved.samples.size()) +
                                 " pixels, the image " + std::to_string(pixels));
+  const std::size_t aovBytes = m_settings.aovs ? pixels * (kAovSumBytes + kAovIdBytes) : 0;
+  if (saved.aovs.size() != aovBytes)
+    throw std::invalid_argument(aovBytes ? "saved accumulation holds no AOVs (or another image's), this render records them"
+                                         : "saved accumulation holds AOVs, this render records none");
   cl::CommandQueue& q = m_context.queue();
+  if (aovBytes) {
+    q.enqueueWriteBuffer(m_path.aovAccum, CL_FALSE, 0, pixels * kAovSumBytes, saved.aovs.data());
+    q.enqueueWriteBuffer(m_path.aovIds, CL_FALSE, 0, pixels * kAovIdBytes, saved.aovs.data() + pixels * kAovSumBytes);
+  }
   q.enqueueWriteBuffer(m_path.state, CL_FALSE, 0, saved.state.size(), saved.state.data());
   q.enqueueWriteBuffer(m_path.sampleCount, CL_FALSE, 0, pixels * 4, saved.samples.data());
   const cl_uint nonFinite = cl_uint(saved.nonFiniteSamples);

@@ -148,10 +148,15 @@ struct Accumulation {
   std::uint64_t nonFiniteSamples = 0;    ///< NaN/Inf samples discarded so far
   std::vector<std::uint8_t> state;       ///< kAccumulationStateBytes per pixel (accumulate.cl's state)
   std::vector<std::uint32_t> samples;    ///< samples folded into each pixel
+  /// With RenderSettings::aovs: the AOV sums (kAovSumBytes per pixel, all
+  /// pixels) then the first sample's ids (kAovIdBytes per pixel); else empty.
+  std::vector<std::uint8_t> aovs;
 };
 
 /// Bytes of accumulation state per pixel (PathState::state: float4[4]).
 constexpr std::size_t kAccumulationStateBytes = 64;
+/// Bytes of AOV accumulation per pixel: PathState::aovAccum (float4[4]) and aovIds (uint4).
+constexpr std::size_t kAovSumBytes = 64, kAovIdBytes = 16;
 
 struct RenderStats {
   int samplesDone = 0;

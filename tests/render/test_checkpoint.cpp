@@ -5,7 +5,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <fstream>
 #include <iterator>
 
@@ -66,6 +68,40 @@ TEST(Checkpoint, RoundTripIsExact) {
   // no temporary file left beside it
   for (const auto& entry : std::filesystem::directory_iterator(path.parent_path()))
     EXPECT_EQ(entry.path().string().find(".tmp"), std::string::npos) << entry.path();
+}
+
+TEST(Checkpoint, AovsRoundTripAndAVersionOneFileStillReads) {
+  const auto path = scratch("aovs.wtckpt");
+  Checkpoint written = sample(4);
+  written.accumulation.aovs.resize(4 * (kAovSumBytes + kAovIdBytes));
+  for (std::size_t i = 0; i < written.accumulation.aovs.size(); ++i)
+    written.accumulation.aovs[i] = std::uint8_t(i * 17 + 3);
+  writeCheckpoint(path, written);
+  EXPECT_EQ(readCheckpoint(path).accumulation.aovs, written.accumulation.aovs);
+
+  // version 1: the same file without AOVs, without the aov_bytes line, checksum recomputed
+  const auto plain = scratch("plain.wtckpt");
+  writeCheckpoint(plain, sample(4));
+  std::vector<char> bytes = readAll(plain);
+  const std::string line = "aov_bytes 0\n";
+  std::uint32_t headerBytes = 0;
+  std::memcpy(&headerBytes, bytes.data() + 12, 4);
+  const auto at = std::search(bytes.begin() + 16, bytes.begin() + 16 + headerBytes, line.begin(), line.end());
+  ASSERT_NE(at, bytes.begin() + 16 + headerBytes);
+  bytes.erase(at, at + std::ptrdiff_t(line.size()));
+  headerBytes -= std::uint32_t(line.size());
+  const std::uint32_t one = 1;
+  std::memcpy(bytes.data() + 8, &one, 4);
+  std::memcpy(bytes.data() + 12, &headerBytes, 4);
+  Fnv64 sum;
+  sum.bytes(bytes.data(), bytes.size() - 8);
+  const std::uint64_t checksum = sum.value();
+  std::memcpy(bytes.data() + bytes.size() - 8, &checksum, 8);
+  const auto v1 = scratch("version1.wtckpt");
+  writeAll(v1, bytes);
+  const Checkpoint read = readCheckpoint(v1);
+  EXPECT_TRUE(read.accumulation.aovs.empty());
+  EXPECT_EQ(read.accumulation.state, sample(4).accumulation.state);
 }
 
 TEST(Checkpoint, EveryTruncationIsRefused) {

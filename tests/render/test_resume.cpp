@@ -63,6 +63,44 @@ TEST_P(Resume, SavedAndContinuedEqualsUninterruptedBitwise) {
 INSTANTIATE_TEST_SUITE_P(Accumulation, Resume,
                          ::testing::Values(WT_ACCUMULATE_SINGLE, WT_ACCUMULATE_KAHAN, WT_ACCUMULATE_DOUBLE));
 
+// The AOVs' sums and first-sample ids resume exactly as the image does.
+TEST(Resume, AovsSavedAndContinuedEqualUninterruptedBitwise) {
+  Context& context = test::deviceContext();
+  const Scene scene = loadDefaultScene();
+  RenderSettings settings = tinySettings(4);
+  settings.aovs = true;
+  Renderer straight(context, scene, settings);
+  for (int s = 0; s < 9; ++s) straight.renderSample();
+  const Aovs expected = straight.readImage().aovs;
+
+  Accumulation saved;
+  {
+    Renderer first(context, scene, settings);
+    for (int s = 0; s < 4; ++s) first.renderSample();
+    saved = first.saveAccumulation();
+  }
+  EXPECT_EQ(saved.aovs.size(), std::size_t(16 * 12) * (kAovSumBytes + kAovIdBytes));
+  Renderer resumed(context, scene, settings);
+  resumed.restoreAccumulation(saved);
+  for (int s = 0; s < 5; ++s) resumed.renderSample();
+  const Aovs got = resumed.readImage().aovs;
+  EXPECT_EQ(got.albedo, expected.albedo);
+  EXPECT_EQ(got.normal, expected.normal);
+  EXPECT_EQ(got.depth, expected.depth);
+  EXPECT_EQ(got.position, expected.position);
+  EXPECT_EQ(got.uv, expected.uv);
+  EXPECT_EQ(got.bounces, expected.bounces);
+  EXPECT_EQ(got.material, expected.material);
+  EXPECT_EQ(got.instance, expected.instance);
+  EXPECT_EQ(got.primitive, expected.primitive);
+
+  // an accumulation without AOVs does not restore into a render that records them
+  Accumulation plain = saved;
+  plain.aovs.clear();
+  Renderer other(context, scene, settings);
+  EXPECT_THROW(other.restoreAccumulation(plain), std::invalid_argument);
+}
+
 TEST(ResumeErrors, AnAccumulationOfAnotherSizeIsRefused) {
   const Scene scene = loadDefaultScene();
   Renderer renderer(test::deviceContext(), scene, tinySettings(1));
