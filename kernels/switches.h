@@ -60,6 +60,11 @@
 #elif !WT_SWITCH_IS_BOOL(WT_HAS_ANISOTROPY)
 #error "WT_HAS_ANISOTROPY must be 0 or 1"
 #endif
+#ifndef WT_HAS_IRIDESCENCE
+#error "WT_HAS_IRIDESCENCE not set (kernelDefines)"
+#elif !WT_SWITCH_IS_BOOL(WT_HAS_IRIDESCENCE)
+#error "WT_HAS_IRIDESCENCE must be 0 or 1"
+#endif
 #ifndef WT_HAS_TEXTURES
 #error "WT_HAS_TEXTURES not set (kernelDefines)"
 #elif !WT_SWITCH_IS_BOOL(WT_HAS_TEXTURES)

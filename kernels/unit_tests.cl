@@ -163,6 +163,20 @@ WT_KERNEL void test_anisotropic_eval(uint count, WtMaterial material, float4 tan
   out[i] = (float4)(f, pdf);
 }
 
+#if WT_HAS_IRIDESCENCE
+// KHR_materials_iridescence's film Fresnel (shared/iridescence.h) for
+// `count` cosines: film = (outside ior, film ior, thickness nm), f0 the
+// base's F0 per channel; out[i] = (rgb, 0).
+WT_KERNEL void test_iridescence_fresnel(uint count, float4 film, float4 f0, __global const float* cos1,
+                                        __global float4* out) {
+  uint i = get_global_id(0);
+  if (i >= count) return;
+  float f[3];
+  iridescence_fresnel(film.x, film.y, f0.x, f0.y, f0.z, film.z, cos1[i], f);
+  out[i] = (float4)(f[0], f[1], f[2], 0.0f);
+}
+#endif
+
 #include "lights/light_tree.cl"
 
 // light_tree_pick at (p, n) for `count` uniforms: the light index and pmf.

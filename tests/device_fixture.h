@@ -49,7 +49,7 @@ inline cl::Program testProgram(const std::string& root) {
     KernelFeatures features;
     features.pbr = true;  // the metallic-roughness BSDF's tests need it compiled in
     features.transmission = true;
-    features.specular = features.clearcoat = features.sheen = features.anisotropy = true;  // and every layer
+    features.specular = features.clearcoat = features.sheen = features.anisotropy = features.iridescence = true;  // and every layer
     it = shared.programs.emplace(root, buildProgram(deviceContext(), features, root)).first;
   }
   return it->second;

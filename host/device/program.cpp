@@ -123,6 +123,7 @@ void setMaterialFeatures(KernelFeatures& features, std::span<const WtMaterial> m
   features.clearcoat = any([](const WtMaterial& m) { return m.clearcoat > 0.0f; });
   features.sheen = any([](const WtMaterial& m) { return m.sheen.x > 0.0f || m.sheen.y > 0.0f || m.sheen.z > 0.0f; });
   features.anisotropy = any([](const WtMaterial& m) { return m.anisotropy > 0.0f; });
+  features.iridescence = any([](const WtMaterial& m) { return m.iridescence.x > 0.0f; });
 }
 
 std::vector<std::string> kernelDefines(const KernelFeatures& features) {
@@ -137,6 +138,7 @@ std::vector<std::string> kernelDefines(const KernelFeatures& features) {
       "-D WT_HAS_CLEARCOAT=" + std::string(features.pbr && features.clearcoat ? "1" : "0"),
       "-D WT_HAS_SHEEN=" + std::string(features.pbr && features.sheen ? "1" : "0"),
       "-D WT_HAS_ANISOTROPY=" + std::string(features.pbr && features.anisotropy ? "1" : "0"),
+      "-D WT_HAS_IRIDESCENCE=" + std::string(features.pbr && features.iridescence ? "1" : "0"),
       "-D WT_HAS_ALPHA=" + std::string(features.alpha ? "1" : "0"),
       "-D WT_PACKET_WIDTH=" + std::to_string(features.packetWidth),
       "-D WT_STREAM_PREFETCH=" + std::string(features.streamPrefetch ? "1" : "0"),

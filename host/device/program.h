@@ -30,6 +30,7 @@ struct KernelFeatures {
   bool clearcoat = false;         ///< a material has a clear coat (KHR_materials_clearcoat)
   bool sheen = false;             ///< a material has a sheen (KHR_materials_sheen)
   bool anisotropy = false;        ///< a material's specular lobe is anisotropic (KHR_materials_anisotropy)
+  bool iridescence = false;       ///< a material's base reflection has a thin film (KHR_materials_iridescence)
   /// A triangle's material can have a hole (alphaMode MASK or BLEND,
   /// SceneBuffers::hasAlpha): traversal runs the alpha test
   /// (kernels/materials/alpha.cl) and its kernels take WT_ALPHA_PARAMS
@@ -74,7 +75,7 @@ constexpr std::size_t kWidePacketMaxTriangles = (std::size_t{1024} * 1024) / 3;
 /// any other request.
 int packetWidthFor(const DeviceInfo& device, int requested = 0, std::size_t triangles = 0);
 
-/// Set pbr, transmission, specular, clearcoat, sheen and anisotropy from the materials
+/// Set pbr, transmission, specular, clearcoat, sheen, anisotropy and iridescence from the materials
 /// a scene holds: only scenes that use a material layer compile it in.
 void setMaterialFeatures(KernelFeatures& features, std::span<const WtMaterial> materials);
 

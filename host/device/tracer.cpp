@@ -22,7 +22,7 @@ Tracer::Tracer(Context& context, const Scene& scene, const BvhBuildOptions& opti
   // the scene's switches (sceneFeatures), less what tracing without shading never reads
   KernelFeatures features =
       kernelFeaturesFor(sceneFeatures(scene, *m_scene, RenderSettings{}), context.info(), m_packetWidth);
-  features.pbr = features.transmission = features.specular = features.clearcoat = features.sheen = features.anisotropy = false;
+  features.pbr = features.transmission = features.specular = features.clearcoat = features.sheen = features.anisotropy = features.iridescence = false;
   // the alpha test reads the surface: texture coordinates, COLOR_0 and textures
   features.textures = features.alpha && features.textures;
   features.vertexColors = features.alpha && features.vertexColors;

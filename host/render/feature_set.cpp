@@ -54,6 +54,7 @@ FeatureSet sceneFeatures(const Scene& scene, const SceneBuffers& buffers, const 
   f.clearcoat = layers.clearcoat;
   f.sheen = layers.sheen;
   f.anisotropy = layers.anisotropy;
+  f.iridescence = layers.iridescence;
   f.transmission = layers.transmission;
   for (const WtMaterial& m : scene.materials) {
     if (m.model == WT_MATERIAL_DIFFUSE) f.lambertian = true;
@@ -92,7 +93,7 @@ std::vector<std::string> featureNames(const FeatureSet& f) {
   static const char* kSlots[WT_TEXTURE_SLOTS] = {
       "base_color", "metallic_roughness", "normal", "emissive", "transmission", "specular",
       "specular_color", "clearcoat", "clearcoat_roughness", "clearcoat_normal", "sheen_color", "sheen_roughness",
-      "anisotropy", "slot13", "slot14", "slot15"};
+      "anisotropy", "iridescence", "iridescence_thickness", "slot15"};
   std::vector<std::string> names;
   auto add = [&](bool on, const char* name) {
     if (on) names.emplace_back(name);
@@ -115,6 +116,7 @@ std::vector<std::string> featureNames(const FeatureSet& f) {
   add(f.clearcoat, "clearcoat");
   add(f.sheen, "sheen");
   add(f.anisotropy, "anisotropy");
+  add(f.iridescence, "iridescence");
   add(f.transmission, "transmission");
   add(f.volume, "volume");
   add(f.textures, "textures");
@@ -149,6 +151,7 @@ KernelFeatures kernelFeaturesFor(const FeatureSet& f, const DeviceInfo& device, 
   k.clearcoat = f.clearcoat;
   k.sheen = f.sheen;
   k.anisotropy = f.anisotropy;
+  k.iridescence = f.iridescence;
   k.textures = f.textures;
   k.vertexColors = f.vertexColors;
   k.alpha = f.alphaTest;
@@ -165,7 +168,7 @@ KernelFeatures kernelFeaturesFor(const FeatureSet& f, const DeviceInfo& device, 
 KernelFeatures generalKernelFeatures(const FeatureSet& f, const DeviceInfo& device, int requestedPacketWidth) {
   KernelFeatures k = kernelFeaturesFor(f, device, requestedPacketWidth);
   // the integrator is an algorithm, not a feature a scene has: kept
-  k.pbr = k.transmission = k.specular = k.clearcoat = k.sheen = k.anisotropy = true;
+  k.pbr = k.transmission = k.specular = k.clearcoat = k.sheen = k.anisotropy = k.iridescence = true;
   k.textures = k.vertexColors = k.alpha = true;
   k.primitives.fill(true);
   k.primitives[WT_PRIM_TRIANGLE] = false;  // triangles are always compiled in: no switch

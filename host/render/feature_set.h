@@ -43,6 +43,7 @@ struct FeatureSet {
   bool clearcoat = false;       ///< KHR_materials_clearcoat
   bool sheen = false;           ///< KHR_materials_sheen
   bool anisotropy = false;      ///< KHR_materials_anisotropy
+  bool iridescence = false;     ///< KHR_materials_iridescence
   bool transmission = false;    ///< KHR_materials_transmission
   bool volume = false;          ///< KHR_materials_volume (absorption inside a refracting boundary)
   bool textures = false;        ///< a material reads a texture (uploaded)

@@ -33,6 +33,7 @@ WtMaterial makeMaterial(glm::vec3 albedo, glm::vec3 emission, bool twoSided) {
   m.clearcoat = 0.0f;
   m.clearcoat_roughness = 0.0f;
   m.anisotropy = m.anisotropy_rotation = 0.0f;
+  m.iridescence = {0.0f, 1.3f, 100.0f, 400.0f};
   return m;
 }
 
@@ -77,6 +78,15 @@ WtMaterial withAnisotropy(WtMaterial m, float strength, float rotation) {
   m.anisotropy = std::clamp(strength, 0.0f, 1.0f);
   // one turn is no turn: keep the angle small for the device's cos and sin
   m.anisotropy_rotation = std::isfinite(rotation) ? std::remainder(rotation, 2.0f * float(M_PI)) : 0.0f;
+  return m;
+}
+
+WtMaterial withIridescence(WtMaterial m, float factor, float ior, float thicknessMin, float thicknessMax) {
+  m.model = WT_MATERIAL_PBR;
+  m.iridescence.x = std::isfinite(factor) ? std::clamp(factor, 0.0f, 1.0f) : 0.0f;
+  m.iridescence.y = ior;
+  m.iridescence.z = std::max(thicknessMin, 0.0f);
+  m.iridescence.w = std::max(thicknessMax, 0.0f);
   return m;
 }
 

@@ -107,4 +107,11 @@ WtMaterial withSheen(WtMaterial m, glm::vec3 color, float roughness);
 /// strength clamped to [0,1]; strength 0 is isotropic.
 WtMaterial withAnisotropy(WtMaterial m, float strength, float rotation);
 
+/// KHR_materials_iridescence: a thin film of index `ior` over the base's
+/// reflection lobe, its Fresnel replaced by the film's (Belcour & Barla
+/// 2017 as the extension gives it) mixed in by `factor` (clamped to
+/// [0,1]); thickness in nm, thicknessMax unless a thickness texture
+/// reads mix(thicknessMin, thicknessMax, g). Factor 0 is no film.
+WtMaterial withIridescence(WtMaterial m, float factor, float ior, float thicknessMin, float thicknessMax);
+
 }  // namespace wt

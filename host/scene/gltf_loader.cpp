@@ -49,6 +49,7 @@ constexpr const char* kClearcoat = "KHR_materials_clearcoat";
 constexpr const char* kSheen = "KHR_materials_sheen";
 constexpr const char* kUnlit = "KHR_materials_unlit";
 constexpr const char* kAnisotropy = "KHR_materials_anisotropy";
+constexpr const char* kIridescence = "KHR_materials_iridescence";
 constexpr const char* kGpuInstancing = "EXT_mesh_gpu_instancing";
 /// Extensions whose absence changes where the geometry is or how its bytes
 /// read: a file that requires one cannot be drawn correctly without it.
@@ -321,6 +322,7 @@ class Converter {
     for (const std::string& ext : m_model.extensionsUsed) {
       if (ext == kEmissiveStrength || ext == kLightsPunctual || ext == kTransmission || ext == kIor ||
           ext == kVolume || ext == kSpecular || ext == kClearcoat || ext == kSheen || ext == kUnlit || ext == kAnisotropy ||
+          ext == kIridescence ||
           ext == kGpuInstancing || ext == kTextureTransform)
         continue;
       bool required = std::find(m_model.extensionsRequired.begin(), m_model.extensionsRequired.end(),
@@ -419,6 +421,9 @@ class Converter {
       extensionSlot(kSheen, "sheenColorTexture", WT_TEXTURE_SLOT_SHEEN_COLOR, true, sheen);
       extensionSlot(kSheen, "sheenRoughnessTexture", WT_TEXTURE_SLOT_SHEEN_ROUGHNESS, false, sheen);
       extensionSlot(kAnisotropy, "anisotropyTexture", WT_TEXTURE_SLOT_ANISOTROPY, false, material.anisotropy > 0.0f);
+      const bool iridescent = material.iridescence.x > 0.0f;
+      extensionSlot(kIridescence, "iridescenceTexture", WT_TEXTURE_SLOT_IRIDESCENCE, false, iridescent);
+      extensionSlot(kIridescence, "iridescenceThicknessTexture", WT_TEXTURE_SLOT_IRIDESCENCE_THICKNESS, false, iridescent);
       // unlit: the base colour texture colours the emission (unlitMaterial moves the slot)
       if (material.texture_mask != 0u) {
         m_scene.materialTextures.resize(m_scene.materials.size() * WT_TEXTURE_SLOTS);
@@ -678,6 +683,16 @@ class Converter {
       double rotation = extensionNumber(*ext, "anisotropyRotation", 0.0, where);
       m = withAnisotropy(m, strength, float(rotation));
     }
+    if (const tinygltf::Value* ext = materialExtension(src, label, kIridescence)) {
+      const std::string where = label + " " + kIridescence;
+      float factor = extensionUnit(*ext, "iridescenceFactor", 0.0, where);
+      double ior = extensionNumber(*ext, "iridescenceIor", 1.3, where);
+      if (ior < 1.0) fail(where + ": iridescenceIor " + std::to_string(ior) + " is below 1");
+      double thin = extensionNumber(*ext, "iridescenceThicknessMinimum", 100.0, where);
+      double thick = extensionNumber(*ext, "iridescenceThicknessMaximum", 400.0, where);
+      if (thin < 0.0 || thick < 0.0) fail(where + ": a thickness is negative");
+      m = withIridescence(m, factor, float(ior), float(thin), float(thick));
+    }
     return m;
   }
 
@@ -693,7 +708,7 @@ class Converter {
   /// it, and are ignored. (When material textures arrive, this material's
   /// baseColorTexture belongs in its emissive slot.)
   WtMaterial unlitMaterial(const tinygltf::Material& src, const std::string& label, const WtMaterial& m) {
-    for (const char* other : {kTransmission, kVolume, kSpecular, kClearcoat, kSheen, kAnisotropy})
+    for (const char* other : {kTransmission, kVolume, kSpecular, kClearcoat, kSheen, kAnisotropy, kIridescence})
       if (src.extensions.count(other))
         m_scene.addWarning(label + ": " + other + " has no effect on a " + kUnlit + " material; ignored");
     WtMaterial unlit = makeMaterial(glm::vec3(0.0f), glm::vec3(m.base_color.x, m.base_color.y, m.base_color.z), src.doubleSided);

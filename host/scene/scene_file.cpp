@@ -474,7 +474,7 @@ class Loader {
                           "double_sided", "transmission", "ior", "thin_walled", "attenuation_color",
                           "attenuation_distance", "specular", "specular_color", "clearcoat",
                           "clearcoat_roughness", "sheen_color", "sheen_roughness", "anisotropy",
-                          "anisotropy_rotation"});
+                          "anisotropy_rotation", "iridescence", "iridescence_ior", "iridescence_thickness"});
     auto read = [&](const char* key, double fallback, auto&& reader) {
       const Json* x = find(v, key);
       return x ? reader(*x, member(path, key)) : fallback;
@@ -515,6 +515,9 @@ class Loader {
       return inRange(x, p, -1e6, 1e6);
     });
     m = withAnisotropy(m, float(read("anisotropy", 0.0, unit)), float(rotation));
+    const double filmIor = read("iridescence_ior", 1.3, [&](const Json& x, const std::string& p) { return inRange(x, p, 1.0, 10.0); });
+    const double thickness = read("iridescence_thickness", 400.0, [&](const Json& x, const std::string& p) { return inRange(x, p, 0.0, 1e5); });
+    m = withIridescence(m, float(read("iridescence", 0.0, unit)), float(filmIor), float(thickness), float(thickness));
     // ior sets the dielectric's F0 ((ior - 1) / (ior + 1))^2 as well as the interface's index
     m.ior = ior;
     if (metallic >= 1.0f)

@@ -73,6 +73,13 @@
 // local x axis (shade turns the frame to the anisotropy direction), alpha_b
 // = alpha along y. Such a lobe scatters once and the base under it keeps 1
 // minus the mirror's Fresnel at mu_o (docs/materials.md, "Anisotropy").
+//
+// KHR_materials_iridescence (WT_HAS_IRIDESCENCE) puts a thin film on the
+// base's reflection lobe: its Fresnel (metal and dielectric) is mixed with
+// the film's (shared/iridescence.h) by the iridescence factor, and the
+// diffuse base under it keeps (1 - max F_film(mu_o)) (1 - max F_film(mu_i))
+// in that share (the extension's rgb_mix, made reciprocal and bounded);
+// the film's share scatters once (docs/materials.md, "Iridescence").
 #ifndef WT_MATERIALS_BSDF_CL
 #define WT_MATERIALS_BSDF_CL
 
@@ -80,6 +87,9 @@
 #include "materials/lambert.cl"
 #include "shared/materials.h"
 #include "shared/sheen.h"
+#if WT_HAS_IRIDESCENCE
+#include "shared/iridescence.h"
+#endif
 
 #define WT_LOBE_DIFFUSE 1u       ///< the Lambertian base and the sheen (any cosine-sampled direction)
 #define WT_LOBE_SPECULAR 2u      ///< reflection: GGX (base and clear coat), its multiple scattering, the mirrors, the interface's reflection
@@ -122,6 +132,11 @@ typedef struct Bsdf {
   float alpha_t;          ///< the base's GGX alpha along the local x axis (the anisotropy direction)
   float alpha_b;          ///< and along y; alpha_t == alpha_b: isotropic, alpha = roughness^2
   float lobe_roughness;   ///< the isotropic roughness whose tables stand in for the base's lobe
+#endif
+#if WT_HAS_IRIDESCENCE
+  float iridescence;      ///< the film's share of the base's Fresnel (0: no film, and inside a volume)
+  float film_ior;         ///< the film's index
+  float film_thickness;   ///< nm (> 0 where iridescence > 0)
 #endif
   __global const float* table;  ///< directional albedos (shared/materials.h)
 } Bsdf;
@@ -235,6 +250,18 @@ inline Bsdf bsdf_make(WtMaterial m, __global const float* table, int inside) {
     b.clearcoat_mirror = m.clearcoat_roughness < WT_PBR_MIN_ROUGHNESS;
   }
 #endif
+#if WT_HAS_IRIDESCENCE
+  b.iridescence = 0.0f;
+  b.film_ior = 1.0f;
+  b.film_thickness = 0.0f;
+  // a film of no thickness is no film: the formula would not give the base's
+  // Fresnel back there (docs/materials.md, "Iridescence")
+  if (pbr && outside && m.iridescence.x > 0.0f && m.iridescence.w > 0.0f && m.iridescence.y > 0.0f) {
+    b.iridescence = fmin(m.iridescence.x, 1.0f);
+    b.film_ior = m.iridescence.y;
+    b.film_thickness = m.iridescence.w;
+  }
+#endif
 #if WT_HAS_SHEEN
   if (pbr && outside) {
     b.sheen = vec4_xyz(m.sheen);
@@ -247,6 +274,29 @@ inline Bsdf bsdf_make(WtMaterial m, __global const float* table, int inside) {
 
 /// Whether any light passes through (the far side needs lights and rays).
 inline bool bsdf_transmits(Bsdf b) { return b.transmission > 0.0f && b.metallic < 1.0f; }
+
+#if WT_HAS_IRIDESCENCE
+/// The film's Fresnel at cos `oh` over a base of F0 `f0` (air outside).
+inline float3 bsdf_film_fresnel(Bsdf b, float3 f0, float oh) {
+  float f[3];
+  iridescence_fresnel(1.0f, b.film_ior, f0.x, f0.y, f0.z, b.film_thickness, oh, f);
+  return (float3)(f[0], f[1], f[2]);
+}
+
+/// The dielectric's film Fresnel: over F0 specular f0 (the extension's
+/// iridescent_dielectric_layer with KHR_materials_specular).
+inline float3 bsdf_film_dielectric(Bsdf b, float oh, float opaque) {
+  return opaque > 0.0f ? bsdf_film_fresnel(b, (float3)(b.specular * b.f0), oh) : (float3)(0.0f);
+}
+
+/// The base's reflection Fresnel `f_spec` (metal and dielectric, already
+/// weighted by metallic and `opaque`) with the film's share iridescence:
+/// mix(f_spec, metallic F_film(base) + opaque film_dielectric, iridescence).
+inline float3 bsdf_iridescent_fresnel(Bsdf b, float oh, float3 f_spec, float opaque, float3 film_dielectric) {
+  float3 f_metal = b.metallic > 0.0f ? bsdf_film_fresnel(b, b.base, oh) : (float3)(0.0f);
+  return mix(f_spec, b.metallic * f_metal + opaque * film_dielectric, b.iridescence);
+}
+#endif
 
 /// GGX albedos at a cosine for a roughness (a mirror below
 /// WT_PBR_MIN_ROUGHNESS): E with F = 1 and S with F = (1 - v.h)^5.
@@ -445,15 +495,43 @@ inline float3 pbr_eval(Bsdf b, float3 wo, float3 wi, uint lobes, float* pdf) {
 #else
     const bool multiscatter = true;
 #endif
+#if WT_HAS_IRIDESCENCE
+    // the film's share of the base's Fresnel and, for the diffuse, max(F_film) at oh
+    float film_keep = 1.0f;  // the multiple scattering's and the layered diffuse's share
+    float film_diffuse = 0.0f;
+    float3 film_dielectric = (float3)(0.0f);
+    if (b.iridescence > 0.0f) {
+      film_keep = 1.0f - b.iridescence;
+      film_dielectric = bsdf_film_dielectric(b, oh, opaque);
+      if (lobes & WT_LOBE_DIFFUSE) {
+        // the extension's rgb_mix reads F at the half vector, which gains
+        // energy at grazing wo; 1 - max F at mu_o and at mu_i does not
+        float3 fo = bsdf_film_dielectric(b, wo.z, opaque), fi = bsdf_film_dielectric(b, wi.z, opaque);
+        film_diffuse = b.iridescence * (1.0f - fmin(fmax(fmax(fo.x, fo.y), fo.z), 1.0f)) *
+                       (1.0f - fmin(fmax(fmax(fi.x, fi.y), fi.z), 1.0f));
+      }
+    }
+#endif
     if ((lobes & WT_LOBE_SPECULAR) && !b.mirror) {
       float d = base_ggx_d(b, h);
       float dv = d * base_ggx_g2(b, wo, wi) / (4.0f * wo.z * wi.z);
       float3 f_metal = b.base + (1.0f - b.base) * m5;
       DielectricColor f_dielectric = b.specular * (b.f0 + (1.0f - b.f0) * m5);
+#if WT_HAS_IRIDESCENCE
+      if (b.iridescence > 0.0f) {
+        f += bsdf_iridescent_fresnel(b, oh, b.metallic * f_metal + opaque * f_dielectric, opaque, film_dielectric) * dv;
+      } else {
+        f += (b.metallic * f_metal + opaque * f_dielectric) * dv;
+      }
+#else
       f += (b.metallic * f_metal + opaque * f_dielectric) * dv;
+#endif
       // multiple scattering: (1 - E(mu_o)) (1 - E(mu_i)) / (pi (1 - E_avg)), by the average Fresnel
       if (multiscatter) {
         float ms = (1.0f - v.e) * (1.0f - es_i.x) / (WT_PI * fmax(1.0f - e_avg, 1e-6f));
+#if WT_HAS_IRIDESCENCE
+        ms *= film_keep;  // the film's share scatters once
+#endif
         float3 fms_metal = pbr_multiscatter_fresnel3(b.base + (1.0f - b.base) / 21.0f, e_avg);
         f += (b.metallic * fms_metal + opaque * b.specular * fms) * ms;
       }
@@ -474,7 +552,16 @@ inline float3 pbr_eval(Bsdf b, float3 wo, float3 wi, uint lobes, float* pdf) {
       if (!multiscatter) spec_o = pbr_dielectric_albedo(b, (float2)(1.0f, ggx_schlick(0.0f, wo.z)), fms);
 #endif
       DielectricColor spec_i = pbr_dielectric_albedo(b, es_i, fms);
+#if WT_HAS_IRIDESCENCE
+      if (b.iridescence > 0.0f) {
+        // the extension's rgb_mix: the base under the film keeps 1 - max(F_film(oh))
+        f += opaque * b.base * ((1.0f / WT_PI) * (film_keep * (1.0f - spec_o) * (1.0f - spec_i) / fmax(1.0f - spec_avg, 1e-6f) + film_diffuse));
+      } else {
+        f += opaque * b.base * ((1.0f / WT_PI) * (1.0f - spec_o) * (1.0f - spec_i) / fmax(1.0f - spec_avg, 1e-6f));
+      }
+#else
       f += opaque * b.base * ((1.0f / WT_PI) * (1.0f - spec_o) * (1.0f - spec_i) / fmax(1.0f - spec_avg, 1e-6f));
+#endif
       pdf_diffuse = wi.z / WT_PI;
     }
     f *= wi.z;
@@ -528,7 +615,13 @@ inline float3 pbr_mirror(Bsdf b, PbrView v, Techniques t, float3 wo, float* p) {
   if (b.mirror && t.specular > 0.0f) {
     float m5 = ggx_schlick(0.0f, wo.z);
     float opaque = (1.0f - b.metallic) * (1.0f - b.transmission);
-    f += v.w_base * (b.metallic * (b.base + (1.0f - b.base) * m5) + opaque * b.specular * (b.f0 + (1.0f - b.f0) * m5));
+    float3 f_base = b.metallic * (b.base + (1.0f - b.base) * m5) + opaque * b.specular * (b.f0 + (1.0f - b.f0) * m5);
+#if WT_HAS_IRIDESCENCE
+    if (b.iridescence > 0.0f) {
+      f_base = bsdf_iridescent_fresnel(b, wo.z, f_base, opaque, bsdf_film_dielectric(b, wo.z, opaque));
+    }
+#endif
+    f += v.w_base * f_base;
     *p += t.specular;
   }
 #if WT_HAS_CLEARCOAT

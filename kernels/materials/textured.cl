@@ -133,6 +133,14 @@ inline WtMaterial material_at(SurfaceScene ss, uint index, WtMaterial m, Surface
     m.sheen.x *= t.x, m.sheen.y *= t.y, m.sheen.z *= t.z;
   }
   if (mask & (1u << WT_TEXTURE_SLOT_SHEEN_ROUGHNESS)) m.sheen.w *= material_texture(ss, index, WT_TEXTURE_SLOT_SHEEN_ROUGHNESS, sp).w;
+#if WT_HAS_IRIDESCENCE
+  // KHR_materials_iridescence: factor times r; thickness mix(minimum, maximum, g) into w
+  if (mask & (1u << WT_TEXTURE_SLOT_IRIDESCENCE)) m.iridescence.x *= material_texture(ss, index, WT_TEXTURE_SLOT_IRIDESCENCE, sp).x;
+  if (mask & (1u << WT_TEXTURE_SLOT_IRIDESCENCE_THICKNESS)) {
+    float g = material_texture(ss, index, WT_TEXTURE_SLOT_IRIDESCENCE_THICKNESS, sp).y;
+    m.iridescence.w = m.iridescence.z + (m.iridescence.w - m.iridescence.z) * g;
+  }
+#endif
   if ((mask & (1u << WT_TEXTURE_SLOT_NORMAL)) && dot(sp.tangent, sp.tangent) > 0.0f) {
     float4 t = material_texture(ss, index, WT_TEXTURE_SLOT_NORMAL, sp);
     float scale = ss.refs[index * WT_TEXTURE_SLOTS + WT_TEXTURE_SLOT_NORMAL].scale;

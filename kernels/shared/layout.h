@@ -41,7 +41,7 @@
   F(WtMaterial, transmission) F(WtMaterial, ior) F(WtMaterial, volume) F(WtMaterial, alpha) \
   F(WtMaterial, alpha_mode) F(WtMaterial, alpha_cutoff) F(WtMaterial, texture_mask) F(WtMaterial, specular) \
   F(WtMaterial, sheen) F(WtMaterial, clearcoat) F(WtMaterial, clearcoat_roughness) F(WtMaterial, anisotropy) \
-  F(WtMaterial, anisotropy_rotation) \
+  F(WtMaterial, anisotropy_rotation) F(WtMaterial, iridescence) \
   S(WtTextureRef) F(WtTextureRef, texture) F(WtTextureRef, texcoord) F(WtTextureRef, scale) F(WtTextureRef, pad) \
   F(WtTextureRef, transform_u) F(WtTextureRef, transform_v) \
   S(WtCamera) F(WtCamera, origin) F(WtCamera, right) F(WtCamera, up) F(WtCamera, forward) \

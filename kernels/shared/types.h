@@ -161,6 +161,7 @@ typedef struct WtMaterial {
   float clearcoat_roughness; ///< clearcoatRoughnessFactor in [0,1], alpha = roughness^2
   float anisotropy;          ///< KHR_materials_anisotropy anisotropyStrength in [0,1] (0: isotropic; PBR only)
   float anisotropy_rotation; ///< anisotropyRotation: radians counter-clockwise from the tangent, in the tangent-bitangent plane
+  WtVec4 iridescence; ///< KHR_materials_iridescence: x iridescenceFactor in [0,1] (0: none; PBR only), y the film's iridescenceIor, z iridescenceThicknessMinimum, w iridescenceThicknessMaximum (nm); the thickness is w where no thickness texture is read
 } WtMaterial;
 
 #define WT_ALPHA_OPAQUE 0u  ///< alpha is ignored
@@ -182,7 +183,9 @@ typedef struct WtMaterial {
 #define WT_TEXTURE_SLOT_SHEEN_COLOR 10u        ///< rgb: KHR_materials_sheen sheenColorFactor (sRGB)
 #define WT_TEXTURE_SLOT_SHEEN_ROUGHNESS 11u    ///< a: sheenRoughnessFactor
 #define WT_TEXTURE_SLOT_ANISOTROPY 12u         ///< rg: direction in [-1,1] tangent-bitangent space (rotated by anisotropy_rotation), b: strength
-#define WT_TEXTURE_SLOTS 16u                   ///< slots 13..15 are free
+#define WT_TEXTURE_SLOT_IRIDESCENCE 13u        ///< r: KHR_materials_iridescence iridescenceFactor
+#define WT_TEXTURE_SLOT_IRIDESCENCE_THICKNESS 14u  ///< g: thickness = mix(minimum, maximum, g)
+#define WT_TEXTURE_SLOTS 16u                   ///< slot 15 is free
 
 /// One textured slot of a material: which texture (WtTexture, shared/textures.h),
 /// read at which texture coordinate set, moved by KHR_texture_transform.

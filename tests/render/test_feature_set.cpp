@@ -223,6 +223,13 @@ const OneFeature kCases[] = {
        return s;
      },
      noSettings, [] { return with(pbrBase(), {"anisotropy"}); }},
+    {"iridescence",
+     [] {
+       Scene s = pbrFloor();
+       s.materials[0] = withIridescence(s.materials[0], 0.8f, 1.3f, 100.0f, 400.0f);
+       return s;
+     },
+     noSettings, [] { return with(pbrBase(), {"iridescence"}); }},
     {"specular",
      [] {
        Scene s = pbrFloor();

@@ -1004,6 +1004,62 @@ TEST(GltfLoader, AnisotropyReadsStrengthRotationAndTexture) {
   EXPECT_CONTAINS(docError(bad), "material 0 'm' KHR_materials_anisotropy: anisotropyRotation is not a finite number");
 }
 
+// KHR_materials_iridescence: factor, film ior, thickness range (defaults 0,
+// 1.3, 100, 400), the intensity and thickness textures with their texCoord,
+// listed among the scene's features; bad values warn or fail by name.
+TEST(GltfLoader, IridescenceReadsFactorsAndTextures) {
+  GltfDoc doc = triangleDoc();
+  doc.extensionsUsed = "[\"KHR_materials_iridescence\"]";
+  doc.images.push_back(
+      "{\"uri\":\"data:image/png;base64,"
+      "iVBORw0KGgoAAAANSUhEUgAAAAEAAAABCAYAAAAfFcSJAAAADUlEQVR42mNk+M9QDwADhgGAWjR9awAAAABJRU5ErkJggg==\"}");
+  doc.textures.push_back("{\"source\":0}");
+  doc.materials.push_back(
+      "{\"name\":\"soap\",\"extensions\":{\"KHR_materials_iridescence\":{\"iridescenceFactor\":0.7,"
+      "\"iridescenceIor\":1.8,\"iridescenceThicknessMinimum\":250,\"iridescenceThicknessMaximum\":120,"
+      "\"iridescenceTexture\":{\"index\":0,\"texCoord\":1},\"iridescenceThicknessTexture\":{\"index\":0}}}}");
+  doc.materials.push_back("{\"name\":\"defaults\",\"extensions\":{\"KHR_materials_iridescence\":{}}}");
+  doc.meshes[0] = "{\"primitives\":[{\"attributes\":{\"POSITION\":0},\"material\":0},"
+                  "{\"attributes\":{\"POSITION\":0},\"material\":1}]}";
+  Scene s = loadDoc(doc);
+  ASSERT_EQ(s.materials.size(), 2u);
+  EXPECT_EQ(s.materials[0].model, WT_MATERIAL_PBR);
+  EXPECT_FLOAT_EQ(s.materials[0].iridescence.x, 0.7f);
+  EXPECT_FLOAT_EQ(s.materials[0].iridescence.y, 1.8f);
+  EXPECT_FLOAT_EQ(s.materials[0].iridescence.z, 250.0f);  // the minimum may exceed the maximum
+  EXPECT_FLOAT_EQ(s.materials[0].iridescence.w, 120.0f);
+  EXPECT_EQ(s.materials[0].texture_mask,
+            (1u << WT_TEXTURE_SLOT_IRIDESCENCE) | (1u << WT_TEXTURE_SLOT_IRIDESCENCE_THICKNESS));
+  ASSERT_GE(s.materialTextures.size(), std::size_t(WT_TEXTURE_SLOTS));
+  EXPECT_EQ(s.materialTextures[WT_TEXTURE_SLOT_IRIDESCENCE].texcoord, 1u);
+  EXPECT_EQ(s.materialTextures[WT_TEXTURE_SLOT_IRIDESCENCE_THICKNESS].texcoord, 0u);
+  EXPECT_EQ(s.materials[1].iridescence.x, 0.0f);
+  EXPECT_FLOAT_EQ(s.materials[1].iridescence.y, 1.3f);
+  EXPECT_FLOAT_EQ(s.materials[1].iridescence.z, 100.0f);
+  EXPECT_FLOAT_EQ(s.materials[1].iridescence.w, 400.0f);
+  EXPECT_EQ(s.materials[1].texture_mask, 0u);
+  KernelFeatures features;
+  setMaterialFeatures(features, s.materials);
+  EXPECT_TRUE(features.iridescence);
+  bool defined = false;
+  for (const std::string& d : kernelDefines(features)) defined |= d == "-D WT_HAS_IRIDESCENCE=1";
+  EXPECT_TRUE(defined);
+  // factor 0 (the default) compiles nothing in
+  KernelFeatures none;
+  setMaterialFeatures(none, std::vector<WtMaterial>{s.materials[1]});
+  EXPECT_FALSE(none.iridescence);
+  GltfDoc bad = triangleDoc();
+  bad.materials.push_back("{\"name\":\"m\",\"extensions\":{\"KHR_materials_iridescence\":{\"iridescenceFactor\":2}}}");
+  bad.meshes[0] = "{\"primitives\":[{\"attributes\":{\"POSITION\":0},\"material\":0}]}";
+  Scene clamped = loadDoc(bad);
+  EXPECT_EQ(clamped.materials[0].iridescence.x, 1.0f);
+  EXPECT_CONTAINS(clamped.warnings.at(0), "material 0 'm' KHR_materials_iridescence iridescenceFactor 2.000000 is outside [0,1]; clamped");
+  bad.materials[0] = "{\"name\":\"m\",\"extensions\":{\"KHR_materials_iridescence\":{\"iridescenceIor\":0.5}}}";
+  EXPECT_CONTAINS(docError(bad), "material 0 'm' KHR_materials_iridescence: iridescenceIor 0.500000 is below 1");
+  bad.materials[0] = "{\"name\":\"m\",\"extensions\":{\"KHR_materials_iridescence\":{\"iridescenceThicknessMaximum\":\"x\"}}}";
+  EXPECT_CONTAINS(docError(bad), "material 0 'm' KHR_materials_iridescence: iridescenceThicknessMaximum is not a finite number");
+}
+
 TEST(GltfLoader, BadLayerValuesAreClampedOrRefused) {
   auto load = [](const std::string& extensions, float metallic = 0.0f) {
     GltfDoc doc = triangleDoc();
@@ -1120,7 +1176,7 @@ TEST(GltfLoader, DefaultMaterialIsAppendedOnce) {
 
 TEST(GltfLoader, UnsupportedFeaturesWarnOnceEach) {
   GltfDoc doc = triangleDoc();
-  doc.extensionsUsed = "[\"KHR_materials_iridescence\",\"KHR_materials_emissive_strength\",\"KHR_materials_anisotropy\","
+  doc.extensionsUsed = "[\"VENDOR_not_implemented\",\"KHR_materials_emissive_strength\",\"KHR_materials_anisotropy\",\"KHR_materials_iridescence\","
                        "\"KHR_materials_clearcoat\",\"KHR_materials_sheen\",\"KHR_materials_specular\",\"KHR_materials_unlit\"]";
   doc.materials.push_back("{\"pbrMetallicRoughness\":{\"metallicFactor\":0},\"alphaMode\":\"BLEND\"}");
   doc.materials.push_back("{\"pbrMetallicRoughness\":{},\"doubleSided\":true}");
@@ -1131,7 +1187,8 @@ TEST(GltfLoader, UnsupportedFeaturesWarnOnceEach) {
     return std::count_if(s.warnings.begin(), s.warnings.end(),
                          [&](const std::string& w) { return w.find(part) != std::string::npos; });
   };
-  EXPECT_EQ(count("KHR_materials_iridescence is not supported; ignored"), 1);
+  EXPECT_EQ(count("VENDOR_not_implemented is not supported; ignored"), 1);
+  EXPECT_EQ(count("KHR_materials_iridescence"), 0);  // drawn
   EXPECT_EQ(count("KHR_materials_anisotropy"), 0);  // drawn
   EXPECT_EQ(count("KHR_materials_clearcoat"), 0);  // drawn (factors only: textures warn as above)
   EXPECT_EQ(count("KHR_materials_sheen"), 0);

@@ -269,6 +269,15 @@ TEST(SceneFile, MaterialLayers) {
   EXPECT_NEAR(a.scene.materials[0].anisotropy_rotation, 7.0f - 2.0f * float(M_PI), 1e-5f);
   EXPECT_EQ(p.anisotropy, 0.0f);
   EXPECT_CONTAINS(errorOf(doc(R"("materials": {"m": {"anisotropy": -0.1}})")), "materials.m.anisotropy: must be in [0, 1]");
+  // KHR_materials_iridescence's factor, film index and thickness (defaults 0, 1.3, 400 nm)
+  SceneFile film = loadText(doc(R"("materials": {"soap": {"iridescence": 0.9, "iridescence_ior": 1.6, "iridescence_thickness": 550}})"));
+  EXPECT_FLOAT_EQ(film.scene.materials[0].iridescence.x, 0.9f);
+  EXPECT_FLOAT_EQ(film.scene.materials[0].iridescence.y, 1.6f);
+  EXPECT_FLOAT_EQ(film.scene.materials[0].iridescence.w, 550.0f);
+  EXPECT_EQ(p.iridescence.x, 0.0f);
+  EXPECT_FLOAT_EQ(p.iridescence.y, 1.3f);
+  EXPECT_FLOAT_EQ(p.iridescence.w, 400.0f);
+  EXPECT_CONTAINS(errorOf(doc(R"("materials": {"m": {"iridescence_ior": 0.5}})")), "materials.m.iridescence_ior: must be in [1, 10]");
 }
 
 TEST(SceneFile, AutoExposureWithAnOffset) {
