@@ -32,13 +32,15 @@ TEST(Embedded, TestKernelsAreNotShipped) {
   }
 }
 
-// The render program holds the wavefront stages; the tracers (with the
-// stream traversal) and the stress kernels are programs of their own.
+// The render program holds the wavefront stages (with the stream traversal
+// its shadow rays may take); the tracers and the stress kernels are
+// programs of their own.
 TEST(Embedded, ProgramsHoldTheirOwnKernelsOnly) {
   const std::string render = expandKernelSource("wavetrace.cl");
-  for (const char* stage : {"generate(", "extend(", "shade(", "connect(", "accumulate(", "tonemap("})
+  for (const char* stage :
+       {"generate(", "extend(", "shade(", "connect(", "connect_stream(", "accumulate(", "tonemap("})
     EXPECT_NE(render.find(std::string("WT_KERNEL void ") + stage), std::string::npos) << stage;
-  for (const char* foreign : {"#line 1 \"trace.cl\"", "#line 1 \"bvh_stream.cl\"", "#line 1 \"stress.cl\"",
+  for (const char* foreign : {"#line 1 \"trace.cl\"", "#line 1 \"stress.cl\"",
                               "WT_KERNEL void trace_", "WT_KERNEL void test_"})
     EXPECT_EQ(render.find(foreign), std::string::npos) << foreign << " in the render program";
   const std::string trace = expandKernelSource("trace.cl");
