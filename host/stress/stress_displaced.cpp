@@ -69,18 +69,13 @@ std::string displacedSceneJson(const DisplacedFiles& files, double translate, do
   const stress_rows::ScaledJson json{translate, scale};
   auto p = [&](double x, double y, double z) { return json.point(x, y, z); };
   auto r = [&](double v) { return json.length(v); };
-  return R"({"version": 1,
-  "camera": {"from": )" + p(0, 1.2, 4) + R"(, "to": )" + p(0, 0.4, 0) + R"(, "fov": 40},
-  "materials": {
-    "ground": {"type": "lambert", "base_color": [0.6, 0.6, 0.6]},
-    "clay": {"base_color": [0.8, 0.5, 0.4], "roughness": 0.5},
-    "light": {"type": "lambert", "base_color": [0, 0, 0], "emission": [20, 18, 15]}},
-  "objects": [
-    {"type": "sphere", "center": )" + p(0, -1000, 0) + R"(, "radius": )" + r(1000) + R"(, "material": "ground"},
-    {"type": "displaced", "mesh": ")" + files.ply.string() + R"(", "displacement": ")" + files.exr.string() +
-         R"(", "scale": )" + r(mapScale) + R"(, "offset": )" + r(mapOffset) + R"(, "material": "clay",
+  return json.stage(R"(    "clay": {"base_color": [0.8, 0.5, 0.4], "roughness": 0.5},
+)",
+                    R"(    {"type": "displaced", "mesh": ")" + files.ply.string() + R"(", "displacement": ")" +
+                        files.exr.string() + R"(", "scale": )" + r(mapScale) + R"(, "offset": )" + r(mapOffset) +
+                        R"(, "material": "clay",
      "transform": {"translate": )" + p(0, 0.6, 0) + R"(, "scale": )" + r(0.6) + R"(}},
-    {"type": "sphere", "center": )" + p(-1.5, 2.5, 1.5) + R"(, "radius": )" + r(0.3) + R"(, "material": "light"}]})";
+)");
 }
 
 }  // namespace

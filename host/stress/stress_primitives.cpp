@@ -38,20 +38,15 @@ std::string sphereSceneJson(double translate, double scale) {
   const stress_rows::ScaledJson json{translate, scale};
   auto p = [&](double x, double y, double z) { return json.point(x, y, z); };
   auto r = [&](double radius) { return json.length(radius); };
-  return R"({"version": 1,
-  "camera": {"from": )" + p(0, 1.2, 4) + R"(, "to": )" + p(0, 0.4, 0) + R"(, "fov": 40},
-  "materials": {
-    "ground": {"type": "lambert", "base_color": [0.6, 0.6, 0.6]},
-    "glass": {"base_color": [1, 1, 1], "roughness": 0, "transmission": 1, "ior": 1.5},
+  return json.stage(
+      R"(    "glass": {"base_color": [1, 1, 1], "roughness": 0, "transmission": 1, "ior": 1.5},
     "metal": {"base_color": [0.9, 0.6, 0.3], "metallic": 1, "roughness": 0.2},
     "white": {"type": "lambert", "base_color": [0.8, 0.8, 0.8]},
-    "light": {"type": "lambert", "base_color": [0, 0, 0], "emission": [20, 18, 15]}},
-  "objects": [
-    {"type": "sphere", "center": )" + p(0, -1000, 0) + R"(, "radius": )" + r(1000) + R"(, "material": "ground"},
-    {"type": "sphere", "center": )" + p(-0.6, 0.5, 0) + R"(, "radius": )" + r(0.5) + R"(, "material": "glass"},
+)",
+      R"(    {"type": "sphere", "center": )" + p(-0.6, 0.5, 0) + R"(, "radius": )" + r(0.5) + R"(, "material": "glass"},
     {"type": "sphere", "center": )" + p(0.6, 0.4, 0.2) + R"(, "radius": )" + r(0.4) + R"(, "material": "metal"},
     {"type": "sphere", "center": )" + p(0.1, 0.05, 0.9) + R"(, "radius": )" + r(0.05) + R"(, "material": "white"},
-    {"type": "sphere", "center": )" + p(-1.5, 2.5, 1.5) + R"(, "radius": )" + r(0.3) + R"(, "material": "light"}]})";
+)");
 }
 
 /// A scene file of one object (JSON text) must be refused, naming the
@@ -368,20 +363,14 @@ std::string sdfSceneJson(double translate, double scale) {
   const stress_rows::ScaledJson json{translate, scale};
   auto p = [&](double x, double y, double z) { return json.point(x, y, z); };
   auto r = [&](double v) { return json.length(v); };
-  return R"({"version": 1,
-  "camera": {"from": )" + p(0, 1.2, 4) + R"(, "to": )" + p(0, 0.4, 0) + R"(, "fov": 40},
-  "materials": {
-    "ground": {"type": "lambert", "base_color": [0.6, 0.6, 0.6]},
-    "metal": {"base_color": [0.9, 0.6, 0.3], "metallic": 1, "roughness": 0.3},
+  return json.stage(R"(    "metal": {"base_color": [0.9, 0.6, 0.3], "metallic": 1, "roughness": 0.3},
     "white": {"type": "lambert", "base_color": [0.8, 0.8, 0.8]},
-    "light": {"type": "lambert", "base_color": [0, 0, 0], "emission": [20, 18, 15]}},
-  "objects": [
-    {"type": "sphere", "center": )" + p(0, -1000, 0) + R"(, "radius": )" + r(1000) + R"(, "material": "ground"},
-    {"type": "sdf", "shape": "torus", "resolution": 64, "storage": "sparse", "material": "metal",
+)",
+                    R"(    {"type": "sdf", "shape": "torus", "resolution": 64, "storage": "sparse", "material": "metal",
      "transform": {"translate": )" + p(-0.6, 0.3, 0) + R"(, "scale": )" + r(0.6) + R"(}},
     {"type": "sdf", "shape": "noisy_sphere", "resolution": 64, "storage": "dense", "material": "white",
      "transform": {"translate": )" + p(0.6, 0.45, 0.2) + R"(, "scale": )" + r(0.5) + R"(}},
-    {"type": "sphere", "center": )" + p(-1.5, 2.5, 1.5) + R"(, "radius": )" + r(0.3) + R"(, "material": "light"}]})";
+)");
 }
 
 /// The SDF scene translated to 1e6 and scaled from 1e-4 to 1e4 renders the

@@ -35,6 +35,18 @@ std::string ScaledJson::length(double v) const {
   return out.str();
 }
 
+std::string ScaledJson::stage(const std::string& materials, const std::string& objects) const {
+  return R"({"version": 1,
+  "camera": {"from": )" + point(0, 1.2, 4) + R"(, "to": )" + point(0, 0.4, 0) + R"(, "fov": 40},
+  "materials": {
+    "ground": {"type": "lambert", "base_color": [0.6, 0.6, 0.6]},
+)" + materials + R"(    "light": {"type": "lambert", "base_color": [0, 0, 0], "emission": [20, 18, 15]}},
+  "objects": [
+    {"type": "sphere", "center": )" + point(0, -1000, 0) + R"(, "radius": )" + length(1000) + R"(, "material": "ground"},
+)" + objects + R"(    {"type": "sphere", "center": )" + point(-1.5, 2.5, 1.5) + R"(, "radius": )" + length(0.3) +
+         R"(, "material": "light"}]})";
+}
+
 TransformStudy transformStudy(const StressOptions& options, int maxBounces) {
   TransformStudy study;
   const int size = options.quick ? 32 : 48, spp = options.quick ? 64 : 256;

@@ -35,6 +35,10 @@ struct ScaledJson {
   double translate = 0.0, scale = 1.0;
   std::string point(double x, double y, double z) const;  ///< "[x, y, z]"
   std::string length(double v) const;                     ///< a radius or a scale
+  /// A scene file on the rows' common stage: the camera, a ground sphere and
+  /// a sphere light (materials "ground" and "light"); `materials` and
+  /// `objects` are the scene's own entries, each line ending in ",\n".
+  std::string stage(const std::string& materials, const std::string& objects) const;
 };
 
 /// The image comparison of the transform rows: the z limit that one false
