@@ -367,8 +367,8 @@ int serveRender([[maybe_unused]] DeviceSet& devices, [[maybe_unused]] const MpiW
   int requested = 0, status = 0;
   bool stopped = false;
   DeviceThreads threads(devices, source, results, stop);
-  while (true) {
-    // results before requests: rank 0 merges a device's chunk before handing it the next
+  // every finished chunk (or a device's error) to rank 0
+  auto sendResults = [&] {
     while (std::optional<ChunkResult> r = results.pop(0.0)) {
       if (!r->error.empty()) {
         MPI_Send(r->error.data(), int(r->error.size()), MPI_CHAR, 0, kTagError, MPI_COMM_WORLD);
@@ -378,6 +378,10 @@ int serveRender([[maybe_unused]] DeviceSet& devices, [[maybe_unused]] const MpiW
       std::vector<std::uint8_t> bytes = packResult(*r);
       MPI_Send(bytes.data(), int(bytes.size()), MPI_BYTE, 0, kTagResult, MPI_COMM_WORLD);
     }
+  };
+  while (true) {
+    // results before requests: rank 0 merges a device's chunk before handing it the next
+    sendResults();
     for (int n = stopped ? 0 : source.wanting(requested); n > 0; --n, ++requested)
       MPI_Send(nullptr, 0, MPI_INT, 0, kTagRequest, MPI_COMM_WORLD);
     int flag = 1;
@@ -402,15 +406,7 @@ int serveRender([[maybe_unused]] DeviceSet& devices, [[maybe_unused]] const MpiW
       return 130;
     }
     if (threads.allFinished() && requested == 0) {
-      while (std::optional<ChunkResult> r = results.pop(0.0)) {
-        if (!r->error.empty()) {
-          MPI_Send(r->error.data(), int(r->error.size()), MPI_CHAR, 0, kTagError, MPI_COMM_WORLD);
-          status = 1;
-          continue;
-        }
-        std::vector<std::uint8_t> bytes = packResult(*r);
-        MPI_Send(bytes.data(), int(bytes.size()), MPI_BYTE, 0, kTagResult, MPI_COMM_WORLD);
-      }
+      sendResults();
       break;
     }
     // a device that failed ends its own loop; the others stop asking too

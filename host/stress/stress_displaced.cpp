@@ -4,6 +4,7 @@
 // mesh; an extreme scale and NaN in the map never crash or make a NaN; a
 // NaN in a map file is refused naming the file and the texel.
 #include "stress/stress.h"
+#include "stress/stress_rows.h"
 
 #include "geometry/primitives.h"
 #include "output/image_io.h"
@@ -17,14 +18,14 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
-#include <sstream>
 
 namespace wt {
 namespace {
 
-double secondsSince(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
+using stress_rows::nonFinitePixels;
+using stress_rows::Rendered;
+using stress_rows::render;
+using stress_rows::secondsSince;
 
 /// The displaced icosphere's base mesh as an ASCII PLY (positions, normals, uv) and its map as an EXR, in a temporary folder.
 struct DisplacedFiles {
@@ -65,88 +66,31 @@ struct DisplacedFiles {
 /// everything scaled by `scale` and moved by `translate` on every axis, as a scene file.
 std::string displacedSceneJson(const DisplacedFiles& files, double translate, double scale, double mapScale = 0.15,
                                double mapOffset = -0.075) {
-  auto p = [&](double x, double y, double z) {
-    std::ostringstream out;
-    out.precision(17);
-    out << "[" << translate + scale * x << ", " << translate + scale * y << ", " << translate + scale * z << "]";
-    return out.str();
-  };
-  auto r = [&](double v) {
-    std::ostringstream out;
-    out.precision(17);
-    out << scale * v;
-    return out.str();
-  };
-  return R"({"version": 1,
-  "camera": {"from": )" + p(0, 1.2, 4) + R"(, "to": )" + p(0, 0.4, 0) + R"(, "fov": 40},
-  "materials": {
-    "ground": {"type": "lambert", "base_color": [0.6, 0.6, 0.6]},
-    "clay": {"base_color": [0.8, 0.5, 0.4], "roughness": 0.5},
-    "light": {"type": "lambert", "base_color": [0, 0, 0], "emission": [20, 18, 15]}},
-  "objects": [
-    {"type": "sphere", "center": )" + p(0, -1000, 0) + R"(, "radius": )" + r(1000) + R"(, "material": "ground"},
-    {"type": "displaced", "mesh": ")" + files.ply.string() + R"(", "displacement": ")" + files.exr.string() +
-         R"(", "scale": )" + r(mapScale) + R"(, "offset": )" + r(mapOffset) + R"(, "material": "clay",
+  const stress_rows::ScaledJson json{translate, scale};
+  auto p = [&](double x, double y, double z) { return json.point(x, y, z); };
+  auto r = [&](double v) { return json.length(v); };
+  return json.stage(R"(    "clay": {"base_color": [0.8, 0.5, 0.4], "roughness": 0.5},
+)",
+                    R"(    {"type": "displaced", "mesh": ")" + files.ply.string() + R"(", "displacement": ")" +
+                        files.exr.string() + R"(", "scale": )" + r(mapScale) + R"(, "offset": )" + r(mapOffset) +
+                        R"(, "material": "clay",
      "transform": {"translate": )" + p(0, 0.6, 0) + R"(, "scale": )" + r(0.6) + R"(}},
-    {"type": "sphere", "center": )" + p(-1.5, 2.5, 1.5) + R"(, "radius": )" + r(0.3) + R"(, "material": "light"}]})";
-}
-
-struct Rendered {
-  Image image;
-  std::uint64_t nonFinite = 0;
-};
-
-Rendered render(Context& context, const Scene& scene, const RenderSettings& settings) {
-  Renderer renderer(context, scene, settings);
-  for (int s = 0; s < settings.samplesPerPixel; ++s) renderer.renderSample();
-  return {renderer.readImage(), renderer.stats().nonFiniteSamples};
-}
-
-std::size_t nonFinitePixels(const Image& image) {
-  std::size_t n = 0;
-  for (float v : image.rgb) n += !std::isfinite(v);
-  return n;
+)");
 }
 
 }  // namespace
 
 std::vector<StressRow> stressDisplaced(Context& context, const StressOptions& options) {
-  std::vector<StressRow> rows;
   const DisplacedFiles files("scene");
-  const int size = options.quick ? 32 : 48, spp = options.quick ? 64 : 256, blocks = options.quick ? 4 : 6;
-  const double zLimit = bonferroniZ(blocks * blocks * 3, 1e-3);
-  RenderSettings settings;
-  settings.width = settings.height = size;
-  settings.samplesPerPixel = spp;
-  settings.maxBounces = 4;
-  settings.seed = 1;
-  settings.background = glm::vec3(0.1f, 0.12f, 0.15f);
+  const stress_rows::TransformStudy study = stress_rows::transformStudy(options, 4);
+  const RenderSettings& settings = study.settings;
   auto load = [&](const std::string& json) { return loadSceneFileFromMemory(json, "displaced (stress)", ".").scene; };
-  const Rendered reference = render(context, load(displacedSceneJson(files, 0.0, 1.0)), settings);
 
   // translation and scale: the same image within noise
-  struct Case {
-    std::string name;
-    double translate, scale;
-  };
-  std::vector<Case> cases = {{"translated by 1e+06 (recentred)", 1e6, 1.0},
-                             {"scaled by 1e-04", 0.0, 1e-4},
-                             {"scaled by 1e+04", 0.0, 1e4}};
-  if (options.quick) cases.resize(2);
-  for (const Case& c : cases) {
-    const auto start = std::chrono::steady_clock::now();
-    const Rendered r = render(context, load(displacedSceneJson(files, c.translate, c.scale)), settings);
-    const ImageAgreement a = compareImages(r.image, reference.image, blocks);
-    StressRow row;
-    row.group = "primitives";
-    row.name = "displaced icosphere (320 base triangles, 32^2 map): " + c.name;
-    row.figure = "max |z| " + stressFormat("%.2f", a.maxAbsZ) + " over " + std::to_string(a.tests) + " blocks";
-    if (r.nonFinite) row.figure += ", " + std::to_string(r.nonFinite) + " NaN/Inf samples";
-    row.criterion = "max |z| < " + stressFormat("%.2f", zLimit) + " against the untransformed scene, no NaN";
-    row.pass = a.maxAbsZ < zLimit && a.exactMismatches == 0 && r.nonFinite == 0;
-    row.seconds = secondsSince(start);
-    rows.push_back(row);
-  }
+  std::vector<StressRow> rows = stress_rows::transformRows(
+      "displaced icosphere (320 base triangles, 32^2 map)", options, study, [&](double translate, double scale) {
+        return render(context, load(displacedSceneJson(files, translate, scale)), settings);
+      });
 
   // zero displacement: the base mesh, as a plain triangle mesh
   {
@@ -157,16 +101,8 @@ std::vector<StressRow> stressDisplaced(Context& context, const StressOptions& op
     const std::size_t end = mesh.find(R"("material": "clay")", at);
     mesh.replace(at, end - at, R"({"type": "mesh", "file": ")" + files.ply.string() + R"(", )");
     const Rendered base = render(context, load(mesh), settings);
-    const ImageAgreement a = compareImages(zero.image, base.image, blocks);
-    StressRow row;
-    row.group = "primitives";
-    row.name = "displaced icosphere, scale 0 and offset 0, against its base mesh as triangles";
-    row.figure = "max |z| " + stressFormat("%.2f", a.maxAbsZ) + " over " + std::to_string(a.tests) + " blocks";
-    if (zero.nonFinite) row.figure += ", " + std::to_string(zero.nonFinite) + " NaN/Inf samples";
-    row.criterion = "max |z| < " + stressFormat("%.2f", zLimit) + ", no NaN";
-    row.pass = a.maxAbsZ < zLimit && a.exactMismatches == 0 && zero.nonFinite == 0;
-    row.seconds = secondsSince(start);
-    rows.push_back(row);
+    rows.push_back(stress_rows::agreementRow(
+        "displaced icosphere, scale 0 and offset 0, against its base mesh as triangles", zero, base, study, "", start));
   }
 
   // extreme scales: spikes 1e4 times the mesh's size, and a scale of 1e30

@@ -4,6 +4,7 @@
 // the surface they left, and degenerate ones are refused or left out with
 // a warning, never a crash or a NaN.
 #include "stress/stress.h"
+#include "stress/stress_rows.h"
 
 #include "core/spawn.h"
 #include "device/tracer.h"
@@ -21,46 +22,31 @@
 #include <filesystem>
 #include <limits>
 #include <random>
-#include <sstream>
 
 namespace wt {
 namespace {
 
-double secondsSince(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
+using stress_rows::Rendered;
+using stress_rows::render;
+using stress_rows::secondsSince;
 
 /// Spheres from 1/1000 to 1000 of the view's size (a ground sphere, a
 /// glass, a metal and a small diffuse one, an emitter), every coordinate
 /// and radius scaled by `scale` and moved by `translate` on every axis, as
 /// a scene file.
 std::string sphereSceneJson(double translate, double scale) {
-  auto p = [&](double x, double y, double z) {
-    std::ostringstream out;
-    out.precision(17);
-    out << "[" << translate + scale * x << ", " << translate + scale * y << ", " << translate + scale * z << "]";
-    return out.str();
-  };
-  auto r = [&](double radius) {
-    std::ostringstream out;
-    out.precision(17);
-    out << scale * radius;
-    return out.str();
-  };
-  return R"({"version": 1,
-  "camera": {"from": )" + p(0, 1.2, 4) + R"(, "to": )" + p(0, 0.4, 0) + R"(, "fov": 40},
-  "materials": {
-    "ground": {"type": "lambert", "base_color": [0.6, 0.6, 0.6]},
-    "glass": {"base_color": [1, 1, 1], "roughness": 0, "transmission": 1, "ior": 1.5},
+  const stress_rows::ScaledJson json{translate, scale};
+  auto p = [&](double x, double y, double z) { return json.point(x, y, z); };
+  auto r = [&](double radius) { return json.length(radius); };
+  return json.stage(
+      R"(    "glass": {"base_color": [1, 1, 1], "roughness": 0, "transmission": 1, "ior": 1.5},
     "metal": {"base_color": [0.9, 0.6, 0.3], "metallic": 1, "roughness": 0.2},
     "white": {"type": "lambert", "base_color": [0.8, 0.8, 0.8]},
-    "light": {"type": "lambert", "base_color": [0, 0, 0], "emission": [20, 18, 15]}},
-  "objects": [
-    {"type": "sphere", "center": )" + p(0, -1000, 0) + R"(, "radius": )" + r(1000) + R"(, "material": "ground"},
-    {"type": "sphere", "center": )" + p(-0.6, 0.5, 0) + R"(, "radius": )" + r(0.5) + R"(, "material": "glass"},
+)",
+      R"(    {"type": "sphere", "center": )" + p(-0.6, 0.5, 0) + R"(, "radius": )" + r(0.5) + R"(, "material": "glass"},
     {"type": "sphere", "center": )" + p(0.6, 0.4, 0.2) + R"(, "radius": )" + r(0.4) + R"(, "material": "metal"},
     {"type": "sphere", "center": )" + p(0.1, 0.05, 0.9) + R"(, "radius": )" + r(0.05) + R"(, "material": "white"},
-    {"type": "sphere", "center": )" + p(-1.5, 2.5, 1.5) + R"(, "radius": )" + r(0.3) + R"(, "material": "light"}]})";
+)");
 }
 
 /// A scene file of one object (JSON text) must be refused, naming the
@@ -96,8 +82,7 @@ StressRow leftOutRow(Context& context, const StressOptions& options, Scene scene
   Renderer renderer(context, scene, settings);
   for (int s = 0; s < settings.samplesPerPixel; ++s) renderer.renderSample();
   const Image image = renderer.readImage();
-  std::size_t nonFinitePixels = 0;
-  for (float v : image.rgb) nonFinitePixels += !std::isfinite(v);
+  const std::size_t nonFinitePixels = stress_rows::nonFinitePixels(image);
   const float centre = image.rgb[3 * (8 * 16 + 8)];
   StressRow row;
   row.group = "primitives";
@@ -113,32 +98,14 @@ StressRow leftOutRow(Context& context, const StressOptions& options, Scene scene
   return row;
 }
 
-struct Rendered {
-  Image image;
-  std::uint64_t nonFinite = 0;
-};
-
-Rendered render(Context& context, const Scene& scene, const RenderSettings& settings) {
-  Renderer renderer(context, scene, settings);
-  for (int s = 0; s < settings.samplesPerPixel; ++s) renderer.renderSample();
-  return {renderer.readImage(), renderer.stats().nonFiniteSamples};
-}
-
 std::vector<StressRow> sphereTransforms(Context& context, const StressOptions& options) {
   std::vector<StressRow> rows;
-  const int size = options.quick ? 32 : 48, spp = options.quick ? 64 : 256, blocks = options.quick ? 4 : 6;
-  const double zLimit = bonferroniZ(blocks * blocks * 3, 1e-3);
-  RenderSettings settings;
-  settings.width = settings.height = size;
-  settings.samplesPerPixel = spp;
-  settings.maxBounces = 6;
-  settings.seed = 1;
-  settings.background = glm::vec3(0.1f, 0.12f, 0.15f);
+  const stress_rows::TransformStudy study = stress_rows::transformStudy(options, 6);
   auto renderCase = [&](double translate, double scale, bool recenter) {
     GltfLoadOptions load;
     load.recenter = recenter;
     return render(context, loadSceneFileFromMemory(sphereSceneJson(translate, scale), "spheres (stress)", ".", load).scene,
-                  settings);
+                  study.settings);
   };
   const Rendered reference = renderCase(0.0, 1.0, true);
   struct Case {
@@ -154,16 +121,8 @@ std::vector<StressRow> sphereTransforms(Context& context, const StressOptions& o
   for (const Case& c : cases) {
     const auto start = std::chrono::steady_clock::now();
     const Rendered r = renderCase(c.translate, c.scale, c.recenter);
-    const ImageAgreement a = compareImages(r.image, reference.image, blocks);
-    StressRow row;
-    row.group = "primitives";
-    row.name = "spheres from 1e-3 to 1e3 of the view (glass, metal, an emitter): " + c.name;
-    row.figure = "max |z| " + stressFormat("%.2f", a.maxAbsZ) + " over " + std::to_string(a.tests) + " blocks";
-    if (r.nonFinite) row.figure += ", " + std::to_string(r.nonFinite) + " NaN/Inf samples";
-    row.criterion = "max |z| < " + stressFormat("%.2f", zLimit) + " against the untransformed scene, no NaN";
-    row.pass = a.maxAbsZ < zLimit && a.exactMismatches == 0 && r.nonFinite == 0;
-    row.seconds = secondsSince(start);
-    rows.push_back(row);
+    rows.push_back(stress_rows::agreementRow("spheres from 1e-3 to 1e3 of the view (glass, metal, an emitter): " + c.name,
+                                             r, reference, study, "against the untransformed scene", start));
   }
   return rows;
 }
@@ -401,73 +360,28 @@ std::vector<StressRow> curveDegenerate(Context& context, const StressOptions& op
 /// on a ground sphere under a sphere light, scaled by `scale` and moved by
 /// `translate` on every axis, as a scene file.
 std::string sdfSceneJson(double translate, double scale) {
-  auto p = [&](double x, double y, double z) {
-    std::ostringstream out;
-    out.precision(17);
-    out << "[" << translate + scale * x << ", " << translate + scale * y << ", " << translate + scale * z << "]";
-    return out.str();
-  };
-  auto r = [&](double v) {
-    std::ostringstream out;
-    out.precision(17);
-    out << scale * v;
-    return out.str();
-  };
-  return R"({"version": 1,
-  "camera": {"from": )" + p(0, 1.2, 4) + R"(, "to": )" + p(0, 0.4, 0) + R"(, "fov": 40},
-  "materials": {
-    "ground": {"type": "lambert", "base_color": [0.6, 0.6, 0.6]},
-    "metal": {"base_color": [0.9, 0.6, 0.3], "metallic": 1, "roughness": 0.3},
+  const stress_rows::ScaledJson json{translate, scale};
+  auto p = [&](double x, double y, double z) { return json.point(x, y, z); };
+  auto r = [&](double v) { return json.length(v); };
+  return json.stage(R"(    "metal": {"base_color": [0.9, 0.6, 0.3], "metallic": 1, "roughness": 0.3},
     "white": {"type": "lambert", "base_color": [0.8, 0.8, 0.8]},
-    "light": {"type": "lambert", "base_color": [0, 0, 0], "emission": [20, 18, 15]}},
-  "objects": [
-    {"type": "sphere", "center": )" + p(0, -1000, 0) + R"(, "radius": )" + r(1000) + R"(, "material": "ground"},
-    {"type": "sdf", "shape": "torus", "resolution": 64, "storage": "sparse", "material": "metal",
+)",
+                    R"(    {"type": "sdf", "shape": "torus", "resolution": 64, "storage": "sparse", "material": "metal",
      "transform": {"translate": )" + p(-0.6, 0.3, 0) + R"(, "scale": )" + r(0.6) + R"(}},
     {"type": "sdf", "shape": "noisy_sphere", "resolution": 64, "storage": "dense", "material": "white",
      "transform": {"translate": )" + p(0.6, 0.45, 0.2) + R"(, "scale": )" + r(0.5) + R"(}},
-    {"type": "sphere", "center": )" + p(-1.5, 2.5, 1.5) + R"(, "radius": )" + r(0.3) + R"(, "material": "light"}]})";
+)");
 }
 
 /// The SDF scene translated to 1e6 and scaled from 1e-4 to 1e4 renders the
 /// untransformed image within noise.
 std::vector<StressRow> sdfTransforms(Context& context, const StressOptions& options) {
-  std::vector<StressRow> rows;
-  const int size = options.quick ? 32 : 48, spp = options.quick ? 64 : 256, blocks = options.quick ? 4 : 6;
-  const double zLimit = bonferroniZ(blocks * blocks * 3, 1e-3);
-  RenderSettings settings;
-  settings.width = settings.height = size;
-  settings.samplesPerPixel = spp;
-  settings.maxBounces = 4;
-  settings.seed = 1;
-  settings.background = glm::vec3(0.1f, 0.12f, 0.15f);
-  auto renderCase = [&](double translate, double scale) {
-    return render(context, loadSceneFileFromMemory(sdfSceneJson(translate, scale), "sdf (stress)", ".").scene, settings);
-  };
-  const Rendered reference = renderCase(0.0, 1.0);
-  struct Case {
-    std::string name;
-    double translate, scale;
-  };
-  std::vector<Case> cases = {{"translated by 1e+06 (recentred)", 1e6, 1.0},
-                             {"scaled by 1e-04", 0.0, 1e-4},
-                             {"scaled by 1e+04", 0.0, 1e4}};
-  if (options.quick) cases.resize(2);
-  for (const Case& c : cases) {
-    const auto start = std::chrono::steady_clock::now();
-    const Rendered r = renderCase(c.translate, c.scale);
-    const ImageAgreement a = compareImages(r.image, reference.image, blocks);
-    StressRow row;
-    row.group = "primitives";
-    row.name = "SDF grids (a sparse torus, a dense noisy sphere, 64^3): " + c.name;
-    row.figure = "max |z| " + stressFormat("%.2f", a.maxAbsZ) + " over " + std::to_string(a.tests) + " blocks";
-    if (r.nonFinite) row.figure += ", " + std::to_string(r.nonFinite) + " NaN/Inf samples";
-    row.criterion = "max |z| < " + stressFormat("%.2f", zLimit) + " against the untransformed scene, no NaN";
-    row.pass = a.maxAbsZ < zLimit && a.exactMismatches == 0 && r.nonFinite == 0;
-    row.seconds = secondsSince(start);
-    rows.push_back(row);
-  }
-  return rows;
+  const stress_rows::TransformStudy study = stress_rows::transformStudy(options, 4);
+  return stress_rows::transformRows(
+      "SDF grids (a sparse torus, a dense noisy sphere, 64^3)", options, study, [&](double translate, double scale) {
+        return render(context, loadSceneFileFromMemory(sdfSceneJson(translate, scale), "sdf (stress)", ".").scene,
+                      study.settings);
+      });
 }
 
 /// SDF grids with NaN, no surface, or an unusable shape: a NaN in a .vol

@@ -231,22 +231,19 @@ inline float disp_shell_hit(DispShell sh, DispRay r, float tmin, float tmax) {
   return ta <= tb ? ta : INFINITY;
 }
 
-/// The shell of the sub-triangle with corners (k0, k1, k2) among the
-/// points (positions p, normals nn, uv): each corner moved by the least and
-/// the largest displacement over its texels, as a box and a slab along fn,
-/// widened past the micro-vertices' rounding.
-inline DispShell disp_shell(DispMesh m, float3 fn, const float3* p, const float3* nn, const float2* uv, int k0, int k1,
-                            int k2) {
-  float2 ulo = fmin(fmin(uv[k0], uv[k1]), uv[k2]), uhi = fmax(fmax(uv[k0], uv[k1]), uv[k2]);
-  float2 r = disp_map_range(m, ulo, uhi);
-  float d0 = m.scale * r.x + m.offset, d1 = m.scale * r.y + m.offset;
-  float dlo = fmin(d0, d1), dhi = fmax(d0, d1);
-  int ks[3] = {k0, k1, k2};
+/// The shell of the triangle with corners p0, p1, p2 (normals n0, n1, n2),
+/// each moved by dlo and by dhi along its normal: a box and a slab along
+/// fn, widened past the micro-vertices' rounding. The corners come by
+/// value: no pointer into the caller's private arrays, which could keep
+/// them out of registers.
+inline DispShell disp_shell_between(float3 fn, float3 p0, float3 p1, float3 p2, float3 n0, float3 n1, float3 n2,
+                                    float dlo, float dhi) {
+  float3 p[3] = {p0, p1, p2}, nn[3] = {n0, n1, n2};
   float3 a = (float3)(INFINITY), b = (float3)(-INFINITY);
   float slo = INFINITY, shi = -INFINITY, mag = 0.0f;
   float3 afn = fabs(fn);
-  for (int q = 0; q < 3; ++q) {
-    float3 x = p[ks[q]] + dlo * nn[ks[q]], y = p[ks[q]] + dhi * nn[ks[q]];
+  for (int k = 0; k < 3; ++k) {
+    float3 x = p[k] + dlo * nn[k], y = p[k] + dhi * nn[k];
     a = fmin(a, fmin(x, y));
     b = fmax(b, fmax(x, y));
     float sx = dot(x, fn), sy = dot(y, fn);
@@ -262,6 +259,17 @@ inline DispShell disp_shell(DispMesh m, float3 fn, const float3* p, const float3
   sh.slo = slo - spad;
   sh.shi = shi + spad;
   return sh;
+}
+
+/// The shell of the sub-triangle with corners (k0, k1, k2) among the
+/// points (positions p, normals nn, uv): each corner moved by the least and
+/// the largest displacement over its texels.
+inline DispShell disp_shell(DispMesh m, float3 fn, const float3* p, const float3* nn, const float2* uv, int k0, int k1,
+                            int k2) {
+  float2 ulo = fmin(fmin(uv[k0], uv[k1]), uv[k2]), uhi = fmax(fmax(uv[k0], uv[k1]), uv[k2]);
+  float2 r = disp_map_range(m, ulo, uhi);
+  float d0 = m.scale * r.x + m.offset, d1 = m.scale * r.y + m.offset;
+  return disp_shell_between(fn, p[k0], p[k1], p[k2], nn[k0], nn[k1], nn[k2], fmin(d0, d1), fmax(d0, d1));
 }
 
 /// Ray (o, d) against displaced base triangle `tri` (its WT_DISP_INFO_ROWS
@@ -289,29 +297,9 @@ inline bool displaced_intersect(__global const float4* rows, __global const uint
   float stack_t[3 * WT_DISP_MAX_LEVEL + 4];
   // the whole triangle's shell first, from its stored displacement range:
   // most triangles the BVH's box lets through stop here
-  {
-    float dlo = as_float(info.z), dhi = as_float(info.w);
-    float3 a = (float3)(INFINITY), b = (float3)(-INFINITY);
-    float slo = INFINITY, shi = -INFINITY, mag = 0.0f;
-    float3 afn = fabs(fn);
-    for (int k = 0; k < 3; ++k) {
-      float3 x = t.p[k] + dlo * t.n[k], y = t.p[k] + dhi * t.n[k];
-      a = fmin(a, fmin(x, y));
-      b = fmax(b, fmax(x, y));
-      float sx = dot(x, fn), sy = dot(y, fn);
-      slo = fmin(slo, fmin(sx, sy));
-      shi = fmax(shi, fmax(sx, sy));
-      mag = fmax(mag, fmax(dot(fabs(x), afn), dot(fabs(y), afn)));
-    }
-    DispShell sh;
-    float3 pad = 4e-6f * fmax(fabs(a), fabs(b)) + 1e-6f * (b - a);
-    sh.lo = a - pad;
-    sh.hi = b + pad;
-    float spad = 8e-6f * mag + 1e-6f * (shi - slo);
-    sh.slo = slo - spad;
-    sh.shi = shi + spad;
-    if (disp_shell_hit(sh, ray, tmin, tmax) == INFINITY) return false;
-  }
+  DispShell whole =
+      disp_shell_between(fn, t.p[0], t.p[1], t.p[2], t.n[0], t.n[1], t.n[2], as_float(info.z), as_float(info.w));
+  if (disp_shell_hit(whole, ray, tmin, tmax) == INFINITY) return false;
   RayShear shear = triangle_ray_shear(d);
   int sp = 0;
   stack[sp] = disp_node(0u, 0u, 0u, 0u);

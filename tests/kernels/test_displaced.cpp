@@ -10,6 +10,7 @@
 #include "geometry/primitives.h"
 #include "scene/generators.h"
 #include "core/spawn.h"
+#include "primitive_checks.h"
 #include "test_util.h"
 
 #include <gtest/gtest.h>
@@ -261,21 +262,8 @@ TEST(DisplacedMeshes, TraversalsFindWhatEveryTriangleFinds) {
   const glm::vec3 center(0.3f, -0.2f, 0.1f);
   const Scene scene = testSphere(-1, 0.2f, -0.1f, center, 2);
   const std::vector<Ray> rays = raysAtSphere(center, test::testSize(3000, 300), 23);
-  const std::vector<KernelHit> brute = kernelClosest(scene, rays);
-  Tracer tracer(test::deviceContext(), scene);
-  for (Traversal traversal : {Traversal::kSingle, Traversal::kPacket}) {
-    const std::vector<RayHit> hits = tracer.traceClosest(rays, traversal);
-    int bad = 0;
-    for (std::size_t i = 0; i < rays.size(); ++i) {
-      const bool hit = hits[i].prim != RayHit::kNoHit;
-      bool ok = hit == (brute[i].t >= 0.0f);
-      if (ok && hit) ok = primType(hits[i].prim) == WT_PRIM_DISPLACED && hits[i].t == brute[i].t;
-      if (!ok && ++bad <= 5)
-        ADD_FAILURE() << "ray " << i << " traversal " << int(traversal) << ": t " << hits[i].t << " prim "
-                      << hits[i].prim << ", every triangle: t " << brute[i].t;
-    }
-    EXPECT_EQ(bad, 0);
-  }
+  test::expectTraversalsFindWhatBruteForceFinds(scene, rays, kernelClosest(scene, rays), WT_PRIM_DISPLACED,
+                                                "every triangle");
 }
 
 TEST(DisplacedMeshes, AnyHitAgreesWithClosestHitInEveryTraversal) {
@@ -283,21 +271,10 @@ TEST(DisplacedMeshes, AnyHitAgreesWithClosestHitInEveryTraversal) {
   const Scene scene = testSphere(3, 0.2f, -0.1f, center);
   const std::vector<MicroTriangle> micro = microMesh(scene.displacedMeshes[0]);
   const std::vector<Ray> rays = raysAtSphere(center, test::testSize(3000, 300), 24);
-  Tracer tracer(test::deviceContext(), scene);
-  const std::vector<RayHit> closest = tracer.traceClosest(rays);
-  for (Traversal traversal : {Traversal::kSingle, Traversal::kPacket, Traversal::kStream}) {
-    const std::vector<std::uint8_t> occluded = tracer.traceOccluded(rays, traversal);
-    int bad = 0;
-    for (std::size_t i = 0; i < rays.size(); ++i) {
-      if (bool(occluded[i]) == (closest[i].prim != RayHit::kNoHit)) continue;
-      const RefHit want = reference(micro, rays[i]);
-      if (want.nearEdge || (want.hit && std::abs(want.t - Real(rays[i].tmax)) <= 1e-5L * rays[i].tmax)) continue;
-      if (++bad <= 5)
-        ADD_FAILURE() << "ray " << i << " traversal " << int(traversal) << ": occluded " << int(occluded[i])
-                      << ", closest hit " << closest[i].prim;
-    }
-    EXPECT_EQ(bad, 0);
-  }
+  test::expectAnyHitAgreesWithClosestHit(scene, rays, [&](std::size_t i) {
+    const RefHit want = reference(micro, rays[i]);
+    return want.nearEdge || (want.hit && std::abs(want.t - Real(rays[i].tmax)) <= 1e-5L * rays[i].tmax);
+  });
 }
 
 TEST(DisplacedMeshes, SpawnedRaysLeaveTheSurfaceOrCrossIt) {
@@ -308,36 +285,7 @@ TEST(DisplacedMeshes, SpawnedRaysLeaveTheSurfaceOrCrossIt) {
   const glm::vec3 center(3.0f, -2.0f, 1.0f);
   const Scene scene = testSphere(4, 0.02f, -0.01f, center);
   const std::vector<Ray> rays = raysAtSphere(center, test::testSize(3000, 300), 25);
-  const std::vector<KernelHit> hits = kernelClosest(scene, rays);
-  std::mt19937 rng(26);
-  std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
-  std::vector<Ray> out, in;
-  for (std::size_t i = 0; i < rays.size(); ++i) {
-    if (hits[i].t < 0.0f) continue;
-    const glm::vec3 p = rays[i].origin + hits[i].t * rays[i].direction, n = hits[i].normal;
-    glm::vec3 w;
-    do w = glm::vec3(unit(rng), unit(rng), unit(rng));
-    while (glm::dot(w, w) > 1.0f || glm::dot(w, w) < 1e-3f || std::abs(glm::dot(glm::normalize(w), n)) < 0.71f);
-    w = glm::normalize(w);
-    if (glm::dot(w, n) < 0.0f) w = -w;
-    Ray r;
-    r.origin = offsetRayOrigin(p, hits[i].error, n);
-    r.direction = w;
-    out.push_back(r);
-    r.origin = offsetRayOrigin(p, hits[i].error, -n);
-    r.direction = -w;
-    in.push_back(r);
-  }
-  ASSERT_GT(out.size(), rays.size() / 12);
-  Tracer tracer(test::deviceContext(), scene);
-  const std::vector<RayHit> again = tracer.traceClosest(out), through = tracer.traceClosest(in);
-  int selfHits = 0, lost = 0;
-  for (std::size_t i = 0; i < out.size(); ++i) {
-    selfHits += again[i].prim != RayHit::kNoHit;
-    lost += through[i].prim == RayHit::kNoHit || !(through[i].t > 0.7f);
-  }
-  EXPECT_EQ(selfHits, 0) << "of " << out.size() << " rays leaving the surface";
-  EXPECT_EQ(lost, 0) << "of " << in.size() << " rays entering it";
+  test::expectSpawnedRaysLeaveOrCross(scene, rays, kernelClosest(scene, rays), 26, 0.71f);
 }
 
 TEST(DisplacedMeshes, SharedEdgesGiveTheSameMicroVerticesBitForBit) {

@@ -10,6 +10,7 @@
 #include "scene/generators.h"
 #include "scene/sdf_volume.h"
 #include "core/spawn.h"
+#include "primitive_checks.h"
 #include "test_util.h"
 
 #include <glm/gtc/matrix_transform.hpp>
@@ -294,21 +295,8 @@ TEST_P(SdfStorages, TraversalsFindWhatEveryBrickFinds) {
   // the brute-force one's
   const Scene scene = sdfScene(SdfShape::kTorus, 40, skewedPlacement(), GetParam());
   const std::vector<Ray> rays = raysAtGrid(scene.sdfGrids[0], test::testSize(6000, 600), 12);
-  const std::vector<KernelHit> brute = kernelClosest(scene, rays);
-  Tracer tracer(test::deviceContext(), scene);
-  for (Traversal traversal : {Traversal::kSingle, Traversal::kPacket}) {
-    const std::vector<RayHit> hits = tracer.traceClosest(rays, traversal);
-    int bad = 0;
-    for (std::size_t i = 0; i < rays.size(); ++i) {
-      const bool hit = hits[i].prim != RayHit::kNoHit;
-      bool ok = hit == (brute[i].t >= 0.0f);
-      if (ok && hit) ok = primType(hits[i].prim) == WT_PRIM_SDF_GRID && hits[i].t == brute[i].t;
-      if (!ok && ++bad <= 5)
-        ADD_FAILURE() << "ray " << i << " traversal " << int(traversal) << ": t " << hits[i].t << " prim "
-                      << hits[i].prim << ", every brick: t " << brute[i].t;
-    }
-    EXPECT_EQ(bad, 0);
-  }
+  test::expectTraversalsFindWhatBruteForceFinds(scene, rays, kernelClosest(scene, rays), WT_PRIM_SDF_GRID,
+                                                "every brick");
 }
 
 INSTANTIATE_TEST_SUITE_P(DenseAndSparse, SdfStorages, ::testing::Values(SdfStorage::kDense, SdfStorage::kSparse),
@@ -348,22 +336,11 @@ TEST(SdfGrids, SparseStorageTakesAQuarterOfDenseAt256) {
 TEST(SdfGrids, AnyHitAgreesWithClosestHitInEveryTraversal) {
   const Scene scene = sdfScene(SdfShape::kNoisySphere, 40, skewedPlacement(), SdfStorage::kSparse);
   const std::vector<Ray> rays = raysAtGrid(scene.sdfGrids[0], test::testSize(8000, 800), 14);
-  Tracer tracer(test::deviceContext(), scene);
-  const std::vector<RayHit> closest = tracer.traceClosest(rays);
-  for (Traversal traversal : {Traversal::kSingle, Traversal::kPacket, Traversal::kStream}) {
-    const std::vector<std::uint8_t> occluded = tracer.traceOccluded(rays, traversal);
-    int bad = 0;
-    for (std::size_t i = 0; i < rays.size(); ++i) {
-      if (bool(occluded[i]) == (closest[i].prim != RayHit::kNoHit)) continue;
-      const RefHit want = reference(scene.sdfGrids[0], rays[i]);
-      // a crossing at the segment's very end or a tangency may go either way
-      if (want.grazes || (want.hit && std::abs(want.t - Real(rays[i].tmax)) <= 1e-5L * rays[i].tmax)) continue;
-      if (++bad <= 5)
-        ADD_FAILURE() << "ray " << i << " traversal " << int(traversal) << ": occluded " << int(occluded[i])
-                      << ", closest hit " << closest[i].prim;
-    }
-    EXPECT_EQ(bad, 0);
-  }
+  test::expectAnyHitAgreesWithClosestHit(scene, rays, [&](std::size_t i) {
+    const RefHit want = reference(scene.sdfGrids[0], rays[i]);
+    // a crossing at the segment's very end or a tangency may go either way
+    return want.grazes || (want.hit && std::abs(want.t - Real(rays[i].tmax)) <= 1e-5L * rays[i].tmax);
+  });
 }
 
 TEST(SdfGrids, SpawnedRaysLeaveTheSurfaceOrCrossIt) {
@@ -376,36 +353,7 @@ TEST(SdfGrids, SpawnedRaysLeaveTheSurfaceOrCrossIt) {
   const glm::dmat4 place = glm::translate(glm::dmat4(1.0), glm::dvec3(3.0, -2.0, 1.0));
   const Scene scene = sdfScene(SdfShape::kSphere, 256, place, SdfStorage::kSparse);
   const std::vector<Ray> rays = raysAtGrid(scene.sdfGrids[0], test::testSize(6000, 600), 15);
-  const std::vector<KernelHit> hits = kernelClosest(scene, rays);
-  std::mt19937 rng(16);
-  std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
-  std::vector<Ray> out, in;
-  for (std::size_t i = 0; i < rays.size(); ++i) {
-    if (hits[i].t < 0.0f) continue;
-    const glm::vec3 p = rays[i].origin + hits[i].t * rays[i].direction, n = hits[i].normal;
-    glm::vec3 w;
-    do w = glm::vec3(unit(rng), unit(rng), unit(rng));
-    while (glm::dot(w, w) > 1.0f || glm::dot(w, w) < 1e-3f || std::abs(glm::dot(glm::normalize(w), n)) < 0.5f);
-    w = glm::normalize(w);
-    if (glm::dot(w, n) < 0.0f) w = -w;
-    Ray r;
-    r.origin = offsetRayOrigin(p, hits[i].error, n);
-    r.direction = w;
-    out.push_back(r);
-    r.origin = offsetRayOrigin(p, hits[i].error, -n);
-    r.direction = -w;
-    in.push_back(r);
-  }
-  ASSERT_GT(out.size(), rays.size() / 12);  // most rays hit (the floor scales with WT_TEST_SMALL)
-  Tracer tracer(test::deviceContext(), scene);
-  const std::vector<RayHit> again = tracer.traceClosest(out), through = tracer.traceClosest(in);
-  int selfHits = 0, lost = 0;
-  for (std::size_t i = 0; i < out.size(); ++i) {
-    selfHits += again[i].prim != RayHit::kNoHit;
-    lost += through[i].prim == RayHit::kNoHit || !(through[i].t > 0.7f);
-  }
-  EXPECT_EQ(selfHits, 0) << "of " << out.size() << " rays leaving the surface";
-  EXPECT_EQ(lost, 0) << "of " << in.size() << " rays entering it";
+  test::expectSpawnedRaysLeaveOrCross(scene, rays, kernelClosest(scene, rays), 16, 0.5f);
 }
 
 TEST(SdfGrids, NoLeaksThroughFacesAndEdgesOfCellsAndBricks) {
