@@ -197,6 +197,7 @@ void writeCheckpoint(const std::filesystem::path& path, const Checkpoint& c) {
   if (!f) fail(path, std::string("cannot write the checkpoint: ") + std::strerror(errno));
   bool ok = true;
   auto put = [&](const void* data, std::size_t size) {
+    if (size == 0) return;  // an empty vector's data() may be null, which fwrite must not get
     sum.bytes(data, size);
     ok = ok && std::fwrite(data, 1, size, f) == size;
   };
