@@ -202,17 +202,29 @@ struct TimedCommand {
 
 }  // namespace
 
+std::vector<std::uint32_t> shadowProbeEntries(std::vector<std::uint32_t> queue, std::size_t count) {
+  if (queue.size() > count) {
+    std::nth_element(queue.begin(), queue.begin() + std::ptrdiff_t(count), queue.end());
+    queue.resize(count);
+  }
+  std::sort(queue.begin(), queue.end());
+  return queue;
+}
+
 Traversal Renderer::probeShadowRays(int bounce) {
-  // Up to kProbeRays of the dense queue's first entries, and their rays: the
-  // paths an entry names lie close together (shade appends in item order),
-  // so the span read stays near the sample's size.
+  // Up to kProbeRays of the paths with a shadow ray, lowest path index first:
+  // the dense queue holds them in the order the device's threads appended
+  // them, which varies from run to run, so the whole queue is read and the
+  // lowest entries taken; neighbouring paths keep the span read near the
+  // sample's size.
   constexpr std::size_t kProbeRays = 16384;
   cl::CommandQueue& q = m_context.queue();
   cl_uint count = 0;
   q.enqueueReadBuffer(m_counters, CL_TRUE, WT_COUNTER_SHADOW * sizeof(cl_uint), sizeof(cl_uint), &count);
-  std::vector<cl_uint> queue(std::min<std::size_t>(count, kProbeRays));
+  std::vector<cl_uint> queue(count);
   if (queue.empty()) return Traversal::kSingle;
   q.enqueueReadBuffer(m_path.shadowQueue, CL_TRUE, 0, queue.size() * sizeof(cl_uint), queue.data());
+  queue = shadowProbeEntries(std::move(queue), kProbeRays);
   // a sample of paths no more than 16 times its size apart: fewer entries where they spread
   std::size_t n = queue.size();
   cl_uint lo = 0, hi = 0;

@@ -266,4 +266,8 @@ class Renderer {
   RenderProfile m_profile;
 };
 
+/// The `count` lowest of a dense shadow queue's path indices, ascending:
+/// the same whatever order the device's threads appended them in.
+std::vector<std::uint32_t> shadowProbeEntries(std::vector<std::uint32_t> queue, std::size_t count);
+
 }  // namespace wt
