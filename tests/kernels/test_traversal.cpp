@@ -4,6 +4,7 @@
 #include "bvh/builders.h"
 #include "device_fixture.h"
 #include "scene/generators.h"
+#include "test_util.h"
 #include "tree_param.h"
 
 #include <gtest/gtest.h>
@@ -138,7 +139,7 @@ TEST(Traversal, PlacedCopiesMatchBruteForce) {
     BvhBuildOptions options;
     options.builder = BvhBuilder::Auto;
     options.maxLeafSize = leaf;
-    expectAgreement(scene, randomRays(4000, 31 + leaf), options);
+    expectAgreement(scene, randomRays(test::testSize(4000, 1000), 31 + leaf), options);
     // the copies' shared tree is what was traced (all but the flattened one)
     EXPECT_EQ(Tracer(test::deviceContext(), scene, options).sceneBuffers().bvhStats().copiesPlaced, 23u);
   }
@@ -156,7 +157,7 @@ TEST(Traversal, FlatRegionsMatchBruteForce) {
       BvhBuildOptions options;
       options.builder = builder;
       options.maxLeafSize = leaf;
-      expectAgreement(scene, randomRays(1000, 57 + leaf), options);
+      expectAgreement(scene, randomRays(test::testSize(1000, 250), 57 + leaf), options);
       EXPECT_GT(Tracer(test::deviceContext(), scene, options).sceneBuffers().bvhStats().flatRegions, 0u);
     }
 }
