@@ -796,7 +796,7 @@ int runInfo(RenderOptions options) {
   std::printf("features:");
   for (const std::string& name : wt::featureNames(features)) std::printf(" %s", name.c_str());
   std::printf("\nswitches (on %s):", device.name.c_str());
-  for (const std::string& d : wt::kernelDefines(wt::kernelFeaturesFor(features, device, settings.packetWidth)))
+  for (const std::string& d : wt::kernelDefines(wt::renderKernelFeatures(features, device, settings, buffers)))
     std::printf(" %s", d.substr(3).c_str());  // without "-D "
   std::printf("\n");
 

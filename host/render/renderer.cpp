@@ -64,13 +64,8 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
                             settings.lightSampler);
 
   m_features = sceneFeatures(scene, *m_scene, settings);
-  m_kernelFeatures = settings.generalProgram ? generalKernelFeatures(m_features, context.info(), settings.packetWidth)
-                                             : kernelFeaturesFor(m_features, context.info(), settings.packetWidth);
-  m_kernelFeatures.aov = settings.aovs;
-  m_kernelFeatures.bvhCost = settings.aovs && settings.bvhCost;
+  m_kernelFeatures = renderKernelFeatures(m_features, context.info(), settings, *m_scene);
   m_packetWidth = m_kernelFeatures.packetWidth;
-  // streams ask for a node's children early where the scene outgrows the cache (as the Tracer's)
-  m_kernelFeatures.streamPrefetch = streamPrefetchFor(context.info(), m_scene->uploadedBytes);
   m_primitiveScale = primitiveScale(scene);
   m_shadowTraversal.assign(std::size_t(std::max(settings.maxBounces, 0)) + 1, std::nullopt);
   const KernelFeatures& features = m_kernelFeatures;
@@ -201,6 +196,17 @@ struct TimedCommand {
 };
 
 }  // namespace
+
+KernelFeatures renderKernelFeatures(const FeatureSet& features, const DeviceInfo& device, const RenderSettings& settings,
+                                    const SceneBuffers& buffers) {
+  KernelFeatures k = settings.generalProgram ? generalKernelFeatures(features, device, settings.packetWidth)
+                                             : kernelFeaturesFor(features, device, settings.packetWidth);
+  k.aov = settings.aovs;
+  k.bvhCost = settings.aovs && settings.bvhCost;
+  // streams ask for a node's children early where the scene outgrows the cache (as the Tracer's)
+  k.streamPrefetch = streamPrefetchFor(device, buffers.uploadedBytes);
+  return k;
+}
 
 std::vector<std::uint32_t> shadowProbeEntries(std::vector<std::uint32_t> queue, std::size_t count) {
   if (queue.size() > count) {

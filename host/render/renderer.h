@@ -266,6 +266,11 @@ class Renderer {
   RenderProfile m_profile;
 };
 
+/// The render program's switches for a scene's feature set on a device
+/// (what `wavetrace info` prints and the Renderer builds).
+KernelFeatures renderKernelFeatures(const FeatureSet& features, const DeviceInfo& device, const RenderSettings& settings,
+                                    const SceneBuffers& buffers);
+
 /// The `count` lowest of a dense shadow queue's path indices, ascending:
 /// the same whatever order the device's threads appended them in.
 std::vector<std::uint32_t> shadowProbeEntries(std::vector<std::uint32_t> queue, std::size_t count);
