@@ -99,7 +99,9 @@ if [ "$mode" = heartbeat ]; then
   lostCheck() {  # $1: the case, $2: the job's exit status, $3: "held" if rank 1 surely held a chunk
     [ "$2" -eq 124 ] && fail "$1: rank 0 still waited 60 s after rank 1 stopped: $(cat "$dir/$1.log")"
     [ "$2" -eq 0 ] || fail "$1: exit status $2: $(cat "$dir/$1.log")"
-    grep -q "warning: rank 1 showed no progress for [0-9.]* s (--rank-timeout 1)" "$dir/$1.log" ||
+    # silent, or (killed) a receive from it that failed or stopped mid-message
+    grep -Eq "warning: rank 1 (showed no progress for [0-9.]* s \(--rank-timeout 1\)|failed while sending|stopped sending)" \
+      "$dir/$1.log" ||
       fail "$1: no message naming rank 1: $(cat "$dir/$1.log")"
     [ "${3:-}" != held ] || grep -q "its chunks [0-9]* (samples [0-9]*-[0-9]*).* were handed out again" "$dir/$1.log" ||
       fail "$1: rank 1 held no chunk (nothing to hand out again): $(cat "$dir/$1.log")"
@@ -137,6 +139,17 @@ if [ "$mode" = heartbeat ]; then
   wait $job
   lostCheck killed $?
   echo "rank 1 killed (mpirun --enable-recovery): finished without it in $((SECONDS - start)) s, equal"
+  # rank 1 hangs before it has started: rank 0 names it and ends the job
+  start=$SECONDS
+  WT_TEST_STALL=1:startup timeout -k 5 60 mpirun --oversubscribe -np 2 "$exe" render "${hb[@]}" -q --rank-timeout 1 \
+    -o "$dir/startup.exr" >"$dir/startup.log" 2>&1
+  status=$?
+  [ $status -eq 124 ] && fail "startup: rank 0 still waited 60 s for rank 1 to start: $(cat "$dir/startup.log")"
+  [ $status -ne 0 ] || fail "startup: the job exited 0 without rank 1"
+  grep -q "error: the job could not start: rank 1 had not finished starting 1 s after rank 0 (--rank-timeout)" \
+    "$dir/startup.log" || fail "startup: no message naming rank 1: $(cat "$dir/startup.log")"
+  [ -f "$dir/startup.exr" ] && fail "startup: an image was written"
+  echo "rank 1 hung while starting: the job ended in $((SECONDS - start)) s naming it"
   exit 0
 fi
 
@@ -151,6 +164,23 @@ grep -q "chunks by rank: [1-9][0-9]*, [1-9]" "$dir/ranks.log" || fail "a rank re
 "$exe" render "${big[@]}" -q --spp 64 --chunk-spp 4 -o "$dir/process.exr" >/dev/null 2>&1 || fail "1 process failed"
 cmp "$dir/ranks.exr" "$dir/process.exr" || fail "2 ranks differ from 1 process (every AOV layer compared)"
 echo "2 ranks equal 1 process, byte for byte (every AOV layer included) (at ${SECONDS} s)"
+
+# --- --target-error and --reference on 2 ranks ---------------------------------
+# rank 1's chunks that arrive after the boundary that met the target are dropped
+"$exe" render --width 24 --height 16 --max-bounces 4 --seed 77 --spp 512 -q -o "$dir/ref.exr" >/dev/null 2>&1 ||
+  fail "reference render failed"
+te=(--chunk-spp 2 --aov all --target-error 0.06 --reference "$dir/ref.exr" --error-log)
+"${mpi[@]}" "$exe" render "${base[@]}" "${te[@]}" "$dir/te-ranks.csv" -o "$dir/te-ranks.exr" >"$dir/te-ranks.log" 2>&1 ||
+  fail "2 ranks with --target-error (exit status $?): $(cat "$dir/te-ranks.log")"
+"$exe" render "${base[@]}" "${te[@]}" "$dir/te-process.csv" -o "$dir/te-process.exr" >"$dir/te-process.log" 2>&1 ||
+  fail "1 process with --target-error: $(cat "$dir/te-process.log")"
+cmp "$dir/te-ranks.exr" "$dir/te-process.exr" || fail "--target-error: 2 ranks differ from 1 process"
+stopped=$(grep -o "stopped after [0-9]* samples (--target-error reached)" "$dir/te-process.log")
+[ -n "$stopped" ] || fail "--target-error not reached: $(cat "$dir/te-process.log")"
+grep -q "$stopped" "$dir/te-ranks.log" || fail "2 ranks stopped elsewhere: $(cat "$dir/te-ranks.log")"
+cmp <(cut -d, -f1,3- "$dir/te-ranks.csv") <(cut -d, -f1,3- "$dir/te-process.csv") ||
+  fail "--reference: 2 ranks log other errors: $(cat "$dir/te-ranks.csv" "$dir/te-process.csv")"
+echo "--target-error 0.06 and --reference on 2 ranks: $stopped, image and error log equal 1 process (at ${SECONDS} s)"
 
 # --- rank 1 killed mid-render -------------------------------------------------
 dbl=(--width 24 --height 16 --max-bounces 4 --seed 9 --accumulation double --chunk-spp 2)

@@ -653,7 +653,7 @@ int runScaleOutRender(RenderOptions options, wt::MpiWorld& world) {
     setupError = e.what();
   }
   try {
-    world.agreeOnStart(setupError, renderHash.value());
+    world.agreeOnStart(setupError, renderHash.value(), options.rankTimeout);
   } catch (const std::exception& e) {
     if (!root) return 1;  // rank 0 reports every rank's failure
     throw;

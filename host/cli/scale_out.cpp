@@ -32,6 +32,7 @@ enum Tag : int {
   kTagError = 5,     ///< worker -> 0: a device failed: its message
   kTagFinished = 6,  ///< worker -> 0: all my devices are done and their results sent
   kTagHeartbeat = 7, ///< worker -> 0: uint64 sample passes its devices have done (a sign of progress)
+  kTagStarted = 8,   ///< worker -> 0: set up (or failed to), about to join the start-up collective
 };
 
 /// The fixed part of a result message.
@@ -249,11 +250,43 @@ void MpiWorld::abort(int code) {
   std::_Exit(code);
 }
 
-void MpiWorld::agreeOnStart(const std::string& error, std::uint64_t renderHash) const {
+void MpiWorld::agreeOnStart(const std::string& error, std::uint64_t renderHash, [[maybe_unused]] double timeoutSeconds) {
 #if WT_MPI
   if (!active()) {
     if (!error.empty()) throw std::runtime_error(error);
     return;
+  }
+  // each worker says it got here before the collective, so that rank 0 can
+  // name a rank that never does (the collective would wait for it forever)
+  if (m_rank != 0) {
+    if (const char* stall = std::getenv("WT_TEST_STALL"); stall && stall == std::to_string(m_rank) + ":startup")
+      StallHook::forever();  // the test hook: a rank hung while starting
+    MPI_Send(nullptr, 0, MPI_INT, 0, kTagStarted, MPI_COMM_WORLD);
+  } else {
+    std::vector<bool> arrived(std::size_t(m_size), false);
+    int missing = m_size - 1;
+    const auto t0 = Clock::now();
+    while (missing > 0) {
+      int flag = 0;
+      MPI_Status status;
+      MPI_Iprobe(MPI_ANY_SOURCE, kTagStarted, MPI_COMM_WORLD, &flag, &status);
+      if (flag) {
+        MPI_Recv(nullptr, 0, MPI_INT, status.MPI_SOURCE, kTagStarted, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+        if (!arrived[std::size_t(status.MPI_SOURCE)]) arrived[std::size_t(status.MPI_SOURCE)] = true, --missing;
+        continue;
+      }
+      if (since(t0) > timeoutSeconds) {
+        std::string names;
+        for (int r = 1; r < m_size; ++r)
+          if (!arrived[std::size_t(r)]) names += (names.empty() ? "" : ", ") + std::to_string(r);
+        char text[160];
+        std::snprintf(text, sizeof text, " had not finished starting %.3g s after rank 0 (--rank-timeout)", timeoutSeconds);
+        log::error("the job could not start: rank" + std::string(missing > 1 ? "s " : " ") + names + text +
+                   "; hung or dead while loading the scene or building its program?");
+        abort(1);  // the others wait in the collective
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
   }
   constexpr int kMessage = 1024;
   std::vector<char> mine(kMessage + 8, 0), all(std::size_t(m_size) * (kMessage + 8));
@@ -398,28 +431,32 @@ ScaleOutResult coordinateRender(DeviceSet& devices, const ScaleOutOptions& optio
       // past the signal mpirun then sends, nor past the rank timeout
       MPI_Request request;
       int received = 0;
-      bool lost = MPI_Irecv(message.data(), bytes, MPI_BYTE, from, status.MPI_TAG, MPI_COMM_WORLD, &request) != MPI_SUCCESS;
-      bool timedOut = false;
-      while (!lost && !received) {
+      bool failed = MPI_Irecv(message.data(), bytes, MPI_BYTE, from, status.MPI_TAG, MPI_COMM_WORLD, &request) != MPI_SUCCESS;
+      bool timedOut = false, interrupted = false;
+      while (!failed && !received && !timedOut && !interrupted) {
+        failed = MPI_Test(&request, &received, MPI_STATUS_IGNORE) != MPI_SUCCESS;
+        if (received || failed) break;
         timedOut = since(receiveStart) > options.rankTimeoutSeconds;
-        lost = MPI_Test(&request, &received, MPI_STATUS_IGNORE) != MPI_SUCCESS ||
-               (options.interrupted && options.interrupted()) || (!received && timedOut);
-        if (!received) std::this_thread::yield();
+        interrupted = options.interrupted && options.interrupted();
+        std::this_thread::yield();
       }
-      if (lost && timedOut) {
-        MPI_Cancel(&request);
-        MPI_Request_free(&request);
+      if (interrupted) break;  // handled below
+      if (timedOut || failed) {
+        // a rank that died mid-message (under a launcher that lets the job
+        // go on, the receive fails) or stopped sending: lost, not the job
+        if (timedOut) {
+          MPI_Cancel(&request);
+          MPI_Request_free(&request);
+        }
         abandoned.push_back(std::move(message));  // MPI may still write into it
         char why[160];
-        std::snprintf(why, sizeof why, "stopped sending a %d-byte message for %.3g s (--rank-timeout)", bytes,
-                      options.rankTimeoutSeconds);
+        if (timedOut)
+          std::snprintf(why, sizeof why, "stopped sending a %d-byte message for %.3g s (--rank-timeout)", bytes,
+                        options.rankTimeoutSeconds);
+        else
+          std::snprintf(why, sizeof why, "failed while sending a %d-byte message (it died?)", bytes);
         loseRank(from, why);
         continue;
-      }
-      if (lost) {
-        if (!(options.interrupted && options.interrupted()))
-          throw std::runtime_error("receiving a message from rank " + std::to_string(from) + " failed");
-        break;  // the interrupt is handled below
       }
       if (sender.lost) continue;  // too late: its chunks went to the others
       if (status.MPI_TAG != kTagHeartbeat) sender.lastProgress = Clock::now();

@@ -34,7 +34,9 @@ class MpiWorld {
   /// what it will render; all return normally only if every rank started
   /// and all hashes agree, else every rank throws. Rank 0's exception names
   /// each failed rank and its message; the others' is empty (rank 0 reports).
-  void agreeOnStart(const std::string& error, std::uint64_t renderHash) const;
+  /// A rank that has not reached this point `timeoutSeconds` after rank 0
+  /// did (hung while loading, or dead) makes rank 0 name it and end the job.
+  void agreeOnStart(const std::string& error, std::uint64_t renderHash, double timeoutSeconds = 120.0);
   static bool builtWithMpi();
 
  private:
