@@ -7,8 +7,13 @@
 #            checkpointed, and the resumed render equals the uninterrupted
 #            one; a rank that cannot load the scene stops the job at start
 #            with its message (no hang). Skips (77) in a build without MPI.
+#   heartbeat: rank 1 hung (process or device) or killed without mpirun
+#            ending the job: rank 0 finishes without it within --rank-timeout,
+#            the image equal to 1 process. Skips (77) without MPI.
+#   devices also: --aov all, --debug, --target-error and --reference on two
+#            devices equal one device with the same --chunk-spp.
 #
-# usage: cli_scale_out.sh WAVETRACE SCRATCH_DIR devices|mpi [WT_MPI]
+# usage: cli_scale_out.sh WAVETRACE SCRATCH_DIR devices|mpi|heartbeat [WT_MPI]
 set -u
 exe=$1
 dir=$2
@@ -22,7 +27,27 @@ fail() {
 }
 # one PoCL thread per process: the ranks share this machine's cores
 export POCL_MAX_PTHREAD_COUNT=1
-common=(--width 24 --height 16 --max-bounces 4 --seed 9 --aov variance)
+base=(--width 24 --height 16 --max-bounces 4 --seed 9)
+common=("${base[@]}" --aov variance)
+
+# the split render ($1: devices "0,0" or "" for one) of the options after it
+# writes $dir/NAME.exr and NAME.csv (the --reference log without its seconds
+# column) and NAME.out (stdout without timings)
+split() {
+  local name=$1 devices=$2
+  shift 2
+  local dev=()
+  [ -n "$devices" ] && dev=(--device "$devices")
+  "$exe" render "${base[@]}" "${dev[@]}" "$@" -o "$dir/$name.exr" >"$dir/$name.raw" 2>"$dir/$name.err" ||
+    fail "$name: $(cat "$dir/$name.raw" "$dir/$name.err")"
+  sed -E 's/, [0-9.]+ (s|ms|min)[^,]* of rendering//' "$dir/$name.raw" | grep -v '^samples,\|^[0-9]*,' | sed "s/$name/NAME/" >"$dir/$name.out"
+  grep '^[0-9]*,' "$dir/$name.raw" | cut -d, -f1,3- >"$dir/$name.csv" || true
+}
+same() {
+  cmp "$dir/$1.exr" "$dir/$2.exr" || fail "$1 and $2 differ: $(cat "$dir/$1.out" "$dir/$2.out")"
+  cmp "$dir/$1.out" "$dir/$2.out" || fail "$1 and $2 report differently: $(cat "$dir/$1.out" "$dir/$2.out")"
+  cmp "$dir/$1.csv" "$dir/$2.csv" || fail "$1 and $2 log other errors: $(cat "$dir/$1.csv" "$dir/$2.csv")"
+}
 
 if [ "$mode" = devices ]; then
   "$exe" render "${common[@]}" -v --spp 24 --chunk-spp 3 --device 0,0 -o "$dir/two.exr" >"$dir/two.log" 2>&1 ||
@@ -31,6 +56,27 @@ if [ "$mode" = devices ]; then
   "$exe" render "${common[@]}" -q --spp 24 --chunk-spp 3 -o "$dir/one.exr" >/dev/null 2>&1 || fail "one device failed"
   cmp "$dir/two.exr" "$dir/one.exr" || fail "two devices differ from one"
   echo "two devices equal one, byte for byte"
+  # every AOV merged as the image is; --target-error stops at the same chunk
+  # boundary and --reference logs the same errors (a reference of another seed)
+  "$exe" render --width 24 --height 16 --max-bounces 4 --seed 77 --spp 512 -q -o "$dir/ref.exr" >/dev/null 2>&1 || fail "reference render failed"
+  split aov2 0,0 -q --chunk-spp 2 --aov all --target-error 0.06 --reference "$dir/ref.exr"
+  split aov1 "" -q --chunk-spp 2 --aov all --target-error 0.06 --reference "$dir/ref.exr"
+  same aov2 aov1
+  grep -q "stopped after [0-9]* samples (--target-error reached)" "$dir/aov1.out" || fail "no target error: $(cat "$dir/aov1.out")"
+  grep -q "error at [0-9]* samples: estimated 0\.0[0-5][0-9]*, measured 0\.0[0-9]*[1-9]" "$dir/aov1.out" ||
+    fail "no error line: $(cat "$dir/aov1.out")"
+  [ "$(wc -l <"$dir/aov1.csv")" -ge 5 ] || fail "too few error rows: $(cat "$dir/aov1.csv")"
+  echo "--aov all, --target-error 0.06, --reference: two devices equal one (image, AOVs, stopping sample, error log)"
+  split dbg2 0,0 -q --spp 24 --chunk-spp 3 --debug albedo
+  split dbg1 "" -q --spp 24 --chunk-spp 3 --debug albedo
+  same dbg2 dbg1
+  echo "--debug albedo: two devices equal one, byte for byte"
+  # what is not merged is refused, by name
+  out=$("$exe" render "${base[@]}" --spp 4 --device 0,0 --profile -o "$dir/profile.exr" 2>&1) &&
+    fail "--profile on two devices was accepted: $out"
+  echo "$out" | grep -q "error: .*--profile/--profile-json: not on several devices" || fail "no --profile refusal: $out"
+  [ -f "$dir/profile.exr" ] && fail "--profile refused, yet an image was written"
+  echo "--profile on two devices: refused by name"
   exit 0
 fi
 
@@ -43,17 +89,98 @@ export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
 # every job bounded: a hang fails the section it is in, with its log
 mpi=(timeout -k 5 120 mpirun --oversubscribe -np 2)
 
+if [ "$mode" = heartbeat ]; then
+  # A worker rank that hangs, or dies without a launcher that ends the job:
+  # rank 0 notices within --rank-timeout, hands its chunks out again (its
+  # own device takes them) and finishes the image, the same as 1 process
+  # byte for byte (the merge is in chunk order, whoever rendered a chunk).
+  hb=(--width 48 --height 48 --max-bounces 4 --seed 9 --aov variance --spp 96 --chunk-spp 2)
+  "$exe" render "${hb[@]}" -q -o "$dir/process.exr" >/dev/null 2>&1 || fail "1 process failed"
+  lostCheck() {  # $1: the case, $2: the job's exit status, $3: "held" if rank 1 surely held a chunk
+    [ "$2" -eq 124 ] && fail "$1: rank 0 still waited 60 s after rank 1 stopped: $(cat "$dir/$1.log")"
+    [ "$2" -eq 0 ] || fail "$1: exit status $2: $(cat "$dir/$1.log")"
+    # silent, or (killed) a receive from it that failed or stopped mid-message
+    grep -Eq "warning: rank 1 (showed no progress for [0-9.]* s \(--rank-timeout 1\)|failed while sending|stopped sending)" \
+      "$dir/$1.log" ||
+      fail "$1: no message naming rank 1: $(cat "$dir/$1.log")"
+    [ "${3:-}" != held ] || grep -q "its chunks [0-9]* (samples [0-9]*-[0-9]*).* were handed out again" "$dir/$1.log" ||
+      fail "$1: rank 1 held no chunk (nothing to hand out again): $(cat "$dir/$1.log")"
+    cmp "$dir/$1.exr" "$dir/process.exr" || fail "$1: the image differs from 1 process"
+  }
+  # rank 1's main thread stops talking once it holds a chunk (a hung process)
+  start=$SECONDS
+  WT_TEST_STALL=1:process timeout -k 5 60 mpirun --oversubscribe -np 2 "$exe" render "${hb[@]}" -q --rank-timeout 1 \
+    -o "$dir/hung.exr" >"$dir/hung.log" 2>&1
+  lostCheck hung $? held
+  echo "rank 1 hung holding a chunk: rank 0 finished without it in $((SECONDS - start)) s, the image equals 1 process"
+  # rank 1's device hangs on its chunk while its heartbeat goes on: no progress
+  start=$SECONDS
+  WT_TEST_STALL=1:device timeout -k 5 60 mpirun --oversubscribe -np 2 "$exe" render "${hb[@]}" -q --rank-timeout 1 \
+    -o "$dir/device.exr" >"$dir/device.log" 2>&1
+  lostCheck device $? held
+  echo "rank 1's device hung (heartbeats without progress): finished without it in $((SECONDS - start)) s, equal"
+  # rank 1 killed under a launcher that lets the job go on (--enable-recovery)
+  start=$SECONDS
+  rm -f "$dir/killed.exr.wtckpt"
+  timeout -k 5 60 mpirun --oversubscribe --enable-recovery -np 2 "$exe" render "${hb[@]}" -q --rank-timeout 1 \
+    --checkpoint 0.1 -o "$dir/killed.exr" >"$dir/killed.log" 2>&1 &
+  job=$!
+  for _ in $(seq 600); do
+    [ -f "$dir/killed.exr.wtckpt" ] && break
+    kill -0 $job 2>/dev/null || fail "killed: the job exited before its first checkpoint: $(cat "$dir/killed.log")"
+    sleep 0.05
+  done
+  rank1=""
+  for p in $(pgrep -P "$(pgrep -P $job | tr '\n' ',' | sed 's/,$//')"); do
+    tr '\0' '\n' <"/proc/$p/environ" 2>/dev/null | grep -qx "OMPI_COMM_WORLD_RANK=1" && rank1=$p
+  done
+  [ -n "$rank1" ] || fail "killed: rank 1's process not found: $(cat "$dir/killed.log")"
+  kill -9 "$rank1"
+  wait $job
+  lostCheck killed $?
+  echo "rank 1 killed (mpirun --enable-recovery): finished without it in $((SECONDS - start)) s, equal"
+  # rank 1 hangs before it has started: rank 0 names it and ends the job
+  start=$SECONDS
+  WT_TEST_STALL=1:startup timeout -k 5 60 mpirun --oversubscribe -np 2 "$exe" render "${hb[@]}" -q --rank-timeout 1 \
+    -o "$dir/startup.exr" >"$dir/startup.log" 2>&1
+  status=$?
+  [ $status -eq 124 ] && fail "startup: rank 0 still waited 60 s for rank 1 to start: $(cat "$dir/startup.log")"
+  [ $status -ne 0 ] || fail "startup: the job exited 0 without rank 1"
+  grep -q "error: the job could not start: rank 1 had not finished starting 1 s after rank 0 (--rank-timeout)" \
+    "$dir/startup.log" || fail "startup: no message naming rank 1: $(cat "$dir/startup.log")"
+  [ -f "$dir/startup.exr" ] && fail "startup: an image was written"
+  echo "rank 1 hung while starting: the job ended in $((SECONDS - start)) s naming it"
+  exit 0
+fi
+
 # --- 2 ranks vs 1 process ---------------------------------------------------
 # enough work (16 chunks of about 30 ms each) that rank 1, started with rank 0,
 # gets chunks even when the machine is busy
-big=(--width 64 --height 64 --max-bounces 4 --seed 9 --aov variance)
+big=(--width 64 --height 64 --max-bounces 4 --seed 9 --aov all)
 "${mpi[@]}" "$exe" render "${big[@]}" -v --spp 64 --chunk-spp 4 -o "$dir/ranks.exr" >"$dir/ranks.log" 2>&1 ||
   fail "2 ranks (exit status $?): $(cat "$dir/ranks.log")"
 grep -q "2 ranks, on device" "$dir/ranks.log" || fail "not 2 ranks: $(cat "$dir/ranks.log")"
 grep -q "chunks by rank: [1-9][0-9]*, [1-9]" "$dir/ranks.log" || fail "a rank rendered no chunk: $(cat "$dir/ranks.log")"
 "$exe" render "${big[@]}" -q --spp 64 --chunk-spp 4 -o "$dir/process.exr" >/dev/null 2>&1 || fail "1 process failed"
-cmp "$dir/ranks.exr" "$dir/process.exr" || fail "2 ranks differ from 1 process"
-echo "2 ranks equal 1 process, byte for byte (variance layer included) (at ${SECONDS} s)"
+cmp "$dir/ranks.exr" "$dir/process.exr" || fail "2 ranks differ from 1 process (every AOV layer compared)"
+echo "2 ranks equal 1 process, byte for byte (every AOV layer included) (at ${SECONDS} s)"
+
+# --- --target-error and --reference on 2 ranks ---------------------------------
+# rank 1's chunks that arrive after the boundary that met the target are dropped
+"$exe" render --width 24 --height 16 --max-bounces 4 --seed 77 --spp 512 -q -o "$dir/ref.exr" >/dev/null 2>&1 ||
+  fail "reference render failed"
+te=(--chunk-spp 2 --aov all --target-error 0.06 --reference "$dir/ref.exr" --error-log)
+"${mpi[@]}" "$exe" render "${base[@]}" "${te[@]}" "$dir/te-ranks.csv" -o "$dir/te-ranks.exr" >"$dir/te-ranks.log" 2>&1 ||
+  fail "2 ranks with --target-error (exit status $?): $(cat "$dir/te-ranks.log")"
+"$exe" render "${base[@]}" "${te[@]}" "$dir/te-process.csv" -o "$dir/te-process.exr" >"$dir/te-process.log" 2>&1 ||
+  fail "1 process with --target-error: $(cat "$dir/te-process.log")"
+cmp "$dir/te-ranks.exr" "$dir/te-process.exr" || fail "--target-error: 2 ranks differ from 1 process"
+stopped=$(grep -o "stopped after [0-9]* samples (--target-error reached)" "$dir/te-process.log")
+[ -n "$stopped" ] || fail "--target-error not reached: $(cat "$dir/te-process.log")"
+grep -q "$stopped" "$dir/te-ranks.log" || fail "2 ranks stopped elsewhere: $(cat "$dir/te-ranks.log")"
+cmp <(cut -d, -f1,3- "$dir/te-ranks.csv") <(cut -d, -f1,3- "$dir/te-process.csv") ||
+  fail "--reference: 2 ranks log other errors: $(cat "$dir/te-ranks.csv" "$dir/te-process.csv")"
+echo "--target-error 0.06 and --reference on 2 ranks: $stopped, image and error log equal 1 process (at ${SECONDS} s)"
 
 # --- rank 1 killed mid-render -------------------------------------------------
 dbl=(--width 24 --height 16 --max-bounces 4 --seed 9 --accumulation double --chunk-spp 2)

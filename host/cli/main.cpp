@@ -157,6 +157,7 @@ struct RenderOptions {
   bool resume = false;
   int chunkSpp = 0;    ///< --chunk-spp; 0: defaultChunkSpp
   bool chunkSppGiven = false;
+  double rankTimeout = wt::ScaleOutOptions::kDefaultRankTimeout;  ///< --rank-timeout
   std::string aov;     ///< --aov: names, comma-separated, or "all"
   std::string aovOut;  ///< --aov-out: folder for one EXR per AOV
   std::string debug;   ///< --debug: a view (output/debug_view.h)
@@ -608,6 +609,7 @@ int runScaleOutRender(RenderOptions options, wt::MpiWorld& world) {
   wt::RenderSettings settings;
   std::vector<wt::CheckpointField> identity;
   std::optional<wt::Moments> start;
+  std::optional<wt::Image> reference;
   const std::filesystem::path checkpointPath = wt::checkpointPathFor(options.outputs.front());
   std::string setupError;
   wt::Fnv64 renderHash;
@@ -617,13 +619,19 @@ int runScaleOutRender(RenderOptions options, wt::MpiWorld& world) {
     if (root)
       for (const std::string& out : options.outputs) wt::checkWritable(out);
     parseAovOptions(options);
-    // what is merged is the image's accumulation only
-    if (options.settings.aovs)
-      throw std::invalid_argument("--aov/--debug: not on several devices or ranks yet (only the image is merged)");
-    if (!options.reference.empty()) throw std::invalid_argument("--reference: not on several devices or ranks");
-    if (options.targetError > 0.0) throw std::invalid_argument("--target-error: not on several devices or ranks yet");
+    // the stage times are per device queue; a split render has one per device and rank
+    if (options.profile || !options.profileJson.empty())
+      throw std::invalid_argument("--profile/--profile-json: not on several devices or ranks, nor with --chunk-spp "
+                                  "(profile a one-device render)");
     loaded = loadRenderScene(options);
     settings = renderSettings(options);
+    if (root && !options.reference.empty()) {
+      reference = wt::readExr(options.reference);
+      if (reference->width != settings.width || reference->height != settings.height)
+        throw std::invalid_argument(options.reference + ": reference is " + std::to_string(reference->width) + "x" +
+                                    std::to_string(reference->height) + ", the render " +
+                                    std::to_string(settings.width) + "x" + std::to_string(settings.height));
+    }
     const std::vector<wt::DeviceInfo> infos = wt::selectDevices(options.device);
     for (std::size_t d = 0; d < infos.size(); ++d) {
       devices.contexts.push_back(std::make_unique<wt::Context>(infos[d]));
@@ -639,13 +647,13 @@ int runScaleOutRender(RenderOptions options, wt::MpiWorld& world) {
       start = wt::momentsFromAccumulation(saved.accumulation, settings.accumulation, 0);
       wt::log::info("resumed from " + checkpointPath.string() + " at " + std::to_string(start->sampleEnd) + " samples");
     } else {
-      start = wt::emptyMoments(pixels, 0);
+      start = wt::emptyMoments(pixels, 0, settings.aovs);
     }
   } catch (const std::exception& e) {
     setupError = e.what();
   }
   try {
-    world.agreeOnStart(setupError, renderHash.value());
+    world.agreeOnStart(setupError, renderHash.value(), options.rankTimeout);
   } catch (const std::exception& e) {
     if (!root) return 1;  // rank 0 reports every rank's failure
     throw;
@@ -655,13 +663,14 @@ int runScaleOutRender(RenderOptions options, wt::MpiWorld& world) {
   std::signal(SIGINT, onInterrupt);
   std::signal(SIGTERM, onInterrupt);
   const std::function<bool()> interrupted = [] { return g_interrupted.load(); };
-  if (!root) return wt::serveRender(devices, world, interrupted);
+  if (!root) return wt::serveRender(devices, world, interrupted, wt::heartbeatSeconds(options.rankTimeout));
 
   const wt::Scene& scene = loaded->scene;
   std::string names;
   for (const std::string& n : devices.names) names += (names.empty() ? "" : ", ") + n;
   int spp = options.settings.samplesPerPixel;
-  if (options.timeSeconds > 0.0 && !options.given.spp && !loaded->settings.samplesPerPixel) spp = wt::kUnboundedSamples;
+  if ((options.timeSeconds > 0.0 || options.targetError > 0.0) && !options.given.spp && !loaded->settings.samplesPerPixel)
+    spp = wt::kUnboundedSamples;
   const int chunkSpp = options.chunkSpp > 0 ? options.chunkSpp : wt::defaultChunkSpp(spp);
   wt::log::info("scene " + scene.sourceName + ": " + std::to_string(scene.triangles.size()) + " triangles; " +
                 (world.active() ? std::to_string(world.size()) + " ranks, " : std::string()) + "on " + names +
@@ -675,7 +684,39 @@ int runScaleOutRender(RenderOptions options, wt::MpiWorld& world) {
   run.quiet = options.quiet;
   run.interrupted = interrupted;
   run.checkpointSeconds = options.checkpointSeconds;
+  run.targetError = options.targetError;
+  run.rankTimeoutSeconds = options.rankTimeout;
   const std::size_t pixels = std::size_t(settings.width) * std::size_t(settings.height);
+  // --reference: the error of the merged prefix at the first chunk boundary
+  // at or past 1, 2, 4, ... samples and at the end (the one-device render
+  // logs every power of two; a chunk boundary is where the split has one)
+  std::FILE* errorOut = nullptr;
+  struct CloseLog {
+    std::FILE*& f;
+    ~CloseLog() {
+      if (f && f != stdout) std::fclose(f);
+    }
+  } closeLog{errorOut};
+  int nextLogged = 1, lastLogged = 0;
+  const auto renderStart = std::chrono::steady_clock::now();
+  auto logError = [&](const wt::Moments& m) {
+    const wt::ImageError e = wt::imageError(wt::imageFromMoments(m, settings.width, settings.height), *reference);
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - renderStart).count();
+    std::fprintf(errorOut, "%d,%.6f,%.8g,%.8g,%.8g,%.8g,%.6f\n", m.sampleEnd, seconds, e.rmse, e.relMse, e.relMseRaw,
+                 e.p99, e.meanRatio);
+    std::fflush(errorOut);
+    lastLogged = m.sampleEnd;
+  };
+  if (reference) {
+    errorOut = options.errorLog.empty() ? stdout : std::fopen(options.errorLog.c_str(), "w");
+    if (!errorOut) throw std::runtime_error(options.errorLog + ": cannot write the error log");
+    std::fprintf(errorOut, "samples,seconds,rmse,relmse,relmse_raw,p99,mean_ratio\n");
+    run.merged = [&](const wt::Moments& m) {
+      if (m.sampleEnd < nextLogged && m.sampleEnd != spp) return;
+      logError(m);
+      while (nextLogged <= m.sampleEnd) nextLogged *= 2;
+    };
+  }
   auto saveCheckpoint = [&](const wt::Moments& m) {
     wt::Checkpoint c;
     c.identity = identity;
@@ -727,9 +768,24 @@ int runScaleOutRender(RenderOptions options, wt::MpiWorld& world) {
                                        std::to_string(result.receiveSeconds) + " s; chunks by rank: " + byRank
                                  : std::string()));
   if (result.failure.empty() && !result.interrupted && done > 0) {
-    const char* why = result.reason == wt::HaltReason::Time ? "--time budget reached" : "--spp reached";
+    const char* why = result.reason == wt::HaltReason::Time          ? "--time budget reached"
+                      : result.reason == wt::HaltReason::TargetError ? "--target-error reached"
+                                                                     : "--spp reached";
     std::printf("stopped after %d samples (%s), %s of rendering\n", done, why,
                 wt::formatDuration(result.seconds).c_str());
+    if (options.targetError > 0.0 || reference) {
+      // the estimate of the merged image (the one-device render's line)
+      const wt::Image merged = wt::imageFromMoments(result.merged, settings.width, settings.height);
+      const double estimate =
+          result.lastErrorSamples == done ? result.lastError : std::sqrt(wt::estimatedRelMse(merged));
+      if (reference && lastLogged != done) logError(result.merged);  // the last row, before the line (both may go to stdout)
+      std::printf("error at %d samples: estimated %.5f", done, estimate);
+      if (reference) {
+        wt::ImageError e = wt::imageError(merged, *reference);
+        std::printf(", measured %.5f against %s", std::sqrt(std::max(0.0, e.relMse)), options.reference.c_str());
+      }
+      std::printf(" (relative RMS error of the pixel means)\n");
+    }
     std::fflush(stdout);
   }
 
@@ -738,6 +794,7 @@ int runScaleOutRender(RenderOptions options, wt::MpiWorld& world) {
     wt::Renderer& out = *devices.renderers.front();
     out.restoreAccumulation(wt::accumulationFromMoments(result.merged, settings.accumulation));
     wt::Image image = out.readImage();
+    wt::applyDebugView(image, options.debugView);
     writeOutputs(options, image);
     if (result.merged.nonFiniteSamples > 0)
       wt::log::warnOnce(std::to_string(result.merged.nonFiniteSamples) + " NaN/Inf samples discarded");
@@ -768,6 +825,13 @@ int runScaleOutRender(RenderOptions options, wt::MpiWorld& world) {
                    kept);
     if (world.active()) world.abort(130);
     return 130;
+  }
+  if (!result.lostRanks.empty()) {
+    // the image is whole (the lost ranks' chunks were rendered again); the
+    // lost ranks may still run or hang, and MPI_Finalize would wait for them
+    wt::log::info("finished without " + std::to_string(result.lostRanks.size()) +
+                  " lost rank(s); ending the job (the image is complete)");
+    world.abort(0);
   }
   return 0;
 }
@@ -932,7 +996,7 @@ void groupRenderOptions(CLI::App* cmd) {
        {"--time", "--target-error", "--reference", "--error-log", "--checkpoint", "--resume"}},
       {"AOVs and debugging", {"--aov", "--aov-out", "--debug", "--stop-on-nan"}},
       {"Device, BVH and kernels",
-       {"--device", "--chunk-spp", "--bvh", "--instancing", "--traversal", "--packet-width", "--kernel-dir", "--kernel-cache",
+       {"--device", "--chunk-spp", "--rank-timeout", "--bvh", "--instancing", "--traversal", "--packet-width", "--kernel-dir", "--kernel-cache",
         "--general-program"}},
       {"Messages and profiling", {"--quiet", "--verbose", "--profile", "--profile-json"}},
   };
@@ -1045,6 +1109,12 @@ int main(int argc, char** argv) {
                         "Samples per chunk when the render is shared over devices or MPI ranks (default: spp/64, "
                         "1 to 64); the image depends on it, not on how many devices or ranks render it")
       ->check(CLI::Range(1, 1 << 20));
+  renderCmd->add_option("--rank-timeout", render.rankTimeout,
+                        "Under MPI: a worker rank that shows no progress for this many seconds (no message, or no "
+                        "sample pass done on the chunk it holds) is lost; its chunks go to the other ranks and the "
+                        "image is finished without it. Must exceed the slowest device's sample pass "
+                        "(docs/scale-out.md, Faults)")
+      ->check(CLI::PositiveNumber)->capture_default_str();
   renderCmd->add_option("--scene-index", render.sceneIndex, "glTF scene to render (default: the file's default scene)")
       ->check(CLI::Range(-1, 1 << 20));
   renderCmd->add_option("--look-from", render.lookFrom, "Camera position X,Y,Z in the file's world coordinates")

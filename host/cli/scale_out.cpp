@@ -2,7 +2,10 @@
 
 #include "core/log.h"
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
+#include <set>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -28,6 +31,8 @@ enum Tag : int {
   kTagResult = 4,    ///< worker -> 0: ResultHeader, then mean, m2 (double) and counts (uint32)
   kTagError = 5,     ///< worker -> 0: a device failed: its message
   kTagFinished = 6,  ///< worker -> 0: all my devices are done and their results sent
+  kTagHeartbeat = 7, ///< worker -> 0: uint64 sample passes its devices have done (a sign of progress)
+  kTagStarted = 8,   ///< worker -> 0: set up (or failed to), about to join the start-up collective
 };
 
 /// The fixed part of a result message.
@@ -42,44 +47,61 @@ static_assert(sizeof(ResultHeader) == 48);
   const std::size_t pixels = r.moments.pixels();
   ResultHeader h{r.chunk.index, r.chunk.firstSample, r.chunk.sampleCount, r.moments.sampleEnd,
                  r.moments.nonFiniteSamples, r.raysTraced, pixels, r.seconds};
-  std::vector<std::uint8_t> bytes(sizeof h + pixels * (6 * sizeof(double) + sizeof(std::uint32_t)));
+  const std::size_t aovBytes = r.moments.hasAovs() ? pixels * (kAovSumBytes + kAovIdBytes) : 0;
+  std::vector<std::uint8_t> bytes(sizeof h + pixels * (6 * sizeof(double) + sizeof(std::uint32_t)) + aovBytes);
   std::uint8_t* p = bytes.data();
   std::memcpy(p, &h, sizeof h), p += sizeof h;
   std::memcpy(p, r.moments.mean.data(), 3 * pixels * sizeof(double)), p += 3 * pixels * sizeof(double);
   std::memcpy(p, r.moments.m2.data(), 3 * pixels * sizeof(double)), p += 3 * pixels * sizeof(double);
-  std::memcpy(p, r.moments.count.data(), pixels * sizeof(std::uint32_t));
+  std::memcpy(p, r.moments.count.data(), pixels * sizeof(std::uint32_t)), p += pixels * sizeof(std::uint32_t);
+  if (aovBytes) {
+    // a chunk's AOV sums are its device's floats: sent as floats, exactly
+    const std::vector<float> sums(r.moments.aovSum.begin(), r.moments.aovSum.end());
+    std::memcpy(p, sums.data(), pixels * kAovSumBytes), p += pixels * kAovSumBytes;
+    std::memcpy(p, r.moments.aovIds.data(), pixels * kAovIdBytes);
+  }
   return bytes;
 }
 
-[[maybe_unused]] ChunkResult unpackResult(const std::vector<std::uint8_t>& bytes, std::size_t expectedPixels) {
+[[maybe_unused]] ChunkResult unpackResult(const std::vector<std::uint8_t>& bytes, std::size_t expectedPixels, bool aovs) {
   ResultHeader h;
   if (bytes.size() < sizeof h) throw std::runtime_error("a result message of " + std::to_string(bytes.size()) + " bytes");
   std::memcpy(&h, bytes.data(), sizeof h);
   const std::size_t pixels = h.pixels;
-  if (pixels != expectedPixels || bytes.size() != sizeof h + pixels * (6 * sizeof(double) + sizeof(std::uint32_t)))
+  const std::size_t aovBytes = aovs ? pixels * (kAovSumBytes + kAovIdBytes) : 0;
+  if (pixels != expectedPixels ||
+      bytes.size() != sizeof h + pixels * (6 * sizeof(double) + sizeof(std::uint32_t)) + aovBytes)
     throw std::runtime_error("a result message of " + std::to_string(bytes.size()) + " bytes for " +
-                             std::to_string(pixels) + " pixels (this image has " + std::to_string(expectedPixels) + ")");
+                             std::to_string(pixels) + " pixels (this image has " + std::to_string(expectedPixels) +
+                             (aovs ? ", with AOVs)" : ")"));
   ChunkResult r;
   r.chunk = {h.index, h.firstSample, h.sampleCount};
   r.raysTraced = h.raysTraced;
   r.seconds = h.seconds;
-  r.moments = emptyMoments(pixels, h.firstSample);
+  r.moments = emptyMoments(pixels, h.firstSample, aovs);
   r.moments.sampleEnd = h.sampleEnd;
   r.moments.nonFiniteSamples = h.nonFiniteSamples;
   const std::uint8_t* p = bytes.data() + sizeof h;
   std::memcpy(r.moments.mean.data(), p, 3 * pixels * sizeof(double)), p += 3 * pixels * sizeof(double);
   std::memcpy(r.moments.m2.data(), p, 3 * pixels * sizeof(double)), p += 3 * pixels * sizeof(double);
-  std::memcpy(r.moments.count.data(), p, pixels * sizeof(std::uint32_t));
+  std::memcpy(r.moments.count.data(), p, pixels * sizeof(std::uint32_t)), p += pixels * sizeof(std::uint32_t);
+  if (aovs) {
+    std::vector<float> sums(16 * pixels);
+    std::memcpy(sums.data(), p, pixels * kAovSumBytes), p += pixels * kAovSumBytes;
+    std::copy(sums.begin(), sums.end(), r.moments.aovSum.begin());
+    std::memcpy(r.moments.aovIds.data(), p, pixels * kAovIdBytes);
+  }
   return r;
 }
 
 /// One thread per device, each counted out when its loop ends.
 class DeviceThreads {
  public:
-  DeviceThreads(DeviceSet& devices, ChunkSource& source, ResultQueue& results, std::atomic<bool>& stop) {
+  DeviceThreads(DeviceSet& devices, ChunkSource& source, ResultQueue& results, std::atomic<bool>& stop,
+                std::atomic<std::uint64_t>* passes = nullptr) {
     for (std::size_t d = 0; d < devices.renderers.size(); ++d)
-      m_threads.emplace_back([&, d] {
-        runDeviceWorker(*devices.renderers[d], source, results, stop, devices.names[d]);
+      m_threads.emplace_back([&, d, passes] {
+        runDeviceWorker(*devices.renderers[d], source, results, stop, devices.names[d], passes);
         ++m_finished;
       });
   }
@@ -137,7 +159,55 @@ class FedSource : public ChunkSource {
   bool m_closed = false;
 };
 
+/// Rank 0's own devices: they take given-back chunks too, so they wait while
+/// chunks are out on other ranks (one may be lost and its chunks given back).
+class ReserveSource : public ChunkSource {
+ public:
+  ReserveSource(ChunkPlan& plan, const std::atomic<bool>& stop) : m_plan(plan), m_stop(stop) {}
+  std::optional<SampleChunk> next() override { return m_plan.nextOrWait(m_stop); }
+
+ private:
+  ChunkPlan& m_plan;
+  const std::atomic<bool>& m_stop;
+};
+
+/// A hidden test hook (tests/cli_scale_out.sh): WT_TEST_STALL="RANK:process"
+/// makes that worker rank's main thread stop talking once it holds its first
+/// chunk (a hung or dead process); "RANK:device" makes its device hang on
+/// its first chunk while the heartbeat goes on (a hung device).
+struct StallHook {
+  bool process = false, device = false;
+  explicit StallHook(int rank) {
+    const char* v = std::getenv("WT_TEST_STALL");
+    if (!v) return;
+    const std::string s(v);
+    const std::size_t colon = s.find(':');
+    if (colon == std::string::npos || std::atoi(s.substr(0, colon).c_str()) != rank) return;
+    process = s.substr(colon + 1) == "process";
+    device = s.substr(colon + 1) == "device";
+  }
+  [[noreturn]] static void forever() {
+    while (true) std::this_thread::sleep_for(std::chrono::seconds(1));
+  }
+};
+
+/// A source whose chunks never get rendered: StallHook's hung device.
+class StalledSource : public ChunkSource {
+ public:
+  explicit StalledSource(ChunkSource& inner) : m_inner(inner) {}
+  std::optional<SampleChunk> next() override {
+    std::optional<SampleChunk> c = m_inner.next();
+    if (c) StallHook::forever();
+    return c;
+  }
+
+ private:
+  ChunkSource& m_inner;
+};
+
 }  // namespace
+
+double heartbeatSeconds(double rankTimeoutSeconds) { return std::clamp(rankTimeoutSeconds / 4.0, 0.01, 1.0); }
 
 // ---------------------------------------------------------------- MpiWorld
 
@@ -180,11 +250,43 @@ void MpiWorld::abort(int code) {
   std::_Exit(code);
 }
 
-void MpiWorld::agreeOnStart(const std::string& error, std::uint64_t renderHash) const {
+void MpiWorld::agreeOnStart(const std::string& error, std::uint64_t renderHash, [[maybe_unused]] double timeoutSeconds) {
 #if WT_MPI
   if (!active()) {
     if (!error.empty()) throw std::runtime_error(error);
     return;
+  }
+  // each worker says it got here before the collective, so that rank 0 can
+  // name a rank that never does (the collective would wait for it forever)
+  if (m_rank != 0) {
+    if (const char* stall = std::getenv("WT_TEST_STALL"); stall && stall == std::to_string(m_rank) + ":startup")
+      StallHook::forever();  // the test hook: a rank hung while starting
+    MPI_Send(nullptr, 0, MPI_INT, 0, kTagStarted, MPI_COMM_WORLD);
+  } else {
+    std::vector<bool> arrived(std::size_t(m_size), false);
+    int missing = m_size - 1;
+    const auto t0 = Clock::now();
+    while (missing > 0) {
+      int flag = 0;
+      MPI_Status status;
+      MPI_Iprobe(MPI_ANY_SOURCE, kTagStarted, MPI_COMM_WORLD, &flag, &status);
+      if (flag) {
+        MPI_Recv(nullptr, 0, MPI_INT, status.MPI_SOURCE, kTagStarted, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+        if (!arrived[std::size_t(status.MPI_SOURCE)]) arrived[std::size_t(status.MPI_SOURCE)] = true, --missing;
+        continue;
+      }
+      if (since(t0) > timeoutSeconds) {
+        std::string names;
+        for (int r = 1; r < m_size; ++r)
+          if (!arrived[std::size_t(r)]) names += (names.empty() ? "" : ", ") + std::to_string(r);
+        char text[160];
+        std::snprintf(text, sizeof text, " had not finished starting %.3g s after rank 0 (--rank-timeout)", timeoutSeconds);
+        log::error("the job could not start: rank" + std::string(missing > 1 ? "s " : " ") + names + text +
+                   "; hung or dead while loading the scene or building its program?");
+        abort(1);  // the others wait in the collective
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
   }
   constexpr int kMessage = 1024;
   std::vector<char> mine(kMessage + 8, 0), all(std::size_t(m_size) * (kMessage + 8));
@@ -217,18 +319,69 @@ ScaleOutResult coordinateRender(DeviceSet& devices, const ScaleOutOptions& optio
   ScaleOutResult result;
   result.chunksByRank.assign(std::size_t(world.size()), 0);
   [[maybe_unused]] const std::size_t pixels = start.pixels();  // checks result messages
+  [[maybe_unused]] const bool aovs = start.hasAovs();
   const int resumed = start.sampleEnd;
   ChunkPlan plan(start.sampleEnd, options.samplesPerPixel, options.chunkSpp);
   OrderedMerge merge(std::move(start));
-  Halting halting({options.samplesPerPixel, options.timeSeconds, 0.0}, resumed);
-  ResultQueue results;
-  PlanSource source(plan);
+  Halting halting({options.samplesPerPixel, options.timeSeconds, options.targetError}, resumed);
   std::atomic<bool> stop{false};
+  // every chunk boundary, in chunk order: the reference log, and the error
+  // estimate for --target-error (on the merged prefix, so the stopping
+  // point does not depend on how many devices or ranks render)
+  merge.onMerged([&](const Moments& m) {
+    if (options.merged) options.merged(m);
+    if (halting.wantsErrorEstimate(m.sampleEnd)) {
+      const Image image = imageFromMoments(m, 1, int(m.pixels()));
+      halting.recordError(m.sampleEnd, std::sqrt(estimatedRelMse(image)), 0.0, 0.0);
+      result.lastError = halting.lastError();
+      result.lastErrorSamples = m.sampleEnd;
+      if (halting.check(m.sampleEnd, 0.0) == HaltReason::TargetError) {
+        result.reason = HaltReason::TargetError;
+        plan.cancel();
+        stop = true;  // this process's devices drop the chunks they hold
+        return false;
+      }
+    }
+    return true;
+  });
+  ResultQueue results;
+  ReserveSource source(plan, stop);
   const auto t0 = Clock::now();
   auto lastReport = t0, lastCheckpoint = t0;
   int checkpointed = resumed;
   const bool tty = isatty(STDERR_FILENO);
   int remoteActive = world.size() - 1;
+
+  // what rank 0 knows of each worker rank (the heartbeat's bookkeeping)
+  struct RankState {
+    bool lost = false, finished = false;
+    Clock::time_point lastProgress;  ///< the last message that showed progress
+    std::uint64_t passes = 0;        ///< its heartbeat's pass count
+    std::set<int> chunks;            ///< chunks assigned to it, not yet returned
+  };
+  std::vector<RankState> ranks(std::size_t(world.size()));
+  for (RankState& r : ranks) r.lastProgress = t0;
+  [[maybe_unused]] std::vector<std::vector<std::uint8_t>> abandoned;  // buffers of receives cancelled from lost ranks
+  // a silent rank: its chunks go back to the plan, for the others (rank 0's
+  // own devices wait for them); whatever it sends later is dropped
+  [[maybe_unused]] auto loseRank = [&](int rank, const std::string& why) {
+    RankState& st = ranks[std::size_t(rank)];
+    if (st.lost) return;
+    st.lost = true;
+    if (!st.finished) --remoteActive;
+    std::string held;
+    for (int c : st.chunks) {
+      const SampleChunk chunk = plan.chunk(c);
+      held += (held.empty() ? "" : ", ") + std::to_string(c) + " (samples " + std::to_string(chunk.firstSample) + "-" +
+              std::to_string(chunk.firstSample + chunk.sampleCount - 1) + ")";
+      plan.giveBack(c);
+    }
+    const std::string message = "rank " + std::to_string(rank) + " " + why +
+                                (held.empty() ? "; it held no chunk" : "; its chunks " + held + " were handed out again");
+    result.lostRanks.push_back(message);
+    log::warnOnce(message);
+    st.chunks.clear();
+  };
 
   auto progress = [&](bool last) {
     const int done = merge.samplesDone(), rendered = done - resumed;
@@ -243,13 +396,14 @@ ScaleOutResult coordinateRender(DeviceSet& devices, const ScaleOutOptions& optio
     if (!r.error.empty()) {
       if (result.failure.empty())
         result.failure = world.active() ? "rank " + std::to_string(rank) + ", " + r.error : r.error;
-      plan.close();
+      plan.cancel();
       return;
     }
     result.raysTraced += r.raysTraced;
     if (local) result.localOverheadSeconds += r.overheadSeconds, ++result.localChunks;
     ++result.chunksByRank[std::size_t(rank)];
-    merge.add(r.chunk.index, std::move(r.moments));
+    merge.add(r.chunk.index, std::move(r.moments));  // false: a duplicate, or after the target error
+    plan.complete(r.chunk.index);
   };
 
   DeviceThreads threads(devices, source, results, stop);
@@ -258,46 +412,71 @@ ScaleOutResult coordinateRender(DeviceSet& devices, const ScaleOutOptions& optio
     while (std::optional<ChunkResult> r = results.pop(0.0)) take(std::move(*r), 0, true), busy = true;
 #if WT_MPI
     // a bounded batch: the checks below (signal, time, checkpoint) must not starve
+    bool drained = !world.active();
     for (int flag = 1, batch = 0; world.active() && flag && batch < 16; ++batch) {
       MPI_Status status;
       MPI_Iprobe(MPI_ANY_SOURCE, MPI_ANY_TAG, MPI_COMM_WORLD, &flag, &status);
-      if (!flag) break;
+      if (!flag) {
+        drained = true;
+        break;
+      }
       busy = true;
       int bytes = 0;
       MPI_Get_count(&status, MPI_BYTE, &bytes);
       const auto receiveStart = Clock::now();
       std::vector<std::uint8_t> message(std::size_t(std::max(bytes, 0)));
       const int from = status.MPI_SOURCE;
+      RankState& sender = ranks[std::size_t(from)];
       // polled, not blocking: a rank that dies mid-message must not hold rank 0
-      // past the signal mpirun then sends (a blocking receive never returns)
+      // past the signal mpirun then sends, nor past the rank timeout
       MPI_Request request;
       int received = 0;
-      bool lost = MPI_Irecv(message.data(), bytes, MPI_BYTE, from, status.MPI_TAG, MPI_COMM_WORLD, &request) != MPI_SUCCESS;
-      while (!lost && !received) {
-        lost = MPI_Test(&request, &received, MPI_STATUS_IGNORE) != MPI_SUCCESS ||
-               (options.interrupted && options.interrupted());
-        if (!received) std::this_thread::yield();
+      bool failed = MPI_Irecv(message.data(), bytes, MPI_BYTE, from, status.MPI_TAG, MPI_COMM_WORLD, &request) != MPI_SUCCESS;
+      bool timedOut = false, interrupted = false;
+      while (!failed && !received && !timedOut && !interrupted) {
+        failed = MPI_Test(&request, &received, MPI_STATUS_IGNORE) != MPI_SUCCESS;
+        if (received || failed) break;
+        timedOut = since(receiveStart) > options.rankTimeoutSeconds;
+        interrupted = options.interrupted && options.interrupted();
+        std::this_thread::yield();
       }
-      if (lost) {
-        if (!(options.interrupted && options.interrupted()))
-          throw std::runtime_error("receiving a message from rank " + std::to_string(from) + " failed");
-        break;  // the interrupt is handled below
+      if (interrupted) break;  // handled below
+      if (timedOut || failed) {
+        // a rank that died mid-message (under a launcher that lets the job
+        // go on, the receive fails) or stopped sending: lost, not the job
+        if (timedOut) {
+          MPI_Cancel(&request);
+          MPI_Request_free(&request);
+        }
+        abandoned.push_back(std::move(message));  // MPI may still write into it
+        char why[160];
+        if (timedOut)
+          std::snprintf(why, sizeof why, "stopped sending a %d-byte message for %.3g s (--rank-timeout)", bytes,
+                        options.rankTimeoutSeconds);
+        else
+          std::snprintf(why, sizeof why, "failed while sending a %d-byte message (it died?)", bytes);
+        loseRank(from, why);
+        continue;
       }
+      if (sender.lost) continue;  // too late: its chunks went to the others
+      if (status.MPI_TAG != kTagHeartbeat) sender.lastProgress = Clock::now();
       switch (status.MPI_TAG) {
         case kTagRequest: {
           std::optional<SampleChunk> c = plan.next();
           if (c) {
             const int assign[3] = {c->index, c->firstSample, c->sampleCount};
             MPI_Send(assign, 3, MPI_INT, from, kTagAssign, MPI_COMM_WORLD);
+            sender.chunks.insert(c->index);
           } else {
             MPI_Send(nullptr, 0, MPI_INT, from, kTagStop, MPI_COMM_WORLD);
           }
           break;
         }
         case kTagResult: {
-          ChunkResult r = unpackResult(message, pixels);
+          ChunkResult r = unpackResult(message, pixels, aovs);
           result.receiveSeconds += since(receiveStart);
           result.bytesReceived += std::uint64_t(bytes);
+          sender.chunks.erase(r.chunk.index);
           take(std::move(r), from, false);
           break;
         }
@@ -307,10 +486,35 @@ ScaleOutResult coordinateRender(DeviceSet& devices, const ScaleOutOptions& optio
           take(std::move(r), from, false);
           break;
         }
-        case kTagFinished: --remoteActive; break;
+        case kTagFinished:
+          sender.finished = true;
+          --remoteActive;
+          break;
+        case kTagHeartbeat: {
+          std::uint64_t passes = 0;
+          if (message.size() == sizeof passes) std::memcpy(&passes, message.data(), sizeof passes);
+          // alive and idle, or a pass further on its chunks
+          if (passes != sender.passes || sender.chunks.empty()) sender.lastProgress = Clock::now();
+          sender.passes = passes;
+          break;
+        }
         default: break;
       }
     }
+    // only with every waiting message taken: heartbeats that queued while this
+    // thread was busy (merging, receiving a large result) count
+    if (drained)
+      for (int r = 1; r < world.size(); ++r) {
+        RankState& st = ranks[std::size_t(r)];
+        const double silent = since(st.lastProgress);
+        if (!st.lost && !st.finished && silent > options.rankTimeoutSeconds) {
+          char why[160];
+          std::snprintf(why, sizeof why, "showed no progress for %.3g s (--rank-timeout %g)%s", silent,
+                        options.rankTimeoutSeconds,
+                        st.chunks.empty() ? "" : ": no message, or heartbeats with no sample pass done");
+          loseRank(r, why);
+        }
+      }
 #endif
     if (options.interrupted && options.interrupted()) {
       // under mpirun also what a dying rank brings: mpirun stops the job
@@ -321,7 +525,7 @@ ScaleOutResult coordinateRender(DeviceSet& devices, const ScaleOutOptions& optio
     if (result.reason == HaltReason::None) {
       const HaltReason why = halting.check(merge.samplesDone(), elapsed);
       if (why == HaltReason::Time) plan.close();
-      if (why != HaltReason::None) result.reason = why;
+      if (why == HaltReason::Time || why == HaltReason::Samples) result.reason = why;
     }
     if (options.checkpoint && options.checkpointSeconds > 0.0 && since(lastCheckpoint) >= options.checkpointSeconds &&
         merge.samplesDone() > checkpointed) {
@@ -342,7 +546,7 @@ ScaleOutResult coordinateRender(DeviceSet& devices, const ScaleOutOptions& optio
     break;
   }
   stop = true;
-  plan.close();
+  plan.cancel();
   threads.join();
   result.seconds = since(t0);
   result.mergeSeconds = merge.mergeSeconds();
@@ -359,14 +563,19 @@ ScaleOutResult coordinateRender(DeviceSet& devices, const ScaleOutOptions& optio
 // ---------------------------------------------------------------- ranks > 0
 
 int serveRender([[maybe_unused]] DeviceSet& devices, [[maybe_unused]] const MpiWorld& world,
-                [[maybe_unused]] const std::function<bool()>& interrupted) {
+                [[maybe_unused]] const std::function<bool()>& interrupted, [[maybe_unused]] double heartbeatSeconds) {
 #if WT_MPI
-  FedSource source;
+  FedSource fed;
+  const StallHook stall(world.rank());
+  StalledSource stalled(fed);
+  ChunkSource& source = stall.device ? static_cast<ChunkSource&>(stalled) : fed;
   ResultQueue results;
   std::atomic<bool> stop{false};
-  int requested = 0, status = 0;
+  std::atomic<std::uint64_t> passes{0};
+  int requested = 0, status = 0, supplied = 0;
   bool stopped = false;
-  DeviceThreads threads(devices, source, results, stop);
+  DeviceThreads threads(devices, source, results, stop, &passes);
+  auto lastBeat = Clock::now();
   // every finished chunk (or a device's error) to rank 0
   auto sendResults = [&] {
     while (std::optional<ChunkResult> r = results.pop(0.0)) {
@@ -382,7 +591,7 @@ int serveRender([[maybe_unused]] DeviceSet& devices, [[maybe_unused]] const MpiW
   while (true) {
     // results before requests: rank 0 merges a device's chunk before handing it the next
     sendResults();
-    for (int n = stopped ? 0 : source.wanting(requested); n > 0; --n, ++requested)
+    for (int n = stopped ? 0 : fed.wanting(requested); n > 0; --n, ++requested)
       MPI_Send(nullptr, 0, MPI_INT, 0, kTagRequest, MPI_COMM_WORLD);
     int flag = 1;
     bool busy = false;
@@ -395,13 +604,21 @@ int serveRender([[maybe_unused]] DeviceSet& devices, [[maybe_unused]] const MpiW
       MPI_Recv(assign, 3, MPI_INT, 0, st.MPI_TAG, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
       --requested;
       if (st.MPI_TAG == kTagAssign && !stopped)
-        source.supply({assign[0], assign[1], assign[2]});
+        fed.supply({assign[0], assign[1], assign[2]}), ++supplied;
       else if (st.MPI_TAG == kTagStop)
-        stopped = true, source.close();
+        stopped = true, fed.close();
+    }
+    if (stall.process && supplied > 0) StallHook::forever();
+    // the sample passes done so far: rank 0 takes a count that stands still
+    // while this rank holds a chunk for a hang (--rank-timeout)
+    if (since(lastBeat) >= heartbeatSeconds) {
+      const std::uint64_t done = passes.load();
+      MPI_Send(&done, int(sizeof done), MPI_BYTE, 0, kTagHeartbeat, MPI_COMM_WORLD);
+      lastBeat = Clock::now();
     }
     if (interrupted && interrupted()) {
       stop = true;
-      source.close();
+      fed.close();
       threads.join();
       return 130;
     }
@@ -410,7 +627,7 @@ int serveRender([[maybe_unused]] DeviceSet& devices, [[maybe_unused]] const MpiW
       break;
     }
     // a device that failed ends its own loop; the others stop asking too
-    if (status != 0 && !stopped) stopped = true, source.close();
+    if (status != 0 && !stopped) stopped = true, fed.close();
     if (!busy) std::this_thread::sleep_for(std::chrono::milliseconds(1));
   }
   threads.join();

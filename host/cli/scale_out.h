@@ -34,7 +34,9 @@ class MpiWorld {
   /// what it will render; all return normally only if every rank started
   /// and all hashes agree, else every rank throws. Rank 0's exception names
   /// each failed rank and its message; the others' is empty (rank 0 reports).
-  void agreeOnStart(const std::string& error, std::uint64_t renderHash) const;
+  /// A rank that has not reached this point `timeoutSeconds` after rank 0
+  /// did (hung while loading, or dead) makes rank 0 name it and end the job.
+  void agreeOnStart(const std::string& error, std::uint64_t renderHash, double timeoutSeconds = 120.0);
   static bool builtWithMpi();
 
  private:
@@ -57,7 +59,20 @@ struct ScaleOutOptions {
   double checkpointSeconds = 0.0;  ///< call `checkpoint` this often with the merged prefix; 0: never
   std::function<void(const Moments&)> checkpoint;
   std::function<bool()> interrupted;  ///< a signal asked the job to stop
+  double targetError = 0.0;  ///< stop at the first chunk boundary whose merged estimate meets it; 0: none
+  /// Called with the merged prefix after each chunk merged, in chunk order
+  /// (--reference's error log).
+  std::function<void(const Moments&)> merged;
+  /// A worker rank that shows no progress for this long (no message, or
+  /// heartbeats whose pass count stands still while it holds a chunk) is
+  /// lost: its chunks go to the others (--rank-timeout).
+  double rankTimeoutSeconds = kDefaultRankTimeout;
+  static constexpr double kDefaultRankTimeout = 120.0;
 };
+
+/// How often a worker rank sends its heartbeat for a rank timeout: four
+/// beats per timeout, at most one a second.
+double heartbeatSeconds(double rankTimeoutSeconds);
 
 struct ScaleOutResult {
   Moments merged;            ///< the merged prefix of the samples
@@ -73,6 +88,11 @@ struct ScaleOutResult {
   std::uint64_t raysTraced = 0;
   int chunks = 0;            ///< chunks merged
   std::vector<int> chunksByRank;  ///< chunks each rank rendered (this process: all, in-process)
+  /// Worker ranks lost to --rank-timeout, each "rank N: why" (their chunks
+  /// were rendered again by the others; the ranks are still running, or hung).
+  std::vector<std::string> lostRanks;
+  double lastError = -1.0;   ///< with a target error: the last estimate, and its sample count
+  int lastErrorSamples = 0;
 };
 
 /// Rank 0 (or the only process): hand out the chunks of
@@ -82,8 +102,10 @@ struct ScaleOutResult {
 ScaleOutResult coordinateRender(DeviceSet& devices, const ScaleOutOptions& options, Moments start,
                                 const MpiWorld& world);
 
-/// A rank other than 0: render the chunks rank 0 sends until it says stop.
+/// A rank other than 0: render the chunks rank 0 sends until it says stop,
+/// with a heartbeat (its sample-pass count) every `heartbeatSeconds`.
 /// Returns non-zero after a local failure (reported to rank 0).
-int serveRender(DeviceSet& devices, const MpiWorld& world, const std::function<bool()>& interrupted);
+int serveRender(DeviceSet& devices, const MpiWorld& world, const std::function<bool()>& interrupted,
+                double heartbeatSeconds);
 
 }  // namespace wt

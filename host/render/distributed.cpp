@@ -18,12 +18,16 @@ namespace {
 
 }  // namespace
 
-Moments emptyMoments(std::size_t pixels, int firstSample) {
+Moments emptyMoments(std::size_t pixels, int firstSample, bool aovs) {
   Moments m;
   m.firstSample = m.sampleEnd = firstSample;
   m.mean.assign(3 * pixels, 0.0);
   m.m2.assign(3 * pixels, 0.0);
   m.count.assign(pixels, 0u);
+  if (aovs) {
+    m.aovSum.assign(16 * pixels, 0.0);
+    m.aovIds.assign(4 * pixels, 0xffffffffu);  // Aovs::kNoId until sample 0 is merged
+  }
   return m;
 }
 
@@ -32,10 +36,19 @@ Moments momentsFromAccumulation(const Accumulation& a, std::uint32_t mode, int f
   if (a.state.size() != pixels * kAccumulationStateBytes)
     throw std::invalid_argument("accumulation state of " + std::to_string(a.state.size()) + " bytes for " +
                                 std::to_string(pixels) + " pixels");
-  Moments m = emptyMoments(pixels, firstSample);
+  if (!a.aovs.empty() && a.aovs.size() != pixels * (kAovSumBytes + kAovIdBytes))
+    throw std::invalid_argument("AOV accumulation of " + std::to_string(a.aovs.size()) + " bytes for " +
+                                std::to_string(pixels) + " pixels");
+  Moments m = emptyMoments(pixels, firstSample, !a.aovs.empty());
   m.sampleEnd = a.samplesDone;
   m.nonFiniteSamples = a.nonFiniteSamples;
   m.count = a.samples;
+  if (!a.aovs.empty()) {
+    std::vector<float> sums(16 * pixels);
+    std::memcpy(sums.data(), a.aovs.data(), pixels * kAovSumBytes);
+    std::copy(sums.begin(), sums.end(), m.aovSum.begin());
+    std::memcpy(m.aovIds.data(), a.aovs.data() + pixels * kAovSumBytes, pixels * kAovIdBytes);
+  }
   for (std::size_t i = 0; i < pixels; ++i) {
     const std::uint8_t* s = a.state.data() + i * kAccumulationStateBytes;
     if (mode == WT_ACCUMULATE_DOUBLE) {
@@ -63,6 +76,13 @@ Accumulation accumulationFromMoments(const Moments& m, std::uint32_t mode) {
   a.nonFiniteSamples = m.nonFiniteSamples;
   a.samples = m.count;
   a.state.assign(pixels * kAccumulationStateBytes, 0u);
+  if (m.hasAovs()) {
+    // the device holds float sums: one rounding of the double sums
+    std::vector<float> sums(m.aovSum.begin(), m.aovSum.end());
+    a.aovs.resize(pixels * (kAovSumBytes + kAovIdBytes));
+    std::memcpy(a.aovs.data(), sums.data(), pixels * kAovSumBytes);
+    std::memcpy(a.aovs.data() + pixels * kAovSumBytes, m.aovIds.data(), pixels * kAovIdBytes);
+  }
   for (std::size_t i = 0; i < pixels; ++i) {
     std::uint8_t* s = a.state.data() + i * kAccumulationStateBytes;
     if (mode == WT_ACCUMULATE_DOUBLE) {
@@ -93,7 +113,14 @@ void mergeMoments(Moments& into, const Moments& next) {
   if (next.firstSample != into.sampleEnd)
     throw std::invalid_argument("merging samples from " + std::to_string(next.firstSample) +
                                 " into a run that ends at " + std::to_string(into.sampleEnd));
+  if (next.hasAovs() != into.hasAovs())
+    throw std::invalid_argument(std::string("merging moments ") + (next.hasAovs() ? "with" : "without") +
+                                " AOVs into a run " + (into.hasAovs() ? "with" : "without"));
   const std::size_t pixels = into.pixels();
+  if (into.hasAovs()) {
+    for (std::size_t k = 0; k < 16 * pixels; ++k) into.aovSum[k] += next.aovSum[k];
+    if (next.firstSample == 0) into.aovIds = next.aovIds;  // the device writes the ids at sample 0 only
+  }
   for (std::size_t i = 0; i < pixels; ++i) {
     const std::uint32_t nb = next.count[i];
     if (nb == 0) continue;
@@ -135,24 +162,80 @@ ChunkPlan::ChunkPlan(int firstSample, int samplesPerPixel, int chunkSpp)
   m_count = (m_end - m_first + m_chunkSpp - 1) / m_chunkSpp;
 }
 
-std::optional<SampleChunk> ChunkPlan::next() {
-  std::lock_guard<std::mutex> lock(m_mutex);
-  if (m_closed || m_next >= m_count) return std::nullopt;
+SampleChunk ChunkPlan::chunk(int index) const {
   SampleChunk c;
-  c.index = m_next++;
-  c.firstSample = m_first + c.index * m_chunkSpp;
+  c.index = index;
+  c.firstSample = m_first + index * m_chunkSpp;
   c.sampleCount = std::min(m_chunkSpp, m_end - c.firstSample);
   return c;
 }
 
-void ChunkPlan::close() {
+std::optional<SampleChunk> ChunkPlan::nextLocked() {
+  if (m_cancelled) return std::nullopt;
+  int index;
+  if (!m_givenBack.empty()) {
+    index = *m_givenBack.begin();
+    m_givenBack.erase(m_givenBack.begin());
+  } else if (!m_closed && m_next < m_count) {
+    index = m_next++;
+  } else {
+    return std::nullopt;
+  }
+  m_out.insert(index);
+  return chunk(index);
+}
+
+std::optional<SampleChunk> ChunkPlan::next() {
   std::lock_guard<std::mutex> lock(m_mutex);
-  m_closed = true;
+  return nextLocked();
+}
+
+std::optional<SampleChunk> ChunkPlan::nextOrWait(const std::atomic<bool>& stop) {
+  std::unique_lock<std::mutex> lock(m_mutex);
+  while (!stop.load()) {
+    if (std::optional<SampleChunk> c = nextLocked()) return c;
+    if (m_cancelled || m_out.empty()) return std::nullopt;
+    // bounded: `stop` is set without notifying
+    m_cv.wait_for(lock, std::chrono::milliseconds(50));
+  }
+  return std::nullopt;
+}
+
+void ChunkPlan::complete(int index) {
+  {
+    std::lock_guard<std::mutex> lock(m_mutex);
+    m_out.erase(index);
+  }
+  m_cv.notify_all();
+}
+
+void ChunkPlan::giveBack(int index) {
+  {
+    std::lock_guard<std::mutex> lock(m_mutex);
+    if (m_out.erase(index)) m_givenBack.insert(index);
+  }
+  m_cv.notify_all();
+}
+
+void ChunkPlan::close() {
+  {
+    std::lock_guard<std::mutex> lock(m_mutex);
+    m_closed = true;
+  }
+  m_cv.notify_all();
+}
+
+void ChunkPlan::cancel() {
+  {
+    std::lock_guard<std::mutex> lock(m_mutex);
+    m_closed = m_cancelled = true;
+  }
+  m_cv.notify_all();
 }
 
 bool ChunkPlan::closed() const {
   std::lock_guard<std::mutex> lock(m_mutex);
-  return m_closed || m_next >= m_count;
+  return m_cancelled || ((m_closed || m_next >= m_count) && m_givenBack.empty());
 }
 
 int ChunkPlan::issued() const {
@@ -165,7 +248,8 @@ int defaultChunkSpp(int samplesPerPixel) { return std::clamp((samplesPerPixel + 
 OrderedMerge::OrderedMerge(Moments start, int firstChunkIndex)
     : m_merged(std::move(start)), m_nextIndex(firstChunkIndex) {}
 
-void OrderedMerge::add(int chunkIndex, Moments moments) {
+bool OrderedMerge::add(int chunkIndex, Moments moments) {
+  if (m_ended || chunkIndex < m_nextIndex || m_waiting.count(chunkIndex)) return false;
   const auto start = std::chrono::steady_clock::now();
   m_waiting.emplace(chunkIndex, std::move(moments));
   // merge in chunk order only: the same sums in the same order on any device count
@@ -173,15 +257,23 @@ void OrderedMerge::add(int chunkIndex, Moments moments) {
     mergeMoments(m_merged, it->second);
     m_waiting.erase(it);
     ++m_nextIndex;
+    if (m_onMerged && !m_onMerged(m_merged)) {
+      m_ended = true;
+      m_waiting.clear();
+      break;
+    }
   }
   m_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return true;
 }
 
-std::optional<Moments> renderChunk(Renderer& renderer, const SampleChunk& chunk, const std::atomic<bool>* stop) {
+std::optional<Moments> renderChunk(Renderer& renderer, const SampleChunk& chunk, const std::atomic<bool>* stop,
+                                   std::atomic<std::uint64_t>* passes) {
   renderer.resetAccumulation(chunk.firstSample);
   for (int k = 0; k < chunk.sampleCount; ++k) {
     if (stop && stop->load()) return std::nullopt;
     renderer.renderSample();
+    if (passes) ++*passes;
   }
   return momentsFromAccumulation(renderer.saveAccumulation(), renderer.settings().accumulation, chunk.firstSample);
 }
@@ -204,7 +296,7 @@ std::optional<ChunkResult> ResultQueue::pop(double timeoutSeconds) {
 }
 
 void runDeviceWorker(Renderer& renderer, ChunkSource& source, ResultQueue& results, const std::atomic<bool>& stop,
-                     const std::string& deviceName) {
+                     const std::string& deviceName, std::atomic<std::uint64_t>* passes) {
   while (!stop.load()) {
     std::optional<SampleChunk> chunk = source.next();
     if (!chunk) return;
@@ -213,7 +305,7 @@ void runDeviceWorker(Renderer& renderer, ChunkSource& source, ResultQueue& resul
     const RenderStats before = renderer.stats();
     const auto start = std::chrono::steady_clock::now();
     try {
-      std::optional<Moments> m = renderChunk(renderer, *chunk, &stop);
+      std::optional<Moments> m = renderChunk(renderer, *chunk, &stop, passes);
       if (!m) return;  // stopped mid-chunk: its passes are dropped
       r.moments = std::move(*m);
     } catch (const std::exception& e) {

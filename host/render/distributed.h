@@ -15,9 +15,11 @@
 #include <condition_variable>
 #include <cstdint>
 #include <deque>
+#include <functional>
 #include <map>
 #include <mutex>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -40,11 +42,20 @@ struct Moments {
   std::vector<double> mean;            ///< 3 per pixel
   std::vector<double> m2;              ///< 3 per pixel: sum of squared deviations from the mean
   std::vector<std::uint32_t> count;    ///< finite samples per pixel
+  /// With AOVs (RenderSettings::aovs): kernels/aov.cl's per-pixel sums, 16
+  /// per pixel, summed over the run (a chunk's are its device's float sums,
+  /// exact in double); else empty.
+  std::vector<double> aovSum;
+  /// With AOVs: the ids of sample 0 (4 per pixel), from the run that holds
+  /// it; other runs' are whatever their device last wrote and are not kept.
+  std::vector<std::uint32_t> aovIds;
   std::size_t pixels() const { return count.size(); }
+  bool hasAovs() const { return !aovSum.empty(); }
 };
 
-/// An empty run of `pixels` pixels starting at sample `firstSample`.
-Moments emptyMoments(std::size_t pixels, int firstSample);
+/// An empty run of `pixels` pixels starting at sample `firstSample`, with
+/// room for AOV sums when `aovs`.
+Moments emptyMoments(std::size_t pixels, int firstSample, bool aovs = false);
 
 /// The moments a device accumulation holds (accumulate.cl's state in
 /// `mode`, WT_ACCUMULATE_*): kahan's compensation folded into the double
@@ -58,8 +69,10 @@ Moments momentsFromAccumulation(const Accumulation& accumulation, std::uint32_t 
 Accumulation accumulationFromMoments(const Moments& moments, std::uint32_t mode);
 
 /// Fold the run `next` into `into` (Chan, Golub and LeVeque's pairwise
-/// update of mean and M2), in double. `next` must start where `into` ends;
-/// throws std::invalid_argument otherwise or when the pixel counts differ.
+/// update of mean and M2), in double; AOV sums are added, and the ids come
+/// from the run that starts at sample 0. `next` must start where `into`
+/// ends; throws std::invalid_argument otherwise or when the pixel counts
+/// or the presence of AOVs differ.
 void mergeMoments(Moments& into, const Moments& next);
 
 /// An Image (rgb mean, unbiased variance, sample counts; no srgba) of the
@@ -68,22 +81,41 @@ Image imageFromMoments(const Moments& moments, int width, int height);
 
 /// The chunks of samples [firstSample, samplesPerPixel) of chunkSpp
 /// samples each (the last may be shorter), handed out in order; thread-safe.
+/// A chunk handed out and then given back (its renderer was lost) is
+/// handed out again before any new one, lowest index first.
 class ChunkPlan {
  public:
   ChunkPlan(int firstSample, int samplesPerPixel, int chunkSpp);
-  /// The next chunk to render; none when every chunk is out or closed.
+  /// The next chunk to render: a given-back one, else a new one; none when
+  /// there is neither (every chunk out, or closed).
   std::optional<SampleChunk> next();
-  /// Hand out no more chunks (time budget, interrupt, a failure).
+  /// As next(), but while chunks are out (handed out, not completed) and
+  /// none is to hand, wait: one of them may be given back. None when every
+  /// chunk is completed, on cancel(), or when `stop` is set.
+  std::optional<SampleChunk> nextOrWait(const std::atomic<bool>& stop);
+  /// A chunk handed out is done (its result merged, or dropped).
+  void complete(int index);
+  /// A chunk handed out will not come back: hand it out again.
+  void giveBack(int index);
+  /// Hand out no new chunks (time budget); given-back ones still go out,
+  /// so that the chunks out before still make a whole prefix.
   void close();
+  /// Hand out nothing more (interrupt, a failure, the target error reached).
+  void cancel();
   bool closed() const;
   int chunkCount() const { return m_count; }
   int issued() const;
+  /// The chunk at `index` of the plan.
+  SampleChunk chunk(int index) const;
 
  private:
+  std::optional<SampleChunk> nextLocked();
   int m_first, m_end, m_chunkSpp, m_count;
   mutable std::mutex m_mutex;
+  std::condition_variable m_cv;
   int m_next = 0;
-  bool m_closed = false;
+  bool m_closed = false, m_cancelled = false;
+  std::set<int> m_out, m_givenBack;
 };
 
 /// The chunk size when --chunk-spp is not given: a function of the sample
@@ -98,7 +130,14 @@ class OrderedMerge {
  public:
   explicit OrderedMerge(Moments start, int firstChunkIndex = 0);
   /// Take a finished chunk (any order); merges every chunk now in order.
-  void add(int chunkIndex, Moments moments);
+  /// A chunk already merged or waiting is dropped (false): a chunk given
+  /// back and rendered again may arrive twice.
+  bool add(int chunkIndex, Moments moments);
+  /// Called after each chunk merged with the merged prefix; returning false
+  /// ends the merge there (later chunks are dropped): --target-error stops
+  /// at the first chunk boundary that meets it, whatever arrives after.
+  void onMerged(std::function<bool(const Moments&)> callback) { m_onMerged = std::move(callback); }
+  bool ended() const { return m_ended; }
   const Moments& merged() const { return m_merged; }
   int samplesDone() const { return m_merged.sampleEnd; }
   int mergedChunks() const { return m_nextIndex; }
@@ -110,12 +149,16 @@ class OrderedMerge {
   int m_nextIndex;
   std::map<int, Moments> m_waiting;
   double m_seconds = 0.0;
+  std::function<bool(const Moments&)> m_onMerged;
+  bool m_ended = false;
 };
 
 /// Render one chunk on `renderer` (its accumulation reset to the chunk's
 /// first sample) and read its moments back; none when `stop` is set
-/// between two passes.
-std::optional<Moments> renderChunk(Renderer& renderer, const SampleChunk& chunk, const std::atomic<bool>* stop);
+/// between two passes. `passes`, if given, counts every sample pass done
+/// (a worker rank's heartbeat reports it).
+std::optional<Moments> renderChunk(Renderer& renderer, const SampleChunk& chunk, const std::atomic<bool>* stop,
+                                   std::atomic<std::uint64_t>* passes = nullptr);
 
 /// A finished chunk, or the failure of the device that had it.
 struct ChunkResult {
@@ -161,7 +204,7 @@ class PlanSource : public ChunkSource {
 /// `stop` is set, render each on `renderer`, push the results (a failure is
 /// pushed as an error result and ends the loop).
 void runDeviceWorker(Renderer& renderer, ChunkSource& source, ResultQueue& results, const std::atomic<bool>& stop,
-                     const std::string& deviceName);
+                     const std::string& deviceName, std::atomic<std::uint64_t>* passes = nullptr);
 
 /// The devices --device names: "" (the default device), an index or name
 /// substring, a comma-separated list of those, or "all". A device named

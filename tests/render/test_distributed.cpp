@@ -28,6 +28,7 @@ RenderSettings tinySettings(std::uint32_t accumulation) {
 /// Render samples [0, spp) in chunks on the renderers, one thread each
 /// taking chunks as it frees (the order they are taken varies run to run).
 Moments renderChunked(std::vector<Renderer*> renderers, int spp, int chunkSpp) {
+  const bool aovs = renderers[0]->settings().aovs;
   const std::size_t pixels = std::size_t(renderers[0]->settings().width) * renderers[0]->settings().height;
   ChunkPlan plan(0, spp, chunkSpp);
   PlanSource source(plan);
@@ -37,7 +38,7 @@ Moments renderChunked(std::vector<Renderer*> renderers, int spp, int chunkSpp) {
   for (Renderer* r : renderers)
     threads.emplace_back([&, r] { runDeviceWorker(*r, source, results, stop, "test device"); });
   for (std::thread& t : threads) t.join();
-  OrderedMerge merge(emptyMoments(pixels, 0));
+  OrderedMerge merge(emptyMoments(pixels, 0, aovs));
   while (std::optional<ChunkResult> r = results.pop(0.0)) {
     EXPECT_EQ(r->error, "");
     merge.add(r->chunk.index, std::move(r->moments));
@@ -109,6 +110,51 @@ TEST(DistributedRender, ChunkedEqualsOnePassToTheAccumulationPrecision) {
     // the tone-mapped image is read from the merged state like any other
     EXPECT_EQ(got.srgba.size(), expected.srgba.size());
   }
+}
+
+// The AOVs of a render shared over two renderers: the per-pixel sums merged
+// in double equal the one-pass float sums to float rounding (each of the n
+// additions rounds by at most 2^-24 of a sum no larger than n times the
+// largest sample), and the ids are those of sample 0 exactly, whichever
+// renderer rendered chunk 0 (the other's id buffer never saw sample 0).
+TEST(DistributedRender, AovsMergedEqualOnePass) {
+  Context& context = test::deviceContext();
+  Context second(context.info());
+  const Scene scene = loadDefaultScene();
+  RenderSettings settings = tinySettings(WT_ACCUMULATE_KAHAN);
+  settings.aovs = true;
+  const int spp = 24;
+  Renderer straight(context, scene, settings);
+  for (int s = 0; s < spp; ++s) straight.renderSample();
+  const Image expected = straight.readImage();
+  Renderer a(context, scene, settings), b(second, scene, settings);
+  const Moments m = renderChunked({&a, &b}, spp, 3);
+  ASSERT_TRUE(m.hasAovs());
+  b.restoreAccumulation(accumulationFromMoments(m, settings.accumulation));
+  const Image got = b.readImage();
+  const Aovs &x = got.aovs, &y = expected.aovs;
+  EXPECT_EQ(x.material, y.material);
+  EXPECT_EQ(x.instance, y.instance);
+  EXPECT_EQ(x.primitive, y.primitive);
+  const double tol = 2.0 * spp * 0x1p-24;
+  auto near = [&](const std::vector<float>& p, const std::vector<float>& q, const char* name) {
+    ASSERT_EQ(p.size(), q.size()) << name;
+    float largest = 0.0f;
+    for (float v : q)
+      if (std::isfinite(v)) largest = std::max(largest, std::fabs(v));
+    int bad = 0;
+    for (std::size_t k = 0; k < p.size(); ++k) {
+      const bool same = (std::isinf(p[k]) && p[k] == q[k]) || std::fabs(double(p[k]) - q[k]) <= tol * 2.0 * largest;
+      if (!same && bad++ < 3) ADD_FAILURE() << name << " " << k << ": " << p[k] << " vs " << q[k];
+    }
+    EXPECT_GT(largest, 0.0f) << name << " is all zero: nothing compared";
+  };
+  near(x.albedo, y.albedo, "albedo");
+  near(x.normal, y.normal, "normal");
+  near(x.position, y.position, "position");
+  near(x.depth, y.depth, "depth");
+  near(x.uv, y.uv, "uv");
+  near(x.bounces, y.bounces, "bounces");
 }
 
 }  // namespace

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstring>
 #include <random>
+#include <thread>
 
 namespace wt {
 namespace {
@@ -141,6 +142,60 @@ TEST(DistributedMerge, ChunkPlanCoversEverySampleOnce) {
   EXPECT_EQ(defaultChunkSpp(1), 1);
   EXPECT_EQ(defaultChunkSpp(256), 4);
   EXPECT_EQ(defaultChunkSpp(1 << 20), 64);
+}
+
+// AOV sums add up; the ids are those of the run that holds sample 0, not
+// of a later run (whose device's id buffer holds whatever it last wrote).
+TEST(DistributedMerge, AovSumsAddAndIdsComeFromSampleZero) {
+  const std::size_t pixels = 3;
+  Moments merged = emptyMoments(pixels, 0, true);
+  for (int chunk = 0; chunk < 3; ++chunk) {
+    Moments m = emptyMoments(pixels, 4 * chunk, true);
+    m.sampleEnd = 4 * chunk + 4;
+    for (std::size_t k = 0; k < m.aovSum.size(); ++k) m.aovSum[k] = double(k + 1) * (chunk + 1);
+    for (std::size_t k = 0; k < m.aovIds.size(); ++k) m.aovIds[k] = std::uint32_t(100 * chunk + k);
+    mergeMoments(merged, m);
+  }
+  for (std::size_t k = 0; k < merged.aovSum.size(); ++k) EXPECT_EQ(merged.aovSum[k], double(k + 1) * 6.0) << k;
+  for (std::size_t k = 0; k < merged.aovIds.size(); ++k) EXPECT_EQ(merged.aovIds[k], std::uint32_t(k)) << k;
+  // through the device state and back: the float sums and the ids kept
+  const Moments back = momentsFromAccumulation(accumulationFromMoments(merged, WT_ACCUMULATE_KAHAN), WT_ACCUMULATE_KAHAN, 0);
+  EXPECT_EQ(back.aovSum, merged.aovSum);
+  EXPECT_EQ(back.aovIds, merged.aovIds);
+  // a run without AOVs cannot be merged into one with them
+  Moments plain = emptyMoments(pixels, merged.sampleEnd);
+  EXPECT_THROW(mergeMoments(merged, plain), std::invalid_argument);
+}
+
+// A chunk given back (its rank was lost) is handed out again before any new
+// one; a chunk merged twice (the lost rank answered late) is dropped; the
+// waiting hand-out ends when every chunk out is complete.
+TEST(DistributedMerge, GivenBackChunksGoOutAgainAndDuplicatesAreDropped) {
+  ChunkPlan plan(0, 16, 4);
+  std::atomic<bool> stop{false};
+  const SampleChunk c0 = *plan.next(), c1 = *plan.next();
+  EXPECT_EQ(c1.index, 1);
+  plan.giveBack(c0.index);
+  EXPECT_EQ(plan.next()->index, 0);  // before chunk 2
+  EXPECT_EQ(plan.next()->index, 2);
+  EXPECT_EQ(plan.nextOrWait(stop)->index, 3);
+  // all four out: next() has none; nextOrWait waits until one is given back
+  EXPECT_FALSE(plan.next());
+  std::thread giver([&] {
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    plan.giveBack(2);
+  });
+  EXPECT_EQ(plan.nextOrWait(stop)->index, 2);
+  giver.join();
+  for (int i = 0; i < 4; ++i) plan.complete(i);
+  EXPECT_FALSE(plan.nextOrWait(stop));  // nothing out, nothing left
+
+  OrderedMerge merge(emptyMoments(1, 0));
+  Moments a = emptyMoments(1, 0);
+  a.sampleEnd = 4;
+  EXPECT_TRUE(merge.add(0, a));
+  EXPECT_FALSE(merge.add(0, a));
+  EXPECT_EQ(merge.samplesDone(), 4);
 }
 
 }  // namespace
