@@ -26,6 +26,7 @@
 #include <atomic>
 #include <filesystem>
 #include <functional>
+#include <future>
 #include <memory>
 #include <thread>
 #include <tuple>
@@ -389,6 +390,9 @@ int runRender(RenderOptions options) {
   parseAovOptions(options);
   StartupTimeline& startup = *g_startup;
   startup.mark("arguments");
+  // the OpenCL platform (PoCL loads LLVM and probes the CPU) starts up while the scene loads
+  std::future<wt::DeviceInfo> deviceFound =
+      std::async(std::launch::async, [spec = options.device] { return wt::selectDevice(spec); });
 
   auto loadStart = std::chrono::steady_clock::now();
   wt::SceneFile loaded = loadRenderScene(options);
@@ -403,8 +407,8 @@ int runRender(RenderOptions options) {
     if (!std::filesystem::is_directory(folder, ec))
       throw std::invalid_argument("--profile-json: folder '" + folder.string() + "' does not exist");
   }
-  wt::DeviceInfo device = wt::selectDevice(options.device);
-  startup.mark("OpenCL platforms and devices");
+  wt::DeviceInfo device = deviceFound.get();
+  startup.mark("OpenCL platforms and devices (after the scene)");
   // profiling events only when asked: without them the queue has no profiling property
   wt::Context context(device, options.profile);
   startup.mark("context");
@@ -641,7 +645,11 @@ int runRender(RenderOptions options) {
   // Whatever happened, keep what was accumulated.
   if (renderer.stats().samplesDone > 0) {
     startup.mark("other samples");
-    wt::Image image = renderer.readImage();
+    // tone-mapped on the device only where a PNG shows it (or its auto exposure is reported)
+    const bool png = std::any_of(options.outputs.begin(), options.outputs.end(), [](const std::string& out) {
+      return wt::imageFormatFor(out) == wt::ImageFormat::Png;
+    });
+    wt::Image image = png || settings.tonemap.autoExposure ? renderer.readImage() : renderer.readRadiance();
     startup.mark("image read");
     wt::applyDebugView(image, options.debugView);
     writeOutputs(options, image);
