@@ -26,6 +26,7 @@
 #include <atomic>
 #include <filesystem>
 #include <functional>
+#include <future>
 #include <memory>
 #include <thread>
 #include <tuple>
@@ -36,6 +37,9 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <sstream>
+#include <ctime>
+#include <sys/resource.h>
 #include <unistd.h>
 
 namespace {
@@ -44,6 +48,67 @@ std::atomic<bool> g_interrupted{false};
 wt::MpiWorld* g_world = nullptr;  ///< this process's place in an MPI job (size 1 without one)
 
 extern "C" void onInterrupt(int) { g_interrupted = true; }
+
+/// Seconds since the kernel started this process (exec), from
+/// /proc/self/stat in clock ticks (10 ms here); nullopt where unreadable.
+std::optional<double> processAgeSeconds() {
+  std::ifstream in("/proc/self/stat");
+  std::string stat;
+  if (!std::getline(in, stat)) return std::nullopt;
+  // field 22 (starttime) counts from the one after the command name's ')'
+  std::size_t close = stat.rfind(')');
+  if (close == std::string::npos) return std::nullopt;
+  std::istringstream fields(stat.substr(close + 2));
+  std::string field;
+  for (int i = 3; i < 22 && fields >> field;) ++i;
+  unsigned long long startTicks = 0;
+  timespec boot{};
+  if (!(fields >> startTicks) || clock_gettime(CLOCK_BOOTTIME, &boot) != 0) return std::nullopt;
+  return double(boot.tv_sec) + double(boot.tv_nsec) * 1e-9 - double(startTicks) / double(sysconf(_SC_CLK_TCK));
+}
+
+/// CPU seconds the process has used, all threads (user and system).
+double processCpuSeconds() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  auto seconds = [](const timeval& t) { return double(t.tv_sec) + double(t.tv_usec) * 1e-6; };
+  return seconds(u.ru_utime) + seconds(u.ru_stime);
+}
+
+/// Where a render's start-up goes, for -v: each phase's wall and CPU
+/// seconds (the CPU time, all threads, stays meaningful on a loaded machine).
+class StartupTimeline {
+ public:
+  StartupTimeline()
+      : m_last(std::chrono::steady_clock::now()), m_lastCpu(processCpuSeconds()),
+        m_startAge(processAgeSeconds().value_or(0.0)) {}
+  /// End the phase `name` now.
+  void mark(const std::string& name) {
+    const auto now = std::chrono::steady_clock::now();
+    const double wall = std::chrono::duration<double>(now - m_last).count(), cpu = processCpuSeconds();
+    m_total += wall;
+    m_text += ", " + name + " " + ms(wall) + " (cpu " + ms(cpu - m_lastCpu) + ")";
+    m_last = now;
+    m_lastCpu = cpu;
+  }
+  /// A part of the phase ended next, measured inside it (wall only).
+  void part(const std::string& name, double seconds) { m_text += " [" + name + " " + ms(seconds) + "]"; }
+  std::string line() const {
+    return "start-up: exec to main " + ms(m_startAge) + " (cpu " + ms(m_mainCpu) + ")" + m_text + "; " +
+           ms(m_startAge + m_total) + " since exec (cpu " + ms(processCpuSeconds()) + ")";
+  }
+
+ private:
+  static std::string ms(double seconds) { return std::to_string(int(std::lround(seconds * 1e3))) + " ms"; }
+  std::chrono::steady_clock::time_point m_last;
+  double m_lastCpu = 0.0;
+  double m_mainCpu = m_lastCpu;
+  double m_startAge = 0.0;
+  double m_total = 0.0;
+  std::string m_text;
+};
+
+std::optional<StartupTimeline> g_startup;  ///< made first thing in main
 
 /// The options a scene file (.json) may also set: true where the command
 /// line named them, which then win over the file.
@@ -324,11 +389,17 @@ int runRender(RenderOptions options) {
   // Fail on an unwritable output or a bad AOV before spending any time rendering.
   for (const std::string& out : options.outputs) wt::checkWritable(out);
   parseAovOptions(options);
+  StartupTimeline& startup = *g_startup;
+  startup.mark("arguments");
+  // the OpenCL platform (PoCL loads LLVM and probes the CPU) starts up while the scene loads
+  std::future<wt::DeviceInfo> deviceFound =
+      std::async(std::launch::async, [spec = options.device] { return wt::selectDevice(spec); });
 
   auto loadStart = std::chrono::steady_clock::now();
   wt::SceneFile loaded = loadRenderScene(options);
   wt::Scene& scene = loaded.scene;
   double loadSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - loadStart).count();
+  startup.mark("scene loaded");
 
   if (!options.profileJson.empty()) {
     options.profile = true;
@@ -337,12 +408,20 @@ int runRender(RenderOptions options) {
     if (!std::filesystem::is_directory(folder, ec))
       throw std::invalid_argument("--profile-json: folder '" + folder.string() + "' does not exist");
   }
-  wt::DeviceInfo device = wt::selectDevice(options.device);
+  wt::DeviceInfo device = deviceFound.get();
+  startup.mark("OpenCL platforms and devices (after the scene)");
   // profiling events only when asked: without them the queue has no profiling property
   wt::Context context(device, options.profile);
+  startup.mark("context");
   wt::RenderSettings settings = renderSettings(options);
   settings.profile = options.profile;
   wt::Renderer renderer(context, scene, settings);
+  startup.mark("renderer");
+  startup.part("scene buffers", renderer.stats().sceneSeconds);
+  startup.part("lights", renderer.stats().lightsSeconds);
+  startup.part("program", renderer.stats().programSeconds);
+  startup.part("kernels", renderer.stats().kernelsSeconds);
+  startup.part("buffers", renderer.stats().buffersSeconds);
   if (std::size_t left = renderer.sceneBuffers().skippedPrimitives())
     wt::log::warnOnce(scene.sourceName + ": " + std::to_string(left) +
                       " primitives left out (a sphere of radius <= 0, a curve segment of radius 0, an SDF grid without cells or "
@@ -495,6 +574,7 @@ int runRender(RenderOptions options) {
       if (reason != wt::HaltReason::None) break;
       renderer.renderSample();
       int done = renderer.stats().samplesDone;
+      if (done == resumedSamples + 1) startup.mark("first sample");
       if (reference && ((done & (done - 1)) == 0 || done == spp)) logError();
       if (halting.wantsErrorEstimate(done)) estimateError();
       if (options.checkpointSeconds > 0.0 && since(lastCheckpoint) >= options.checkpointSeconds) {
@@ -565,9 +645,17 @@ int runRender(RenderOptions options) {
 
   // Whatever happened, keep what was accumulated.
   if (renderer.stats().samplesDone > 0) {
-    wt::Image image = renderer.readImage();
+    startup.mark("other samples");
+    // tone-mapped on the device only where a PNG shows it (or its auto exposure is reported)
+    const bool png = std::any_of(options.outputs.begin(), options.outputs.end(), [](const std::string& out) {
+      return wt::imageFormatFor(out) == wt::ImageFormat::Png;
+    });
+    wt::Image image = png || settings.tonemap.autoExposure ? renderer.readImage() : renderer.readRadiance();
+    startup.mark("image read");
     wt::applyDebugView(image, options.debugView);
     writeOutputs(options, image);
+    startup.mark("written");
+    wt::log::debug(startup.line());
     if (settings.tonemap.autoExposure) {
       const float scale = renderer.autoExposure();
       wt::log::info("auto exposure: scale " + std::to_string(scale) + " (log-average luminance " +
@@ -1011,6 +1099,7 @@ void groupRenderOptions(CLI::App* cmd) {
 }
 
 int main(int argc, char** argv) {
+  g_startup.emplace();
   wt::MpiWorld world(argc, argv);
   g_world = &world;
   CLI::App app{"wavetrace: a wavefront path tracer for OpenCL devices"};

@@ -5,7 +5,7 @@
 #include <ImfHeader.h>
 #include <ImfInputFile.h>
 #include <ImfOutputFile.h>
-#include <stb_image_write.h>
+#include <zlib.h>
 
 #include <algorithm>
 #include <cctype>
@@ -136,9 +136,51 @@ void writeExr(const std::filesystem::path& path, const Image& image, std::span<c
   writeExrChannels(path, image.width, image.height, channels);
 }
 
+/// A PNG chunk: length, type, data, CRC over type and data.
+void appendPngChunk(std::string& out, const char (&type)[5], const std::string& data) {
+  auto be32 = [&out](std::uint32_t v) {
+    const char bytes[4] = {char(v >> 24), char(v >> 16), char(v >> 8), char(v)};
+    out.append(bytes, 4);
+  };
+  be32(std::uint32_t(data.size()));
+  const std::size_t crcFrom = out.size();
+  out.append(type, 4);
+  out += data;
+  be32(std::uint32_t(crc32(0, reinterpret_cast<const Bytef*>(out.data() + crcFrom), uInt(out.size() - crcFrom))));
+}
+
 void writePng(const std::filesystem::path& path, const Image& image) {
-  if (!stbi_write_png(path.c_str(), image.width, image.height, 4, image.srgba.data(),
-                      image.width * 4))
+  // Each row filtered by its difference to the one above (PNG filter 2)
+  // and deflated at zlib's fastest level: several times faster than
+  // stb_image_write's encoder, and smaller on the dithered renders.
+  const std::size_t rowBytes = std::size_t(image.width) * 4;
+  std::string raw(std::size_t(image.height) * (rowBytes + 1), '\0');
+  for (std::size_t y = 0; y < std::size_t(image.height); ++y) {
+    char* row = raw.data() + y * (rowBytes + 1);
+    const std::uint8_t* src = image.srgba.data() + y * rowBytes;
+    row[0] = 2;
+    for (std::size_t x = 0; x < rowBytes; ++x) row[1 + x] = char(y == 0 ? src[x] : std::uint8_t(src[x] - src[x - rowBytes]));
+  }
+  uLongf packedBytes = compressBound(uLong(raw.size()));
+  std::string packed(packedBytes, '\0');
+  if (compress2(reinterpret_cast<Bytef*>(packed.data()), &packedBytes, reinterpret_cast<const Bytef*>(raw.data()),
+                uLong(raw.size()), 1) != Z_OK)
+    throw OutputError(path.string() + ": compressing the PNG failed");
+  packed.resize(packedBytes);
+
+  std::string header(13, '\0');  // IHDR: width, height, 8 bits, RGBA, deflate, adaptive filters, not interlaced
+  for (int i = 0; i < 4; ++i) {
+    header[std::size_t(i)] = char(std::uint32_t(image.width) >> (24 - 8 * i));
+    header[std::size_t(4 + i)] = char(std::uint32_t(image.height) >> (24 - 8 * i));
+  }
+  header[8] = 8;
+  header[9] = 6;
+  std::string file("\x89PNG\r\n\x1a\n", 8);
+  appendPngChunk(file, "IHDR", header);
+  appendPngChunk(file, "IDAT", packed);
+  appendPngChunk(file, "IEND", std::string());
+  std::ofstream out(path, std::ios::binary);
+  if (!out.write(file.data(), std::streamsize(file.size())) || !out.flush())
     throw OutputError(path.string() + ": writing PNG failed");
 }
 

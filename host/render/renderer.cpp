@@ -47,6 +47,14 @@ WtFrameParams frameParams(const RenderSettings& s, const LightList& lights, int 
 
 Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& settings)
     : m_context(context), m_settings(settings) {
+  auto phase = std::chrono::steady_clock::now();
+  // seconds since the previous call (or the constructor's start)
+  auto lap = [&phase]() {
+    const auto now = std::chrono::steady_clock::now();
+    const double seconds = std::chrono::duration<double>(now - phase).count();
+    phase = now;
+    return seconds;
+  };
   CameraDesc desc = scene.camera ? *scene.camera : defaultCamera(scene.bounds());
   m_camera = makeCamera(desc, settings.width, settings.height);
   BvhBuildOptions bvhOptions;
@@ -55,6 +63,7 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
   bvhOptions.instancing = settings.instancing;
   bvhOptions.allSurfaceAttributes = settings.generalProgram;
   m_scene = std::make_unique<SceneBuffers>(context, scene, bvhOptions);
+  m_stats.sceneSeconds = lap();
   m_environment = settings.environmentMap.empty()
                       ? constantEnvironment(settings.background)
                       : loadEnvironmentMap(settings.environmentMap, settings.environmentIntensity,
@@ -69,9 +78,9 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
   m_primitiveScale = primitiveScale(scene);
   m_shadowTraversal.assign(std::size_t(std::max(settings.maxBounces, 0)) + 1, std::nullopt);
   const KernelFeatures& features = m_kernelFeatures;
-  const auto buildStart = std::chrono::steady_clock::now();
+  m_stats.lightsSeconds = lap();
   m_program = buildProgram(context, features);
-  m_stats.programSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - buildStart).count();
+  m_stats.programSeconds = lap();
   if (settings.accumulation == WT_ACCUMULATE_DOUBLE && !context.info().fp64)
     throw DeviceError("double-precision accumulation needs fp64, which '" + context.info().name + "' lacks");
   const ParamFeatures built{features.alpha};
@@ -85,6 +94,7 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
   m_accumulate = {m_program, built};
   m_resolve = {m_program, built};
   m_tonemapper = Tonemapper(context, m_program, built, std::size_t(settings.width) * std::size_t(settings.height));
+  m_stats.kernelsSeconds = lap();
 
   // connect runs only where shade can queue shadow rays: the same count of
   // lights shade's next-event estimation draws from
@@ -135,6 +145,7 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
   context.fill(m_counters, 0u, 0, WT_COUNTER_COUNT * sizeof(cl_uint));
   context.fill(m_counters, 0xffffffffu, WT_COUNTER_FIRST_NONFINITE * sizeof(cl_uint), sizeof(cl_uint));
   q.finish();
+  m_stats.buffersSeconds = lap();
 
   // Arguments that never change, by name; per-launch ones are set in
   // renderSample() and readImage(). The path state binds itself to every

@@ -164,6 +164,11 @@ struct RenderStats {
   std::uint64_t nonFiniteSamples = 0; ///< discarded NaN/Inf samples
   double seconds = 0.0;               ///< wall time in renderSample()
   double programSeconds = 0.0;        ///< building (or PoCL's cache loading) the program, in the constructor
+  // the rest of the constructor, for the start-up timeline (render -v)
+  double sceneSeconds = 0.0;    ///< scene buffers: BVH build and upload
+  double lightsSeconds = 0.0;   ///< environment, light list and feature set
+  double kernelsSeconds = 0.0;  ///< the kernels made from the program and checked against their declarations
+  double buffersSeconds = 0.0;  ///< path state, light and environment buffers: allocated, uploaded, cleared
 };
 
 class Renderer {
