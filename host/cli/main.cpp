@@ -1382,8 +1382,8 @@ int main(int argc, char** argv) {
   CLI::App* stressCmd = app.add_subcommand("stress", "Numerical-stability stress suite: every row with its figure and pass/fail");
   stressCmd->add_flag("--quick", stress.quick, "Small images and ray counts (the subset the tests run)");
   stressCmd->add_option("--group", stress.groups,
-                        "Only these groups: transform, cracks, self-intersection, degenerate, materials, "
-                        "accumulation, non-finite (repeatable)");
+                        "Only these groups: transform, cracks, self-intersection, degenerate, materials, textures, "
+                        "accumulation, non-finite, primitives (repeatable)");
   stressCmd->add_option("--device", stressDevice, "Device index or name substring");
   stressCmd->add_flag("--json", stressJson, "Machine-readable output");
   stressCmd->add_option("--kernel-cache", kernelCache, kernelCacheHelp);

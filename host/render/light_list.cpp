@@ -165,6 +165,12 @@ LightList buildLightList(const Scene& scene, const SceneBuffers& buffers, double
     const bool twoSided = e.w != 0.0f;
     l.position.w = twoSided ? 1.0f : 0.0f;
     l.position.y = textured ? 1.0f : 0.0f;
+    // an emitter with holes emits only where it is there (lights/light_sampling.cl)
+    const WtMaterial& m = scene.materials[t.material];
+    if (m.alpha_mode == WT_ALPHA_MASK || m.alpha_mode == WT_ALPHA_BLEND) {
+      const bool alphaTexture = m.texture_mask & (1u << WT_TEXTURE_SLOT_BASE_COLOR);
+      l.direction = {float(m.alpha_mode), m.alpha_cutoff, m.alpha, alphaTexture ? 1.0f : 0.0f};
+    }
     lightOfLeaf[leaf] = std::uint32_t(list.lights.size());
     // pi * L * area from each emitting face
     power.push_back((twoSided ? 2.0 : 1.0) * std::numbers::pi * area * luminance(average));

@@ -763,8 +763,10 @@ class Converter {
       double thickness = extensionNumber(*volume, "thicknessFactor", 0.0, where);
       if (thickness < 0.0) fail(where + ": thicknessFactor " + std::to_string(thickness) + " is negative");
       thinWalled = thickness == 0.0;
-      if (volume->Has("thicknessTexture"))
-        m_scene.addWarning(where + " thicknessTexture is not supported yet (only whether thicknessFactor is 0 matters here)");
+      // thicknessTexture, like the factor's value, is a rasteriser's stand-in
+      // for the distance through the mesh; a path tracer walks that distance
+      // through the geometry itself (the extension leaves both to renderers
+      // that cannot), so it is read past without a warning
       double distance = extensionNumber(*volume, "attenuationDistance", INFINITY, where);
       if (volume->Has("attenuationDistance") && !(distance > 0.0))
         fail(where + ": attenuationDistance " + std::to_string(distance) + " is not positive");

@@ -92,7 +92,8 @@ std::vector<StressRow> stressAccumulation(Context& context, const StressOptions&
 const std::vector<std::pair<std::string, StressGroup>>& stressGroups() {
   static const std::vector<std::pair<std::string, StressGroup>> groups = {
       {"transform", stressTransforms},   {"cracks", stressCracks},       {"self-intersection", stressSelfIntersection},
-      {"degenerate", stressDegenerate},  {"materials", stressMaterials}, {"accumulation", stressAccumulation},
+      {"degenerate", stressDegenerate},  {"materials", stressMaterials}, {"textures", stressTextures},
+      {"accumulation", stressAccumulation},
       {"non-finite", stressNonFinite},  {"primitives", stressPrimitives},
   };
   return groups;

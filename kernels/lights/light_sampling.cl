@@ -22,10 +22,49 @@ typedef struct LightScene {
   SurfaceScene surface;              ///< their texture coordinates and textures
 } LightScene;
 
+#if WT_HAS_ALPHA
+/// The share of a holed triangle light (alphaMode MASK or BLEND,
+/// light.direction: mode, cutoff, factor, 1 where the base colour texture's
+/// alpha counts) that is there at barycentrics (b1, b2): MASK all or
+/// nothing by the cutoff, BLEND its coverage (the chance that a ray meets
+/// it, which is how BSDF sampling finds it through traversal), with
+/// coverage read as the alpha test reads it (materials/alpha.cl). Light
+/// sampling keeps its pdf: a point in a hole emits nothing, and a path
+/// through the hole never hits the emitter there, so MIS stays consistent.
+inline float light_triangle_coverage(LightScene ls, WtLight light, float b1, float b2) {
+  float alpha = light.direction.z;
+#if WT_HAS_VERTEX_COLORS || WT_HAS_TEXTURES
+  uint4 v = ls.tri_info[light.triangle];
+  float b0 = 1.0f - b1 - b2;
+#endif
+#if WT_HAS_VERTEX_COLORS
+  alpha *= b0 * ls.surface.color[v.x].w + b1 * ls.surface.color[v.y].w + b2 * ls.surface.color[v.z].w;
+#endif
+#if WT_HAS_TEXTURES
+  if (light.direction.w != 0.0f) {
+    SurfacePoint sp;
+    sp.uv = b0 * ls.surface.uv[v.x] + b1 * ls.surface.uv[v.y] + b2 * ls.surface.uv[v.z];
+    sp.uv_scale = (float2)(0.0f);
+    sp.footprint = 0.0f;  // the finest level, as traversal's test
+    alpha *= material_texture(ls.surface, v.w, WT_TEXTURE_SLOT_BASE_COLOR, sp).w;
+  }
+#endif
+  if ((uint)light.direction.x == WT_ALPHA_MASK) return alpha >= light.direction.y ? 1.0f : 0.0f;
+  return fmin(fmax(alpha, 0.0f), 1.0f);
+}
+#endif
+
 /// A triangle light's radiance at barycentrics (b1, b2): its emission, times
-/// the emissive texture there where its material has one (light.position.y).
+/// the emissive texture there where its material has one (light.position.y),
+/// times its coverage where it may have holes (light.direction.x, an alpha mode).
 inline float3 light_triangle_radiance(LightScene ls, WtLight light, float b1, float b2) {
   float3 le = vec4_xyz(light.intensity);
+#if WT_HAS_ALPHA
+  if (light.direction.x != 0.0f) {
+    le *= light_triangle_coverage(ls, light, b1, b2);
+    if (!(le.x > 0.0f || le.y > 0.0f || le.z > 0.0f)) return le;
+  }
+#endif
 #if WT_HAS_TEXTURES
   if (light.position.y != 0.0f) {
     uint4 v = ls.tri_info[light.triangle];

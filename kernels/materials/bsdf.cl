@@ -71,8 +71,9 @@
 // KHR_materials_anisotropy (WT_HAS_ANISOTROPY) makes the base's GGX
 // reflection anisotropic: alpha_t = mix(alpha, 1, strength^2) along the
 // local x axis (shade turns the frame to the anisotropy direction), alpha_b
-// = alpha along y. Such a lobe scatters once and the base under it keeps 1
-// minus the mirror's Fresnel at mu_o (docs/materials.md, "Anisotropy").
+// = alpha along y. Its energy compensation and the base's share read the
+// anisotropic albedo tables at the view's azimuth (shared/materials.h,
+// docs/materials.md, "Anisotropy").
 //
 // KHR_materials_iridescence (WT_HAS_IRIDESCENCE) puts a thin film on the
 // base's reflection lobe: its Fresnel (metal and dielectric) is mixed with
@@ -131,7 +132,7 @@ typedef struct Bsdf {
 #if WT_HAS_ANISOTROPY
   float alpha_t;          ///< the base's GGX alpha along the local x axis (the anisotropy direction)
   float alpha_b;          ///< and along y; alpha_t == alpha_b: isotropic, alpha = roughness^2
-  float lobe_roughness;   ///< the isotropic roughness whose tables stand in for the base's lobe
+  float aniso_r, aniso_k;  ///< the anisotropic tables' (r_b, k) coordinates of the lobe (pbr_aniso_coords)
 #endif
 #if WT_HAS_IRIDESCENCE
   float iridescence;      ///< the film's share of the base's Fresnel (0: no film, and inside a volume)
@@ -140,14 +141,6 @@ typedef struct Bsdf {
 #endif
   __global const float* table;  ///< directional albedos (shared/materials.h)
 } Bsdf;
-
-/// The roughness at which the base's GGX lobe reads the albedo tables: its
-/// own, or an anisotropic lobe's stand-in (bsdf_make).
-#if WT_HAS_ANISOTROPY
-#define bsdf_lobe_roughness(b) ((b).lobe_roughness)
-#else
-#define bsdf_lobe_roughness(b) ((b).roughness)
-#endif
 
 /// The base's GGX lobe (reflection, metal and dielectric): its
 /// distribution, masking and visible-normal sampling, anisotropic where
@@ -220,7 +213,7 @@ inline Bsdf bsdf_make(WtMaterial m, __global const float* table, int inside) {
   bool pbr = m.model == WT_MATERIAL_PBR;
 #if WT_HAS_ANISOTROPY
   b.alpha_t = b.alpha_b = m.roughness * m.roughness;
-  b.lobe_roughness = m.roughness;
+  b.aniso_r = b.aniso_k = 0.0f;
   if (pbr && m.anisotropy > 0.0f) {
     float alpha_t, alpha_b;
     ggx_anisotropy_alphas(m.roughness, fmin(m.anisotropy, 1.0f), &alpha_t, &alpha_b);
@@ -230,7 +223,7 @@ inline Bsdf bsdf_make(WtMaterial m, __global const float* table, int inside) {
       b.alpha_t = alpha_t;
       b.alpha_b = fmax(alpha_b, WT_GGX_MIN_ALPHA);
       b.mirror = 0;
-      b.lobe_roughness = fmax(sqrt(sqrt(b.alpha_t * b.alpha_b)), WT_PBR_MIN_ROUGHNESS);
+      pbr_aniso_coords(b.alpha_t, b.alpha_b, &b.aniso_r, &b.aniso_k);
     }
   }
 #endif
@@ -306,6 +299,28 @@ inline float2 pbr_moments(__global const float* table, float mu, float roughness
                   pbr_table_albedo(table, WT_PBR_TABLE_S, mu, roughness));
 }
 
+/// The base's GGX albedos (E, S) towards local direction w (z > 0): the
+/// isotropic tables at mu, or an anisotropic lobe's at mu and w's azimuth.
+inline float2 base_moments(Bsdf b, float3 w) {
+#if WT_HAS_ANISOTROPY
+  if (b.alpha_t != b.alpha_b)
+    return (float2)(pbr_aniso_albedo(b.table, WT_PBR_TABLE_ANISO_E, w.x, w.y, w.z, b.alpha_t, b.alpha_b, b.aniso_r, b.aniso_k),
+                    pbr_aniso_albedo(b.table, WT_PBR_TABLE_ANISO_S, w.x, w.y, w.z, b.alpha_t, b.alpha_b, b.aniso_r, b.aniso_k));
+#endif
+  return pbr_moments(b.table, w.z, b.roughness);
+}
+
+/// The hemispherical averages of the base's E (s = 0) or S (s = 1); 1 and
+/// 1/21 for a mirror.
+inline float base_average(Bsdf b, int s) {
+  if (b.mirror) return s ? 1.0f / 21.0f : 1.0f;
+#if WT_HAS_ANISOTROPY
+  if (b.alpha_t != b.alpha_b)
+    return pbr_aniso_average(b.table, s ? WT_PBR_TABLE_ANISO_S_AVG : WT_PBR_TABLE_ANISO_E_AVG, b.aniso_r, b.aniso_k);
+#endif
+  return pbr_table_average(b.table, s ? WT_PBR_TABLE_S_AVG : WT_PBR_TABLE_E_AVG, b.roughness);
+}
+
 /// Kulla and Conty's Fresnel of the multiple-scattering lobe, per channel.
 inline float3 pbr_multiscatter_fresnel3(float3 f_avg, float e_avg) {
   return f_avg * f_avg * e_avg / (1.0f - f_avg * (1.0f - e_avg));
@@ -346,9 +361,10 @@ inline PbrView pbr_view_none(void) {
   return v;
 }
 
-inline PbrView pbr_view(Bsdf b, float mu) {
+inline PbrView pbr_view(Bsdf b, float3 wo) {
   PbrView v;
-  float2 es = pbr_moments(b.table, mu, bsdf_lobe_roughness(b));
+  float mu = wo.z;
+  float2 es = base_moments(b, wo);
   v.e = es.x, v.s = es.y;
   v.spec_ss = pbr_dielectric_albedo(b, es, (DielectricColor)(0.0f));
   v.coat = v.sheen = v.sheen_lambda_o = 0.0f;
@@ -473,7 +489,7 @@ inline float3 interface_eval(Bsdf b, float3 wo, float3 wi, uint lobes, float* pd
 inline float3 pbr_eval(Bsdf b, float3 wo, float3 wi, uint lobes, float* pdf) {
   *pdf = 0.0f;
   if (wo.z <= 0.0f || wi.z == 0.0f) return (float3)(0.0f);
-  PbrView v = pbr_view(b, wo.z);
+  PbrView v = pbr_view(b, wo);
   Techniques t = bsdf_techniques(b, v, lobes);
   float3 f = (float3)(0.0f);       // the base, before the layers above take their share
   float3 f_layers = (float3)(0.0f);  // the coat and the sheen
@@ -483,18 +499,9 @@ inline float3 pbr_eval(Bsdf b, float3 wo, float3 wi, uint lobes, float* pdf) {
     float3 h = normalize(wo + wi);
     float oh = fmax(dot(wo, h), 0.0f);
     float m5 = ggx_schlick(0.0f, oh);  // (1 - oh)^5
-    float2 es_i = pbr_moments(b.table, wi.z, bsdf_lobe_roughness(b));
-    float e_avg = b.mirror ? 1.0f : pbr_table_average(b.table, WT_PBR_TABLE_E_AVG, bsdf_lobe_roughness(b));
+    float2 es_i = base_moments(b, wi);
+    float e_avg = base_average(b, 0);
     DielectricColor fms = pbr_dielectric_multiscatter(b.f0 + (1.0f - b.f0) / 21.0f, e_avg);
-#if WT_HAS_ANISOTROPY
-    // an anisotropic lobe scatters once: its albedo departs from the
-    // isotropic tables (above them viewed along alpha_t at grazing angles),
-    // so a compensation read from them would add energy
-    bool multiscatter = b.alpha_t == b.alpha_b;
-    if (!multiscatter) fms = (DielectricColor)(0.0f);
-#else
-    const bool multiscatter = true;
-#endif
 #if WT_HAS_IRIDESCENCE
     // the film's share of the base's Fresnel and, for the diffuse, max(F_film) at oh
     float film_keep = 1.0f;  // the multiple scattering's and the layered diffuse's share
@@ -527,7 +534,7 @@ inline float3 pbr_eval(Bsdf b, float3 wo, float3 wi, uint lobes, float* pdf) {
       f += (b.metallic * f_metal + opaque * f_dielectric) * dv;
 #endif
       // multiple scattering: (1 - E(mu_o)) (1 - E(mu_i)) / (pi (1 - E_avg)), by the average Fresnel
-      if (multiscatter) {
+      {
         float ms = (1.0f - v.e) * (1.0f - es_i.x) / (WT_PI * fmax(1.0f - e_avg, 1e-6f));
 #if WT_HAS_IRIDESCENCE
         ms *= film_keep;  // the film's share scatters once
@@ -539,18 +546,9 @@ inline float3 pbr_eval(Bsdf b, float3 wo, float3 wi, uint lobes, float* pdf) {
     }
     if (lobes & WT_LOBE_DIFFUSE) {
       // what the specular lobe (with its multiple scattering) leaves, both ways, over its average
-      float s_avg = b.mirror ? 1.0f / 21.0f : pbr_table_average(b.table, WT_PBR_TABLE_S_AVG, bsdf_lobe_roughness(b));
+      float s_avg = base_average(b, 1);
       DielectricColor spec_avg = b.specular * (b.f0 * e_avg + (1.0f - b.f0) * s_avg + fms * (1.0f - e_avg));
       DielectricColor spec_o = pbr_dielectric_albedo(b, (float2)(v.e, v.s), fms);
-#if WT_HAS_ANISOTROPY
-      // the base keeps 1 - spec_o whatever tables spec_i and spec_avg are
-      // read at; an anisotropic lobe's albedo departs from the isotropic
-      // tables (above them viewed along alpha_b at grazing angles), so spec_o
-      // is the mirror's, Schlick at mu_o, above the lobe's over the tested
-      // grid (WhiteAnisotropicMaterialsReflectAtMostEverything): it loses
-      // energy rather than gain it
-      if (!multiscatter) spec_o = pbr_dielectric_albedo(b, (float2)(1.0f, ggx_schlick(0.0f, wo.z)), fms);
-#endif
       DielectricColor spec_i = pbr_dielectric_albedo(b, es_i, fms);
 #if WT_HAS_IRIDESCENCE
       if (b.iridescence > 0.0f) {
@@ -662,7 +660,7 @@ inline bool interface_direction(Bsdf b, float3 wo, float3 h, float p_reflect, fl
 /// nothing is scattered (no allowed lobe, a direction on the wrong side).
 inline bool bsdf_sample(Bsdf b, float3 wo, uint lobes, float u_lobe, float u1, float u2, BsdfSample* s) {
   if (wo.z <= 0.0f || !(lobes & (WT_LOBE_DIFFUSE | WT_LOBE_SPECULAR | WT_LOBE_TRANSMISSION))) return false;
-  PbrView v = b.model == WT_MATERIAL_PBR ? pbr_view(b, wo.z) : pbr_view_none();
+  PbrView v = b.model == WT_MATERIAL_PBR ? pbr_view(b, wo) : pbr_view_none();
   Techniques t = bsdf_techniques(b, v, lobes);
   // the techniques in order: coat, base GGX, interface, cosine (diffuse and sheen)
   float below_spec = t.clearcoat, below_interface = below_spec + t.specular;

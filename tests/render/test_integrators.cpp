@@ -235,11 +235,11 @@ TEST(Integrators, WhiteLayeredSpheresUnderAUniformSkyReflectEverything) {
 // KHR_materials_anisotropy through the renderer: the scene's tangents
 // (around the view axis) reach the shading frame (a frame broken to NaN
 // turns the sphere black), and a white anisotropic sphere under a uniform
-// sky never shows more than the sky (5 standard errors and 1% per pixel).
-// It scatters once (docs/materials.md), so it is darker than the sky, but
-// not black. The grazing views where the lobe's albedo most departs from
-// the tables are too thin a rim at this size to catch an energy gain:
-// Bsdf.WhiteAnisotropicMaterialsReflectAtMostEverything does that.
+// sky never shows more than the sky (5 standard errors and 1% per pixel),
+// and is not black. The grazing views where the anisotropic tables'
+// interpolation errs most are too thin a rim at this size to catch an
+// energy gain or loss: Bsdf.WhiteAnisotropicMaterialsReflectEverything
+// does that.
 TEST(Integrators, WhiteAnisotropicSpheresUnderAUniformSkyReflectAtMostTheSky) {
   const std::pair<WtMaterial, const char*> cases[] = {
       {withAnisotropy(makePbrMaterial(glm::vec3(1.0f), 1.0f, 0.3f), 0.8f, 0.4f), "anisotropic metal"},
