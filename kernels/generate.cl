@@ -7,7 +7,7 @@ WT_KERNEL void generate(WtFrameParams frame, WtCamera camera, __global float4* r
                         __global float4* ray_d, __global float4* throughput,
                         __global float4* radiance, __global uint* queue,
                         __global uint* counters, __global ushort4* bounce_counts, __global uint* ray_skip,
-                        __global float2* ray_cone) {
+                        __global float2* ray_cone, __global uint4* media) {
   uint i = get_global_id(0);
   uint pixel_count = frame.width * frame.height;
   if (i >= pixel_count) return;
@@ -49,5 +49,9 @@ WT_KERNEL void generate(WtFrameParams frame, WtCamera camera, __global float4* r
   // converges to the pixel's box integral of the finest level.
   float pixel = 2.0f * length(vec4_xyz(camera.up)) / (float)frame.height * rsqrt((float)frame.sample + 1.0f);
   ray_cone[i] = camera.origin.w == (float)WT_CAMERA_ORTHOGRAPHIC ? (float2)(pixel, 0.0f) : (float2)(0.0f, pixel);
+#endif
+#if WT_HAS_TRANSMISSION
+  // the camera is in no volume (shared/media.h)
+  media[i] = (uint4)(WT_MEDIUM_NONE);
 #endif
 }

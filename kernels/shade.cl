@@ -47,7 +47,7 @@ WT_KERNEL void shade(WtFrameParams frame, WtEnvironment environment, __global co
                      __global const WtLightNode* light_tree, __global const uint* emitter_leaf,
                      __global float4* prev_normal, __global const uint* hit_instance, WT_GEOMETRY_PARAMS,
                      __global float2* ray_cone, __global float4* aov_sample, __global uint4* aov_ids,
-                     WT_SURFACE_PARAMS) {
+                     __global uint4* media, WT_SURFACE_PARAMS) {
   uint i = get_global_id(0);
   if (i >= counters[in_slot]) return;
   // Without WT_FLAG_COMPACT_SHADOWS entry i of the shadow queue is this
@@ -146,10 +146,35 @@ WT_KERNEL void shade(WtFrameParams frame, WtEnvironment environment, __global co
   // ng is the winding's normal here: a ray meeting its back side comes from inside
   bool inside = dot(ng, dir) > 0.0f;
 #if WT_HAS_TRANSMISSION
-  // the inside of a closed object of this material absorbs along the way (Beer-Lambert)
-  if (inside && material.volume.w != 0.0f && material.model == WT_MATERIAL_PBR && material.transmission > 0.0f) {
-    float3 sigma = vec4_xyz(material.volume);
+  // the volumes the path is inside (shared/media.h) and what this hit is to them
+  uint4 media_in = media[path];
+  WtMediaStack stack = {{media_in.x, media_in.y, media_in.z, media_in.w}};
+  int current = media_current(&stack, materials);
+  bool boundary = media_is_boundary(materials, surface.material);
+  WtMediaCrossing crossing = {1u, 1.0f, 1.0f, WT_MEDIUM_NONE, WT_MEDIUM_NONE};
+  if (boundary) crossing = media_crossing(&stack, materials, surface.material, !inside);
+  // the medium the path is in absorbs along the way (Beer-Lambert): the
+  // stack's current one, or the boundary's own when leaving one the stack lacks
+  if (current >= 0 || (inside && boundary)) {
+    float3 sigma = vec4_xyz(current >= 0 ? materials[stack.id[current]].volume : material.volume);
     if (sigma.x > 0.0f || sigma.y > 0.0f || sigma.z > 0.0f) beta *= exp(-sigma * (hit.x * length(dir)));
+  }
+  // a false hit: the surface lies inside a medium that outranks it. The
+  // path passes it unchanged and without a bounce of its own (it still takes
+  // a wavefront pass); pdf 0 makes what it finds count in full, since NEE
+  // from the last vertex was blocked by this surface.
+  if (!crossing.real) {
+    if (frame.bounce >= frame.max_bounces) return;
+    media_cross(&stack, materials, surface.material, !inside);
+    media[path] = (uint4)(stack.id[0], stack.id[1], stack.id[2], stack.id[3]);
+    throughput[path] = (float4)(beta, 0.0f);
+#if WT_HAS_TEXTURES
+    ray_cone[path] = (float2)(footprint, cone_angle);
+#endif
+    ray_skip[path] = prim;
+    ray_o[path] = (float4)(ray_offset_origin(p, p_error, inside ? ng : -ng), 0.0f);
+    queue_out[atomic_inc(&counters[out_slot])] = path;
+    return;
   }
 #endif
 
@@ -207,12 +232,35 @@ WT_KERNEL void shade(WtFrameParams frame, WtEnvironment environment, __global co
   anisotropy_frame(aniso_dir, ns, &frame_t, &frame_b);
 #endif
   float3 wo_local = (float3)(dot(wo, frame_t), dot(wo, frame_b), dot(wo, ns));
+  // the path's diffuse, specular and transmission bounces so far (x, y, z);
+  // w: the channel it carries alone past a dispersive interface, plus 1 (0: all)
+  ushort4 counts = bounce_counts[path];
   Bsdf bsdf = bsdf_make(material, pbr_table, inside);
+#if WT_HAS_TRANSMISSION
+  // a volume boundary refracts by the indices the stack gives its two sides
+  // (n far / n near: the material's own index against air outside every other volume)
+  if (boundary) {
+    float ior_near = crossing.ior_near, ior_far = crossing.ior_far;
+    float dispersion_near = crossing.near_id == WT_MEDIUM_NONE ? 0.0f : materials[crossing.near_id].dispersion;
+    float dispersion_far = crossing.far_id == WT_MEDIUM_NONE ? 0.0f : materials[crossing.far_id].dispersion;
+    if (dispersion_near > 0.0f || dispersion_far > 0.0f) {
+      // KHR_materials_dispersion: the first such interface picks the channel the path carries alone
+      // (three times as strong, so the mean over the pick is unbiased), each index at its wavelength
+      if (counts.w == 0u) {
+        uint c = min((uint)(sampler_get(frame, path, WT_DIM_WAVELENGTH) * 3.0f), 2u);
+        counts.w = (ushort)(c + 1u);
+        beta = (float3)(c == 0u ? 3.0f * beta.x : 0.0f, c == 1u ? 3.0f * beta.y : 0.0f, c == 2u ? 3.0f * beta.z : 0.0f);
+      }
+      ior_near = media_channel_ior(ior_near, dispersion_near, counts.w - 1u);
+      ior_far = media_channel_ior(ior_far, dispersion_far, counts.w - 1u);
+    }
+    bsdf.eta = ior_far / ior_near;
+    bsdf.smooth = bsdf.mirror || fabs(bsdf.eta - 1.0f) < 1e-3f;
+  }
+#endif
   float3 origin = ray_offset_origin(p, p_error, ng);
 
-  // the lobes this path may still scatter by: its diffuse, specular and
-  // transmission bounces so far (x, y, z) against their limits
-  ushort4 counts = bounce_counts[path];
+  // the lobes this path may still scatter by: its bounces so far against their limits
   uint lobes = ((uint)counts.x < frame.max_diffuse_bounces ? WT_LOBE_DIFFUSE : 0u) |
                ((uint)counts.y < frame.max_specular_bounces ? WT_LOBE_SPECULAR : 0u) |
                ((uint)counts.z < frame.max_transmission_bounces ? WT_LOBE_TRANSMISSION : 0u);
@@ -319,6 +367,12 @@ WT_KERNEL void shade(WtFrameParams frame, WtEnvironment environment, __global co
   ray_cone[path] = (float2)(footprint, bs.pdf > 0.0f ? rsqrt(bs.pdf * ((float)frame.sample + 1.0f)) : cone_angle);
 #endif
   bounce_counts[path] = counts;
+#if WT_HAS_TRANSMISSION
+  if (crossed && boundary) {
+    media_cross(&stack, materials, surface.material, !inside);
+    media[path] = (uint4)(stack.id[0], stack.id[1], stack.id[2], stack.id[3]);
+  }
+#endif
   ray_skip[path] = prim;
   prev_normal[path] = (float4)(tree_normal, 0.0f);  // for the light tree's pmf if the ray finds an emitter
   ray_o[path] = (float4)(crossed ? origin_far : origin, 0.0f);

@@ -196,3 +196,32 @@ WT_KERNEL void test_light_tree_pmf(uint count, __global const WtLightNode* nodes
   if (i >= count) return;
   pmf[i] = light_tree_pmf(nodes, leaves[i], p.xyz, n.xyz);
 }
+
+// Nested dielectrics (shared/media.h): walk i meets the boundaries
+// steps[i * step_count + j] = (material, entering), starting outside every
+// volume and crossing each one it meets (transmitted, or passed as a false
+// hit). out per step: (real, n near, n far, as_float(the current entry's
+// material after the step, WT_MEDIUM_NONE: none)); stacks: the stack after it.
+WT_KERNEL void test_media_walk(uint count, uint step_count, __global const WtMaterial* materials,
+                               __global const uint2* steps, __global float4* out, __global uint4* stacks) {
+  uint i = get_global_id(0);
+  if (i >= count) return;
+  WtMediaStack s = {{WT_MEDIUM_NONE, WT_MEDIUM_NONE, WT_MEDIUM_NONE, WT_MEDIUM_NONE}};
+  for (uint j = 0; j < step_count; ++j) {
+    uint2 step = steps[i * step_count + j];
+    WtMediaCrossing c = media_crossing(&s, materials, step.x, (int)step.y);
+    media_cross(&s, materials, step.x, (int)step.y);
+    int current = media_current(&s, materials);
+    out[i * step_count + j] = (float4)(as_float(c.real), c.ior_near, c.ior_far,
+                                       as_float(current < 0 ? WT_MEDIUM_NONE : s.id[current]));
+    stacks[i * step_count + j] = (uint4)(s.id[0], s.id[1], s.id[2], s.id[3]);
+  }
+}
+
+// KHR_materials_dispersion's index per channel (shared/media.h): out[3i + c]
+// for (ior, dispersion) = pairs[i].
+WT_KERNEL void test_media_channel_ior(uint count, __global const float2* pairs, __global float* out) {
+  uint i = get_global_id(0);
+  if (i >= count) return;
+  for (uint c = 0; c < WT_DISPERSION_CHANNELS; ++c) out[3u * i + c] = media_channel_ior(pairs[i].x, pairs[i].y, c);
+}

@@ -533,7 +533,7 @@ static_assert(offsetof(WtBvh4Node, lo_y) == 32 && offsetof(WtBvh4Node, lo_z) == 
 // bvh_ray_planes (kernels/bvh.cl) addresses the planes by these float offsets
 static_assert(offsetof(WtBvh4Node, hi_x) == 16 && offsetof(WtBvh4Node, hi_y) == 48 && offsetof(WtBvh4Node, hi_z) == 80);
 static_assert(offsetof(WtBvh4Node, child) == 96 && offsetof(WtBvh4Node, count) == 112);
-static_assert(sizeof(WtMaterial) == 144 && offsetof(WtMaterial, specular) == 80 && offsetof(WtMaterial, sheen) == 96 &&
+static_assert(sizeof(WtMaterial) == 160 && offsetof(WtMaterial, priority) == 144 && offsetof(WtMaterial, specular) == 80 && offsetof(WtMaterial, sheen) == 96 &&
               offsetof(WtMaterial, clearcoat) == 112 && offsetof(WtMaterial, iridescence) == 128);
 static_assert(sizeof(WtTextureRef) == 48);
 static_assert(sizeof(WtAlphaMaterial) == 16);

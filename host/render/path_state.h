@@ -22,6 +22,7 @@ enum class PathNeed : std::uint8_t {
   Instances,  ///< the scene has instances (hit_instance)
   Textures,   ///< textures are read at the path's footprint (ray_cone)
   Aovs,       ///< the render records AOVs (RenderSettings::aovs, kernels/aov.cl)
+  Media,      ///< the kernels refract (WT_HAS_TRANSMISSION): the nested-dielectric stack
 };
 
 struct PathNeeds {
@@ -29,10 +30,11 @@ struct PathNeeds {
   bool instances = false;
   bool textures = false;
   bool aovs = false;
+  bool media = false;
   bool has(PathNeed n) const {
     return n == PathNeed::Always || (n == PathNeed::Shadows && shadows) ||
            (n == PathNeed::Instances && instances) || (n == PathNeed::Textures && textures) ||
-           (n == PathNeed::Aovs && aovs);
+           (n == PathNeed::Aovs && aovs) || (n == PathNeed::Media && media);
   }
 };
 
@@ -69,9 +71,10 @@ struct PathState {
   cl::Buffer aovSample;       ///< float4[4]: this sample's AOVs (kernels/aov.cl)
   cl::Buffer aovAccum;        ///< float4[4]: the AOVs summed over samples
   cl::Buffer aovIds;          ///< uint4: the first sample's material, instance, primitive at the camera hit
+  cl::Buffer media;           ///< uint4: the volumes the path is inside (kernels/shared/media.h)
 
   /// Every buffer above, once.
-  static const std::array<PathBufferDesc, 25> kBuffers;
+  static const std::array<PathBufferDesc, 26> kBuffers;
 
   /// Allocate every buffer for `pixels` pixels (one element where `needs` lacks its need).
   void allocate(const cl::Context& context, std::size_t pixels, const PathNeeds& needs);
@@ -85,7 +88,7 @@ struct PathState {
   }
 };
 
-inline const std::array<PathBufferDesc, 25> PathState::kBuffers{{
+inline const std::array<PathBufferDesc, 26> PathState::kBuffers{{
     {"ray_o", "float4", 16, &PathState::rayO, PathNeed::Always},
     {"ray_d", "float4", 16, &PathState::rayD, PathNeed::Always},
     {"hits", "float4", 16, &PathState::hits, PathNeed::Always},
@@ -112,6 +115,7 @@ inline const std::array<PathBufferDesc, 25> PathState::kBuffers{{
     {"aov_sample", "float4", 64, &PathState::aovSample, PathNeed::Aovs},
     {"aov_accum", "float4", 64, &PathState::aovAccum, PathNeed::Aovs},
     {"aov_ids", "uint4", 16, &PathState::aovIds, PathNeed::Aovs},
+    {"media", "uint4", 16, &PathState::media, PathNeed::Media},
 }};
 
 inline void PathState::allocate(const cl::Context& context, std::size_t pixelCount, const PathNeeds& needs) {

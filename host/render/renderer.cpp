@@ -112,6 +112,7 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
   needs.instances = features.primitives[WT_PRIM_INSTANCE];
   needs.textures = features.textures;
   needs.aovs = settings.aovs;
+  needs.media = features.transmission;
   m_path.allocate(ctx, pixels, needs);
   m_counters = cl::Buffer(ctx, CL_MEM_READ_WRITE, WT_COUNTER_COUNT * sizeof(cl_uint));
   auto upload = [&](const auto& data) {

@@ -11,7 +11,7 @@ namespace wt::stage {
 struct Generate {
   static constexpr std::string_view kName = "generate";
   static constexpr auto kParams = params("frame", "camera", "ray_o", "ray_d", "throughput", "radiance", "queue",
-                                         "counters", "bounce_counts", "ray_skip", "ray_cone");
+                                         "counters", "bounce_counts", "ray_skip", "ray_cone", "media");
 };
 
 /// extend and extend_packet: the same parameters.
@@ -36,7 +36,7 @@ struct Shade {
              "tri_verts", "normals", "materials", "lights", "alias", "emitter_pdf_area", "shadow_queue", "shadow_o",
              "shadow_d", "shadow_radiance", "pbr_table", "bounce_counts", "ray_skip", "shadow_skip", "light_tree",
              "emitter_leaf", "prev_normal", "hit_instance"),
-      kGeometryParams, params("ray_cone", "aov_sample", "aov_ids"), kSurfaceParams);
+      kGeometryParams, params("ray_cone", "aov_sample", "aov_ids", "media"), kSurfaceParams);
 };
 
 /// connect, connect_packet and connect_stream: the same parameters.

@@ -34,6 +34,9 @@ WtMaterial makeMaterial(glm::vec3 albedo, glm::vec3 emission, bool twoSided) {
   m.clearcoat_roughness = 0.0f;
   m.anisotropy = m.anisotropy_rotation = 0.0f;
   m.iridescence = {0.0f, 1.3f, 100.0f, 400.0f};
+  m.priority = 0u;
+  m.dispersion = 0.0f;
+  m.pad0 = m.pad1 = 0u;
   return m;
 }
 
@@ -51,6 +54,16 @@ WtMaterial withTransmission(WtMaterial m, float transmission, float ior, bool th
   m.ior = std::clamp(ior, 1.0f, 10.0f);
   glm::vec3 sigma = glm::max(absorption, glm::vec3(0.0f));
   m.volume = toVec4(thinWalled ? glm::vec3(0.0f) : sigma, thinWalled ? 0.0f : 1.0f);
+  return m;
+}
+
+WtMaterial withPriority(WtMaterial m, std::uint32_t priority) {
+  m.priority = priority;
+  return m;
+}
+
+WtMaterial withDispersion(WtMaterial m, float dispersion) {
+  m.dispersion = std::clamp(dispersion, 0.0f, 1000.0f);
   return m;
 }
 

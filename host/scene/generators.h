@@ -86,6 +86,15 @@ WtMaterial makePbrMaterial(glm::vec3 baseColor, float metallic, float roughness,
 WtMaterial withTransmission(WtMaterial m, float transmission, float ior = 1.5f, bool thinWalled = false,
                             glm::vec3 absorption = glm::vec3(0.0f));
 
+/// The nested-dielectric priority of a volume boundary (shared/media.h):
+/// where closed transmitting volumes overlap, the higher priority's medium
+/// fills the overlap and the other's surfaces there are passed through.
+WtMaterial withPriority(WtMaterial m, std::uint32_t priority);
+
+/// KHR_materials_dispersion: `dispersion` = 20 / Abbe number (clamped to
+/// [0, 1000]); it bends light by wavelength at volume boundaries only.
+WtMaterial withDispersion(WtMaterial m, float dispersion);
+
 /// KHR_materials_specular: `specular` (clamped to [0,1]) weighs the
 /// dielectric's whole Fresnel term, `specularColor` (>= 0) tints its F0
 /// (((ior - 1) / (ior + 1))^2, capped at 1). Specular 0 leaves a purely

@@ -50,6 +50,7 @@ constexpr const char* kSheen = "KHR_materials_sheen";
 constexpr const char* kUnlit = "KHR_materials_unlit";
 constexpr const char* kAnisotropy = "KHR_materials_anisotropy";
 constexpr const char* kIridescence = "KHR_materials_iridescence";
+constexpr const char* kDispersion = "KHR_materials_dispersion";
 constexpr const char* kGpuInstancing = "EXT_mesh_gpu_instancing";
 /// Extensions whose absence changes where the geometry is or how its bytes
 /// read: a file that requires one cannot be drawn correctly without it.
@@ -322,7 +323,7 @@ class Converter {
     for (const std::string& ext : m_model.extensionsUsed) {
       if (ext == kEmissiveStrength || ext == kLightsPunctual || ext == kTransmission || ext == kIor ||
           ext == kVolume || ext == kSpecular || ext == kClearcoat || ext == kSheen || ext == kUnlit || ext == kAnisotropy ||
-          ext == kIridescence ||
+          ext == kIridescence || ext == kDispersion ||
           ext == kGpuInstancing || ext == kTextureTransform)
         continue;
       bool required = std::find(m_model.extensionsRequired.begin(), m_model.extensionsRequired.end(),
@@ -391,6 +392,8 @@ class Converter {
       setAlphaMode(src, label, material);
       material = withTransmissionExtensions(src, label, material);
       material = withLayerExtensions(src, label, material);
+      material.priority = nestedPriority(src, label, material);
+      material.dispersion = dispersionOf(src, label, material);
 
       // textures (occlusion is not one: a path tracer finds the occlusion itself)
       std::array<WtTextureRef, WT_TEXTURE_SLOTS> refs{};
@@ -708,7 +711,7 @@ class Converter {
   /// it, and are ignored. (When material textures arrive, this material's
   /// baseColorTexture belongs in its emissive slot.)
   WtMaterial unlitMaterial(const tinygltf::Material& src, const std::string& label, const WtMaterial& m) {
-    for (const char* other : {kTransmission, kVolume, kSpecular, kClearcoat, kSheen, kAnisotropy, kIridescence})
+    for (const char* other : {kTransmission, kVolume, kSpecular, kClearcoat, kSheen, kAnisotropy, kIridescence, kDispersion})
       if (src.extensions.count(other))
         m_scene.addWarning(label + ": " + other + " has no effect on a " + kUnlit + " material; ignored");
     WtMaterial unlit = makeMaterial(glm::vec3(0.0f), glm::vec3(m.base_color.x, m.base_color.y, m.base_color.z), src.doubleSided);
@@ -721,6 +724,45 @@ class Converter {
       unlit.texture_mask = 1u << WT_TEXTURE_SLOT_EMISSIVE;
     }
     return unlit;
+  }
+
+  /// The nested-dielectric priority (kernels/shared/media.h) from the
+  /// material's `"extras": {"wavetrace": {"priority": N}}`, an integer in
+  /// [0, 2^31); 0 without it. It matters only on a volume boundary (said once
+  /// where it is set on any other material).
+  std::uint32_t nestedPriority(const tinygltf::Material& src, const std::string& label, const WtMaterial& m) {
+    if (!src.extras.IsObject() || !src.extras.Has("wavetrace")) return 0u;
+    const tinygltf::Value& ours = src.extras.Get("wavetrace");
+    const std::string where = label + " extras.wavetrace";
+    if (!ours.IsObject()) fail(where + " is not an object");
+    if (!ours.Has("priority")) return 0u;
+    const tinygltf::Value& v = ours.Get("priority");
+    const double p = v.IsNumber() ? v.GetNumberAsDouble() : -1.0;
+    if (!(p >= 0.0 && p < 2147483648.0 && p == std::floor(p)))
+      fail(where + ".priority is not an integer in [0, 2147483647]");
+    const bool boundary = m.model == WT_MATERIAL_PBR && m.transmission > 0.0f && m.volume.w != 0.0f;
+    if (!boundary && p != 0.0)
+      m_scene.addWarning(where + ".priority has no effect on a material that bounds no volume (transmission and a "
+                         "non-zero KHR_materials_volume thicknessFactor); ignored");
+    return std::uint32_t(p);
+  }
+
+  /// KHR_materials_dispersion's `dispersion` (20 / Abbe number, >= 0; 0
+  /// without it). It bends light by wavelength at volume boundaries only
+  /// (said once where it is set on any other material).
+  float dispersionOf(const tinygltf::Material& src, const std::string& label, const WtMaterial& m) {
+    const tinygltf::Value* ext = materialExtension(src, label, kDispersion);
+    if (!ext) return 0.0f;
+    const std::string where = label + " " + kDispersion;
+    const double d = extensionNumber(*ext, "dispersion", 0.0, where);
+    if (d < 0.0) fail(where + ": dispersion " + std::to_string(d) + " is negative");
+    const bool boundary = m.model == WT_MATERIAL_PBR && m.transmission > 0.0f && m.volume.w != 0.0f;
+    if (!boundary && d > 0.0) {
+      m_scene.addWarning(where + " has no effect on a material that bounds no volume (transmission and a "
+                         "non-zero KHR_materials_volume thicknessFactor); ignored");
+      return 0.0f;
+    }
+    return float(std::min(d, 1e3));
   }
 
   /// KHR_materials_transmission, _ior and _volume on a converted material.

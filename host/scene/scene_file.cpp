@@ -474,7 +474,7 @@ class Loader {
                           "double_sided", "transmission", "ior", "thin_walled", "attenuation_color",
                           "attenuation_distance", "specular", "specular_color", "clearcoat",
                           "clearcoat_roughness", "sheen_color", "sheen_roughness", "anisotropy",
-                          "anisotropy_rotation", "iridescence", "iridescence_ior", "iridescence_thickness"});
+                          "anisotropy_rotation", "iridescence", "iridescence_ior", "iridescence_thickness", "priority", "dispersion"});
     auto read = [&](const char* key, double fallback, auto&& reader) {
       const Json* x = find(v, key);
       return x ? reader(*x, member(path, key)) : fallback;
@@ -524,7 +524,7 @@ class Loader {
       for (const char* key : {"ior", "specular", "specular_color"})
         if (find(v, key)) m_result.scene.addWarning(member(path, key) + " has no effect on a metal (metallic 1); ignored");
     if (!(transmission > 0.0f)) {
-      for (const char* key : {"thin_walled", "attenuation_color", "attenuation_distance"})
+      for (const char* key : {"thin_walled", "attenuation_color", "attenuation_distance", "priority", "dispersion"})
         if (find(v, key))
           m_result.scene.addWarning(member(path, key) + " has no effect without transmission; ignored");
       return m;
@@ -539,7 +539,18 @@ class Loader {
     if (attenuates)
       for (int k = 0; k < 3; ++k)
         absorption[k] = float(std::min(-std::log(std::max(double(attenuationColor[k]), 1e-300)) / distance, 1e30));
-    return withTransmission(m, transmission, ior, thinWalled, absorption);
+    // the nested-dielectric priority (kernels/shared/media.h): a volume boundary's only
+    const double priority = read("priority", 0.0, [&](const Json& x, const std::string& p) {
+      return double(integer(x, p, 0, 2147483647));
+    });
+    // KHR_materials_dispersion's 20 / Abbe number: a volume boundary's only
+    const double dispersion = read("dispersion", 0.0, [&](const Json& x, const std::string& p) { return inRange(x, p, 0.0, 1000.0); });
+    for (const char* key : {"priority", "dispersion"})
+      if (thinWalled && find(v, key))
+        m_result.scene.addWarning(member(path, key) + " has no effect on a thin-walled material; ignored");
+    m = withPriority(withTransmission(m, transmission, ior, thinWalled, absorption), std::uint32_t(priority));
+    if (!thinWalled) m.dispersion = float(dispersion);
+    return m;
   }
 
   void readCamera(const Json& v, const std::string& path) {

@@ -19,6 +19,7 @@
 #define WT_DIM_LIGHT_TREE 9u       ///< shade: which emitter the light tree picks
 #define WT_DIM_ALPHA_EXTEND 10u    ///< extend: stochastic transparency's launch key (rng_alpha_key)
 #define WT_DIM_ALPHA_SHADOW 11u    ///< connect: the same for shadow rays
-#define WT_DIM_COUNT 12u           ///< dimensions in use per bounce (a bounce's dimensions are below 256)
+#define WT_DIM_WAVELENGTH 12u      ///< shade: the channel a path carries alone past a dispersive interface (shared/media.h)
+#define WT_DIM_COUNT 13u           ///< dimensions in use per bounce (a bounce's dimensions are below 256)
 
 #endif  // WT_SHARED_DIMS_H

@@ -9,6 +9,7 @@
 #include "shared/alpha.h"
 #include "shared/environment.h"
 #include "shared/lights.h"
+#include "shared/media.h"
 #include "shared/textures.h"
 #include "shared/tonemap.h"
 #include "shared/types.h"
@@ -41,7 +42,11 @@
   F(WtMaterial, transmission) F(WtMaterial, ior) F(WtMaterial, volume) F(WtMaterial, alpha) \
   F(WtMaterial, alpha_mode) F(WtMaterial, alpha_cutoff) F(WtMaterial, texture_mask) F(WtMaterial, specular) \
   F(WtMaterial, sheen) F(WtMaterial, clearcoat) F(WtMaterial, clearcoat_roughness) F(WtMaterial, anisotropy) \
-  F(WtMaterial, anisotropy_rotation) F(WtMaterial, iridescence) \
+  F(WtMaterial, anisotropy_rotation) F(WtMaterial, iridescence) F(WtMaterial, priority) F(WtMaterial, dispersion) \
+  F(WtMaterial, pad0) F(WtMaterial, pad1) \
+  S(WtMediaStack) F(WtMediaStack, id) \
+  S(WtMediaCrossing) F(WtMediaCrossing, real) F(WtMediaCrossing, ior_near) F(WtMediaCrossing, ior_far) \
+  F(WtMediaCrossing, near_id) F(WtMediaCrossing, far_id) \
   S(WtTextureRef) F(WtTextureRef, texture) F(WtTextureRef, texcoord) F(WtTextureRef, scale) F(WtTextureRef, pad) \
   F(WtTextureRef, transform_u) F(WtTextureRef, transform_v) \
   S(WtCamera) F(WtCamera, origin) F(WtCamera, right) F(WtCamera, up) F(WtCamera, forward) \

@@ -162,6 +162,9 @@ typedef struct WtMaterial {
   float anisotropy;          ///< KHR_materials_anisotropy anisotropyStrength in [0,1] (0: isotropic; PBR only)
   float anisotropy_rotation; ///< anisotropyRotation: radians counter-clockwise from the tangent, in the tangent-bitangent plane
   WtVec4 iridescence; ///< KHR_materials_iridescence: x iridescenceFactor in [0,1] (0: none; PBR only), y the film's iridescenceIor, z iridescenceThicknessMinimum, w iridescenceThicknessMaximum (nm); the thickness is w where no thickness texture is read
+  wt_uint priority;   ///< nested dielectrics (shared/media.h): where volume boundaries overlap, the medium of higher priority fills the overlap (extras.wavetrace.priority; 0 by default)
+  float dispersion;   ///< KHR_materials_dispersion: 20 / V_d (Abbe number V_d); 0: the index is the same at every wavelength (volume boundaries only: shared/media.h)
+  wt_uint pad0, pad1;
 } WtMaterial;
 
 #define WT_ALPHA_OPAQUE 0u  ///< alpha is ignored

@@ -887,6 +887,59 @@ TEST(GltfLoader, BadTransmissionValuesAreClampedOrRefused) {
                   "attenuationColor is not an array of 3 numbers");
 }
 
+// The nested-dielectric priority from the material's extras
+// (docs/materials.md, "Nested dielectrics"): 0 without it, a warning where
+// it cannot matter, an error naming the material where it is no integer.
+TEST(GltfLoader, NestedPriorityComesFromTheMaterialExtras) {
+  auto load = [](const std::string& extras, bool volume = true) {
+    GltfDoc doc = triangleDoc();
+    doc.extensionsUsed = "[\"KHR_materials_transmission\",\"KHR_materials_volume\"]";
+    doc.materials.push_back("{\"name\":\"m\",\"pbrMetallicRoughness\":{\"metallicFactor\":0},\"extensions\":{"
+                            "\"KHR_materials_transmission\":{\"transmissionFactor\":1}" +
+                            std::string(volume ? ",\"KHR_materials_volume\":{\"thicknessFactor\":1}" : "") + "}" +
+                            (extras.empty() ? "" : ",\"extras\":" + extras) + "}");
+    doc.meshes[0] = "{\"primitives\":[{\"attributes\":{\"POSITION\":0},\"material\":0}]}";
+    return doc;
+  };
+  EXPECT_EQ(loadDoc(load("")).materials[0].priority, 0u);
+  EXPECT_EQ(loadDoc(load("{\"author\":\"x\"}")).materials[0].priority, 0u);
+  Scene glass = loadDoc(load("{\"wavetrace\":{\"priority\":7}}"));
+  EXPECT_EQ(glass.materials[0].priority, 7u);
+  EXPECT_TRUE(glass.warnings.empty()) << glass.warnings.at(0);
+  EXPECT_EQ(loadDoc(load("{\"wavetrace\":{\"priority\":2147483647}}")).materials[0].priority, 2147483647u);
+  Scene thin = loadDoc(load("{\"wavetrace\":{\"priority\":3}}", false));
+  EXPECT_CONTAINS(thin.warnings.at(0), "material 0 'm' extras.wavetrace.priority has no effect");
+  for (const char* bad : {"-1", "1.5", "\"high\"", "2147483648"})
+    EXPECT_CONTAINS(docError(load(std::string("{\"wavetrace\":{\"priority\":") + bad + "}}")),
+                    "material 0 'm' extras.wavetrace.priority is not an integer in [0, 2147483647]")
+        << bad;
+  EXPECT_CONTAINS(docError(load("{\"wavetrace\":3}")), "material 0 'm' extras.wavetrace is not an object");
+}
+
+// KHR_materials_dispersion: 20 / Abbe number on a volume boundary; a
+// warning elsewhere, an error naming the material when negative.
+TEST(GltfLoader, DispersionIsReadOnVolumeBoundaries) {
+  auto load = [](const std::string& dispersion, bool volume = true) {
+    GltfDoc doc = triangleDoc();
+    doc.extensionsUsed = "[\"KHR_materials_transmission\",\"KHR_materials_volume\",\"KHR_materials_dispersion\"]";
+    doc.materials.push_back("{\"name\":\"m\",\"pbrMetallicRoughness\":{\"metallicFactor\":0},\"extensions\":{"
+                            "\"KHR_materials_transmission\":{\"transmissionFactor\":1}," +
+                            std::string(volume ? "\"KHR_materials_volume\":{\"thicknessFactor\":1}," : "") +
+                            "\"KHR_materials_dispersion\":{" + dispersion + "}}}");
+    doc.meshes[0] = "{\"primitives\":[{\"attributes\":{\"POSITION\":0},\"material\":0}]}";
+    return doc;
+  };
+  Scene glass = loadDoc(load("\"dispersion\":0.33"));
+  EXPECT_FLOAT_EQ(glass.materials[0].dispersion, 0.33f);
+  EXPECT_TRUE(glass.warnings.empty()) << glass.warnings.at(0);  // a supported extension: no warning
+  EXPECT_EQ(loadDoc(load("")).materials[0].dispersion, 0.0f);
+  Scene thin = loadDoc(load("\"dispersion\":1", false));
+  EXPECT_EQ(thin.materials[0].dispersion, 0.0f);
+  EXPECT_CONTAINS(thin.warnings.at(0), "material 0 'm' KHR_materials_dispersion has no effect on a material that bounds no volume");
+  EXPECT_CONTAINS(docError(load("\"dispersion\":-0.5")), "material 0 'm' KHR_materials_dispersion: dispersion -0.500000 is negative");
+  EXPECT_CONTAINS(docError(load("\"dispersion\":\"x\"")), "dispersion is not a finite number");
+}
+
 // KHR_materials_specular, _clearcoat, _sheen and _ior without
 // transmission: their factors (defaults where absent), their textures
 // warned about like every material texture.

@@ -235,6 +235,28 @@ TEST(SceneFile, TransmissionAndAttenuation) {
   EXPECT_TRUE(warned);
 }
 
+// The nested-dielectric priority: 0 by default, a warning where it cannot matter.
+TEST(SceneFile, NestedPriority) {
+  SceneFile f = loadText(doc(R"("materials": {
+      "glass": {"transmission": 1, "priority": 3},
+      "water": {"transmission": 1, "ior": 1.33},
+      "sheet": {"transmission": 1, "thin_walled": true, "priority": 2},
+      "paint": {"priority": 1}
+    })"));
+  const Scene& s = f.scene;
+  EXPECT_EQ(s.materials[0].priority, 3u);
+  EXPECT_EQ(s.materials[1].priority, 0u);
+  int warned = 0;
+  for (const std::string& w : s.warnings)
+    warned += w.find("materials.sheet.priority has no effect on a thin-walled material") != std::string::npos ||
+              w.find("materials.paint.priority has no effect without transmission") != std::string::npos;
+  EXPECT_EQ(warned, 2);
+  EXPECT_CONTAINS(errorOf(doc(R"("materials": {"m": {"transmission": 1, "priority": 1.5}})")),
+                  "materials.m.priority: must be an integer, got 1.5");
+  EXPECT_CONTAINS(errorOf(doc(R"("materials": {"m": {"transmission": 1, "priority": -1}})")),
+                  "materials.m.priority: must be an integer in [0, 2147483647], got -1");
+}
+
 // The layers: a weighted, tinted specular F0 (ior sets it without
 // transmission too), a clear coat, a sheen; defaults where absent.
 TEST(SceneFile, MaterialLayers) {
