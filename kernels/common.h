@@ -7,6 +7,7 @@
 #include "shared/types.h"
 #include "shared/rng.h"
 #include "shared/spawn.h"
+#include "shared/trig.h"
 
 // Products must round separately: a fused multiply-add in the edge functions
 // of the watertight triangle test breaks its exactness on shared edges.
