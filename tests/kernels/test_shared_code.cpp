@@ -56,21 +56,25 @@ TEST(SharedCode, LambertSamplesAreCosineDistributed) {
   ctx.launch("test_lambert", k, n);
   std::vector<cl_float4> dirs(n);
   ctx.queue().enqueueReadBuffer(out, CL_TRUE, 0, n * sizeof(cl_float4), dirs.data());
-  // Chi-square over 8 bins of cos(theta)^2, which is uniform under a cosine
-  // distribution (pdf of c = cos(theta) is 2c, so c^2 ~ U(0,1)).
+  // Chi-square over 8 x 8 bins of (cos(theta)^2, azimuth), both uniform
+  // under a cosine distribution (pdf of c = cos(theta) is 2c, so c^2 ~
+  // U(0,1)), the azimuth about any frame of the normal.
   const int kBins = 8;
-  std::vector<double> counts(kBins, 0.0);
+  const glm::vec3 t = glm::normalize(glm::cross(normal, glm::vec3(1.0f, 0.0f, 0.0f))), b = glm::cross(normal, t);
+  std::vector<double> counts(kBins * kBins, 0.0);
   for (const cl_float4& d : dirs) {
     glm::vec3 v(d.s[0], d.s[1], d.s[2]);
     ASSERT_NEAR(glm::length(v), 1.0f, 1e-5f);
     float c = glm::dot(v, normal);
     ASSERT_GE(c, 0.0f);
-    counts[std::min(kBins - 1, int(c * c * kBins))] += 1.0;
+    const double phi = std::atan2(double(glm::dot(v, b)), double(glm::dot(v, t))) + M_PI;
+    const int azimuth = std::min(kBins - 1, int(phi / (2.0 * M_PI) * kBins));
+    counts[std::min(kBins - 1, int(c * c * kBins)) * kBins + azimuth] += 1.0;
   }
-  double chi2 = 0.0, expected = double(n) / kBins;
+  double chi2 = 0.0, expected = double(n) / (kBins * kBins);
   for (double c : counts) chi2 += (c - expected) * (c - expected) / expected;
-  // 7 degrees of freedom: P(chi2 > 24.3) = 0.001
-  EXPECT_LT(chi2, 24.3) << "histogram of cos^2: " << ::testing::PrintToString(counts);
+  // 63 degrees of freedom: P(chi2 > 103.4) = 0.001
+  EXPECT_LT(chi2, 103.4) << "histogram of (cos^2, azimuth): " << ::testing::PrintToString(counts);
 }
 
 // Random triangles of every size from 1e-6 to 1e4, up to 1e7 from the world
