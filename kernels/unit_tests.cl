@@ -130,6 +130,17 @@ WT_KERNEL void test_spherical_triangle(uint count, __global const float4* verts,
 }
 
 #include "shared/sampler.h"
+#include "sampler.cl"
+
+/// Item i draws pair 2 (i % 6) of pixel i with sampler_get2 and with
+/// sampler_get twice: (pair, single, single).
+WT_KERNEL void test_sampler_pairs(uint count, WtFrameParams frame, __global float4* out) {
+  uint i = get_global_id(0);
+  if (i >= count) return;
+  uint dim = 2u * (i % 6u);
+  float2 pair = sampler_get2(frame, i, dim);
+  out[i] = (float4)(pair, sampler_get(frame, i, dim), sampler_get(frame, i, dim + 1u));
+}
 
 WT_KERNEL void test_sobol(uint count, uint pixel, uint bounce, uint dim, uint seed, __global float* out) {
   uint i = get_global_id(0);

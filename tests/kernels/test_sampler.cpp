@@ -61,6 +61,28 @@ TEST(Sampler, PascalFormIsTheDirectionNumberDefinition) {
     }
 }
 
+// sampler_get2 (kernels/sampler.cl), which shade and generate draw their
+// pairs with, gives what sampler_get gives for each dimension, bit for bit,
+// for both samplers and every pair shade uses.
+TEST(Sampler, PairsAreTheSingleValues) {
+  Context& ctx = test::deviceContext();
+  const cl_uint n = test::testSize(6 * 4096, 6 * 64);
+  cl::Buffer out(ctx.context(), CL_MEM_WRITE_ONLY, n * sizeof(cl_float4));
+  cl::Kernel k(test::unitTestProgram(), "test_sampler_pairs");
+  for (cl_uint flags : {0u, cl_uint(WT_FLAG_SOBOL)}) {
+    WtFrameParams frame{};
+    frame.sample = 37, frame.bounce = 3, frame.seed = 11, frame.flags = flags;
+    k.setArg(0, n), k.setArg(1, frame), k.setArg(2, out);
+    ctx.launch("test_sampler_pairs", k, n);
+    std::vector<cl_float4> got(n);
+    ctx.queue().enqueueReadBuffer(out, CL_TRUE, 0, n * sizeof(cl_float4), got.data());
+    for (cl_uint i = 0; i < n; ++i) {
+      ASSERT_EQ(got[i].s[0], got[i].s[2]) << "flags " << flags << ", item " << i;
+      ASSERT_EQ(got[i].s[1], got[i].s[3]) << "flags " << flags << ", item " << i;
+    }
+  }
+}
+
 TEST(Sampler, PixelsAreDecorrelated) {
   // the same sample index in two pixels gives unrelated values
   int equal = 0;
