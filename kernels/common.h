@@ -8,6 +8,7 @@
 #include "shared/rng.h"
 #include "shared/spawn.h"
 #include "shared/media.h"
+#include "shared/trig.h"
 
 // Products must round separately: a fused multiply-add in the edge functions
 // of the watertight triangle test breaks its exactness on shared edges.

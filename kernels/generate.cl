@@ -16,8 +16,8 @@ WT_KERNEL void generate(WtFrameParams frame, WtCamera camera, __global float4* r
   // image plane in [-1,1]^2, y up
   uint px = i % frame.width;
   uint py = i / frame.width;
-  float jx = sampler_get(frame, i, WT_DIM_PIXEL_X);
-  float jy = sampler_get(frame, i, WT_DIM_PIXEL_Y);
+  float2 jitter = sampler_get2(frame, i, WT_DIM_PIXEL_X);  // (PIXEL_X, PIXEL_Y)
+  float jx = jitter.x, jy = jitter.y;
   float sx = 2.0f * ((float)px + jx) / (float)frame.width - 1.0f;
   float sy = 1.0f - 2.0f * ((float)py + jy) / (float)frame.height;
 

@@ -270,13 +270,16 @@ WT_KERNEL void shade(WtFrameParams frame, WtEnvironment environment, __global co
   bool through = bsdf_transmits(bsdf) && (lobes & WT_LOBE_TRANSMISSION);
   float3 origin_far = through ? ray_offset_origin(p, p_error, -ng) : origin;
   float3 tree_normal = through ? (float3)(0.0f) : ng;
+  // the shading uniforms by Sobol pairs (sampler_get2; shared/dims.h pairs them)
+  float2 u_pick_rr = sampler_get2(frame, path, WT_DIM_LIGHT_PICK);   // (LIGHT_PICK, RUSSIAN_ROULETTE)
+  float2 u_lobe_tree = sampler_get2(frame, path, WT_DIM_BSDF_LOBE);  // (BSDF_LOBE, LIGHT_TREE)
 
   // next-event estimation: the full light list by power (path), or one
   // uniformly chosen analytic light (minimal)
   uint nee_count = WT_INTEGRATOR_MINIMAL ? frame.analytic_count
                                          : ((frame.flags & WT_FLAG_NEE) ? frame.light_count : 0u);
   if (nee_count > 0u) {
-    float u_pick = sampler_get(frame, path, WT_DIM_LIGHT_PICK);
+    float u_pick = u_pick_rr.x;
     float pmf;
     uint index;
     if (WT_INTEGRATOR_MINIMAL) {
@@ -287,14 +290,13 @@ WT_KERNEL void shade(WtFrameParams frame, WtEnvironment environment, __global co
       // the light tree entry: an emitter by its importance here
       if (ls.lights[index].type == WT_LIGHT_TREE) {
         float pmf_tree;
-        index = light_tree_pick(light_tree, origin, tree_normal, sampler_get(frame, path, WT_DIM_LIGHT_TREE),
-                                &pmf_tree);
+        index = light_tree_pick(light_tree, origin, tree_normal, u_lobe_tree.y, &pmf_tree);
         pmf *= pmf_tree;
       }
     }
     LightSample s;
-    float u1 = sampler_get(frame, path, WT_DIM_LIGHT_U);
-    float u2 = sampler_get(frame, path, WT_DIM_LIGHT_V);
+    float2 u_light = sampler_get2(frame, path, WT_DIM_LIGHT_U);  // (LIGHT_U, LIGHT_V)
+    float u1 = u_light.x, u2 = u_light.y;
     float3 f_cos = (float3)(0.0f);
     float pdf_bsdf = 0.0f;
     if (pmf > 0.0f && light_sample(ls, index, p, u1, u2, &s) && (dot(ng, s.wi) > 0.0f || through)) {
@@ -338,9 +340,8 @@ WT_KERNEL void shade(WtFrameParams frame, WtEnvironment environment, __global co
 
   // the next direction from the BSDF; one below the geometric surface is absorbed
   BsdfSample bs;
-  if (!bsdf_sample(bsdf, wo_local, lobes, sampler_get(frame, path, WT_DIM_BSDF_LOBE),
-                   sampler_get(frame, path, WT_DIM_BSDF_U), sampler_get(frame, path, WT_DIM_BSDF_V), &bs))
-    return;
+  float2 u_bsdf = sampler_get2(frame, path, WT_DIM_BSDF_U);  // (BSDF_U, BSDF_V)
+  if (!bsdf_sample(bsdf, wo_local, lobes, u_lobe_tree.x, u_bsdf.x, u_bsdf.y, &bs)) return;
   float3 wi = bs.wi.x * frame_t + bs.wi.y * frame_b + bs.wi.z * ns;
   bool crossed = (bs.lobe & WT_LOBE_TRANSMISSION) != 0u;
   if (crossed ? dot(wi, ng) >= 0.0f : dot(wi, ng) <= 0.0f) return;
@@ -352,7 +353,7 @@ WT_KERNEL void shade(WtFrameParams frame, WtEnvironment environment, __global co
   // Russian roulette: survive with probability from the throughput, reweight
   if (!WT_INTEGRATOR_MINIMAL && (frame.flags & WT_FLAG_RR) && frame.bounce >= frame.rr_min_depth) {
     float q = fmin(fmax(beta.x, fmax(beta.y, beta.z)), 0.95f);
-    if (sampler_get(frame, path, WT_DIM_RUSSIAN_ROULETTE) >= q) return;
+    if (u_pick_rr.y >= q) return;
     beta /= q;
   }
   shade_check_finite(frame, counters, path, beta, WT_NONFINITE_THROUGHPUT);

@@ -88,7 +88,59 @@ WT_KERNEL void test_mis(uint count, __global const float2* pdfs, uint flags, __g
   weights[i] = (float2)(mis_weight(p.x, p.y, flags), mis_weight(p.y, p.x, flags));
 }
 
+WT_KERNEL void test_sincospi(uint count, __global const float* x, __global float2* sin_cos) {
+  uint i = get_global_id(0);
+  if (i >= count) return;
+  float c;
+  float s = wt_sincospi(x[i], &c);
+  sin_cos[i] = (float2)(s, c);
+}
+
+/// Arvo's spherical-triangle sampling as first written (acos, sin, cos of
+/// library calls): the reference light_sample_spherical_triangle must agree with.
+inline float3 test_spherical_triangle_arvo(float3 A, float3 B, float3 C, float solid_angle, float u1, float u2) {
+  float3 n_ab = light_orthonormal(B, A), n_ac = light_orthonormal(C, A);
+  float cos_alpha = clamp(dot(n_ab, n_ac), -1.0f, 1.0f);
+  float sin_alpha = sqrt(fmax(0.0f, 1.0f - cos_alpha * cos_alpha));
+  float alpha = acos(cos_alpha);
+  float area = u1 * solid_angle;
+  float s = -sin(area - alpha), t = -cos(area - alpha);
+  float cos_c = dot(A, B);
+  float k1 = t + cos_alpha, k2 = s - sin_alpha * cos_c;
+  float cos_b = (k2 + (k2 * t - k1 * s) * cos_alpha) / ((k2 * s + k1 * t) * sin_alpha);
+  cos_b = clamp(cos_b, -1.0f, 1.0f);
+  float3 c_prime = cos_b * A + sqrt(fmax(0.0f, 1.0f - cos_b * cos_b)) * n_ac;
+  float cos_theta = 1.0f - u2 * (1.0f - dot(c_prime, B));
+  float sin_theta = sqrt(fmax(0.0f, 1.0f - cos_theta * cos_theta));
+  return normalize(cos_theta * B + sin_theta * light_orthonormal(c_prime, B));
+}
+
+/// Direction i towards the triangle verts[3 i .. 3 i + 2] from p_of[i] for
+/// uniforms u[i]: out[2 i] the sampler's (w, solid angle), out[2 i + 1] the
+/// reference's (w, 0).
+WT_KERNEL void test_spherical_triangle(uint count, __global const float4* verts, __global const float4* p_of,
+                                       __global const float2* u, __global float4* out) {
+  uint i = get_global_id(0);
+  if (i >= count) return;
+  float3 p = p_of[i].xyz, p0 = verts[3 * i].xyz, p1 = verts[3 * i + 1].xyz, p2 = verts[3 * i + 2].xyz;
+  float omega = light_triangle_solid_angle(p, p0, p1, p2);
+  float3 A = normalize(p0 - p), B = normalize(p1 - p), C = normalize(p2 - p);
+  out[2 * i] = (float4)(light_sample_spherical_triangle(A, B, C, omega, u[i].x, u[i].y), omega);
+  out[2 * i + 1] = (float4)(test_spherical_triangle_arvo(A, B, C, omega, u[i].x, u[i].y), 0.0f);
+}
+
 #include "shared/sampler.h"
+#include "sampler.cl"
+
+/// Item i draws pair 2 (i % 6) of pixel i with sampler_get2 and with
+/// sampler_get twice: (pair, single, single).
+WT_KERNEL void test_sampler_pairs(uint count, WtFrameParams frame, __global float4* out) {
+  uint i = get_global_id(0);
+  if (i >= count) return;
+  uint dim = 2u * (i % 6u);
+  float2 pair = sampler_get2(frame, i, dim);
+  out[i] = (float4)(pair, sampler_get(frame, i, dim), sampler_get(frame, i, dim + 1u));
+}
 
 WT_KERNEL void test_sobol(uint count, uint pixel, uint bounce, uint dim, uint seed, __global float* out) {
   uint i = get_global_id(0);

@@ -120,17 +120,20 @@ inline float3 light_orthonormal(float3 a, float3 b) {
 
 /// A direction uniform in the solid angle of spherical triangle (A, B, C)
 /// (unit vectors from the shading point), of area `solid_angle` (Arvo 1995).
+/// The angles enter only through their sines and cosines: the sub-triangle's
+/// sin and cos of (area - alpha) come from the angle-difference identities,
+/// so one polynomial sincos of the area replaces acos, sin and cos.
 inline float3 light_sample_spherical_triangle(float3 A, float3 B, float3 C, float solid_angle,
                                               float u1, float u2) {
-  // the angle at A between the great arcs AB and AC
+  // the angle alpha at A between the great arcs AB and AC
   float3 n_ab = light_orthonormal(B, A), n_ac = light_orthonormal(C, A);
   float cos_alpha = clamp(dot(n_ab, n_ac), -1.0f, 1.0f);
   float sin_alpha = sqrt(fmax(0.0f, 1.0f - cos_alpha * cos_alpha));
-  float alpha = acos(cos_alpha);
   // pick the sub-triangle area, then the point C' on arc AC that bounds it
-  // phi = (sampled area + pi) - alpha
-  float area = u1 * solid_angle;
-  float s = -sin(area - alpha), t = -cos(area - alpha);
+  // phi = (sampled area + pi) - alpha: s = sin(phi), t = cos(phi)
+  float cos_area;
+  float sin_area = wt_sincospi(u1 * (solid_angle * (1.0f / WT_PI)), &cos_area);
+  float s = cos_area * sin_alpha - sin_area * cos_alpha, t = -(cos_area * cos_alpha + sin_area * sin_alpha);
   float cos_c = dot(A, B);
   float k1 = t + cos_alpha, k2 = s - sin_alpha * cos_c;
   float cos_b = (k2 + (k2 * t - k1 * s) * cos_alpha) / ((k2 * s + k1 * t) * sin_alpha);

@@ -10,11 +10,12 @@
 /// A cosine-distributed direction about n from two uniforms in [0,1).
 inline float3 lambert_sample(float3 n, float u1, float u2) {
   float r = sqrt(u1);
-  float phi = 2.0f * WT_PI * u2;
+  float cos_phi;
+  float sin_phi = wt_sincospi(2.0f * u2, &cos_phi);  // phi = 2 pi u2
   float3 t, b;
   frame_from_normal(n, &t, &b);
   float z = sqrt(fmax(0.0f, 1.0f - u1));
-  return normalize(r * cos(phi) * t + r * sin(phi) * b + z * n);
+  return normalize(r * cos_phi * t + r * sin_phi * b + z * n);
 }
 
 #endif  // WT_MATERIALS_LAMBERT_CL

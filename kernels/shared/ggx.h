@@ -9,6 +9,7 @@
 #define WT_SHARED_GGX_H
 
 #include "shared/types.h"
+#include "shared/trig.h"
 
 #ifdef __OPENCL_C_VERSION__
 #define WT_GGX_INLINE inline
@@ -130,8 +131,9 @@ WT_GGX_INLINE void ggx_sample_visible_normal_aniso(float vx, float vy, float vz,
   }
   float t2x = -sz * t1y, t2y = sz * t1x, t2z = sx * t1y - sy * t1x;
   // a point on the projected disk, warped towards the visible half
-  float r = sqrt(u1), phi = 2.0f * WT_GGX_PI * u2;
-  float p1 = r * cos(phi), p2 = r * sin(phi);
+  float r = sqrt(u1), cos_phi;
+  float sin_phi = wt_sincospi(2.0f * u2, &cos_phi);  // phi = 2 pi u2
+  float p1 = r * cos_phi, p2 = r * sin_phi;
   float s = 0.5f * (1.0f + sz);
   p2 = (1.0f - s) * sqrt(fmax(0.0f, 1.0f - p1 * p1)) + s * p2;
   float p3 = sqrt(fmax(0.0f, 1.0f - p1 * p1 - p2 * p2));

@@ -50,7 +50,8 @@ WT_INLINE wt_uint sampler_owen_scramble(wt_uint x, wt_uint seed) {
 /// The first two Sobol dimensions of point `index`, as 32 fraction bits:
 /// dimension 0 is the bit-reversed index (van der Corput); dimension 1 has
 /// direction numbers v_(i+1) = v_i ^ (v_i >> 1) (primitive polynomial x+1).
-/// A fixed trip count with no branch lets PoCL vectorise across work-items.
+/// The direction-number loop; the samplers use sampler_sobol_pascal below,
+/// which tests hold to this definition bit for bit.
 WT_INLINE wt_uint sampler_sobol_bits(wt_uint index, wt_uint d) {
   if (d == 0u) return sampler_reverse_bits(index);
   wt_uint v = 0x80000000u, result = 0u;
@@ -61,12 +62,28 @@ WT_INLINE wt_uint sampler_sobol_bits(wt_uint index, wt_uint d) {
   return result;
 }
 
+/// Dimension 1 bit-reversed: sampler_reverse_bits(sampler_sobol_bits(index, 1)).
+/// Counting bit positions of the result from the top, v_i is (1 + y)^i, so
+/// the result is the index's polynomial a(y) at y + 1: a Taylor shift over
+/// GF(2), in five steps of "each block's low half ^= its high half" instead
+/// of 32 iterations.
+WT_INLINE wt_uint sampler_sobol_pascal(wt_uint index) {
+  index ^= (index >> 1u) & 0x55555555u;
+  index ^= (index >> 2u) & 0x33333333u;
+  index ^= (index >> 4u) & 0x0f0f0f0fu;
+  index ^= (index >> 8u) & 0x00ff00ffu;
+  index ^= (index >> 16u) & 0x0000ffffu;
+  return index;
+}
+
 /// Owen-scrambled Sobol value in [0,1) for the same key as rng_uniform.
 WT_INLINE float sampler_sobol(wt_uint pixel, wt_uint sample, wt_uint bounce, wt_uint dim, wt_uint seed) {
   wt_uint group_seed = rng_hash(seed ^ rng_hash(pixel ^ rng_hash((bounce << 8u) + (dim >> 1u) + 0x9e3779b9u)));
   wt_uint index = sampler_owen_scramble(sample, group_seed);
   wt_uint d = dim & 1u;
-  wt_uint v = sampler_owen_scramble(sampler_sobol_bits(index, d), rng_hash(group_seed + d + 1u));
+  // sampler_owen_scramble of the Sobol point, its two bit reversals cancelled
+  wt_uint point = d == 0u ? index : sampler_sobol_pascal(index);
+  wt_uint v = sampler_reverse_bits(sampler_lk_permute(point, rng_hash(group_seed + d + 1u)));
   return (float)(v >> 8u) * (1.0f / 16777216.0f);
 }
 

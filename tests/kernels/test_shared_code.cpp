@@ -4,6 +4,7 @@
 #include "device_fixture.h"
 #include "core/spawn.h"
 #include "shared/rng.h"
+#include "shared/trig.h"
 #include "test_util.h"
 
 #include <glm/glm.hpp>
@@ -13,6 +14,7 @@
 #include <cmath>
 #include <cstring>
 #include <random>
+#include <tuple>
 
 namespace wt {
 namespace {
@@ -54,21 +56,25 @@ TEST(SharedCode, LambertSamplesAreCosineDistributed) {
   ctx.launch("test_lambert", k, n);
   std::vector<cl_float4> dirs(n);
   ctx.queue().enqueueReadBuffer(out, CL_TRUE, 0, n * sizeof(cl_float4), dirs.data());
-  // Chi-square over 8 bins of cos(theta)^2, which is uniform under a cosine
-  // distribution (pdf of c = cos(theta) is 2c, so c^2 ~ U(0,1)).
+  // Chi-square over 8 x 8 bins of (cos(theta)^2, azimuth), both uniform
+  // under a cosine distribution (pdf of c = cos(theta) is 2c, so c^2 ~
+  // U(0,1)), the azimuth about any frame of the normal.
   const int kBins = 8;
-  std::vector<double> counts(kBins, 0.0);
+  const glm::vec3 t = glm::normalize(glm::cross(normal, glm::vec3(1.0f, 0.0f, 0.0f))), b = glm::cross(normal, t);
+  std::vector<double> counts(kBins * kBins, 0.0);
   for (const cl_float4& d : dirs) {
     glm::vec3 v(d.s[0], d.s[1], d.s[2]);
     ASSERT_NEAR(glm::length(v), 1.0f, 1e-5f);
     float c = glm::dot(v, normal);
     ASSERT_GE(c, 0.0f);
-    counts[std::min(kBins - 1, int(c * c * kBins))] += 1.0;
+    const double phi = std::atan2(double(glm::dot(v, b)), double(glm::dot(v, t))) + M_PI;
+    const int azimuth = std::min(kBins - 1, int(phi / (2.0 * M_PI) * kBins));
+    counts[std::min(kBins - 1, int(c * c * kBins)) * kBins + azimuth] += 1.0;
   }
-  double chi2 = 0.0, expected = double(n) / kBins;
+  double chi2 = 0.0, expected = double(n) / (kBins * kBins);
   for (double c : counts) chi2 += (c - expected) * (c - expected) / expected;
-  // 7 degrees of freedom: P(chi2 > 24.3) = 0.001
-  EXPECT_LT(chi2, 24.3) << "histogram of cos^2: " << ::testing::PrintToString(counts);
+  // 63 degrees of freedom: P(chi2 > 103.4) = 0.001
+  EXPECT_LT(chi2, 103.4) << "histogram of (cos^2, azimuth): " << ::testing::PrintToString(counts);
 }
 
 // Random triangles of every size from 1e-6 to 1e4, up to 1e7 from the world
@@ -181,6 +187,58 @@ TEST(SharedCode, Atan2IsAccurateOnEveryOctantAndAtTheAxes) {
       ADD_FAILURE() << "atan2(" << y << ", " << x << ") = " << got[i] << ", want " << want;
   }
   EXPECT_EQ(failures, 0) << "worst error " << worst << " x (2 ulp + 2e-7)";
+}
+
+// wt_sincospi (kernels/shared/trig.h), the samplers' sin and cos of pi x, on
+// the device and in the host build: within 2 ulp of 1 (2.4e-7) of the
+// double-precision values over the range the samplers use ([0, 2]) and
+// beyond it, both signs; exact at the quarter turns, where a rounded
+// reduction would leave a residue.
+TEST(SharedCode, SinCosPiIsAccurateAndExactAtQuarterTurns) {
+  Context& ctx = test::deviceContext();
+  std::mt19937 rng(23);
+  std::uniform_real_distribution<float> near(-2.0f, 2.0f), far(-3000.0f, 3000.0f);
+  std::vector<float> xs;
+  for (int i = 0; i < 50000; ++i) xs.push_back(i % 8 == 0 ? far(rng) : near(rng));
+  // the reduction's rounding points (k / 4, where the quarter turn changes) from both sides
+  for (int k = -16; k <= 16; ++k) {
+    float up = 0.25f * float(k), down = up;
+    xs.push_back(up);
+    for (int step = 0; step < 3; ++step) {
+      xs.push_back(up = std::nextafter(up, 1e9f));
+      xs.push_back(down = std::nextafter(down, -1e9f));
+    }
+  }
+  for (float x : {1e-30f, -1e-30f, 0.0f, -0.0f, 4194303.5f, -4194303.25f}) xs.push_back(x);
+  const cl_uint n = cl_uint(xs.size());
+  cl::Buffer in(ctx.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, n * sizeof(float), xs.data());
+  cl::Buffer out(ctx.context(), CL_MEM_WRITE_ONLY, n * sizeof(cl_float2));
+  cl::Kernel k(test::unitTestProgram(), "test_sincospi");
+  k.setArg(0, n), k.setArg(1, in), k.setArg(2, out);
+  ctx.launch("test_sincospi", k, n);
+  std::vector<cl_float2> device(n);
+  ctx.queue().enqueueReadBuffer(out, CL_TRUE, 0, n * sizeof(cl_float2), device.data());
+  const double tolerance = 2.0 * std::ldexp(1.0, -23);
+  int failures = 0;
+  double worst = 0.0;
+  for (cl_uint i = 0; i < n; ++i) {
+    const float x = xs[i];
+    // pi x reduced in double: x is exact, so x mod 2 is too
+    const double turns = std::fmod(double(x), 2.0);
+    const double want_s = std::sin(M_PI * turns), want_c = std::cos(M_PI * turns);
+    float host_c;
+    const float host_s = wt_sincospi(x, &host_c);
+    for (auto [s, c, where] : {std::tuple{device[i].s[0], device[i].s[1], "device"}, std::tuple{host_s, host_c, "host"}}) {
+      const double err = std::max(std::fabs(s - want_s), std::fabs(c - want_c));
+      worst = std::max(worst, err);
+      bool ok = err <= tolerance;
+      // quarter turns: sin(pi k) = +-0 and cos = +-1 exactly, and the other way round
+      if (std::rint(2.0 * x) == 2.0 * x) ok = ok && (std::fabs(s) == 0.0f || std::fabs(s) == 1.0f) && std::fabs(s) + std::fabs(c) == 1.0f;
+      if (!ok && ++failures <= 10)
+        ADD_FAILURE() << where << " sincospi(" << x << ") = (" << s << ", " << c << "), want (" << want_s << ", " << want_c << ")";
+    }
+  }
+  EXPECT_EQ(failures, 0) << "worst error " << worst;
 }
 
 // The four-lane leaf test gives what testing the triangles one by one gives,
