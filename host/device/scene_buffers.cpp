@@ -466,19 +466,88 @@ void SceneBuffers::uploadSurface(Context& context, const Scene& scene) {
   textureUploadSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
+namespace {
+
+/// The box of the piece [s0, s1] of a curve segment (joints a, b; radius
+/// in w): the boxes of the joint spheres at its ends, whose hull holds the
+/// piece (centre and radius vary linearly), widened past float rounding.
+Aabb curvePieceBox(const glm::dvec4& a, const glm::dvec4& b, double s0, double s1) {
+  Aabb box;
+  for (double s : {s0, s1}) {
+    const glm::dvec4 p = a + s * (b - a);
+    const glm::dvec3 c(p);
+    const glm::dvec3 reach = glm::dvec3(p.w) + 1e-6 * (glm::abs(c) + glm::dvec3(p.w));
+    box.extend(glm::vec3(c - reach));
+    box.extend(glm::vec3(c + reach));
+  }
+  return box;
+}
+
+double boxArea(const Aabb& b) {
+  const glm::dvec3 e = glm::max(glm::dvec3(b.hi) - glm::dvec3(b.lo), glm::dvec3(0.0));
+  return e.x * e.y + e.y * e.z + e.z * e.x;
+}
+
+/// The tree's entries with thin curve segments that lie across their boxes
+/// entered as up to kCurvePieces boxes along their length, the same typed
+/// id in each (reference splitting): a ray through the empty corners of a
+/// diagonal hair's box tests it no more. Every point of the segment stays
+/// in some piece's box, so rays meet it where they did. A segment is
+/// halved while the halves' boxes take less than kCurveSplitArea of their
+/// parent's area. Segments whose rows `rows` does not hold stay whole.
+constexpr int kCurvePieces = 4;
+constexpr double kCurveSplitArea = 0.7;
+void splitCurveBoxes(const PrimitiveRows& rows, std::vector<Aabb>& bounds, std::vector<std::uint32_t>& ids) {
+  const std::size_t n = ids.size();
+  for (std::size_t i = 0; i < n; ++i) {
+    if (primType(ids[i]) != WT_PRIM_CURVE) continue;
+    const std::size_t row = rows.dataFirst[WT_PRIM_CURVE] + 2 * std::size_t(primIndex(ids[i]));
+    if (row + 1 >= rows.data.size()) continue;
+    const WtVec4 &ra = rows.data[row], &rb = rows.data[row + 1];
+    const glm::dvec4 a(ra.x, ra.y, ra.z, std::fabs(ra.w)), b(rb.x, rb.y, rb.z, std::fabs(rb.w));
+    int pieces = 1;
+    while (pieces < kCurvePieces) {
+      // halving every piece: worth it where the halves' boxes are much smaller than the whole's
+      double whole = 0.0, halves = 0.0;
+      for (int k = 0; k < pieces; ++k) {
+        const double s0 = double(k) / pieces, s1 = double(k + 1) / pieces, sm = 0.5 * (s0 + s1);
+        whole += boxArea(curvePieceBox(a, b, s0, s1));
+        halves += boxArea(curvePieceBox(a, b, s0, sm)) + boxArea(curvePieceBox(a, b, sm, s1));
+      }
+      if (!(halves < kCurveSplitArea * whole)) break;
+      pieces *= 2;
+    }
+    if (pieces == 1) continue;
+    for (int k = 0; k < pieces; ++k) {
+      const Aabb box = curvePieceBox(a, b, double(k) / pieces, double(k + 1) / pieces);
+      if (k == 0) {
+        bounds[i] = box;
+      } else {
+        bounds.push_back(box);
+        ids.push_back(ids[i]);
+      }
+    }
+  }
+}
+
+}  // namespace
+
 PrimitiveTree buildPrimitiveTree(const PrimitiveRows& rows, const BvhBuildOptions& options) {
   const auto start = std::chrono::steady_clock::now();
   // Each leaf entry is a typed id, tested one by one, so leaves stay small.
   BvhBuildOptions primOptions = options;
   primOptions.maxLeafSize = kPrimitiveLeafSize;
-  const Bvh bvh = buildBvh(rows.bounds, binaryBuildOptions(primOptions, rows.bounds.size()));
+  std::vector<Aabb> bounds = rows.bounds;
+  std::vector<std::uint32_t> ids = rows.ids;
+  splitCurveBoxes(rows, bounds, ids);
+  const Bvh bvh = buildBvh(bounds, binaryBuildOptions(primOptions, bounds.size()));
   Bvh4Options collapse = bvh4Options(primOptions);
   collapse.nodeBytesPerPrimitive = 0.0;  // no triangle blocks to weigh the nodes against
   PrimitiveTree tree;
   tree.bvh4 = collapseToBvh4(bvh, collapse);
   orderChildSlots(tree.bvh4);
   tree.refs.resize(bvh.primIndices.size());
-  for (std::size_t i = 0; i < tree.refs.size(); ++i) tree.refs[i] = rows.ids[bvh.primIndices[i]];
+  for (std::size_t i = 0; i < tree.refs.size(); ++i) tree.refs[i] = ids[bvh.primIndices[i]];
   tree.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return tree;
 }

@@ -33,6 +33,8 @@ struct PrimitiveTree {
   std::vector<std::uint32_t> refs;
   double seconds = 0.0;  ///< wall time of the build and collapse
 };
+/// Curve segments that lie across their boxes enter the tree as several
+/// boxes along their length (refs then holds their id more than once).
 PrimitiveTree buildPrimitiveTree(const PrimitiveRows& rows, const BvhBuildOptions& options);
 
 /// Whether scene triangle `tri` can have a hole under its material's alpha
