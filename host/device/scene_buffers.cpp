@@ -770,7 +770,10 @@ PrimitiveRows SceneBuffers::layoutPrimitiveInstances(const Scene& scene, const P
                                                      std::vector<InstanceDesc>& instances,
                                                      std::vector<PrimitiveTree>& trees) {
   PrimitiveRows out;
-  out.skipped = full.skipped;
+  // gatherInstances counts the instances it leaves out again below: the triangles' ones not twice
+  std::size_t keptInstances = 0;
+  for (std::uint32_t id : full.ids) keptInstances += primType(id) == WT_PRIM_INSTANCE;
+  out.skipped = full.skipped - (full.count[WT_PRIM_INSTANCE] - keptInstances);
   // the gathered items in instanced copies, per type: which copy and which geometry
   std::array<std::vector<std::uint8_t>, WT_PRIM_TYPES> omitted;
   std::array<std::vector<std::uint32_t>, WT_PRIM_TYPES> boxOf;  // an item's entry in full.bounds
