@@ -11,6 +11,125 @@
 
 #if WT_HAS_PRIMITIVES
 
+#if WT_HAS_INSTANCES
+/// Narrow `hit` to a nearer primitive of the geometry whose tree starts at
+/// node `root` (spheres or curves stored once), the ray in its object space:
+/// the tree holds no instances. `skip`: the primitive the ray leaves on this
+/// copy (WT_NO_HIT when it leaves another).
+inline bool bvh_prims_closest_root(GeometryScene g, uint root, float3 org, float3 dir, float tmin, uint skip,
+                                   Hit* hit) {
+  if (!bvh_ray_is_finite(org, dir)) return false;
+  float3 inv_d = bvh_safe_rcp(dir);
+  RayPlanes planes = bvh_ray_planes(inv_d);
+  uint stack_node[WT_BVH_STACK_SIZE];
+  float stack_t[WT_BVH_STACK_SIZE];
+  int sp = 0;
+  uint node = root;
+  bool found = false;
+  for (;;) {
+    __global const WtBvh4Node* n = &g.nodes[node];
+    float4 t4;
+    int4 hit4 = bvh4_box_hit(n, planes, org, inv_d, tmin, hit->t, &t4);
+    float t_child[4] = {t4.s0, t4.s1, t4.s2, t4.s3};
+    int hit_child[4] = {hit4.s0, hit4.s1, hit4.s2, hit4.s3};
+    int next = -1;
+    float next_t = INFINITY;
+    for (int k = 0; k < 4; ++k) {
+      if (!hit_child[k]) continue;
+      uint first = n->child[k], count = n->count[k];
+      if (count > 0) {
+        for (uint i = first; i < first + count; ++i) {
+          uint prim = g.refs[i];
+          float t, u, v;
+          if (geometry_intersect(g, prim, org, dir, tmin, hit->t, skip, WT_NO_HIT, &t, &u, &v)) {
+            hit->t = t;
+            hit->b1 = u;
+            hit->b2 = v;
+            hit->prim = prim;
+            found = true;
+          }
+        }
+      } else if (t_child[k] < next_t) {
+        if (next >= 0) {
+          stack_node[sp] = (uint)next;
+          stack_t[sp++] = next_t;
+        }
+        next = (int)first;
+        next_t = t_child[k];
+      } else {
+        stack_node[sp] = first;
+        stack_t[sp++] = t_child[k];
+      }
+    }
+    if (next >= 0 && next_t <= hit->t) {
+      node = (uint)next;
+      continue;
+    }
+    for (;;) {
+      if (sp == 0) return found;
+      --sp;
+      if (stack_t[sp] <= hit->t) break;
+    }
+    node = stack_node[sp];
+  }
+}
+
+/// Whether a primitive of the geometry whose tree starts at `root` blocks (tmin, tmax), the ray in its object space.
+inline bool bvh_prims_occluded_root(GeometryScene g, uint root, float3 org, float3 dir, float tmin, float tmax,
+                                    uint skip) {
+  if (!bvh_ray_is_finite(org, dir)) return true;
+  float3 inv_d = bvh_safe_rcp(dir);
+  RayPlanes planes = bvh_ray_planes(inv_d);
+  uint stack_node[WT_BVH_STACK_SIZE];
+  int sp = 0;
+  uint node = root;
+  for (;;) {
+    __global const WtBvh4Node* n = &g.nodes[node];
+    float4 t4;
+    int4 hit4 = bvh4_box_hit(n, planes, org, inv_d, tmin, tmax, &t4);
+    int hit_child[4] = {hit4.s0, hit4.s1, hit4.s2, hit4.s3};
+    for (int k = 0; k < 4; ++k) {
+      if (!hit_child[k]) continue;
+      uint first = n->child[k], count = n->count[k];
+      if (count > 0) {
+        for (uint i = first; i < first + count; ++i) {
+          float t, u, v;
+          if (geometry_intersect(g, g.refs[i], org, dir, tmin, tmax, skip, WT_NO_HIT, &t, &u, &v)) return true;
+        }
+      } else {
+        stack_node[sp++] = first;
+      }
+    }
+    if (sp == 0) return false;
+    node = stack_node[--sp];
+  }
+}
+
+/// An instance's closest hit, of either kind: triangles (its geometry's
+/// leaf-order triangle in hit->prim) or spheres and curves (its geometry's
+/// typed id), the ray moved into the copy's object space (unnormalised, so
+/// t carries over). True when it narrowed `hit`.
+inline bool bvh_prims_instance_closest(BvhScene scene, GeometryScene g, uint prim, float3 org, float3 dir, float tmin,
+                                       uint skip, uint skip_instance, Hit* hit) {
+  uint4 info = geometry_instance_info(g, prim);
+  if (!(info.y & WT_INSTANCE_PRIMITIVES)) return geometry_instance_closest(scene, g, prim, org, dir, tmin, skip,
+                                                                           skip_instance, hit);
+  __global const float4* rows = geometry_instance_rows(g, prim);
+  return bvh_prims_closest_root(g, info.x, instance_point(rows, org), instance_vector(rows, dir), tmin,
+                                prim == skip_instance ? skip : WT_NO_HIT, hit);
+}
+
+inline bool bvh_prims_instance_occluded(BvhScene scene, GeometryScene g, uint prim, float3 org, float3 dir, float tmin,
+                                        float tmax, uint skip, uint skip_instance) {
+  uint4 info = geometry_instance_info(g, prim);
+  if (!(info.y & WT_INSTANCE_PRIMITIVES)) return geometry_instance_occluded(scene, g, prim, org, dir, tmin, tmax, skip,
+                                                                            skip_instance);
+  __global const float4* rows = geometry_instance_rows(g, prim);
+  return bvh_prims_occluded_root(g, info.x, instance_point(rows, org), instance_vector(rows, dir), tmin, tmax,
+                                 prim == skip_instance ? skip : WT_NO_HIT);
+}
+#endif
+
 /// Narrow `hit` (the triangles' closest hit, hit->t its distance or tmax) to
 /// a nearer primitive in (tmin, hit->t), never at the start of the surface
 /// the ray leaves: `skip` (on instance `skip_instance` when that is not
@@ -41,7 +160,7 @@ inline void bvh_prims_closest(BvhScene scene, GeometryScene g, float3 org, float
           uint prim = g.refs[i];
 #if WT_HAS_INSTANCES
           if (prim_type(prim) == WT_PRIM_INSTANCE) {
-            if (geometry_instance_closest(scene, g, prim, org, dir, tmin, skip, skip_instance, hit))
+            if (bvh_prims_instance_closest(scene, g, prim, org, dir, tmin, skip, skip_instance, hit))
               *hit_instance = prim;
             continue;
           }
@@ -105,7 +224,7 @@ inline bool bvh_prims_occluded(BvhScene scene, GeometryScene g, float3 org, floa
           uint prim = g.refs[i];
 #if WT_HAS_INSTANCES
           if (prim_type(prim) == WT_PRIM_INSTANCE) {
-            if (geometry_instance_occluded(scene, g, prim, org, dir, tmin, tmax, skip_a, skip_instance)) return true;
+            if (bvh_prims_instance_occluded(scene, g, prim, org, dir, tmin, tmax, skip_a, skip_instance)) return true;
             continue;
           }
 #endif

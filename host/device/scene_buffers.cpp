@@ -466,31 +466,286 @@ void SceneBuffers::uploadSurface(Context& context, const Scene& scene) {
   textureUploadSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
+namespace {
+
+/// The box of the piece [s0, s1] of a curve segment (joints a, b; radius
+/// in w): the boxes of the joint spheres at its ends, whose hull holds the
+/// piece (centre and radius vary linearly), widened past float rounding.
+Aabb curvePieceBox(const glm::dvec4& a, const glm::dvec4& b, double s0, double s1) {
+  Aabb box;
+  for (double s : {s0, s1}) {
+    const glm::dvec4 p = a + s * (b - a);
+    const glm::dvec3 c(p);
+    const glm::dvec3 reach = glm::dvec3(p.w) + 1e-6 * (glm::abs(c) + glm::dvec3(p.w));
+    box.extend(glm::vec3(c - reach));
+    box.extend(glm::vec3(c + reach));
+  }
+  return box;
+}
+
+double boxArea(const Aabb& b) {
+  const glm::dvec3 e = glm::max(glm::dvec3(b.hi) - glm::dvec3(b.lo), glm::dvec3(0.0));
+  return e.x * e.y + e.y * e.z + e.z * e.x;
+}
+
+/// The tree's entries with thin curve segments that lie across their boxes
+/// entered as up to kCurvePieces boxes along their length, the same typed
+/// id in each (reference splitting): a ray through the empty corners of a
+/// diagonal hair's box tests it no more. Every point of the segment stays
+/// in some piece's box, so rays meet it where they did. A segment is
+/// halved while the halves' boxes take less than kCurveSplitArea of their
+/// parent's area. Segments whose rows `rows` does not hold stay whole.
+constexpr int kCurvePieces = 4;
+constexpr double kCurveSplitArea = 0.7;
+void splitCurveBoxes(const PrimitiveRows& rows, std::vector<Aabb>& bounds, std::vector<std::uint32_t>& ids) {
+  const std::size_t n = ids.size();
+  for (std::size_t i = 0; i < n; ++i) {
+    if (primType(ids[i]) != WT_PRIM_CURVE) continue;
+    const std::size_t row = rows.dataFirst[WT_PRIM_CURVE] + 2 * std::size_t(primIndex(ids[i]));
+    if (row + 1 >= rows.data.size()) continue;
+    const WtVec4 &ra = rows.data[row], &rb = rows.data[row + 1];
+    const glm::dvec4 a(ra.x, ra.y, ra.z, std::fabs(ra.w)), b(rb.x, rb.y, rb.z, std::fabs(rb.w));
+    int pieces = 1;
+    while (pieces < kCurvePieces) {
+      // halving every piece: worth it where the halves' boxes are much smaller than the whole's
+      double whole = 0.0, halves = 0.0;
+      for (int k = 0; k < pieces; ++k) {
+        const double s0 = double(k) / pieces, s1 = double(k + 1) / pieces, sm = 0.5 * (s0 + s1);
+        whole += boxArea(curvePieceBox(a, b, s0, s1));
+        halves += boxArea(curvePieceBox(a, b, s0, sm)) + boxArea(curvePieceBox(a, b, sm, s1));
+      }
+      if (!(halves < kCurveSplitArea * whole)) break;
+      pieces *= 2;
+    }
+    if (pieces == 1) continue;
+    for (int k = 0; k < pieces; ++k) {
+      const Aabb box = curvePieceBox(a, b, double(k) / pieces, double(k + 1) / pieces);
+      if (k == 0) {
+        bounds[i] = box;
+      } else {
+        bounds.push_back(box);
+        ids.push_back(ids[i]);
+      }
+    }
+  }
+}
+
+}  // namespace
+
 PrimitiveTree buildPrimitiveTree(const PrimitiveRows& rows, const BvhBuildOptions& options) {
   const auto start = std::chrono::steady_clock::now();
   // Each leaf entry is a typed id, tested one by one, so leaves stay small.
   BvhBuildOptions primOptions = options;
   primOptions.maxLeafSize = kPrimitiveLeafSize;
-  const Bvh bvh = buildBvh(rows.bounds, binaryBuildOptions(primOptions, rows.bounds.size()));
+  std::vector<Aabb> bounds = rows.bounds;
+  std::vector<std::uint32_t> ids = rows.ids;
+  splitCurveBoxes(rows, bounds, ids);
+  const Bvh bvh = buildBvh(bounds, binaryBuildOptions(primOptions, bounds.size()));
   Bvh4Options collapse = bvh4Options(primOptions);
   collapse.nodeBytesPerPrimitive = 0.0;  // no triangle blocks to weigh the nodes against
   PrimitiveTree tree;
   tree.bvh4 = collapseToBvh4(bvh, collapse);
   orderChildSlots(tree.bvh4);
   tree.refs.resize(bvh.primIndices.size());
-  for (std::size_t i = 0; i < tree.refs.size(); ++i) tree.refs[i] = rows.ids[bvh.primIndices[i]];
+  for (std::size_t i = 0; i < tree.refs.size(); ++i) tree.refs[i] = ids[bvh.primIndices[i]];
   tree.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return tree;
 }
 
+/// Spheres or curves stored once: the Scene::primitiveInstances entries
+/// that place one geometry, the first of them its source (the copy nearest
+/// the origin, whose floats are the finest), and where its items' rows
+/// start in the device's block of their type.
+struct InstancedPrimitives {
+  std::uint32_t type = WT_PRIM_SPHERE;
+  std::vector<std::uint32_t> copies;
+  glm::dvec3 centre{0.0};      ///< the source's box centre: the geometry's object space is the source's less it
+  std::uint32_t base = 0;      ///< the geometry's first item's device index
+};
+
+namespace {
+
+/// Until the trees are laid out, a primitive instance's root names its geometry: this plus its index.
+constexpr std::uint32_t kPrimitiveGeometryTag = 0x80000000u;
+
+std::uint32_t rowsPerItem(std::uint32_t type) { return type == WT_PRIM_CURVE ? 2u : 1u; }
+
+/// The gathered index range [lo, hi) of a copy's items (spheres by scene
+/// index, curves their kept segments); empty when the copy is out of range.
+std::pair<std::uint32_t, std::uint32_t> copyItems(const Scene& scene, const PrimitiveRows& rows,
+                                                  const PrimitiveInstance& copy) {
+  const std::size_t end = std::size_t(copy.first) + copy.count;
+  if (copy.type == WT_PRIM_SPHERE && end <= scene.spheres.size()) return {copy.first, std::uint32_t(end)};
+  if (copy.type == WT_PRIM_CURVE && end <= scene.curves.size() && end < rows.curveSegments.size())
+    return {rows.curveSegments[copy.first], rows.curveSegments[end]};
+  return {0u, 0u};
+}
+
+/// Whether copy `c` is the source `s` moved by c's transform times the
+/// inverse of s's, a similarity with scale *scale: every item's joint
+/// (xyz, radius) within float rounding of the moved source's; spheres
+/// usable and not emitting (the light list addresses emitters as flat
+/// spheres), curves ending at the same joints.
+bool copyMatchesSource(const Scene& scene, const PrimitiveRows& rows, const PrimitiveInstance& c,
+                       const PrimitiveInstance& s, glm::dmat4* relative) {
+  const auto [lo, hi] = copyItems(scene, rows, c);
+  const auto [slo, shi] = copyItems(scene, rows, s);
+  if (hi == lo || hi - lo != shi - slo) return false;
+  const double det = glm::determinant(glm::dmat3(c.transform)) * glm::determinant(glm::dmat3(s.transform));
+  if (!(std::isfinite(det) && det != 0.0)) return false;
+  const glm::dmat4 r = c.transform * glm::inverse(s.transform);
+  const glm::dmat3 l(r);
+  const double s2 = (glm::dot(l[0], l[0]) + glm::dot(l[1], l[1]) + glm::dot(l[2], l[2])) / 3.0;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j)
+      if (std::abs(glm::dot(l[i], l[j]) - (i == j ? s2 : 0.0)) > 1e-5 * s2) return false;  // (float-made rotations)
+  const double scale = std::sqrt(s2);
+  const double reach = std::max({std::abs(r[3].x), std::abs(r[3].y), std::abs(r[3].z)});
+  const std::uint32_t per = rowsPerItem(c.type);
+  const std::uint32_t data = rows.dataFirst[c.type];
+  for (std::uint32_t k = 0; k < hi - lo; ++k) {
+    if (c.type == WT_PRIM_SPHERE) {
+      const Sphere& sphere = scene.spheres[lo + k];
+      if (!sphereUsable(sphere) || !sphereUsable(scene.spheres[slo + k])) return false;
+      const WtVec4& e = scene.materials[sphere.material].emission;
+      if (e.x > 0.0f || e.y > 0.0f || e.z > 0.0f) return false;
+    }
+    for (std::uint32_t j = 0; j < per; ++j) {
+      const WtVec4& a = rows.data[data + per * (lo + k) + j];
+      const WtVec4& b = rows.data[data + per * (slo + k) + j];
+      if (std::signbit(a.w) != std::signbit(b.w)) return false;
+      const glm::dvec3 moved(r * glm::dvec4(b.x, b.y, b.z, 1.0));
+      const glm::dvec3 at(a.x, a.y, a.z);
+      // a few float roundings of the terms each copy's floats were made from
+      const double tol = 4e-6 * (glm::length(at) + scale * glm::length(glm::dvec3(b.x, b.y, b.z)) + reach +
+                                 std::abs(double(a.w)));
+      if (!(glm::length(moved - at) <= tol) || !(std::abs(scale * std::abs(b.w) - std::abs(a.w)) <= tol)) return false;
+    }
+  }
+  *relative = r;
+  return true;
+}
+
+/// Copies of spheres and curves to store once: per (type, geometry), the
+/// copies that match their source (copyMatchesSource), two or more.
+std::vector<InstancedPrimitives> choosePrimitiveGeometries(const Scene& scene, const PrimitiveRows& rows) {
+  std::map<std::pair<std::uint32_t, std::uint32_t>, std::vector<std::uint32_t>> groups;
+  for (std::uint32_t c = 0; c < scene.primitiveInstances.size(); ++c) {
+    const PrimitiveInstance& copy = scene.primitiveInstances[c];
+    if (copy.type != WT_PRIM_SPHERE && copy.type != WT_PRIM_CURVE) continue;
+    const auto [lo, hi] = copyItems(scene, rows, copy);
+    if (hi > lo) groups[{copy.type, copy.geometry}].push_back(c);
+  }
+  std::vector<InstancedPrimitives> out;
+  std::vector<std::uint8_t> taken(scene.primitiveInstances.size(), 0);
+  for (auto& [key, copies] : groups) {
+    // the source: the copy whose items lie nearest the origin
+    std::uint32_t source = copies[0];
+    double best = INFINITY;
+    for (std::uint32_t c : copies) {
+      const auto [lo, hi] = copyItems(scene, rows, scene.primitiveInstances[c]);
+      double reach = 0.0;
+      const std::uint32_t per = rowsPerItem(key.first);
+      for (std::uint32_t i = per * lo; i < per * hi; ++i) {
+        const WtVec4& p = rows.data[rows.dataFirst[key.first] + i];
+        reach = std::max({reach, std::abs(double(p.x)), std::abs(double(p.y)), std::abs(double(p.z))});
+      }
+      if (reach < best) best = reach, source = c;
+    }
+    InstancedPrimitives g;
+    g.type = key.first;
+    glm::dmat4 relative;
+    if (!copyMatchesSource(scene, rows, scene.primitiveInstances[source], scene.primitiveInstances[source], &relative))
+      continue;
+    g.copies.push_back(source);
+    for (std::uint32_t c : copies)
+      if (c != source && !taken[c] &&
+          copyMatchesSource(scene, rows, scene.primitiveInstances[c], scene.primitiveInstances[source], &relative))
+        g.copies.push_back(c);
+    if (g.copies.size() < 2) continue;
+    for (std::uint32_t c : g.copies) taken[c] = 1;
+    // the centre of the source's items
+    const auto [lo, hi] = copyItems(scene, rows, scene.primitiveInstances[source]);
+    glm::dvec3 a(INFINITY), b(-INFINITY);
+    const std::uint32_t per = rowsPerItem(g.type);
+    for (std::uint32_t i = per * lo; i < per * hi; ++i) {
+      const WtVec4& p = rows.data[rows.dataFirst[g.type] + i];
+      a = glm::min(a, glm::dvec3(p.x, p.y, p.z));
+      b = glm::max(b, glm::dvec3(p.x, p.y, p.z));
+    }
+    g.centre = 0.5 * (a + b);
+    out.push_back(std::move(g));
+  }
+  // in scene order, so the layout does not depend on the map's
+  std::sort(out.begin(), out.end(), [](const InstancedPrimitives& a, const InstancedPrimitives& b) {
+    return a.copies[0] < b.copies[0];
+  });
+  return out;
+}
+
+/// Rows [first, end) of a gathered block: its data or info rows of `type`
+/// up to the next type's in gatherPrimitives' order.
+template <class Rows>
+std::pair<std::size_t, std::size_t> blockOf(const Rows& all, const std::array<std::uint32_t, WT_PRIM_TYPES>& first,
+                                            std::uint32_t type) {
+  std::size_t end = all.size();
+  bool after = false;
+  for (const PrimitiveType& t : primitiveTypes()) {
+    if (after && first[t.id] >= first[type]) {
+      end = std::min<std::size_t>(end, first[t.id]);
+      break;
+    }
+    after = after || t.id == type;
+  }
+  return {first[type], end};
+}
+
+}  // namespace
+
 void SceneBuffers::uploadPrimitives(Context& context, const Scene& scene, const BvhBuildOptions& options,
-                                    std::span<const InstanceDesc> instances) {
+                                    std::vector<InstanceDesc> instances) {
   PrimitiveRows rows = gatherPrimitives(scene, instances);
+  std::vector<InstancedPrimitives> geometries;
+  if (options.instancing != Instancing::Off && !scene.primitiveInstances.empty()) {
+    geometries = choosePrimitiveGeometries(scene, rows);
+    if (options.instancing == Instancing::Auto) {
+      // as triangles: only where the flattened copies would outgrow the cache
+      std::size_t copied = 0;
+      for (const InstancedPrimitives& g : geometries) {
+        const auto [lo, hi] = copyItems(scene, rows, scene.primitiveInstances[g.copies[0]]);
+        copied += std::size_t(hi - lo) * (g.copies.size() - 1);
+      }
+      if (!instancingPays(copied, context.info().globalCacheBytes)) geometries.clear();
+    }
+  }
+  std::vector<PrimitiveTree> geometryTrees;
+  const std::size_t triangleInstances = instances.size();
+  m_primitiveInstanceStack = 0;
+  for (auto& map : m_primDevice) map.clear();
+  for (auto& map : m_primScene) map.clear();
+  if (!geometries.empty()) rows = layoutPrimitiveInstances(scene, rows, geometries, options, instances, geometryTrees);
   m_primitiveCount = rows.count;
   m_skippedPrimitives = rows.skipped;
   PrimitiveTree tree = buildPrimitiveTree(rows, options);
   m_primStats = tree.bvh4.stats;
   m_primitiveBuildSeconds = tree.seconds;
+  // each geometry's tree after the scene's: its nodes and refs moved past the ones before
+  for (const PrimitiveTree& g : geometryTrees) {
+    const auto nodeBase = std::uint32_t(tree.bvh4.nodes.size());
+    const auto refBase = std::uint32_t(tree.refs.size());
+    for (WtBvh4Node n : g.bvh4.nodes) {
+      for (int k = 0; k < 4; ++k)
+        if (n.child[k] != WT_BVH4_EMPTY) n.child[k] += n.count[k] > 0 ? refBase : nodeBase;
+      tree.bvh4.nodes.push_back(n);
+    }
+    tree.refs.insert(tree.refs.end(), g.refs.begin(), g.refs.end());
+    // the instances of this geometry: their root (gatherInstances wrote the tree's own index)
+    for (std::size_t i = triangleInstances; i < instances.size(); ++i)
+      if (instances[i].root == std::uint32_t(&g - geometryTrees.data()) + kPrimitiveGeometryTag)
+        rows.info[rows.infoFirst[WT_PRIM_INSTANCE] + i][0] = nodeBase;
+    m_primitiveInstanceStack = std::max(m_primitiveInstanceStack, bvh4StackEntries(g.bvh4.stats));
+    m_primitiveBuildSeconds += g.seconds;
+  }
 
   geometry = WtGeometry{};
   geometry.node_count = std::uint32_t(tree.bvh4.nodes.size());
@@ -509,6 +764,164 @@ void SceneBuffers::uploadPrimitives(Context& context, const Scene& scene, const 
   primInfo = upload(context, rows.info, primitiveBytes);
 }
 
+PrimitiveRows SceneBuffers::layoutPrimitiveInstances(const Scene& scene, const PrimitiveRows& full,
+                                                     std::vector<InstancedPrimitives>& geometries,
+                                                     const BvhBuildOptions& options,
+                                                     std::vector<InstanceDesc>& instances,
+                                                     std::vector<PrimitiveTree>& trees) {
+  PrimitiveRows out;
+  // gatherInstances counts the instances it leaves out again below: the triangles' ones not twice
+  std::size_t keptInstances = 0;
+  for (std::uint32_t id : full.ids) keptInstances += primType(id) == WT_PRIM_INSTANCE;
+  out.skipped = full.skipped - (full.count[WT_PRIM_INSTANCE] - keptInstances);
+  // the gathered items in instanced copies, per type: which copy and which geometry
+  std::array<std::vector<std::uint8_t>, WT_PRIM_TYPES> omitted;
+  std::array<std::vector<std::uint32_t>, WT_PRIM_TYPES> boxOf;  // an item's entry in full.bounds
+  for (std::uint32_t type : {WT_PRIM_SPHERE, WT_PRIM_CURVE}) {
+    const auto [lo, hi] = blockOf(full.info, full.infoFirst, type);
+    omitted[type].assign(hi - lo, 0);
+    boxOf[type].assign(hi - lo, 0xffffffffu);
+  }
+  for (std::size_t i = 0; i < full.ids.size(); ++i) {
+    const std::uint32_t type = primType(full.ids[i]);
+    if (type == WT_PRIM_SPHERE || type == WT_PRIM_CURVE) boxOf[type][primIndex(full.ids[i])] = std::uint32_t(i);
+  }
+  for (const InstancedPrimitives& g : geometries)
+    for (std::uint32_t c : g.copies) {
+      const auto [lo, hi] = copyItems(scene, full, scene.primitiveInstances[c]);
+      std::fill(omitted[g.type].begin() + lo, omitted[g.type].begin() + hi, 1);
+    }
+  // the ids that enter the scene's tree: other types' as gathered, spheres' and curves' renumbered below
+  std::array<std::vector<std::uint32_t>, WT_PRIM_TYPES> renumber;
+  for (const PrimitiveType& t : primitiveTypes()) {
+    const std::uint32_t type = t.id;
+    if (type == WT_PRIM_INSTANCE) {
+      // triangle instances as they were, then one per instanced copy (roots patched once the trees are laid out)
+      for (std::size_t gi = 0; gi < geometries.size(); ++gi) {
+        InstancedPrimitives& g = geometries[gi];
+        // the geometry's own tree over its items in object space (the source's less its centre)
+        PrimitiveRows local;
+        const auto [lo, hi] = copyItems(scene, full, scene.primitiveInstances[g.copies[0]]);
+        for (std::uint32_t k = 0; k < hi - lo; ++k) {
+          const std::uint32_t id = primId(g.type, g.base + k);
+          // the source's box moved in double and widened past the float rounding of the move
+          const Aabb& box = full.bounds[boxOf[g.type][lo + k]];  // every item of a copy is usable (copyMatchesSource)
+          const glm::dvec3 a = glm::dvec3(box.lo) - g.centre, b = glm::dvec3(box.hi) - g.centre;
+          const glm::dvec3 slack = 2.4e-7 * (glm::max(glm::abs(a), glm::abs(b)) + (b - a));
+          Aabb moved;
+          moved.lo = glm::vec3(a - slack);
+          moved.hi = glm::vec3(b + slack);
+          local.bounds.push_back(moved);
+          local.ids.push_back(id);
+        }
+        trees.push_back(buildPrimitiveTree(local, options));
+        const WtBvh4Node& root = trees.back().bvh4.nodes.front();
+        const PrimitiveInstance& source = scene.primitiveInstances[g.copies[0]];
+        const glm::dmat4 fromSource = glm::inverse(source.transform) * glm::translate(glm::dmat4(1.0), g.centre);
+        for (std::uint32_t c : g.copies) {
+          const PrimitiveInstance& copy = scene.primitiveInstances[c];
+          InstanceDesc desc;
+          desc.primitives = true;
+          desc.root = kPrimitiveGeometryTag + std::uint32_t(gi);
+          for (int k = 0; k < 4; ++k) {
+            desc.rootBoxes[k].lo = glm::vec3(root.lo_x[k], root.lo_y[k], root.lo_z[k]);
+            desc.rootBoxes[k].hi = glm::vec3(root.hi_x[k], root.hi_y[k], root.hi_z[k]);
+          }
+          desc.objectToScene = copy.transform * fromSource;
+          const auto instance = std::uint32_t(instances.size());
+          instances.push_back(desc);
+          m_instanceOffset.push_back(0);
+          m_instanceMirrored.push_back(glm::determinant(glm::dmat3(desc.objectToScene)) < 0.0);
+          // the copy's items: the geometry's on this instance
+          const auto [clo, chi] = copyItems(scene, full, copy);
+          m_primInstanceFirst.resize(instances.size(), 0);
+          m_primInstanceFirst[instance] = std::int64_t(clo) - std::int64_t(g.base);
+          for (std::uint32_t k = 0; k < chi - clo; ++k)
+            m_primDevice[g.type][clo + k] = {g.base + k, primId(WT_PRIM_INSTANCE, instance)};
+        }
+      }
+      gatherInstances(instances, out);
+      continue;
+    }
+    if (type != WT_PRIM_SPHERE && type != WT_PRIM_CURVE) {
+      // copied as gathered: rows count from their type's first row
+      const auto [dlo, dhi] = blockOf(full.data, full.dataFirst, type);
+      const auto [ilo, ihi] = blockOf(full.info, full.infoFirst, type);
+      out.dataFirst[type] = std::uint32_t(out.data.size());
+      out.infoFirst[type] = std::uint32_t(out.info.size());
+      out.data.insert(out.data.end(), full.data.begin() + dlo, full.data.begin() + dhi);
+      out.info.insert(out.info.end(), full.info.begin() + ilo, full.info.begin() + ihi);
+      out.count[type] = full.count[type];
+      continue;
+    }
+    // spheres, curves: the flat items, then each geometry's (the source's, object space)
+    const std::uint32_t per = rowsPerItem(type);
+    if (per == 2 && out.data.size() % 2 != 0) out.data.push_back({0.0f, 0.0f, 0.0f, 0.0f});
+    out.dataFirst[type] = std::uint32_t(out.data.size());
+    out.infoFirst[type] = std::uint32_t(out.info.size());
+    const std::size_t items = omitted[type].size();
+    m_primDevice[type].assign(items, {0xffffffffu, 0xffffffffu});
+    renumber[type].assign(items, 0xffffffffu);
+    for (std::uint32_t i = 0; i < items; ++i) {
+      if (omitted[type][i]) continue;
+      renumber[type][i] = std::uint32_t(m_primScene[type].size());
+      m_primDevice[type][i] = {renumber[type][i], 0xffffffffu};
+      m_primScene[type].push_back(i);
+      for (std::uint32_t j = 0; j < per; ++j) out.data.push_back(full.data[full.dataFirst[type] + per * i + j]);
+      out.info.push_back(full.info[full.infoFirst[type] + i]);
+    }
+    std::uint32_t next = std::uint32_t(m_primScene[type].size());
+    for (InstancedPrimitives& g : geometries) {
+      if (g.type != type) continue;
+      g.base = next;
+      const auto [lo, hi] = copyItems(scene, full, scene.primitiveInstances[g.copies[0]]);
+      for (std::uint32_t i = lo; i < hi; ++i) {
+        for (std::uint32_t j = 0; j < per; ++j) {
+          const WtVec4& p = full.data[full.dataFirst[type] + per * i + j];
+          const glm::vec3 q(glm::dvec3(p.x, p.y, p.z) - g.centre);
+          out.data.push_back({q.x, q.y, q.z, p.w});  // the radius keeps its sign bit (curves' ends)
+        }
+        out.info.push_back(full.info[full.infoFirst[type] + i]);
+      }
+      next += hi - lo;
+    }
+    // items left out as gathered (degenerate) still count; the instanced copies' count once
+    out.count[type] = full.count[type] - (items - m_primScene[type].size()) + (next - m_primScene[type].size());
+  }
+  // the scene tree's entries: every gathered id but the instanced copies', renumbered, then the instances
+  for (std::size_t i = 0; i < full.ids.size(); ++i) {
+    const std::uint32_t id = full.ids[i], type = primType(id);
+    if (type == WT_PRIM_INSTANCE) continue;
+    if (type == WT_PRIM_SPHERE || type == WT_PRIM_CURVE) {
+      const std::uint32_t to = renumber[type][primIndex(id)];
+      if (to == 0xffffffffu) continue;
+      out.bounds.push_back(full.bounds[i]);
+      out.ids.push_back(primId(type, to));
+      continue;
+    }
+    out.bounds.push_back(full.bounds[i]);
+    out.ids.push_back(id);
+  }
+  // gatherInstances wrote the instances' boxes and ids into out already (before the others: order does not matter)
+  return out;
+}
+
+std::pair<std::uint32_t, std::uint32_t> SceneBuffers::devicePrimitive(std::uint32_t sceneId) const {
+  const std::uint32_t type = primType(sceneId);
+  if (sceneId == 0xffffffffu || type >= WT_PRIM_TYPES || m_primDevice[type].empty()) return {sceneId, 0xffffffffu};
+  if (primIndex(sceneId) >= m_primDevice[type].size()) return {sceneId, 0xffffffffu};
+  const auto [index, instance] = m_primDevice[type][primIndex(sceneId)];
+  return {primId(type, index), instance};
+}
+
+std::uint32_t SceneBuffers::scenePrimitive(std::uint32_t deviceId, std::uint32_t instance) const {
+  const std::uint32_t type = primType(deviceId);
+  if (deviceId == 0xffffffffu || type >= WT_PRIM_TYPES || m_primDevice[type].empty()) return deviceId;
+  if (instance != 0xffffffffu)
+    return primId(type, std::uint32_t(std::int64_t(primIndex(deviceId)) + m_primInstanceFirst[primIndex(instance)]));
+  return primId(type, m_primScene[type][primIndex(deviceId)]);
+}
+
 std::uint32_t SceneBuffers::sceneTriangle(std::uint32_t leafIndex, std::uint32_t instance) const {
   const std::uint32_t first = m_leafToScene[leafIndex];
   if (instance == 0xffffffffu) return first;
@@ -516,7 +929,8 @@ std::uint32_t SceneBuffers::sceneTriangle(std::uint32_t leafIndex, std::uint32_t
 }
 
 int SceneBuffers::stackSize() const {
-  int needed = std::max({bvh4StackEntries(m_bvh4Stats), bvh4StackEntries(m_primStats), m_blasStackEntries});
+  int needed = std::max({bvh4StackEntries(m_bvh4Stats), bvh4StackEntries(m_primStats), m_blasStackEntries,
+                         m_primitiveInstanceStack});
   return std::max(32, (needed + 31) / 32 * 32);
 }
 

@@ -33,6 +33,8 @@ struct PrimitiveTree {
   std::vector<std::uint32_t> refs;
   double seconds = 0.0;  ///< wall time of the build and collapse
 };
+/// Curve segments that lie across their boxes enter the tree as several
+/// boxes along their length (refs then holds their id more than once).
 PrimitiveTree buildPrimitiveTree(const PrimitiveRows& rows, const BvhBuildOptions& options);
 
 /// Whether scene triangle `tri` can have a hole under its material's alpha
@@ -49,6 +51,8 @@ bool textureIsOpaque(const TextureSet& textures, std::uint32_t texture);
 
 /// "off", "on", "auto" (Instancing, host/bvh/lbvh.h).
 std::optional<Instancing> parseInstancing(std::string_view name);
+
+struct InstancedPrimitives;
 
 class SceneBuffers {
  public:
@@ -169,6 +173,15 @@ class SceneBuffers {
   /// corners 1 and 2 are swapped against its geometry's (barycentrics b1, b2
   /// trade places).
   bool instanceMirrored(std::uint32_t instance) const { return m_instanceMirrored[primIndex(instance)]; }
+  /// A sphere's or curve segment's typed id in the flattened scene (spheres
+  /// by scene index, segments as gatherCurves numbers them) as the device
+  /// knows it: its typed id there and the instance it is on (0xffffffff
+  /// for none). Other ids as they are.
+  std::pair<std::uint32_t, std::uint32_t> devicePrimitive(std::uint32_t sceneId) const;
+  /// The reverse: the flattened scene's typed id of device primitive `deviceId` hit on `instance`.
+  std::uint32_t scenePrimitive(std::uint32_t deviceId, std::uint32_t instance) const;
+  /// Whether spheres or curves are stored once (their device ids differ from the flattened scene's).
+  bool primitivesInstanced() const { return !m_primInstanceFirst.empty(); }
   /// Scene triangles in instanced copies (each stored once per geometry).
   std::size_t instancedTriangles() const { return m_instancedTriangles; }
   /// What the triangles take on the device: uploadedBytes, and with
@@ -185,7 +198,14 @@ class SceneBuffers {
 
  private:
   void uploadPrimitives(Context& context, const Scene& scene, const BvhBuildOptions& options,
-                        std::span<const InstanceDesc> instances);
+                        std::vector<InstanceDesc> instances);
+  /// The gathered rows with the copies in `geometries` stored once: the
+  /// flat items renumbered, each geometry's items in object space after
+  /// them, an instance per copy appended to `instances`; `trees` gets each
+  /// geometry's own tree.
+  PrimitiveRows layoutPrimitiveInstances(const Scene& scene, const PrimitiveRows& full,
+                                         std::vector<InstancedPrimitives>& geometries, const BvhBuildOptions& options,
+                                         std::vector<InstanceDesc>& instances, std::vector<PrimitiveTree>& trees);
 
   void uploadSurface(Context& context, const Scene& scene);
 
@@ -209,6 +229,13 @@ class SceneBuffers {
   std::vector<bool> m_instanceMirrored;
   std::size_t m_instancedTriangles = 0;
   int m_blasStackEntries = 0;
+  /// Spheres and curves stored once, per type: the flattened scene's item
+  /// -> (device index, instance typed id or 0xffffffff), and device index ->
+  /// the flattened scene's item for the flat ones; empty without them.
+  std::array<std::vector<std::pair<std::uint32_t, std::uint32_t>>, WT_PRIM_TYPES> m_primDevice;
+  std::array<std::vector<std::uint32_t>, WT_PRIM_TYPES> m_primScene;
+  std::vector<std::int64_t> m_primInstanceFirst;  ///< per instance: its copy's first item less its geometry's device index
+  int m_primitiveInstanceStack = 0;               ///< stack entries the primitive geometries' trees need
   std::size_t m_attributeBytes = 0;
 };
 

@@ -160,9 +160,11 @@ void Tracer::uploadRays(std::span<const Ray> rays) {
     d[4 * i + 0] = r.direction.x, d[4 * i + 1] = r.direction.y, d[4 * i + 2] = r.direction.z,
               d[4 * i + 3] = r.tmax;
     // a scene triangle of an instanced copy is its geometry's triangle on that instance
+    // and a sphere's or curve's of an instanced copy is its geometry's on that instance
     const bool triangle = primType(r.skip) == WT_PRIM_TRIANGLE;
-    skip[i] = triangle ? m_scene->leafTriangle(r.skip) : r.skip;
-    skipInstance[i] = triangle ? m_scene->triangleInstance(r.skip) : RayHit::kNoHit;
+    const auto [prim, instance] = m_scene->devicePrimitive(r.skip);
+    skip[i] = triangle ? m_scene->leafTriangle(r.skip) : prim;
+    skipInstance[i] = triangle ? m_scene->triangleInstance(r.skip) : instance;
   }
   if (!rays.empty()) {
     m_context.queue().enqueueWriteBuffer(m_rayO, CL_TRUE, 0, o.size() * 4, o.data());
@@ -226,12 +228,12 @@ std::vector<RayHit> Tracer::traceClosest(std::span<const Ray> rays, Traversal tr
     hits[i].b1 = raw[4 * i + 1];
     hits[i].b2 = raw[4 * i + 2];
     const bool triangle = prim != RayHit::kNoHit && primType(prim) == WT_PRIM_TRIANGLE;
-    const std::uint32_t instance = triangle ? instances[i] : RayHit::kNoHit;
+    const std::uint32_t instance = prim != RayHit::kNoHit ? instances[i] : RayHit::kNoHit;
     hits[i].triangle = triangle ? m_scene->sceneTriangle(prim, instance) : RayHit::kNoHit;
-    hits[i].prim = triangle ? hits[i].triangle : prim;
+    hits[i].prim = triangle ? hits[i].triangle : m_scene->scenePrimitive(prim, instance);
     hits[i].instance = instance;
     // a mirroring copy's corners 1 and 2 are its geometry's 2 and 1
-    if (instance != RayHit::kNoHit && m_scene->instanceMirrored(instance)) std::swap(hits[i].b1, hits[i].b2);
+    if (triangle && instance != RayHit::kNoHit && m_scene->instanceMirrored(instance)) std::swap(hits[i].b1, hits[i].b2);
   }
   return hits;
 }

@@ -31,8 +31,9 @@ struct RayHit {
   float b1 = 0.0f, b2 = 0.0f;       ///< barycentrics of the triangle's v1 and v2
   std::uint32_t triangle = kNoHit;  ///< the scene's triangle index; kNoHit for a miss or another type
   std::uint32_t prim = kNoHit;      ///< what was hit: the scene's triangle index, or another type's typed id (primId)
-  /// the instance (typed id, WT_PRIM_INSTANCE) whose copy of `triangle` was
-  /// hit; kNoHit for a flat triangle, another type or a miss
+  /// the instance (typed id, WT_PRIM_INSTANCE) whose copy of `triangle` (or
+  /// of a sphere or curve: `prim` names the flattened scene's) was hit;
+  /// kNoHit for a flat primitive or a miss
   std::uint32_t instance = kNoHit;
   static constexpr std::uint32_t kNoHit = 0xffffffffu;
 };

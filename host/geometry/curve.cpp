@@ -181,14 +181,17 @@ void gatherCurves(const Scene& scene, PrimitiveRows& rows) {
   rows.dataFirst[WT_PRIM_CURVE] = std::uint32_t(rows.data.size());
   rows.infoFirst[WT_PRIM_CURVE] = std::uint32_t(rows.info.size());
   rows.count[WT_PRIM_CURVE] = 0;
+  rows.curveSegments.clear();
   for (std::size_t i = 0; i < scene.curves.size(); ++i) {
     const Curve& curve = scene.curves[i];
+    rows.curveSegments.push_back(std::uint32_t(rows.info.size() - rows.infoFirst[WT_PRIM_CURVE]));
     SegmentWriter writer(rows, std::uint32_t(i), curve.material);
     if (curve.basis == CurveBasis::kBSpline)
       gatherBSpline(scene, curve, writer);
     else
       gatherLinear(scene, curve, writer);
   }
+  rows.curveSegments.push_back(std::uint32_t(rows.info.size() - rows.infoFirst[WT_PRIM_CURVE]));
 }
 
 CurveSegment curveSegment(const PrimitiveRows& rows, std::uint32_t index) {

@@ -24,7 +24,9 @@ void gatherInstances(std::span<const InstanceDesc> instances, PrimitiveRows& row
     appendRows(glm::inverse(toScene), rows.data);
     appendRows(toScene, rows.data);
     const bool mirrored = glm::determinant(glm::dmat3(toScene)) < 0.0;
-    rows.info.push_back({instance.root, mirrored ? WT_INSTANCE_MIRRORED : 0u, 0u, 0u});
+    rows.info.push_back({instance.root,
+                         (mirrored ? WT_INSTANCE_MIRRORED : 0u) | (instance.primitives ? WT_INSTANCE_PRIMITIVES : 0u),
+                         0u, 0u});
 
     glm::dvec3 lo(INFINITY), hi(-INFINITY);
     for (const Aabb& box : instance.rootBoxes) {

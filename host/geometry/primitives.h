@@ -51,6 +51,8 @@ struct PrimitiveRows {
   std::array<std::uint32_t, WT_PRIM_TYPES> infoFirst{};  ///< per type: its first prim_info row
   std::array<std::size_t, WT_PRIM_TYPES> count{};        ///< per type: primitives in the scene (kept or not)
   std::size_t skipped = 0;  ///< primitives left out (degenerate: zero size, non-finite)
+  /// gatherCurves: per Scene::curves entry its first kept segment's index, then the end (curves + 1 entries)
+  std::vector<std::uint32_t> curveSegments;
 };
 
 /// Whether a sphere can be drawn: a finite centre and a finite radius > 0.
@@ -166,11 +168,12 @@ glm::vec3 displacedVertex(const DisplacedMesh& mesh, std::uint32_t triangle, int
 /// vertices; Scene::displacedMeshes is emptied. Returns the triangles made.
 std::size_t tessellateDisplaced(Scene& scene, int perEdge);
 
-/// A placed copy of a triangle geometry stored once (WT_PRIM_INSTANCE,
+/// A placed copy of a geometry stored once (WT_PRIM_INSTANCE,
 /// kernels/geometry/instance.cl), as SceneBuffers laid it out.
 struct InstanceDesc {
   glm::dmat4 objectToScene{1.0};  ///< the geometry's object space -> scene space, double
-  std::uint32_t root = 0;         ///< the geometry's root node in SceneBuffers::nodes
+  std::uint32_t root = 0;         ///< the geometry's root node in SceneBuffers::nodes (primNodes for primitives)
+  bool primitives = false;        ///< a geometry of spheres or curves (WT_INSTANCE_PRIMITIVES)
   std::array<Aabb, 4> rootBoxes;  ///< the root's child boxes, object space (empty ones unused)
 };
 

@@ -224,10 +224,11 @@ LightList buildLightList(const Scene& scene, const SceneBuffers& buffers, double
     if (!(luminance(le) > 0.0) || !sphereUsable(sphere) || !std::isfinite(area)) continue;
     WtLight l{};
     l.type = WT_LIGHT_PRIMITIVE;
-    l.triangle = primId(WT_PRIM_SPHERE, std::uint32_t(i));
+    // its id on the device (emitting spheres are never instanced, but instanced ones shift them)
+    l.triangle = buffers.devicePrimitive(primId(WT_PRIM_SPHERE, std::uint32_t(i))).first;
     l.position = {sphere.center.x, sphere.center.y, sphere.center.z, sphere.radius};
     l.intensity = {le.x, le.y, le.z, 0.0f};
-    sphereLights.push_back({geometry.emitter_first[WT_PRIM_SPHERE] + std::uint32_t(i),
+    sphereLights.push_back({geometry.emitter_first[WT_PRIM_SPHERE] + primIndex(l.triangle),
                             std::uint32_t(list.lights.size())});
     power.push_back(std::numbers::pi * area * luminance(le));  // pi * L * area, from the outside
     list.lights.push_back(l);

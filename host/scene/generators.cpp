@@ -406,6 +406,15 @@ void appendScene(Scene& dst, const Scene& src) {
     t.v0 += vertexBase, t.v1 += vertexBase, t.v2 += vertexBase, t.material += materialBase;
     dst.triangles.push_back(t);
   }
+  // copies of spheres and curves: their items and geometry ids past dst's, per type
+  std::uint32_t primitiveGeometryBase = 0;
+  for (const PrimitiveInstance& copy : dst.primitiveInstances)
+    primitiveGeometryBase = std::max(primitiveGeometryBase, copy.geometry + 1);
+  for (PrimitiveInstance copy : src.primitiveInstances) {
+    copy.first += std::uint32_t(copy.type == WT_PRIM_SPHERE ? dst.spheres.size() : dst.curves.size());
+    copy.geometry += primitiveGeometryBase;
+    dst.primitiveInstances.push_back(copy);
+  }
   for (Sphere sphere : src.spheres) {
     sphere.material += materialBase;
     dst.spheres.push_back(sphere);
@@ -447,6 +456,28 @@ Scene placeCopies(const Scene& mesh, std::span<const glm::mat4> transforms) {
       t.v0 += vertexBase, t.v1 += vertexBase, t.v2 += vertexBase;
       if (flip) std::swap(t.v1, t.v2);
       scene.triangles.push_back(t);
+    }
+    // spheres and curves: radii scale by the cube root of the determinant (as scene files place them)
+    const float radiusScale = float(std::cbrt(std::abs(glm::determinant(glm::dmat3(transform)))));
+    if (!mesh.spheres.empty())
+      scene.primitiveInstances.push_back({WT_PRIM_SPHERE, std::uint32_t(scene.spheres.size()),
+                                          std::uint32_t(mesh.spheres.size()), 0, glm::dmat4(transform)});
+    for (Sphere s : mesh.spheres) {
+      s.center = glm::vec3(transform * glm::vec4(s.center, 1.0f));
+      s.radius *= radiusScale;
+      scene.spheres.push_back(s);
+    }
+    if (!mesh.curves.empty())
+      scene.primitiveInstances.push_back({WT_PRIM_CURVE, std::uint32_t(scene.curves.size()),
+                                          std::uint32_t(mesh.curves.size()), 0, glm::dmat4(transform)});
+    const auto pointBase = std::uint32_t(scene.curvePoints.size());
+    for (Curve c : mesh.curves) {
+      c.firstPoint += pointBase;
+      scene.curves.push_back(c);
+    }
+    for (const WtVec4& p : mesh.curvePoints) {
+      const glm::vec3 moved(transform * glm::vec4(p.x, p.y, p.z, 1.0f));
+      scene.curvePoints.push_back({moved.x, moved.y, moved.z, p.w * radiusScale});
     }
   }
   return scene;

@@ -67,8 +67,9 @@ void appendScene(Scene& dst, const Scene& src);
 /// One copy of `mesh`'s triangles per transform (points by the matrix,
 /// normals by its inverse transpose; a mirroring one swaps two corners so the
 /// front face stays in front, as the glTF loader does), each recorded in
-/// Scene::instances with its transform as a copy of one geometry; the
-/// materials once.
+/// Scene::instances with its transform as a copy of one geometry; likewise
+/// its spheres and curves (radii by the cube root of the determinant) in
+/// Scene::primitiveInstances; the materials once.
 Scene placeCopies(const Scene& mesh, std::span<const glm::mat4> transforms);
 
 /// A Lambertian material; emission from the front face only unless twoSided.

@@ -143,22 +143,12 @@ typedef struct SurfaceHit {
   uint material;   ///< index into materials
 } SurfaceHit;
 
-/// The surface where ray (o, d) hit primitive `prim`; `hit` is the stored
-/// (t, u, v, prim); `instance` the instance hit (prim then its geometry's
-/// leaf-order triangle), WT_NO_HIT for none.
-inline SurfaceHit geometry_surface(GeometryScene g, __global const float4* tri_verts, __global const uint4* tri_info,
-                                   __global const float4* normals, uint prim, uint instance, float3 o, float3 d,
-                                   float4 hit) {
+/// The surface of a primitive that is not an instance's triangle, in the
+/// space of the ray (o, d): geometry_surface's switch.
+inline SurfaceHit geometry_local_surface(GeometryScene g, __global const float4* tri_verts,
+                                         __global const uint4* tri_info, __global const float4* normals, uint prim,
+                                         float3 o, float3 d, float4 hit) {
   SurfaceHit s;
-#if WT_HAS_INSTANCES
-  if (instance != WT_NO_HIT) {
-    instance_surface(geometry_instance_rows(g, instance), tri_verts, tri_info, normals, prim, hit.y, hit.z, &s.p,
-                     &s.p_error, &s.ng, &s.ns, &s.dpdu);
-    s.uv = (float2)(hit.y, hit.z);
-    s.material = tri_info[prim].w;
-    return s;
-  }
-#endif
   switch (prim_type(prim)) {
 #if WT_HAS_SPHERES
     case WT_PRIM_SPHERE: {
@@ -209,6 +199,33 @@ inline SurfaceHit geometry_surface(GeometryScene g, __global const float4* tri_v
       return s;
     }
   }
+}
+
+/// The surface where ray (o, d) hit primitive `prim`; `hit` is the stored
+/// (t, u, v, prim); `instance` the instance hit (prim then its geometry's
+/// leaf-order triangle or typed id), WT_NO_HIT for none.
+inline SurfaceHit geometry_surface(GeometryScene g, __global const float4* tri_verts, __global const uint4* tri_info,
+                                   __global const float4* normals, uint prim, uint instance, float3 o, float3 d,
+                                   float4 hit) {
+#if WT_HAS_INSTANCES
+  if (instance != WT_NO_HIT) {
+    SurfaceHit s;
+    __global const float4* rows = geometry_instance_rows(g, instance);
+    if (prim_type(prim) == WT_PRIM_TRIANGLE) {
+      instance_surface(rows, tri_verts, tri_info, normals, prim, hit.y, hit.z, &s.p, &s.p_error, &s.ng, &s.ns,
+                       &s.dpdu);
+      s.uv = (float2)(hit.y, hit.z);
+      s.material = tri_info[prim].w;
+      return s;
+    }
+    // spheres and curves: the surface in object space (t carries over), moved back
+    s = geometry_local_surface(g, tri_verts, tri_info, normals, prim, instance_point(rows, o),
+                               instance_vector(rows, d), hit);
+    instance_to_scene(rows, s.p, s.p_error, s.ng, s.ns, s.dpdu, &s.p, &s.p_error, &s.ng, &s.ns, &s.dpdu);
+    return s;
+  }
+#endif
+  return geometry_local_surface(g, tri_verts, tri_info, normals, prim, o, d, hit);
 }
 
 /// A point of non-triangle emitter `prim` sampled from p, as solid angle:

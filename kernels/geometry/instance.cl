@@ -1,7 +1,8 @@
-// Instances (WT_PRIM_INSTANCE): a triangle geometry stored once, in its own
-// "object space" (its tree in `nodes` after the scene's, its triangles in
-// tri_verts and tri_info after the scene's), placed by one affine transform
-// per copy. A copy's rows (shared/types.h, WT_INSTANCE_ROWS): object-from-
+// Instances (WT_PRIM_INSTANCE): a geometry stored once, in its own "object
+// space" (triangles: its tree in `nodes` after the scene's, its triangles in
+// tri_verts and tri_info after the scene's; spheres or curves: its tree in
+// prim_nodes, traversed by kernels/bvh_prims.cl), placed by one affine
+// transform per copy. A copy's rows (shared/types.h, WT_INSTANCE_ROWS): object-from-
 // scene, then scene-from-object, each a 3x4 matrix in three float4 rows,
 // both rounded to float from one double inverse pair on the host
 // (host/geometry/instance.cpp). The ray goes into object space unnormalised,
@@ -58,22 +59,15 @@ inline bool instance_occluded(BvhScene scene, __global const float4* rows, uint 
                            WT_NO_HIT);
 }
 
-/// The scene-space surface at a hit (barycentrics b1, b2) on the geometry's
-/// leaf-order triangle `tri` of the copy with rows `rows`: the triangle's
-/// surface in object space moved by scene-from-object. The position's error
+/// An object-space surface (point po with error bound eo, normals ngo and
+/// nso, dp/du) of the copy with rows `rows` moved by scene-from-object. The position's error
 /// bound grows by the transform's rounding (pbrt-v4's bound for a point with
 /// error, gamma(3) on the products and (1 + gamma(3)) on the carried error),
 /// with gamma(7) in place of gamma(3) on the products: the ray of the next
 /// bounce goes back by the other float matrix, which is the inverse of this
 /// one only to a few ulps.
-inline void instance_surface(__global const float4* rows, __global const float4* tri_verts,
-                             __global const uint4* tri_info, __global const float4* normals, uint tri, float b1,
-                             float b2, float3* p, float3* p_error, float3* ng, float3* ns, float3* dpdu) {
-  uint4 info = tri_info[tri];
-  float3 p0, p1, p2, po, eo, ngo, nso;
-  triangle_corners(tri_verts, tri, &p0, &p1, &p2);
-  triangle_surface(p0, p1, p2, normals[info.x].xyz, normals[info.y].xyz, normals[info.z].xyz, b1, b2, &po, &eo, &ngo,
-                   &nso);
+inline void instance_to_scene(__global const float4* rows, float3 po, float3 eo, float3 ngo, float3 nso,
+                              float3 dpduo, float3* p, float3* p_error, float3* ng, float3* ns, float3* dpdu) {
   __global const float4* m = rows + 3;  // scene-from-object
   *p = instance_point(m, po);
   float3 r0 = fabs(m[0].xyz), r1 = fabs(m[1].xyz), r2 = fabs(m[2].xyz);
@@ -87,7 +81,20 @@ inline void instance_surface(__global const float4* rows, __global const float4*
   float3 s = instance_normal(rows, nso);
   float slen = length(s);
   *ns = (slen > 0.0f && isfinite(slen)) ? s / slen : *ng;
-  *dpdu = instance_vector(m, p1 - p0);
+  *dpdu = instance_vector(m, dpduo);
+}
+
+/// The scene-space surface at a hit (barycentrics b1, b2) on the geometry's
+/// leaf-order triangle `tri` of the copy with rows `rows` (instance_to_scene).
+inline void instance_surface(__global const float4* rows, __global const float4* tri_verts,
+                             __global const uint4* tri_info, __global const float4* normals, uint tri, float b1,
+                             float b2, float3* p, float3* p_error, float3* ng, float3* ns, float3* dpdu) {
+  uint4 info = tri_info[tri];
+  float3 p0, p1, p2, po, eo, ngo, nso;
+  triangle_corners(tri_verts, tri, &p0, &p1, &p2);
+  triangle_surface(p0, p1, p2, normals[info.x].xyz, normals[info.y].xyz, normals[info.z].xyz, b1, b2, &po, &eo, &ngo,
+                   &nso);
+  instance_to_scene(rows, po, eo, ngo, nso, p1 - p0, p, p_error, ng, ns, dpdu);
 }
 
 #endif  // WT_GEOMETRY_INSTANCE_CL

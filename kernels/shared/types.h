@@ -73,11 +73,13 @@ typedef struct WtBvh4Node {
 #define WT_PRIM_TRIANGLE 0u  ///< kernels/geometry/triangle.cl, in their own BVH (nodes, tri_verts)
 #define WT_PRIM_SPHERE 1u    ///< kernels/geometry/sphere.cl
 #define WT_PRIM_CURVE 2u     ///< kernels/geometry/curve.cl: one segment (a round cone) of a curve
-/// A placed copy of a triangle geometry stored once (kernels/geometry/instance.cl):
-/// its own 4-wide tree in `nodes` after the scene's, its triangles in
-/// tri_verts/tri_info after the scene's (leaf order). A hit on it keeps the
-/// geometry's leaf-order triangle in the hit and the instance's typed id
-/// beside it (hit_instance).
+/// A placed copy of a geometry stored once (kernels/geometry/instance.cl).
+/// Triangles: its own 4-wide tree in `nodes` after the scene's, its
+/// triangles in tri_verts/tri_info after the scene's (leaf order). Spheres
+/// or curves (WT_INSTANCE_PRIMITIVES): its own tree in prim_nodes after the
+/// scene's, its primitives' rows after the scene's in their type's block.
+/// A hit on it keeps the geometry's primitive (a leaf-order triangle or a
+/// typed id) in the hit and the instance's typed id beside it (hit_instance).
 #define WT_PRIM_INSTANCE 3u
 /// prim_data rows per instance: object-from-scene as three float4 rows of a
 /// 3x4 matrix (xyz the linear part's row, w the translation), then
@@ -85,6 +87,7 @@ typedef struct WtBvh4Node {
 /// y = WT_INSTANCE_* flags.
 #define WT_INSTANCE_ROWS 6
 #define WT_INSTANCE_MIRRORED 1u  ///< the transform's determinant is negative (the copy's corners 1 and 2 swapped)
+#define WT_INSTANCE_PRIMITIVES 2u  ///< the root is a node of prim_nodes (spheres, curves), not of nodes (triangles)
 /// A base triangle of a displaced mesh (kernels/geometry/displaced.cl),
 /// intersected as 4^L micro-triangles that are never stored. prim_data: per
 /// mesh WT_DISP_MESH_ROWS rows: (scale, offset, map width, map height),
