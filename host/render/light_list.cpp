@@ -43,9 +43,9 @@ std::vector<WtAliasSlot> buildAliasTable(std::span<const double> weights) {
 
 namespace {
 
-/// The texel of `texture` nearest to uv at `level`, linear RGB (host twin of
-/// kernels/materials/texture.cl for the light list's estimates).
-glm::dvec3 texelAt(const TextureSet& set, const WtTexture& texture, std::uint32_t level, glm::dvec2 uv) {
+/// The texel of `texture` nearest to uv at `level`, linear RGB and alpha (host
+/// twin of kernels/materials/texture.cl for the light list's estimates).
+glm::dvec4 texelAt(const TextureSet& set, const WtTexture& texture, std::uint32_t level, glm::dvec2 uv) {
   const WtTextureLevel& l = set.levels[texture.first_level + std::min(level, texture.level_count - 1)];
   auto wrap = [](double x, std::uint32_t size, std::uint32_t mode) {
     double t = x * double(size);
@@ -61,16 +61,40 @@ glm::dvec3 texelAt(const TextureSet& set, const WtTexture& texture, std::uint32_
   const std::uint32_t x = wrap(uv.x, l.width, WT_TEXTURE_WRAP_S(texture.flags));
   const std::uint32_t y = wrap(uv.y, l.height, WT_TEXTURE_WRAP_T(texture.flags));
   const std::size_t index = std::size_t(y) * l.width + x;
-  glm::dvec3 c;
+  glm::dvec4 c;
   if (texture.flags & WT_TEXTURE_16BIT) {
     const wt_uint a = set.texels[l.offset + 2 * index], b = set.texels[l.offset + 2 * index + 1];
-    c = glm::dvec3(a & 0xffffu, a >> 16, b & 0xffffu) / 65535.0;
+    c = glm::dvec4(a & 0xffffu, a >> 16, b & 0xffffu, b >> 16) / 65535.0;
   } else {
     const wt_uint a = set.texels[l.offset + index];
-    c = glm::dvec3(a & 0xffu, (a >> 8) & 0xffu, (a >> 16) & 0xffu) / 255.0;
+    c = glm::dvec4(a & 0xffu, (a >> 8) & 0xffu, (a >> 16) & 0xffu, a >> 24) / 255.0;
   }
-  if (texture.flags & WT_TEXTURE_SRGB) c = glm::dvec3(srgbToLinear(c.x), srgbToLinear(c.y), srgbToLinear(c.z));
+  if (texture.flags & WT_TEXTURE_SRGB) c = glm::dvec4(srgbToLinear(c.x), srgbToLinear(c.y), srgbToLinear(c.z), c.w);
   return c;
+}
+
+/// Texture coordinates of vertex v as texture slot `ref` reads them (its set and transform).
+glm::dvec2 slotUv(const Scene& scene, const WtTextureRef& ref, std::uint32_t v) {
+  glm::dvec2 st = ref.texcoord == 1 ? (v < scene.texcoords1.size() ? glm::dvec2(scene.texcoords1[v]) : glm::dvec2(0.0))
+                                    : (v < scene.texcoords.size() ? glm::dvec2(scene.texcoords[v]) : glm::dvec2(0.0));
+  return glm::dvec2(ref.transform_u.x * st.x + ref.transform_u.y * st.y + ref.transform_u.z,
+                    ref.transform_v.x * st.x + ref.transform_v.y * st.y + ref.transform_v.z);
+}
+
+/// Barycentrics (b1, b2) of stratum (i, j) of a side x side grid over the unit
+/// square mapped onto the triangle (square-root map, area-preserving).
+glm::dvec2 stratumBarycentrics(int i, int j, int side) {
+  const double su = std::sqrt((i + 0.5) / side), v = (j + 0.5) / side;
+  return {su * (1.0 - v), su * v};
+}
+
+/// The pyramid level whose texels each cover about 1/samples of the uv
+/// triangle (a, b, c) on `texture`'s base level.
+double levelForSamples(const TextureSet& set, const WtTexture& texture, glm::dvec2 a, glm::dvec2 b, glm::dvec2 c,
+                       int samples) {
+  const WtTextureLevel& base = set.levels[texture.first_level];
+  const double texels = 0.5 * std::fabs((b - a).x * (c - a).y - (b - a).y * (c - a).x) * double(base.width) * base.height;
+  return texels > samples ? 0.5 * std::log2(texels / samples) : 0.0;
 }
 
 }  // namespace
@@ -80,26 +104,54 @@ glm::dvec3 averageEmissiveTexture(const Scene& scene, const WtTriangle& t) {
   if (!(m.texture_mask & (1u << WT_TEXTURE_SLOT_EMISSIVE))) return glm::dvec3(1.0);
   const WtTextureRef& ref = scene.materialTextures[std::size_t(t.material) * WT_TEXTURE_SLOTS + WT_TEXTURE_SLOT_EMISSIVE];
   const WtTexture& texture = scene.textures.textures[ref.texture];
-  auto uvOf = [&](std::uint32_t v) {
-    glm::dvec2 st = ref.texcoord == 1 ? (v < scene.texcoords1.size() ? glm::dvec2(scene.texcoords1[v]) : glm::dvec2(0.0))
-                                      : (v < scene.texcoords.size() ? glm::dvec2(scene.texcoords[v]) : glm::dvec2(0.0));
-    return glm::dvec2(ref.transform_u.x * st.x + ref.transform_u.y * st.y + ref.transform_u.z,
-                      ref.transform_v.x * st.x + ref.transform_v.y * st.y + ref.transform_v.z);
-  };
-  const glm::dvec2 a = uvOf(t.v0), b = uvOf(t.v1), c = uvOf(t.v2);
+  const glm::dvec2 a = slotUv(scene, ref, t.v0), b = slotUv(scene, ref, t.v1), c = slotUv(scene, ref, t.v2);
   // the level whose texels are about as large as a sample's share of the
   // triangle, so that kSide^2 nearest texels of the box-filtered pyramid average it
   constexpr int kSide = 4;
-  const WtTextureLevel& base = scene.textures.levels[texture.first_level];
-  const double texels = 0.5 * std::fabs((b - a).x * (c - a).y - (b - a).y * (c - a).x) * double(base.width) * base.height;
-  const double level = texels > kSide * kSide ? 0.5 * std::log2(texels / (kSide * kSide)) : 0.0;
+  const double level = levelForSamples(scene.textures, texture, a, b, c, kSide * kSide);
   glm::dvec3 sum(0.0);
   for (int i = 0; i < kSide; ++i)
     for (int j = 0; j < kSide; ++j) {
-      // stratified over the unit square, then onto the triangle (square-root map)
-      const double su = std::sqrt((i + 0.5) / kSide), v = (j + 0.5) / kSide;
-      const double b1 = su * (1.0 - v), b2 = su * v;
-      sum += texelAt(scene.textures, texture, std::uint32_t(std::lround(level)), (1.0 - b1 - b2) * a + b1 * b + b2 * c);
+      const glm::dvec2 w = stratumBarycentrics(i, j, kSide);
+      sum += glm::dvec3(texelAt(scene.textures, texture, std::uint32_t(std::lround(level)),
+                                (1.0 - w.x - w.y) * a + w.x * b + w.y * c));
+    }
+  return sum / double(kSide * kSide);
+}
+
+double meanCoverage(const Scene& scene, const WtTriangle& t) {
+  const WtMaterial& m = scene.materials[t.material];
+  if (m.alpha_mode != WT_ALPHA_MASK && m.alpha_mode != WT_ALPHA_BLEND) return 1.0;
+  const bool textured = m.texture_mask & (1u << WT_TEXTURE_SLOT_BASE_COLOR);
+  const bool colored = !scene.colors.empty();
+  if (!textured && !colored) {  // the same coverage everywhere: the alpha factor
+    const double alpha = m.alpha;
+    return m.alpha_mode == WT_ALPHA_MASK ? (alpha >= m.alpha_cutoff ? 1.0 : 0.0) : std::clamp(alpha, 0.0, 1.0);
+  }
+  const WtTextureRef* ref =
+      textured ? &scene.materialTextures[std::size_t(t.material) * WT_TEXTURE_SLOTS + WT_TEXTURE_SLOT_BASE_COLOR] : nullptr;
+  const WtTexture* texture = textured ? &scene.textures.textures[ref->texture] : nullptr;
+  glm::dvec2 a(0.0), b(0.0), c(0.0);
+  if (textured) a = slotUv(scene, *ref, t.v0), b = slotUv(scene, *ref, t.v1), c = slotUv(scene, *ref, t.v2);
+  constexpr int kSide = 8;
+  // BLEND averages alpha, so a box-filtered level whose texels are a sample's
+  // share of the triangle averages it well; MASK thresholds each point as
+  // traversal does, at the finest level (a filtered level's alpha would cross
+  // the cutoff elsewhere)
+  const std::uint32_t level =
+      textured && m.alpha_mode == WT_ALPHA_BLEND
+          ? std::uint32_t(std::lround(levelForSamples(scene.textures, *texture, a, b, c, kSide * kSide)))
+          : 0u;
+  auto vertexAlpha = [&](std::uint32_t v) { return v < scene.colors.size() ? double(scene.colors[v].w) : 1.0; };
+  double sum = 0.0;
+  for (int i = 0; i < kSide; ++i)
+    for (int j = 0; j < kSide; ++j) {
+      const glm::dvec2 w = stratumBarycentrics(i, j, kSide);
+      const double w0 = 1.0 - w.x - w.y;
+      double alpha = m.alpha;
+      if (colored) alpha *= w0 * vertexAlpha(t.v0) + w.x * vertexAlpha(t.v1) + w.y * vertexAlpha(t.v2);
+      if (textured) alpha *= texelAt(scene.textures, *texture, level, w0 * a + w.x * b + w.y * c).w;
+      sum += m.alpha_mode == WT_ALPHA_MASK ? (alpha >= m.alpha_cutoff ? 1.0 : 0.0) : std::clamp(alpha, 0.0, 1.0);
     }
   return sum / double(kSide * kSide);
 }
@@ -112,7 +164,7 @@ double environmentPowerEstimate(const Scene& scene, double meanLuminance) {
 }
 
 LightList buildLightList(const Scene& scene, const SceneBuffers& buffers, double environmentPower,
-                         LightSampler sampler) {
+                         LightSampler sampler, bool coverageWeights) {
   LightList list;
   std::vector<double> power;
   Aabb box = scene.bounds();
@@ -172,8 +224,10 @@ LightList buildLightList(const Scene& scene, const SceneBuffers& buffers, double
       l.direction = {float(m.alpha_mode), m.alpha_cutoff, m.alpha, alphaTexture ? 1.0f : 0.0f};
     }
     lightOfLeaf[leaf] = std::uint32_t(list.lights.size());
-    // pi * L * area from each emitting face
-    power.push_back((twoSided ? 2.0 : 1.0) * std::numbers::pi * area * luminance(average));
+    // pi * L * area from each emitting face, times the share of it that is there
+    // floored: 64 points may miss what little is there, and NEE must still reach it (unbiased)
+    const double coverage = coverageWeights ? std::max(meanCoverage(scene, t), kMinCoverageWeight) : 1.0;
+    power.push_back((twoSided ? 2.0 : 1.0) * std::numbers::pi * area * luminance(average) * coverage);
     areas.push_back(area);
     list.lights.push_back(l);
   }

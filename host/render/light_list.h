@@ -48,9 +48,14 @@ std::vector<WtAliasSlot> buildAliasTable(std::span<const double> weights);
 
 /// The light list of a scene whose triangles were uploaded as `buffers`.
 /// `environmentPower` is the environment's estimated power (0: no environment
-/// light, see environmentPowerEstimate).
+/// light, see environmentPowerEstimate). `coverageWeights`: an emitter with
+/// holes weighs by its meanCoverage (at least kMinCoverageWeight), else by
+/// its emission alone (for comparison; unbiased either way).
 LightList buildLightList(const Scene& scene, const SceneBuffers& buffers, double environmentPower,
-                         LightSampler sampler = LightSampler::Auto);
+                         LightSampler sampler = LightSampler::Auto, bool coverageWeights = true);
+
+/// The least share of its power an emitter with holes is weighed by.
+constexpr double kMinCoverageWeight = 1e-3;
 
 /// Power of a uniform environment of luminance `meanLuminance` falling on the scene's bounding sphere.
 double environmentPowerEstimate(const Scene& scene, double meanLuminance);
@@ -60,5 +65,10 @@ double luminance(glm::vec3 rgb);
 /// stratified texels of the mip level where each stands for about a 16th of
 /// the triangle; 1 where its material has no emissive texture.
 glm::dvec3 averageEmissiveTexture(const Scene& scene, const WtTriangle& t);
+/// The share of triangle `t` that is there (a ray meets it) where its material
+/// has holes (alphaMode MASK or BLEND): its coverage as traversal's alpha test
+/// reads it (alpha factor x COLOR_0 alpha x base colour texture alpha; MASK 0
+/// or 1 by the cutoff) averaged over 64 stratified points; 1 for OPAQUE.
+double meanCoverage(const Scene& scene, const WtTriangle& t);
 
 }  // namespace wt

@@ -70,7 +70,7 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
                                            settings.environmentRotationDegrees);
   double envLum = m_environment.meanLuminance;
   m_lights = buildLightList(scene, *m_scene, envLum > 0.0 ? environmentPowerEstimate(scene, envLum) : 0.0,
-                            settings.lightSampler);
+                            settings.lightSampler, settings.lightCoverageWeights);
 
   m_features = sceneFeatures(scene, *m_scene, settings);
   m_kernelFeatures = renderKernelFeatures(m_features, context.info(), settings, *m_scene);

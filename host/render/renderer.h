@@ -58,6 +58,9 @@ struct RenderSettings {
   bool sobol = false;           ///< Owen-scrambled Sobol instead of independent random numbers
   bool textureFootprint = true;  ///< textures read at the mip level of the path's footprint (else the finest level)
   LightSampler lightSampler = LightSampler::Auto;  ///< path: how NEE picks among emissive triangles
+  /// Developer setting (tests): the light list weighs an emitter with holes by
+  /// its mean coverage (buildLightList); false: by its emission alone.
+  bool lightCoverageWeights = true;
   std::uint32_t accumulation = WT_ACCUMULATE_KAHAN;  ///< WT_ACCUMULATE_* (double needs fp64)
   BvhBuilder bvhBuilder = BvhBuilder::Auto;  ///< which tree the scene's BVH is (host/bvh/builders.h)
   Instancing instancing = Instancing::Off;   ///< whether repeated geometry is stored once (SceneBuffers)
