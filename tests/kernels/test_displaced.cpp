@@ -15,6 +15,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <map>
@@ -198,10 +199,10 @@ std::vector<KernelHit> kernelClosest(const Scene& scene, const std::vector<Ray>&
 }
 
 /// Closest hits on random rays at the sphere against the long-double reference of every micro-triangle.
-void expectKernelMatchesReference(const Scene& scene, std::uint32_t seed, int maxDepth = -1) {
+void expectKernelMatchesReference(const Scene& scene, std::uint32_t seed, int maxDepth = -1, std::size_t count = 3000) {
   const DisplacedMesh& mesh = scene.displacedMeshes[0];
   const std::vector<MicroTriangle> micro = microMesh(mesh);
-  const std::vector<Ray> rays = raysAtSphere(glm::vec3(0.3f, -0.2f, 0.1f), test::testSize(3000, 300), seed);
+  const std::vector<Ray> rays = raysAtSphere(glm::vec3(0.3f, -0.2f, 0.1f), test::testSize(count, count / 10), seed);
   const std::vector<KernelHit> got = kernelClosest(scene, rays, maxDepth);
   int bad = 0, hits = 0, ambiguous = 0;
   for (std::size_t i = 0; i < rays.size(); ++i) {
@@ -244,7 +245,29 @@ TEST(DisplacedMeshes, LevelsBelowTheStoredBoxesMatchTheReference) {
   // map's range over their texels; D = 0 keeps the whole triangle's box only
   for (int depth : {1, 0}) {
     SCOPED_TRACE("stored depth " + std::to_string(depth));
-    expectKernelMatchesReference(testSphere(3), 30 + std::uint32_t(depth), depth);
+    expectKernelMatchesReference(testSphere(3), 30 + std::uint32_t(depth), depth, 1500);
+  }
+}
+
+TEST(DisplacedMeshes, EightBitMapsAreStoredAsBytesAndDrawTheSameSurface) {
+  // a map of at most 256 distinct values (an 8-bit image's) is stored as
+  // a byte a texel and a palette of the values, a map of more as floats:
+  // both draw the surface the reference samples from the values themselves
+  Scene floats = testSphere(3), bytes = floats;
+  std::vector<float>& fine = floats.displacedMeshes[0].map;
+  for (std::size_t i = 0; i < fine.size(); ++i) fine[i] += float(i) * 0x1p-20f;  // every texel its own value
+  std::vector<float>& coarse = bytes.displacedMeshes[0].map;
+  for (float& v : coarse) v = std::round(std::clamp(v, 0.0f, 1.0f) * 255.0f) / 255.0f;
+  std::vector<float> distinct(coarse);
+  std::sort(distinct.begin(), distinct.end());
+  distinct.erase(std::unique(distinct.begin(), distinct.end()), distinct.end());
+  ASSERT_GT(distinct.size(), 32u);  // a map with many values, not a handful
+  // the texels' rows: a float each, or a byte each after the palette
+  const std::size_t texels = fine.size(), floatRows = typeRows(floats).data.size(), byteRows = typeRows(bytes).data.size();
+  EXPECT_EQ(floatRows - byteRows, (texels + 3) / 4 - (texels + 4 * distinct.size() + 15) / 16);
+  for (const Scene* scene : {&floats, &bytes}) {
+    SCOPED_TRACE(scene == &floats ? "float texels" : "byte texels");
+    expectKernelMatchesReference(*scene, 33, -1, 1500);
   }
 }
 
