@@ -447,13 +447,17 @@ void gatherDisplacedTo(const Scene& scene, PrimitiveRows& rows, std::uint32_t ma
     if (!palette.empty()) {
       paletteWord[mi] = words.size();
       words.insert(words.end(), palette.begin(), palette.end());
+      // bytes in 8 x 8 tiles (64 bytes, one cache line), rows of ceil(w / 8) tiles, as disp_texel reads them
       texelWord[mi] = words.size();
-      for (std::size_t i = 0; i < texels; i += 4) {
-        std::uint8_t word[4] = {0, 0, 0, 0};
-        for (std::size_t k = 0; k < 4 && i + k < texels; ++k)
-          word[k] = std::uint8_t(std::lower_bound(palette.begin(), palette.end(), texelBits[i + k]) - palette.begin());
+      const std::size_t tilesX = (m.mapWidth + 7) / 8, tilesY = (m.mapHeight + 7) / 8;
+      std::vector<std::uint8_t> tiled(64 * tilesX * tilesY, 0);
+      for (std::size_t y = 0; y < m.mapHeight; ++y)
+        for (std::size_t x = 0; x < m.mapWidth; ++x)
+          tiled[64 * ((y / 8) * tilesX + x / 8) + (y % 8) * 8 + x % 8] = std::uint8_t(
+              std::lower_bound(palette.begin(), palette.end(), texelBits[y * m.mapWidth + x]) - palette.begin());
+      for (std::size_t i = 0; i < tiled.size(); i += 4) {
         std::uint32_t packed;
-        std::memcpy(&packed, word, 4);
+        std::memcpy(&packed, tiled.data() + i, 4);
         words.push_back(packed);
       }
     } else {

@@ -40,7 +40,7 @@ typedef struct DispMesh {
   uint level;                  ///< L: 2^L micro-edges per base edge
   uint depth;                  ///< D: the deepest level whose sub-triangles' boxes are stored
   __global const float* texels;///< w h floats, row-major from the top (v = 0); null for a paletted map
-  __global const uchar* bytes; ///< a paletted map's w h texels: indices into palette
+  __global const uchar* bytes; ///< a paletted map's texels, indices into palette, in 8 x 8 tiles (one cache line; rows of ceil(w / 8) tiles)
   __global const float* palette;///< a paletted map's values (a map of at most 256 distinct values: 8-bit images)
 } DispMesh;
 
@@ -91,8 +91,11 @@ inline int disp_wrap(float x, int size) {
 }
 
 inline float disp_texel(DispMesh m, int x, int y) {
-  uint i = (uint)y * (uint)m.w + (uint)x;
-  return m.texels ? m.texels[i] : m.palette[m.bytes[i]];
+  if (m.texels) return m.texels[(uint)y * (uint)m.w + (uint)x];
+  // tiled: a bilinear footprint and its neighbours' mostly share a cache line
+  uint tiles_x = ((uint)m.w + 7u) >> 3;
+  uint tile = ((uint)y >> 3) * tiles_x + ((uint)x >> 3);
+  return m.palette[m.bytes[64u * tile + (((uint)y & 7u) << 3) + ((uint)x & 7u)]];
 }
 
 /// The map at uv, bilinear between texel centres, repeating; 0 where uv is

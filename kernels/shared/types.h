@@ -89,14 +89,17 @@ typedef struct WtBvh4Node {
 /// intersected as 4^L micro-triangles that are never stored. prim_data: per
 /// mesh WT_DISP_MESH_ROWS rows: (scale, offset, map width, map height),
 /// then as uint bits (L, D the deepest level with stored boxes, the
-/// texels' first float, 0); then per vertex WT_DISP_VERTEX_ROWS rows
+/// texels' first float, the palette's first float or ~0); then per vertex WT_DISP_VERTEX_ROWS rows
 /// (position xyz and u, normal xyz and v); then per base triangle (L > 0)
 /// its boxes: two rows (the whole triangle's box: low xyz, high xyz, w 0),
 /// then for each sub-triangle of levels 0 to D - 1 in level order (node k's
 /// children are 4k + 1 to 4k + 4) a block of 24 bytes, its four children's
 /// boxes relative to its own (uchar4 rows: low x, y, z, high x, y, z; low =
 /// parent low + q step, high = parent high - (255 - q) step, step = parent
-/// extent / 255), padded to a whole row; then the maps' texels. Float
+/// extent / 255), padded to a whole row; then the maps' texels: floats
+/// row by row, or for a map of at most 256 distinct values its palette
+/// (the values' bits, sorted) and a
+/// byte a texel in 8 x 8 tiles, rows of ceil(w / 8) tiles. Float
 /// offsets and row indices count from the type's first row. prim_info per
 /// base triangle, WT_DISP_INFO_ROWS rows: (material, its mesh's first row,
 /// its boxes' first row, 0), then its corners' first rows in winding order
