@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <cstring>
 #include <limits>
 
 namespace wt {
@@ -194,13 +195,214 @@ bool cornersUsable(const DisplacedMesh& m, const std::array<std::uint32_t, 3>& t
   return true;
 }
 
+
+/// The distinct values (bit patterns, sorted) of a map that has at most 256
+/// of them, as an 8-bit image has; empty for a map with more.
+std::vector<std::uint32_t> smallPalette(const std::vector<std::uint32_t>& texels) {
+  // open addressing over 1024 slots: at most 257 values ever go in
+  constexpr std::size_t kSlots = 1024;
+  std::vector<std::uint32_t> slot(kSlots);
+  std::vector<bool> used(kSlots, false);
+  std::vector<std::uint32_t> values;
+  std::uint32_t last = 0;
+  bool haveLast = false;
+  for (std::uint32_t v : texels) {
+    if (haveLast && v == last) continue;
+    last = v, haveLast = true;
+    std::size_t h = (v * 2654435761u) >> 22;
+    while (used[h] && slot[h] != v) h = (h + 1) % kSlots;
+    if (used[h]) continue;
+    used[h] = true;
+    slot[h] = v;
+    values.push_back(v);
+    if (values.size() > 256) return {};
+  }
+  std::sort(values.begin(), values.end());
+  return values;
+}
+
+/// A quadtree node as the kernel's disp_node: its level, orientation and
+/// place in its level's lattice.
+struct QuadNode {
+  std::uint32_t level = 0, inverted = 0, i = 0, j = 0;
+};
+
+/// Child k of a node, as displaced_intersect pushes it (children in the
+/// order of the corner triples (A, AB, AC), (AB, B, BC), (AC, BC, C), (AB, AC, BC)).
+QuadNode childNode(const QuadNode& p, int k) {
+  static constexpr int kUpDi[4] = {0, 1, 0, 0}, kUpDj[4] = {0, 0, 1, 0};
+  static constexpr int kInvDi[4] = {1, 0, 1, 1}, kInvDj[4] = {0, 1, 1, 1};
+  const std::uint32_t di = std::uint32_t(p.inverted ? kInvDi[k] : kUpDi[k]);
+  const std::uint32_t dj = std::uint32_t(p.inverted ? kInvDj[k] : kUpDj[k]);
+  return {p.level + 1, k == 3 ? 1 - p.inverted : p.inverted, 2 * p.i + di, 2 * p.j + dj};
+}
+
+/// A node's corners in the level-L lattice, as disp_node_corners.
+std::array<glm::ivec2, 3> nodeCorners(const QuadNode& q, std::uint32_t levelL) {
+  const int s = 1 << (levelL - q.level), i = int(q.i), j = int(q.j);
+  if (q.inverted) return {glm::ivec2((i + 1) * s, j * s), glm::ivec2(i * s, (j + 1) * s), glm::ivec2((i + 1) * s, (j + 1) * s)};
+  return {glm::ivec2(i * s, j * s), glm::ivec2((i + 1) * s, j * s), glm::ivec2(i * s, (j + 1) * s)};
+}
+
+/// The box a block's byte q gives a child's low (high: false) side on one
+/// axis inside the parent's [lo, hi], as displaced_intersect computes it
+/// (float, no contraction): 0 and 255 give the parent's own sides exactly.
+float dequantized(float lo, float hi, int q, bool low) {
+  const float step = (hi - lo) * (1.0f / 255.0f);
+  return low ? lo + float(q) * step : hi - (255.0f - float(q)) * step;
+}
+
+/// The byte that bounds `target` from below (low) or above inside [lo, hi]:
+/// the tightest whose dequantized side still holds it, 0 or 255 at worst.
+std::uint8_t quantized(float lo, float hi, double target, bool low) {
+  const double step = (double(hi) - double(lo)) / 255.0;
+  double guess = step > 0.0 ? (target - double(lo)) / step : (low ? 0.0 : 255.0);
+  int q = std::clamp(int(low ? std::floor(guess) : std::ceil(guess)), 0, 255);
+  if (low) {
+    while (q > 0 && double(dequantized(lo, hi, q, true)) > target) --q;
+    while (q < 255 && double(dequantized(lo, hi, q + 1, true)) <= target) ++q;
+  } else {
+    while (q < 255 && double(dequantized(lo, hi, q, false)) < target) ++q;
+    while (q > 0 && double(dequantized(lo, hi, q - 1, false)) >= target) --q;
+  }
+  return std::uint8_t(q);
+}
+
+/// D, the deepest level whose sub-triangles' boxes are stored, for level L.
+std::uint32_t storedDepth(std::uint32_t maxDepth, std::uint32_t level) {
+  return level == 0 ? 0 : std::min({level - 1, maxDepth, std::uint32_t(WT_DISP_MAX_DEPTH)});
+}
+
+/// A base triangle's boxes as the kernel reads them: the whole triangle's
+/// box (the BVH's) and the blocks of its sub-triangles' children's boxes
+/// (shared/types.h, WT_PRIM_DISPLACED), each holding its sub-triangle's
+/// micro-triangles as the kernel displaces them. Exact over the
+/// micro-vertices where the level-D sub-triangles are the micro-triangles'
+/// parents (L <= WT_DISP_MAX_DEPTH + 1); deeper, each level-D box bounds
+/// its corners moved by the least and the largest displacement over its
+/// texels (the pyramid's). Every box is widened by a sliver past rounding.
+struct TriangleBoxes {
+  Aabb root;
+  std::vector<std::uint8_t> blocks;  ///< 24 bytes per sub-triangle of levels 0 to D - 1
+  bool finite = true;
+};
+
+TriangleBoxes triangleBoxes(const DisplacedMesh& mesh, const MapView& map, const std::vector<std::vector<float>>* pyramid,
+                            const std::array<std::uint32_t, 3>& t, std::uint32_t levelL, std::uint32_t depth) {
+  const int n = 1 << levelL;
+  std::size_t nodes = 0;
+  for (std::uint32_t l = 0; l <= depth; ++l) nodes += std::size_t(1) << (2 * l);
+  std::vector<Aabb> exact(nodes);
+  // the level-D sub-triangles' boxes, then each parent the union of its children's
+  const std::size_t firstLeaf = nodes - (std::size_t(1) << (2 * depth));
+  std::vector<glm::vec3> grid;
+  std::vector<std::size_t> rowStart;
+  if (levelL == 0 || levelL == depth + 1) {
+    rowStart.resize(std::size_t(n) + 1);
+    for (int j = 0; j <= n; ++j) {
+      rowStart[std::size_t(j)] = grid.size();
+      for (int i = 0; i + j <= n; ++i) grid.push_back(microVertex(mesh, map, t, n, i, j));
+    }
+  }
+  auto vertex = [&](glm::ivec2 c) { return grid[rowStart[std::size_t(c.y)] + std::size_t(c.x)]; };
+  std::vector<QuadNode> level{QuadNode{}};
+  for (std::uint32_t l = 0; l < depth; ++l) {
+    std::vector<QuadNode> next;
+    next.reserve(4 * level.size());
+    for (const QuadNode& q : level)
+      for (int k = 0; k < 4; ++k) next.push_back(childNode(q, k));
+    level = std::move(next);
+  }
+  for (std::size_t k = 0; k < level.size(); ++k) {
+    Aabb& box = exact[firstLeaf + k];
+    if (levelL == 0) {
+      for (glm::ivec2 c : {glm::ivec2(0, 0), glm::ivec2(1, 0), glm::ivec2(0, 1)}) box.extend(vertex(c));
+    } else if (levelL == depth + 1) {
+      const std::array<glm::ivec2, 3> c = nodeCorners(level[k], levelL);
+      for (glm::ivec2 p : {c[0], c[1], c[2], (c[0] + c[1]) / 2, (c[0] + c[2]) / 2, (c[1] + c[2]) / 2})
+        box.extend(vertex(p));
+    } else {
+      // the corners moved by the least and the largest displacement over the sub-triangle's texels
+      const std::array<glm::ivec2, 3> c = nodeCorners(level[k], levelL);
+      glm::dvec3 p[3], nn[3];
+      glm::dvec2 ulo(std::numeric_limits<double>::infinity()), uhi(-ulo.x);
+      for (int e = 0; e < 3; ++e) {
+        const double wb = double(c[e].x) / n, wc = double(c[e].y) / n, wa = 1.0 - wb - wc;
+        p[e] = wa * glm::dvec3(mesh.positions[t[0]]) + wb * glm::dvec3(mesh.positions[t[1]]) +
+               wc * glm::dvec3(mesh.positions[t[2]]);
+        nn[e] = wa * glm::dvec3(mesh.normals[t[0]]) + wb * glm::dvec3(mesh.normals[t[1]]) +
+                wc * glm::dvec3(mesh.normals[t[2]]);
+        const glm::dvec2 uv = wa * glm::dvec2(mesh.texcoords[t[0]]) + wb * glm::dvec2(mesh.texcoords[t[1]]) +
+                              wc * glm::dvec2(mesh.texcoords[t[2]]);
+        ulo = glm::min(ulo, uv);
+        uhi = glm::max(uhi, uv);
+      }
+      const glm::dvec2 r = mapRange(map, *pyramid, ulo, uhi);
+      glm::dvec3 lo(std::numeric_limits<double>::infinity()), hi(-lo.x);
+      for (int e = 0; e < 3; ++e)
+        for (double d : {double(mesh.scale) * r.x + mesh.offset, double(mesh.scale) * r.y + mesh.offset}) {
+          lo = glm::min(lo, p[e] + d * nn[e]);
+          hi = glm::max(hi, p[e] + d * nn[e]);
+        }
+      // float rounding here is a few ulps: the margin below covers it
+      box.lo = glm::vec3(lo);
+      box.hi = glm::vec3(hi);
+    }
+  }
+  for (std::size_t g = firstLeaf; g-- > 0;)
+    for (std::size_t k = 1; k <= 4; ++k) exact[g].extend(exact[4 * g + k]);
+  TriangleBoxes out;
+  const glm::dvec3 rlo(exact[0].lo), rhi(exact[0].hi);
+  if (!std::isfinite(rlo.x + rlo.y + rlo.z + rhi.x + rhi.y + rhi.z)) {
+    out.finite = false;
+    return out;
+  }
+  // past the rounding of the micro-vertices (the kernel's against these) and of the bounds above
+  double big = 0.0, extent = 0.0;
+  for (int a = 0; a < 3; ++a) {
+    big = std::max({big, std::fabs(rlo[a]), std::fabs(rhi[a])});
+    extent = std::max(extent, rhi[a] - rlo[a]);
+  }
+  const double margin = 4e-6 * big + 1e-6 * extent;
+  const float inf = std::numeric_limits<float>::infinity();
+  for (int a = 0; a < 3; ++a) {
+    out.root.lo[a] = float(rlo[a] - margin);
+    if (double(out.root.lo[a]) > rlo[a] - margin) out.root.lo[a] = std::nextafter(out.root.lo[a], -inf);
+    out.root.hi[a] = float(rhi[a] + margin);
+    if (double(out.root.hi[a]) < rhi[a] + margin) out.root.hi[a] = std::nextafter(out.root.hi[a], inf);
+  }
+  // top down: each child's box in bytes relative to its parent's box as the kernel dequantizes it
+  const std::size_t blocks = firstLeaf;
+  out.blocks.assign(24 * blocks, 0);
+  std::vector<Aabb> stored(nodes);
+  stored[0] = out.root;
+  for (std::size_t g = 0; g < blocks; ++g) {
+    const Aabb& parent = stored[g];
+    for (int k = 0; k < 4; ++k) {
+      const Aabb& e = exact[4 * g + 1 + std::size_t(k)];
+      Aabb& child = stored[4 * g + 1 + std::size_t(k)];
+      for (int a = 0; a < 3; ++a) {
+        const std::uint8_t lo = quantized(parent.lo[a], parent.hi[a], double(e.lo[a]) - margin, true);
+        const std::uint8_t hi = quantized(parent.lo[a], parent.hi[a], double(e.hi[a]) + margin, false);
+        out.blocks[24 * g + 4 * std::size_t(a) + std::size_t(k)] = lo;
+        out.blocks[24 * g + 12 + 4 * std::size_t(a) + std::size_t(k)] = hi;
+        child.lo[a] = dequantized(parent.lo[a], parent.hi[a], lo, true);
+        child.hi[a] = dequantized(parent.lo[a], parent.hi[a], hi, false);
+      }
+    }
+  }
+  return out;
+}
+
 }  // namespace
 
-void gatherDisplaced(const Scene& scene, PrimitiveRows& rows) {
+void gatherDisplaced(const Scene& scene, PrimitiveRows& rows) { gatherDisplacedTo(scene, rows, WT_DISP_MAX_DEPTH); }
+
+void gatherDisplacedTo(const Scene& scene, PrimitiveRows& rows, std::uint32_t maxDepth) {
   rows.dataFirst[WT_PRIM_DISPLACED] = std::uint32_t(rows.data.size());
   rows.infoFirst[WT_PRIM_DISPLACED] = std::uint32_t(rows.info.size());
   const std::size_t meshes = scene.displacedMeshes.size();
-  // rows from the type's first: headers, then vertices, then the maps' floats
+  // rows from the type's first: headers, then vertices (then the boxes, then the maps)
   std::vector<WtVec4> data(WT_DISP_MESH_ROWS * meshes, WtVec4{0, 0, 0, 0});
   std::vector<std::size_t> vertexRow(meshes, 0);
   for (std::size_t mi = 0; mi < meshes; ++mi) {
@@ -214,8 +416,10 @@ void gatherDisplaced(const Scene& scene, PrimitiveRows& rows) {
       data.push_back({n.x, n.y, n.z, uv.y});
     }
   }
-  std::vector<float> floats;
-  const std::size_t floatBase = 4 * data.size();
+  // the base triangles' boxes follow the vertices, the maps' texels follow those
+  std::vector<WtVec4> boxRows;
+  std::vector<std::uint32_t> words;  // the maps, as 32-bit words (floats' bits, or four bytes)
+  std::vector<std::size_t> texelWord(meshes, 0), paletteWord(meshes, ~std::size_t(0));
   std::uint32_t prims = 0;
   for (std::size_t mi = 0; mi < meshes; ++mi) {
     const DisplacedMesh& m = scene.displacedMeshes[mi];
@@ -224,18 +428,41 @@ void gatherDisplaced(const Scene& scene, PrimitiveRows& rows) {
       continue;
     }
     const MapView map{m.map.data(), int(m.mapWidth), int(m.mapHeight)};
-    const std::vector<std::vector<float>> pyramid = minMaxPyramid(map);
+    const std::uint32_t level = displacedLevel(m), depth = storedDepth(maxDepth, level);
+    // the pyramid bounds sub-triangles only below the stored depth (levels past WT_DISP_MAX_DEPTH + 1)
+    std::vector<std::vector<float>> pyramid;
+    if (level > depth + 1) pyramid = minMaxPyramid(map);
     WtVec4* header = &data[WT_DISP_MESH_ROWS * mi];
     header[0] = {m.scale, m.offset, float(m.mapWidth), float(m.mapHeight)};
-    const std::uint32_t level = displacedLevel(m);
     auto bits = [](std::uint32_t u) { return std::bit_cast<float>(u); };
-    header[1] = {bits(level), bits(std::uint32_t(pyramid.size())), bits(std::uint32_t(floatBase + floats.size())), 0.0f};
+    // z: the texels' first float, w: the palette's (below); ~0: float texels
+    header[1] = {bits(level), bits(depth), 0.0f, bits(~0u)};
+    // a map of at most 256 distinct values (an 8-bit image's) as bytes and a palette of the values' bits
+    const std::size_t texels = std::size_t(m.mapWidth) * m.mapHeight;
+    std::vector<std::uint32_t> texelBits(texels);
     for (std::size_t y = 0; y < m.mapHeight; ++y)
-      for (std::size_t x = 0; x < m.mapWidth; ++x) floats.push_back(map.at(int(x), int(y)));
-    float* slots = &header[2].x;
-    for (std::size_t k = 0; k < pyramid.size() && k < WT_DISP_MAX_MIPS; ++k) {
-      slots[k] = bits(std::uint32_t(floatBase + floats.size()));
-      floats.insert(floats.end(), pyramid[k].begin(), pyramid[k].end());
+      for (std::size_t x = 0; x < m.mapWidth; ++x)
+        texelBits[y * m.mapWidth + x] = std::bit_cast<std::uint32_t>(map.at(int(x), int(y)));
+    const std::vector<std::uint32_t> palette = smallPalette(texelBits);
+    if (!palette.empty()) {
+      paletteWord[mi] = words.size();
+      words.insert(words.end(), palette.begin(), palette.end());
+      // bytes in 8 x 8 tiles (64 bytes, one cache line), rows of ceil(w / 8) tiles, as disp_texel reads them
+      texelWord[mi] = words.size();
+      const std::size_t tilesX = (m.mapWidth + 7) / 8, tilesY = (m.mapHeight + 7) / 8;
+      std::vector<std::uint8_t> tiled(64 * tilesX * tilesY, 0);
+      for (std::size_t y = 0; y < m.mapHeight; ++y)
+        for (std::size_t x = 0; x < m.mapWidth; ++x)
+          tiled[64 * ((y / 8) * tilesX + x / 8) + (y % 8) * 8 + x % 8] = std::uint8_t(
+              std::lower_bound(palette.begin(), palette.end(), texelBits[y * m.mapWidth + x]) - palette.begin());
+      for (std::size_t i = 0; i < tiled.size(); i += 4) {
+        std::uint32_t packed;
+        std::memcpy(&packed, tiled.data() + i, 4);
+        words.push_back(packed);
+      }
+    } else {
+      texelWord[mi] = words.size();
+      words.insert(words.end(), texelBits.begin(), texelBits.end());
     }
     for (std::size_t ti = 0; ti < m.triangles.size(); ++ti) {
       const std::array<std::uint32_t, 3>& t = m.triangles[ti];
@@ -243,47 +470,47 @@ void gatherDisplaced(const Scene& scene, PrimitiveRows& rows) {
         ++rows.skipped;
         continue;
       }
-      // the shell: every corner moved by the least and the largest displacement over the triangle's texels
-      glm::dvec2 lo(std::numeric_limits<double>::infinity()), hi(-lo.x);
-      for (std::uint32_t v : t) {
-        lo = glm::min(lo, glm::dvec2(m.texcoords[v]));
-        hi = glm::max(hi, glm::dvec2(m.texcoords[v]));
-      }
-      const glm::dvec2 r = mapRange(map, pyramid, lo, hi);
-      const double d0 = double(m.scale) * r.x + m.offset, d1 = double(m.scale) * r.y + m.offset;
-      glm::dvec3 blo(std::numeric_limits<double>::infinity()), bhi(-blo.x);
-      for (std::uint32_t v : t)
-        for (double d : {d0, d1}) {
-          const glm::dvec3 q = glm::dvec3(m.positions[v]) + d * glm::dvec3(m.normals[v]);
-          blo = glm::min(blo, q);
-          bhi = glm::max(bhi, q);
-        }
-      // past the kernel's rounding of the micro-vertices and of its own shells
-      const glm::dvec3 pad = 1e-5 * glm::max(glm::abs(blo), glm::abs(bhi)) + 1e-5 * (bhi - blo);
-      Aabb box;
-      box.lo = glm::vec3(blo - pad);
-      box.hi = glm::vec3(bhi + pad);
-      if (!std::isfinite(box.lo.x + box.lo.y + box.lo.z + box.hi.x + box.hi.y + box.hi.z)) {
+      const TriangleBoxes boxes = triangleBoxes(m, map, pyramid.empty() ? nullptr : &pyramid, t, level, depth);
+      if (!boxes.finite) {
         ++rows.skipped;
         continue;
       }
-      // the displacement's range, rounded outwards: the kernel's whole-shell test reads it
-      const float dlo = std::nextafter(float(std::min(d0, d1)), -std::numeric_limits<float>::infinity());
-      const float dhi = std::nextafter(float(std::max(d0, d1)), std::numeric_limits<float>::infinity());
-      rows.info.push_back({m.material, std::uint32_t(WT_DISP_MESH_ROWS * mi), std::bit_cast<std::uint32_t>(dlo),
-                           std::bit_cast<std::uint32_t>(dhi)});
+      const std::size_t boxRow = boxRows.size();  // from the boxes' first row, made absolute below
+      if (level > 0) {
+        boxRows.push_back({boxes.root.lo.x, boxes.root.lo.y, boxes.root.lo.z, 0.0f});
+        boxRows.push_back({boxes.root.hi.x, boxes.root.hi.y, boxes.root.hi.z, 0.0f});
+        for (std::size_t b = 0; b < boxes.blocks.size(); b += 16) {
+          WtVec4 row{0, 0, 0, 0};
+          std::memcpy(&row, boxes.blocks.data() + b, std::min<std::size_t>(16, boxes.blocks.size() - b));
+          boxRows.push_back(row);
+        }
+      }
+      rows.info.push_back({m.material, std::uint32_t(WT_DISP_MESH_ROWS * mi), std::uint32_t(boxRow), 0u});
       rows.info.push_back({std::uint32_t(vertexRow[mi] + WT_DISP_VERTEX_ROWS * t[0]),
                            std::uint32_t(vertexRow[mi] + WT_DISP_VERTEX_ROWS * t[1]),
                            std::uint32_t(vertexRow[mi] + WT_DISP_VERTEX_ROWS * t[2]), std::uint32_t(ti)});
-      rows.bounds.push_back(box);
+      rows.bounds.push_back(boxes.root);
       rows.ids.push_back(primId(WT_PRIM_DISPLACED, prims++));
     }
   }
   rows.count[WT_PRIM_DISPLACED] = prims;
-  for (std::size_t i = 0; i < floats.size(); i += 4) {
-    float v[4] = {0.0f, 0.0f, 0.0f, 0.0f};
-    for (std::size_t k = 0; k < 4 && i + k < floats.size(); ++k) v[k] = floats[i + k];
-    data.push_back({v[0], v[1], v[2], v[3]});
+  // the offsets known now: boxes after the headers and vertices, texels after the boxes
+  const std::size_t boxFirst = data.size(), floatBase = 4 * (data.size() + boxRows.size());
+  for (std::size_t r = rows.infoFirst[WT_PRIM_DISPLACED]; r < rows.info.size(); r += WT_DISP_INFO_ROWS)
+    rows.info[r][2] += std::uint32_t(boxFirst);
+  for (std::size_t mi = 0; mi < meshes; ++mi)
+    if (displacedMeshUsable(scene.displacedMeshes[mi])) {
+      data[WT_DISP_MESH_ROWS * mi + 1].z = std::bit_cast<float>(std::uint32_t(floatBase + texelWord[mi]));
+      if (paletteWord[mi] != ~std::size_t(0))
+        data[WT_DISP_MESH_ROWS * mi + 1].w = std::bit_cast<float>(std::uint32_t(floatBase + paletteWord[mi]));
+    }
+  data.insert(data.end(), boxRows.begin(), boxRows.end());
+  for (std::size_t i = 0; i < words.size(); i += 4) {
+    std::uint32_t v[4] = {0, 0, 0, 0};
+    for (std::size_t k = 0; k < 4 && i + k < words.size(); ++k) v[k] = words[i + k];
+    WtVec4 row;
+    std::memcpy(&row, v, sizeof(row));
+    data.push_back(row);
   }
   rows.data.insert(rows.data.end(), data.begin(), data.end());
 }

@@ -134,14 +134,19 @@ std::uint32_t displacedLevel(const DisplacedMesh& mesh);
 bool displacedMeshUsable(const DisplacedMesh& mesh);
 
 /// Displaced meshes (WT_PRIM_DISPLACED): WT_DISP_MESH_ROWS data rows per
-/// mesh, WT_DISP_VERTEX_ROWS per vertex, then each map's texels (NaN
-/// written as 0) and min-max pyramid; WT_DISP_INFO_ROWS info rows per base
-/// triangle ((material, mesh row, displacement range), corners' rows, index),
-/// one primitive per base triangle boxed around its shell (its corners
-/// moved by the least and the largest displacement over its texels). A
-/// triangle with a corner out of range or not finite is left out. count:
-/// the base triangles kept.
+/// mesh, WT_DISP_VERTEX_ROWS per vertex, then each base triangle's boxes
+/// (its own and its sub-triangles' to level D, eight bits a coordinate
+/// relative to the parent's box; shared/types.h), then each map's texels
+/// (NaN written as 0); WT_DISP_INFO_ROWS info rows per base triangle
+/// ((material, mesh row, boxes' row), corners' rows, index), one primitive
+/// per base triangle boxed around its micro-triangles. A triangle with a
+/// corner out of range or not finite is left out. count: the base
+/// triangles kept.
 void gatherDisplaced(const Scene& scene, PrimitiveRows& rows);
+/// gatherDisplaced with boxes stored to level min(L - 1, maxDepth,
+/// WT_DISP_MAX_DEPTH) only: tests reach the levels walked untested below
+/// the stored ones at small L.
+void gatherDisplacedTo(const Scene& scene, PrimitiveRows& rows, std::uint32_t maxDepth);
 
 /// Which mesh and base triangle a WT_PRIM_DISPLACED typed id's index is.
 struct DisplacedTriangleRef {

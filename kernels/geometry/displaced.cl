@@ -6,18 +6,21 @@
 // cut into 4^L micro-triangles (2^L per edge, WT_PRIM_DISPLACED and the rows
 // in shared/types.h), each micro-vertex displaced exactly, each
 // micro-triangle flat. It is never stored: the ray walks the quadtree of
-// sub-triangles (each splits into four at its edge midpoints), bounding each
-// by its shell, the box of its corners moved by the least and the largest d
-// over the texels its micro-vertices read (a min-max mip pyramid of the map
-// answers that in at most four reads). Because P and N are linear in the
-// barycentrics, every point P + d N with d in [dmin, dmax] lies in the
-// convex hull of the six shell corners: the bound is exact, not a guess. The
-// finest level's micro-triangles are intersected by the watertight test
-// (triangle.cl). This is the min-max-tree variant of Thonat et al. 2021
-// ("Tessellation-free displacement mapping for ray tracing"): the same
-// shells and texel hierarchy, with flat micro-triangles at the leaves, so
-// the surface equals a tessellation at the same rate (the --tessellate
-// comparison) and hits are exact rather than a root search.
+// sub-triangles (each splits into four at its edge midpoints), testing each
+// sub-triangle's box, and tests the micro-triangles of the sub-triangles
+// it reaches at the finest level, four at a time (triangle_test4_lanes).
+// The boxes are stored, eight bits a coordinate relative to the parent's
+// box (rounded outwards), computed on the host from the micro-vertices
+// themselves (gatherDisplaced): exact bounds of the flat micro-triangles,
+// far tighter than bounds from the map's range over texels. Below the
+// stored depth (levels past WT_DISP_MAX_DEPTH + 1) a sub-triangle's box
+// bounds all of its descendants, which the walk then visits untested.
+// This is a min-max hierarchy as in Thonat et al. 2021 ("Tessellation-free
+// displacement mapping for ray tracing"), kept per base triangle over the
+// micro-mesh rather than over the map's texels, with flat micro-triangles
+// at the leaves, so the surface equals a tessellation at the same rate
+// (the --tessellate comparison) and hits are exact rather than a root
+// search.
 //
 // Watertight across base triangles: a micro-vertex is the weighted sum of
 // the corners with exact weights (multiples of 2^-L) and no contraction; on
@@ -35,10 +38,10 @@ typedef struct DispMesh {
   float scale, offset;         ///< d = scale h + offset, world units
   int w, h;                    ///< the map's texels per axis
   uint level;                  ///< L: 2^L micro-edges per base edge
-  uint mips;                   ///< min-max pyramid levels above the texels (the last is 1 x 1)
-  __global const float* texels;///< w h floats, row-major from the top (v = 0)
-  __global const float* rows;  ///< the type's first row as floats (mip offsets count from here)
-  __global const float4* header;
+  uint depth;                  ///< D: the deepest level whose sub-triangles' boxes are stored
+  __global const float* texels;///< w h floats, row-major from the top (v = 0); null for a paletted map
+  __global const uchar* bytes; ///< a paletted map's texels, indices into palette, in 8 x 8 tiles (one cache line; rows of ceil(w / 8) tiles)
+  __global const float* palette;///< a paletted map's values (a map of at most 256 distinct values: 8-bit images)
 } DispMesh;
 
 /// A base triangle's corners (a, b, c), in its winding's order.
@@ -51,23 +54,19 @@ typedef struct DispTri {
 inline DispMesh disp_mesh(__global const float4* rows, uint mesh_row) {
   DispMesh m;
   __global const float4* hdr = rows + mesh_row;
-  m.header = hdr;
   m.scale = hdr[0].x;
   m.offset = hdr[0].y;
   m.w = (int)hdr[0].z;
   m.h = (int)hdr[0].w;
   uint4 b = as_uint4(hdr[1]);
   m.level = b.x;
-  m.mips = b.y;
-  m.rows = (__global const float*)rows;
-  m.texels = m.rows + b.z;
+  m.depth = b.y;
+  __global const float* first = (__global const float*)rows + b.z;
+  bool paletted = b.w != 0xffffffffu;
+  m.texels = paletted ? 0 : first;
+  m.bytes = (__global const uchar*)first;
+  m.palette = (__global const float*)rows + b.w;
   return m;
-}
-
-/// Mip level k's (>= 1) min-max pairs: the floats' offset from the type's first row.
-inline uint disp_mip_offset(DispMesh m, uint k) {
-  uint slot = k - 1u;
-  return as_uint(((__global const float*)(m.header + 2))[slot]);
 }
 
 inline DispTri disp_tri(__global const float4* rows, uint4 corners) {
@@ -84,11 +83,20 @@ inline DispTri disp_tri(__global const float4* rows, uint4 corners) {
 
 /// Wrap a texel coordinate (an integer-valued float of magnitude below 2^24) into [0, size).
 inline int disp_wrap(float x, int size) {
+  // inside the map (the common case): no division
+  int xi = (int)x;
+  if (xi >= 0 && xi < size) return xi;
   float fs = (float)size;
   return (int)(x - fs * floor(x / fs));
 }
 
-inline float disp_texel(DispMesh m, int x, int y) { return m.texels[(uint)y * (uint)m.w + (uint)x]; }
+inline float disp_texel(DispMesh m, int x, int y) {
+  if (m.texels) return m.texels[(uint)y * (uint)m.w + (uint)x];
+  // tiled: a bilinear footprint and its neighbours' mostly share a cache line
+  uint tiles_x = ((uint)m.w + 7u) >> 3;
+  uint tile = ((uint)y >> 3) * tiles_x + ((uint)x >> 3);
+  return m.palette[m.bytes[64u * tile + (((uint)y & 7u) << 3) + ((uint)x & 7u)]];
+}
 
 /// The map at uv, bilinear between texel centres, repeating; 0 where uv is
 /// not finite or beyond 2^22 repeats (the loaders refuse such uv).
@@ -101,61 +109,6 @@ inline float disp_sample(DispMesh m, float2 uv) {
   int x1 = x0 + 1 == m.w ? 0 : x0 + 1, y1 = y0 + 1 == m.h ? 0 : y0 + 1;
   float a = disp_texel(m, x0, y0), b = disp_texel(m, x1, y0), c = disp_texel(m, x0, y1), d = disp_texel(m, x1, y1);
   return (a * (1.0f - fx) + b * fx) * (1.0f - fy) + (c * (1.0f - fx) + d * fx) * fy;
-}
-
-/// The texels a bilinear sample anywhere in [lo, hi] (one axis, in texel
-/// units less a half) reads: [*a, *b] wrapped into [0, size), contiguous;
-/// the whole axis where the range wraps or is not finite.
-inline void disp_axis_range(float lo, float hi, int size, int* a, int* b) {
-  float f0 = floor(lo), f1 = floor(hi) + 1.0f;
-  if (!(f1 - f0 < (float)size) || !(fabs(f0) < 4194304.0f && fabs(f1) < 4194304.0f)) {
-    *a = 0;
-    *b = size - 1;
-    return;
-  }
-  int w0 = disp_wrap(f0, size);
-  int w1 = w0 + (int)(f1 - f0);
-  if (w1 >= size) {
-    *a = 0;
-    *b = size - 1;
-    return;
-  }
-  *a = w0;
-  *b = w1;
-}
-
-/// The least and the largest map value a bilinear sample at any uv of the
-/// box [uv_lo, uv_hi] can take: the texels it reads, through the pyramid's
-/// level at which they span two cells per axis at most.
-inline float2 disp_map_range(DispMesh m, float2 uv_lo, float2 uv_hi) {
-  // a sliver of slack: micro-vertices' uv round a little differently from the corners'
-  float2 slack = 1e-6f * (fabs(uv_lo) + fabs(uv_hi)) + 1e-7f;
-  float2 lo = (uv_lo - slack) * (float2)((float)m.w, (float)m.h) - 0.5f;
-  float2 hi = (uv_hi + slack) * (float2)((float)m.w, (float)m.h) - 0.5f;
-  int x0, x1, y0, y1;
-  disp_axis_range(lo.x, hi.x, m.w, &x0, &x1);
-  disp_axis_range(lo.y, hi.y, m.h, &y0, &y1);
-  uint k = 0;
-  while (k < m.mips && (((x1 >> k) - (x0 >> k)) > 1 || ((y1 >> k) - (y0 >> k)) > 1)) ++k;
-  float vmin = INFINITY, vmax = -INFINITY;
-  if (k == 0) {
-    for (int y = y0; y <= y1; ++y)
-      for (int x = x0; x <= x1; ++x) {
-        float v = disp_texel(m, x, y);
-        vmin = fmin(vmin, v);
-        vmax = fmax(vmax, v);
-      }
-    return (float2)(vmin, vmax);
-  }
-  int wk = (m.w + (1 << k) - 1) >> k;
-  __global const float* level = m.rows + disp_mip_offset(m, k);
-  for (int y = y0 >> k; y <= (y1 >> k); ++y)
-    for (int x = x0 >> k; x <= (x1 >> k); ++x) {
-      uint c = 2u * ((uint)y * (uint)wk + (uint)x);
-      vmin = fmin(vmin, level[c]);
-      vmax = fmax(vmax, level[c + 1u]);
-    }
-  return (float2)(vmin, vmax);
 }
 
 /// The base surface at lattice point (i, j) of 2^L per edge (weights
@@ -206,107 +159,78 @@ inline void disp_node_corners(uint node, uint level_l, int2* c) {
   }
 }
 
-/// A shell's bound: a box and a slab along the base triangle's face
-/// normal (the range of dot(x, fn) over the shell's six corners). The slab
-/// cuts the box down where the sub-triangle lies slanted to the axes.
-typedef struct DispShell {
-  float3 lo, hi;   ///< box, world
-  float slo, shi;  ///< slab: dot(x, fn) in [slo, shi]
-} DispShell;
-
-/// The per-ray constants of the shell test.
-typedef struct DispRay {
-  float3 o, inv_d;
-  float on, inv_dn;  ///< dot(o, fn) and 1 / dot(d, fn) (+-1e30 for a ray along the slab)
-} DispRay;
-
-/// The ray's entry into the shell in (tmin, tmax), widened for rounding
-/// as the BVH's slab tests; INFINITY for a miss.
-inline float disp_shell_hit(DispShell sh, DispRay r, float tmin, float tmax) {
-  float3 t0 = (sh.lo - r.o) * r.inv_d, t1 = (sh.hi - r.o) * r.inv_d;
-  float3 tn = fmin(t0, t1), tf = fmax(t0, t1);
-  float s0 = (sh.slo - r.on) * r.inv_dn, s1 = (sh.shi - r.on) * r.inv_dn;
-  float ta = fmax(fmax(fmax(tn.x, tn.y), fmax(tn.z, fmin(s0, s1))), tmin);
-  float tb = fmin(fmin(fmin(tf.x, tf.y), fmin(tf.z, fmax(s0, s1))), tmax) * (1.0f + 2.0f * spawn_gamma(3));
-  return ta <= tb ? ta : INFINITY;
-}
-
-/// The shell of the triangle with corners p0, p1, p2 (normals n0, n1, n2),
-/// each moved by dlo and by dhi along its normal: a box and a slab along
-/// fn, widened past the micro-vertices' rounding. The corners come by
-/// value: no pointer into the caller's private arrays, which could keep
-/// them out of registers.
-inline DispShell disp_shell_between(float3 fn, float3 p0, float3 p1, float3 p2, float3 n0, float3 n1, float3 n2,
-                                    float dlo, float dhi) {
-  float3 p[3] = {p0, p1, p2}, nn[3] = {n0, n1, n2};
-  float3 a = (float3)(INFINITY), b = (float3)(-INFINITY);
-  float slo = INFINITY, shi = -INFINITY, mag = 0.0f;
-  float3 afn = fabs(fn);
-  for (int k = 0; k < 3; ++k) {
-    float3 x = p[k] + dlo * nn[k], y = p[k] + dhi * nn[k];
-    a = fmin(a, fmin(x, y));
-    b = fmax(b, fmax(x, y));
-    float sx = dot(x, fn), sy = dot(y, fn);
-    slo = fmin(slo, fmin(sx, sy));
-    shi = fmax(shi, fmax(sx, sy));
-    mag = fmax(mag, fmax(dot(fabs(x), afn), dot(fabs(y), afn)));
+/// The four micro-triangles of level L - 1 node `node` (corners c) against
+/// the ray, at once: the six micro-vertices (corners A, B, C, midpoints AB,
+/// AC, BC) displaced, the children's corner triples of `child_k` in the
+/// lanes. A nearer hit than *best moves *best and the lattice point *li, *lj.
+inline bool disp_leaf_hit(DispMesh m, DispTri t, int n, float inv_n, int2 c0, int2 c1, int2 c2, float3 o,
+                          RayShear shear, float tmin, float* best, float* li, float* lj) {
+  int2 q[6] = {c0, c1, c2, (c0 + c1) / 2, (c0 + c2) / 2, (c1 + c2) / 2};
+  float x[6], y[6], z[6];
+  for (int k = 0; k < 6; ++k) {
+    float3 a = disp_vertex(m, t, n, inv_n, q[k].x, q[k].y) - o;
+    x[k] = vec3_component(a, shear.kx);
+    y[k] = vec3_component(a, shear.ky);
+    z[k] = vec3_component(a, shear.kz);
   }
-  DispShell sh;
-  float3 pad = 4e-6f * fmax(fabs(a), fabs(b)) + 1e-6f * (b - a);
-  sh.lo = a - pad;
-  sh.hi = b + pad;
-  float spad = 8e-6f * mag + 1e-6f * (shi - slo);
-  sh.slo = slo - spad;
-  sh.shi = shi + spad;
-  return sh;
-}
-
-/// The shell of the sub-triangle with corners (k0, k1, k2) among the
-/// points (positions p, normals nn, uv): each corner moved by the least and
-/// the largest displacement over its texels.
-inline DispShell disp_shell(DispMesh m, float3 fn, const float3* p, const float3* nn, const float2* uv, int k0, int k1,
-                            int k2) {
-  float2 ulo = fmin(fmin(uv[k0], uv[k1]), uv[k2]), uhi = fmax(fmax(uv[k0], uv[k1]), uv[k2]);
-  float2 r = disp_map_range(m, ulo, uhi);
-  float d0 = m.scale * r.x + m.offset, d1 = m.scale * r.y + m.offset;
-  return disp_shell_between(fn, p[k0], p[k1], p[k2], nn[k0], nn[k1], nn[k2], fmin(d0, d1), fmax(d0, d1));
+  // lanes: (A, AB, AC), (AB, B, BC), (AC, BC, C), (AB, AC, BC), as the quadtree's children
+  TriangleLanes h = triangle_test4_lanes(
+      shear, tmin, *best, (float4)(x[0], x[3], x[4], x[3]), (float4)(y[0], y[3], y[4], y[3]),
+      (float4)(z[0], z[3], z[4], z[3]), (float4)(x[3], x[1], x[5], x[4]), (float4)(y[3], y[1], y[5], y[4]),
+      (float4)(z[3], z[1], z[5], z[4]), (float4)(x[4], x[5], x[2], x[5]), (float4)(y[4], y[5], y[2], y[5]),
+      (float4)(z[4], z[5], z[2], z[5]));
+  if (!triangle_any4(h)) return false;
+  float th, b1, b2;
+  uint lane = triangle_nearest4(h, 0u, &th, &b1, &b2);
+  const int child_k[12] = {0, 3, 4, 3, 1, 5, 4, 5, 2, 3, 4, 5};
+  int2 k0 = q[child_k[3u * lane]], k1 = q[child_k[3u * lane + 1u]], k2 = q[child_k[3u * lane + 2u]];
+  *best = th;
+  *li = (float)k0.x + b1 * (float)(k1.x - k0.x) + b2 * (float)(k2.x - k0.x);
+  *lj = (float)k0.y + b1 * (float)(k1.y - k0.y) + b2 * (float)(k2.y - k0.y);
+  return true;
 }
 
 /// Ray (o, d) against displaced base triangle `tri` (its WT_DISP_INFO_ROWS
 /// prim_info rows) in (tmin, tmax): the nearest micro-triangle hit, its t,
 /// and the hit's lattice coordinates (level-L units) in *li, *lj, which
 /// displaced_surface takes back. `rows`: the type's first prim_data row.
+/// The base triangle's own box is the BVH's: the walk starts at its children.
 inline bool displaced_intersect(__global const float4* rows, __global const uint4* tri, float3 o, float3 d,
                                 float tmin, float tmax, float* t_hit, float* li, float* lj) {
   uint4 info = tri[0];
   DispMesh m = disp_mesh(rows, info.y);
   DispTri t = disp_tri(rows, tri[1]);
-  uint level_l = m.level;
+  uint level_l = m.level, depth = m.depth;
   int n = 1 << level_l;
   float inv_n = 1.0f / (float)n;
-  float3 fn = cross(t.p[1] - t.p[0], t.p[2] - t.p[0]);
-  DispRay ray;
-  ray.o = o;
-  ray.inv_d = 1.0f / select(d, copysign((float3)(1e-30f), d), fabs(d) < 1e-30f);
-  ray.on = dot(o, fn);
-  float dn = dot(d, fn);
-  ray.inv_dn = 1.0f / (fabs(dn) < 1e-30f ? copysign(1e-30f, dn) : dn);
+  RayShear shear = triangle_ray_shear(d);
   float best = tmax;
   bool found = false;
-  uint stack[3 * WT_DISP_MAX_LEVEL + 4];
+  if (level_l == 0u) {
+    // one flat triangle: the base triangle's corners displaced
+    float3 s0 = disp_vertex(m, t, n, inv_n, 0, 0), s1 = disp_vertex(m, t, n, inv_n, 1, 0),
+           s2 = disp_vertex(m, t, n, inv_n, 0, 1);
+    float th, b1, b2;
+    if (!triangle_intersect(o, shear, tmin, best, s0, s1, s2, &th, &b1, &b2)) return false;
+    *t_hit = th;
+    *li = b1;
+    *lj = b2;
+    return true;
+  }
+  __global const float4* box_rows = rows + info.z;
+  // the children's boxes, four a block (x, y, z of the lows, then of the highs), node by node in level order
+  __global const uchar4* blocks = (__global const uchar4*)(box_rows + 2);
+  float3 inv_d = 1.0f / select(d, copysign((float3)(1e-30f), d), fabs(d) < 1e-30f);
+  float widen = 1.0f + 2.0f * spawn_gamma(3);
+  uint stack[3 * WT_DISP_MAX_LEVEL + 4], stack_index[3 * WT_DISP_MAX_LEVEL + 4];
   float stack_t[3 * WT_DISP_MAX_LEVEL + 4];
-  // the whole triangle's shell first, from its stored displacement range:
-  // most triangles the BVH's box lets through stop here
-  DispShell whole =
-      disp_shell_between(fn, t.p[0], t.p[1], t.p[2], t.n[0], t.n[1], t.n[2], as_float(info.z), as_float(info.w));
-  if (disp_shell_hit(whole, ray, tmin, tmax) == INFINITY) return false;
-  RayShear shear = triangle_ray_shear(d);
+  float4 stack_lo[3 * WT_DISP_MAX_LEVEL + 4], stack_hi[3 * WT_DISP_MAX_LEVEL + 4];
   int sp = 0;
   stack[sp] = disp_node(0u, 0u, 0u, 0u);
-  stack_t[sp++] = tmin;
-  // the child table: corner triples among [A, B, C, AB, AC, BC] and, per
-  // parent orientation, the children's lattice offsets and orientation
-  const int child_k[12] = {0, 3, 4, 3, 1, 5, 4, 5, 2, 3, 4, 5};
+  stack_index[sp] = 0u;
+  stack_t[sp] = tmin;
+  stack_lo[sp] = box_rows[0];
+  stack_hi[sp++] = box_rows[1];
   const int up_di[4] = {0, 1, 0, 0}, up_dj[4] = {0, 0, 1, 0};
   const int inv_di[4] = {1, 0, 1, 1}, inv_dj[4] = {0, 1, 1, 1};
   while (sp > 0) {
@@ -314,68 +238,72 @@ inline bool displaced_intersect(__global const float4* rows, __global const uint
     uint node = stack[sp];
     if (stack_t[sp] > best) continue;
     uint level = node >> 28;
-    int2 c[3];
-    disp_node_corners(node, level_l, c);
-    if (level == level_l) {
-      // only the root of a level-0 mesh: one flat triangle
-      float3 s0 = disp_vertex(m, t, n, inv_n, c[0].x, c[0].y), s1 = disp_vertex(m, t, n, inv_n, c[1].x, c[1].y),
-             s2 = disp_vertex(m, t, n, inv_n, c[2].x, c[2].y);
-      float th, b1, b2;
-      if (triangle_intersect(o, shear, tmin, best, s0, s1, s2, &th, &b1, &b2)) {
-        best = th;
-        found = true;
-        *li = (float)c[0].x + b1 * (float)(c[1].x - c[0].x) + b2 * (float)(c[2].x - c[0].x);
-        *lj = (float)c[0].y + b1 * (float)(c[1].y - c[0].y) + b2 * (float)(c[2].y - c[0].y);
-      }
+    if (level + 1u == level_l) {
+      int2 c[3];
+      disp_node_corners(node, level_l, c);
+      found |= disp_leaf_hit(m, t, n, inv_n, c[0], c[1], c[2], o, shear, tmin, &best, li, lj);
       continue;
     }
-    // the six points: corners A, B, C and midpoints AB, AC, BC
-    int2 q[6] = {c[0], c[1], c[2], (c[0] + c[1]) / 2, (c[0] + c[2]) / 2, (c[1] + c[2]) / 2};
     uint inverted = (node >> 27) & 1u;
     uint ci = node & 8191u, cj = (node >> 13) & 8191u;
-    if (level + 1u == level_l) {
-      // the children are micro-triangles: displace the six points, test the four
-      float3 s[6];
-      for (int k = 0; k < 6; ++k) s[k] = disp_vertex(m, t, n, inv_n, q[k].x, q[k].y);
+    uint index = stack_index[sp];
+    float4 plo = stack_lo[sp], phi = stack_hi[sp];
+    float te[4] = {stack_t[sp], stack_t[sp], stack_t[sp], stack_t[sp]};
+    float4 clo[4], chi[4];
+    int order[4] = {0, 1, 2, 3};
+    int count = 4;
+    if (level < depth) {
+      // the four children's boxes: parent low + q step for the lows, parent high - (255 - q) step for the
+      // highs, so that 0 and 255 give the parent's own sides exactly
+      __global const uchar4* q = blocks + 6u * index;
+      float4 step = (phi - plo) * (1.0f / 255.0f);
+      float4 lx = plo.x + convert_float4(q[0]) * step.x, ly = plo.y + convert_float4(q[1]) * step.y,
+             lz = plo.z + convert_float4(q[2]) * step.z;
+      float4 hx = phi.x - (255.0f - convert_float4(q[3])) * step.x,
+             hy = phi.y - (255.0f - convert_float4(q[4])) * step.y,
+             hz = phi.z - (255.0f - convert_float4(q[5])) * step.z;
+      float4 tx0 = (lx - o.x) * inv_d.x, tx1 = (hx - o.x) * inv_d.x;
+      float4 ty0 = (ly - o.y) * inv_d.y, ty1 = (hy - o.y) * inv_d.y;
+      float4 tz0 = (lz - o.z) * inv_d.z, tz1 = (hz - o.z) * inv_d.z;
+      float4 tn = fmax(fmax(fmin(tx0, tx1), fmin(ty0, ty1)), fmax(fmin(tz0, tz1), (float4)(tmin)));
+      float4 tf = fmin(fmin(fmax(tx0, tx1), fmax(ty0, ty1)), fmin(fmax(tz0, tz1), (float4)(best))) * widen;
+      float tna[4], lxa[4], lya[4], lza[4], hxa[4], hya[4], hza[4];
+      int hit[4];
+      vstore4(tn, 0, tna);
+      vstore4(lx, 0, lxa), vstore4(ly, 0, lya), vstore4(lz, 0, lza);
+      vstore4(hx, 0, hxa), vstore4(hy, 0, hya), vstore4(hz, 0, hza);
+      int4 ok = tn <= tf;
+      vstore4(ok, 0, hit);
+      // the children hit, farthest first (pushed first, popped last)
+      count = 0;
       for (int k = 0; k < 4; ++k) {
-        int k0 = child_k[3 * k], k1 = child_k[3 * k + 1], k2 = child_k[3 * k + 2];
-        float th, b1, b2;
-        if (triangle_intersect(o, shear, tmin, best, s[k0], s[k1], s[k2], &th, &b1, &b2)) {
-          best = th;
-          found = true;
-          *li = (float)q[k0].x + b1 * (float)(q[k1].x - q[k0].x) + b2 * (float)(q[k2].x - q[k0].x);
-          *lj = (float)q[k0].y + b1 * (float)(q[k1].y - q[k0].y) + b2 * (float)(q[k2].y - q[k0].y);
+        if (!hit[k]) continue;
+        clo[k] = (float4)(lxa[k], lya[k], lza[k], 0.0f);
+        chi[k] = (float4)(hxa[k], hya[k], hza[k], 0.0f);
+        te[k] = tna[k];
+        int at = count++;
+        while (at > 0 && te[order[at - 1]] < te[k]) {
+          order[at] = order[at - 1];
+          --at;
         }
+        order[at] = k;
       }
-      continue;
+    } else {
+      // below the stored depth: every child, in the parent's box, untested
+      for (int k = 0; k < 4; ++k) {
+        clo[k] = plo;
+        chi[k] = phi;
+      }
     }
-    // inner children: their shells, pushed farthest first
-    float3 p[6], nn[6];
-    float2 uv[6];
-    for (int k = 0; k < 6; ++k) disp_base(t, n, inv_n, q[k].x, q[k].y, &p[k], &nn[k], &uv[k]);
-    uint kids[4];
-    float kt[4];
-    int count = 0;
-    for (int k = 0; k < 4; ++k) {
-      float te = disp_shell_hit(disp_shell(m, fn, p, nn, uv, child_k[3 * k], child_k[3 * k + 1], child_k[3 * k + 2]),
-                                ray, tmin, best);
-      if (te == INFINITY) continue;
+    for (int r = 0; r < count; ++r) {
+      int k = order[r];
       uint di = (uint)(inverted ? inv_di[k] : up_di[k]), dj = (uint)(inverted ? inv_dj[k] : up_dj[k]);
       uint kid_inv = (k == 3) ? 1u - inverted : inverted;
-      // insertion by entry distance, nearest last (popped first)
-      uint id = disp_node(level + 1u, kid_inv, 2u * ci + di, 2u * cj + dj);
-      int at = count++;
-      while (at > 0 && kt[at - 1] < te) {
-        kids[at] = kids[at - 1];
-        kt[at] = kt[at - 1];
-        --at;
-      }
-      kids[at] = id;
-      kt[at] = te;
-    }
-    for (int k = 0; k < count; ++k) {
-      stack[sp] = kids[k];
-      stack_t[sp++] = kt[k];
+      stack[sp] = disp_node(level + 1u, kid_inv, 2u * ci + di, 2u * cj + dj);
+      stack_index[sp] = 4u * index + 1u + (uint)k;
+      stack_t[sp] = te[k];
+      stack_lo[sp] = clo[k];
+      stack_hi[sp++] = chi[k];
     }
   }
   if (found) *t_hit = best;

@@ -99,38 +99,22 @@ typedef struct TriangleLanes {
   float4 t, v, w, inv_det;
 } TriangleLanes;
 
-/// The hits in (tmin, tmax) of the triangles of block `block`
-/// (leaf-order triangles 4 block + lane) whose lanes lie in [lane_lo,
-/// lane_hi), but skip_a and skip_b, tested at once: the watertight test of
-/// triangle_intersect on float4 lanes, one triangle per lane, with the same
-/// operations in the same order (so the same answers). The block's rows are
-/// already one axis of one corner for the four triangles: the ray's axes
-/// (kx, ky, kz) pick rows, no shuffle. triangle_nearest4 picks the nearest
-/// lane; traversal with the alpha test (bvh_block_hit, kernels/bvh.cl)
-/// drops the lanes whose surface has a hole there and picks again. This
-/// form takes the ray's origin already on its permuted axes (o_k = (org[kx],
-/// org[ky], org[kz]), triangle_origin_k), for callers that keep it per ray
-/// (streams test many leaves with each ray).
-__attribute__((always_inline)) inline TriangleLanes triangle_test4_k(float3 o_k, RayShear s, float tmin, float tmax,
-                                                                      __global const float4* tri_verts, uint block,
-                                                                      uint lane_lo, uint lane_hi, uint skip_a,
-                                                                      uint skip_b) {
-  __global const float4* r = tri_verts + WT_TRIANGLE_BLOCK_ROWS * block;
-  float ox = o_k.x, oy = o_k.y, oz = o_k.z;
-  float4 vx[3], vy[3], vz[3];
-#pragma unroll
-  for (int k = 0; k < 3; ++k) {
-    vx[k] = r[3 * k + s.kx] - ox;
-    vy[k] = r[3 * k + s.ky] - oy;
-    vz[k] = r[3 * k + s.kz] - oz;
-  }
-  float4 az = vz[0], bz = vz[1], cz = vz[2];
-  float4 ax = vx[0] - s.sx * az;
-  float4 ay = vy[0] - s.sy * az;
-  float4 bx = vx[1] - s.sx * bz;
-  float4 by = vy[1] - s.sy * bz;
-  float4 cx = vx[2] - s.sx * cz;
-  float4 cy = vy[2] - s.sy * cz;
+/// The watertight test of triangle_intersect on float4 lanes, one triangle
+/// per lane, with the same operations in the same order (so the same
+/// answers): corner k's coordinates less the ray's origin on the ray's
+/// permuted axes (kx, ky, kz) in xk, yk, zk. ok: the lane is hit in (tmin,
+/// tmax). Loads nothing, for callers whose corners are not stored
+/// (displaced micro-triangles) as well as for triangle_test4_k.
+__attribute__((always_inline)) inline TriangleLanes triangle_test4_lanes(RayShear s, float tmin, float tmax, float4 x0,
+                                                                         float4 y0, float4 z0, float4 x1, float4 y1,
+                                                                         float4 z1, float4 x2, float4 y2, float4 z2) {
+  float4 az = z0, bz = z1, cz = z2;
+  float4 ax = x0 - s.sx * az;
+  float4 ay = y0 - s.sy * az;
+  float4 bx = x1 - s.sx * bz;
+  float4 by = y1 - s.sy * bz;
+  float4 cx = x2 - s.sx * cz;
+  float4 cy = y2 - s.sy * cz;
 
   float4 u = cx * by - cy * bx;
   float4 v = ax * cy - ay * cx;
@@ -155,15 +139,44 @@ __attribute__((always_inline)) inline TriangleLanes triangle_test4_k(float3 o_k,
   float4 t_scaled = u * s.sz * az + v * s.sz * bz + w * s.sz * cz;
   float4 inv_det = 1.0f / det;
   float4 t = t_scaled * inv_det;
-  uint4 lane = (uint4)(0u, 1u, 2u, 3u);
-  uint4 index = (uint4)(4u * block) + lane;
   TriangleLanes h;
-  h.ok = inside & (det != 0.0f) & (t > tmin) & (t < tmax) & (lane >= (uint4)(lane_lo)) & (lane < (uint4)(lane_hi)) &
-         (index != (uint4)(skip_a)) & (index != (uint4)(skip_b));
+  h.ok = inside & (det != 0.0f) & (t > tmin) & (t < tmax);
   h.t = t;
   h.v = v;
   h.w = w;
   h.inv_det = inv_det;
+  return h;
+}
+
+/// The hits in (tmin, tmax) of the triangles of block `block`
+/// (leaf-order triangles 4 block + lane) whose lanes lie in [lane_lo,
+/// lane_hi), but skip_a and skip_b, tested at once (triangle_test4_lanes).
+/// The block's rows are
+/// already one axis of one corner for the four triangles: the ray's axes
+/// (kx, ky, kz) pick rows, no shuffle. triangle_nearest4 picks the nearest
+/// lane; traversal with the alpha test (bvh_block_hit, kernels/bvh.cl)
+/// drops the lanes whose surface has a hole there and picks again. This
+/// form takes the ray's origin already on its permuted axes (o_k = (org[kx],
+/// org[ky], org[kz]), triangle_origin_k), for callers that keep it per ray
+/// (streams test many leaves with each ray).
+__attribute__((always_inline)) inline TriangleLanes triangle_test4_k(float3 o_k, RayShear s, float tmin, float tmax,
+                                                                      __global const float4* tri_verts, uint block,
+                                                                      uint lane_lo, uint lane_hi, uint skip_a,
+                                                                      uint skip_b) {
+  __global const float4* r = tri_verts + WT_TRIANGLE_BLOCK_ROWS * block;
+  float ox = o_k.x, oy = o_k.y, oz = o_k.z;
+  float4 vx[3], vy[3], vz[3];
+#pragma unroll
+  for (int k = 0; k < 3; ++k) {
+    vx[k] = r[3 * k + s.kx] - ox;
+    vy[k] = r[3 * k + s.ky] - oy;
+    vz[k] = r[3 * k + s.kz] - oz;
+  }
+  TriangleLanes h = triangle_test4_lanes(s, tmin, tmax, vx[0], vy[0], vz[0], vx[1], vy[1], vz[1], vx[2], vy[2], vz[2]);
+  uint4 lane = (uint4)(0u, 1u, 2u, 3u);
+  uint4 index = (uint4)(4u * block) + lane;
+  h.ok = h.ok & (lane >= (uint4)(lane_lo)) & (lane < (uint4)(lane_hi)) & (index != (uint4)(skip_a)) &
+         (index != (uint4)(skip_b));
   return h;
 }
 

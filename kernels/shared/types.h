@@ -91,21 +91,28 @@ typedef struct WtBvh4Node {
 /// A base triangle of a displaced mesh (kernels/geometry/displaced.cl),
 /// intersected as 4^L micro-triangles that are never stored. prim_data: per
 /// mesh WT_DISP_MESH_ROWS rows: (scale, offset, map width, map height),
-/// then as uint bits (L, the min-max pyramid's levels above the texels, the
-/// texels' first float, 0), then four rows of the pyramid levels' first
-/// floats (level k >= 1 at slot k - 1; its cells are (min, max) pairs,
-/// ceil(w / 2^k) per row); then per vertex WT_DISP_VERTEX_ROWS rows
-/// (position xyz and u, normal xyz and v); then the maps' texels and
-/// pyramids. Float offsets and row indices count from the type's first
-/// row. prim_info per base triangle, WT_DISP_INFO_ROWS rows: (material, its mesh's first row,
-/// its least and largest displacement as float bits), then its corners' first rows in
-/// winding order and its index in its mesh (mesh = first row / WT_DISP_MESH_ROWS).
+/// then as uint bits (L, D the deepest level with stored boxes, the
+/// texels' first float, the palette's first float or ~0); then per vertex WT_DISP_VERTEX_ROWS rows
+/// (position xyz and u, normal xyz and v); then per base triangle (L > 0)
+/// its boxes: two rows (the whole triangle's box: low xyz, high xyz, w 0),
+/// then for each sub-triangle of levels 0 to D - 1 in level order (node k's
+/// children are 4k + 1 to 4k + 4) a block of 24 bytes, its four children's
+/// boxes relative to its own (uchar4 rows: low x, y, z, high x, y, z; low =
+/// parent low + q step, high = parent high - (255 - q) step, step = parent
+/// extent / 255), padded to a whole row; then the maps' texels: floats
+/// row by row, or for a map of at most 256 distinct values its palette
+/// (the values' bits, sorted) and a
+/// byte a texel in 8 x 8 tiles, rows of ceil(w / 8) tiles. Float
+/// offsets and row indices count from the type's first row. prim_info per
+/// base triangle, WT_DISP_INFO_ROWS rows: (material, its mesh's first row,
+/// its boxes' first row, 0), then its corners' first rows in winding order
+/// and its index in its mesh (mesh = first row / WT_DISP_MESH_ROWS).
 #define WT_PRIM_DISPLACED 4u
-#define WT_DISP_MESH_ROWS 6       ///< prim_data rows per displaced mesh
+#define WT_DISP_MESH_ROWS 2       ///< prim_data rows per displaced mesh
 #define WT_DISP_VERTEX_ROWS 2     ///< prim_data rows per vertex
 #define WT_DISP_INFO_ROWS 2       ///< prim_info rows per base triangle
 #define WT_DISP_MAX_LEVEL 10      ///< L at most: 1024 micro-edges per base edge
-#define WT_DISP_MAX_MIPS 16       ///< pyramid levels above the texels at most (maps up to 65536 per side)
+#define WT_DISP_MAX_DEPTH 6       ///< D at most (D = min(L - 1, this)): 1365 stored blocks, 32 KiB a base triangle
 /// A brick of up to WT_SDF_BRICK^3 cells of a grid of signed distances that
 /// the surface crosses (kernels/geometry/sdf_grid.cl). prim_data: per grid
 /// WT_SDF_GRID_ROWS rows (lattice-from-scene as a 3x4 matrix, then (cells

@@ -15,6 +15,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <map>
@@ -149,8 +150,11 @@ struct TypeRows {
   std::uint32_t count = 0;
 };
 
-TypeRows typeRows(const Scene& scene) {
-  PrimitiveRows rows = gatherPrimitives(scene);
+/// The type's rows as gatherPrimitives lays them out, or with boxes stored to level maxDepth at most.
+TypeRows typeRows(const Scene& scene, int maxDepth = -1) {
+  PrimitiveRows rows;
+  if (maxDepth < 0) rows = gatherPrimitives(scene);
+  else gatherDisplacedTo(scene, rows, std::uint32_t(maxDepth));
   TypeRows t;
   t.count = std::uint32_t(rows.count[WT_PRIM_DISPLACED]);
   t.data.assign(rows.data.begin() + rows.dataFirst[WT_PRIM_DISPLACED], rows.data.end());
@@ -164,8 +168,8 @@ cl::Buffer input(const V& v) {
                     const_cast<void*>(static_cast<const void*>(v.data())));
 }
 
-std::vector<KernelHit> kernelClosest(const Scene& scene, const std::vector<Ray>& rays) {
-  const TypeRows rows = typeRows(scene);
+std::vector<KernelHit> kernelClosest(const Scene& scene, const std::vector<Ray>& rays, int maxDepth = -1) {
+  const TypeRows rows = typeRows(scene, maxDepth);
   EXPECT_GT(rows.count, 0u);
   Context& ctx = test::deviceContext();
   std::vector<cl_float4> o(rays.size()), d(rays.size());
@@ -194,14 +198,12 @@ std::vector<KernelHit> kernelClosest(const Scene& scene, const std::vector<Ray>&
   return hits;
 }
 
-TEST(DisplacedMeshes, KernelMatchesLongDoubleReference) {
-  // level 3 over a 48^2 map: micro-edges span several texels, so the shells
-  // come from the pyramid's upper levels as well as from single texels
-  const Scene scene = testSphere(3);
+/// Closest hits on random rays at the sphere against the long-double reference of every micro-triangle.
+void expectKernelMatchesReference(const Scene& scene, std::uint32_t seed, int maxDepth = -1, std::size_t count = 3000) {
   const DisplacedMesh& mesh = scene.displacedMeshes[0];
   const std::vector<MicroTriangle> micro = microMesh(mesh);
-  const std::vector<Ray> rays = raysAtSphere(glm::vec3(0.3f, -0.2f, 0.1f), test::testSize(3000, 300), 21);
-  const std::vector<KernelHit> got = kernelClosest(scene, rays);
+  const std::vector<Ray> rays = raysAtSphere(glm::vec3(0.3f, -0.2f, 0.1f), test::testSize(count, count / 10), seed);
+  const std::vector<KernelHit> got = kernelClosest(scene, rays, maxDepth);
   int bad = 0, hits = 0, ambiguous = 0;
   for (std::size_t i = 0; i < rays.size(); ++i) {
     const RefHit want = reference(micro, rays[i]);
@@ -230,6 +232,154 @@ TEST(DisplacedMeshes, KernelMatchesLongDoubleReference) {
   EXPECT_EQ(bad, 0);
   EXPECT_GT(hits, int(rays.size() / 3));
   EXPECT_LT(ambiguous, int(rays.size() / 100) + 1);
+}
+
+TEST(DisplacedMeshes, KernelMatchesLongDoubleReference) {
+  // level 3 over a 48^2 map: micro-edges span several texels
+  expectKernelMatchesReference(testSphere(3), 21);
+}
+
+TEST(DisplacedMeshes, LevelsBelowTheStoredBoxesMatchTheReference) {
+  // boxes stored to level D < L - 1: the sub-triangles below D are walked
+  // untested inside their level-D ancestor's box, which bounds them by the
+  // map's range over their texels; D = 0 keeps the whole triangle's box only
+  for (int depth : {1, 0}) {
+    SCOPED_TRACE("stored depth " + std::to_string(depth));
+    expectKernelMatchesReference(testSphere(3), 30 + std::uint32_t(depth), depth, 1500);
+  }
+}
+
+TEST(DisplacedMeshes, EightBitMapsAreStoredAsBytesAndDrawTheSameSurface) {
+  // a map of at most 256 distinct values (an 8-bit image's) is stored as
+  // a byte a texel and a palette of the values, a map of more as floats:
+  // both draw the surface the reference samples from the values themselves
+  Scene floats = testSphere(3), bytes = floats;
+  std::vector<float>& fine = floats.displacedMeshes[0].map;
+  for (std::size_t i = 0; i < fine.size(); ++i) fine[i] += float(i) * 0x1p-20f;  // every texel its own value
+  std::vector<float>& coarse = bytes.displacedMeshes[0].map;
+  for (float& v : coarse) v = std::round(std::clamp(v, 0.0f, 1.0f) * 255.0f) / 255.0f;
+  std::vector<float> distinct(coarse);
+  std::sort(distinct.begin(), distinct.end());
+  distinct.erase(std::unique(distinct.begin(), distinct.end()), distinct.end());
+  ASSERT_GT(distinct.size(), 32u);  // a map with many values, not a handful
+  // the texels' rows: a float each, or a byte each in 8 x 8 tiles after the palette
+  const std::size_t texels = fine.size(), floatRows = typeRows(floats).data.size(), byteRows = typeRows(bytes).data.size();
+  const std::size_t tiled = 64 * ((bytes.displacedMeshes[0].mapWidth + 7) / 8) * ((bytes.displacedMeshes[0].mapHeight + 7) / 8);
+  EXPECT_EQ(floatRows - byteRows, (texels + 3) / 4 - (tiled + 4 * distinct.size() + 15) / 16);
+  for (const Scene* scene : {&floats, &bytes}) {
+    SCOPED_TRACE(scene == &floats ? "float texels" : "byte texels");
+    expectKernelMatchesReference(*scene, 33, -1, 1500);
+  }
+}
+
+/// A base triangle's stored boxes decoded as shared/types.h lays them out
+/// (WT_PRIM_DISPLACED), this file's own reading: per node in level order
+/// (node k's children 4k + 1 .. 4k + 4) its box, level D the deepest.
+struct DecodedBoxes {
+  std::uint32_t level = 0, depth = 0;
+  std::vector<glm::vec3> lo, hi;
+};
+
+DecodedBoxes decodeBoxes(const TypeRows& rows, std::uint32_t triangle) {
+  const std::array<std::uint32_t, 4> info = rows.info[WT_DISP_INFO_ROWS * triangle];
+  DecodedBoxes out;
+  std::memcpy(&out.level, &rows.data[info[1] + 1].x, 4);
+  std::memcpy(&out.depth, &rows.data[info[1] + 1].y, 4);
+  const WtVec4 lo = rows.data[info[2]], hi = rows.data[info[2] + 1];
+  out.lo.push_back({lo.x, lo.y, lo.z});
+  out.hi.push_back({hi.x, hi.y, hi.z});
+  const auto* bytes = reinterpret_cast<const std::uint8_t*>(&rows.data[info[2] + 2]);
+  std::size_t nodes = 0;
+  for (std::uint32_t l = 0; l <= out.depth; ++l) nodes += std::size_t(1) << (2 * l);
+  for (std::size_t child = 1; child < nodes; ++child) {
+    const std::size_t parent = (child - 1) / 4, k = (child - 1) % 4;
+    const std::uint8_t* block = bytes + 24 * parent;
+    glm::vec3 clo, chi;
+    for (int a = 0; a < 3; ++a) {
+      const float plo = out.lo[parent][a], phi = out.hi[parent][a], step = (phi - plo) * (1.0f / 255.0f);
+      clo[a] = plo + float(block[4 * a + k]) * step;
+      chi[a] = phi - (255.0f - float(block[12 + 4 * a + k])) * step;
+    }
+    out.lo.push_back(clo);
+    out.hi.push_back(chi);
+  }
+  return out;
+}
+
+TEST(DisplacedMeshes, StoredBoxesHoldEveryMicroTriangleAndStayTight) {
+  // every stored box holds the micro-vertices (as the kernel displaces
+  // them) of its sub-triangle, so the micro-triangles, flat between them;
+  // and the deepest boxes are no wider than those vertices' own box by
+  // more than the eight-bit step of their parent's box (the walk prunes)
+  for (int depth : {-1, 1}) {
+    SCOPED_TRACE("box depth " + std::to_string(depth));
+    const Scene scene = testSphere(4, 0.3f, -0.15f);
+    const TypeRows rows = typeRows(scene, depth);
+    const int levelL = int(displacedLevel(scene.displacedMeshes[0])), n = 1 << levelL;
+    // the kernel's micro-vertices, every lattice point of every base triangle
+    std::vector<cl_uint4> queries;
+    for (std::uint32_t b = 0; b < rows.count; ++b)
+      for (int j = 0; j <= n; ++j)
+        for (int i = 0; i + j <= n; ++i) queries.push_back({{b, cl_uint(i), cl_uint(j), 0}});
+    Context& ctx = test::deviceContext();
+    cl::Buffer dataBuf = input(rows.data), infoBuf = input(rows.info), qBuf = input(queries);
+    cl::Buffer out(ctx.context(), CL_MEM_WRITE_ONLY, queries.size() * sizeof(cl_float4));
+    cl::Kernel k(test::testProgram("displaced_tests.cl"), "test_displaced_vertex");
+    k.setArg(0, cl_uint(queries.size())), k.setArg(1, dataBuf), k.setArg(2, infoBuf), k.setArg(3, qBuf), k.setArg(4, out);
+    ctx.launch("test_displaced_vertex", k, queries.size());
+    std::vector<cl_float4> verts(queries.size());
+    ctx.queue().enqueueReadBuffer(out, CL_TRUE, 0, verts.size() * sizeof(cl_float4), verts.data());
+    const std::size_t perTriangle = std::size_t(n + 1) * std::size_t(n + 2) / 2;
+    int outside = 0, loose = 0, leaves = 0;
+    for (std::uint32_t b = 0; b < rows.count; ++b) {
+      const DecodedBoxes boxes = decodeBoxes(rows, b);
+      ASSERT_EQ(boxes.level, std::uint32_t(levelL));
+      ASSERT_EQ(boxes.depth, depth < 0 ? std::uint32_t(levelL - 1) : std::uint32_t(depth));
+      auto vertex = [&](int i, int j) {
+        std::size_t at = b * perTriangle;
+        for (int r = 0; r < j; ++r) at += std::size_t(n + 1 - r);
+        const cl_float4 v = verts[at + std::size_t(i)];
+        return glm::vec3(v.s[0], v.s[1], v.s[2]);
+      };
+      // nodes in level order with their corners in the level-L lattice: child k of corners (A, B, C) takes
+      // (A, AB, AC), (AB, B, BC), (AC, BC, C), (AB, AC, BC)
+      std::vector<std::array<glm::ivec2, 3>> corners{{glm::ivec2(0, 0), glm::ivec2(n, 0), glm::ivec2(0, n)}};
+      for (std::size_t node = 0; node < boxes.lo.size(); ++node) {
+        const auto [A, B, C] = corners[node];
+        const glm::ivec2 ab = (A + B) / 2, ac = (A + C) / 2, bc = (B + C) / 2;
+        corners.push_back({A, ab, ac});
+        corners.push_back({ab, B, bc});
+        corners.push_back({ac, bc, C});
+        corners.push_back({ab, ac, bc});
+        // the lattice points of the sub-triangle: A + (a (B - A) + c (C - A)) / s
+        const int s = std::max(std::abs(B.x - A.x), std::abs(B.y - A.y));
+        glm::vec3 vlo(std::numeric_limits<float>::infinity()), vhi(-vlo.x);
+        for (int c = 0; c <= s; ++c)
+          for (int a = 0; a + c <= s; ++a) {
+            const glm::ivec2 p = A + (a * (B - A) + c * (C - A)) / s;
+            const glm::vec3 v = vertex(p.x, p.y);
+            vlo = glm::min(vlo, v);
+            vhi = glm::max(vhi, v);
+          }
+        if (glm::any(glm::lessThan(vlo, boxes.lo[node])) || glm::any(glm::greaterThan(vhi, boxes.hi[node])))
+          if (++outside <= 5) ADD_FAILURE() << "triangle " << b << " node " << node << ": a micro-vertex outside its box";
+        // tight where the deepest boxes come from the micro-vertices (level D the micro-triangles' parents)
+        if (boxes.depth + 1 != boxes.level || node == 0 || node < boxes.lo.size() - (std::size_t(1) << (2 * boxes.depth)))
+          continue;
+        ++leaves;
+        const std::size_t parent = (node - 1) / 4;
+        const glm::vec3 step = (boxes.hi[parent] - boxes.lo[parent]) / 255.0f;
+        const glm::vec3 pad = step + 1e-5f * (1.0f + glm::abs(vlo) + glm::abs(vhi));
+        if (glm::any(glm::greaterThan(vlo - boxes.lo[node], pad)) || glm::any(glm::greaterThan(boxes.hi[node] - vhi, pad)))
+          if (++loose <= 5) ADD_FAILURE() << "triangle " << b << " node " << node << ": box wider than its vertices need";
+      }
+    }
+    EXPECT_EQ(outside, 0);
+    EXPECT_EQ(loose, 0);
+    if (depth < 0) {
+      EXPECT_GT(leaves, 0);
+    }
+  }
 }
 
 TEST(DisplacedMeshes, ShadingNormalsFaceOutAndFollowTheBumps) {
