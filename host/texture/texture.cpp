@@ -14,6 +14,7 @@
 #include <exception>
 #include <system_error>
 #include <thread>
+#include <future>
 
 namespace wt {
 
@@ -378,10 +379,16 @@ struct StbPixels {
   std::unique_ptr<void, void (*)(void*)> data{nullptr, stbi_image_free};
 };
 
-/// decodeImage's checks and decoding, without copying the pixels out of
-/// stb's buffer. stb_image keeps its failure reason per thread (built with
-/// STBI_THREAD_LOCAL), so decodes may run in parallel.
-StbPixels decodePixels(const unsigned char* bytes, std::size_t size, const std::string& name) {
+/// An image file's header as decodeImage checks it.
+struct ImageHeader {
+  ImageFileFormat format = ImageFileFormat::Unknown;
+  std::uint32_t width = 0, height = 0;
+  bool sixteenBit = false;
+};
+
+/// decodeImage's checks before decoding: the format, the JPEG's Huffman
+/// tables and the size (from the header alone, nothing allocated).
+ImageHeader readHeader(const unsigned char* bytes, std::size_t size, const std::string& name) {
   if (size == 0) fail(name, "no image data (0 bytes)");
   if (!bytes) fail(name, "no image data (a null pointer)");
   const ImageFileFormat format = sniffImageFormat(bytes, size);
@@ -406,24 +413,36 @@ StbPixels decodePixels(const unsigned char* bytes, std::size_t size, const std::
   if (!stbi_info_from_memory(bytes, length, &width, &height, &channels))
     fail(name, std::string("cannot read the ") + imageFormatName(format) + " header: " + stbReason());
   checkImageSize(name, std::uint64_t(std::max(width, 0)), std::uint64_t(std::max(height, 0)));
+  ImageHeader header;
+  header.format = format;
+  header.width = std::uint32_t(width), header.height = std::uint32_t(height);
+  header.sixteenBit = format == ImageFileFormat::Png && stbi_is_16_bit_from_memory(bytes, length);
+  return header;
+}
 
+/// decodeImage's decoding, after readHeader gave `header`, without copying
+/// the pixels out of stb's buffer. stb_image keeps its failure reason per
+/// thread (STBI_THREAD_LOCAL), so decodes may run in parallel.
+StbPixels decodePixels(const unsigned char* bytes, std::size_t size, const std::string& name, const ImageHeader& header) {
+  const int length = int(size);
+  int w = 0, h = 0, channels = 0;
   StbPixels image;
-  image.sixteenBit = format == ImageFileFormat::Png && stbi_is_16_bit_from_memory(bytes, length);
-  int w = 0, h = 0;
+  image.sixteenBit = header.sixteenBit;
   image.data.reset(image.sixteenBit ? static_cast<void*>(stbi_load_16_from_memory(bytes, length, &w, &h, &channels, 4))
                                     : static_cast<void*>(stbi_load_from_memory(bytes, length, &w, &h, &channels, 4)));
-  if (!image.data) fail(name, std::string("cannot decode the ") + imageFormatName(format) + " data: " + stbReason());
-  if (w != width || h != height)
+  if (!image.data)
+    fail(name, std::string("cannot decode the ") + imageFormatName(header.format) + " data: " + stbReason());
+  if (std::uint32_t(w) != header.width || std::uint32_t(h) != header.height)
     fail(name, "decoded size " + std::to_string(w) + " x " + std::to_string(h) + " differs from the header's " +
-                   std::to_string(width) + " x " + std::to_string(height));
-  image.width = std::uint32_t(width), image.height = std::uint32_t(height);
+                   std::to_string(header.width) + " x " + std::to_string(header.height));
+  image.width = header.width, image.height = header.height;
   return image;
 }
 
 }  // namespace
 
 DecodedImage decodeImage(const unsigned char* bytes, std::size_t size, const std::string& name) {
-  const StbPixels pixels = decodePixels(bytes, size, name);
+  const StbPixels pixels = decodePixels(bytes, size, name, readHeader(bytes, size, name));
   DecodedImage image;
   image.name = name;
   image.sixteenBit = pixels.sixteenBit;
@@ -466,41 +485,67 @@ std::uint32_t TextureSet::addImage(const DecodedImage& image, bool srgb) {
 
 std::vector<std::uint32_t> TextureSet::addEncodedImages(const std::vector<EncodedImage>& images, unsigned threads) {
   if (threads == 0) threads = std::max(std::thread::hardware_concurrency(), 1u);
-  // decode every image, in parallel: stb's buffers are kept for the pyramids
-  std::vector<StbPixels> pixels(images.size());
-  const std::vector<std::exception_ptr> decodeErrors = forEachParallel(images.size(), threads, [&](std::size_t i) {
-    pixels[i] = decodePixels(images[i].bytes, images[i].size, images[i].name);
-  });
-  // then place them as addImage would, one after another, and size the texel
-  // array once (no reallocation and copy per image)
+  // the headers first (cheap): their sizes place every image, so the texel
+  // array is sized, and its pages first touched, while the images decode
+  std::vector<ImageHeader> headers(images.size());
+  std::vector<std::exception_ptr> errors(images.size());
   std::vector<std::uint64_t> offsets(images.size());
   std::uint64_t end = texels.size();
   for (std::size_t i = 0; i < images.size(); ++i) {
-    if (decodeErrors[i]) std::rethrow_exception(decodeErrors[i]);  // the first failure, as serially
-    const std::uint64_t words = pyramidWords(pixels[i].width, pixels[i].height, pixels[i].sixteenBit);
-    if (end + words > (std::uint64_t(1) << 32))
-      fail(images[i].name, "the scene's textures pass 2^32 texel words (16 GiB) with this image");
-    offsets[i] = end;
-    end += words;
-  }
-  texels.resize(end);
-  // the pyramids, in parallel, each into its own range and level list
-  std::vector<std::vector<WtTextureLevel>> imageLevels(images.size());
-  const std::vector<std::exception_ptr> pyramidErrors = forEachParallel(images.size(), threads, [&](std::size_t i) {
-    const StbPixels& p = pixels[i];
-    writePyramid(texels.data() + offsets[i], wt_uint(offsets[i]), imageLevels[i], p.data.get(), p.width, p.height,
-                 p.sixteenBit, images[i].srgb);
-    pixels[i].data.reset();  // the decoded pixels are no longer needed
-  });
-  for (const std::exception_ptr& e : pyramidErrors)
-    if (e) {  // out of memory: leave the set as it was
-      texels.resize(offsets.empty() ? texels.size() : offsets[0]);
-      std::rethrow_exception(e);
+    try {
+      headers[i] = readHeader(images[i].bytes, images[i].size, images[i].name);
+    } catch (const TextureError&) {
+      errors[i] = std::current_exception();
+      continue;
     }
+    offsets[i] = end;
+    end += pyramidWords(headers[i].width, headers[i].height, headers[i].sixteenBit);
+  }
+  // past 2^32 words an error follows (below, for the image that passes it): no array that large
+  const bool presize = end <= (std::uint64_t(1) << 32);
+  const std::size_t originalSize = texels.size();
+  // job 0 sizes the array; job i + 1 decodes image i and, once the array is
+  // sized, writes its pyramid there (no pass waits for all images of the last)
+  std::vector<std::vector<WtTextureLevel>> imageLevels(images.size());
+  std::promise<void> sizedPromise;
+  std::shared_future<void> sized = sizedPromise.get_future().share();
+  const std::vector<std::exception_ptr> jobErrors = forEachParallel(images.size() + 1, threads, [&](std::size_t job) {
+    if (job == 0) {
+      try {
+        if (presize) texels.resize(end);
+        sizedPromise.set_value();
+      } catch (...) {
+        sizedPromise.set_exception(std::current_exception());
+        throw;
+      }
+      return;
+    }
+    const std::size_t i = job - 1;
+    if (errors[i]) return;
+    const StbPixels pixels = decodePixels(images[i].bytes, images[i].size, images[i].name, headers[i]);
+    sized.get();  // job 0 was taken first, so it is running or done: no deadlock
+    if (!presize) return;  // an image passes 2^32 words: an error follows
+    writePyramid(texels.data() + offsets[i], wt_uint(offsets[i]), imageLevels[i], pixels.data.get(), pixels.width,
+                 pixels.height, pixels.sixteenBit, images[i].srgb);
+  });
+  auto restore = [&] { texels.resize(originalSize); };
+  if (jobErrors[0]) std::rethrow_exception(jobErrors[0]);  // out of memory: the set is as it was
+  for (std::size_t i = 0; i < images.size(); ++i) {
+    // the first failure in order, as one image after another would meet it
+    if (!errors[i]) errors[i] = jobErrors[i + 1];
+    if (errors[i]) {
+      restore();
+      std::rethrow_exception(errors[i]);
+    }
+    if (offsets[i] + pyramidWords(headers[i].width, headers[i].height, headers[i].sixteenBit) > (std::uint64_t(1) << 32)) {
+      restore();
+      fail(images[i].name, "the scene's textures pass 2^32 texel words (16 GiB) with this image");
+    }
+  }
   std::vector<std::uint32_t> indices;
   indices.reserve(images.size());
   for (std::size_t i = 0; i < images.size(); ++i) {
-    const wt_uint flags = (images[i].srgb ? WT_TEXTURE_SRGB : 0u) | (pixels[i].sixteenBit ? WT_TEXTURE_16BIT : 0u);
+    const wt_uint flags = (images[i].srgb ? WT_TEXTURE_SRGB : 0u) | (headers[i].sixteenBit ? WT_TEXTURE_16BIT : 0u);
     m_images.push_back({wt_uint(levels.size()), wt_uint(imageLevels[i].size()), flags});
     levels.insert(levels.end(), imageLevels[i].begin(), imageLevels[i].end());
     indices.push_back(std::uint32_t(m_images.size() - 1));

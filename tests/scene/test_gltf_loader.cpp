@@ -1408,15 +1408,22 @@ TEST(GltfLoader, TexturesLoadTheSameOnAnyThreadCount) {
 // would), not another.
 TEST(GltfLoader, BrokenImageAmongManyIsNamed) {
   GltfDoc doc = manyTexturesDoc();
-  // the third of five met (images 0, 1, 5, 4, 3), and the fifth
-  doc.images[5] = "{\"uri\":\"data:application/octet-stream;base64,iVBORw0KGgoAAAAA\",\"name\":\"cut\"}";
-  doc.images[3] = "{\"uri\":\"data:application/octet-stream;base64,/9j/AAAA\",\"name\":\"also cut\"}";
+  // the third of five met (images 0, 1, 5, 4, 3), and the fifth: PNGs cut
+  // in the middle of their pixel data, so only decoding them fails
+  for (int image : {5, 3}) {
+    const std::string file = writeImageFile(".broken" + std::to_string(image) + ".png", 40, 40, unsigned(image));
+    std::ifstream in(scratchFile(".broken" + std::to_string(image) + ".png"), std::ios::binary);
+    std::vector<unsigned char> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    bytes.resize(bytes.size() / 2);
+    writeFile(".broken" + std::to_string(image) + ".png", bytes);
+    doc.images[std::size_t(image)] = "{\"uri\":\"" + file + "\"}";
+  }
   for (unsigned threads : {1u, 2u, 6u}) {
     GltfLoadOptions options;
     options.textureThreads = threads;
     const std::string message = docError(doc, options);
-    EXPECT_CONTAINS(message, "image 5 'cut': ");
-    EXPECT_EQ(message.find("also cut"), std::string::npos) << message;
+    EXPECT_CONTAINS(message, "image 5 ('" + scratchFile(".broken5.png").filename().string() + "'): cannot decode");
+    EXPECT_EQ(message.find("broken3"), std::string::npos) << message;
   }
 }
 
