@@ -296,6 +296,7 @@ class Converter {
   void run() {
     checkExtensions();
     convertMaterials();
+    addPendingTextures();
     traverse(chooseRoots());
     chooseCamera();
     chooseOrigin();
@@ -568,9 +569,31 @@ class Converter {
       const tinygltf::Sampler& sampler = m_model.samplers[std::size_t(texture.sampler)];
       wrapS = sampler.wrapS, wrapT = sampler.wrapT, mag = sampler.magFilter, min = sampler.minFilter;
     }
-    ref.texture = m_scene.textures.addTexture(*image, wrapS, wrapT, mag, min);
+    // added once the images are (addPendingTextures), at the index it will have
+    ref.texture = std::uint32_t(m_scene.textures.textures.size() + m_pendingTextures.size());
+    m_pendingTextures.push_back({*image, wrapS, wrapT, mag, min});
     m_textureIndex[key] = int(ref.texture);
     return ref;
+  }
+
+  /// Decode the images the materials use and build their mips, on several
+  /// threads, then add the textures made of them, in the order met.
+  void addPendingTextures() {
+    if (!m_pendingImages.empty()) {
+      const auto start = std::chrono::steady_clock::now();
+      try {
+        const std::vector<std::uint32_t> added =
+            m_scene.textures.addEncodedImages(m_pendingImages, m_options.textureThreads);
+        for (std::size_t i = 0; i < added.size(); ++i)
+          if (added[i] != m_firstPendingImage + i) throw std::logic_error("glTF loader: texture image indices out of step");
+      } catch (const TextureError& e) {
+        fail(e.what());
+      }
+      m_scene.textureSeconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      m_pendingImages.clear();
+    }
+    for (const PendingTexture& t : m_pendingTextures) m_scene.textures.addTexture(t.image, t.wrapS, t.wrapT, t.mag, t.min);
+    m_pendingTextures.clear();
   }
 
   /// Image `index` decoded and added to the scene's textures (once per
@@ -590,14 +613,10 @@ class Converter {
       m_scene.addWarning(label + " is " + imageFormatName(format) +
                          ", which is not supported (PNG and JPEG are); the materials using it keep their factors");
     } else {
-      const auto start = std::chrono::steady_clock::now();
-      try {
-        DecodedImage decoded = decodeImage(image.image.data(), image.image.size(), label);
-        result = m_scene.textures.addImage(decoded, srgb);
-      } catch (const TextureError& e) {
-        fail(e.what());
-      }
-      m_scene.textureSeconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      // decoded later with the others (addPendingTextures), at the index it will have
+      if (m_pendingImages.empty()) m_firstPendingImage = m_scene.textures.imageCount();
+      result = std::uint32_t(m_firstPendingImage + m_pendingImages.size());
+      m_pendingImages.push_back({image.image.data(), image.image.size(), label, srgb});
     }
     m_imageIndex[key] = result;
     return result;
@@ -1658,6 +1677,13 @@ class Converter {
   std::vector<bool> m_localDone;
   std::vector<std::vector<std::unique_ptr<DecodedPrimitive>>> m_decoded;
   std::map<std::array<int, 3>, std::uint32_t> m_geometries;  ///< (POSITION, indices, mode) -> GeometryInstance::geometry
+  struct PendingTexture {
+    std::uint32_t image;
+    int wrapS, wrapT, mag, min;  ///< the glTF sampler's codes
+  };
+  std::vector<EncodedImage> m_pendingImages;  ///< bytes in m_model, which outlives the conversion
+  std::size_t m_firstPendingImage = 0;
+  std::vector<PendingTexture> m_pendingTextures;
   std::map<std::pair<int, bool>, int> m_textureIndex;  ///< (glTF texture, sRGB) -> scene texture; -1: left out
   std::map<std::pair<std::size_t, bool>, std::optional<std::uint32_t>> m_imageIndex;  ///< (glTF image, sRGB) -> TextureSet image
   std::uint32_t m_splitGeometries = 0;  ///< geometries of their own for primitives whose vertices tangents split

@@ -20,6 +20,9 @@ struct GltfLoadOptions {
   /// 10 GiB of host arrays.
   std::size_t maxVertices = std::size_t(1) << 28;
   std::size_t maxTriangles = std::size_t(1) << 28;
+  /// Threads that decode the images and build their mips; 0: the hardware's.
+  /// Any count gives the same scene, bit for bit.
+  unsigned textureThreads = 0;
 };
 
 /// Load a .gltf or .glb file. Throws SceneError.

@@ -9,6 +9,12 @@
 #include <cmath>
 #include <cstring>
 #include <memory>
+#include <atomic>
+#include <bit>
+#include <exception>
+#include <system_error>
+#include <thread>
+#include <future>
 
 namespace wt {
 
@@ -199,24 +205,24 @@ struct Codec16 {
   }
 };
 
-/// The level below `src` (width x height RGBA), box-filtered per the taps:
-/// each destination row blends its 1-3 source rows (decoded once each),
-/// then its columns.
+/// The level below `src` (width x height RGBA) into `dst`, box-filtered per
+/// the taps: each destination row blends its 1-3 source rows (decoded once
+/// each), then its columns. `dst` is resized, so a caller's buffer is reused.
 template <typename T, typename Codec>
-std::vector<T> downsample(const std::vector<T>& src, std::uint32_t width, std::uint32_t height, const Codec& codec) {
+void downsample(const T* src, std::uint32_t width, std::uint32_t height, const Codec& codec, std::vector<T>& dst) {
   const std::vector<Taps> tx = axisTaps(width), ty = axisTaps(height);
   const std::size_t rowValues = std::size_t(width) * 4;
   // rows 2y .. 2y + 2 of one destination row fall in distinct slots (row % 3)
   std::vector<float> decoded(3 * rowValues), blend(rowValues);
   std::array<std::int64_t, 3> slotRow = {-1, -1, -1};
-  std::vector<T> dst(tx.size() * ty.size() * 4);
+  dst.resize(tx.size() * ty.size() * 4);
   std::size_t out = 0;
   for (const Taps& row : ty) {
     std::fill(blend.begin(), blend.end(), 0.0f);
     for (std::uint32_t j = 0; j < row.count; ++j) {
       const std::uint32_t r = row.first + j;
       float* line = decoded.data() + (r % 3) * rowValues;
-      if (slotRow[r % 3] != r) codec.decodeRow(src.data() + r * rowValues, line, width), slotRow[r % 3] = r;
+      if (slotRow[r % 3] != r) codec.decodeRow(src + r * rowValues, line, width), slotRow[r % 3] = r;
       const float w = row.weight[j];
       for (std::size_t i = 0; i < rowValues; ++i) blend[i] += w * line[i];
     }
@@ -227,38 +233,93 @@ std::vector<T> downsample(const std::vector<T>& src, std::uint32_t width, std::u
       for (int c = 0; c < 4; ++c) dst[out++] = codec.encode(sum[c], c);
     }
   }
-  return dst;
 }
 
-void appendTexels(std::vector<wt_uint>& texels, const std::vector<std::uint8_t>& rgba) {
-  std::size_t out = texels.size();
-  texels.resize(out + rgba.size() / 4);
-  for (std::size_t i = 0; i < rgba.size(); i += 4)
-    texels[out++] = wt_uint(rgba[i]) | wt_uint(rgba[i + 1]) << 8 | wt_uint(rgba[i + 2]) << 16 |
-                    wt_uint(rgba[i + 3]) << 24;
-}
-
-void appendTexels(std::vector<wt_uint>& texels, const std::vector<std::uint16_t>& rgba) {
-  std::size_t out = texels.size();
-  texels.resize(out + rgba.size() / 2);
-  for (std::size_t i = 0; i < rgba.size(); i += 4) {
-    texels[out++] = wt_uint(rgba[i]) | wt_uint(rgba[i + 1]) << 16;
-    texels[out++] = wt_uint(rgba[i + 2]) | wt_uint(rgba[i + 3]) << 16;
+/// Pack `values` RGBA channel values at `out`: one uint per 8-bit texel
+/// (r | g << 8 | b << 16 | a << 24), two per 16-bit texel (r | g << 16,
+/// b | a << 16). On a little-endian host that is the channels' own bytes.
+void packTexels(wt_uint* out, const std::uint8_t* rgba, std::size_t values) {
+  if constexpr (std::endian::native == std::endian::little) {
+    std::memcpy(out, rgba, values);
+  } else {
+    for (std::size_t i = 0; i < values; i += 4)
+      *out++ = wt_uint(rgba[i]) | wt_uint(rgba[i + 1]) << 8 | wt_uint(rgba[i + 2]) << 16 | wt_uint(rgba[i + 3]) << 24;
   }
 }
 
-/// Append every level of an image, level 0 (`pixels`) first.
+void packTexels(wt_uint* out, const std::uint16_t* rgba, std::size_t values) {
+  if constexpr (std::endian::native == std::endian::little) {
+    std::memcpy(out, rgba, values * sizeof(std::uint16_t));
+  } else {
+    for (std::size_t i = 0; i < values; i += 2) *out++ = wt_uint(rgba[i]) | wt_uint(rgba[i + 1]) << 16;
+  }
+}
+
+/// Texel words of every level of a width x height image, level 0 first.
+std::uint64_t pyramidWords(std::uint64_t w, std::uint64_t h, bool sixteenBit) {
+  std::uint64_t total = 0;
+  for (;; w = std::max<std::uint64_t>(w / 2, 1), h = std::max<std::uint64_t>(h / 2, 1)) {
+    total += w * h * (sixteenBit ? 2 : 1);
+    if (w == 1 && h == 1) return total;
+  }
+}
+
+/// Write every level of an image, level 0 (`pixels`) first, packed at
+/// `out` (pyramidWords of them), and append their level records with
+/// offsets from `base`.
 template <typename T, typename Codec>
-void appendPyramid(std::vector<wt_uint>& texels, std::vector<WtTextureLevel>& levels, const std::vector<T>& pixels,
-                   std::uint32_t width, std::uint32_t height, const Codec& codec) {
-  std::vector<T> level;  // the last level made; level 0 is not copied
-  for (const std::vector<T>* current = &pixels;; current = &level) {
-    levels.push_back({wt_uint(texels.size()), width, height, 0});
-    appendTexels(texels, *current);
+void writePyramid(wt_uint* out, wt_uint base, std::vector<WtTextureLevel>& levels, const T* pixels,
+                  std::uint32_t width, std::uint32_t height, const Codec& codec) {
+  std::vector<T> buffers[2];  // the last level made and the one being made; level 0 is not copied
+  const T* current = pixels;
+  wt_uint offset = 0;
+  for (int next = 0;; next ^= 1) {
+    levels.push_back({base + offset, width, height, 0});
+    const std::size_t values = std::size_t(width) * height * 4;
+    packTexels(out + offset, current, values);
+    offset += wt_uint(values * sizeof(T) / sizeof(wt_uint));
     if (width == 1 && height == 1) return;
-    level = downsample(*current, width, height, codec);
+    downsample(current, width, height, codec, buffers[next]);
+    current = buffers[next].data();
     width = std::max(width / 2, 1u), height = std::max(height / 2, 1u);
   }
+}
+
+/// An image's pyramid into `out`: 8- or 16-bit, sRGB or linear.
+void writePyramid(wt_uint* out, wt_uint base, std::vector<WtTextureLevel>& levels, const void* pixels,
+                  std::uint32_t width, std::uint32_t height, bool sixteenBit, bool srgb) {
+  if (sixteenBit)
+    writePyramid(out, base, levels, static_cast<const std::uint16_t*>(pixels), width, height, Codec16{srgb});
+  else
+    writePyramid(out, base, levels, static_cast<const std::uint8_t*>(pixels), width, height, Codec8{srgb});
+}
+
+/// Run job(0) .. job(count - 1) on up to `threads` threads (this one among
+/// them), each job once; returns each job's exception (null where none).
+template <typename Job>
+std::vector<std::exception_ptr> forEachParallel(std::size_t count, unsigned threads, const Job& job) {
+  std::vector<std::exception_ptr> errors(count);
+  std::atomic<std::size_t> next{0};
+  auto work = [&] {
+    for (std::size_t i; (i = next.fetch_add(1)) < count;) {
+      try {
+        job(i);
+      } catch (...) {
+        errors[i] = std::current_exception();
+      }
+    }
+  };
+  const std::size_t extra = std::min<std::size_t>(std::max(threads, 1u), count) - (count > 0);
+  std::vector<std::thread> pool;
+  pool.reserve(extra);
+  try {
+    for (std::size_t t = 0; t < extra; ++t) pool.emplace_back(work);
+  } catch (const std::system_error&) {
+    // no more threads: the ones started and this one do the rest
+  }
+  work();
+  for (std::thread& t : pool) t.join();
+  return errors;
 }
 
 wt_uint wrapMode(int code) {
@@ -309,7 +370,25 @@ double linearToSrgb(double linear) {
 // ---------------------------------------------------------------------------
 // decoding
 
-DecodedImage decodeImage(const unsigned char* bytes, std::size_t size, const std::string& name) {
+namespace {
+
+/// Pixels as stb_image decoded them: RGBA, 8 or 16 bits, in stb's buffer.
+struct StbPixels {
+  std::uint32_t width = 0, height = 0;
+  bool sixteenBit = false;
+  std::unique_ptr<void, void (*)(void*)> data{nullptr, stbi_image_free};
+};
+
+/// An image file's header as decodeImage checks it.
+struct ImageHeader {
+  ImageFileFormat format = ImageFileFormat::Unknown;
+  std::uint32_t width = 0, height = 0;
+  bool sixteenBit = false;
+};
+
+/// decodeImage's checks before decoding: the format, the JPEG's Huffman
+/// tables and the size (from the header alone, nothing allocated).
+ImageHeader readHeader(const unsigned char* bytes, std::size_t size, const std::string& name) {
   if (size == 0) fail(name, "no image data (0 bytes)");
   if (!bytes) fail(name, "no image data (a null pointer)");
   const ImageFileFormat format = sniffImageFormat(bytes, size);
@@ -334,26 +413,46 @@ DecodedImage decodeImage(const unsigned char* bytes, std::size_t size, const std
   if (!stbi_info_from_memory(bytes, length, &width, &height, &channels))
     fail(name, std::string("cannot read the ") + imageFormatName(format) + " header: " + stbReason());
   checkImageSize(name, std::uint64_t(std::max(width, 0)), std::uint64_t(std::max(height, 0)));
+  ImageHeader header;
+  header.format = format;
+  header.width = std::uint32_t(width), header.height = std::uint32_t(height);
+  header.sixteenBit = format == ImageFileFormat::Png && stbi_is_16_bit_from_memory(bytes, length);
+  return header;
+}
 
+/// decodeImage's decoding, after readHeader gave `header`, without copying
+/// the pixels out of stb's buffer. stb_image keeps its failure reason per
+/// thread (STBI_THREAD_LOCAL), so decodes may run in parallel.
+StbPixels decodePixels(const unsigned char* bytes, std::size_t size, const std::string& name, const ImageHeader& header) {
+  const int length = int(size);
+  int w = 0, h = 0, channels = 0;
+  StbPixels image;
+  image.sixteenBit = header.sixteenBit;
+  image.data.reset(image.sixteenBit ? static_cast<void*>(stbi_load_16_from_memory(bytes, length, &w, &h, &channels, 4))
+                                    : static_cast<void*>(stbi_load_from_memory(bytes, length, &w, &h, &channels, 4)));
+  if (!image.data)
+    fail(name, std::string("cannot decode the ") + imageFormatName(header.format) + " data: " + stbReason());
+  if (std::uint32_t(w) != header.width || std::uint32_t(h) != header.height)
+    fail(name, "decoded size " + std::to_string(w) + " x " + std::to_string(h) + " differs from the header's " +
+                   std::to_string(header.width) + " x " + std::to_string(header.height));
+  image.width = header.width, image.height = header.height;
+  return image;
+}
+
+}  // namespace
+
+DecodedImage decodeImage(const unsigned char* bytes, std::size_t size, const std::string& name) {
+  const StbPixels pixels = decodePixels(bytes, size, name, readHeader(bytes, size, name));
   DecodedImage image;
   image.name = name;
-  image.sixteenBit = format == ImageFileFormat::Png && stbi_is_16_bit_from_memory(bytes, length);
-  int w = 0, h = 0;
-  void* pixels = image.sixteenBit ? static_cast<void*>(stbi_load_16_from_memory(bytes, length, &w, &h, &channels, 4))
-                                  : static_cast<void*>(stbi_load_from_memory(bytes, length, &w, &h, &channels, 4));
-  std::unique_ptr<void, void (*)(void*)> owned(pixels, stbi_image_free);
-  if (!pixels) fail(name, std::string("cannot decode the ") + imageFormatName(format) + " data: " + stbReason());
-  if (w != width || h != height)
-    fail(name, "decoded size " + std::to_string(w) + " x " + std::to_string(h) + " differs from the header's " +
-                   std::to_string(width) + " x " + std::to_string(height));
-
-  image.width = std::uint32_t(width), image.height = std::uint32_t(height);
-  const std::size_t values = std::size_t(width) * std::size_t(height) * 4;  // <= 2^30: checkImageSize
+  image.sixteenBit = pixels.sixteenBit;
+  image.width = pixels.width, image.height = pixels.height;
+  const std::size_t values = std::size_t(image.width) * image.height * 4;  // <= 2^30: checkImageSize
   if (image.sixteenBit) {
-    const auto* p = static_cast<const std::uint16_t*>(pixels);
+    const auto* p = static_cast<const std::uint16_t*>(pixels.data.get());
     image.rgba16.assign(p, p + values);
   } else {
-    const auto* p = static_cast<const std::uint8_t*>(pixels);
+    const auto* p = static_cast<const std::uint8_t*>(pixels.data.get());
     image.rgba8.assign(p, p + values);
   }
   return image;
@@ -369,28 +468,89 @@ std::uint32_t TextureSet::addImage(const DecodedImage& image, bool srgb) {
   if ((image.sixteenBit ? image.rgba16.size() : image.rgba8.size()) != values)
     fail(name, "has " + std::to_string(image.sixteenBit ? image.rgba16.size() : image.rgba8.size()) +
                    " channel values, not width x height x 4 = " + std::to_string(values));
-
+  const std::uint64_t words = pyramidWords(image.width, image.height, image.sixteenBit);
   // every level's texels must stay addressable with a 32-bit offset
-  std::uint64_t total = 0;
-  for (std::uint64_t w = image.width, h = image.height;; w = std::max<std::uint64_t>(w / 2, 1),
-                     h = std::max<std::uint64_t>(h / 2, 1)) {
-    total += w * h * (image.sixteenBit ? 2 : 1);
-    if (w == 1 && h == 1) break;
-  }
-  if (texels.size() + total > (std::uint64_t(1) << 32))
+  if (texels.size() + words > (std::uint64_t(1) << 32))
     fail(name, "the scene's textures pass 2^32 texel words (16 GiB) with this image");
 
-  Image entry{wt_uint(levels.size()), 0, srgb ? WT_TEXTURE_SRGB : 0u};
-  texels.reserve(texels.size() + total);
-  if (image.sixteenBit) {
-    entry.flags |= WT_TEXTURE_16BIT;
-    appendPyramid(texels, levels, image.rgba16, image.width, image.height, Codec16{srgb});
-  } else {
-    appendPyramid(texels, levels, image.rgba8, image.width, image.height, Codec8{srgb});
-  }
+  Image entry{wt_uint(levels.size()), 0, (srgb ? WT_TEXTURE_SRGB : 0u) | (image.sixteenBit ? WT_TEXTURE_16BIT : 0u)};
+  const std::size_t base = texels.size();
+  texels.resize(base + words);
+  const void* pixels = image.sixteenBit ? static_cast<const void*>(image.rgba16.data()) : image.rgba8.data();
+  writePyramid(texels.data() + base, wt_uint(base), levels, pixels, image.width, image.height, image.sixteenBit, srgb);
   entry.levelCount = wt_uint(levels.size()) - entry.firstLevel;
   m_images.push_back(entry);
   return std::uint32_t(m_images.size() - 1);
+}
+
+std::vector<std::uint32_t> TextureSet::addEncodedImages(const std::vector<EncodedImage>& images, unsigned threads) {
+  if (threads == 0) threads = std::max(std::thread::hardware_concurrency(), 1u);
+  // the headers first (cheap): their sizes place every image, so the texel
+  // array is sized, and its pages first touched, while the images decode
+  std::vector<ImageHeader> headers(images.size());
+  std::vector<std::exception_ptr> errors(images.size());
+  std::vector<std::uint64_t> offsets(images.size());
+  std::uint64_t end = texels.size();
+  for (std::size_t i = 0; i < images.size(); ++i) {
+    try {
+      headers[i] = readHeader(images[i].bytes, images[i].size, images[i].name);
+    } catch (const TextureError&) {
+      errors[i] = std::current_exception();
+      continue;
+    }
+    offsets[i] = end;
+    end += pyramidWords(headers[i].width, headers[i].height, headers[i].sixteenBit);
+  }
+  // past 2^32 words an error follows (below, for the image that passes it): no array that large
+  const bool presize = end <= (std::uint64_t(1) << 32);
+  const std::size_t originalSize = texels.size();
+  // job 0 sizes the array; job i + 1 decodes image i and, once the array is
+  // sized, writes its pyramid there (no pass waits for all images of the last)
+  std::vector<std::vector<WtTextureLevel>> imageLevels(images.size());
+  std::promise<void> sizedPromise;
+  std::shared_future<void> sized = sizedPromise.get_future().share();
+  const std::vector<std::exception_ptr> jobErrors = forEachParallel(images.size() + 1, threads, [&](std::size_t job) {
+    if (job == 0) {
+      try {
+        if (presize) texels.resize(end);
+        sizedPromise.set_value();
+      } catch (...) {
+        sizedPromise.set_exception(std::current_exception());
+        throw;
+      }
+      return;
+    }
+    const std::size_t i = job - 1;
+    if (errors[i]) return;
+    const StbPixels pixels = decodePixels(images[i].bytes, images[i].size, images[i].name, headers[i]);
+    sized.get();  // job 0 was taken first, so it is running or done: no deadlock
+    if (!presize) return;  // an image passes 2^32 words: an error follows
+    writePyramid(texels.data() + offsets[i], wt_uint(offsets[i]), imageLevels[i], pixels.data.get(), pixels.width,
+                 pixels.height, pixels.sixteenBit, images[i].srgb);
+  });
+  auto restore = [&] { texels.resize(originalSize); };
+  if (jobErrors[0]) std::rethrow_exception(jobErrors[0]);  // out of memory: the set is as it was
+  for (std::size_t i = 0; i < images.size(); ++i) {
+    // the first failure in order, as one image after another would meet it
+    if (!errors[i]) errors[i] = jobErrors[i + 1];
+    if (errors[i]) {
+      restore();
+      std::rethrow_exception(errors[i]);
+    }
+    if (offsets[i] + pyramidWords(headers[i].width, headers[i].height, headers[i].sixteenBit) > (std::uint64_t(1) << 32)) {
+      restore();
+      fail(images[i].name, "the scene's textures pass 2^32 texel words (16 GiB) with this image");
+    }
+  }
+  std::vector<std::uint32_t> indices;
+  indices.reserve(images.size());
+  for (std::size_t i = 0; i < images.size(); ++i) {
+    const wt_uint flags = (images[i].srgb ? WT_TEXTURE_SRGB : 0u) | (headers[i].sixteenBit ? WT_TEXTURE_16BIT : 0u);
+    m_images.push_back({wt_uint(levels.size()), wt_uint(imageLevels[i].size()), flags});
+    levels.insert(levels.end(), imageLevels[i].begin(), imageLevels[i].end());
+    indices.push_back(std::uint32_t(m_images.size() - 1));
+  }
+  return indices;
 }
 
 std::uint32_t TextureSet::addTexture(std::uint32_t imageIndex, int wrapS, int wrapT, int magFilter, int minFilter) {

@@ -57,6 +57,14 @@ struct DecodedImage {
 /// kMaxTextureSide per side or kMaxTextureTexels.
 DecodedImage decodeImage(const unsigned char* bytes, std::size_t size, const std::string& name);
 
+/// An image file's bytes, for TextureSet::addEncodedImages.
+struct EncodedImage {
+  const unsigned char* bytes = nullptr;  ///< not owned: must outlive the call
+  std::size_t size = 0;
+  std::string name;  ///< starts every message, as decodeImage's `name`
+  bool srgb = false;
+};
+
 /// Every texture of a scene packed as the kernels read them
 /// (kernels/shared/textures.h).
 ///
@@ -76,6 +84,13 @@ class TextureSet {
   /// and as a linear map is added twice. Throws TextureError when the
   /// texel array would pass 2^32 uints.
   std::uint32_t addImage(const DecodedImage& image, bool srgb);
+
+  /// decodeImage and addImage for each of `images` in turn, the decoding
+  /// and the mip building spread over up to `threads` threads (0: the
+  /// hardware's); the result is the same, bit for bit, on any number.
+  /// Returns their image indices, in order. Throws the TextureError of the
+  /// first image (in order) that fails, as addImage would, adding none.
+  std::vector<std::uint32_t> addEncodedImages(const std::vector<EncodedImage>& images, unsigned threads = 0);
 
   /// A texture of image `imageIndex` (from addImage) with a glTF sampler:
   /// wrapS, wrapT, magFilter and minFilter are glTF's codes, -1 where the

@@ -9,6 +9,8 @@
 
 #include <gtest/gtest.h>
 
+#include <stb_image_write.h>
+
 #include <glm/glm.hpp>
 
 #include <algorithm>
@@ -1322,6 +1324,107 @@ TEST(GltfLoader, TextureProblemsNameTheirElement) {
   // garbage that claims to be a PNG: an error naming the image
   doc.images[0] = "{\"uri\":\"data:application/octet-stream;base64,iVBORw0KGgoAAAAA\"}";
   EXPECT_CONTAINS(docError(doc), "image 0");
+}
+
+/// A PNG (or a JPEG at quality 90) of w x h RGBA pixels of a seeded pattern,
+/// written next to the test's .gltf; returns its file name for a uri.
+std::string writeImageFile(const std::string& suffix, int w, int h, unsigned seed, bool jpeg = false) {
+  std::mt19937 rng(seed);
+  std::vector<unsigned char> pixels(std::size_t(w) * h * 4), bytes;
+  for (unsigned char& v : pixels) v = static_cast<unsigned char>(rng() & 255u);
+  auto append = [](void* context, void* data, int size) {
+    auto* out = static_cast<std::vector<unsigned char>*>(context);
+    out->insert(out->end(), static_cast<unsigned char*>(data), static_cast<unsigned char*>(data) + size);
+  };
+  const int ok = jpeg ? stbi_write_jpg_to_func(append, &bytes, w, h, 4, pixels.data(), 90)
+                      : stbi_write_png_to_func(append, &bytes, w, h, 4, pixels.data(), w * 4);
+  EXPECT_NE(ok, 0);
+  return writeFile(suffix, bytes).filename().string();
+}
+
+/// Three materials over six images (textures 0-5 read images 0-5): PNGs of odd and even sizes, a JPEG, one
+/// image read both as sRGB and linear, and a WebP (warned about) between them.
+GltfDoc manyTexturesDoc() {
+  GltfDoc doc = triangleDoc();
+  const std::string files[] = {
+      writeImageFile(".a.png", 37, 23, 1), writeImageFile(".b.png", 64, 64, 2), writeImageFile(".c.png", 3, 50, 3),
+      writeImageFile(".d.jpg", 40, 31, 4, true), writeImageFile(".e.png", 1, 1, 5)};
+  for (const std::string& f : files) doc.images.push_back("{\"uri\":\"" + f + "\"}");
+  doc.images.insert(doc.images.begin() + 2, "{\"uri\":\"data:application/octet-stream;base64,UklGRgAAAABXRUJQ\"}");
+  for (int i = 0; i < 6; ++i) doc.textures.push_back("{\"source\":" + std::to_string(i) + "}");
+  doc.samplers.push_back("{\"wrapS\":33071,\"minFilter\":9728}");
+  doc.textures[3] = "{\"source\":3,\"sampler\":0}";
+  doc.materials.push_back("{\"pbrMetallicRoughness\":{\"baseColorTexture\":{\"index\":0}},\"normalTexture\":{\"index\":1}}");
+  doc.materials.push_back("{\"pbrMetallicRoughness\":{\"baseColorTexture\":{\"index\":2},"
+                          "\"metallicRoughnessTexture\":{\"index\":5}},\"emissiveTexture\":{\"index\":4},"
+                          "\"emissiveFactor\":[1,1,1]}");
+  doc.materials.push_back("{\"pbrMetallicRoughness\":{\"baseColorTexture\":{\"index\":1}},"
+                          "\"occlusionTexture\":{\"index\":3},\"normalTexture\":{\"index\":3}}");
+  doc.meshes[0] = "{\"primitives\":[{\"attributes\":{\"POSITION\":0},\"material\":0},"
+                  "{\"attributes\":{\"POSITION\":0},\"material\":1},{\"attributes\":{\"POSITION\":0},\"material\":2}]}";
+  return doc;
+}
+
+// The images are decoded and their mips built on several threads: any
+// thread count gives the same scene, bit for bit, warnings in the same order.
+TEST(GltfLoader, TexturesLoadTheSameOnAnyThreadCount) {
+  const GltfDoc doc = manyTexturesDoc();
+  GltfLoadOptions one, many;
+  one.textureThreads = 1;
+  many.textureThreads = 4;
+  const Scene a = loadDoc(doc, one), b = loadDoc(doc, many);
+  ASSERT_EQ(a.textures.imageCount(), 6u);  // five decodable images, one of them read as sRGB and linear
+  EXPECT_EQ(a.textures.imageCount(), b.textures.imageCount());
+  EXPECT_EQ(a.textures.texels, b.textures.texels);
+  ASSERT_EQ(a.textures.levels.size(), b.textures.levels.size());
+  EXPECT_EQ(0, std::memcmp(a.textures.levels.data(), b.textures.levels.data(), a.textures.levels.size() * sizeof(WtTextureLevel)));
+  ASSERT_EQ(a.textures.textures.size(), b.textures.textures.size());
+  EXPECT_EQ(0, std::memcmp(a.textures.textures.data(), b.textures.textures.data(),
+                           a.textures.textures.size() * sizeof(WtTexture)));
+  ASSERT_EQ(a.materialTextures.size(), b.materialTextures.size());
+  EXPECT_EQ(0, std::memcmp(a.materialTextures.data(), b.materialTextures.data(),
+                           a.materialTextures.size() * sizeof(WtTextureRef)));
+  EXPECT_EQ(a.warnings, b.warnings);
+  EXPECT_EQ(std::count_if(a.warnings.begin(), a.warnings.end(),
+                          [](const std::string& w) { return w.find("image 2 is WebP") != std::string::npos; }),
+            1);
+  // and the same as each image decoded and added alone, in the order met
+  TextureSet serial;
+  // images 0 (a), 1 (b), 5 (e), 4 (d), 1, 3 (c), as the materials meet them, and their encodings
+  const std::pair<const char*, bool> order[] = {{".a.png", true},  {".b.png", false}, {".e.png", false},
+                                                {".d.jpg", true},  {".b.png", true},  {".c.png", false}};
+  for (const auto& [suffix, srgb] : order) {
+    std::ifstream in(scratchFile(suffix), std::ios::binary);
+    const std::vector<unsigned char> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    serial.addImage(decodeImage(bytes.data(), bytes.size(), suffix), srgb);
+  }
+  EXPECT_EQ(serial.texels, b.textures.texels);
+  ASSERT_EQ(serial.levels.size(), b.textures.levels.size());
+  EXPECT_EQ(0, std::memcmp(serial.levels.data(), b.textures.levels.data(), serial.levels.size() * sizeof(WtTextureLevel)));
+}
+
+// A broken image among several decoded in parallel: the error names it (the
+// first broken one in the order the materials meet them, as a serial load
+// would), not another.
+TEST(GltfLoader, BrokenImageAmongManyIsNamed) {
+  GltfDoc doc = manyTexturesDoc();
+  // the third of five met (images 0, 1, 5, 4, 3), and the fifth: PNGs cut
+  // in the middle of their pixel data, so only decoding them fails
+  for (int image : {5, 3}) {
+    const std::string file = writeImageFile(".broken" + std::to_string(image) + ".png", 40, 40, unsigned(image));
+    std::ifstream in(scratchFile(".broken" + std::to_string(image) + ".png"), std::ios::binary);
+    std::vector<unsigned char> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    bytes.resize(bytes.size() / 2);
+    writeFile(".broken" + std::to_string(image) + ".png", bytes);
+    doc.images[std::size_t(image)] = "{\"uri\":\"" + file + "\"}";
+  }
+  for (unsigned threads : {1u, 2u, 6u}) {
+    GltfLoadOptions options;
+    options.textureThreads = threads;
+    const std::string message = docError(doc, options);
+    EXPECT_CONTAINS(message, "image 5 ('" + scratchFile(".broken5.png").filename().string() + "'): cannot decode");
+    EXPECT_EQ(message.find("broken3"), std::string::npos) << message;
+  }
 }
 
 TEST(GltfLoader, RequiredGeometryExtensionIsAnError) {
