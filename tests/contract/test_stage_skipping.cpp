@@ -11,6 +11,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstring>
 #include <filesystem>
 #include <string>
@@ -124,6 +125,8 @@ TEST(StageSkipping, ExampleSceneFiles) {
     SCOPED_TRACE(entry.path().filename().string());
     ++files;
     SceneFile file = loadSceneFile(entry.path().string());
+    // the level changes nothing skipping touches; level 6's boxes take seconds to build
+    for (DisplacedMesh& m : file.scene.displacedMeshes) m.level = m.level < 0 ? 3 : std::min(m.level, 3);
     RenderSettings s = smallSettings();
     if (file.settings.environment && file.settings.environment->color)
       s.background = *file.settings.environment->color;
