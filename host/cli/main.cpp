@@ -26,7 +26,6 @@
 #include <atomic>
 #include <filesystem>
 #include <functional>
-#include <future>
 #include <memory>
 #include <thread>
 #include <tuple>
@@ -391,9 +390,6 @@ int runRender(RenderOptions options) {
   parseAovOptions(options);
   StartupTimeline& startup = *g_startup;
   startup.mark("arguments");
-  // the OpenCL platform (PoCL loads LLVM and probes the CPU) starts up while the scene loads
-  std::future<wt::DeviceInfo> deviceFound =
-      std::async(std::launch::async, [spec = options.device] { return wt::selectDevice(spec); });
 
   auto loadStart = std::chrono::steady_clock::now();
   wt::SceneFile loaded = loadRenderScene(options);
@@ -408,8 +404,10 @@ int runRender(RenderOptions options) {
     if (!std::filesystem::is_directory(folder, ec))
       throw std::invalid_argument("--profile-json: folder '" + folder.string() + "' does not exist");
   }
-  wt::DeviceInfo device = deviceFound.get();
-  startup.mark("OpenCL platforms and devices (after the scene)");
+  // on the main thread: a thread that starts PoCL's LLVM gets LLVM's own signal stack,
+  // which AddressSanitizer fails to unmap when that thread exits
+  wt::DeviceInfo device = wt::selectDevice(options.device);
+  startup.mark("OpenCL platforms and devices");
   // profiling events only when asked: without them the queue has no profiling property
   wt::Context context(device, options.profile);
   startup.mark("context");
