@@ -40,7 +40,8 @@ split() {
   [ -n "$devices" ] && dev=(--device "$devices")
   "$exe" render "${base[@]}" "${dev[@]}" "$@" -o "$dir/$name.exr" >"$dir/$name.raw" 2>"$dir/$name.err" ||
     fail "$name: $(cat "$dir/$name.raw" "$dir/$name.err")"
-  sed -E 's/, [0-9.]+ (s|ms|min)[^,]* of rendering//' "$dir/$name.raw" | grep -v '^samples,\|^[0-9]*,' | sed "s/$name/NAME/" >"$dir/$name.out"
+  # status lines: stdout, or stderr where stdout is the error log
+  cat "$dir/$name.raw" "$dir/$name.err" | sed -E 's/, [0-9.]+ (s|ms|min)[^,]* of rendering//' | grep -v '^samples,\|^[0-9]*,' | sed "s/$name/NAME/" >"$dir/$name.out"
   grep '^[0-9]*,' "$dir/$name.raw" | cut -d, -f1,3- >"$dir/$name.csv" || true
 }
 same() {

@@ -246,16 +246,16 @@ void applyCameraOptions(const RenderOptions& options, wt::Scene& scene) {
   wt::applyCameraOverride(scene, o);
 }
 
-void writeOutputs(const RenderOptions& options, const wt::Image& image) {
+void writeOutputs(const RenderOptions& options, const wt::Image& image, std::FILE* say) {
   for (const std::string& out : options.outputs) {
     wt::writeImage(out, image, options.aovs);
-    std::printf("wrote %s\n", out.c_str());
+    std::fprintf(say, "wrote %s\n", out.c_str());
   }
   if (!options.aovOut.empty())
     for (wt::Aov aov : options.aovs) {
       std::filesystem::path out = std::filesystem::path(options.aovOut) / (std::string(wt::aovName(aov)) + ".exr");
       wt::writeAovImage(out, image, aov);
-      std::printf("wrote %s\n", out.c_str());
+      std::fprintf(say, "wrote %s\n", out.c_str());
     }
 }
 
@@ -490,6 +490,8 @@ int runRender(RenderOptions options) {
     if (!errorOut) throw std::runtime_error(options.errorLog + ": cannot write the error log");
     std::fprintf(errorOut, "samples,seconds,rmse,relmse,relmse_raw,p99,mean_ratio\n");
   }
+  // status lines go to stderr while stdout carries the error log, so stdout stays one CSV
+  std::FILE* say = errorOut == stdout ? stderr : stdout;
   auto logError = [&]() {
     wt::ImageError e = wt::imageError(renderer.readImage(), *reference);
     std::fprintf(errorOut, "%d,%.6f,%.8g,%.8g,%.8g,%.8g,%.6f\n", renderer.stats().samplesDone,
@@ -601,16 +603,16 @@ int runRender(RenderOptions options) {
                       : reason == wt::HaltReason::TargetError ? "--target-error reached"
                       : reason == wt::HaltReason::Samples     ? "--spp reached"
                                                               : "interrupted";
-    std::printf("stopped after %d samples (%s), %s of rendering\n", done, why, wt::formatDuration(since(loopStart)).c_str());
+    std::fprintf(say, "stopped after %d samples (%s), %s of rendering\n", done, why, wt::formatDuration(since(loopStart)).c_str());
     if (options.targetError > 0.0 || reference) {
       if (halting.lastErrorSamples() != done) estimateError();
-      std::printf("error at %d samples: estimated %.5f", done, halting.lastError());
+      std::fprintf(say, "error at %d samples: estimated %.5f", done, halting.lastError());
       if (reference) {
         wt::ImageError e = wt::imageError(renderer.readRadiance(), *reference);
-        std::printf(", measured %.5f against %s", std::sqrt(std::max(0.0, e.relMse)), options.reference.c_str());
+        std::fprintf(say, ", measured %.5f against %s", std::sqrt(std::max(0.0, e.relMse)), options.reference.c_str());
         if ((done & (done - 1)) != 0 && done != spp) logError();
       }
-      std::printf(" (relative RMS error of the pixel means)\n");
+      std::fprintf(say, " (relative RMS error of the pixel means)\n");
     }
     if (halting.errorChecks() > 0)
       wt::log::debug(std::to_string(halting.errorChecks()) + " error estimates read back in " +
@@ -623,8 +625,8 @@ int runRender(RenderOptions options) {
   if (renderer.stats().samplesDone > resumedSamples) {
     const wt::RenderProfile& profile = renderer.profile();
     if (options.profile) {
-      std::printf("%s", wt::profileTable(profile).c_str());
-      std::fflush(stdout);
+      std::fprintf(say, "%s", wt::profileTable(profile).c_str());
+      std::fflush(say);
     } else {
       wt::log::debug(wt::profileSummary(profile));
     }
@@ -632,7 +634,7 @@ int runRender(RenderOptions options) {
       std::ofstream out(options.profileJson);
       out << wt::profileJson(profile);
       if (!out.flush()) throw std::runtime_error(options.profileJson + ": cannot write the profile");
-      std::printf("wrote %s\n", options.profileJson.c_str());
+      std::fprintf(say, "wrote %s\n", options.profileJson.c_str());
     }
   }
   if (errorOut && errorOut != stdout) std::fclose(errorOut);
@@ -651,7 +653,7 @@ int runRender(RenderOptions options) {
     wt::Image image = png || settings.tonemap.autoExposure ? renderer.readImage() : renderer.readRadiance();
     startup.mark("image read");
     wt::applyDebugView(image, options.debugView);
-    writeOutputs(options, image);
+    writeOutputs(options, image, say);
     startup.mark("written");
     wt::log::debug(startup.line());
     if (settings.tonemap.autoExposure) {
@@ -803,6 +805,8 @@ int runScaleOutRender(RenderOptions options, wt::MpiWorld& world) {
       while (nextLogged <= m.sampleEnd) nextLogged *= 2;
     };
   }
+  // status lines go to stderr while stdout carries the error log, so stdout stays one CSV
+  std::FILE* say = errorOut == stdout ? stderr : stdout;
   auto saveCheckpoint = [&](const wt::Moments& m) {
     wt::Checkpoint c;
     c.identity = identity;
@@ -857,20 +861,20 @@ int runScaleOutRender(RenderOptions options, wt::MpiWorld& world) {
     const char* why = result.reason == wt::HaltReason::Time          ? "--time budget reached"
                       : result.reason == wt::HaltReason::TargetError ? "--target-error reached"
                                                                      : "--spp reached";
-    std::printf("stopped after %d samples (%s), %s of rendering\n", done, why,
+    std::fprintf(say, "stopped after %d samples (%s), %s of rendering\n", done, why,
                 wt::formatDuration(result.seconds).c_str());
     if (options.targetError > 0.0 || reference) {
       // the estimate of the merged image (the one-device render's line)
       const wt::Image merged = wt::imageFromMoments(result.merged, settings.width, settings.height);
       const double estimate =
           result.lastErrorSamples == done ? result.lastError : std::sqrt(wt::estimatedRelMse(merged));
-      if (reference && lastLogged != done) logError(result.merged);  // the last row, before the line (both may go to stdout)
-      std::printf("error at %d samples: estimated %.5f", done, estimate);
+      if (reference && lastLogged != done) logError(result.merged);  // the last row, before the line
+      std::fprintf(say, "error at %d samples: estimated %.5f", done, estimate);
       if (reference) {
         wt::ImageError e = wt::imageError(merged, *reference);
-        std::printf(", measured %.5f against %s", std::sqrt(std::max(0.0, e.relMse)), options.reference.c_str());
+        std::fprintf(say, ", measured %.5f against %s", std::sqrt(std::max(0.0, e.relMse)), options.reference.c_str());
       }
-      std::printf(" (relative RMS error of the pixel means)\n");
+      std::fprintf(say, " (relative RMS error of the pixel means)\n");
     }
     std::fflush(stdout);
   }
@@ -881,7 +885,7 @@ int runScaleOutRender(RenderOptions options, wt::MpiWorld& world) {
     out.restoreAccumulation(wt::accumulationFromMoments(result.merged, settings.accumulation));
     wt::Image image = out.readImage();
     wt::applyDebugView(image, options.debugView);
-    writeOutputs(options, image);
+    writeOutputs(options, image, say);
     if (result.merged.nonFiniteSamples > 0)
       wt::log::warnOnce(std::to_string(result.merged.nonFiniteSamples) + " NaN/Inf samples discarded");
   }
