@@ -320,6 +320,23 @@ TEST(Integrators, LobeBounceLimitsCutPathsWhereTheySay) {
 
 // ---- path against minimal ----------------------------------------------------------
 
+/// Renders with `minimal` (the settings given) and with `path`, and requires
+/// the two images to agree; with `checkPower`, each must also be precise
+/// enough that a 5 % bias over the image would be many standard errors.
+void expectPathMatchesMinimal(const Scene& scene, const RenderSettings& minimal, int minimalSpp, int pathSpp,
+                              const char* what, bool checkPower) {
+  Image reference = render(scene, minimal, minimalSpp);
+  RenderSettings p = minimal;
+  p.integrator = Integrator::Path;
+  Image img = render(scene, p, pathSpp);
+  expectSameImage(reference, img, 4, 5.0, what);
+  if (!checkPower) return;
+  for (const Image* i : {&reference, &img}) {
+    test::BlockStat all = test::blockStat(*i, 0, 0, i->width, i->height, 1);
+    EXPECT_LT(std::sqrt(all.varianceOfMean), 0.01 * all.mean) << what;
+  }
+}
+
 TEST(Integrators, PathMatchesMinimalOnCornell) {
   Scene scene = loadDefaultScene();
   RenderSettings s = small(Integrator::Minimal, 16);
@@ -361,11 +378,7 @@ TEST(Integrators, PathMatchesMinimalWithAnalyticLightsAndSky) {
   RenderSettings s = small(Integrator::Minimal, 16);
   s.maxBounces = 3;
   s.background = glm::vec3(0.2f, 0.3f, 0.5f);
-  Image reference = render(scene, s, 256);
-  RenderSettings p = s;
-  p.integrator = Integrator::Path;
-  Image img = render(scene, p, 256);
-  expectSameImage(reference, img, 4, 5.0, "analytic lights and sky");
+  expectPathMatchesMinimal(scene, s, 256, 256, "analytic lights and sky", false);
 }
 
 // Glossy surfaces: a rough dielectric floor, a gold sphere, a rougher steel
@@ -401,16 +414,7 @@ TEST(Integrators, PathMatchesMinimalOnGlossySurfaces) {
   RenderSettings s = small(Integrator::Minimal, 16);
   s.maxBounces = 3;
   s.background = glm::vec3(0.2f, 0.3f, 0.5f);
-  Image reference = render(scene, s, 4096);
-  RenderSettings p = s;
-  p.integrator = Integrator::Path;
-  Image img = render(scene, p, 1024);
-  expectSameImage(reference, img, 4, 5.0, "glossy surfaces");
-  // power: a 5% bias over the image would be many standard errors
-  for (const Image* i : {&reference, &img}) {
-    test::BlockStat all = test::blockStat(*i, 0, 0, i->width, i->height, 1);
-    EXPECT_LT(std::sqrt(all.varianceOfMean), 0.01 * all.mean);
-  }
+  expectPathMatchesMinimal(scene, s, 4096, 1024, "glossy surfaces", true);
 }
 
 TEST(Integrators, SobolSamplerConvergesToTheSameImage) {
@@ -446,16 +450,7 @@ TEST(Integrators, PathMatchesMinimalUnderAnEnvironmentMap) {
   s.maxBounces = 3;
   s.environmentMap = map.string();
   s.environmentRotationDegrees = 30.0f;
-  Image reference = render(scene, s, 2048);
-  RenderSettings p = s;
-  p.integrator = Integrator::Path;
-  Image img = render(scene, p, 256);
-  expectSameImage(reference, img, 4, 5.0, "environment map");
-  // power: a 5% bias over the image would be many standard errors
-  for (const Image* i : {&reference, &img}) {
-    test::BlockStat all = test::blockStat(*i, 0, 0, i->width, i->height, 1);
-    EXPECT_LT(std::sqrt(all.varianceOfMean), 0.01 * all.mean);
-  }
+  expectPathMatchesMinimal(scene, s, 2048, 256, "environment map", true);
 }
 
 TEST(Integrators, MisHeuristicsAgree) {
