@@ -749,7 +749,7 @@ int runScaleOutRender(RenderOptions options, wt::MpiWorld& world) {
   std::signal(SIGINT, onInterrupt);
   std::signal(SIGTERM, onInterrupt);
   const std::function<bool()> interrupted = [] { return g_interrupted.load(); };
-  if (!root) return wt::serveRender(devices, world, interrupted, wt::heartbeatSeconds(options.rankTimeout));
+  if (!root) return wt::serveRender(devices, world, interrupted, options.rankTimeout);
 
   const wt::Scene& scene = loaded->scene;
   std::string names;
@@ -877,7 +877,7 @@ int runScaleOutRender(RenderOptions options, wt::MpiWorld& world) {
 
   // whatever happened, keep what was merged
   if (done > 0) {
-    wt::Renderer& out = *devices.renderers.front();
+    wt::Renderer& out = *devices.renderers[std::size_t(result.outputDevice)];
     out.restoreAccumulation(wt::accumulationFromMoments(result.merged, settings.accumulation));
     wt::Image image = out.readImage();
     wt::applyDebugView(image, options.debugView);
@@ -896,12 +896,16 @@ int runScaleOutRender(RenderOptions options, wt::MpiWorld& world) {
       if (result.failure.empty()) result.failure = e.what();
     }
   }
+  // a lost device's thread is left behind: only an abort ends the process safely
+  const bool lost = !result.lostRanks.empty() || !result.lostDevices.empty();
+  const bool mustAbort = (world.active() && (lost || !result.failure.empty() || result.interrupted)) ||
+                         !result.lostDevices.empty();
   const std::string kept = done > 0 ? "; the " + std::to_string(done) + " merged samples were written"
                                     : "; no chunk was merged, nothing written";
   if (!result.failure.empty()) {
     wt::log::error("render failed after " + std::to_string(done) + " of " + std::to_string(spp) +
                    " samples: " + result.failure + kept);
-    if (world.active()) world.abort(1);
+    if (mustAbort) world.abort(1);
     return 1;
   }
   if (result.interrupted) {
@@ -909,14 +913,15 @@ int runScaleOutRender(RenderOptions options, wt::MpiWorld& world) {
                    (world.active() ? " (under mpirun also when a rank died or was killed: mpirun then stops every rank)"
                                    : "") +
                    kept);
-    if (world.active()) world.abort(130);
+    if (mustAbort) world.abort(130);
     return 130;
   }
-  if (!result.lostRanks.empty()) {
-    // the image is whole (the lost ranks' chunks were rendered again); the
-    // lost ranks may still run or hang, and MPI_Finalize would wait for them
-    wt::log::info("finished without " + std::to_string(result.lostRanks.size()) +
-                  " lost rank(s); ending the job (the image is complete)");
+  if (mustAbort) {
+    // the image is whole (the lost ranks' and devices' chunks were rendered
+    // again); they may still run or hang, and MPI_Finalize or a return
+    // (destroying the devices) would wait for them
+    wt::log::info("finished without " + std::to_string(result.lostRanks.size()) + " lost rank(s) and " +
+                  std::to_string(result.lostDevices.size()) + " lost device(s); ending (the image is complete)");
     world.abort(0);
   }
   return 0;
