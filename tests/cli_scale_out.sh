@@ -149,10 +149,11 @@ if [ "$mode" = heartbeat ]; then
     -o "$dir/device.exr" >"$dir/device.log" 2>&1
   lostCheck device $? held
   echo "rank 1's device hung (heartbeats without progress): finished without it in $((SECONDS - start)) s, equal"
-  # rank 1 killed under a launcher that lets the job go on (--enable-recovery)
+  # rank 1 killed under a launcher that lets the job go on (--enable-recovery);
+  # hung on its first chunk first, so that the job cannot end before the kill
   start=$SECONDS
   rm -f "$dir/killed.exr.wtckpt"
-  timeout -k 5 60 mpirun --oversubscribe --enable-recovery -np 2 "$exe" render "${hb[@]}" -q --rank-timeout 1 \
+  WT_TEST_STALL=1:process timeout -k 5 60 mpirun --oversubscribe --enable-recovery -np 2 "$exe" render "${hb[@]}" -q --rank-timeout 1 \
     --checkpoint 0.1 -o "$dir/killed.exr" >"$dir/killed.log" 2>&1 &
   job=$!
   waitForFile "$dir/killed.exr.wtckpt" $job
@@ -160,7 +161,7 @@ if [ "$mode" = heartbeat ]; then
   [ -n "$rank1" ] || fail "killed: rank 1's process not found: $(cat "$dir/killed.log")"
   kill -9 "$rank1"
   wait $job
-  lostCheck killed $?
+  lostCheck killed $? held
   echo "rank 1 killed (mpirun --enable-recovery): finished without it in $((SECONDS - start)) s, equal"
   # rank 0's device hangs on its first chunk: rank 1 renders every chunk
   # (chunk 0 too: the AOV ids of sample 0 cross ranks) and rank 0 ends the
