@@ -1202,10 +1202,10 @@ int main(int argc, char** argv) {
                         "1 to 64); the image depends on it, not on how many devices or ranks render it")
       ->check(CLI::Range(1, 1 << 20));
   renderCmd->add_option("--rank-timeout", render.rankTimeout,
-                        "Under MPI: a worker rank that shows no progress for this many seconds (no message, or no "
-                        "sample pass done on the chunk it holds) is lost; its chunks go to the other ranks and the "
-                        "image is finished without it. Must exceed the slowest device's sample pass "
-                        "(docs/scale-out.md, Faults)")
+                        "A worker rank or a device of a split render that shows no progress for this many seconds "
+                        "(no message, or no sample pass done on the chunk it holds) is lost; its chunks go to the "
+                        "others and the image is finished without it; a rank 0 that sends nothing that long ends "
+                        "the job. Must exceed the slowest device's sample pass (docs/scale-out.md, Faults)")
       ->check(CLI::PositiveNumber)->capture_default_str();
   renderCmd->add_option("--scene-index", render.sceneIndex, "glTF scene to render (default: the file's default scene)")
       ->check(CLI::Range(-1, 1 << 20));
