@@ -53,6 +53,11 @@ same() {
   cmp "$dir/$1.out" "$dir/$2.out" || fail "$1 and $2 report differently: $(cat "$dir/$1.out" "$dir/$2.out")"
   cmp "$dir/$1.csv" "$dir/$2.csv" || fail "$1 and $2 log other errors: $(cat "$dir/$1.csv" "$dir/$2.csv")"
 }
+# a 512-spp render of another seed: the reference --reference measures against
+reference() {
+  "$exe" render --width 24 --height 16 --max-bounces 4 --seed 77 --spp 512 -q -o "$dir/ref.exr" >/dev/null 2>&1 ||
+    fail "reference render failed"
+}
 # the pid of rank $1 of the job $2 (timeout, its child mpirun, mpirun's children the ranks)
 rankPid() {
   local p
@@ -88,7 +93,7 @@ if [ "$mode" = devices ]; then
   echo "one of two devices hung: the other finished the same image"
   # every AOV merged as the image is; --target-error stops at the same chunk
   # boundary and --reference logs the same errors (a reference of another seed)
-  "$exe" render --width 24 --height 16 --max-bounces 4 --seed 77 --spp 512 -q -o "$dir/ref.exr" >/dev/null 2>&1 || fail "reference render failed"
+  reference
   split aov2 0,0 -q --chunk-spp 2 --aov all --target-error 0.06 --reference "$dir/ref.exr"
   split aov1 "" -q --chunk-spp 2 --aov all --target-error 0.06 --reference "$dir/ref.exr"
   same aov2 aov1
@@ -137,17 +142,23 @@ if [ "$mode" = heartbeat ]; then
       fail "$1: rank 1 held no chunk (nothing to hand out again): $(cat "$dir/$1.log")"
     cmp "$dir/$1.exr" "$dir/process.exr" || fail "$1: the image differs from 1 process"
   }
+  # a 2-rank job with the hang $1 (WT_TEST_STALL), NAME $2, --rank-timeout 1,
+  # bounded by 60 s, its exit status in $status; the render's options follow
+  stalled() {
+    local stall=$1 name=$2
+    shift 2
+    start=$SECONDS
+    WT_TEST_STALL=$stall timeout -k 5 60 mpirun --oversubscribe -np 2 "$exe" render "$@" --rank-timeout 1 \
+      -o "$dir/$name.exr" >"$dir/$name.log" 2>&1
+    status=$?
+  }
   # rank 1's main thread stops talking once it holds a chunk (a hung process)
-  start=$SECONDS
-  WT_TEST_STALL=1:process timeout -k 5 60 mpirun --oversubscribe -np 2 "$exe" render "${hb[@]}" -q --rank-timeout 1 \
-    -o "$dir/hung.exr" >"$dir/hung.log" 2>&1
-  lostCheck hung $? held
+  stalled 1:process hung "${hb[@]}" -q
+  lostCheck hung $status held
   echo "rank 1 hung holding a chunk: rank 0 finished without it in $((SECONDS - start)) s, the image equals 1 process"
   # rank 1's device hangs on its chunk while its heartbeat goes on: no progress
-  start=$SECONDS
-  WT_TEST_STALL=1:device timeout -k 5 60 mpirun --oversubscribe -np 2 "$exe" render "${hb[@]}" -q --rank-timeout 1 \
-    -o "$dir/device.exr" >"$dir/device.log" 2>&1
-  lostCheck device $? held
+  stalled 1:device device "${hb[@]}" -q
+  lostCheck device $status held
   echo "rank 1's device hung (heartbeats without progress): finished without it in $((SECONDS - start)) s, equal"
   # rank 1 killed under a launcher that lets the job go on (--enable-recovery);
   # hung on its first chunk first, so that the job cannot end before the kill
@@ -166,10 +177,7 @@ if [ "$mode" = heartbeat ]; then
   # rank 0's device hangs on its first chunk: rank 1 renders every chunk
   # (chunk 0 too: the AOV ids of sample 0 cross ranks) and rank 0 ends the
   # job without waiting for its device
-  start=$SECONDS
-  WT_TEST_STALL=0:device timeout -k 5 60 mpirun --oversubscribe -np 2 "$exe" render "${hb[@]}" -v --rank-timeout 1 \
-    -o "$dir/rank0device.exr" >"$dir/rank0device.log" 2>&1
-  status=$?
+  stalled 0:device rank0device "${hb[@]}" -v
   [ $status -eq 0 ] || fail "rank 0's device hung: exit status $status: $(cat "$dir/rank0device.log")"
   grep -q "warning: device 0 (.*) of rank 0 did no sample pass for [0-9.]* s (--rank-timeout 1) on its chunk" \
     "$dir/rank0device.log" || fail "rank 0's device hung: no warning naming it: $(cat "$dir/rank0device.log")"
@@ -184,11 +192,8 @@ if [ "$mode" = heartbeat ]; then
   # to the uninterrupted image
   r0=(--width 48 --height 48 --max-bounces 4 --seed 9 --accumulation double --spp 96 --chunk-spp 2)
   "$exe" render "${r0[@]}" -q -o "$dir/straight.exr" >/dev/null 2>&1 || fail "uninterrupted render failed"
-  start=$SECONDS
   rm -f "$dir/rank0.exr.wtckpt"
-  WT_TEST_STALL=0:process timeout -k 5 60 mpirun --oversubscribe -np 2 "$exe" render "${r0[@]}" -q --rank-timeout 1 \
-    --checkpoint 0.1 -o "$dir/rank0.exr" >"$dir/rank0.log" 2>&1
-  status=$?
+  stalled 0:process rank0 "${r0[@]}" -q --checkpoint 0.1
   [ $status -eq 124 ] && fail "rank 0 hung: the job still ran after 60 s: $(cat "$dir/rank0.log")"
   [ $status -ne 0 ] || fail "rank 0 hung: the job exited 0: $(cat "$dir/rank0.log")"
   grep -q "error: rank 1: rank 0 (which merges and writes the image) sent nothing for [0-9.]* s (--rank-timeout 1)" \
@@ -201,10 +206,7 @@ if [ "$mode" = heartbeat ]; then
   cmp "$dir/rank0.exr" "$dir/straight.exr" || fail "rank 0 hung: the resumed image differs from the uninterrupted one"
   echo "rank 0 hung: rank 1 ended the job in $((SECONDS - start)) s naming it; its checkpoint resumed to the same image"
   # rank 1 hangs before it has started: rank 0 names it and ends the job
-  start=$SECONDS
-  WT_TEST_STALL=1:startup timeout -k 5 60 mpirun --oversubscribe -np 2 "$exe" render "${hb[@]}" -q --rank-timeout 1 \
-    -o "$dir/startup.exr" >"$dir/startup.log" 2>&1
-  status=$?
+  stalled 1:startup startup "${hb[@]}" -q
   [ $status -eq 124 ] && fail "startup: rank 0 still waited 60 s for rank 1 to start: $(cat "$dir/startup.log")"
   [ $status -ne 0 ] || fail "startup: the job exited 0 without rank 1"
   grep -q "error: the job could not start: rank 1 had not finished starting 1 s after rank 0 (--rank-timeout)" \
@@ -228,8 +230,7 @@ echo "2 ranks equal 1 process, byte for byte (every AOV layer included) (at ${SE
 
 # --- --target-error and --reference on 2 ranks ---------------------------------
 # rank 1's chunks that arrive after the boundary that met the target are dropped
-"$exe" render --width 24 --height 16 --max-bounces 4 --seed 77 --spp 512 -q -o "$dir/ref.exr" >/dev/null 2>&1 ||
-  fail "reference render failed"
+reference
 te=(--chunk-spp 2 --aov all --target-error 0.06 --reference "$dir/ref.exr" --error-log)
 "${mpi[@]}" "$exe" render "${base[@]}" "${te[@]}" "$dir/te-ranks.csv" -o "$dir/te-ranks.exr" >"$dir/te-ranks.log" 2>&1 ||
   fail "2 ranks with --target-error (exit status $?): $(cat "$dir/te-ranks.log")"
