@@ -213,6 +213,13 @@ if [ "$mode" = heartbeat ]; then
     "$dir/startup.log" || fail "startup: no message naming rank 1: $(cat "$dir/startup.log")"
   [ -f "$dir/startup.exr" ] && fail "startup: an image was written"
   echo "rank 1 hung while starting: the job ended in $((SECONDS - start)) s naming it"
+  # rank 0 hangs before it has started: rank 1 names it and ends the job
+  stalled 0:startup startup0 "${hb[@]}" -q
+  [ $status -eq 124 ] && fail "startup0: rank 1 still waited 60 s for rank 0 to start: $(cat "$dir/startup0.log")"
+  [ $status -ne 0 ] || fail "startup0: the job exited 0 without rank 0"
+  grep -q "error: the job could not start: rank 0 had not finished starting 1 s after rank 1 (--rank-timeout)" \
+    "$dir/startup0.log" || fail "startup0: no message naming rank 0: $(cat "$dir/startup0.log")"
+  echo "rank 0 hung while starting: the job ended in $((SECONDS - start)) s naming it"
   exit 0
 fi
 

@@ -33,7 +33,8 @@ enum Tag : int {
   kTagFinished = 6,  ///< worker -> 0: all my devices are done and their results sent
   kTagHeartbeat = 7, ///< worker -> 0: uint64 sample passes its devices have done (a sign of progress);
                      ///< 0 -> worker: no payload (rank 0 is alive)
-  kTagStarted = 8,   ///< worker -> 0: set up (or failed to), about to join the start-up collective
+  kTagStarted = 8,   ///< worker -> 0: set up (or failed to), about to join the start-up collective;
+                     ///< 0 -> worker: every rank has (join it)
 };
 
 /// The fixed part of a result message.
@@ -309,11 +310,29 @@ void MpiWorld::agreeOnStart(const std::string& error, std::uint64_t renderHash, 
     return;
   }
   // each worker says it got here before the collective, so that rank 0 can
-  // name a rank that never does (the collective would wait for it forever)
+  // name a rank that never does (the collective would wait for it forever),
+  // and rank 0 answers once all have, so that a worker can name a rank 0
+  // that never gets here
+  if (const char* stall = std::getenv("WT_TEST_STALL"); stall && stall == std::to_string(m_rank) + ":startup")
+    StallHook::forever();  // the test hook: a rank hung while starting
   if (m_rank != 0) {
-    if (const char* stall = std::getenv("WT_TEST_STALL"); stall && stall == std::to_string(m_rank) + ":startup")
-      StallHook::forever();  // the test hook: a rank hung while starting
     MPI_Send(nullptr, 0, MPI_INT, 0, kTagStarted, MPI_COMM_WORLD);
+    const auto t0 = Clock::now();
+    for (int flag = 0; !flag;) {
+      MPI_Iprobe(0, kTagStarted, MPI_COMM_WORLD, &flag, MPI_STATUS_IGNORE);
+      if (flag) break;
+      if (since(t0) > timeoutSeconds) {
+        char text[240];
+        std::snprintf(text, sizeof text,
+                      "the job could not start: rank 0 had not finished starting %.3g s after rank %d "
+                      "(--rank-timeout); hung or dead while loading the scene or building its program?",
+                      timeoutSeconds, m_rank);
+        log::error(text);
+        abort(1);
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+    MPI_Recv(nullptr, 0, MPI_INT, 0, kTagStarted, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
   } else {
     std::vector<bool> arrived(std::size_t(m_size), false);
     int missing = m_size - 1;
@@ -339,6 +358,7 @@ void MpiWorld::agreeOnStart(const std::string& error, std::uint64_t renderHash, 
       }
       std::this_thread::sleep_for(std::chrono::milliseconds(1));
     }
+    for (int r = 1; r < m_size; ++r) MPI_Send(nullptr, 0, MPI_INT, r, kTagStarted, MPI_COMM_WORLD);
   }
   constexpr int kMessage = 1024;
   std::vector<char> mine(kMessage + 8, 0), all(std::size_t(m_size) * (kMessage + 8));

@@ -35,7 +35,9 @@ class MpiWorld {
   /// and all hashes agree, else every rank throws. Rank 0's exception names
   /// each failed rank and its message; the others' is empty (rank 0 reports).
   /// A rank that has not reached this point `timeoutSeconds` after rank 0
-  /// did (hung while loading, or dead) makes rank 0 name it and end the job.
+  /// did (hung while loading, or dead) makes rank 0 name it and end the job;
+  /// a rank 0 that has not, `timeoutSeconds` after a worker did, makes that
+  /// worker name rank 0 and end the job.
   void agreeOnStart(const std::string& error, std::uint64_t renderHash, double timeoutSeconds = 120.0);
   static bool builtWithMpi();
 
