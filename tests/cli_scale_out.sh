@@ -159,6 +159,10 @@ if [ "$mode" = heartbeat ]; then
   # rank 1's device hangs on its chunk while its heartbeat goes on: no progress
   stalled 1:device device "${hb[@]}" -q
   lostCheck device $status held
+  # rank 1 is alive: rank 0 tells it that it was given up on, so that it does
+  # not take rank 0's silence towards it for a hung rank 0 and end the job
+  grep -q "warning: rank 1: rank 0 gave up on this rank" "$dir/device.log" ||
+    fail "device: rank 1 was not told it was given up on: $(cat "$dir/device.log")"
   echo "rank 1's device hung (heartbeats without progress): finished without it in $((SECONDS - start)) s, equal"
   # rank 1 killed under a launcher that lets the job go on (--enable-recovery);
   # hung on its first chunk first, so that the job cannot end before the kill

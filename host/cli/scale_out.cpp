@@ -35,6 +35,8 @@ enum Tag : int {
                      ///< 0 -> worker: no payload (rank 0 is alive)
   kTagStarted = 8,   ///< worker -> 0: set up (or failed to), about to join the start-up collective;
                      ///< 0 -> worker: every rank has (join it)
+  kTagRelease = 9,   ///< 0 -> worker: int 1: you were lost, 0: the job ends early; either way stop
+                     ///< watching rank 0, which sends no more heartbeats and ends the job itself
 };
 
 /// The fixed part of a result message.
@@ -466,6 +468,12 @@ ScaleOutResult coordinateRender(DeviceSet& devices, const ScaleOutOptions& optio
     result.lostRanks.push_back(message);
     log::warnOnce(message);
     st.chunks.clear();
+#if WT_MPI
+    // it may be alive (a hung device): it must not take rank 0's silence
+    // towards it for a hung rank 0 and end the job before the image is written
+    const int lost = 1;
+    MPI_Send(&lost, 1, MPI_INT, rank, kTagRelease, MPI_COMM_WORLD);
+#endif
   };
   // this process's devices, watched like the ranks: one that holds a chunk
   // with no sample pass done for the timeout is lost (a hung driver), its
@@ -694,6 +702,13 @@ ScaleOutResult coordinateRender(DeviceSet& devices, const ScaleOutOptions& optio
     if (result.failure.empty()) result.failure = e.what();
     break;
   }
+#if WT_MPI
+  // ended early (a failure, a signal): the workers still running must not
+  // end the job while rank 0 writes the image
+  for (int r = 1, ending = 0; r < world.size(); ++r)
+    if (!ranks[std::size_t(r)].lost && !ranks[std::size_t(r)].finished)
+      MPI_Send(&ending, 1, MPI_INT, r, kTagRelease, MPI_COMM_WORLD);
+#endif
   stop = true;
   plan.cancel();
   threads.join();
@@ -728,15 +743,27 @@ int serveRender([[maybe_unused]] DeviceSet& devices, [[maybe_unused]] const MpiW
   bool stopped = false;
   DeviceThreads threads(devices, fed, results, stop, stall.device);
   auto lastBeat = Clock::now(), lastHeard = Clock::now();
+  bool released = false;
   // rank 0 sends a heartbeat as often as the workers do: a rank 0 that is
-  // silent for the timeout is hung or dead, and with it the job
+  // silent for the timeout is hung or dead, and with it the job (unless it
+  // released this rank: then it ends the job itself)
   auto takeRootHeartbeats = [&] {
-    for (int flag = 1; flag;) {
-      MPI_Iprobe(0, kTagHeartbeat, MPI_COMM_WORLD, &flag, MPI_STATUS_IGNORE);
-      if (flag) MPI_Recv(nullptr, 0, MPI_BYTE, 0, kTagHeartbeat, MPI_COMM_WORLD, MPI_STATUS_IGNORE), lastHeard = Clock::now();
-    }
+    for (const int tag : {kTagHeartbeat, kTagRelease})
+      for (int flag = 1; flag;) {
+        MPI_Iprobe(0, tag, MPI_COMM_WORLD, &flag, MPI_STATUS_IGNORE);
+        if (!flag) break;
+        int lost = 0;
+        MPI_Recv(&lost, tag == kTagRelease ? 1 : 0, MPI_INT, 0, tag, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+        lastHeard = Clock::now();
+        if (tag != kTagRelease) continue;
+        released = true;
+        if (lost)
+          log::warnOnce("rank " + std::to_string(world.rank()) +
+                        ": rank 0 gave up on this rank (no progress within --rank-timeout); it waits for rank 0 "
+                        "to end the job");
+      }
     const double silent = since(lastHeard);
-    if (silent <= rankTimeoutSeconds) return;
+    if (released || silent <= rankTimeoutSeconds) return;
     char text[400];
     std::snprintf(text, sizeof text,
                   "rank %d: rank 0 (which merges and writes the image) sent nothing for %.3g s (--rank-timeout %g): "
@@ -780,7 +807,7 @@ int serveRender([[maybe_unused]] DeviceSet& devices, [[maybe_unused]] const MpiW
     while (requested > 0) {
       MPI_Status st;
       MPI_Iprobe(0, MPI_ANY_TAG, MPI_COMM_WORLD, &flag, &st);
-      if (!flag || st.MPI_TAG == kTagHeartbeat) break;
+      if (!flag || st.MPI_TAG == kTagHeartbeat || st.MPI_TAG == kTagRelease) break;
       busy = true;
       lastHeard = Clock::now();
       int assign[3] = {0, 0, 0};
