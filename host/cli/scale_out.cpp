@@ -432,7 +432,8 @@ ScaleOutResult coordinateRender(DeviceSet& devices, const ScaleOutOptions& optio
     return true;
   });
   const auto t0 = Clock::now();
-  auto lastReport = t0, lastCheckpoint = t0, lastBeat = t0;
+  auto lastReport = t0, lastCheckpoint = t0;
+  [[maybe_unused]] auto lastBeat = t0;  // rank 0's heartbeat (MPI only)
   const StallHook stall(0);
   int checkpointed = resumed;
   const bool tty = isatty(STDERR_FILENO);
