@@ -9,9 +9,14 @@
 #            with its message (no hang). Skips (77) in a build without MPI.
 #   heartbeat: rank 1 hung (process or device) or killed without mpirun
 #            ending the job: rank 0 finishes without it within --rank-timeout,
-#            the image equal to 1 process. Skips (77) without MPI.
+#            the image equal to 1 process. Rank 0's device hung: rank 1 renders
+#            every chunk, chunk 0 included, and the image, every AOV and the
+#            ids included, equals 1 process. Rank 0 hung: rank 1 ends the job
+#            naming it, its checkpoint resumes to the uninterrupted image.
+#            Skips (77) without MPI.
 #   devices also: --aov all, --debug, --target-error and --reference on two
-#            devices equal one device with the same --chunk-spp.
+#            devices equal one device with the same --chunk-spp; one of two
+#            devices hung: the other finishes the same image.
 #
 # usage: cli_scale_out.sh WAVETRACE SCRATCH_DIR devices|mpi|heartbeat [WT_MPI]
 set -u
@@ -49,6 +54,28 @@ same() {
   cmp "$dir/$1.out" "$dir/$2.out" || fail "$1 and $2 report differently: $(cat "$dir/$1.out" "$dir/$2.out")"
   cmp "$dir/$1.csv" "$dir/$2.csv" || fail "$1 and $2 log other errors: $(cat "$dir/$1.csv" "$dir/$2.csv")"
 }
+# a 512-spp render of another seed: the reference --reference measures against
+reference() {
+  "$exe" render --width 24 --height 16 --max-bounces 4 --seed 77 --spp 512 -q -o "$dir/ref.exr" >/dev/null 2>&1 ||
+    fail "reference render failed"
+}
+# the pid of rank $1 of the job $2 (timeout, its child mpirun, mpirun's children the ranks)
+rankPid() {
+  local p
+  for p in $(pgrep -P "$(pgrep -P "$2" | tr '\n' ',' | sed 's/,$//')"); do
+    tr '\0' '\n' <"/proc/$p/environ" 2>/dev/null | grep -qx "OMPI_COMM_WORLD_RANK=$1" && echo "$p"
+  done
+}
+# wait until $1 exists while the job $2 runs (at most 120 s)
+waitForFile() {
+  local _
+  for _ in $(seq 1200); do
+    [ -f "$1" ] && return 0
+    kill -0 "$2" 2>/dev/null || fail "the job exited before writing $1: $(cat "${1%.exr.wtckpt}.log")"
+    sleep 0.1
+  done
+  fail "no $1 after 120 s"
+}
 
 if [ "$mode" = devices ]; then
   "$exe" render "${common[@]}" -v --spp 24 --chunk-spp 3 --device 0,0 -o "$dir/two.exr" >"$dir/two.log" 2>&1 ||
@@ -57,9 +84,17 @@ if [ "$mode" = devices ]; then
   "$exe" render "${common[@]}" -q --spp 24 --chunk-spp 3 -o "$dir/one.exr" >/dev/null 2>&1 || fail "one device failed"
   cmp "$dir/two.exr" "$dir/one.exr" || fail "two devices differ from one"
   echo "two devices equal one, byte for byte"
+  # the first device to take a chunk hangs on it: after --rank-timeout the
+  # other takes that chunk, and the process ends without waiting for the hung one
+  WT_TEST_STALL=0:device timeout -k 5 60 "$exe" render "${common[@]}" --spp 24 --chunk-spp 3 --device 0,0 \
+    --rank-timeout 1 -o "$dir/stalled.exr" >"$dir/stalled.log" 2>&1 || fail "one device hung: exit status $?: $(cat "$dir/stalled.log")"
+  grep -q "warning: device 0 (.*) did no sample pass for [0-9.]* s (--rank-timeout 1) on its chunk [0-9]* (samples [0-9]*-[0-9]*): handed out again" \
+    "$dir/stalled.log" || fail "one device hung: no warning naming it: $(cat "$dir/stalled.log")"
+  cmp "$dir/stalled.exr" "$dir/one.exr" || fail "one device hung: the image differs from one device"
+  echo "one of two devices hung: the other finished the same image"
   # every AOV merged as the image is; --target-error stops at the same chunk
   # boundary and --reference logs the same errors (a reference of another seed)
-  "$exe" render --width 24 --height 16 --max-bounces 4 --seed 77 --spp 512 -q -o "$dir/ref.exr" >/dev/null 2>&1 || fail "reference render failed"
+  reference
   split aov2 0,0 -q --chunk-spp 2 --aov all --target-error 0.06 --reference "$dir/ref.exr"
   split aov1 "" -q --chunk-spp 2 --aov all --target-error 0.06 --reference "$dir/ref.exr"
   same aov2 aov1
@@ -95,7 +130,7 @@ if [ "$mode" = heartbeat ]; then
   # rank 0 notices within --rank-timeout, hands its chunks out again (its
   # own device takes them) and finishes the image, the same as 1 process
   # byte for byte (the merge is in chunk order, whoever rendered a chunk).
-  hb=(--width 48 --height 48 --max-bounces 4 --seed 9 --aov variance --spp 96 --chunk-spp 2)
+  hb=(--width 48 --height 48 --max-bounces 4 --seed 9 --aov all --spp 96 --chunk-spp 2)
   "$exe" render "${hb[@]}" -q -o "$dir/process.exr" >/dev/null 2>&1 || fail "1 process failed"
   lostCheck() {  # $1: the case, $2: the job's exit status, $3: "held" if rank 1 surely held a chunk
     [ "$2" -eq 124 ] && fail "$1: rank 0 still waited 60 s after rank 1 stopped: $(cat "$dir/$1.log")"
@@ -108,49 +143,88 @@ if [ "$mode" = heartbeat ]; then
       fail "$1: rank 1 held no chunk (nothing to hand out again): $(cat "$dir/$1.log")"
     cmp "$dir/$1.exr" "$dir/process.exr" || fail "$1: the image differs from 1 process"
   }
+  # a 2-rank job with the hang $1 (WT_TEST_STALL), NAME $2, --rank-timeout 1,
+  # bounded by 60 s, its exit status in $status; the render's options follow
+  stalled() {
+    local stall=$1 name=$2
+    shift 2
+    start=$SECONDS
+    WT_TEST_STALL=$stall timeout -k 5 60 mpirun --oversubscribe -np 2 "$exe" render "$@" --rank-timeout 1 \
+      -o "$dir/$name.exr" >"$dir/$name.log" 2>&1
+    status=$?
+  }
   # rank 1's main thread stops talking once it holds a chunk (a hung process)
-  start=$SECONDS
-  WT_TEST_STALL=1:process timeout -k 5 60 mpirun --oversubscribe -np 2 "$exe" render "${hb[@]}" -q --rank-timeout 1 \
-    -o "$dir/hung.exr" >"$dir/hung.log" 2>&1
-  lostCheck hung $? held
+  stalled 1:process hung "${hb[@]}" -q
+  lostCheck hung $status held
   echo "rank 1 hung holding a chunk: rank 0 finished without it in $((SECONDS - start)) s, the image equals 1 process"
   # rank 1's device hangs on its chunk while its heartbeat goes on: no progress
-  start=$SECONDS
-  WT_TEST_STALL=1:device timeout -k 5 60 mpirun --oversubscribe -np 2 "$exe" render "${hb[@]}" -q --rank-timeout 1 \
-    -o "$dir/device.exr" >"$dir/device.log" 2>&1
-  lostCheck device $? held
+  stalled 1:device device "${hb[@]}" -q
+  lostCheck device $status held
+  # rank 1 is alive: rank 0 tells it that it was given up on, so that it does
+  # not take rank 0's silence towards it for a hung rank 0 and end the job
+  grep -q "warning: rank 1: rank 0 gave up on this rank" "$dir/device.log" ||
+    fail "device: rank 1 was not told it was given up on: $(cat "$dir/device.log")"
   echo "rank 1's device hung (heartbeats without progress): finished without it in $((SECONDS - start)) s, equal"
-  # rank 1 killed under a launcher that lets the job go on (--enable-recovery)
+  # rank 1 killed under a launcher that lets the job go on (--enable-recovery);
+  # hung on its first chunk first, so that the job cannot end before the kill
   start=$SECONDS
   rm -f "$dir/killed.exr.wtckpt"
-  timeout -k 5 60 mpirun --oversubscribe --enable-recovery -np 2 "$exe" render "${hb[@]}" -q --rank-timeout 1 \
+  WT_TEST_STALL=1:process timeout -k 5 60 mpirun --oversubscribe --enable-recovery -np 2 "$exe" render "${hb[@]}" -q --rank-timeout 1 \
     --checkpoint 0.1 -o "$dir/killed.exr" >"$dir/killed.log" 2>&1 &
   job=$!
-  for _ in $(seq 600); do
-    [ -f "$dir/killed.exr.wtckpt" ] && break
-    kill -0 $job 2>/dev/null || fail "killed: the job exited before its first checkpoint: $(cat "$dir/killed.log")"
-    sleep 0.05
-  done
-  rank1=""
-  for p in $(pgrep -P "$(pgrep -P $job | tr '\n' ',' | sed 's/,$//')"); do
-    tr '\0' '\n' <"/proc/$p/environ" 2>/dev/null | grep -qx "OMPI_COMM_WORLD_RANK=1" && rank1=$p
-  done
+  waitForFile "$dir/killed.exr.wtckpt" $job
+  rank1=$(rankPid 1 $job)
   [ -n "$rank1" ] || fail "killed: rank 1's process not found: $(cat "$dir/killed.log")"
   kill -9 "$rank1"
   wait $job
-  lostCheck killed $?
+  lostCheck killed $? held
   echo "rank 1 killed (mpirun --enable-recovery): finished without it in $((SECONDS - start)) s, equal"
+  # rank 0's device hangs on its first chunk: rank 1 renders every chunk
+  # (chunk 0 too: the AOV ids of sample 0 cross ranks) and rank 0 ends the
+  # job without waiting for its device
+  stalled 0:device rank0device "${hb[@]}" -v
+  [ $status -eq 0 ] || fail "rank 0's device hung: exit status $status: $(cat "$dir/rank0device.log")"
+  grep -q "warning: device 0 (.*) of rank 0 did no sample pass for [0-9.]* s (--rank-timeout 1) on its chunk" \
+    "$dir/rank0device.log" || fail "rank 0's device hung: no warning naming it: $(cat "$dir/rank0device.log")"
+  grep -q "chunks by rank: 0, 48$" "$dir/rank0device.log" ||
+    fail "rank 0's device hung: rank 1 did not render all 48 chunks: $(cat "$dir/rank0device.log")"
+  cmp "$dir/rank0device.exr" "$dir/process.exr" ||
+    fail "rank 0's device hung: the image differs from 1 process (every AOV layer, the ids of chunk 0 from rank 1)"
+  echo "rank 0's device hung: rank 1 rendered all 48 chunks in $((SECONDS - start)) s; equal, every AOV and the ids included"
+  # rank 0 itself hangs (after its first checkpoint): rank 1 hears nothing
+  # from it for --rank-timeout and ends the job naming it; the checkpoint
+  # resumes (double accumulation, no AOVs: a checkpoint holds the image alone)
+  # to the uninterrupted image
+  r0=(--width 48 --height 48 --max-bounces 4 --seed 9 --accumulation double --spp 96 --chunk-spp 2)
+  "$exe" render "${r0[@]}" -q -o "$dir/straight.exr" >/dev/null 2>&1 || fail "uninterrupted render failed"
+  rm -f "$dir/rank0.exr.wtckpt"
+  stalled 0:process rank0 "${r0[@]}" -q --checkpoint 0.1
+  [ $status -eq 124 ] && fail "rank 0 hung: the job still ran after 60 s: $(cat "$dir/rank0.log")"
+  [ $status -ne 0 ] || fail "rank 0 hung: the job exited 0: $(cat "$dir/rank0.log")"
+  grep -q "error: rank 1: rank 0 (which merges and writes the image) sent nothing for [0-9.]* s (--rank-timeout 1)" \
+    "$dir/rank0.log" || fail "rank 0 hung: no message naming it: $(cat "$dir/rank0.log")"
+  [ -f "$dir/rank0.exr.wtckpt" ] || fail "rank 0 hung: no checkpoint"
+  "$exe" render "${r0[@]}" --resume -o "$dir/rank0.exr" >"$dir/rank0-resume.log" 2>&1 ||
+    fail "rank 0 hung: its checkpoint does not resume: $(cat "$dir/rank0-resume.log")"
+  grep -q "resumed from .* at [1-9][0-9]* samples" "$dir/rank0-resume.log" ||
+    fail "rank 0 hung: the checkpoint held no samples: $(cat "$dir/rank0-resume.log")"
+  cmp "$dir/rank0.exr" "$dir/straight.exr" || fail "rank 0 hung: the resumed image differs from the uninterrupted one"
+  echo "rank 0 hung: rank 1 ended the job in $((SECONDS - start)) s naming it; its checkpoint resumed to the same image"
   # rank 1 hangs before it has started: rank 0 names it and ends the job
-  start=$SECONDS
-  WT_TEST_STALL=1:startup timeout -k 5 60 mpirun --oversubscribe -np 2 "$exe" render "${hb[@]}" -q --rank-timeout 1 \
-    -o "$dir/startup.exr" >"$dir/startup.log" 2>&1
-  status=$?
+  stalled 1:startup startup "${hb[@]}" -q
   [ $status -eq 124 ] && fail "startup: rank 0 still waited 60 s for rank 1 to start: $(cat "$dir/startup.log")"
   [ $status -ne 0 ] || fail "startup: the job exited 0 without rank 1"
   grep -q "error: the job could not start: rank 1 had not finished starting 1 s after rank 0 (--rank-timeout)" \
     "$dir/startup.log" || fail "startup: no message naming rank 1: $(cat "$dir/startup.log")"
   [ -f "$dir/startup.exr" ] && fail "startup: an image was written"
   echo "rank 1 hung while starting: the job ended in $((SECONDS - start)) s naming it"
+  # rank 0 hangs before it has started: rank 1 names it and ends the job
+  stalled 0:startup startup0 "${hb[@]}" -q
+  [ $status -eq 124 ] && fail "startup0: rank 1 still waited 60 s for rank 0 to start: $(cat "$dir/startup0.log")"
+  [ $status -ne 0 ] || fail "startup0: the job exited 0 without rank 0"
+  grep -q "error: the job could not start: rank 0 had not finished starting 1 s after rank 1 (--rank-timeout)" \
+    "$dir/startup0.log" || fail "startup0: no message naming rank 0: $(cat "$dir/startup0.log")"
+  echo "rank 0 hung while starting: the job ended in $((SECONDS - start)) s naming it"
   exit 0
 fi
 
@@ -168,8 +242,7 @@ echo "2 ranks equal 1 process, byte for byte (every AOV layer included) (at ${SE
 
 # --- --target-error and --reference on 2 ranks ---------------------------------
 # rank 1's chunks that arrive after the boundary that met the target are dropped
-"$exe" render --width 24 --height 16 --max-bounces 4 --seed 77 --spp 512 -q -o "$dir/ref.exr" >/dev/null 2>&1 ||
-  fail "reference render failed"
+reference
 te=(--chunk-spp 2 --aov all --target-error 0.06 --reference "$dir/ref.exr" --error-log)
 "${mpi[@]}" "$exe" render "${base[@]}" "${te[@]}" "$dir/te-ranks.csv" -o "$dir/te-ranks.exr" >"$dir/te-ranks.log" 2>&1 ||
   fail "2 ranks with --target-error (exit status $?): $(cat "$dir/te-ranks.log")"
@@ -187,17 +260,8 @@ echo "--target-error 0.06 and --reference on 2 ranks: $stopped, image and error 
 dbl=(--width 24 --height 16 --max-bounces 4 --seed 9 --accumulation double --chunk-spp 2)
 "${mpi[@]}" "$exe" render "${dbl[@]}" -q --spp 1000000 --checkpoint 0.2 -o "$dir/killed.exr" >"$dir/killed.log" 2>&1 &
 job=$!
-for _ in $(seq 1200); do
-  [ -f "$dir/killed.exr.wtckpt" ] && break
-  kill -0 $job 2>/dev/null || fail "the job exited before its first checkpoint: $(cat "$dir/killed.log")"
-  sleep 0.1
-done
-[ -f "$dir/killed.exr.wtckpt" ] || fail "no checkpoint after 120 s"
-rank1=""
-# the job is timeout, its child mpirun, mpirun's children the ranks
-for p in $(pgrep -P "$(pgrep -P $job | tr '\n' ',' | sed 's/,$//')"); do
-  tr '\0' '\n' <"/proc/$p/environ" 2>/dev/null | grep -qx "OMPI_COMM_WORLD_RANK=1" && rank1=$p
-done
+waitForFile "$dir/killed.exr.wtckpt" $job
+rank1=$(rankPid 1 $job)
 [ -n "$rank1" ] || fail "rank 1's process not found among mpirun's children: $(ps -o pid,ppid,stat,comm --ppid $job) $(cat "$dir/killed.log")"
 sleep 0.3
 kill -9 "$rank1"

@@ -751,7 +751,7 @@ int runScaleOutRender(RenderOptions options, wt::MpiWorld& world) {
   std::signal(SIGINT, onInterrupt);
   std::signal(SIGTERM, onInterrupt);
   const std::function<bool()> interrupted = [] { return g_interrupted.load(); };
-  if (!root) return wt::serveRender(devices, world, interrupted, wt::heartbeatSeconds(options.rankTimeout));
+  if (!root) return wt::serveRender(devices, world, interrupted, options.rankTimeout);
 
   const wt::Scene& scene = loaded->scene;
   std::string names;
@@ -881,7 +881,7 @@ int runScaleOutRender(RenderOptions options, wt::MpiWorld& world) {
 
   // whatever happened, keep what was merged
   if (done > 0) {
-    wt::Renderer& out = *devices.renderers.front();
+    wt::Renderer& out = *devices.renderers[std::size_t(result.outputDevice)];
     out.restoreAccumulation(wt::accumulationFromMoments(result.merged, settings.accumulation));
     wt::Image image = out.readImage();
     wt::applyDebugView(image, options.debugView);
@@ -900,12 +900,16 @@ int runScaleOutRender(RenderOptions options, wt::MpiWorld& world) {
       if (result.failure.empty()) result.failure = e.what();
     }
   }
+  // a lost device's thread is left behind: only an abort ends the process safely
+  const bool lost = !result.lostRanks.empty() || !result.lostDevices.empty();
+  const bool mustAbort = (world.active() && (lost || !result.failure.empty() || result.interrupted)) ||
+                         !result.lostDevices.empty();
   const std::string kept = done > 0 ? "; the " + std::to_string(done) + " merged samples were written"
                                     : "; no chunk was merged, nothing written";
   if (!result.failure.empty()) {
     wt::log::error("render failed after " + std::to_string(done) + " of " + std::to_string(spp) +
                    " samples: " + result.failure + kept);
-    if (world.active()) world.abort(1);
+    if (mustAbort) world.abort(1);
     return 1;
   }
   if (result.interrupted) {
@@ -913,14 +917,15 @@ int runScaleOutRender(RenderOptions options, wt::MpiWorld& world) {
                    (world.active() ? " (under mpirun also when a rank died or was killed: mpirun then stops every rank)"
                                    : "") +
                    kept);
-    if (world.active()) world.abort(130);
+    if (mustAbort) world.abort(130);
     return 130;
   }
-  if (!result.lostRanks.empty()) {
-    // the image is whole (the lost ranks' chunks were rendered again); the
-    // lost ranks may still run or hang, and MPI_Finalize would wait for them
-    wt::log::info("finished without " + std::to_string(result.lostRanks.size()) +
-                  " lost rank(s); ending the job (the image is complete)");
+  if (mustAbort) {
+    // the image is whole (the lost ranks' and devices' chunks were rendered
+    // again); they may still run or hang, and MPI_Finalize or a return
+    // (destroying the devices) would wait for them
+    wt::log::info("finished without " + std::to_string(result.lostRanks.size()) + " lost rank(s) and " +
+                  std::to_string(result.lostDevices.size()) + " lost device(s); ending (the image is complete)");
     world.abort(0);
   }
   return 0;
@@ -1201,10 +1206,10 @@ int main(int argc, char** argv) {
                         "1 to 64); the image depends on it, not on how many devices or ranks render it")
       ->check(CLI::Range(1, 1 << 20));
   renderCmd->add_option("--rank-timeout", render.rankTimeout,
-                        "Under MPI: a worker rank that shows no progress for this many seconds (no message, or no "
-                        "sample pass done on the chunk it holds) is lost; its chunks go to the other ranks and the "
-                        "image is finished without it. Must exceed the slowest device's sample pass "
-                        "(docs/scale-out.md, Faults)")
+                        "A worker rank or a device of a split render that shows no progress for this many seconds "
+                        "(no message, or no sample pass done on the chunk it holds) is lost; its chunks go to the "
+                        "others and the image is finished without it; a rank 0 that sends nothing that long ends "
+                        "the job. Must exceed the slowest device's sample pass (docs/scale-out.md, Faults)")
       ->check(CLI::PositiveNumber)->capture_default_str();
   renderCmd->add_option("--scene-index", render.sceneIndex, "glTF scene to render (default: the file's default scene)")
       ->check(CLI::Range(-1, 1 << 20));

@@ -31,8 +31,12 @@ enum Tag : int {
   kTagResult = 4,    ///< worker -> 0: ResultHeader, then mean, m2 (double) and counts (uint32)
   kTagError = 5,     ///< worker -> 0: a device failed: its message
   kTagFinished = 6,  ///< worker -> 0: all my devices are done and their results sent
-  kTagHeartbeat = 7, ///< worker -> 0: uint64 sample passes its devices have done (a sign of progress)
-  kTagStarted = 8,   ///< worker -> 0: set up (or failed to), about to join the start-up collective
+  kTagHeartbeat = 7, ///< worker -> 0: uint64 sample passes its devices have done (a sign of progress);
+                     ///< 0 -> worker: no payload (rank 0 is alive)
+  kTagStarted = 8,   ///< worker -> 0: set up (or failed to), about to join the start-up collective;
+                     ///< 0 -> worker: every rank has (join it)
+  kTagRelease = 9,   ///< 0 -> worker: int 1: you were lost, 0: the job ends early; either way stop
+                     ///< watching rank 0, which sends no more heartbeats and ends the job itself
 };
 
 /// The fixed part of a result message.
@@ -94,27 +98,112 @@ static_assert(sizeof(ResultHeader) == 48);
   return r;
 }
 
-/// One thread per device, each counted out when its loop ends.
+/// A hidden test hook (tests/cli_scale_out.sh): WT_TEST_STALL="RANK:process"
+/// makes that rank's main thread stop talking (a hung or dead process): a
+/// worker once it holds its first chunk, rank 0 once it has checkpointed (or
+/// merged) a chunk; "RANK:device" makes the first of that rank's devices to
+/// take a chunk hang on it (a hung device; a worker's heartbeat goes on).
+/// Rank 0 is also the only process of a render without MPI.
+struct StallHook {
+  bool process = false, device = false;
+  explicit StallHook(int rank) {
+    const char* v = std::getenv("WT_TEST_STALL");
+    if (!v) return;
+    const std::string s(v);
+    const std::size_t colon = s.find(':');
+    if (colon == std::string::npos || std::atoi(s.substr(0, colon).c_str()) != rank) return;
+    process = s.substr(colon + 1) == "process";
+    device = s.substr(colon + 1) == "device";
+  }
+  [[noreturn]] static void forever() {
+    while (true) std::this_thread::sleep_for(std::chrono::seconds(1));
+  }
+};
+
+/// What the coordinator sees of one device thread: the chunk it holds and
+/// its sample passes, so that a hung device can be told from a slow one.
+struct DeviceWatch {
+  std::atomic<int> chunk{-1};            ///< the chunk it renders; -1: none
+  std::atomic<std::uint64_t> passes{0};  ///< sample passes done
+  std::atomic<bool> finished{false};     ///< its loop ended
+  std::atomic<bool> lost{false};         ///< given up on: it gets no more chunks
+};
+
+/// One device's view of the shared source: records the chunk it takes; with
+/// the stall hook, the first device to take a chunk hangs on it.
+class WatchedSource : public ChunkSource {
+ public:
+  WatchedSource(ChunkSource& inner, DeviceWatch& watch, std::atomic<bool>* stallFirst)
+      : m_inner(inner), m_watch(watch), m_stallFirst(stallFirst) {}
+  std::optional<SampleChunk> next() override {
+    m_watch.chunk = -1;
+    if (m_watch.lost) return std::nullopt;  // back from a hang: its chunk went to another
+    std::optional<SampleChunk> c = m_inner.next();
+    if (c) {
+      m_watch.chunk = c->index;
+      if (m_stallFirst && !m_stallFirst->exchange(true)) StallHook::forever();
+    }
+    return c;
+  }
+
+ private:
+  ChunkSource& m_inner;
+  DeviceWatch& m_watch;
+  std::atomic<bool>* m_stallFirst;
+};
+
+/// One thread per device, each watched (DeviceWatch) and counted out when
+/// its loop ends. A lost device's thread may never end: it is left behind
+/// (detached), and the process must end without returning to it.
 class DeviceThreads {
  public:
   DeviceThreads(DeviceSet& devices, ChunkSource& source, ResultQueue& results, std::atomic<bool>& stop,
-                std::atomic<std::uint64_t>* passes = nullptr) {
-    for (std::size_t d = 0; d < devices.renderers.size(); ++d)
-      m_threads.emplace_back([&, d, passes] {
-        runDeviceWorker(*devices.renderers[d], source, results, stop, devices.names[d], passes);
-        ++m_finished;
+                bool stallFirst = false) {
+    const std::size_t n = devices.renderers.size();
+    for (std::size_t d = 0; d < n; ++d) {
+      m_watches.push_back(std::make_unique<DeviceWatch>());
+      m_sources.push_back(
+          std::make_unique<WatchedSource>(source, *m_watches[d], stallFirst ? &m_stallTaken : nullptr));
+    }
+    for (std::size_t d = 0; d < n; ++d)
+      m_threads.emplace_back([&, d] {
+        runDeviceWorker(*devices.renderers[d], *m_sources[d], results, stop, devices.names[d], &m_watches[d]->passes);
+        m_watches[d]->finished = true;
       });
   }
   ~DeviceThreads() { join(); }
+  /// Joins every thread, except a lost device's that has not ended: left behind.
   void join() {
-    for (std::thread& t : m_threads)
-      if (t.joinable()) t.join();
+    for (std::size_t d = 0; d < m_threads.size(); ++d) {
+      if (!m_threads[d].joinable()) continue;
+      if (m_watches[d]->lost && !m_watches[d]->finished)
+        m_threads[d].detach(), m_leftBehind = true;
+      else
+        m_threads[d].join();
+    }
   }
-  bool allFinished() const { return m_finished.load() == int(m_threads.size()); }
+  std::size_t size() const { return m_threads.size(); }
+  DeviceWatch& watch(std::size_t d) { return *m_watches[d]; }
+  /// Every device's loop ended, or the device was lost.
+  bool allFinished() const { return live() == 0; }
+  int live() const {
+    int n = 0;
+    for (const auto& w : m_watches) n += !w->finished && !w->lost;
+    return n;
+  }
+  std::uint64_t passes() const {
+    std::uint64_t n = 0;
+    for (const auto& w : m_watches) n += w->passes.load();
+    return n;
+  }
+  bool leftBehind() const { return m_leftBehind; }
 
  private:
+  std::vector<std::unique_ptr<DeviceWatch>> m_watches;
+  std::vector<std::unique_ptr<WatchedSource>> m_sources;
   std::vector<std::thread> m_threads;
-  std::atomic<int> m_finished{0};
+  std::atomic<bool> m_stallTaken{false};
+  bool m_leftBehind = false;
 };
 
 /// A worker rank's chunk source: a device that wants a chunk waits here
@@ -171,40 +260,6 @@ class ReserveSource : public ChunkSource {
   const std::atomic<bool>& m_stop;
 };
 
-/// A hidden test hook (tests/cli_scale_out.sh): WT_TEST_STALL="RANK:process"
-/// makes that worker rank's main thread stop talking once it holds its first
-/// chunk (a hung or dead process); "RANK:device" makes its device hang on
-/// its first chunk while the heartbeat goes on (a hung device).
-struct StallHook {
-  bool process = false, device = false;
-  explicit StallHook(int rank) {
-    const char* v = std::getenv("WT_TEST_STALL");
-    if (!v) return;
-    const std::string s(v);
-    const std::size_t colon = s.find(':');
-    if (colon == std::string::npos || std::atoi(s.substr(0, colon).c_str()) != rank) return;
-    process = s.substr(colon + 1) == "process";
-    device = s.substr(colon + 1) == "device";
-  }
-  [[noreturn]] static void forever() {
-    while (true) std::this_thread::sleep_for(std::chrono::seconds(1));
-  }
-};
-
-/// A source whose chunks never get rendered: StallHook's hung device.
-class StalledSource : public ChunkSource {
- public:
-  explicit StalledSource(ChunkSource& inner) : m_inner(inner) {}
-  std::optional<SampleChunk> next() override {
-    std::optional<SampleChunk> c = m_inner.next();
-    if (c) StallHook::forever();
-    return c;
-  }
-
- private:
-  ChunkSource& m_inner;
-};
-
 }  // namespace
 
 double heartbeatSeconds(double rankTimeoutSeconds) { return std::clamp(rankTimeoutSeconds / 4.0, 0.01, 1.0); }
@@ -241,7 +296,7 @@ MpiWorld::~MpiWorld() {
 #endif
 }
 
-void MpiWorld::abort(int code) {
+void MpiWorld::abort(int code) const {
   std::fflush(stdout);
   std::fflush(stderr);
 #if WT_MPI
@@ -257,11 +312,29 @@ void MpiWorld::agreeOnStart(const std::string& error, std::uint64_t renderHash, 
     return;
   }
   // each worker says it got here before the collective, so that rank 0 can
-  // name a rank that never does (the collective would wait for it forever)
+  // name a rank that never does (the collective would wait for it forever),
+  // and rank 0 answers once all have, so that a worker can name a rank 0
+  // that never gets here
+  if (const char* stall = std::getenv("WT_TEST_STALL"); stall && stall == std::to_string(m_rank) + ":startup")
+    StallHook::forever();  // the test hook: a rank hung while starting
   if (m_rank != 0) {
-    if (const char* stall = std::getenv("WT_TEST_STALL"); stall && stall == std::to_string(m_rank) + ":startup")
-      StallHook::forever();  // the test hook: a rank hung while starting
     MPI_Send(nullptr, 0, MPI_INT, 0, kTagStarted, MPI_COMM_WORLD);
+    const auto t0 = Clock::now();
+    for (int flag = 0; !flag;) {
+      MPI_Iprobe(0, kTagStarted, MPI_COMM_WORLD, &flag, MPI_STATUS_IGNORE);
+      if (flag) break;
+      if (since(t0) > timeoutSeconds) {
+        char text[240];
+        std::snprintf(text, sizeof text,
+                      "the job could not start: rank 0 had not finished starting %.3g s after rank %d "
+                      "(--rank-timeout); hung or dead while loading the scene or building its program?",
+                      timeoutSeconds, m_rank);
+        log::error(text);
+        abort(1);
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+    MPI_Recv(nullptr, 0, MPI_INT, 0, kTagStarted, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
   } else {
     std::vector<bool> arrived(std::size_t(m_size), false);
     int missing = m_size - 1;
@@ -287,6 +360,7 @@ void MpiWorld::agreeOnStart(const std::string& error, std::uint64_t renderHash, 
       }
       std::this_thread::sleep_for(std::chrono::milliseconds(1));
     }
+    for (int r = 1; r < m_size; ++r) MPI_Send(nullptr, 0, MPI_INT, r, kTagStarted, MPI_COMM_WORLD);
   }
   constexpr int kMessage = 1024;
   std::vector<char> mine(kMessage + 8, 0), all(std::size_t(m_size) * (kMessage + 8));
@@ -321,10 +395,23 @@ ScaleOutResult coordinateRender(DeviceSet& devices, const ScaleOutOptions& optio
   [[maybe_unused]] const std::size_t pixels = start.pixels();  // checks result messages
   [[maybe_unused]] const bool aovs = start.hasAovs();
   const int resumed = start.sampleEnd;
-  ChunkPlan plan(start.sampleEnd, options.samplesPerPixel, options.chunkSpp);
+  // what the device threads use, on the heap: a lost device's thread, left
+  // behind, may still return into it after this function has (the process
+  // then ends without freeing it)
+  struct Shared {
+    ChunkPlan plan;
+    ResultQueue results;
+    std::atomic<bool> stop{false};
+    ReserveSource source{plan, stop};
+    std::unique_ptr<DeviceThreads> threads;
+    Shared(int first, int spp, int chunkSpp) : plan(first, spp, chunkSpp) {}
+  };
+  auto shared = std::make_unique<Shared>(start.sampleEnd, options.samplesPerPixel, options.chunkSpp);
+  ChunkPlan& plan = shared->plan;
+  std::atomic<bool>& stop = shared->stop;
+  ResultQueue& results = shared->results;
   OrderedMerge merge(std::move(start));
   Halting halting({options.samplesPerPixel, options.timeSeconds, options.targetError}, resumed);
-  std::atomic<bool> stop{false};
   // every chunk boundary, in chunk order: the reference log, and the error
   // estimate for --target-error (on the merged prefix, so the stopping
   // point does not depend on how many devices or ranks render)
@@ -344,10 +431,10 @@ ScaleOutResult coordinateRender(DeviceSet& devices, const ScaleOutOptions& optio
     }
     return true;
   });
-  ResultQueue results;
-  ReserveSource source(plan, stop);
   const auto t0 = Clock::now();
   auto lastReport = t0, lastCheckpoint = t0;
+  [[maybe_unused]] auto lastBeat = t0;  // rank 0's heartbeat (MPI only)
+  const StallHook stall(0);
   int checkpointed = resumed;
   const bool tty = isatty(STDERR_FILENO);
   int remoteActive = world.size() - 1;
@@ -358,6 +445,7 @@ ScaleOutResult coordinateRender(DeviceSet& devices, const ScaleOutOptions& optio
     Clock::time_point lastProgress;  ///< the last message that showed progress
     std::uint64_t passes = 0;        ///< its heartbeat's pass count
     std::set<int> chunks;            ///< chunks assigned to it, not yet returned
+    int requests = 0;                ///< its devices' requests not yet answered
   };
   std::vector<RankState> ranks(std::size_t(world.size()));
   for (RankState& r : ranks) r.lastProgress = t0;
@@ -381,6 +469,58 @@ ScaleOutResult coordinateRender(DeviceSet& devices, const ScaleOutOptions& optio
     result.lostRanks.push_back(message);
     log::warnOnce(message);
     st.chunks.clear();
+#if WT_MPI
+    // it may be alive (a hung device): it must not take rank 0's silence
+    // towards it for a hung rank 0 and end the job before the image is written
+    const int lost = 1;
+    MPI_Send(&lost, 1, MPI_INT, rank, kTagRelease, MPI_COMM_WORLD);
+#endif
+  };
+  // this process's devices, watched like the ranks: one that holds a chunk
+  // with no sample pass done for the timeout is lost (a hung driver), its
+  // chunk goes to the others, and the job ends without waiting for it
+  struct DeviceSeen {
+    int chunk = -1;
+    std::uint64_t passes = 0;
+    Clock::time_point since;
+  };
+  std::vector<DeviceSeen> seen(devices.renderers.size(), DeviceSeen{-1, 0, t0});
+  auto watchDevices = [&] {
+    DeviceThreads& threads = *shared->threads;
+    const auto now = Clock::now();
+    for (std::size_t d = 0; d < threads.size(); ++d) {
+      DeviceWatch& w = threads.watch(d);
+      if (w.lost || w.finished) continue;
+      const int chunk = w.chunk.load();
+      const std::uint64_t passes = w.passes.load();
+      if (chunk < 0 || chunk != seen[d].chunk || passes != seen[d].passes) {
+        seen[d] = {chunk, passes, now};
+        continue;
+      }
+      const double silent = std::chrono::duration<double>(now - seen[d].since).count();
+      if (silent <= options.rankTimeoutSeconds) continue;
+      w.lost = true;
+      const SampleChunk c = plan.chunk(chunk);
+      plan.giveBack(chunk);
+      char text[320];
+      std::snprintf(text, sizeof text,
+                    "%s%s did no sample pass for %.3g s (--rank-timeout %g) on its chunk %d (samples %d-%d): handed "
+                    "out again; the job ends without waiting for it",
+                    devices.names[d].c_str(), world.active() ? " of rank 0" : "", silent, options.rankTimeoutSeconds,
+                    chunk, c.firstSample, c.firstSample + c.sampleCount - 1);
+      result.lostDevices.push_back(text);
+      log::warnOnce(text);
+    }
+  };
+  // rank 0 is alive: the workers end the job if they stop hearing it
+  [[maybe_unused]] auto beat = [&] {
+#if WT_MPI
+    if (since(lastBeat) < heartbeatSeconds(options.rankTimeoutSeconds)) return;
+    for (int r = 1; r < world.size(); ++r)
+      if (!ranks[std::size_t(r)].lost && !ranks[std::size_t(r)].finished)
+        MPI_Send(nullptr, 0, MPI_BYTE, r, kTagHeartbeat, MPI_COMM_WORLD);
+    lastBeat = Clock::now();
+#endif
   };
 
   auto progress = [&](bool last) {
@@ -406,14 +546,17 @@ ScaleOutResult coordinateRender(DeviceSet& devices, const ScaleOutOptions& optio
     plan.complete(r.chunk.index);
   };
 
-  DeviceThreads threads(devices, source, results, stop);
+  shared->threads = std::make_unique<DeviceThreads>(devices, shared->source, results, stop, stall.device);
+  DeviceThreads& threads = *shared->threads;
   while (true) try {
     bool busy = false;
+    beat();
     while (std::optional<ChunkResult> r = results.pop(0.0)) take(std::move(*r), 0, true), busy = true;
 #if WT_MPI
     // a bounded batch: the checks below (signal, time, checkpoint) must not starve
     bool drained = !world.active();
     for (int flag = 1, batch = 0; world.active() && flag && batch < 16; ++batch) {
+      beat();
       MPI_Status status;
       MPI_Iprobe(MPI_ANY_SOURCE, MPI_ANY_TAG, MPI_COMM_WORLD, &flag, &status);
       if (!flag) {
@@ -438,6 +581,7 @@ ScaleOutResult coordinateRender(DeviceSet& devices, const ScaleOutOptions& optio
         if (received || failed) break;
         timedOut = since(receiveStart) > options.rankTimeoutSeconds;
         interrupted = options.interrupted && options.interrupted();
+        beat();
         std::this_thread::yield();
       }
       if (interrupted) break;  // handled below
@@ -461,17 +605,9 @@ ScaleOutResult coordinateRender(DeviceSet& devices, const ScaleOutOptions& optio
       if (sender.lost) continue;  // too late: its chunks went to the others
       if (status.MPI_TAG != kTagHeartbeat) sender.lastProgress = Clock::now();
       switch (status.MPI_TAG) {
-        case kTagRequest: {
-          std::optional<SampleChunk> c = plan.next();
-          if (c) {
-            const int assign[3] = {c->index, c->firstSample, c->sampleCount};
-            MPI_Send(assign, 3, MPI_INT, from, kTagAssign, MPI_COMM_WORLD);
-            sender.chunks.insert(c->index);
-          } else {
-            MPI_Send(nullptr, 0, MPI_INT, from, kTagStop, MPI_COMM_WORLD);
-          }
+        case kTagRequest:
+          ++sender.requests;  // answered below
           break;
-        }
         case kTagResult: {
           ChunkResult r = unpackResult(message, pixels, aovs);
           result.receiveSeconds += since(receiveStart);
@@ -501,6 +637,20 @@ ScaleOutResult coordinateRender(DeviceSet& devices, const ScaleOutOptions& optio
         default: break;
       }
     }
+    // a request is answered with a chunk, or with stop once no chunk is out
+    // that could still be given back (the asking rank may have to take it)
+    for (int r = 1; r < world.size(); ++r)
+      for (RankState& st = ranks[std::size_t(r)]; st.requests > 0 && !st.lost; --st.requests) {
+        if (std::optional<SampleChunk> c = plan.next()) {
+          const int assign[3] = {c->index, c->firstSample, c->sampleCount};
+          MPI_Send(assign, 3, MPI_INT, r, kTagAssign, MPI_COMM_WORLD);
+          st.chunks.insert(c->index);
+        } else if (plan.settled()) {
+          MPI_Send(nullptr, 0, MPI_INT, r, kTagStop, MPI_COMM_WORLD);
+        } else {
+          break;
+        }
+      }
     // only with every waiting message taken: heartbeats that queued while this
     // thread was busy (merging, receiving a large result) count
     if (drained)
@@ -516,6 +666,14 @@ ScaleOutResult coordinateRender(DeviceSet& devices, const ScaleOutOptions& optio
         }
       }
 #endif
+    watchDevices();
+    if (threads.live() == 0 && remoteActive == 0 && !plan.settled()) {
+      // every device lost, no rank left to take their chunks
+      result.failure = "no device or rank is left to render the chunks of the lost device(s)";
+      break;
+    }
+    if (stall.process && world.active() && (options.checkpoint ? checkpointed : merge.samplesDone()) > resumed)
+      StallHook::forever();  // the test hook: a hung rank 0
     if (options.interrupted && options.interrupted()) {
       // under mpirun also what a dying rank brings: mpirun stops the job
       result.interrupted = true;
@@ -545,9 +703,22 @@ ScaleOutResult coordinateRender(DeviceSet& devices, const ScaleOutOptions& optio
     if (result.failure.empty()) result.failure = e.what();
     break;
   }
+#if WT_MPI
+  // ended early (a failure, a signal): the workers still running must not
+  // end the job while rank 0 writes the image
+  for (int r = 1, ending = 0; r < world.size(); ++r)
+    if (!ranks[std::size_t(r)].lost && !ranks[std::size_t(r)].finished)
+      MPI_Send(&ending, 1, MPI_INT, r, kTagRelease, MPI_COMM_WORLD);
+#endif
   stop = true;
   plan.cancel();
   threads.join();
+  if (threads.leftBehind()) (void)shared.release();  // see Shared
+  for (std::size_t d = 0; d < threads.size(); ++d)
+    if (!threads.watch(d).lost) {
+      result.outputDevice = int(d);
+      break;
+    }
   result.seconds = since(t0);
   result.mergeSeconds = merge.mergeSeconds();
   result.chunks = merge.mergedChunks();
@@ -563,29 +734,67 @@ ScaleOutResult coordinateRender(DeviceSet& devices, const ScaleOutOptions& optio
 // ---------------------------------------------------------------- ranks > 0
 
 int serveRender([[maybe_unused]] DeviceSet& devices, [[maybe_unused]] const MpiWorld& world,
-                [[maybe_unused]] const std::function<bool()>& interrupted, [[maybe_unused]] double heartbeatSeconds) {
+                [[maybe_unused]] const std::function<bool()>& interrupted, [[maybe_unused]] double rankTimeoutSeconds) {
 #if WT_MPI
   FedSource fed;
   const StallHook stall(world.rank());
-  StalledSource stalled(fed);
-  ChunkSource& source = stall.device ? static_cast<ChunkSource&>(stalled) : fed;
   ResultQueue results;
   std::atomic<bool> stop{false};
-  std::atomic<std::uint64_t> passes{0};
   int requested = 0, status = 0, supplied = 0;
   bool stopped = false;
-  DeviceThreads threads(devices, source, results, stop, &passes);
-  auto lastBeat = Clock::now();
+  DeviceThreads threads(devices, fed, results, stop, stall.device);
+  auto lastBeat = Clock::now(), lastHeard = Clock::now();
+  bool released = false;
+  // rank 0 sends a heartbeat as often as the workers do: a rank 0 that is
+  // silent for the timeout is hung or dead, and with it the job (unless it
+  // released this rank: then it ends the job itself)
+  auto takeRootHeartbeats = [&] {
+    for (const int tag : {kTagHeartbeat, kTagRelease})
+      for (int flag = 1; flag;) {
+        MPI_Iprobe(0, tag, MPI_COMM_WORLD, &flag, MPI_STATUS_IGNORE);
+        if (!flag) break;
+        int lost = 0;
+        MPI_Recv(&lost, tag == kTagRelease ? 1 : 0, MPI_INT, 0, tag, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+        lastHeard = Clock::now();
+        if (tag != kTagRelease) continue;
+        released = true;
+        if (lost)
+          log::warnOnce("rank " + std::to_string(world.rank()) +
+                        ": rank 0 gave up on this rank (no progress within --rank-timeout); it waits for rank 0 "
+                        "to end the job");
+      }
+    const double silent = since(lastHeard);
+    if (released || silent <= rankTimeoutSeconds) return;
+    char text[400];
+    std::snprintf(text, sizeof text,
+                  "rank %d: rank 0 (which merges and writes the image) sent nothing for %.3g s (--rank-timeout %g): "
+                  "hung or dead; ending the job. Its merged samples are lost, except what its last checkpoint "
+                  "holds (--checkpoint; --resume continues from it)",
+                  world.rank(), silent, rankTimeoutSeconds);
+    log::error(text);
+    world.abort(1);
+  };
+  // a send polled, not blocking: a hung rank 0 never posts the receive of a large result
+  auto sendToRoot = [&](const void* data, int bytes, int tag) {
+    MPI_Request request;
+    MPI_Isend(data, bytes, MPI_BYTE, 0, tag, MPI_COMM_WORLD, &request);
+    for (int done = 0;;) {
+      MPI_Test(&request, &done, MPI_STATUS_IGNORE);
+      if (done) return;
+      takeRootHeartbeats();
+      std::this_thread::yield();
+    }
+  };
   // every finished chunk (or a device's error) to rank 0
   auto sendResults = [&] {
     while (std::optional<ChunkResult> r = results.pop(0.0)) {
       if (!r->error.empty()) {
-        MPI_Send(r->error.data(), int(r->error.size()), MPI_CHAR, 0, kTagError, MPI_COMM_WORLD);
+        sendToRoot(r->error.data(), int(r->error.size()), kTagError);
         status = 1;
         continue;
       }
-      std::vector<std::uint8_t> bytes = packResult(*r);
-      MPI_Send(bytes.data(), int(bytes.size()), MPI_BYTE, 0, kTagResult, MPI_COMM_WORLD);
+      const std::vector<std::uint8_t> bytes = packResult(*r);
+      sendToRoot(bytes.data(), int(bytes.size()), kTagResult);
     }
   };
   while (true) {
@@ -593,13 +802,15 @@ int serveRender([[maybe_unused]] DeviceSet& devices, [[maybe_unused]] const MpiW
     sendResults();
     for (int n = stopped ? 0 : fed.wanting(requested); n > 0; --n, ++requested)
       MPI_Send(nullptr, 0, MPI_INT, 0, kTagRequest, MPI_COMM_WORLD);
+    takeRootHeartbeats();
     int flag = 1;
     bool busy = false;
     while (requested > 0) {
       MPI_Status st;
       MPI_Iprobe(0, MPI_ANY_TAG, MPI_COMM_WORLD, &flag, &st);
-      if (!flag) break;
+      if (!flag || st.MPI_TAG == kTagHeartbeat || st.MPI_TAG == kTagRelease) break;
       busy = true;
+      lastHeard = Clock::now();
       int assign[3] = {0, 0, 0};
       MPI_Recv(assign, 3, MPI_INT, 0, st.MPI_TAG, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
       --requested;
@@ -611,8 +822,8 @@ int serveRender([[maybe_unused]] DeviceSet& devices, [[maybe_unused]] const MpiW
     if (stall.process && supplied > 0) StallHook::forever();
     // the sample passes done so far: rank 0 takes a count that stands still
     // while this rank holds a chunk for a hang (--rank-timeout)
-    if (since(lastBeat) >= heartbeatSeconds) {
-      const std::uint64_t done = passes.load();
+    if (since(lastBeat) >= heartbeatSeconds(rankTimeoutSeconds)) {
+      const std::uint64_t done = threads.passes();
       MPI_Send(&done, int(sizeof done), MPI_BYTE, 0, kTagHeartbeat, MPI_COMM_WORLD);
       lastBeat = Clock::now();
     }

@@ -29,13 +29,15 @@ class MpiWorld {
   bool active() const { return m_size > 1; }
   /// End every rank of the job now with `code` (a failure rank 0 has
   /// reported; the others may be blocked or gone).
-  [[noreturn]] void abort(int code);
+  [[noreturn]] void abort(int code) const;
   /// Every rank passes its start-up failure ("" if none) and the hash of
   /// what it will render; all return normally only if every rank started
   /// and all hashes agree, else every rank throws. Rank 0's exception names
   /// each failed rank and its message; the others' is empty (rank 0 reports).
   /// A rank that has not reached this point `timeoutSeconds` after rank 0
-  /// did (hung while loading, or dead) makes rank 0 name it and end the job.
+  /// did (hung while loading, or dead) makes rank 0 name it and end the job;
+  /// a rank 0 that has not, `timeoutSeconds` after a worker did, makes that
+  /// worker name rank 0 and end the job.
   void agreeOnStart(const std::string& error, std::uint64_t renderHash, double timeoutSeconds = 120.0);
   static bool builtWithMpi();
 
@@ -91,6 +93,11 @@ struct ScaleOutResult {
   /// Worker ranks lost to --rank-timeout, each "rank N: why" (their chunks
   /// were rendered again by the others; the ranks are still running, or hung).
   std::vector<std::string> lostRanks;
+  /// This process's devices lost the same way (a sample pass that never
+  /// ends): their threads are left behind, so the process must end by
+  /// MpiWorld::abort, never by returning.
+  std::vector<std::string> lostDevices;
+  int outputDevice = 0;      ///< a device not lost: the one to write the image with
   double lastError = -1.0;   ///< with a target error: the last estimate, and its sample count
   int lastErrorSamples = 0;
 };
@@ -103,9 +110,12 @@ ScaleOutResult coordinateRender(DeviceSet& devices, const ScaleOutOptions& optio
                                 const MpiWorld& world);
 
 /// A rank other than 0: render the chunks rank 0 sends until it says stop,
-/// with a heartbeat (its sample-pass count) every `heartbeatSeconds`.
-/// Returns non-zero after a local failure (reported to rank 0).
+/// with a heartbeat (its sample-pass count) every
+/// heartbeatSeconds(rankTimeoutSeconds). Ends the job (MpiWorld::abort(1),
+/// with an error naming rank 0) when rank 0 sends nothing, not even its
+/// heartbeat, for `rankTimeoutSeconds`. Returns non-zero after a local
+/// failure (reported to rank 0).
 int serveRender(DeviceSet& devices, const MpiWorld& world, const std::function<bool()>& interrupted,
-                double heartbeatSeconds);
+                double rankTimeoutSeconds);
 
 }  // namespace wt

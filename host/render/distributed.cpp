@@ -238,6 +238,11 @@ bool ChunkPlan::closed() const {
   return m_cancelled || ((m_closed || m_next >= m_count) && m_givenBack.empty());
 }
 
+bool ChunkPlan::settled() const {
+  std::lock_guard<std::mutex> lock(m_mutex);
+  return m_cancelled || ((m_closed || m_next >= m_count) && m_givenBack.empty() && m_out.empty());
+}
+
 int ChunkPlan::issued() const {
   std::lock_guard<std::mutex> lock(m_mutex);
   return m_next;

@@ -103,6 +103,9 @@ class ChunkPlan {
   /// Hand out nothing more (interrupt, a failure, the target error reached).
   void cancel();
   bool closed() const;
+  /// Nothing to hand out and nothing out: every chunk completed, or the
+  /// plan cancelled (a chunk out may still be given back until then).
+  bool settled() const;
   int chunkCount() const { return m_count; }
   int issued() const;
   /// The chunk at `index` of the plan.

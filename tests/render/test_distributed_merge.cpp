@@ -169,7 +169,7 @@ TEST(DistributedMerge, AovSumsAddAndIdsComeFromSampleZero) {
 
 // A chunk given back (its rank was lost) is handed out again before any new
 // one; a chunk merged twice (the lost rank answered late) is dropped; the
-// waiting hand-out ends when every chunk out is complete.
+// waiting hand-out ends (the plan is settled) when every chunk out is complete.
 TEST(DistributedMerge, GivenBackChunksGoOutAgainAndDuplicatesAreDropped) {
   ChunkPlan plan(0, 16, 4);
   std::atomic<bool> stop{false};
@@ -181,14 +181,22 @@ TEST(DistributedMerge, GivenBackChunksGoOutAgainAndDuplicatesAreDropped) {
   EXPECT_EQ(plan.nextOrWait(stop)->index, 3);
   // all four out: next() has none; nextOrWait waits until one is given back
   EXPECT_FALSE(plan.next());
+  EXPECT_FALSE(plan.settled());  // chunks out may still come back: a waiting rank is not told to stop
   std::thread giver([&] {
     std::this_thread::sleep_for(std::chrono::milliseconds(50));
     plan.giveBack(2);
   });
   EXPECT_EQ(plan.nextOrWait(stop)->index, 2);
   giver.join();
-  for (int i = 0; i < 4; ++i) plan.complete(i);
+  for (int i = 0; i < 3; ++i) plan.complete(i);
+  EXPECT_FALSE(plan.settled());
+  plan.complete(3);
+  EXPECT_TRUE(plan.settled());
   EXPECT_FALSE(plan.nextOrWait(stop));  // nothing out, nothing left
+  ChunkPlan cancelled(0, 16, 4);
+  cancelled.next();
+  cancelled.cancel();
+  EXPECT_TRUE(cancelled.settled());  // a chunk still out is never merged after a cancel
 
   OrderedMerge merge(emptyMoments(1, 0));
   Moments a = emptyMoments(1, 0);
