@@ -214,6 +214,51 @@ TEST(PrimitiveInstancing, HitsMatchTheFlattenedScene) {
   }
 }
 
+/// Spheres and curves are stored as the copy whose floats are finest for its
+/// size, as triangles are: here the large copy 300 from the origin, not the
+/// tiny one (1e-5 of its size) beside the origin, whose points are rounded
+/// to about 0.5 % of its size. Both copies become instances (the large one,
+/// drawn as the tiny one moved, would not match its own floats), and the
+/// large copy's hits match its flattened ones.
+TEST(PrimitiveInstancing, TheStoredCopyIsTheFinestForItsSize) {
+  Scene geometry = sphereAndCurveGeometry(30, 12, 7);
+  // linear only: the tiny copy's rounded B-spline points would subdivide
+  // into other segments than the large copy's, and such copies stay flat
+  for (Curve& c : geometry.curves) c.basis = CurveBasis::kLinear;
+  Placed p;
+  const glm::mat4 copies[] = {glm::scale(glm::translate(glm::mat4(1.0f), glm::vec3(1.0f, 0.5f, 0.0f)), glm::vec3(1e-5f)),
+                              glm::rotate(glm::translate(glm::mat4(1.0f), glm::vec3(300.0f, 0.0f, 0.0f)), 0.4f,
+                                          glm::normalize(glm::vec3(1.0f, 2.0f, 3.0f)))};
+  p.scene = placeCopies(geometry, copies);
+  p.centres = {glm::vec3(300.0f, 0.0f, 0.0f)};  // the large copy's rays only: the tiny one's floats are too coarse
+  p.scales = {1.0f};
+  Tracer on(test::deviceContext(), p.scene, withInstancing(Instancing::On));
+  Tracer off(test::deviceContext(), p.scene, withInstancing(Instancing::Off));
+  ASSERT_EQ(on.sceneBuffers().instanceCount(), 4u);  // spheres and curves, two copies each
+  const PrimitiveRows rows = gatherPrimitives(p.scene);
+  const std::vector<Ray> rays = raysAtCopies(p, 4000, 17);
+  const std::vector<RayHit> flat = off.traceClosest(rays), got = on.traceClosest(rays);
+  int bad = 0, grazing = 0, hits = 0;
+  for (std::size_t i = 0; i < rays.size(); ++i) {
+    hits += flat[i].prim != RayHit::kNoHit;
+    const double tol = 2e-6 * (301.0 + (flat[i].prim != RayHit::kNoHit ? flat[i].t : 0.0));
+    if (got[i].prim == flat[i].prim && (got[i].prim == RayHit::kNoHit || std::abs(got[i].t - flat[i].t) <= tol))
+      continue;
+    const bool bothHit = got[i].prim != RayHit::kNoHit && flat[i].prim != RayHit::kNoHit;
+    if ((bothHit && std::abs(got[i].t - flat[i].t) <= tol) || grazes(p.scene, rows, rays[i], flat[i].prim) ||
+        grazes(p.scene, rows, rays[i], got[i].prim)) {
+      ++grazing;
+      continue;
+    }
+    if (++bad <= 5)
+      ADD_FAILURE() << "ray " << i << ": instanced prim " << std::hex << got[i].prim << std::dec << " t=" << got[i].t
+                    << ", flattened prim " << std::hex << flat[i].prim << std::dec << " t=" << flat[i].t;
+  }
+  EXPECT_EQ(bad, 0);
+  EXPECT_GT(hits, int(rays.size() / 2));
+  EXPECT_LT(grazing, int(rays.size() / 100));
+}
+
 /// Rays spawned off instanced spheres (the point from the flattened sphere,
 /// pushed past its error bound and the copy's float placement, skipping that
 /// sphere): outwards they never meet it again, inwards they meet it once
