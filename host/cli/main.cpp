@@ -1381,7 +1381,7 @@ int main(int argc, char** argv) {
   stressCmd->add_flag("--quick", stress.quick, "Small images and ray counts (the subset the tests run)");
   stressCmd->add_option("--group", stress.groups,
                         "Only these groups: transform, cracks, self-intersection, degenerate, materials, textures, "
-                        "accumulation, non-finite, primitives (repeatable)");
+                        "accumulation, non-finite, primitives, far-furnace (repeatable)");
   stressCmd->add_option("--device", stressDevice, "Device index or name substring");
   stressCmd->add_flag("--json", stressJson, "Machine-readable output");
   stressCmd->add_option("--kernel-cache", kernelCache, kernelCacheHelp);
