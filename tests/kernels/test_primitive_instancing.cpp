@@ -10,6 +10,7 @@
 #include "geometry/primitives.h"
 #include "instancing_checks.h"
 #include "scene/generators.h"
+#include "scene/scene_file.h"
 
 #include <gtest/gtest.h>
 #include <glm/gtc/matrix_transform.hpp>
@@ -396,6 +397,42 @@ TEST(PrimitiveInstancing, WhiteInstancedCopiesInUniformSky) {
     }
   }
   }
+}
+
+/// A scene file's "instances" of spheres and of curves (B-splines with
+/// children, a mirrored and a scaled copy) are stored once with
+/// Instancing::On, and render the flattened image within noise.
+TEST(PrimitiveInstancing, SceneFileInstancesAreStoredOnce) {
+  const SceneFile file = loadSceneFileFromMemory(R"({"version": 1,
+      "camera": {"from": [0, 1, 9], "to": [0, 0, 0], "fov": 50},
+      "materials": {"white": {"type": "lambert", "base_color": [0.8, 0.8, 0.8]},
+                    "red": {"type": "lambert", "base_color": [0.8, 0.2, 0.1]}},
+      "objects": [
+        {"type": "spheres", "centers": [[0, 0, 0], [0.6, 0.2, 0], [-0.5, 0.3, 0.2]], "radii": [0.4, 0.2, 0.25],
+         "material": "white", "instances": [{"translate": [-2.5, 0, 0]}, {"rotate": [0, 1, 0, 90], "scale": 1.5},
+                                            {"translate": [2.5, 0, 0], "scale": [-1, 1, 1]}]},
+        {"type": "curves", "material": "red", "basis": "bspline", "children": 8, "child_radius": 0.1,
+         "strands": [[[0, -1, 0, 0.06], [0.1, -0.5, 0, 0.06], [0.3, 0, 0.1, 0.04], [0.6, 0.5, 0.1, 0.02], [1, 1, 0.2, 0]]],
+         "instances": [{"translate": [-2.5, 0.8, 0]}, {"translate": [0, 0.8, 0], "scale": 1.4},
+                       {"translate": [2.5, 0.8, 0], "rotate": [0, 0, 1, 30]}]}]})",
+                                                 "instances.json", ".");
+  const Scene& scene = file.scene;
+  ASSERT_EQ(scene.primitiveInstances.size(), 6u);
+  {
+    Tracer on(test::deviceContext(), scene, withInstancing(Instancing::On));
+    EXPECT_EQ(on.sceneBuffers().instanceCount(), 6u);
+  }
+  RenderSettings settings;
+  settings.width = 48;
+  settings.height = 32;
+  settings.maxBounces = 3;
+  settings.seed = 4;
+  settings.background = glm::vec3(0.6f, 0.7f, 0.9f);
+  settings.instancing = Instancing::Off;
+  const Image flat = test::render(scene, settings, 64);
+  settings.instancing = Instancing::On;
+  const Image instanced = test::render(scene, settings, 64);
+  test::expectSameImage(flat, instanced, 4, 4.5, "scene-file instances against their flattened copies");
 }
 
 /// Memory: 98 copies of spheres and curves stored once take about 1/98 of
