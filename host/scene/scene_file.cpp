@@ -208,12 +208,14 @@ struct WorldDisplaced {
   std::string path;                     ///< "objects[2]"
 };
 
-/// Copies of a "sphere" or "spheres" object ("instances"): one copy's
-/// spheres in the loader's list, the object's own coordinates moved by `world`.
+/// One copy of a "sphere" or "spheres" object with "instances": the
+/// object's spheres as written, moved by `world` (expanded only when the
+/// scene is built, so a million copies cost their spheres and no more).
 struct SphereCopy {
-  std::size_t first = 0, count = 0;  ///< in Loader::m_spheres
+  std::size_t first = 0, count = 0;  ///< the object's spheres in Loader::m_instancedSpheres
   std::uint32_t geometry = 0;        ///< shared by the object's copies (PrimitiveInstance::geometry)
   glm::dmat4 world{1.0};             ///< the object's own coordinates -> world
+  std::size_t object = 0, index = 0; ///< objects[object].instances[index], for messages
 };
 
 /// A "curves" object in world coordinates, before the origin is subtracted.
@@ -377,7 +379,10 @@ class Loader {
     if (const Json* v = find(doc, "camera")) readCamera(*v, "camera");
     if (const Json* v = find(doc, "objects")) {
       if (!v->is_array()) fail("objects", "must be an array, got " + describe(*v));
-      for (std::size_t i = 0; i < v->size(); ++i) readObject((*v)[i], element("objects", i));
+      for (std::size_t i = 0; i < v->size(); ++i) {
+        m_objectIndex = i;
+        readObject((*v)[i], element("objects", i));
+      }
     }
     build();
   }
@@ -1010,28 +1015,29 @@ class Loader {
   }
 
   /// With "instances", the spheres read from m_spheres[first] on are the
-  /// object's own coordinates: they are replaced by one moved copy per transform.
+  /// object's own coordinates: they move to m_instancedSpheres, one
+  /// SphereCopy per transform.
   void copySpheres(const Json& v, const std::string& path, std::size_t first) {
     const std::vector<glm::dmat4> instances = readInstances(v, path);
     const std::size_t count = m_spheres.size() - first;
-    const std::size_t total = m_spheres.size() + count * std::max<std::size_t>(instances.size(), 1) - count;
-    if (total > kMaxSpheres)
-      fail(path, "brings the scene to " + std::to_string(total) + " spheres (copies included), more than the " +
+    m_sphereCount += count * std::max<std::size_t>(instances.size(), 1);
+    if (m_sphereCount > kMaxSpheres)
+      fail(path, "brings the scene to " + std::to_string(m_sphereCount) + " spheres (copies included), more than the " +
                      std::to_string(kMaxSpheres) + " supported");
     if (instances.empty()) return;
-    const std::vector<WorldSphere> own(m_spheres.begin() + std::ptrdiff_t(first), m_spheres.end());
+    const std::size_t own = m_instancedSpheres.size();
+    m_instancedSpheres.insert(m_instancedSpheres.end(), m_spheres.begin() + std::ptrdiff_t(first), m_spheres.end());
     m_spheres.resize(first);
-    m_spheres.reserve(total);
     const std::uint32_t geometry = m_primitiveGeometries[0]++;
-    for (std::size_t k = 0; k < instances.size(); ++k) {
-      const glm::dmat4& m = instances[k];
-      const double scale = std::cbrt(std::fabs(glm::determinant(glm::dmat3(m))));
-      const std::string at = element(member(path, "instances"), k);
-      m_sphereCopies.push_back({m_spheres.size(), count, geometry, m});
-      for (const WorldSphere& s : own)
-        m_spheres.push_back({glm::dvec3(m * glm::dvec4(s.center, 1.0)), s.radius * scale, s.material,
-                             s.path == path ? at : at + " (" + s.path.substr(path.size() + 1) + ")"});
-    }
+    for (std::size_t k = 0; k < instances.size(); ++k)
+      m_sphereCopies.push_back({own, count, geometry, instances[k], m_objectIndex, k});
+  }
+
+  /// Where sphere `s` of copy `c` is named in messages: objects[2].instances[5] (centers[1]).
+  std::string copyPath(const SphereCopy& c, const WorldSphere& s) const {
+    const std::string object = element("objects", c.object);
+    const std::string at = element(member(object, "instances"), c.index);
+    return s.path == object ? at : at + " (" + s.path.substr(object.size() + 1) + ")";
   }
 
   void readGltf(const Json& v, const std::string& path) {
@@ -1263,18 +1269,25 @@ class Loader {
       scene.camera = desc;
     }
 
-    scene.spheres.reserve(scene.spheres.size() + m_spheres.size());
-    const auto sphereBase = std::uint32_t(scene.spheres.size());
-    for (const SphereCopy& c : m_sphereCopies)
-      scene.primitiveInstances.push_back({WT_PRIM_SPHERE, sphereBase + std::uint32_t(c.first), std::uint32_t(c.count),
-                                          c.geometry, glm::translate(glm::dmat4(1.0), -origin) * c.world});
-    for (const WorldSphere& s : m_spheres) {
-      const glm::vec3 center(s.center - origin);
-      const auto radius = float(s.radius);
-      if (!isFinite(center)) fail(s.path, "the centre lies beyond the range of a float from the scene's origin");
+    scene.spheres.reserve(scene.spheres.size() + m_sphereCount);
+    auto addSphere = [&](const glm::dvec3& world, double r, std::uint32_t material, const auto& path) {
+      const glm::vec3 center(world - origin);
+      const auto radius = float(r);
+      if (!isFinite(center)) fail(path(), "the centre lies beyond the range of a float from the scene's origin");
       if (!(radius > 0.0f) || !std::isfinite(radius))
-        fail(s.path, "the radius " + formatNumber(s.radius) + " is out of the range of a float");
-      scene.spheres.push_back({center, radius, s.material});
+        fail(path(), "the radius " + formatNumber(r) + " is out of the range of a float");
+      scene.spheres.push_back({center, radius, material});
+    };
+    for (const WorldSphere& s : m_spheres) addSphere(s.center, s.radius, s.material, [&] { return s.path; });
+    for (const SphereCopy& c : m_sphereCopies) {
+      const double scale = std::cbrt(std::fabs(glm::determinant(glm::dmat3(c.world))));
+      scene.primitiveInstances.push_back({WT_PRIM_SPHERE, std::uint32_t(scene.spheres.size()), std::uint32_t(c.count),
+                                          c.geometry, glm::translate(glm::dmat4(1.0), -origin) * c.world});
+      for (std::size_t i = c.first; i < c.first + c.count; ++i) {
+        const WorldSphere& s = m_instancedSpheres[i];
+        addSphere(glm::dvec3(c.world * glm::dvec4(s.center, 1.0)), s.radius * scale, s.material,
+                  [&] { return copyPath(c, s); });
+      }
     }
     for (const WorldCurves& c : m_curves) placeCurves(c, origin);
     for (WorldSdf& sdf : m_sdfs) {
@@ -1321,6 +1334,15 @@ class Loader {
     for (const WorldSphere& s : m_spheres) {
       lo = glm::min(lo, s.center - s.radius);
       hi = glm::max(hi, s.center + s.radius);
+    }
+    for (const SphereCopy& c : m_sphereCopies) {
+      const double scale = std::cbrt(std::fabs(glm::determinant(glm::dmat3(c.world))));
+      for (std::size_t i = c.first; i < c.first + c.count; ++i) {
+        const WorldSphere& s = m_instancedSpheres[i];
+        const glm::dvec3 centre(c.world * glm::dvec4(s.center, 1.0));
+        lo = glm::min(lo, centre - scale * s.radius);
+        hi = glm::max(hi, centre + scale * s.radius);
+      }
     }
     for (const WorldCurves& c : m_curves)
       for (std::size_t k = 0; k < std::max<std::size_t>(c.instances.size(), 1); ++k) {
@@ -1513,6 +1535,9 @@ class Loader {
   std::uint64_t m_curvePoints = 0;  ///< children and copies included
   std::uint32_t m_nextGeometry = 0;
   std::vector<SphereCopy> m_sphereCopies;
+  std::vector<WorldSphere> m_instancedSpheres;  ///< the spheres of objects with "instances", as written
+  std::size_t m_sphereCount = 0;                ///< copies included
+  std::size_t m_objectIndex = 0;                ///< the object being read
   std::uint32_t m_primitiveGeometries[2] = {0, 0};  ///< the next PrimitiveInstance::geometry of spheres, curves
 };
 

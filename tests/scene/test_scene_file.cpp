@@ -1145,6 +1145,25 @@ TEST(SceneFileErrorsMore, FlattenedSceneIsLimited) {
                   "scene.json: objects[2]: brings the scene to 9 vertices and 3 triangles, more than the 268435456 and 2 supported");
 }
 
+/// "instances" is limited to 2^20 transforms an object, and the copies
+/// count towards the scene's 2^28 spheres (checked before they are made).
+TEST(SceneFileErrorsMore, InstancesAreLimited) {
+  auto identities = [](std::size_t n) {
+    std::string list = "[";
+    for (std::size_t i = 0; i < n; ++i) list += i ? ",{}" : "{}";
+    return list + "]";
+  };
+  EXPECT_CONTAINS(errorOf(sphere(", \"instances\": " + identities((1u << 20) + 1))),
+                  "scene.json: objects[0].instances: holds 1048577 transforms, more than the 1048576 supported");
+  std::string centers = "[";
+  for (int i = 0; i < 257; ++i) centers += std::string(i ? "," : "") + "[" + std::to_string(i) + ", 0, 0]";
+  centers += "]";
+  EXPECT_CONTAINS(errorOf(objects(kSphere + R"(, {"type": "spheres", "radius": 0.1, "centers": )" + centers +
+                                  R"(, "instances": )" + identities(1u << 20) + "}")),
+                  "scene.json: objects[1]: brings the scene to 269484033 spheres (copies included), more than the "
+                  "268435456 supported");
+}
+
 TEST(SceneFileErrorsMore, GltfOptionsWarnWhenSet) {
   GltfLoadOptions options;
   options.cameraIndex = 2;
