@@ -968,9 +968,10 @@ int runInfo(RenderOptions options) {
               "(%zu base triangles), %zu vertices\n",
               scene.triangles.size(), scene.spheres.size(), scene.curves.size(), curvePoints, scene.sdfGrids.size(),
               scene.displacedMeshes.size(), baseTriangles, scene.positions.size());
-  std::printf("instances: %zu mesh copies in the file; instancing %s: %zu instances, %zu triangles in instanced copies\n",
-              scene.instances.size(), options.instancing.c_str(), buffers.instanceCount(),
-              buffers.instancedTriangles());
+  std::printf("instances: %zu mesh copies and %zu sphere or curve copies in the file; instancing %s: %zu instances, "
+              "%zu triangles in instanced copies\n",
+              scene.instances.size(), scene.primitiveInstances.size(), options.instancing.c_str(),
+              buffers.instanceCount(), buffers.instancedTriangles());
   // materials
   std::size_t lambertian = 0, pbr = 0, mask = 0, blend = 0;
   for (const WtMaterial& m : scene.materials) {
@@ -1390,7 +1391,7 @@ int main(int argc, char** argv) {
   stressCmd->add_flag("--quick", stress.quick, "Small images and ray counts (the subset the tests run)");
   stressCmd->add_option("--group", stress.groups,
                         "Only these groups: transform, cracks, self-intersection, degenerate, materials, textures, "
-                        "accumulation, non-finite, primitives (repeatable)");
+                        "accumulation, non-finite, primitives, far-furnace (repeatable)");
   stressCmd->add_option("--device", stressDevice, "Device index or name substring");
   stressCmd->add_flag("--json", stressJson, "Machine-readable output");
   stressCmd->add_option("--kernel-cache", kernelCache, kernelCacheHelp);

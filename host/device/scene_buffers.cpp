@@ -149,6 +149,18 @@ std::vector<InstancedGeometry> chooseInstancedGeometries(const Scene& scene, con
   return out;
 }
 
+/// How coarse a copy's floats are for its size: the largest coordinate of
+/// its box over the box's largest extent (float spacing grows with the
+/// first). The copy nearest the origin is not always the finest: a small
+/// copy near it can be coarser for its size than a large one farther out.
+double relativeSpacing(const Aabb& box) {
+  const glm::dvec3 lo(box.lo), hi(box.hi);
+  const glm::dvec3 far = glm::max(glm::abs(lo), glm::abs(hi)), extent = hi - lo;
+  const double size = std::max({extent.x, extent.y, extent.z});
+  const double reach = std::max({far.x, far.y, far.z});
+  return size > 0.0 ? reach / size : INFINITY;
+}
+
 glm::dvec3 dpos(const Scene& scene, std::uint32_t v) {
   const WtVec4& p = scene.positions[v];
   return glm::dvec3(p.x, p.y, p.z);
@@ -238,8 +250,8 @@ SceneBuffers::SceneBuffers(Context& context, const Scene& scene, const BvhBuildO
   // Each geometry stored once: its tree's nodes after the others (child and
   // leaf indices moved along), its triangles after the others from a block
   // boundary (the leaves' block layout holds), in object space: the copy
-  // nearest the scene's origin (the finest floats), moved to its box's
-  // centre. Copy k's transform is W_k W_s^-1 T(centre), composed in double.
+  // whose floats are finest for its size (relativeSpacing), moved to its
+  // box's centre. Copy k's transform is W_k W_s^-1 T(centre), composed in double.
   std::vector<InstanceDesc> descs;
   if (!instanced.empty()) {
     if (allNodes.empty()) allNodes.push_back(emptyBvh4Node());  // node 0: the flat tree's root, hit by nothing
@@ -247,16 +259,16 @@ SceneBuffers::SceneBuffers(Context& context, const Scene& scene, const BvhBuildO
   }
   int blasStack = 0;
   for (const InstancedGeometry& g : instanced) {
-    // the source: the copy whose box lies nearest the origin
+    // the source: the copy whose floats are finest for its size (every copy
+    // is drawn as the source moved, so its rounding reaches them all)
     double best = INFINITY;
     std::uint32_t source = g.copies[0];
     Aabb sourceBox;
     for (std::uint32_t c : g.copies) {
       Aabb box;
       for (std::uint32_t t : g.kept) box.extend(scene.triangleBounds(scene.instances[c].firstTriangle + t));
-      const glm::vec3 far = glm::max(glm::abs(box.lo), glm::abs(box.hi));
-      const double reach = std::max({far.x, far.y, far.z});
-      if (reach < best) best = reach, source = c, sourceBox = box;
+      const double coarseness = relativeSpacing(box);
+      if (c == g.copies[0] || coarseness < best) best = coarseness, source = c, sourceBox = box;
     }
     const GeometryInstance& src = scene.instances[source];
     const glm::dvec3 centre = 0.5 * (glm::dvec3(sourceBox.lo) + glm::dvec3(sourceBox.hi));
@@ -553,8 +565,8 @@ PrimitiveTree buildPrimitiveTree(const PrimitiveRows& rows, const BvhBuildOption
 }
 
 /// Spheres or curves stored once: the Scene::primitiveInstances entries
-/// that place one geometry, the first of them its source (the copy nearest
-/// the origin, whose floats are the finest), and where its items' rows
+/// that place one geometry, the first of them its source (the copy whose
+/// floats are finest for its size: relativeSpacing), and where its items' rows
 /// start in the device's block of their type.
 struct InstancedPrimitives {
   std::uint32_t type = WT_PRIM_SPHERE;
@@ -639,18 +651,21 @@ std::vector<InstancedPrimitives> choosePrimitiveGeometries(const Scene& scene, c
   std::vector<InstancedPrimitives> out;
   std::vector<std::uint8_t> taken(scene.primitiveInstances.size(), 0);
   for (auto& [key, copies] : groups) {
-    // the source: the copy whose items lie nearest the origin
+    // the source: the copy whose floats are finest for its size (as for triangles)
     std::uint32_t source = copies[0];
     double best = INFINITY;
     for (std::uint32_t c : copies) {
       const auto [lo, hi] = copyItems(scene, rows, scene.primitiveInstances[c]);
-      double reach = 0.0;
+      Aabb box;
       const std::uint32_t per = rowsPerItem(key.first);
       for (std::uint32_t i = per * lo; i < per * hi; ++i) {
         const WtVec4& p = rows.data[rows.dataFirst[key.first] + i];
-        reach = std::max({reach, std::abs(double(p.x)), std::abs(double(p.y)), std::abs(double(p.z))});
+        const float r = std::abs(p.w);  // a sphere's or joint's radius
+        box.extend(glm::vec3(p.x, p.y, p.z) - r);
+        box.extend(glm::vec3(p.x, p.y, p.z) + r);
       }
-      if (reach < best) best = reach, source = c;
+      const double coarseness = relativeSpacing(box);
+      if (c == copies[0] || coarseness < best) best = coarseness, source = c;
     }
     InstancedPrimitives g;
     g.type = key.first;

@@ -52,6 +52,10 @@ constexpr std::uint64_t kMaxCurvePoints = std::uint64_t(1) << 28;
 /// Cells per axis of a procedural SDF grid at most (its corners take 4 bytes each on the host).
 constexpr std::int64_t kMaxSdfResolution = 512;
 constexpr std::int64_t kMaxChildren = 100000;
+/// Spheres a scene may hold, copies included (28-bit primitive ids).
+constexpr std::uint64_t kMaxSpheres = std::uint64_t(1) << 28;
+/// Transforms in one object's "instances".
+constexpr std::size_t kMaxInstances = std::size_t(1) << 20;
 
 // paths and values in messages
 
@@ -204,15 +208,27 @@ struct WorldDisplaced {
   std::string path;                     ///< "objects[2]"
 };
 
+/// One copy of a "sphere" or "spheres" object with "instances": the
+/// object's spheres as written, moved by `world` (expanded only when the
+/// scene is built, so a million copies cost their spheres and no more).
+struct SphereCopy {
+  std::size_t first = 0, count = 0;  ///< the object's spheres in Loader::m_instancedSpheres
+  std::uint32_t geometry = 0;        ///< shared by the object's copies (PrimitiveInstance::geometry)
+  glm::dmat4 world{1.0};             ///< the object's own coordinates -> world
+  std::size_t object = 0, index = 0; ///< objects[object].instances[index], for messages
+};
+
 /// A "curves" object in world coordinates, before the origin is subtracted.
 struct WorldCurves {
-  std::vector<glm::dvec4> points;      ///< xyz world, w radius (world units)
+  std::vector<glm::dvec4> points;      ///< xyz world, w radius (world units); with instances, before them
   std::vector<std::uint32_t> counts;   ///< points per strand
   CurveBasis basis = CurveBasis::kLinear;
   std::uint32_t material = 0;
   std::uint32_t children = 0;
   double childRadius = 0.0;
   std::uint32_t seed = 1;
+  std::vector<glm::dmat4> instances;   ///< "instances": each copy's world from `points`' (empty: placed once as they are)
+  std::uint32_t geometry = 0;          ///< with instances: shared by the copies (PrimitiveInstance::geometry)
   std::string path;  ///< "objects[2]"
 };
 
@@ -363,7 +379,10 @@ class Loader {
     if (const Json* v = find(doc, "camera")) readCamera(*v, "camera");
     if (const Json* v = find(doc, "objects")) {
       if (!v->is_array()) fail("objects", "must be an array, got " + describe(*v));
-      for (std::size_t i = 0; i < v->size(); ++i) readObject((*v)[i], element("objects", i));
+      for (std::size_t i = 0; i < v->size(); ++i) {
+        m_objectIndex = i;
+        readObject((*v)[i], element("objects", i));
+      }
     }
     build();
   }
@@ -834,7 +853,7 @@ class Loader {
 
   void readCurves(const Json& v, const std::string& path) {
     checkKeys(v, path, {"type", "file", "strands", "basis", "radius", "radius_scale", "transform", "material",
-                        "children", "child_radius", "seed"});
+                        "children", "child_radius", "seed", "instances"});
     const Json* file = find(v, "file");
     const Json* strands = find(v, "strands");
     if (file && strands) fail(path, "give \"file\" (a .hair or .ply file) or \"strands\" (points), not both");
@@ -911,9 +930,12 @@ class Loader {
       fail(member(path, "child_radius"), "missing (required with \"children\": how far children stray from their guide)");
     }
     if (const Json* x = find(v, "seed")) curves.seed = std::uint32_t(integer(*x, member(path, "seed"), 0, std::numeric_limits<std::uint32_t>::max()));
-    m_curvePoints += std::uint64_t(local.size()) * (std::uint64_t(curves.children) + 1);
+    curves.instances = readInstances(v, path);
+    if (!curves.instances.empty()) curves.geometry = m_primitiveGeometries[1]++;
+    m_curvePoints += std::uint64_t(local.size()) * (std::uint64_t(curves.children) + 1) *
+                     std::max<std::uint64_t>(curves.instances.size(), 1);
     if (m_curvePoints > kMaxCurvePoints)
-      fail(path, "brings the scene to " + std::to_string(m_curvePoints) + " curve points (children included), more than the " +
+      fail(path, "brings the scene to " + std::to_string(m_curvePoints) + " curve points (children and copies included), more than the " +
                      std::to_string(kMaxCurvePoints) + " supported");
 
     curves.material = materialOf(v, path);
@@ -926,14 +948,16 @@ class Loader {
   }
 
   void readSphere(const Json& v, const std::string& path) {
-    checkKeys(v, path, {"type", "center", "radius", "material"});
+    checkKeys(v, path, {"type", "center", "radius", "material", "instances"});
     const glm::dvec3 center = vec3(require(v, path, "center"), member(path, "center"));
     const double radius = positive(require(v, path, "radius"), member(path, "radius"));
+    const std::size_t first = m_spheres.size();
     m_spheres.push_back({center, radius, materialOf(v, path), path});
+    copySpheres(v, path, first);
   }
 
   void readSpheres(const Json& v, const std::string& path) {
-    checkKeys(v, path, {"type", "centers", "radius", "radii", "material"});
+    checkKeys(v, path, {"type", "centers", "radius", "radii", "material", "instances"});
     const std::string centersPath = member(path, "centers");
     const Json& centers = require(v, path, "centers");
     if (!centers.is_array()) fail(centersPath, "must be an array of [x, y, z] centres, got " + describe(centers));
@@ -947,11 +971,73 @@ class Loader {
                           describe(*radii));
     const double shared = radius ? positive(*radius, member(path, "radius")) : 0.0;
     const std::uint32_t material = materialOf(v, path);
+    const std::size_t first = m_spheres.size();
     m_spheres.reserve(m_spheres.size() + centers.size());
     for (std::size_t i = 0; i < centers.size(); ++i) {
       const double r = radii ? positive((*radii)[i], element(radiiPath, i)) : shared;
       m_spheres.push_back({vec3(centers[i], element(centersPath, i)), r, material, element(centersPath, i)});
     }
+    copySpheres(v, path, first);
+  }
+
+  /// An object's "instances": each a transform (as "transform") that keeps
+  /// shapes, since a sphere or a round curve must stay one: a rotation, one
+  /// scale for every axis (negative: a mirror) and a translation. Empty
+  /// when the object has none.
+  std::vector<glm::dmat4> readInstances(const Json& v, const std::string& path) const {
+    const Json* x = find(v, "instances");
+    if (!x) return {};
+    const std::string where = member(path, "instances");
+    if (!x->is_array() || x->empty())
+      fail(where, "must be a non-empty array of transforms (each as \"transform\"), got " + describe(*x));
+    if (x->size() > kMaxInstances)
+      fail(where, "holds " + std::to_string(x->size()) + " transforms, more than the " +
+                      std::to_string(kMaxInstances) + " supported");
+    std::vector<glm::dmat4> out;
+    out.reserve(x->size());
+    for (std::size_t k = 0; k < x->size(); ++k) {
+      const std::string at = element(where, k);
+      const glm::dmat4 m = readTransform((*x)[k], at);
+      // columns of one length and perpendicular, to the digits a typed
+      // rotation matrix carries (the renderer checks its copies as closely)
+      const glm::dmat3 l(m);
+      const glm::dvec3 lengths(glm::length(l[0]), glm::length(l[1]), glm::length(l[2]));
+      const double s2 = (glm::dot(l[0], l[0]) + glm::dot(l[1], l[1]) + glm::dot(l[2], l[2])) / 3.0;
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j)
+          if (!(std::abs(glm::dot(l[i], l[j]) - (i == j ? s2 : 0.0)) <= 1e-5 * s2))
+            fail(at, "must keep spheres and curves round: a rotation, one scale for all axes and a translation "
+                     "(its axes are scaled by " + formatNumber(lengths.x) + ", " + formatNumber(lengths.y) + ", " +
+                     formatNumber(lengths.z) + (i == j ? ")" : " and are not perpendicular)"));
+      out.push_back(m);
+    }
+    return out;
+  }
+
+  /// With "instances", the spheres read from m_spheres[first] on are the
+  /// object's own coordinates: they move to m_instancedSpheres, one
+  /// SphereCopy per transform.
+  void copySpheres(const Json& v, const std::string& path, std::size_t first) {
+    const std::vector<glm::dmat4> instances = readInstances(v, path);
+    const std::size_t count = m_spheres.size() - first;
+    m_sphereCount += count * std::max<std::size_t>(instances.size(), 1);
+    if (m_sphereCount > kMaxSpheres)
+      fail(path, "brings the scene to " + std::to_string(m_sphereCount) + " spheres (copies included), more than the " +
+                     std::to_string(kMaxSpheres) + " supported");
+    if (instances.empty()) return;
+    const std::size_t own = m_instancedSpheres.size();
+    m_instancedSpheres.insert(m_instancedSpheres.end(), m_spheres.begin() + std::ptrdiff_t(first), m_spheres.end());
+    m_spheres.resize(first);
+    const std::uint32_t geometry = m_primitiveGeometries[0]++;
+    for (std::size_t k = 0; k < instances.size(); ++k)
+      m_sphereCopies.push_back({own, count, geometry, instances[k], m_objectIndex, k});
+  }
+
+  /// Where sphere `s` of copy `c` is named in messages: objects[2].instances[5] (centers[1]).
+  std::string copyPath(const SphereCopy& c, const WorldSphere& s) const {
+    const std::string object = element("objects", c.object);
+    const std::string at = element(member(object, "instances"), c.index);
+    return s.path == object ? at : at + " (" + s.path.substr(object.size() + 1) + ")";
   }
 
   void readGltf(const Json& v, const std::string& path) {
@@ -1183,14 +1269,25 @@ class Loader {
       scene.camera = desc;
     }
 
-    scene.spheres.reserve(m_spheres.size());
-    for (const WorldSphere& s : m_spheres) {
-      const glm::vec3 center(s.center - origin);
-      const auto radius = float(s.radius);
-      if (!isFinite(center)) fail(s.path, "the centre lies beyond the range of a float from the scene's origin");
+    scene.spheres.reserve(scene.spheres.size() + m_sphereCount);
+    auto addSphere = [&](const glm::dvec3& world, double r, std::uint32_t material, const auto& path) {
+      const glm::vec3 center(world - origin);
+      const auto radius = float(r);
+      if (!isFinite(center)) fail(path(), "the centre lies beyond the range of a float from the scene's origin");
       if (!(radius > 0.0f) || !std::isfinite(radius))
-        fail(s.path, "the radius " + formatNumber(s.radius) + " is out of the range of a float");
-      scene.spheres.push_back({center, radius, s.material});
+        fail(path(), "the radius " + formatNumber(r) + " is out of the range of a float");
+      scene.spheres.push_back({center, radius, material});
+    };
+    for (const WorldSphere& s : m_spheres) addSphere(s.center, s.radius, s.material, [&] { return s.path; });
+    for (const SphereCopy& c : m_sphereCopies) {
+      const double scale = std::cbrt(std::fabs(glm::determinant(glm::dmat3(c.world))));
+      scene.primitiveInstances.push_back({WT_PRIM_SPHERE, std::uint32_t(scene.spheres.size()), std::uint32_t(c.count),
+                                          c.geometry, glm::translate(glm::dmat4(1.0), -origin) * c.world});
+      for (std::size_t i = c.first; i < c.first + c.count; ++i) {
+        const WorldSphere& s = m_instancedSpheres[i];
+        addSphere(glm::dvec3(c.world * glm::dvec4(s.center, 1.0)), s.radius * scale, s.material,
+                  [&] { return copyPath(c, s); });
+      }
     }
     for (const WorldCurves& c : m_curves) placeCurves(c, origin);
     for (WorldSdf& sdf : m_sdfs) {
@@ -1238,10 +1335,24 @@ class Loader {
       lo = glm::min(lo, s.center - s.radius);
       hi = glm::max(hi, s.center + s.radius);
     }
+    for (const SphereCopy& c : m_sphereCopies) {
+      const double scale = std::cbrt(std::fabs(glm::determinant(glm::dmat3(c.world))));
+      for (std::size_t i = c.first; i < c.first + c.count; ++i) {
+        const WorldSphere& s = m_instancedSpheres[i];
+        const glm::dvec3 centre(c.world * glm::dvec4(s.center, 1.0));
+        lo = glm::min(lo, centre - scale * s.radius);
+        hi = glm::max(hi, centre + scale * s.radius);
+      }
+    }
     for (const WorldCurves& c : m_curves)
-      for (const glm::dvec4& p : c.points) {
-        lo = glm::min(lo, glm::dvec3(p) - p.w);
-        hi = glm::max(hi, glm::dvec3(p) + p.w);
+      for (std::size_t k = 0; k < std::max<std::size_t>(c.instances.size(), 1); ++k) {
+        const glm::dmat4 m = c.instances.empty() ? glm::dmat4(1.0) : c.instances[k];
+        const double scale = std::cbrt(std::fabs(glm::determinant(glm::dmat3(m))));
+        for (const glm::dvec4& p : c.points) {
+          const glm::dvec3 q(m * glm::dvec4(glm::dvec3(p), 1.0));
+          lo = glm::min(lo, q - scale * p.w);
+          hi = glm::max(hi, q + scale * p.w);
+        }
       }
     for (const WorldSdf& s : m_sdfs)
       for (int corner = 0; corner < 8; ++corner) {
@@ -1265,6 +1376,7 @@ class Loader {
 
   /// Append a curves object's strands, moved to the origin, and their children.
   void placeCurves(const WorldCurves& c, const glm::dvec3& origin) {
+    if (!c.instances.empty()) return placeCurveCopies(c, origin);
     Scene& scene = m_result.scene;
     const auto firstGuide = std::uint32_t(scene.curves.size());
     std::size_t next = 0;
@@ -1289,6 +1401,52 @@ class Loader {
       scene.curves.push_back(curve);
     }
     addChildCurves(scene, firstGuide, std::uint32_t(c.counts.size()), c.children, float(c.childRadius), c.seed);
+  }
+
+  /// Append a curves object with "instances": its strands and children made
+  /// once about their own centre (so the children are the same in every
+  /// copy), then one moved copy per transform, each a PrimitiveInstance.
+  void placeCurveCopies(const WorldCurves& c, const glm::dvec3& origin) {
+    Scene& scene = m_result.scene;
+    glm::dvec3 lo(INFINITY), hi(-INFINITY);
+    for (const glm::dvec4& p : c.points) lo = glm::min(lo, glm::dvec3(p)), hi = glm::max(hi, glm::dvec3(p));
+    const glm::dvec3 centre = 0.5 * (lo + hi);
+    Scene own;
+    std::size_t next = 0;
+    for (std::uint32_t count : c.counts) {
+      own.curves.push_back({std::uint32_t(own.curvePoints.size()), count, c.material, c.basis});
+      for (std::uint32_t i = 0; i < count; ++i, ++next) {
+        const glm::dvec4& p = c.points[next];
+        const glm::vec3 q(glm::dvec3(p) - centre);
+        if (!isFinite(q) || !std::isfinite(float(p.w)))
+          fail(c.path, "strand " + std::to_string(own.curves.size() - 1) + ", point " + std::to_string(i) +
+                           " is beyond the range of a float from the strands' centre");
+        own.curvePoints.push_back({q.x, q.y, q.z, float(p.w)});
+      }
+    }
+    addChildCurves(own, 0, std::uint32_t(c.counts.size()), c.children, float(c.childRadius), c.seed);
+    for (std::size_t k = 0; k < c.instances.size(); ++k) {
+      const glm::dmat4 m = glm::translate(glm::dmat4(1.0), -origin) * c.instances[k] * glm::translate(glm::dmat4(1.0), centre);
+      const double scale = std::cbrt(std::fabs(glm::determinant(glm::dmat3(m))));
+      const auto firstCurve = std::uint32_t(scene.curves.size());
+      for (const Curve& curve : own.curves) {
+        Curve moved = curve;
+        moved.firstPoint = std::uint32_t(scene.curvePoints.size());
+        for (std::uint32_t i = 0; i < curve.pointCount; ++i) {
+          const WtVec4& p = own.curvePoints[curve.firstPoint + i];
+          const glm::vec3 q(glm::dvec3(m * glm::dvec4(p.x, p.y, p.z, 1.0)));
+          const auto r = float(scale * double(p.w));
+          if (!isFinite(q) || !std::isfinite(r))
+            fail(element(member(c.path, "instances"), k),
+                 "strand " + std::to_string(&curve - own.curves.data()) + ", point " + std::to_string(i) +
+                     " lies beyond the range of a float from the scene's origin");
+          scene.curvePoints.push_back({q.x, q.y, q.z, r});
+        }
+        scene.curves.push_back(moved);
+      }
+      scene.primitiveInstances.push_back(
+          {WT_PRIM_CURVE, firstCurve, std::uint32_t(own.curves.size()), c.geometry, m});
+    }
   }
 
   /// Append one placed copy of an included file, moved to the origin.
@@ -1374,8 +1532,13 @@ class Loader {
   std::vector<WorldCurves> m_curves;
   std::vector<WorldSdf> m_sdfs;
   std::vector<WorldDisplaced> m_displaced;
-  std::uint64_t m_curvePoints = 0;  ///< children included
+  std::uint64_t m_curvePoints = 0;  ///< children and copies included
   std::uint32_t m_nextGeometry = 0;
+  std::vector<SphereCopy> m_sphereCopies;
+  std::vector<WorldSphere> m_instancedSpheres;  ///< the spheres of objects with "instances", as written
+  std::size_t m_sphereCount = 0;                ///< copies included
+  std::size_t m_objectIndex = 0;                ///< the object being read
+  std::uint32_t m_primitiveGeometries[2] = {0, 0};  ///< the next PrimitiveInstance::geometry of spheres, curves
 };
 
 }  // namespace

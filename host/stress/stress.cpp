@@ -94,7 +94,7 @@ const std::vector<std::pair<std::string, StressGroup>>& stressGroups() {
       {"transform", stressTransforms},   {"cracks", stressCracks},       {"self-intersection", stressSelfIntersection},
       {"degenerate", stressDegenerate},  {"materials", stressMaterials}, {"textures", stressTextures},
       {"accumulation", stressAccumulation},
-      {"non-finite", stressNonFinite},  {"primitives", stressPrimitives},
+      {"non-finite", stressNonFinite},  {"primitives", stressPrimitives}, {"far-furnace", stressFarFurnace},
   };
   return groups;
 }

@@ -70,6 +70,7 @@ std::vector<StressRow> stressMaterials(Context&, const StressOptions&);        /
 std::vector<StressRow> stressAccumulation(Context&, const StressOptions&);     ///< 2^20 samples per precision mode against double
 std::vector<StressRow> stressNonFinite(Context&, const StressOptions&);        ///< NaN samples are counted, reported and never accumulated
 std::vector<StressRow> stressPrimitives(Context&, const StressOptions&);       ///< the other geometry types: transforms, self-intersection, degenerate input
+std::vector<StressRow> stressFarFurnace(Context&, const StressOptions&);      ///< white objects of every geometry type far from the origin vanish in a uniform sky
 std::vector<StressRow> stressTextures(Context&, const StressOptions&);         ///< texture coordinates far out or NaN, one texel, odd sizes, 16 bits
 std::vector<StressRow> stressDisplaced(Context&, const StressOptions&);        ///< displaced meshes (in the primitives group): transforms, zero and extreme scale, NaN maps
 

@@ -282,6 +282,15 @@ void writeSceneFileSeeds(const fs::path& dir) {
     {"type": "gltf", "file": "triangle.gltf", "transform": {"matrix": [1,0,0,0, 0,1,0,0, 0,0,1,0, 4,5,6,1]}},
     {"type": "sphere", "center": [0, 0, 0], "radius": 0.5}
   ]})"},
+      {"instances", R"({"version": 1,
+  "objects": [
+    {"type": "sphere", "center": [0, 1, 0], "radius": 0.5, "instances": [{"translate": [2, 0, 0]}, {"scale": -2}]},
+    {"type": "spheres", "centers": [[0, 0, 0], [1, 0, 0]], "radii": [0.1, 0.2],
+     "instances": [{"rotate": [0, 1, 0, 30], "scale": 3}, {"matrix": [0,1,0,0, -1,0,0,0, 0,0,1,0, 4,5,6,1]}]},
+    {"type": "curves", "basis": "bspline", "children": 2, "child_radius": 0.1,
+     "strands": [[[0, 0, 0, 0.1], [0, 1, 0, 0.1], [0, 2, 1, 0.05], [1, 3, 1, 0]]],
+     "instances": [{"translate": [0, 0, 5]}, {"quaternion": [0, 0.2588190451, 0, 0.9659258263], "scale": 0.5}]}
+  ]})"},
       {"gltf_with_camera", R"({"version": 1,
   "camera": {"from": [1e6, 2, 10], "to": [1e6, 0, 0], "fov": 30},
   "objects": [{"type": "gltf", "file": "triangle.gltf", "transform": {"translate": [1e6, 0, 0]}}]})"},

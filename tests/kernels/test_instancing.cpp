@@ -99,6 +99,39 @@ TEST(Instancing, CopiesBecomeInstances) {
   EXPECT_FALSE(SceneBuffers::instancingPays(7 * 1279, 0));
 }
 
+/// The geometry is stored as the copy whose floats are finest for its size:
+/// here the large copy 300 from the origin, not the tiny one (1e-5 of its
+/// size) beside the origin, whose corners are a few float spacings apart
+/// and would draw every copy with corners off by about 0.5 % of its size.
+/// The large copy's instanced hits match its flattened ones within the
+/// rounding of its own coordinates (the tiny one's flattened floats are too
+/// coarse to compare with).
+TEST(Instancing, TheStoredCopyIsTheFinestForItsSize) {
+  const Scene mesh = makeIcosphere(3, glm::vec3(0.0f), 1.0f, makeMaterial(glm::vec3(0.6f)));
+  Placed p;
+  const glm::mat4 copies[] = {glm::scale(glm::translate(glm::mat4(1.0f), glm::vec3(1.0f, 0.5f, 0.0f)), glm::vec3(1e-5f)),
+                              glm::rotate(glm::translate(glm::mat4(1.0f), glm::vec3(300.0f, 0.0f, 0.0f)), 0.4f,
+                                          glm::normalize(glm::vec3(1.0f, 2.0f, 3.0f)))};
+  p.scene = placeCopies(mesh, copies);
+  p.centres = {glm::vec3(1.0f, 0.5f, 0.0f), glm::vec3(300.0f, 0.0f, 0.0f)};
+  p.radii = {1e-5f, 1.0f};
+  Tracer on(test::deviceContext(), p.scene, withInstancing(Instancing::On));
+  Tracer off(test::deviceContext(), p.scene, withInstancing(Instancing::Off));
+  ASSERT_EQ(on.sceneBuffers().instanceCount(), 2u);
+  std::vector<Ray> rays = raysAtCopies(p, 4000, 13);
+  rays.erase(rays.begin(), rays.begin() + 4000);  // the large copy's
+  const std::vector<RayHit> flat = off.traceClosest(rays), got = on.traceClosest(rays);
+  int bad = 0, edges = 0, hits = 0;
+  for (std::size_t i = 0; i < rays.size(); ++i) {
+    hits += flat[i].triangle != RayHit::kNoHit;
+    if (!hitsAgree(p.scene, rays[i], got[i], flat[i], &edges) && ++bad <= 5)
+      ADD_FAILURE() << "ray " << i << ": instanced t=" << got[i].t << ", flattened t=" << flat[i].t;
+  }
+  EXPECT_EQ(bad, 0);
+  EXPECT_GT(hits, int(rays.size() / 2));
+  EXPECT_LT(edges, int(rays.size() / 100));
+}
+
 /// Closest hits, any hits, in every traversal mode: the instanced form
 /// against the flattened one, on rays aimed at every copy (the mirrored one
 /// and those 1e4 from the origin included) and random rays through the rest.

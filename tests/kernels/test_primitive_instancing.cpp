@@ -10,6 +10,7 @@
 #include "geometry/primitives.h"
 #include "instancing_checks.h"
 #include "scene/generators.h"
+#include "scene/scene_file.h"
 
 #include <gtest/gtest.h>
 #include <glm/gtc/matrix_transform.hpp>
@@ -214,6 +215,51 @@ TEST(PrimitiveInstancing, HitsMatchTheFlattenedScene) {
   }
 }
 
+/// Spheres and curves are stored as the copy whose floats are finest for its
+/// size, as triangles are: here the large copy 300 from the origin, not the
+/// tiny one (1e-5 of its size) beside the origin, whose points are rounded
+/// to about 0.5 % of its size. Both copies become instances (the large one,
+/// drawn as the tiny one moved, would not match its own floats), and the
+/// large copy's hits match its flattened ones.
+TEST(PrimitiveInstancing, TheStoredCopyIsTheFinestForItsSize) {
+  Scene geometry = sphereAndCurveGeometry(30, 12, 7);
+  // linear only: the tiny copy's rounded B-spline points would subdivide
+  // into other segments than the large copy's, and such copies stay flat
+  for (Curve& c : geometry.curves) c.basis = CurveBasis::kLinear;
+  Placed p;
+  const glm::mat4 copies[] = {glm::scale(glm::translate(glm::mat4(1.0f), glm::vec3(1.0f, 0.5f, 0.0f)), glm::vec3(1e-5f)),
+                              glm::rotate(glm::translate(glm::mat4(1.0f), glm::vec3(300.0f, 0.0f, 0.0f)), 0.4f,
+                                          glm::normalize(glm::vec3(1.0f, 2.0f, 3.0f)))};
+  p.scene = placeCopies(geometry, copies);
+  p.centres = {glm::vec3(300.0f, 0.0f, 0.0f)};  // the large copy's rays only: the tiny one's floats are too coarse
+  p.scales = {1.0f};
+  Tracer on(test::deviceContext(), p.scene, withInstancing(Instancing::On));
+  Tracer off(test::deviceContext(), p.scene, withInstancing(Instancing::Off));
+  ASSERT_EQ(on.sceneBuffers().instanceCount(), 4u);  // spheres and curves, two copies each
+  const PrimitiveRows rows = gatherPrimitives(p.scene);
+  const std::vector<Ray> rays = raysAtCopies(p, 4000, 17);
+  const std::vector<RayHit> flat = off.traceClosest(rays), got = on.traceClosest(rays);
+  int bad = 0, grazing = 0, hits = 0;
+  for (std::size_t i = 0; i < rays.size(); ++i) {
+    hits += flat[i].prim != RayHit::kNoHit;
+    const double tol = 2e-6 * (301.0 + (flat[i].prim != RayHit::kNoHit ? flat[i].t : 0.0));
+    if (got[i].prim == flat[i].prim && (got[i].prim == RayHit::kNoHit || std::abs(got[i].t - flat[i].t) <= tol))
+      continue;
+    const bool bothHit = got[i].prim != RayHit::kNoHit && flat[i].prim != RayHit::kNoHit;
+    if ((bothHit && std::abs(got[i].t - flat[i].t) <= tol) || grazes(p.scene, rows, rays[i], flat[i].prim) ||
+        grazes(p.scene, rows, rays[i], got[i].prim)) {
+      ++grazing;
+      continue;
+    }
+    if (++bad <= 5)
+      ADD_FAILURE() << "ray " << i << ": instanced prim " << std::hex << got[i].prim << std::dec << " t=" << got[i].t
+                    << ", flattened prim " << std::hex << flat[i].prim << std::dec << " t=" << flat[i].t;
+  }
+  EXPECT_EQ(bad, 0);
+  EXPECT_GT(hits, int(rays.size() / 2));
+  EXPECT_LT(grazing, int(rays.size() / 100));
+}
+
 /// Rays spawned off instanced spheres (the point from the flattened sphere,
 /// pushed past its error bound and the copy's float placement, skipping that
 /// sphere): outwards they never meet it again, inwards they meet it once
@@ -351,6 +397,42 @@ TEST(PrimitiveInstancing, WhiteInstancedCopiesInUniformSky) {
     }
   }
   }
+}
+
+/// A scene file's "instances" of spheres and of curves (B-splines with
+/// children, a mirrored and a scaled copy) are stored once with
+/// Instancing::On, and render the flattened image within noise.
+TEST(PrimitiveInstancing, SceneFileInstancesAreStoredOnce) {
+  const SceneFile file = loadSceneFileFromMemory(R"({"version": 1,
+      "camera": {"from": [0, 1, 9], "to": [0, 0, 0], "fov": 50},
+      "materials": {"white": {"type": "lambert", "base_color": [0.8, 0.8, 0.8]},
+                    "red": {"type": "lambert", "base_color": [0.8, 0.2, 0.1]}},
+      "objects": [
+        {"type": "spheres", "centers": [[0, 0, 0], [0.6, 0.2, 0], [-0.5, 0.3, 0.2]], "radii": [0.4, 0.2, 0.25],
+         "material": "white", "instances": [{"translate": [-2.5, 0, 0]}, {"rotate": [0, 1, 0, 90], "scale": 1.5},
+                                            {"translate": [2.5, 0, 0], "scale": [-1, 1, 1]}]},
+        {"type": "curves", "material": "red", "basis": "bspline", "children": 8, "child_radius": 0.1,
+         "strands": [[[0, -1, 0, 0.06], [0.1, -0.5, 0, 0.06], [0.3, 0, 0.1, 0.04], [0.6, 0.5, 0.1, 0.02], [1, 1, 0.2, 0]]],
+         "instances": [{"translate": [-2.5, 0.8, 0]}, {"translate": [0, 0.8, 0], "scale": 1.4},
+                       {"translate": [2.5, 0.8, 0], "rotate": [0, 0, 1, 30]}]}]})",
+                                                 "instances.json", ".");
+  const Scene& scene = file.scene;
+  ASSERT_EQ(scene.primitiveInstances.size(), 6u);
+  {
+    Tracer on(test::deviceContext(), scene, withInstancing(Instancing::On));
+    EXPECT_EQ(on.sceneBuffers().instanceCount(), 6u);
+  }
+  RenderSettings settings;
+  settings.width = 48;
+  settings.height = 32;
+  settings.maxBounces = 3;
+  settings.seed = 4;
+  settings.background = glm::vec3(0.6f, 0.7f, 0.9f);
+  settings.instancing = Instancing::Off;
+  const Image flat = test::render(scene, settings, 64);
+  settings.instancing = Instancing::On;
+  const Image instanced = test::render(scene, settings, 64);
+  test::expectSameImage(flat, instanced, 4, 4.5, "scene-file instances against their flattened copies");
 }
 
 /// Memory: 98 copies of spheres and curves stored once take about 1/98 of

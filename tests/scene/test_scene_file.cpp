@@ -373,6 +373,11 @@ TEST(SceneFile, ExampleScenesLoad) {
   expectConsistent(tube.scene);
   EXPECT_EQ(tube.scene.curves.size(), 1u);
   EXPECT_EQ(tube.scene.curves[0].pointCount, 25u);
+  SceneFile instances = loadSceneFile((scenes / "instances.json").string());
+  expectConsistent(instances.scene);
+  EXPECT_EQ(instances.scene.primitiveInstances.size(), 14u + 24u);  // pebbles and grass tufts
+  EXPECT_EQ(instances.scene.curves.size(), 24u * 31u);
+  EXPECT_TRUE(instances.scene.warnings.empty()) << instances.scene.warnings.front();
   // the box is scaled by 10: its light hangs at y = 5.487
   float top = -1e30f;
   for (const WtVec4& p : mixed.scene.positions) top = std::max(top, p.y);
@@ -768,6 +773,66 @@ TEST(SceneFileAssets, HeadMeshLoads) {
 // ---------------------------------------------------------------------------
 // errors: each names the file, the JSON path and the problem
 
+/// "instances" place a sphere, spheres or curves object once per transform:
+/// every copy is the object's own coordinates moved by its transform (radii
+/// by its scale, children the same in every copy), recorded as
+/// PrimitiveInstances of one geometry per object, relative to the origin.
+TEST(SceneFile, SpheresAndCurvesPlacedAsInstances) {
+  const std::string text = doc(R"("camera": {"from": [100, 0, 10], "to": [100, 0, 0]}, "objects": [
+      {"type": "sphere", "center": [1, 0, 0], "radius": 0.5,
+       "instances": [{"translate": [100, 0, 0]}, {"translate": [100, 5, 0], "scale": -2}]},
+      {"type": "spheres", "centers": [[0, 0, 0], [0, 1, 0]], "radii": [0.1, 0.2],
+       "instances": [{"rotate": [0, 0, 1, 90]}, {"translate": [3, 0, 0], "scale": 3}, {"translate": [0, 0, 9]}]},
+      {"type": "curves", "strands": [[[0, 0, 0, 0.1], [0, 1, 0, 0.05]]], "children": 2, "child_radius": 0.2,
+       "transform": {"translate": [50, 0, 0]},
+       "instances": [{"translate": [10, 0, 0]}, {"translate": [0, 0, 10], "rotate": [1, 0, 0, 90], "scale": 0.5}]}])");
+  const Scene s = loadText(text).scene;
+  ASSERT_EQ(s.spheres.size(), 2u + 6u);
+  ASSERT_EQ(s.curves.size(), 2u * 3u);
+  ASSERT_EQ(s.primitiveInstances.size(), 2u + 3u + 2u);
+  EXPECT_EQ(s.origin, glm::dvec3(100, 0, 10));
+  auto centre = [&](std::uint32_t i) { return s.origin + glm::dvec3(s.spheres[i].center); };
+  // the sphere: translated, then mirrored and scaled by 2 (radius 1)
+  EXPECT_EQ(centre(0), glm::dvec3(101, 0, 0));
+  EXPECT_EQ(centre(1), glm::dvec3(98, 5, 0));
+  EXPECT_FLOAT_EQ(s.spheres[1].radius, 1.0f);
+  // the spheres: turned about z, scaled by 3, moved along z
+  EXPECT_LT(glm::distance(centre(3), glm::dvec3(-1, 0, 0)), 1e-5);
+  EXPECT_EQ(centre(5), glm::dvec3(3, 3, 0));
+  EXPECT_FLOAT_EQ(s.spheres[5].radius, 0.6f);
+  EXPECT_EQ(centre(7), glm::dvec3(0, 1, 9));
+  // one geometry per object, its copies' transforms from its own coordinates to the scene's
+  const PrimitiveInstance &a = s.primitiveInstances[0], &b = s.primitiveInstances[3];
+  EXPECT_EQ(a.type, std::uint32_t(WT_PRIM_SPHERE));
+  EXPECT_EQ(a.first, 0u);
+  EXPECT_EQ(a.count, 1u);
+  EXPECT_EQ(b.first, 4u);
+  EXPECT_EQ(b.count, 2u);
+  EXPECT_NE(a.geometry, b.geometry);
+  EXPECT_EQ(s.primitiveInstances[2].geometry, b.geometry);
+  EXPECT_EQ(glm::dvec3(b.transform * glm::dvec4(0, 1, 0, 1)), glm::dvec3(s.spheres[5].center));
+  // the curves: copy 1 is copy 0 moved by their transforms' difference, children included
+  const PrimitiveInstance &c0 = s.primitiveInstances[5], &c1 = s.primitiveInstances[6];
+  EXPECT_EQ(c0.type, std::uint32_t(WT_PRIM_CURVE));
+  EXPECT_EQ(c0.first, 0u);
+  EXPECT_EQ(c0.count, 3u);
+  EXPECT_EQ(c1.first, 3u);
+  EXPECT_EQ(c0.geometry, c1.geometry);
+  const glm::dmat4 relative = c1.transform * glm::inverse(c0.transform);
+  for (std::uint32_t c = 0; c < 3; ++c)
+    for (std::uint32_t i = 0; i < 2; ++i) {
+      const WtVec4 p = s.curvePoints[s.curves[c].firstPoint + i], q = s.curvePoints[s.curves[3 + c].firstPoint + i];
+      const glm::dvec3 moved(relative * glm::dvec4(p.x, p.y, p.z, 1.0));
+      EXPECT_LT(glm::distance(moved, glm::dvec3(q.x, q.y, q.z)), 1e-4) << "curve " << c << ", point " << i;
+      EXPECT_FLOAT_EQ(q.w, 0.5f * p.w);
+    }
+  // the guide's root: the object's transform, then the copy's
+  const WtVec4 root = s.curvePoints[s.curves[3].firstPoint];
+  EXPECT_LT(glm::distance(s.origin + glm::dvec3(root.x, root.y, root.z), glm::dvec3(25, 0, 10)), 1e-4);
+  // the flattened copies are in the bounds
+  EXPECT_GE(s.bounds().hi.y + s.origin.y, 6.0 - 1e-4);
+}
+
 struct BadFile {
   const char* name;
   std::string json;
@@ -815,7 +880,7 @@ const BadFile kBadFiles[] = {
         BadFile{"ObjectsNotAnArray", doc("\"objects\": {}"), "objects: must be an array, got {}"},
         // objects
         BadFile{"UnknownField", objects(kSphere + "," + kSphere + "," + kSphere + R"(, {"type": "sphere", "radus": 1})"),
-                "objects[3].radus: unknown field (expected one of: type, center, radius, material)"},
+                "objects[3].radus: unknown field (expected one of: type, center, radius, material, instances)"},
         BadFile{"NegativeRadius", objects(kSphere + "," + kSphere + "," + kSphere +
                                           R"(, {"type": "sphere", "center": [0, 0, 0], "radius": -1})"),
                 "objects[3].radius: must be > 0, got -1"},
@@ -894,7 +959,7 @@ const BadFile kBadFiles[] = {
                 "objects[0].children: must be an integer in [0, 100000], got 1000000"},
         BadFile{"CurvesUnknownField", objects(R"({"type": "curves", "strands": [[[0, 0, 0, 1], [1, 0, 0, 1]]], "width": 1})"),
                 "objects[0].width: unknown field (expected one of: type, file, strands, basis, radius, radius_scale, transform, "
-                "material, children, child_radius, seed)"},
+                "material, children, child_radius, seed, instances)"},
         BadFile{"CurvesPointBeyondFloat", objects(R"({"type": "curves", "strands": [[[0, 0, 0, 1], [1e300, 0, 0, 1]]]})"),
                 "objects[0]: strand 0, point 1 lies beyond the range of a float from the scene's origin"},
         BadFile{"ObjectNotAnObject", objects("3"), "objects[0]: must be an object, got 3"},
@@ -940,6 +1005,39 @@ const BadFile kBadFiles[] = {
                 "objects[0].transform: is singular or not finite (determinant 0)"},
         BadFile{"MatrixShort", transform(R"({"matrix": [1, 0, 0]})"),
                 "objects[0].transform.matrix: must be an array of 16 numbers (column-major, as glTF), got [1,0,0]"},
+        // instances
+        BadFile{"InstancesNotAnArray", sphere(R"(, "instances": {"translate": [1, 0, 0]})"),
+                "objects[0].instances: must be a non-empty array of transforms (each as \"transform\"), got {"},
+        BadFile{"InstancesEmpty", sphere(R"(, "instances": [])"),
+                "objects[0].instances: must be a non-empty array of transforms (each as \"transform\"), got []"},
+        BadFile{"InstanceNotAnObject", sphere(R"(, "instances": [{"translate": [1, 0, 0]}, 5])"),
+                "objects[0].instances[1]: must be an object, got 5"},
+        BadFile{"InstanceUnknownField", sphere(R"(, "instances": [{"move": [1, 0, 0]}])"),
+                "objects[0].instances[0].move: unknown field (expected one of: translate, rotate, quaternion, scale, matrix)"},
+        BadFile{"InstanceUnevenScale", sphere(R"(, "instances": [{"translate": [1, 0, 0]}, {"scale": [1, 2, 1]}])"),
+                "objects[0].instances[1]: must keep spheres and curves round: a rotation, one scale for all axes and a "
+                "translation (its axes are scaled by 1, 2, 1)"},
+        BadFile{"InstanceSheared", sphere(R"(, "instances": [{"matrix": [1,0,0,0, 0.6,0.8,0,0, 0,0,1,0, 0,0,0,1]}])"),
+                "objects[0].instances[0]: must keep spheres and curves round: a rotation, one scale for all axes and a "
+                "translation (its axes are scaled by 1, 1, 1 and are not perpendicular)"},
+        BadFile{"InstanceZeroScale", sphere(R"(, "instances": [{"scale": 0}])"),
+                "objects[0].instances[0].scale: must not be 0"},
+        BadFile{"InstancesOfSpheresUneven", objects(R"({"type": "spheres", "centers": [[0, 0, 0]], "radius": 1,
+                "instances": [{"scale": [2, 2, -3]}]})"),
+                "objects[0].instances[0]: must keep spheres and curves round"},
+        BadFile{"InstancesOfCurvesUneven", objects(R"({"type": "curves", "strands": [[[0, 0, 0, 1], [1, 0, 0, 1]]],
+                "instances": [{"translate": [0, 0, 0]}, {"quaternion": [0, 0, 0, 1], "scale": [1, 1, 2]}]})"),
+                "objects[0].instances[1]: must keep spheres and curves round"},
+        BadFile{"InstanceBeyondFloat", sphere(R"(, "instances": [{"translate": [1e39, 0, 0]}])"),
+                "objects[0].instances[0]: the centre lies beyond the range of a float from the scene's origin"},
+        BadFile{"InstanceOfSpheresBeyondFloat", objects(R"({"type": "spheres", "centers": [[0, 0, 0], [1, 0, 0]],
+                "radius": 1, "instances": [{"translate": [0, 0, 0]}, {"translate": [1e39, 0, 0]}]})"),
+                "objects[0].instances[1] (centers[0]): the centre lies beyond the range of a float"},
+        BadFile{"InstanceOfCurvesBeyondFloat", objects(R"({"type": "curves", "strands": [[[0, 0, 0, 1], [1, 0, 0, 1]]],
+                "instances": [{"translate": [0, 0, 0]}, {"translate": [1e39, 0, 0]}]})"),
+                "objects[0].instances[1]: strand 0, point 0 lies beyond the range of a float from the scene's origin"},
+        BadFile{"InstancesOnAMesh", objects(R"({"type": "mesh", "file": "square.ply", "instances": []})"),
+                "objects[0].instances: unknown field"},
         // camera
         BadFile{"CameraNoFrom", doc(R"("camera": {"to": [0, 0, 0]})"), "camera.from: missing (required)"},
         BadFile{"CameraFovRange", doc(R"("camera": {"from": [0, 0, 1], "to": [0, 0, 0], "fov": 180})"),
@@ -1045,6 +1143,25 @@ TEST(SceneFileErrorsMore, FlattenedSceneIsLimited) {
   loadText(objects(gltfObject("") + "," + gltfObject("")), options);  // two triangles: fine
   EXPECT_CONTAINS(errorOf(objects(gltfObject("") + "," + gltfObject("") + "," + gltfObject("")), options),
                   "scene.json: objects[2]: brings the scene to 9 vertices and 3 triangles, more than the 268435456 and 2 supported");
+}
+
+/// "instances" is limited to 2^20 transforms an object, and the copies
+/// count towards the scene's 2^28 spheres (checked before they are made).
+TEST(SceneFileErrorsMore, InstancesAreLimited) {
+  auto identities = [](std::size_t n) {
+    std::string list = "[";
+    for (std::size_t i = 0; i < n; ++i) list += i ? ",{}" : "{}";
+    return list + "]";
+  };
+  EXPECT_CONTAINS(errorOf(sphere(", \"instances\": " + identities((1u << 20) + 1))),
+                  "scene.json: objects[0].instances: holds 1048577 transforms, more than the 1048576 supported");
+  std::string centers = "[";
+  for (int i = 0; i < 257; ++i) centers += std::string(i ? "," : "") + "[" + std::to_string(i) + ", 0, 0]";
+  centers += "]";
+  EXPECT_CONTAINS(errorOf(objects(kSphere + R"(, {"type": "spheres", "radius": 0.1, "centers": )" + centers +
+                                  R"(, "instances": )" + identities(1u << 20) + "}")),
+                  "scene.json: objects[1]: brings the scene to 269484033 spheres (copies included), more than the "
+                  "268435456 supported");
 }
 
 TEST(SceneFileErrorsMore, GltfOptionsWarnWhenSet) {
