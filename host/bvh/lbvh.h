@@ -50,6 +50,9 @@ struct BvhBuildOptions {
   /// COLOR_0 and the alpha bits for every vertex and triangle even where no
   /// material reads them, for the general program (generalKernelFeatures).
   bool allSurfaceAttributes = false;
+  /// Read by SceneBuffers only: the scene outlives the buffers and stays
+  /// unchanged, so a CPU device reads its texels in place (readOnlyBuffer).
+  bool texelsInPlace = false;
 };
 
 /// Primitives [first, first + count) are a placed copy of `geometry`: the

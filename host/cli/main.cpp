@@ -413,6 +413,7 @@ int runRender(RenderOptions options) {
   startup.mark("context");
   wt::RenderSettings settings = renderSettings(options);
   settings.profile = options.profile;
+  settings.sceneOutlivesRenderer = true;  // `loaded` is destroyed after `renderer`
   wt::Renderer renderer(context, scene, settings);
   startup.mark("renderer");
   startup.part("scene buffers", renderer.stats().sceneSeconds);
@@ -713,6 +714,7 @@ int runScaleOutRender(RenderOptions options, wt::MpiWorld& world) {
                                   "(profile a one-device render)");
     loaded = loadRenderScene(options);
     settings = renderSettings(options);
+    settings.sceneOutlivesRenderer = true;  // `loaded` is destroyed after `devices`
     if (root && !options.reference.empty()) {
       reference = wt::readExr(options.reference);
       if (reference->width != settings.width || reference->height != settings.height)

@@ -31,6 +31,17 @@ cl::Buffer upload(Context& context, const Array& data, std::size_t& bytes) {
 
 }  // namespace
 
+cl::Buffer readOnlyBuffer(Context& context, const void* data, std::size_t bytes, bool inPlace) {
+  // OpenCL rejects zero-sized buffers and a null host pointer: one dummy word
+  if (bytes == 0 || data == nullptr) return cl::Buffer(context.context(), CL_MEM_READ_ONLY, sizeof(wt_uint));
+  // a CPU device's kernels address host memory: the buffer can be the array itself
+  if (inPlace && context.info().isCpu)
+    return cl::Buffer(context.context(), CL_MEM_READ_ONLY | CL_MEM_USE_HOST_PTR, bytes, const_cast<void*>(data));
+  cl::Buffer buffer(context.context(), CL_MEM_READ_ONLY, bytes);
+  context.queue().enqueueWriteBuffer(buffer, CL_TRUE, 0, bytes, data);
+  return buffer;
+}
+
 std::vector<BvhInstance> bvhInstances(const Scene& scene, std::span<const std::uint32_t> bvhToScene) {
   // A copy's triangles that enter the BVH are consecutive inputs (bvhToScene
   // is ascending). Copies that lost the same triangles (zero area in mesh
@@ -176,7 +187,7 @@ std::optional<Instancing> parseInstancing(std::string_view name) {
 }
 
 SceneBuffers::SceneBuffers(Context& context, const Scene& scene, const BvhBuildOptions& options)
-    : m_allSurfaceAttributes(options.allSurfaceAttributes) {
+    : m_allSurfaceAttributes(options.allSurfaceAttributes), m_texelsInPlace(options.texelsInPlace) {
   // Zero-area and non-finite triangles never enter the BVH: they cannot be
   // hit meaningfully, and in float a ray through a collinear triangle can
   // still produce a spurious hit.
@@ -471,9 +482,13 @@ void SceneBuffers::uploadSurface(Context& context, const Scene& scene) {
   materialTextures = upload(context, refs, m_attributeBytes);
   std::size_t bytes = 0;
   const auto start = std::chrono::steady_clock::now();
-  textures = upload(context, m_hasTextures ? scene.textures.textures : std::vector<WtTexture>{}, bytes);
-  textureLevels = upload(context, m_hasTextures ? scene.textures.levels : std::vector<WtTextureLevel>{}, bytes);
-  texels = upload(context, m_hasTextures ? scene.textures.texels : std::vector<wt_uint>{}, bytes);
+  // spans, not `cond ? vector : vector{}`: that expression is a copy of the texels
+  const TextureSet& set = scene.textures;
+  textures = upload(context, m_hasTextures ? std::span(set.textures) : std::span<const WtTexture>(), bytes);
+  textureLevels = upload(context, m_hasTextures ? std::span(set.levels) : std::span<const WtTextureLevel>(), bytes);
+  const std::span<const wt_uint> texelWords = m_hasTextures ? std::span(set.texels) : std::span<const wt_uint>();
+  texels = readOnlyBuffer(context, texelWords.data(), texelWords.size_bytes(), m_texelsInPlace);
+  bytes += texelWords.size_bytes();
   textureBytes = m_hasTextures ? bytes : 0;
   textureUploadSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }

@@ -54,6 +54,12 @@ std::optional<Instancing> parseInstancing(std::string_view name);
 
 struct InstancedPrimitives;
 
+/// A read-only buffer of `bytes` at `data` (one dummy word where empty). With
+/// `inPlace` on a CPU device it is that memory itself (CL_MEM_USE_HOST_PTR):
+/// no copy and no second set of pages to fault in, so the memory must then
+/// outlive the buffer unchanged; elsewhere the bytes are copied.
+cl::Buffer readOnlyBuffer(Context& context, const void* data, std::size_t bytes, bool inPlace);
+
 class SceneBuffers {
  public:
   /// A leaf-order slot no triangle fills (the padding before a geometry
@@ -213,6 +219,7 @@ class SceneBuffers {
 
   bool m_hasTextures = false, m_hasVertexColors = false;
   bool m_allSurfaceAttributes = false;  ///< BvhBuildOptions::allSurfaceAttributes
+  bool m_texelsInPlace = false;         ///< BvhBuildOptions::texelsInPlace
   std::size_t m_alphaTriangles = 0;
   BvhBuildStats m_bvhStats;
   Bvh4Stats m_bvh4Stats;

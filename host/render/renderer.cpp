@@ -62,6 +62,7 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
   bvhOptions.maxLeafSize = 0;  // leaves of up to kBvh4MaxLeafSize, chosen by the collapse
   bvhOptions.instancing = settings.instancing;
   bvhOptions.allSurfaceAttributes = settings.generalProgram;
+  bvhOptions.texelsInPlace = settings.sceneOutlivesRenderer;
   m_scene = std::make_unique<SceneBuffers>(context, scene, bvhOptions);
   m_stats.sceneSeconds = lap();
   m_environment = settings.environmentMap.empty()
@@ -129,11 +130,8 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
   m_lightTree = upload(m_lights.tree);
   m_emitterLeaf = upload(m_lights.emitterLeaf);
   EnvironmentUpload env = environmentUpload(m_environment);
-  auto uploadSpan = [&](auto span) {
-    cl::Buffer b(ctx, CL_MEM_READ_ONLY, span.size_bytes());
-    context.queue().enqueueWriteBuffer(b, CL_TRUE, 0, span.size_bytes(), span.data());
-    return b;
-  };
+  // m_environment is the renderer's own and never changes: read in place where the device can
+  auto uploadSpan = [&](auto span) { return readOnlyBuffer(context, span.data(), span.size_bytes(), true); };
   m_envTexels = uploadSpan(env.texels);
   m_envMarginal = uploadSpan(env.marginalCdf);
   m_envConditional = uploadSpan(env.conditionalCdf);

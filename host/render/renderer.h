@@ -80,6 +80,9 @@ struct RenderSettings {
   /// (generalKernelFeatures) instead of the scene's; the same image, for the
   /// specialised-vs-general tests and the bench.
   bool generalProgram = false;
+  /// The caller keeps the scene alive and unchanged as long as the renderer,
+  /// so a CPU device reads the scene's texels in place (readOnlyBuffer).
+  bool sceneOutlivesRenderer = false;
   /// Stages and buffers the scene and settings cannot use are neither
   /// allocated nor launched (the connect stage without light sampling);
   /// false runs and allocates them all, for tests that the image is the same.

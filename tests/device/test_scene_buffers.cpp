@@ -4,6 +4,7 @@
 #include "device/scene_buffers.h"
 #include "device_fixture.h"
 #include "scene/generators.h"
+#include "texture_helpers.h"
 
 #include <gtest/gtest.h>
 #include <glm/gtc/matrix_transform.hpp>
@@ -45,6 +46,28 @@ TEST(SceneBuffers, BlocksHoldEachLeafTriangleCornersAndInfoItsIndicesAndMaterial
     }
   }
   for (std::size_t i = 0; i < seen.size(); ++i) EXPECT_LE(seen[i], 1) << "scene triangle " << i;
+}
+
+TEST(SceneBuffers, TexelsAreReadInPlaceOnlyWhereTheSceneOutlivesTheBuffers) {
+  // in place, a CPU device reads the scene's own texel array (no copy, no
+  // second set of pages); otherwise the buffer holds a copy. The device sees
+  // the same words either way.
+  Scene scene = makeIcosphere(1, glm::vec3(0.0f), 1.0f, makeMaterial(glm::vec3(0.5f)));
+  test::setBaseColorTexture(scene, 0, test::addCheckerTexture(scene, 64));
+  ASSERT_GT(scene.textures.texels.size(), 64u * 64u);
+  Context& context = test::deviceContext();
+  for (bool inPlace : {false, true}) {
+    BvhBuildOptions options;
+    options.texelsInPlace = inPlace;
+    SceneBuffers buffers(context, scene, options);
+    ASSERT_TRUE(buffers.hasTextures());
+    const void* host = buffers.texels.getInfo<CL_MEM_HOST_PTR>();
+    EXPECT_EQ(host == scene.textures.texels.data(), inPlace && context.info().isCpu) << "in place: " << inPlace;
+    ASSERT_EQ(buffers.texels.getInfo<CL_MEM_SIZE>(), scene.textures.texels.size() * sizeof(wt_uint));
+    std::vector<wt_uint> words(scene.textures.texels.size());
+    context.queue().enqueueReadBuffer(buffers.texels, CL_TRUE, 0, words.size() * sizeof(wt_uint), words.data());
+    EXPECT_EQ(words, scene.textures.texels) << "in place: " << inPlace;
+  }
 }
 
 TEST(SceneBuffers, CopiesThatLostTheSameTrianglesShareAGeometry) {

@@ -134,6 +134,20 @@ TEST(TextureFootprint, ConvergedImageKeepsTheBoxFilteredValue) {
 
 // At one sample per pixel the footprint's level is the better estimate of the
 // pixel's box integral than a point on the finest level, over several seeds.
+TEST(TextureFootprint, TexelsReadInPlaceGiveTheSameImage) {
+  // RenderSettings::sceneOutlivesRenderer lets a CPU device read the scene's
+  // texels where they are: the same numbers, so the same image bit for bit
+  const Scene scene = checkerPlane();
+  RenderSettings s = settings(true, 1);
+  const Image copied = test::render(scene, s, 2);
+  s.sceneOutlivesRenderer = true;
+  const Image inPlace = test::render(scene, s, 2);
+  ASSERT_EQ(copied.rgb.size(), inPlace.rgb.size());
+  std::size_t differing = 0;
+  for (std::size_t i = 0; i < copied.rgb.size(); ++i) differing += copied.rgb[i] != inPlace.rgb[i];
+  EXPECT_EQ(differing, 0u) << "of " << copied.rgb.size() << " values";
+}
+
 TEST(TextureFootprint, OneSampleErrorBelowPointSampling) {
   Scene scene = checkerPlane();
   std::vector<double> ref = boxReference(scene);
