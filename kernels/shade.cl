@@ -128,6 +128,9 @@ WT_KERNEL void shade(WtFrameParams frame, WtEnvironment environment, __global co
 #if WT_HAS_ANISOTROPY
   float3 aniso_dir = (float3)(0.0f);  // the anisotropy direction, world (textured.cl); zero: none
 #endif
+#if WT_HAS_TEXTURES && WT_HAS_CLEARCOAT
+  float3 coat_ns = (float3)(0.0f);  // the coat's own normal, world (textured.cl); zero: the shading normal's
+#endif
 #if WT_HAS_TEXTURES || WT_HAS_VERTEX_COLORS || WT_HAS_ANISOTROPY
   // triangles (an instance's too) carry vertex attributes and textures
   if (prim_type(prim) == WT_PRIM_TRIANGLE) {
@@ -149,6 +152,9 @@ WT_KERNEL void shade(WtFrameParams frame, WtEnvironment environment, __global co
 #endif
 #if WT_HAS_ANISOTROPY
     aniso_dir = anisotropy_direction(ss, surface.material, &material, sp, ns);  // before a normal map bends ns
+#endif
+#if WT_HAS_TEXTURES && WT_HAS_CLEARCOAT
+    coat_ns = clearcoat_normal(ss, surface.material, material.texture_mask, sp, ns);  // before the base's map bends ns
 #endif
     material = material_at(ss, surface.material, material, sp, &ns);
   }
@@ -242,6 +248,14 @@ WT_KERNEL void shade(WtFrameParams frame, WtEnvironment environment, __global co
 #if WT_HAS_TEXTURES
   if (material.texture_mask & (1u << WT_TEXTURE_SLOT_NORMAL)) ns = shading_normal_reflecting(ns, ng, wo);
 #endif
+#if WT_HAS_TEXTURES && WT_HAS_CLEARCOAT
+  // the coat's normal faces the viewer and reflects above the surface, as ns does
+  if (dot(coat_ns, coat_ns) > 0.0f) {
+    if (dot(coat_ns, ng) < 0.0f) coat_ns = -coat_ns;
+    if (dot(coat_ns, wo) <= 0.0f) coat_ns = ng;
+    coat_ns = shading_normal_reflecting(coat_ns, ng, wo);
+  }
+#endif
   float3 frame_t, frame_b;
   frame_from_normal(ns, &frame_t, &frame_b);
 #if WT_HAS_ANISOTROPY
@@ -255,6 +269,10 @@ WT_KERNEL void shade(WtFrameParams frame, WtEnvironment environment, __global co
   ushort4 counts = bounce_counts[path];
 #endif
   Bsdf bsdf = bsdf_make(material, pbr_table, inside);
+#if WT_HAS_TEXTURES && WT_HAS_CLEARCOAT
+  if (dot(coat_ns, coat_ns) > 0.0f)
+    bsdf_coat_normal(&bsdf, (float3)(dot(coat_ns, frame_t), dot(coat_ns, frame_b), dot(coat_ns, ns)));
+#endif
 #if WT_HAS_TRANSMISSION
   // a volume boundary refracts by the indices the stack gives its two sides
   // (n far / n near: the material's own index against air outside every other volume)
