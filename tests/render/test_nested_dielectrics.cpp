@@ -87,6 +87,35 @@ TEST(NestedDielectrics, FalseHitsDoNotCountAsBounces) {
   expectSameRender(solid, nested, "minimal, 3 bounces", 3, Integrator::Minimal);
 }
 
+// The cap on free false hits (WT_MAX_FALSE_HITS, 16): ten nested shells of
+// lower priority inside the ball put up to twenty false hits on a path
+// through its middle. With bounces to spare the ball still renders as solid
+// glass (what the cap charges fits the limit); at a bounce limit of 3 the
+// false hits past the 16th are bounces and end the paths through the middle
+// before they reach the floor: the image is darker than the solid ball's.
+TEST(NestedDielectrics, FalseHitsPastTheCapCountAsBounces) {
+  const WtMaterial outer = glass(1.5f, kGlassSigma, 1);
+  const Scene solid = glassBall(outer, [](Scene&) {});
+  const Scene shells = glassBall(outer, [](Scene& s) {
+    for (int k = 0; k < 10; ++k)
+      addSphere(s, glm::vec3(0.0f), 0.95f - 0.05f * float(k), glass(1.33f, glm::vec3(0.5f), 0), "shell");
+  });
+  expectSameRender(solid, shells, "24 bounces", 24);
+  RenderSettings s;
+  s.width = s.height = 32;
+  s.maxBounces = 3;
+  s.background = glm::vec3(0.05f);
+  s.seed = 5;
+  const int spp = int(test::testSize(256, 96));
+  const Image a = render(solid, s, spp);
+  s.seed = 6;
+  const Image b = render(shells, s, spp);
+  for (int c = 0; c < 3; ++c) {
+    const test::BlockStat x = test::blockStat(a, 0, 0, a.width, a.height, c), y = test::blockStat(b, 0, 0, b.width, b.height, c);
+    EXPECT_LT(y.mean, x.mean - 5.0 * std::sqrt(x.varianceOfMean + y.varianceOfMean)) << "channel " << c;
+  }
+}
+
 // An inner volume of the glass's own index and absorption but higher
 // priority is a boundary between equal media: no reflection, no bending.
 TEST(NestedDielectrics, ABoundaryBetweenMediaOfOneIndexIsNoInterface) {
