@@ -3,7 +3,7 @@
 #include "common.h"
 #include "sampler.cl"
 
-WT_KERNEL void generate(WtFrameParams frame, WtCamera camera, __global float4* ray_o,
+WT_KERNEL void generate(WtFrameParams frame, WtCamera camera, uint4 camera_media, __global float4* ray_o,
                         __global float4* ray_d, __global float4* throughput,
                         __global float4* radiance, __global uint* queue,
                         __global uint* counters, __global ushort4* bounce_counts, __global uint* ray_skip,
@@ -51,7 +51,7 @@ WT_KERNEL void generate(WtFrameParams frame, WtCamera camera, __global float4* r
   ray_cone[i] = camera.origin.w == (float)WT_CAMERA_ORTHOGRAPHIC ? (float2)(pixel, 0.0f) : (float2)(0.0f, pixel);
 #endif
 #if WT_HAS_TRANSMISSION
-  // the camera is in no volume (shared/media.h)
-  media[i] = (uint4)(WT_MEDIUM_NONE);
+  // the volumes the camera is inside (shared/media.h; host/render/camera_media.h)
+  media[i] = camera_media;
 #endif
 }

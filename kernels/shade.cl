@@ -64,6 +64,16 @@ WT_KERNEL void shade(WtFrameParams frame, WtEnvironment environment, __global co
   float3 beta = state.xyz;
   float pdf_prev = state.w;  // solid-angle pdf of the BSDF sample that made this ray; 0 for camera rays
   float3 dir = ray_d[path].xyz;
+#if WT_HAS_TRANSMISSION
+  // the path's bounces so far (below); false hits it passed for free took
+  // wavefront passes but are no bounces (shared/media.h): its own bounce is
+  // the pass less them, for the limits, roulette and its sampler dimensions.
+  // A private copy: PoCL shares a by-value argument among a group's items.
+  ushort4 counts = bounce_counts[path];
+  WtFrameParams path_frame = frame;
+  path_frame.bounce -= media_false_hits(counts.w);
+#define frame path_frame
+#endif
 
   EnvScene env = {environment, env_texels, env_marginal_cdf, env_conditional_cdf};
   GeometryScene g = WT_GEOMETRY_SCENE;
@@ -118,6 +128,9 @@ WT_KERNEL void shade(WtFrameParams frame, WtEnvironment environment, __global co
 #if WT_HAS_ANISOTROPY
   float3 aniso_dir = (float3)(0.0f);  // the anisotropy direction, world (textured.cl); zero: none
 #endif
+#if WT_HAS_TEXTURES && WT_HAS_CLEARCOAT
+  float3 coat_ns = (float3)(0.0f);  // the coat's own normal, world (textured.cl); zero: the shading normal's
+#endif
 #if WT_HAS_TEXTURES || WT_HAS_VERTEX_COLORS || WT_HAS_ANISOTROPY
   // triangles (an instance's too) carry vertex attributes and textures
   if (prim_type(prim) == WT_PRIM_TRIANGLE) {
@@ -140,6 +153,9 @@ WT_KERNEL void shade(WtFrameParams frame, WtEnvironment environment, __global co
 #if WT_HAS_ANISOTROPY
     aniso_dir = anisotropy_direction(ss, surface.material, &material, sp, ns);  // before a normal map bends ns
 #endif
+#if WT_HAS_TEXTURES && WT_HAS_CLEARCOAT
+    coat_ns = clearcoat_normal(ss, surface.material, material.texture_mask, sp, ns);  // before the base's map bends ns
+#endif
     material = material_at(ss, surface.material, material, sp, &ns);
   }
 #endif
@@ -161,10 +177,16 @@ WT_KERNEL void shade(WtFrameParams frame, WtEnvironment environment, __global co
   }
   // a false hit: the surface lies inside a medium that outranks it. The
   // path passes it unchanged and without a bounce of its own (it still takes
-  // a wavefront pass); pdf 0 makes what it finds count in full, since NEE
-  // from the last vertex was blocked by this surface.
+  // a wavefront pass; up to WT_MAX_FALSE_HITS, then each counts as one); pdf
+  // 0 makes what it finds count in full, since NEE from the last vertex was
+  // blocked by this surface.
   if (!crossing.real) {
-    if (frame.bounce >= frame.max_bounces) return;
+    if (media_false_hits(counts.w) < WT_MAX_FALSE_HITS) {
+      counts.w += (ushort)WT_FALSE_HIT_STEP;
+      bounce_counts[path] = counts;
+    } else if (frame.bounce >= frame.max_bounces) {
+      return;
+    }
     media_cross(&stack, materials, surface.material, !inside);
     media[path] = (uint4)(stack.id[0], stack.id[1], stack.id[2], stack.id[3]);
     throughput[path] = (float4)(beta, 0.0f);
@@ -226,6 +248,14 @@ WT_KERNEL void shade(WtFrameParams frame, WtEnvironment environment, __global co
 #if WT_HAS_TEXTURES
   if (material.texture_mask & (1u << WT_TEXTURE_SLOT_NORMAL)) ns = shading_normal_reflecting(ns, ng, wo);
 #endif
+#if WT_HAS_TEXTURES && WT_HAS_CLEARCOAT
+  // the coat's normal faces the viewer and reflects above the surface, as ns does
+  if (dot(coat_ns, coat_ns) > 0.0f) {
+    if (dot(coat_ns, ng) < 0.0f) coat_ns = -coat_ns;
+    if (dot(coat_ns, wo) <= 0.0f) coat_ns = ng;
+    coat_ns = shading_normal_reflecting(coat_ns, ng, wo);
+  }
+#endif
   float3 frame_t, frame_b;
   frame_from_normal(ns, &frame_t, &frame_b);
 #if WT_HAS_ANISOTROPY
@@ -233,9 +263,16 @@ WT_KERNEL void shade(WtFrameParams frame, WtEnvironment environment, __global co
 #endif
   float3 wo_local = (float3)(dot(wo, frame_t), dot(wo, frame_b), dot(wo, ns));
   // the path's diffuse, specular and transmission bounces so far (x, y, z);
-  // w: the channel it carries alone past a dispersive interface, plus 1 (0: all)
+  // w: the channel it carries alone past a dispersive interface, plus 1 (0:
+  // all), and with transmission its free false hits (shared/media.h)
+#if !WT_HAS_TRANSMISSION
   ushort4 counts = bounce_counts[path];
+#endif
   Bsdf bsdf = bsdf_make(material, pbr_table, inside);
+#if WT_HAS_TEXTURES && WT_HAS_CLEARCOAT
+  if (dot(coat_ns, coat_ns) > 0.0f)
+    bsdf_coat_normal(&bsdf, (float3)(dot(coat_ns, frame_t), dot(coat_ns, frame_b), dot(coat_ns, ns)));
+#endif
 #if WT_HAS_TRANSMISSION
   // a volume boundary refracts by the indices the stack gives its two sides
   // (n far / n near: the material's own index against air outside every other volume)
@@ -246,13 +283,13 @@ WT_KERNEL void shade(WtFrameParams frame, WtEnvironment environment, __global co
     if (dispersion_near > 0.0f || dispersion_far > 0.0f) {
       // KHR_materials_dispersion: the first such interface picks the channel the path carries alone
       // (three times as strong, so the mean over the pick is unbiased), each index at its wavelength
-      if (counts.w == 0u) {
+      if ((counts.w & WT_DISPERSION_BITS) == 0u) {
         uint c = min((uint)(sampler_get(frame, path, WT_DIM_WAVELENGTH) * 3.0f), 2u);
-        counts.w = (ushort)(c + 1u);
+        counts.w = (ushort)(counts.w | (c + 1u));
         beta = (float3)(c == 0u ? 3.0f * beta.x : 0.0f, c == 1u ? 3.0f * beta.y : 0.0f, c == 2u ? 3.0f * beta.z : 0.0f);
       }
-      ior_near = media_channel_ior(ior_near, dispersion_near, counts.w - 1u);
-      ior_far = media_channel_ior(ior_far, dispersion_far, counts.w - 1u);
+      ior_near = media_channel_ior(ior_near, dispersion_near, (counts.w & WT_DISPERSION_BITS) - 1u);
+      ior_far = media_channel_ior(ior_far, dispersion_far, (counts.w & WT_DISPERSION_BITS) - 1u);
     }
     bsdf.eta = ior_far / ior_near;
     bsdf.smooth = bsdf.mirror || fabs(bsdf.eta - 1.0f) < 1e-3f;
@@ -381,3 +418,6 @@ WT_KERNEL void shade(WtFrameParams frame, WtEnvironment environment, __global co
   uint slot = atomic_inc(&counters[out_slot]);
   queue_out[slot] = path;
 }
+#if WT_HAS_TRANSMISSION
+#undef frame
+#endif

@@ -157,10 +157,11 @@ WT_KERNEL void test_sobol(uint count, uint pixel, uint bounce, uint dim, uint se
 // wo.w != 0: seen from inside (the back face).
 WT_KERNEL void test_bsdf_sample(uint count, WtMaterial material, float4 wo, uint lobes,
                                 __global const float* table, __global const float4* u,
-                                __global float4* wi_pdf, __global float4* weight_lobe) {
+                                __global float4* wi_pdf, __global float4* weight_lobe, float4 coat_n) {
   uint i = get_global_id(0);
   if (i >= count) return;
   Bsdf b = bsdf_make(material, table, wo.w != 0.0f);
+  bsdf_coat_normal(&b, coat_n.xyz);
   BsdfSample s;
   if (bsdf_sample(b, wo.xyz, lobes, u[i].x, u[i].y, u[i].z, &s)) {
     wi_pdf[i] = (float4)(s.wi, s.pdf);
@@ -173,10 +174,12 @@ WT_KERNEL void test_bsdf_sample(uint count, WtMaterial material, float4 wo, uint
 
 // bsdf_eval for `count` local directions: f cos and the mixture pdf.
 WT_KERNEL void test_bsdf_eval(uint count, WtMaterial material, float4 wo, uint lobes,
-                              __global const float* table, __global const float4* wi, __global float4* out) {
+                              __global const float* table, __global const float4* wi, __global float4* out,
+                              float4 coat_n) {
   uint i = get_global_id(0);
   if (i >= count) return;
   Bsdf b = bsdf_make(material, table, wo.w != 0.0f);
+  bsdf_coat_normal(&b, coat_n.xyz);
   float pdf;
   float3 f = bsdf_eval(b, wo.xyz, wi[i].xyz, lobes, &pdf);
   out[i] = (float4)(f, pdf);

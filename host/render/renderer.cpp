@@ -3,7 +3,9 @@
 #include "core/log.h"
 #include "device/program.h"
 #include "device/scene_args.h"
+#include "render/camera_media.h"
 #include "render/material_tables.h"
+#include "shared/media.h"
 #include "shared/rng.h"
 
 #include <algorithm>
@@ -77,7 +79,14 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
   m_kernelFeatures = renderKernelFeatures(m_features, context.info(), settings, *m_scene);
   m_packetWidth = m_kernelFeatures.packetWidth;
   m_primitiveScale = primitiveScale(scene);
-  m_shadowTraversal.assign(std::size_t(std::max(settings.maxBounces, 0)) + 1, std::nullopt);
+  {
+    // the volumes the camera is inside, found on the host once (Cycles finds them too; Mitsuba asks the scene)
+    WtMediaStack stack;
+    for (wt_uint& id : stack.id) id = WT_MEDIUM_NONE;
+    if (m_kernelFeatures.transmission) stack = cameraMediaStack(scene, glm::vec3(m_camera.origin.x, m_camera.origin.y, m_camera.origin.z));
+    for (int k = 0; k < WT_MEDIA_STACK; ++k) m_cameraMedia.s[k] = stack.id[k];
+  }
+  m_shadowTraversal.assign(std::size_t(passLimit()) + 1, std::nullopt);
   const KernelFeatures& features = m_kernelFeatures;
   m_stats.lightsSeconds = lap();
   m_program = buildProgram(context, features);
@@ -269,6 +278,10 @@ Traversal Renderer::probeShadowRays(int bounce) {
   return choice;
 }
 
+int Renderer::passLimit() const {
+  return std::max(m_settings.maxBounces, 0) + (m_kernelFeatures.transmission ? int(WT_MAX_FALSE_HITS) : 0);
+}
+
 void Renderer::renderSample() {
   auto start = std::chrono::steady_clock::now();
   const int sample = m_stats.samplesDone;
@@ -290,14 +303,19 @@ void Renderer::renderSample() {
   std::vector<std::pair<int, std::vector<cl_uint>>> shadowEntries;  // profiled: each bounce's shadow queue
 
   // generate: every pixel's path enters queue A
-  m_generate.set("frame", frameParams(m_settings, m_lights, sample, 0)).set("camera", m_camera);
+  m_generate.set("frame", frameParams(m_settings, m_lights, sample, 0))
+      .set("camera", m_camera)
+      .set("camera_media", m_cameraMedia);
   launch(m_generate, pixels, event(Command::Generate, 0));
 
   cl::Buffer* queueIn = &m_path.queueA;
   cl::Buffer* queueOut = &m_path.queueB;
   cl_uint inSlot = WT_COUNTER_QUEUE_A, outSlot = WT_COUNTER_QUEUE_B;
   std::size_t alive = pixels;
-  for (int bounce = 0; bounce <= m_settings.maxBounces && alive > 0; ++bounce) {
+  // a pass per bounce, and with nested dielectrics up to WT_MAX_FALSE_HITS
+  // more for paths that passed false hits (no bounces: shared/media.h)
+  const int passes = passLimit();
+  for (int bounce = 0; bounce <= passes && alive > 0; ++bounce) {
     m_stats.raysTraced += alive;
     if (m_profile.bounces.size() <= std::size_t(bounce)) m_profile.bounces.resize(bounce + 1);
     m_profile.bounces[bounce].passes += 1;
@@ -345,7 +363,7 @@ void Renderer::renderSample() {
 
     // connect: shadow rays of this bounce (count read on the device); shade
     // makes none at the last bounce, which it shades for emission only
-    const bool connect = m_settings.skipUnusedStages ? m_connectStage && bounce < m_settings.maxBounces
+    const bool connect = m_settings.skipUnusedStages ? m_connectStage && bounce < passes
                                                      : m_lights.sampleable;
     if (connect) {
       auto run = [&](auto& k, std::size_t items) {

@@ -219,6 +219,10 @@ class Renderer {
   /// program was built with (also the checkpoint's identity).
   const FeatureSet& features() const { return m_features; }
   const KernelFeatures& kernelFeatures() const { return m_kernelFeatures; }
+  /// The wavefront passes after the camera's a sample may take: maxBounces,
+  /// and WT_MAX_FALSE_HITS more where paths may pass false hits of nested
+  /// dielectrics, which are no bounces (kernels/shared/media.h).
+  int passLimit() const;
   /// Bytes of the per-pixel buffers (PathState) on the device.
   std::size_t pathStateBytes() const { return m_path.bytes; }
   /// The scale auto exposure gave the last readImage() (1 without it).
@@ -236,6 +240,7 @@ class Renderer {
   FeatureSet m_features;
   KernelFeatures m_kernelFeatures;
   WtCamera m_camera;
+  cl_uint4 m_cameraMedia{};  ///< the medium stack every path starts with (cameraMediaStack)
   std::unique_ptr<SceneBuffers> m_scene;
   cl::Program m_program;
   KernelArgs<stage::Generate> m_generate;

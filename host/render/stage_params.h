@@ -10,7 +10,7 @@ namespace wt::stage {
 
 struct Generate {
   static constexpr std::string_view kName = "generate";
-  static constexpr auto kParams = params("frame", "camera", "ray_o", "ray_d", "throughput", "radiance", "queue",
+  static constexpr auto kParams = params("frame", "camera", "camera_media", "ray_o", "ray_d", "throughput", "radiance", "queue",
                                          "counters", "bounce_counts", "ray_skip", "ray_cone", "media");
 };
 

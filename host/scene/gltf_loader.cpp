@@ -410,10 +410,11 @@ class Converter {
       slot(WT_TEXTURE_SLOT_NORMAL, "normalTexture", TextureUse(src.normalTexture), false);
       slot(WT_TEXTURE_SLOT_EMISSIVE, "emissiveTexture", TextureUse(src.emissiveTexture), true);
       // the extensions' textures, where the extension's factor leaves them something to scale
-      auto extensionSlot = [&](const char* extension, const char* name, std::uint32_t s, bool srgb, bool used) {
+      auto extensionSlot = [&](const char* extension, const char* name, std::uint32_t s, bool srgb, bool used,
+                               bool normal = false) {
         auto it = src.extensions.find(extension);
         if (!used || it == src.extensions.end() || !it->second.IsObject() || !it->second.Has(name)) return;
-        slot(s, name, extensionTextureUse(it->second.Get(name), label + " " + extension + " " + name), srgb);
+        slot(s, name, extensionTextureUse(it->second.Get(name), label + " " + extension + " " + name, normal), srgb);
       };
       const bool coated = material.clearcoat > 0.0f;
       const bool sheen = material.sheen.x > 0.0f || material.sheen.y > 0.0f || material.sheen.z > 0.0f;
@@ -422,6 +423,7 @@ class Converter {
       extensionSlot(kSpecular, "specularColorTexture", WT_TEXTURE_SLOT_SPECULAR_COLOR, true, true);
       extensionSlot(kClearcoat, "clearcoatTexture", WT_TEXTURE_SLOT_CLEARCOAT, false, coated);
       extensionSlot(kClearcoat, "clearcoatRoughnessTexture", WT_TEXTURE_SLOT_CLEARCOAT_ROUGHNESS, false, coated);
+      extensionSlot(kClearcoat, "clearcoatNormalTexture", WT_TEXTURE_SLOT_CLEARCOAT_NORMAL, false, coated, true);
       extensionSlot(kSheen, "sheenColorTexture", WT_TEXTURE_SLOT_SHEEN_COLOR, true, sheen);
       extensionSlot(kSheen, "sheenRoughnessTexture", WT_TEXTURE_SLOT_SHEEN_ROUGHNESS, false, sheen);
       extensionSlot(kAnisotropy, "anisotropyTexture", WT_TEXTURE_SLOT_ANISOTROPY, false, material.anisotropy > 0.0f);
@@ -479,8 +481,9 @@ class Converter {
         : index(t.index), texCoord(t.texCoord), extensions(&t.extensions) {}
   };
 
-  /// An extension's textureInfo, which tinygltf leaves as JSON.
-  TextureUse extensionTextureUse(const tinygltf::Value& v, const std::string& who) const {
+  /// An extension's textureInfo, which tinygltf leaves as JSON (`normal`: a
+  /// normalTextureInfo, with its scale).
+  TextureUse extensionTextureUse(const tinygltf::Value& v, const std::string& who, bool normal = false) const {
     if (!v.IsObject()) fail(who + " is not an object");
     TextureUse use;
     auto integer = [&](const char* name, int fallback) {
@@ -494,6 +497,7 @@ class Converter {
     use.index = integer("index", -1);
     if (use.index < 0) fail(who + ": index is missing or negative");
     use.texCoord = integer("texCoord", 0);
+    if (normal) use.scale = extensionNumber(v, "scale", 1.0, who);
     if (v.Has("extensions") && v.Get("extensions").IsObject() && v.Get("extensions").Has(kTextureTransform))
       use.transform = &v.Get("extensions").Get(kTextureTransform);
     return use;
@@ -690,8 +694,6 @@ class Converter {
       float coat = extensionUnit(*ext, "clearcoatFactor", 0.0, where);
       float roughness = extensionUnit(*ext, "clearcoatRoughnessFactor", 0.0, where);
       m = withClearcoat(m, coat, roughness);
-      if (ext->Has("clearcoatNormalTexture"))
-        m_scene.addWarning(where + " clearcoatNormalTexture is not supported yet; the coat follows the base's normal");
     }
     if (const tinygltf::Value* ext = materialExtension(src, label, kSheen)) {
       const std::string where = label + " " + kSheen;
@@ -1128,10 +1130,12 @@ class Converter {
   /// normal texture's coordinates, else TEXCOORD_0); a vertex split at a
   /// mirrored seam gets a geometry of its own, so no other primitive shares it.
   void generateTangentsFor(const tinygltf::Material& material, DecodedPrimitive& out) {
-    const bool normalMap = material.normalTexture.index >= 0;
+    const int coatNormalSet = clearcoatNormalTexCoord(material);
+    const bool normalMap = material.normalTexture.index >= 0 || coatNormalSet >= 0;
     if (!normalMap && !anisotropic(material)) return;
-    const std::vector<glm::vec2>& uv =
-        normalMap && material.normalTexture.texCoord == 1 ? out.texcoords1 : out.texcoords;
+    // the normal texture's set, else the clear coat's
+    const int set = material.normalTexture.index >= 0 ? material.normalTexture.texCoord : coatNormalSet;
+    const std::vector<glm::vec2>& uv = normalMap && set == 1 ? out.texcoords1 : out.texcoords;
     if (uv.empty()) {
       // a normal texture is left out, warned where the material is read; anisotropy is kept, its direction not
       if (!normalMap)
@@ -1151,6 +1155,18 @@ class Converter {
   }
 
   /// Whether a material has KHR_materials_anisotropy with a strength above 0.
+  /// The texture coordinate set of a KHR_materials_clearcoat
+  /// clearcoatNormalTexture (a coat of factor 0 reads none); -1: none.
+  static int clearcoatNormalTexCoord(const tinygltf::Material& material) {
+    auto it = material.extensions.find(kClearcoat);
+    if (it == material.extensions.end() || !it->second.IsObject() || !it->second.Has("clearcoatNormalTexture")) return -1;
+    const tinygltf::Value& factor = it->second.Has("clearcoatFactor") ? it->second.Get("clearcoatFactor") : tinygltf::Value();
+    if (!factor.IsNumber() || !(factor.GetNumberAsDouble() > 0.0)) return -1;
+    const tinygltf::Value& info = it->second.Get("clearcoatNormalTexture");
+    if (!info.IsObject() || !info.Has("texCoord") || !info.Get("texCoord").IsNumber()) return 0;
+    return info.Get("texCoord").GetNumberAsDouble() == 1.0 ? 1 : 0;
+  }
+
   static bool anisotropic(const tinygltf::Material& material) {
     auto it = material.extensions.find(kAnisotropy);
     if (it == material.extensions.end() || !it->second.IsObject() || !it->second.Has("anisotropyStrength")) return false;

@@ -126,6 +126,9 @@ typedef struct Bsdf {
   float clearcoat;   ///< weight of the clear coat (0 without WT_HAS_CLEARCOAT, and inside a volume)
   float clearcoat_roughness;  ///< perceptual; alpha = roughness^2
   int clearcoat_mirror;       ///< a coat whose roughness is below WT_PBR_MIN_ROUGHNESS
+#if WT_HAS_CLEARCOAT
+  float3 coat_t, coat_b, coat_n;  ///< the coat's own frame in the local one (clearcoatNormalTexture); else the local axes
+#endif
   float3 sheen;      ///< sheen colour (0 without WT_HAS_SHEEN, and inside a volume)
   float sheen_roughness;  ///< clamped to [WT_SHEEN_MIN_ROUGHNESS, 1]; alpha = roughness^2
   SheenFit sheen_fit;     ///< its visibility's Lambda fit, once per material
@@ -178,6 +181,28 @@ inline float3 base_ggx_sample(Bsdf b, float3 wo, float u1, float u2) {
   return (float3)(hx, hy, hz);
 }
 
+#if WT_HAS_CLEARCOAT
+/// Local direction w in the coat's frame (its normal along z).
+inline float3 coat_local(Bsdf b, float3 w) { return (float3)(dot(w, b.coat_t), dot(w, b.coat_b), dot(w, b.coat_n)); }
+
+/// Whether the coat has a normal of its own, apart from the shading normal.
+inline bool coat_apart(Bsdf b) { return b.coat_n.z < 1.0f; }
+
+/// KHR_materials_clearcoat's clearcoatNormalTexture: the coat's GGX lobe
+/// (its albedo, distribution, masking, Fresnel and sampling) about local
+/// normal n instead of the shading normal; the base and the sheen keep
+/// theirs. The coat is a closure of its own, as in Cycles and the glTF
+/// specification's clearcoat_brdf: its cosines are to its own normal.
+inline void bsdf_coat_normal(Bsdf* b, float3 n) {
+  float len = length(n);
+  if (!(len > 0.0f) || !isfinite(len)) return;
+  n /= len;
+  if (n.z >= 1.0f) return;
+  b->coat_n = n;
+  frame_from_normal(n, &b->coat_t, &b->coat_b);
+}
+#endif
+
 /// The outcome of sampling a direction.
 typedef struct BsdfSample {
   float3 wi;       ///< local frame, unit
@@ -207,6 +232,11 @@ inline Bsdf bsdf_make(WtMaterial m, __global const float* table, int inside) {
   b.clearcoat = 0.0f;
   b.clearcoat_roughness = 1.0f;
   b.clearcoat_mirror = 0;
+#if WT_HAS_CLEARCOAT
+  b.coat_t = (float3)(1.0f, 0.0f, 0.0f);
+  b.coat_b = (float3)(0.0f, 1.0f, 0.0f);
+  b.coat_n = (float3)(0.0f, 0.0f, 1.0f);
+#endif
   b.sheen = (float3)(0.0f);
   b.sheen_roughness = 1.0f;
   b.sheen_fit = (SheenFit){0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f};
@@ -369,8 +399,9 @@ inline PbrView pbr_view(Bsdf b, float3 wo) {
   v.spec_ss = pbr_dielectric_albedo(b, es, (DielectricColor)(0.0f));
   v.coat = v.sheen = v.sheen_lambda_o = 0.0f;
 #if WT_HAS_CLEARCOAT
-  if (b.clearcoat > 0.0f) {
-    float2 c = pbr_moments(b.table, mu, b.clearcoat_roughness);
+  float mu_coat = coat_local(b, wo).z;  // the coat's albedo at its own normal
+  if (b.clearcoat > 0.0f && mu_coat > 0.0f) {
+    float2 c = pbr_moments(b.table, mu_coat, b.clearcoat_roughness);
     v.coat = b.clearcoat * (WT_PBR_DIELECTRIC_F0 * c.x + (1.0f - WT_PBR_DIELECTRIC_F0) * c.y);
   }
 #endif
@@ -564,13 +595,14 @@ inline float3 pbr_eval(Bsdf b, float3 wo, float3 wi, uint lobes, float* pdf) {
     }
     f *= wi.z;
 #if WT_HAS_CLEARCOAT
-    if ((lobes & WT_LOBE_SPECULAR) && b.clearcoat > 0.0f && !b.clearcoat_mirror) {
-      // D G F / (4 mu_o mu_i) mu_i, F0 0.04
+    // D G F / (4 mu_o mu_i) mu_i, F0 0.04, in the coat's frame
+    float3 wo_c = coat_local(b, wo), wi_c = coat_local(b, wi), h_c = coat_local(b, h);
+    if ((lobes & WT_LOBE_SPECULAR) && b.clearcoat > 0.0f && !b.clearcoat_mirror && wo_c.z > 0.0f && wi_c.z > 0.0f) {
       float alpha = b.clearcoat_roughness * b.clearcoat_roughness;
-      float d = ggx_d(h.x, h.y, h.z, alpha);
-      float g2 = ggx_g2(wo.x, wo.y, wo.z, wi.x, wi.y, wi.z, alpha);
-      f_layers += b.clearcoat * ggx_schlick(WT_PBR_DIELECTRIC_F0, oh) * d * g2 / (4.0f * wo.z);
-      pdf_coat = ggx_g1(wo.x, wo.y, wo.z, alpha) * d / (4.0f * wo.z);
+      float d = ggx_d(h_c.x, h_c.y, h_c.z, alpha);
+      float g2 = ggx_g2(wo_c.x, wo_c.y, wo_c.z, wi_c.x, wi_c.y, wi_c.z, alpha);
+      f_layers += b.clearcoat * ggx_schlick(WT_PBR_DIELECTRIC_F0, oh) * d * g2 / (4.0f * wo_c.z);
+      pdf_coat = ggx_g1(wo_c.x, wo_c.y, wo_c.z, alpha) * d / (4.0f * wo_c.z);
     }
 #endif
 #if WT_HAS_SHEEN
@@ -607,10 +639,12 @@ inline float3 bsdf_eval(Bsdf b, float3 wo, float3 wi, uint lobes, float* pdf) {
 /// the mirror coat. Their weight F (what a delta carries, no pdf), summed,
 /// and *p: the summed probability of the techniques that produce them, so a
 /// mirror coat over a mirror base is one delta reached by either technique.
-inline float3 pbr_mirror(Bsdf b, PbrView v, Techniques t, float3 wo, float* p) {
+/// `which`: 1 the base's, 2 the coat's, 3 both (one direction: the coat has
+/// no normal of its own).
+inline float3 pbr_mirror(Bsdf b, PbrView v, Techniques t, float3 wo, float* p, uint which) {
   float3 f = (float3)(0.0f);
   *p = 0.0f;
-  if (b.mirror && t.specular > 0.0f) {
+  if ((which & 1u) && b.mirror && t.specular > 0.0f) {
     float m5 = ggx_schlick(0.0f, wo.z);
     float opaque = (1.0f - b.metallic) * (1.0f - b.transmission);
     float3 f_base = b.metallic * (b.base + (1.0f - b.base) * m5) + opaque * b.specular * (b.f0 + (1.0f - b.f0) * m5);
@@ -623,8 +657,8 @@ inline float3 pbr_mirror(Bsdf b, PbrView v, Techniques t, float3 wo, float* p) {
     *p += t.specular;
   }
 #if WT_HAS_CLEARCOAT
-  if (b.clearcoat_mirror && t.clearcoat > 0.0f) {
-    f += b.clearcoat * ggx_schlick(WT_PBR_DIELECTRIC_F0, wo.z);
+  if ((which & 2u) && b.clearcoat_mirror && t.clearcoat > 0.0f) {
+    f += b.clearcoat * ggx_schlick(WT_PBR_DIELECTRIC_F0, coat_local(b, wo).z);
     *p += t.clearcoat;
   }
 #endif
@@ -671,18 +705,32 @@ inline bool bsdf_sample(Bsdf b, float3 wo, uint lobes, float u_lobe, float u1, f
     if (coat ? b.clearcoat_mirror : b.mirror) {
       // the mirror: F at mu_o, over the probability of having picked a technique that makes it
       float p;
-      float3 f = pbr_mirror(b, v, t, wo, &p);
+      uint which = 3u;
       s->wi = (float3)(-wo.x, -wo.y, wo.z);
+#if WT_HAS_CLEARCOAT
+      // a coat of its own normal mirrors about it, apart from the base's mirror
+      if (coat_apart(b)) {
+        which = coat ? 2u : 1u;
+        if (coat) s->wi = 2.0f * dot(wo, b.coat_n) * b.coat_n - wo;
+      }
+#endif
+      float3 f = pbr_mirror(b, v, t, wo, &p, which);
       s->weight = f / p;
       s->pdf = 0.0f;
       s->lobe |= WT_LOBE_DELTA;
-      return p > 0.0f && (f.x > 0.0f || f.y > 0.0f || f.z > 0.0f);
+      return p > 0.0f && s->wi.z > 0.0f && (f.x > 0.0f || f.y > 0.0f || f.z > 0.0f);
     }
     float3 h;
     if (coat) {
+#if WT_HAS_CLEARCOAT
       float alpha = b.clearcoat_roughness * b.clearcoat_roughness, hx, hy, hz;
-      ggx_sample_visible_normal(wo.x, wo.y, wo.z, alpha, u1, u2, &hx, &hy, &hz);
-      h = (float3)(hx, hy, hz);
+      float3 wo_c = coat_local(b, wo);
+      if (!(wo_c.z > 0.0f)) return false;
+      ggx_sample_visible_normal(wo_c.x, wo_c.y, wo_c.z, alpha, u1, u2, &hx, &hy, &hz);
+      h = hx * b.coat_t + hy * b.coat_b + hz * b.coat_n;
+#else
+      return false;
+#endif
     } else {
       h = base_ggx_sample(b, wo, u1, u2);
     }

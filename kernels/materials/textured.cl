@@ -92,6 +92,25 @@ inline float4 material_texture(SurfaceScene ss, uint material, uint slot, Surfac
 }
 #endif
 
+#if WT_HAS_TEXTURES
+/// Unit normal n bent by the tangent-space normal map in `slot` (its xy
+/// scaled by the slot's scale); n itself where the point has no tangent.
+inline float3 normal_mapped(SurfaceScene ss, uint index, uint slot, SurfacePoint sp, float3 n) {
+  if (!(dot(sp.tangent, sp.tangent) > 0.0f)) return n;
+  float4 t = material_texture(ss, index, slot, sp);
+  float scale = ss.refs[index * WT_TEXTURE_SLOTS + slot].scale;
+  float3 mapped = (float3)((2.0f * t.x - 1.0f) * scale, (2.0f * t.y - 1.0f) * scale, 2.0f * t.z - 1.0f);
+  float3 tangent = sp.tangent - n * dot(n, sp.tangent);
+  float tl = length(tangent);
+  if (!(tl > 0.0f)) return n;
+  tangent /= tl;
+  float3 bitangent = sp.sign * cross(n, tangent);
+  float3 bent = mapped.x * tangent + mapped.y * bitangent + mapped.z * n;
+  float bl = length(bent);
+  return bl > 0.0f && isfinite(bl) ? bent / bl : n;
+}
+#endif
+
 /// Material `index` (`m`) at the point: base colour and alpha times COLOR_0
 /// and the base colour texture, roughness and metallic times their texture's
 /// green and blue, emission and transmission times theirs; `ns` (the
@@ -141,24 +160,21 @@ inline WtMaterial material_at(SurfaceScene ss, uint index, WtMaterial m, Surface
     m.iridescence.w = m.iridescence.z + (m.iridescence.w - m.iridescence.z) * g;
   }
 #endif
-  if ((mask & (1u << WT_TEXTURE_SLOT_NORMAL)) && dot(sp.tangent, sp.tangent) > 0.0f) {
-    float4 t = material_texture(ss, index, WT_TEXTURE_SLOT_NORMAL, sp);
-    float scale = ss.refs[index * WT_TEXTURE_SLOTS + WT_TEXTURE_SLOT_NORMAL].scale;
-    float3 mapped = (float3)((2.0f * t.x - 1.0f) * scale, (2.0f * t.y - 1.0f) * scale, 2.0f * t.z - 1.0f);
-    float3 n = *ns;
-    float3 tangent = sp.tangent - n * dot(n, sp.tangent);
-    float tl = length(tangent);
-    if (tl > 0.0f) {
-      tangent /= tl;
-      float3 bitangent = sp.sign * cross(n, tangent);
-      float3 bent = mapped.x * tangent + mapped.y * bitangent + mapped.z * n;
-      float bl = length(bent);
-      if (bl > 0.0f && isfinite(bl)) *ns = bent / bl;
-    }
-  }
+  if (mask & (1u << WT_TEXTURE_SLOT_NORMAL)) *ns = normal_mapped(ss, index, WT_TEXTURE_SLOT_NORMAL, sp, *ns);
 #endif
   return m;
 }
+
+#if WT_HAS_TEXTURES && WT_HAS_CLEARCOAT
+/// KHR_materials_clearcoat's clearcoatNormalTexture: the coat's normal,
+/// world, from the interpolated normal n (the tangent space the base's normal
+/// map bends too); zero where the material has none (the coat then follows
+/// the shading normal).
+inline float3 clearcoat_normal(SurfaceScene ss, uint index, uint mask, SurfacePoint sp, float3 n) {
+  if (!(mask & (1u << WT_TEXTURE_SLOT_CLEARCOAT_NORMAL))) return (float3)(0.0f);
+  return normal_mapped(ss, index, WT_TEXTURE_SLOT_CLEARCOAT_NORMAL, sp, n);
+}
+#endif
 
 #if WT_HAS_ANISOTROPY
 /// KHR_materials_anisotropy at the point: m's strength times the anisotropy

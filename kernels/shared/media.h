@@ -24,6 +24,19 @@
 #define WT_MEDIA_STACK 4          ///< media per path; the path state holds them as one uint4
 #define WT_MEDIUM_NONE 0xffffffffu  ///< a free entry
 
+// A false hit is no bounce: it counts neither towards the bounce limit nor
+// for Russian roulette (Falcor's rejected hits). A path passes at most
+// WT_MAX_FALSE_HITS of them for free, so that overlapping volumes cannot keep
+// a path alive forever; beyond that each counts as a bounce. The count shares
+// the path state's fourth bounce counter with the dispersion channel: bits
+// 0-1 the channel plus 1 (0: all channels), bits 2 and up the false hits.
+#define WT_MAX_FALSE_HITS 16u
+#define WT_DISPERSION_BITS 3u      ///< the channel's bits in the shared counter
+#define WT_FALSE_HIT_STEP 4u       ///< one false hit in the shared counter
+
+/// The false hits a path passed for free, from its shared counter.
+WT_MEDIA_INLINE wt_uint media_false_hits(wt_uint shared_counter) { return shared_counter / WT_FALSE_HIT_STEP; }
+
 /// The volumes a path is inside: material ids, oldest first, entries
 /// [0, count) used and the rest WT_MEDIUM_NONE.
 typedef struct WtMediaStack {

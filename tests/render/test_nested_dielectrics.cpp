@@ -41,13 +41,13 @@ void addSphere(Scene& s, glm::vec3 center, float radius, const WtMaterial& m, co
 }
 
 /// Two renders within noise, block by block (fewer samples in the sanitizer
-/// pass: the z-test scales with them). A false hit takes a wavefront pass of
-/// its own: the bounce limit is high enough that what either render loses
-/// to it is far below the noise.
-void expectSameRender(const Scene& a, const Scene& b, const std::string& what) {
+/// pass: the z-test scales with them).
+void expectSameRender(const Scene& a, const Scene& b, const std::string& what, int maxBounces = 24,
+                      Integrator integrator = Integrator::Path) {
   RenderSettings s;
   s.width = s.height = 32;
-  s.maxBounces = 24;
+  s.maxBounces = maxBounces;
+  s.integrator = integrator;
   s.background = glm::vec3(0.05f);
   s.seed = 5;
   const int spp = int(test::testSize(256, 96));
@@ -69,6 +69,51 @@ TEST(NestedDielectrics, AVolumeOfLowerPriorityInsideGlassIsNotThere) {
     addSphere(s, glm::vec3(0.1f, 0.2f, 0.0f), 0.6f, glass(1.33f, glm::vec3(3.0f, 0.1f, 2.0f), 0), "water");
   });
   expectSameRender(solid, nested, "a lower-priority sphere inside the glass");
+}
+
+// False hits are no bounces: at a bounce limit of 3 the floor seen through
+// the ball (glass in, glass out, the floor's light sample) is as bright with
+// the lower-priority sphere inside as without it, though that sphere adds
+// two hits on the way (four when the camera ray passes it and the floor
+// does not light it). Counting them as bounces leaves the floor black
+// behind the ball.
+TEST(NestedDielectrics, FalseHitsDoNotCountAsBounces) {
+  const WtMaterial outer = glass(1.5f, kGlassSigma, 1);
+  const Scene solid = glassBall(outer, [](Scene&) {});
+  const Scene nested = glassBall(outer, [](Scene& s) {
+    addSphere(s, glm::vec3(0.0f, -0.1f, 0.0f), 0.7f, glass(1.33f, glm::vec3(3.0f, 0.1f, 2.0f), 0), "water");
+  });
+  expectSameRender(solid, nested, "path, 3 bounces", 3);
+  expectSameRender(solid, nested, "minimal, 3 bounces", 3, Integrator::Minimal);
+}
+
+// The cap on free false hits (WT_MAX_FALSE_HITS, 16): ten nested shells of
+// lower priority inside the ball put up to twenty false hits on a path
+// through its middle. With bounces to spare the ball still renders as solid
+// glass (what the cap charges fits the limit); at a bounce limit of 3 the
+// false hits past the 16th are bounces and end the paths through the middle
+// before they reach the floor: the image is darker than the solid ball's.
+TEST(NestedDielectrics, FalseHitsPastTheCapCountAsBounces) {
+  const WtMaterial outer = glass(1.5f, kGlassSigma, 1);
+  const Scene solid = glassBall(outer, [](Scene&) {});
+  const Scene shells = glassBall(outer, [](Scene& s) {
+    for (int k = 0; k < 10; ++k)
+      addSphere(s, glm::vec3(0.0f), 0.95f - 0.05f * float(k), glass(1.33f, glm::vec3(0.5f), 0), "shell");
+  });
+  expectSameRender(solid, shells, "24 bounces", 24);
+  RenderSettings s;
+  s.width = s.height = 32;
+  s.maxBounces = 3;
+  s.background = glm::vec3(0.05f);
+  s.seed = 5;
+  const int spp = int(test::testSize(256, 96));
+  const Image a = render(solid, s, spp);
+  s.seed = 6;
+  const Image b = render(shells, s, spp);
+  for (int c = 0; c < 3; ++c) {
+    const test::BlockStat x = test::blockStat(a, 0, 0, a.width, a.height, c), y = test::blockStat(b, 0, 0, b.width, b.height, c);
+    EXPECT_LT(y.mean, x.mean - 5.0 * std::sqrt(x.varianceOfMean + y.varianceOfMean)) << "channel " << c;
+  }
 }
 
 // An inner volume of the glass's own index and absorption but higher
@@ -114,6 +159,47 @@ TEST(NestedDielectrics, GlassOverOverlappingWaterPassesTheStackedSlabsClosedForm
   for (Integrator integrator : {Integrator::Path, Integrator::Minimal}) {
     s.integrator = integrator;
     expectUniform(render(scene, s, 256), expected, 1e-4, 5.0, integrator == Integrator::Path ? "path" : "minimal");
+  }
+}
+
+// The camera inside a volume starts its paths in it (host/render/camera_media.h):
+// under water (y in [0, 3], index 1.33, priority 0), looking straight down
+// at y = 2 through a submerged block of another absorption and the water's
+// index (y in [0.5, 1], priority 1) onto an emitter below the water. The
+// only interfaces are the water's faces (reflectance R each way) and the
+// column absorbs everywhere: the upward radiance at the camera is
+// n^2 tau_up (1 - R) E / (1 - R^2 tau^2), tau_up the column below the
+// camera, tau the whole column and n^2 the squared index radiance gains
+// entering water (bsdf.cl scales it so). A camera taken to start in air
+// sees a glass face of index ratio 1.33 on the way in and out, no water
+// above it, and misses the factor exp(-sigma_water) of it.
+TEST(NestedDielectrics, ACameraUnderWaterStartsInTheWater) {
+  const glm::vec3 emitted(1.0f, 2.0f, 4.0f), waterSigma(0.6f, 0.3f, 0.1f), blockSigma(0.2f, 0.4f, 0.8f);
+  Scene scene = test::makeFloor(3.0f, -1.0f, makeMaterial(glm::vec3(0.0f), emitted));
+  appendScene(scene, makeBox(glm::vec3(-2.0f, 0.0f, -2.0f), glm::vec3(2.0f, 3.0f, 2.0f), glass(1.33f, waterSigma, 0)));
+  appendScene(scene,
+              makeBox(glm::vec3(-1.5f, 0.5f, -1.5f), glm::vec3(1.5f, 1.0f, 1.5f), glass(1.33f, blockSigma, 1)));
+  scene.camera = test::topDownCamera(glm::vec3(0.0f, 2.0f, 0.0f), 1.0f);
+  const double r = normalFresnel(1.33, 1.0);
+  glm::dvec3 expected;
+  for (int c = 0; c < 3; ++c) {
+    const double tauUp = std::exp(-1.5 * waterSigma[c] - 0.5 * blockSigma[c]);
+    const double tau = tauUp * std::exp(-1.0 * waterSigma[c]);
+    expected[c] = 1.33 * 1.33 * emitted[c] * tauUp * (1.0 - r) / (1.0 - r * r * tau * tau);
+  }
+  RenderSettings s;
+  s.width = s.height = 8;
+  s.maxBounces = 64;
+  s.seed = 7;
+  // the image's mean (a pixel whose paths all crossed the water's face has no variance to test against)
+  for (Integrator integrator : {Integrator::Path, Integrator::Minimal}) {
+    s.integrator = integrator;
+    const Image img = render(scene, s, 256);
+    for (int c = 0; c < 3; ++c) {
+      const test::BlockStat all = test::blockStat(img, 0, 0, img.width, img.height, c);
+      EXPECT_NEAR(all.mean, expected[c], 5.0 * std::sqrt(all.varianceOfMean) + 1e-4 * expected[c])
+          << (integrator == Integrator::Path ? "path" : "minimal") << ", channel " << c;
+    }
   }
 }
 

@@ -361,7 +361,8 @@ TEST(GltfAssets, TransmissionMaterials) {
 // factors and colours, up to the "HDR" colour 25 (F0 0.04 x 25, capped at 1
 // by the BSDF); UnlitTest's orange [1, 0.2176, 0] as emission; and
 // IridescenceSuzanne, whose iridescence is not drawn and said so once, while
-// its opaque ior 2.0 now sets the dielectric's F0.
+// its opaque ior 2.0 now sets the dielectric's F0. ClearCoatTest's coat
+// normal maps are read, with tangents generated for them.
 TEST(GltfAssets, LayerMaterials) {
   WT_REQUIRE_ASSET(coat, "gltf/ClearCoatTest/glTF/ClearCoatTest.gltf");
   WT_REQUIRE_ASSET(specular, "gltf/SpecularTest/glTF/SpecularTest.gltf");
@@ -378,7 +379,12 @@ TEST(GltfAssets, LayerMaterials) {
   EXPECT_EQ(named(c, "RoughVariations_Coated").clearcoat_roughness, 1.0f);
   EXPECT_EQ(named(c, "Simple_Base").clearcoat, 0.0f);
   EXPECT_FALSE(hasWarning(c, "KHR_materials_clearcoat is not supported"));
-  EXPECT_TRUE(hasWarning(c, "clearcoatNormalTexture is not supported yet"));
+  // the coat's normal maps are read: alone, and beside the base's own
+  EXPECT_FALSE(hasWarning(c, "clearcoatNormalTexture"));
+  EXPECT_EQ(named(c, "CoatNorm_Coated").texture_mask, 1u << WT_TEXTURE_SLOT_CLEARCOAT_NORMAL);
+  EXPECT_EQ(named(c, "SharedNorm_Coated").texture_mask,
+            (1u << WT_TEXTURE_SLOT_CLEARCOAT_NORMAL) | (1u << WT_TEXTURE_SLOT_NORMAL));
+  EXPECT_EQ(c.tangents.size(), c.positions.size());
   // the coat's factor and roughness textures are read
   EXPECT_EQ(named(c, "Partial_Coated").texture_mask, 1u << WT_TEXTURE_SLOT_CLEARCOAT);
   EXPECT_EQ(named(c, "RoughVariations_Coated").texture_mask, 1u << WT_TEXTURE_SLOT_CLEARCOAT_ROUGHNESS);

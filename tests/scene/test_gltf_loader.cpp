@@ -993,23 +993,35 @@ TEST(GltfLoader, LayerExtensionsReadTheirFactors) {
   setMaterialFeatures(features, s.materials);
   EXPECT_TRUE(features.specular && features.clearcoat && features.sheen);
 
-  // textures of the extensions: read into their slots, but the coat's normal map (warned about)
+  // textures of the extensions: read into their slots, the coat's normal map with its scale;
+  // a primitive with TEXCOORD_0 and no TANGENT gets tangents for the coat's normal map alone
   GltfDoc textured = triangleDoc();
+  const int uv = textured.addVec2({{0, 0}, {1, 0}, {0, 1}});
   textured.images.push_back(
       "{\"uri\":\"data:image/png;base64,"
       "iVBORw0KGgoAAAANSUhEUgAAAAEAAAABCAYAAAAfFcSJAAAADUlEQVR42mNk+M9QDwADhgGAWjR9awAAAABJRU5ErkJggg==\"}");
   textured.textures.push_back("{\"source\":0}");
   textured.materials.push_back(
       "{\"extensions\":{\"KHR_materials_specular\":{\"specularTexture\":{\"index\":0}},"
-      "\"KHR_materials_clearcoat\":{\"clearcoatFactor\":1,\"clearcoatNormalTexture\":{\"index\":0}},"
+      "\"KHR_materials_clearcoat\":{\"clearcoatFactor\":1,\"clearcoatNormalTexture\":{\"index\":0,\"scale\":0.5}},"
       "\"KHR_materials_sheen\":{\"sheenColorFactor\":[1,1,1],\"sheenRoughnessTexture\":{\"index\":0}}}}");
-  textured.meshes[0] = "{\"primitives\":[{\"attributes\":{\"POSITION\":0},\"material\":0}]}";
+  textured.meshes[0] =
+      "{\"primitives\":[{\"attributes\":{\"POSITION\":0,\"TEXCOORD_0\":" + str(std::size_t(uv)) + "},\"material\":0}]}";
   Scene t = loadDoc(textured);
+  expectConsistent(t);
   EXPECT_EQ(t.materials[0].clearcoat, 1.0f);
   EXPECT_EQ(t.materials[0].sheen.x, 1.0f);
-  ASSERT_EQ(t.warnings.size(), 1u);
-  EXPECT_CONTAINS(t.warnings[0], "clearcoatNormalTexture is not supported yet");
-  EXPECT_EQ(t.materials[0].texture_mask, (1u << WT_TEXTURE_SLOT_SPECULAR) | (1u << WT_TEXTURE_SLOT_SHEEN_ROUGHNESS));
+  EXPECT_TRUE(t.warnings.empty()) << t.warnings.at(0);
+  EXPECT_EQ(t.materials[0].texture_mask, (1u << WT_TEXTURE_SLOT_SPECULAR) | (1u << WT_TEXTURE_SLOT_SHEEN_ROUGHNESS) |
+                                             (1u << WT_TEXTURE_SLOT_CLEARCOAT_NORMAL));
+  ASSERT_EQ(t.materialTextures.size(), std::size_t(WT_TEXTURE_SLOTS));
+  EXPECT_EQ(t.materialTextures[WT_TEXTURE_SLOT_CLEARCOAT_NORMAL].scale, 0.5f);
+  ASSERT_EQ(t.tangents.size(), t.positions.size());
+  for (const glm::vec4& tangent : t.tangents) EXPECT_NEAR(glm::length(glm::vec3(tangent)), 1.0f, 1e-5f);
+  // the normal map takes the feature that compiles normal mapping in
+  KernelFeatures coated;
+  setMaterialFeatures(coated, t.materials);
+  EXPECT_TRUE(coated.clearcoat);
 }
 
 // KHR_materials_anisotropy: strength and rotation (defaults 0), the
