@@ -50,6 +50,10 @@ struct BvhBuildOptions {
   /// COLOR_0 and the alpha bits for every vertex and triangle even where no
   /// material reads them, for the general program (generalKernelFeatures).
   bool allSurfaceAttributes = false;
+  /// Read by SceneBuffers only: materials that are exactly Lambertian go to
+  /// the device as the Lambertian model (kernelMaterial, scene/generators.h);
+  /// false keeps their own model (A/B measurements, tests).
+  bool lambertianForms = true;
 };
 
 /// Primitives [first, first + count) are a placed copy of `geometry`: the

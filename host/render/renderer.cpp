@@ -62,6 +62,7 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
   bvhOptions.maxLeafSize = 0;  // leaves of up to kBvh4MaxLeafSize, chosen by the collapse
   bvhOptions.instancing = settings.instancing;
   bvhOptions.allSurfaceAttributes = settings.generalProgram;
+  bvhOptions.lambertianForms = settings.lambertianForms;
   m_scene = std::make_unique<SceneBuffers>(context, scene, bvhOptions);
   m_stats.sceneSeconds = lap();
   m_environment = settings.environmentMap.empty()
