@@ -10,11 +10,13 @@ WT_KERNEL void test_rng(uint count, uint sample, uint bounce, uint dim, uint see
   out[i] = rng_uniform(i, sample, bounce, dim, seed);
 }
 
+// lambert_sample about normal.xyz, or lambert_sample_local (about +z) where normal.w is 1
 WT_KERNEL void test_lambert(uint count, float4 normal, __global const float2* u,
                             __global float4* out) {
   uint i = get_global_id(0);
   if (i >= count) return;
-  out[i] = (float4)(lambert_sample(normal.xyz, u[i].x, u[i].y), 0.0f);
+  float3 d = normal.w != 0.0f ? lambert_sample_local(u[i].x, u[i].y) : lambert_sample(normal.xyz, u[i].x, u[i].y);
+  out[i] = (float4)(d, 0.0f);
 }
 
 #include "geometry/triangle.cl"

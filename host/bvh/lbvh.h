@@ -53,6 +53,10 @@ struct BvhBuildOptions {
   /// Read by SceneBuffers only: the scene outlives the buffers and stays
   /// unchanged, so a CPU device reads its texels in place (readOnlyBuffer).
   bool texelsInPlace = false;
+  /// Read by SceneBuffers only: materials that are exactly Lambertian go to
+  /// the device as the Lambertian model (kernelMaterial, scene/generators.h);
+  /// false keeps their own model (A/B measurements, tests).
+  bool lambertianForms = true;
 };
 
 /// Primitives [first, first + count) are a placed copy of `geometry`: the

@@ -18,6 +18,7 @@
 #include "render/renderer.h"
 #include "scene/camera_override.h"
 #include "scene/default_scene.h"
+#include "scene/generators.h"
 #include "stress/stress.h"
 
 #include <CLI/CLI.hpp>
@@ -975,15 +976,16 @@ int runInfo(RenderOptions options) {
               scene.instances.size(), scene.primitiveInstances.size(), options.instancing.c_str(),
               buffers.instanceCount(), buffers.instancedTriangles());
   // materials
-  std::size_t lambertian = 0, pbr = 0, mask = 0, blend = 0;
+  std::size_t lambertian = 0, pbr = 0, pbrLambertian = 0, mask = 0, blend = 0;
   for (const WtMaterial& m : scene.materials) {
     (m.model == WT_MATERIAL_PBR ? pbr : lambertian) += 1;
+    pbrLambertian += m.model == WT_MATERIAL_PBR && wt::isLambertian(m);
     mask += m.alpha_mode == WT_ALPHA_MASK;
     blend += m.alpha_mode == WT_ALPHA_BLEND;
   }
-  std::printf("materials: %zu (%zu lambertian, %zu metallic-roughness; alpha: %zu mask, %zu blend; %zu triangles "
-              "alpha-tested)\n",
-              scene.materials.size(), lambertian, pbr, mask, blend, buffers.alphaTriangles());
+  std::printf("materials: %zu (%zu lambertian, %zu metallic-roughness, %zu of them exactly Lambertian and rendered as "
+              "such; alpha: %zu mask, %zu blend; %zu triangles alpha-tested)\n",
+              scene.materials.size(), lambertian, pbr, pbrLambertian, mask, blend, buffers.alphaTriangles());
   // lights
   std::size_t kinds[WT_LIGHT_DIRECTIONAL + 1] = {};
   for (const wt::PunctualLight& l : scene.lights)

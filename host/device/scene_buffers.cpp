@@ -1,6 +1,7 @@
 #include "device/scene_buffers.h"
 
 #include "bvh/builders.h"
+#include "scene/generators.h"
 #include "shared/alpha.h"
 #include "shared/lights.h"
 
@@ -368,7 +369,11 @@ SceneBuffers::SceneBuffers(Context& context, const Scene& scene, const BvhBuildO
   triangleInfo = upload(context, info, bytes);
   uploadedBytes = bytes;
   normals = upload(context, scene.normals, m_attributeBytes);
-  materials = upload(context, scene.materials, m_attributeBytes);
+  // each material in the cheapest model that renders it exactly (kernelMaterial)
+  m_kernelMaterials = scene.materials;
+  if (options.lambertianForms)
+    std::transform(m_kernelMaterials.begin(), m_kernelMaterials.end(), m_kernelMaterials.begin(), kernelMaterial);
+  materials = upload(context, m_kernelMaterials, m_attributeBytes);
   uploadPrimitives(context, scene, options, descs);
   uploadSurface(context, scene);
   uploadAlpha(context, scene);

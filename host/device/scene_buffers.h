@@ -96,7 +96,10 @@ class SceneBuffers {
   /// the per-vertex normals) and its material
   cl::Buffer triangleInfo;
   cl::Buffer normals;     ///< float4 per vertex
-  cl::Buffer materials;   ///< WtMaterial[]
+  cl::Buffer materials;   ///< WtMaterial[]: kernelMaterials()
+  /// The materials as uploaded: the scene's, each exactly Lambertian one as
+  /// the Lambertian model unless BvhBuildOptions::lambertianForms is off.
+  const std::vector<WtMaterial>& kernelMaterials() const { return m_kernelMaterials; }
 
   /// What materials/textured.cl reads (WT_SURFACE_PARAMS), each one dummy
   /// entry where the scene has none: per vertex TEXCOORD_0 and _1 (float4),
@@ -218,6 +221,7 @@ class SceneBuffers {
   void uploadAlpha(Context& context, const Scene& scene);
 
   bool m_hasTextures = false, m_hasVertexColors = false;
+  std::vector<WtMaterial> m_kernelMaterials;
   bool m_allSurfaceAttributes = false;  ///< BvhBuildOptions::allSurfaceAttributes
   bool m_texelsInPlace = false;         ///< BvhBuildOptions::texelsInPlace
   std::size_t m_alphaTriangles = 0;

@@ -46,9 +46,9 @@ FeatureSet sceneFeatures(const Scene& scene, const SceneBuffers& buffers, const 
   f.constantSky = settings.environmentMap.empty() &&
                   (settings.background.x > 0.0f || settings.background.y > 0.0f || settings.background.z > 0.0f);
 
-  // surfaces: the layers by the one rule that compiles them in (setMaterialFeatures)
+  // surfaces, as the device gets them: the layers by the one rule that compiles them in (setMaterialFeatures)
   KernelFeatures layers;
-  setMaterialFeatures(layers, scene.materials);
+  setMaterialFeatures(layers, buffers.kernelMaterials());
   f.pbr = layers.pbr;
   f.specular = layers.specular;
   f.clearcoat = layers.clearcoat;
@@ -56,7 +56,7 @@ FeatureSet sceneFeatures(const Scene& scene, const SceneBuffers& buffers, const 
   f.anisotropy = layers.anisotropy;
   f.iridescence = layers.iridescence;
   f.transmission = layers.transmission;
-  for (const WtMaterial& m : scene.materials) {
+  for (const WtMaterial& m : buffers.kernelMaterials()) {
     if (m.model == WT_MATERIAL_DIFFUSE) f.lambertian = true;
     if (m.model == WT_MATERIAL_PBR && m.transmission > 0.0f && m.volume.w > 0.0f &&
         (m.volume.x > 0.0f || m.volume.y > 0.0f || m.volume.z > 0.0f))

@@ -65,6 +65,7 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
   bvhOptions.instancing = settings.instancing;
   bvhOptions.allSurfaceAttributes = settings.generalProgram;
   bvhOptions.texelsInPlace = settings.sceneOutlivesRenderer;
+  bvhOptions.lambertianForms = settings.lambertianForms;
   m_scene = std::make_unique<SceneBuffers>(context, scene, bvhOptions);
   m_stats.sceneSeconds = lap();
   m_environment = settings.environmentMap.empty()

@@ -61,6 +61,10 @@ struct RenderSettings {
   /// Developer setting (tests): the light list weighs an emitter with holes by
   /// its mean coverage (buildLightList); false: by its emission alone.
   bool lightCoverageWeights = true;
+  /// Developer setting (A/B, tests): metallic-roughness materials that are
+  /// exactly Lambertian rendered as the Lambertian model (kernelMaterial,
+  /// the same image up to float rounding); false: by the general model.
+  bool lambertianForms = true;
   std::uint32_t accumulation = WT_ACCUMULATE_KAHAN;  ///< WT_ACCUMULATE_* (double needs fp64)
   BvhBuilder bvhBuilder = BvhBuilder::Auto;  ///< which tree the scene's BVH is (host/bvh/builders.h)
   Instancing instancing = Instancing::Off;   ///< whether repeated geometry is stored once (SceneBuffers)

@@ -48,6 +48,19 @@ WtMaterial makePbrMaterial(glm::vec3 baseColor, float metallic, float roughness,
   return m;
 }
 
+bool isLambertian(const WtMaterial& m) {
+  if (m.model == WT_MATERIAL_DIFFUSE) return true;
+  return m.model == WT_MATERIAL_PBR && m.base_color.w == 0.0f && m.specular.w == 0.0f && m.transmission == 0.0f &&
+         m.clearcoat == 0.0f && m.sheen.x == 0.0f && m.sheen.y == 0.0f && m.sheen.z == 0.0f && m.anisotropy == 0.0f &&
+         m.iridescence.x == 0.0f;
+}
+
+WtMaterial kernelMaterial(const WtMaterial& m) {
+  WtMaterial k = m;
+  if (isLambertian(m)) k.model = WT_MATERIAL_DIFFUSE;
+  return k;
+}
+
 WtMaterial withTransmission(WtMaterial m, float transmission, float ior, bool thinWalled, glm::vec3 absorption) {
   m.model = WT_MATERIAL_PBR;
   m.transmission = std::clamp(transmission, 0.0f, 1.0f);

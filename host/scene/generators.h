@@ -75,6 +75,18 @@ Scene placeCopies(const Scene& mesh, std::span<const glm::mat4> transforms);
 /// A Lambertian material; emission from the front face only unless twoSided.
 WtMaterial makeMaterial(glm::vec3 albedo, glm::vec3 emission = glm::vec3(0.0f), bool twoSided = false);
 
+/// Whether the kernels may render `m` as the Lambertian model: it is one,
+/// or a metallic-roughness material whose every lobe but the diffuse base
+/// weighs 0 (metallic factor 0, which a texture only multiplies; specular 0;
+/// no transmission, clear coat, sheen, anisotropy or iridescence), so that
+/// its BSDF is base colour / pi and its sampling the cosine lobe exactly.
+bool isLambertian(const WtMaterial& m);
+
+/// `m` as the kernels get it: the Lambertian model where isLambertian, so
+/// such a material costs what a Lambertian one does (the general model
+/// evaluates and samples lobes of weight 0).
+WtMaterial kernelMaterial(const WtMaterial& m);
+
 /// A glTF metallic-roughness material (values clamped to [0,1]).
 WtMaterial makePbrMaterial(glm::vec3 baseColor, float metallic, float roughness,
                            glm::vec3 emission = glm::vec3(0.0f), bool twoSided = false);

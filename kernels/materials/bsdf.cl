@@ -763,7 +763,7 @@ inline bool bsdf_sample(Bsdf b, float3 wo, uint lobes, float u_lobe, float u1, f
   } else {
     if (!(lobes & WT_LOBE_DIFFUSE) || !(t.diffuse + t.sheen > 0.0f)) return false;
     s->lobe = WT_LOBE_DIFFUSE;
-    s->wi = lambert_sample((float3)(0.0f, 0.0f, 1.0f), u1, u2);
+    s->wi = lambert_sample_local(u1, u2);
   }
   // reflection stays on wo's side, transmission crosses
   if ((s->lobe & WT_LOBE_TRANSMISSION) ? !(s->wi.z < 0.0f) : !(s->wi.z > 0.0f)) return false;

@@ -800,6 +800,72 @@ TEST(Bsdf, SpecularZeroIsLambertian) {
     }
 }
 
+// The materials SceneBuffers hands the kernels as the Lambertian model
+// (isLambertian, kernelMaterial) are exactly those whose BSDF is the
+// Lambertian one: each accepted material evaluates and samples as its
+// Lambertian form within float rounding, and each material that breaks one
+// condition evaluates measurably otherwise (so no condition is superfluous
+// and none is missing from those listed).
+TEST(Bsdf, MaterialsRenderedAsLambertianHaveTheLambertianBsdf) {
+  const glm::vec3 base(0.7f, 0.4f, 0.1f);
+  auto dielectric = [&](float roughness) { return withSpecular(makePbrMaterial(base, 0.0f, roughness), 0.0f); };
+  WtMaterial textured = dielectric(0.4f);
+  textured.texture_mask = 1u << WT_TEXTURE_SLOT_METALLIC_ROUGHNESS;  // a texture only multiplies metallic 0
+  WtMaterial highIor = withSpecular(dielectric(1.0f), 0.0f, glm::vec3(2.0f, 1.0f, 0.5f));
+  highIor.ior = 2.4f;
+  WtMaterial emitter = withSpecular(makePbrMaterial(base, 0.0f, 1.0f, glm::vec3(3.0f), true), 0.0f);
+  WtMaterial metalTexture = withSpecular(makePbrMaterial(base, 0.3f, 1.0f), 0.0f);
+  const std::pair<const char*, WtMaterial> lambertian[] = {
+      {"Lambertian model", makeMaterial(base)}, {"specular 0, rough", dielectric(1.0f)},
+      {"specular 0, smooth", dielectric(0.0f)}, {"specular 0, metallic texture", textured},
+      {"specular 0, tinted, ior 2.4", highIor},  {"specular 0, emissive", emitter}};
+  const std::pair<const char*, WtMaterial> general[] = {
+      {"metallic 0.3", metalTexture},
+      {"specular 0.2", withSpecular(makePbrMaterial(base, 0.0f, 1.0f), 0.2f)},
+      {"default specular", makePbrMaterial(base, 0.0f, 1.0f)},
+      {"transmission 0.5", withTransmission(dielectric(1.0f), 0.5f)},
+      {"clear coat 0.4", withClearcoat(dielectric(1.0f), 0.4f, 0.3f)},
+      {"sheen 0.3", withSheen(dielectric(1.0f), glm::vec3(0.3f), 0.5f)},
+      {"iridescence 0.5", withIridescence(dielectric(1.0f), 0.5f, 1.8f, 100.0f, 300.0f)}};
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> u01(0.0f, 1.0f);
+  std::vector<glm::vec3> wis;
+  for (int i = 0; i < 64; ++i) wis.push_back(localDirection(std::max(1e-3f, u01(rng)), 6.28f * u01(rng)));
+  const std::vector<cl_float4> us = stratified(8, 9);
+  // the largest relative difference from the Lambertian BSDF, evaluated and sampled, over three views
+  auto departure = [&](const WtMaterial& m) {
+    double worst = 0.0;
+    for (float mu : {0.05f, 0.6f, 1.0f}) {
+      const glm::vec3 wo = localDirection(mu, 0.7f);
+      const std::vector<cl_float4> ev = evalOnDevice(m, wo, kAllLobes, wis);
+      for (std::size_t i = 0; i < wis.size(); ++i) {
+        for (int c = 0; c < 3; ++c)
+          worst = std::max(worst, std::fabs(ev[i].s[c] - base[c] / M_PI * wis[i].z) / (base[c] / M_PI * wis[i].z));
+        worst = std::max(worst, std::fabs(ev[i].s[3] - wis[i].z / M_PI) / (wis[i].z / M_PI));
+      }
+      const Sampled s = sampleOnDevice(m, wo, kAllLobes, us), l = sampleOnDevice(makeMaterial(base), wo, kAllLobes, us);
+      for (std::size_t i = 0; i < us.size(); ++i)
+        for (int c = 0; c < 4; ++c) {
+          worst = std::max(worst, double(std::fabs(s.wiPdf[i].s[c] - l.wiPdf[i].s[c])));
+          worst = std::max(worst, double(std::fabs(s.weightLobe[i].s[c] - l.weightLobe[i].s[c])));
+        }
+    }
+    return worst;
+  };
+  for (const auto& [name, m] : lambertian) {
+    EXPECT_TRUE(isLambertian(m)) << name;
+    EXPECT_EQ(kernelMaterial(m).model, WT_MATERIAL_DIFFUSE) << name;
+    EXPECT_LT(departure(m), 2e-6) << name << ": not the Lambertian BSDF within rounding";
+  }
+  for (const auto& [name, m] : general) {
+    EXPECT_FALSE(isLambertian(m)) << name;
+    EXPECT_EQ(kernelMaterial(m).model, WT_MATERIAL_PBR) << name;
+    EXPECT_GT(departure(m), 1e-3) << name << ": the Lambertian BSDF, though it is kept general";
+  }
+  // anisotropy turns the shading frame (shade.cl), which the Lambertian model never does: kept general
+  EXPECT_FALSE(isLambertian(withAnisotropy(dielectric(0.5f), 0.6f, 0.3f)));
+}
+
 // The weight of every sample is f cos / pdf of bsdf_eval in that direction,
 // for each layer and all of them together.
 TEST(Bsdf, LayeredWeightIsFCosOverPdf) {

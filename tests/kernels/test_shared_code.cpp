@@ -41,6 +41,8 @@ TEST(SharedCode, RngMatchesTheHostBuildBitForBit) {
   }
 }
 
+// Both forms: about a world normal, and about the local frame's +z (the
+// BSDF's, which builds no frame).
 TEST(SharedCode, LambertSamplesAreCosineDistributed) {
   Context& ctx = test::deviceContext();
   const cl_uint n = test::testSize(1 << 16, 1 << 12);
@@ -48,33 +50,37 @@ TEST(SharedCode, LambertSamplesAreCosineDistributed) {
   std::uniform_real_distribution<float> u(0.0f, 1.0f);
   std::vector<cl_float2> us(n);
   for (auto& v : us) v = {{u(rng), u(rng)}};
-  glm::vec3 normal = glm::normalize(glm::vec3(0.3f, -0.5f, 0.8f));
-  cl::Buffer in(ctx.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, n * sizeof(cl_float2), us.data());
-  cl::Buffer out(ctx.context(), CL_MEM_WRITE_ONLY, n * sizeof(cl_float4));
-  cl::Kernel k(test::unitTestProgram(), "test_lambert");
-  k.setArg(0, n), k.setArg(1, cl_float4{{normal.x, normal.y, normal.z, 0}}), k.setArg(2, in), k.setArg(3, out);
-  ctx.launch("test_lambert", k, n);
-  std::vector<cl_float4> dirs(n);
-  ctx.queue().enqueueReadBuffer(out, CL_TRUE, 0, n * sizeof(cl_float4), dirs.data());
-  // Chi-square over 8 x 8 bins of (cos(theta)^2, azimuth), both uniform
-  // under a cosine distribution (pdf of c = cos(theta) is 2c, so c^2 ~
-  // U(0,1)), the azimuth about any frame of the normal.
-  const int kBins = 8;
-  const glm::vec3 t = glm::normalize(glm::cross(normal, glm::vec3(1.0f, 0.0f, 0.0f))), b = glm::cross(normal, t);
-  std::vector<double> counts(kBins * kBins, 0.0);
-  for (const cl_float4& d : dirs) {
-    glm::vec3 v(d.s[0], d.s[1], d.s[2]);
-    ASSERT_NEAR(glm::length(v), 1.0f, 1e-5f);
-    float c = glm::dot(v, normal);
-    ASSERT_GE(c, 0.0f);
-    const double phi = std::atan2(double(glm::dot(v, b)), double(glm::dot(v, t))) + M_PI;
-    const int azimuth = std::min(kBins - 1, int(phi / (2.0 * M_PI) * kBins));
-    counts[std::min(kBins - 1, int(c * c * kBins)) * kBins + azimuth] += 1.0;
+  for (bool local : {false, true}) {
+    SCOPED_TRACE(local ? "lambert_sample_local" : "lambert_sample");
+    glm::vec3 normal = local ? glm::vec3(0.0f, 0.0f, 1.0f) : glm::normalize(glm::vec3(0.3f, -0.5f, 0.8f));
+    cl::Buffer in(ctx.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, n * sizeof(cl_float2), us.data());
+    cl::Buffer out(ctx.context(), CL_MEM_WRITE_ONLY, n * sizeof(cl_float4));
+    cl::Kernel k(test::unitTestProgram(), "test_lambert");
+    k.setArg(0, n), k.setArg(1, cl_float4{{normal.x, normal.y, normal.z, local ? 1.0f : 0.0f}}), k.setArg(2, in);
+    k.setArg(3, out);
+    ctx.launch("test_lambert", k, n);
+    std::vector<cl_float4> dirs(n);
+    ctx.queue().enqueueReadBuffer(out, CL_TRUE, 0, n * sizeof(cl_float4), dirs.data());
+    // Chi-square over 8 x 8 bins of (cos(theta)^2, azimuth), both uniform
+    // under a cosine distribution (pdf of c = cos(theta) is 2c, so c^2 ~
+    // U(0,1)), the azimuth about any frame of the normal.
+    const int kBins = 8;
+    const glm::vec3 t = glm::normalize(glm::cross(normal, glm::vec3(1.0f, 0.0f, 0.0f))), b = glm::cross(normal, t);
+    std::vector<double> counts(kBins * kBins, 0.0);
+    for (const cl_float4& d : dirs) {
+      glm::vec3 v(d.s[0], d.s[1], d.s[2]);
+      ASSERT_NEAR(glm::length(v), 1.0f, 1e-5f);
+      float c = glm::dot(v, normal);
+      ASSERT_GE(c, 0.0f);
+      const double phi = std::atan2(double(glm::dot(v, b)), double(glm::dot(v, t))) + M_PI;
+      const int azimuth = std::min(kBins - 1, int(phi / (2.0 * M_PI) * kBins));
+      counts[std::min(kBins - 1, int(c * c * kBins)) * kBins + azimuth] += 1.0;
+    }
+    double chi2 = 0.0, expected = double(n) / (kBins * kBins);
+    for (double c : counts) chi2 += (c - expected) * (c - expected) / expected;
+    // 63 degrees of freedom: P(chi2 > 103.4) = 0.001
+    EXPECT_LT(chi2, 103.4) << "histogram of (cos^2, azimuth): " << ::testing::PrintToString(counts);
   }
-  double chi2 = 0.0, expected = double(n) / (kBins * kBins);
-  for (double c : counts) chi2 += (c - expected) * (c - expected) / expected;
-  // 63 degrees of freedom: P(chi2 > 103.4) = 0.001
-  EXPECT_LT(chi2, 103.4) << "histogram of (cos^2, azimuth): " << ::testing::PrintToString(counts);
 }
 
 // Random triangles of every size from 1e-6 to 1e4, up to 1e7 from the world

@@ -6,6 +6,7 @@
 #include "render/feature_set.h"
 #include "render/render_helpers.h"
 #include "scene/default_scene.h"
+#include "scene/generators.h"
 #include "scene/sdf_volume.h"
 #include "test_util.h"
 #include "texture_helpers.h"
@@ -327,6 +328,47 @@ TEST(FeatureSwitches, NeverDependOnTheImageSizeOrTheSampleCount) {
 
 // specialised vs general program
 
+/// Two renders of one scene with the same seed whose programs do the same
+/// arithmetic, up to the compiler's choices and float rounding: the same
+/// image within rounding.
+void expectSameUpToRounding(const Image& one, const Image& other, const std::string& name,
+                            const std::string& what) {
+  ASSERT_EQ(one.rgb.size(), other.rgb.size());
+  // Bitwise where possible; PoCL's compiler may order the same float
+  // operations differently once more code is compiled in (a last-bit
+  // difference), and such a difference can flip a later decision of one
+  // sample (roulette, which of two equally distant hits), which moves that
+  // pixel's mean by up to one sample's value over spp. So: every channel
+  // within rounding (relative 1e-4) except at most 1% of them, and the
+  // image means within 4 standard errors of their difference (the per-pixel
+  // variances; the two renders are not independent, so this is generous).
+  std::size_t bitwise = 0, beyondRounding = 0, first = one.rgb.size();
+  double sumDifference = 0.0, varianceOfSum = 0.0, maxRelative = 0.0;
+  for (std::size_t i = 0; i < one.rgb.size(); ++i) {
+    const float a = one.rgb[i], b = other.rgb[i];
+    if (std::memcmp(&a, &b, sizeof(float)) != 0) ++bitwise;
+    const double relative = std::fabs(double(a) - double(b)) / std::max(1e-6, std::fabs(double(a)));
+    maxRelative = std::max(maxRelative, relative);
+    if (relative > 1e-4) {
+      ++beyondRounding;
+      first = std::min(first, i);
+    }
+    sumDifference += double(a) - double(b);
+    const std::uint32_t n = std::max<std::uint32_t>(1, one.samples[i / 3]);
+    varianceOfSum += (double(one.rgbVariance[i]) + double(other.rgbVariance[i])) / n;
+  }
+  ASSERT_TRUE(std::isfinite(sumDifference));
+  EXPECT_LE(beyondRounding, one.rgb.size() / 100)
+      << name << ": " << beyondRounding << " of " << one.rgb.size()
+      << " channel values differ beyond rounding between the " << what << "; first at pixel "
+      << first / 3 << " (" << (first < one.rgb.size() ? one.rgb[first] : 0.0f) << " vs "
+      << (first < other.rgb.size() ? other.rgb[first] : 0.0f) << ")";
+  EXPECT_LE(std::fabs(sumDifference), 4.0 * std::sqrt(varianceOfSum) + 1e-9)
+      << name << ": the image means differ by more than the noise allows";
+  std::printf("%s: %zu of %zu channel values not bitwise equal, %zu beyond relative 1e-4, max relative %.3g\n",
+              name.c_str(), bitwise, one.rgb.size(), beyondRounding, maxRelative);
+}
+
 /// Render `loaded` at a small size with its own feature set's program and
 /// with the general program (every switch on), same seed, and compare.
 /// The random numbers are a pure function of pixel, sample, bounce and
@@ -356,40 +398,48 @@ void expectSpecialisedEqualsGeneral(const SceneFile& loaded, const std::string& 
   EXPECT_TRUE(generalSwitches.pbr && generalSwitches.textures && generalSwitches.alpha &&
               generalSwitches.primitives[WT_PRIM_SPHERE] && generalSwitches.primitives[WT_PRIM_INSTANCE])
       << "the general program is not every switch on";
-  ASSERT_EQ(specialised.rgb.size(), general.rgb.size());
-  // Bitwise where possible; PoCL's compiler may order the same float
-  // operations differently once more code is compiled in (a last-bit
-  // difference), and such a difference can flip a later decision of one
-  // sample (roulette, which of two equally distant hits), which moves that
-  // pixel's mean by up to one sample's value over spp. So: every channel
-  // within rounding (relative 1e-4) except at most 1% of them, and the
-  // image means within 4 standard errors of their difference (the per-pixel
-  // variances; the two renders are not independent, so this is generous).
-  std::size_t bitwise = 0, beyondRounding = 0, first = specialised.rgb.size();
-  double sumDifference = 0.0, varianceOfSum = 0.0, maxRelative = 0.0;
-  for (std::size_t i = 0; i < specialised.rgb.size(); ++i) {
-    const float a = specialised.rgb[i], b = general.rgb[i];
-    if (std::memcmp(&a, &b, sizeof(float)) != 0) ++bitwise;
-    const double relative = std::fabs(double(a) - double(b)) / std::max(1e-6, std::fabs(double(a)));
-    maxRelative = std::max(maxRelative, relative);
-    if (relative > 1e-4) {
-      ++beyondRounding;
-      first = std::min(first, i);
-    }
-    sumDifference += double(a) - double(b);
-    const std::uint32_t n = std::max<std::uint32_t>(1, specialised.samples[i / 3]);
-    varianceOfSum += (double(specialised.rgbVariance[i]) + double(general.rgbVariance[i])) / n;
+  expectSameUpToRounding(specialised, general, name, "specialised and the general program");
+}
+
+// Metallic-roughness materials that are exactly Lambertian (specularFactor
+// 0, no metal: how glTF states a Lambertian wall) go to the kernels as the
+// Lambertian model (RenderSettings::lambertianForms): the program compiles
+// no metallic-roughness code when all are, and the image is the one the
+// general model renders, within rounding.
+TEST(LambertianForms, SpecularZeroRendersAsTheLambertianModelWithTheSameImage) {
+  const Scene cornell = loadDefaultScene();
+  auto renderWith = [](const Scene& scene, bool forms, KernelFeatures* used) {
+    RenderSettings s;
+    s.width = 40, s.height = 30;
+    s.samplesPerPixel = 4;
+    s.seed = 5;
+    s.lambertianForms = forms;
+    Renderer renderer(test::deviceContext(), scene, s);
+    *used = renderer.kernelFeatures();
+    for (int i = 0; i < s.samplesPerPixel; ++i) renderer.renderSample();
+    return renderer.readImage();
+  };
+  {
+    SCOPED_TRACE("every material specular 0");
+    Scene scene = cornell;
+    for (WtMaterial& m : scene.materials) m = withSpecular(m, 0.0f);
+    KernelFeatures general, lambertian;
+    const Image a = renderWith(scene, false, &general), b = renderWith(scene, true, &lambertian);
+    EXPECT_TRUE(general.pbr && general.specular);
+    EXPECT_FALSE(lambertian.pbr || lambertian.specular) << "the Lambertian forms compiled metallic-roughness code in";
+    expectSameUpToRounding(a, b, "Cornell box, specular 0", "general model and the Lambertian forms");
   }
-  ASSERT_TRUE(std::isfinite(sumDifference));
-  EXPECT_LE(beyondRounding, specialised.rgb.size() / 100)
-      << name << ": " << beyondRounding << " of " << specialised.rgb.size()
-      << " channel values differ beyond rounding between the specialised and the general program; first at pixel "
-      << first / 3 << " (" << (first < specialised.rgb.size() ? specialised.rgb[first] : 0.0f) << " vs "
-      << (first < general.rgb.size() ? general.rgb[first] : 0.0f) << ")";
-  EXPECT_LE(std::fabs(sumDifference), 4.0 * std::sqrt(varianceOfSum) + 1e-9)
-      << name << ": the image means differ by more than the noise allows";
-  std::printf("%s: %zu of %zu channel values not bitwise equal, %zu beyond relative 1e-4, max relative %.3g\n",
-              name.c_str(), bitwise, specialised.rgb.size(), beyondRounding, maxRelative);
+  {
+    SCOPED_TRACE("the red wall keeps its specular lobe");
+    Scene scene = cornell;
+    for (std::size_t i = 0; i < scene.materials.size(); ++i)
+      if (i != 1) scene.materials[i] = withSpecular(scene.materials[i], 0.0f);
+    ASSERT_GT(scene.materials[1].base_color.x, 0.5f) << "material 1 is not the red wall";
+    KernelFeatures general, lambertian;
+    const Image a = renderWith(scene, false, &general), b = renderWith(scene, true, &lambertian);
+    EXPECT_TRUE(lambertian.pbr && !lambertian.specular);
+    expectSameUpToRounding(a, b, "Cornell box, specular 0 but the red wall", "general model and the Lambertian forms");
+  }
 }
 
 class SpecialisedProgram : public ::testing::TestWithParam<const char*> {};
