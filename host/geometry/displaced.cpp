@@ -563,6 +563,28 @@ glm::vec3 displacedVertex(const DisplacedMesh& mesh, std::uint32_t triangle, int
   return microVertex(mesh, map, mesh.triangles[triangle], perEdge, i, j);
 }
 
+double displacedArea(const DisplacedMesh& mesh, std::uint32_t triangle) {
+  const MapView map{mesh.map.data(), int(mesh.mapWidth), int(mesh.mapHeight)};
+  const std::array<std::uint32_t, 3>& t = mesh.triangles[triangle];
+  const int n = 1 << displacedLevel(mesh);
+  // the lattice row by row, then its upright and inverted micro-triangles
+  std::vector<glm::dvec3> grid;
+  std::vector<std::size_t> rowStart(std::size_t(n) + 1);
+  for (int j = 0; j <= n; ++j) {
+    rowStart[std::size_t(j)] = grid.size();
+    for (int i = 0; i + j <= n; ++i) grid.push_back(glm::dvec3(microVertex(mesh, map, t, n, i, j)));
+  }
+  auto at = [&](int i, int j) { return grid[rowStart[std::size_t(j)] + std::size_t(i)]; };
+  auto area = [](glm::dvec3 a, glm::dvec3 b, glm::dvec3 c) { return 0.5 * glm::length(glm::cross(b - a, c - a)); };
+  double sum = 0.0;
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i + j < n; ++i) {
+      sum += area(at(i, j), at(i + 1, j), at(i, j + 1));
+      if (i + j + 2 <= n) sum += area(at(i + 1, j), at(i + 1, j + 1), at(i, j + 1));
+    }
+  return sum;
+}
+
 std::size_t tessellateDisplaced(Scene& scene, int perEdge) {
   const int n = std::max(perEdge, 1);
   std::size_t made = 0;

@@ -167,6 +167,10 @@ glm::vec3 displacedPoint(const DisplacedMesh& mesh, std::uint32_t triangle, floa
 /// kernel computes it for perEdge = 2^L.
 glm::vec3 displacedVertex(const DisplacedMesh& mesh, std::uint32_t triangle, int perEdge, int i, int j);
 
+/// The displaced surface's area over base triangle `triangle`: its 4^L
+/// micro-triangles' areas summed (what light sampling spreads its samples over).
+double displacedArea(const DisplacedMesh& mesh, std::uint32_t triangle);
+
 /// Pre-tessellation, for comparison only: every displaced mesh turned into
 /// triangles, perEdge^2 per base triangle (the kernel's surface exactly
 /// when perEdge = 2^L), with the displaced surface's normals at the
