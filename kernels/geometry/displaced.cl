@@ -195,8 +195,10 @@ inline bool disp_leaf_hit(DispMesh m, DispTri t, int n, float inv_n, int2 c0, in
 /// and the hit's lattice coordinates (level-L units) in *li, *lj, which
 /// displaced_surface takes back. `rows`: the type's first prim_data row.
 /// The base triangle's own box is the BVH's: the walk starts at its children.
+/// With `any_hit` (shadow rays) the first micro-triangle hit found in the
+/// interval ends the walk, not necessarily the nearest.
 inline bool displaced_intersect(__global const float4* rows, __global const uint4* tri, float3 o, float3 d,
-                                float tmin, float tmax, float* t_hit, float* li, float* lj) {
+                                float tmin, float tmax, bool any_hit, float* t_hit, float* li, float* lj) {
   uint4 info = tri[0];
   DispMesh m = disp_mesh(rows, info.y);
   DispTri t = disp_tri(rows, tri[1]);
@@ -242,6 +244,7 @@ inline bool displaced_intersect(__global const float4* rows, __global const uint
       int2 c[3];
       disp_node_corners(node, level_l, c);
       found |= disp_leaf_hit(m, t, n, inv_n, c[0], c[1], c[2], o, shear, tmin, &best, li, lj);
+      if (found && any_hit) break;
       continue;
     }
     uint inverted = (node >> 27) & 1u;

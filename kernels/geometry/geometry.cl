@@ -100,9 +100,10 @@ inline bool geometry_instance_occluded(BvhScene scene, GeometryScene g, uint pri
 /// Ray (o, d) against primitive `prim` in (tmin, tmax): the distance and the
 /// type's own hit parameters (u, v), which geometry_surface takes back. A
 /// primitive the ray leaves (skip_a) or aims at (skip_b) is never met at the
-/// ray's start.
+/// ray's start. With `any_hit` (shadow rays) a type may return any hit in
+/// the interval rather than its nearest (displaced meshes stop at the first).
 inline bool geometry_intersect(GeometryScene g, uint prim, float3 o, float3 d, float tmin, float tmax, uint skip_a,
-                               uint skip_b, float* t, float* u, float* v) {
+                               uint skip_b, bool any_hit, float* t, float* u, float* v) {
   bool leaving = prim == skip_a || prim == skip_b;
   *u = 0.0f;
   *v = 0.0f;
@@ -126,7 +127,7 @@ inline bool geometry_intersect(GeometryScene g, uint prim, float3 o, float3 d, f
     case WT_PRIM_DISPLACED:
       return displaced_intersect(g.data + g.header.data_first[WT_PRIM_DISPLACED],
                                  g.info + g.header.info_first[WT_PRIM_DISPLACED] + WT_DISP_INFO_ROWS * prim_index(prim),
-                                 o, d, tmin, tmax, t, u, v);
+                                 o, d, tmin, tmax, any_hit, t, u, v);
 #endif
     default:
       return false;
