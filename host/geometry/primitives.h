@@ -145,8 +145,9 @@ bool displacedMeshUsable(const DisplacedMesh& mesh);
 void gatherDisplaced(const Scene& scene, PrimitiveRows& rows);
 /// gatherDisplaced with boxes stored to level min(L - 1, maxDepth,
 /// WT_DISP_MAX_DEPTH) only: tests reach the levels walked untested below
-/// the stored ones at small L.
-void gatherDisplacedTo(const Scene& scene, PrimitiveRows& rows, std::uint32_t maxDepth);
+/// the stored ones at small L. The base triangles' boxes are built on
+/// `threads` threads (0: every hardware thread), the same rows on any number.
+void gatherDisplacedTo(const Scene& scene, PrimitiveRows& rows, std::uint32_t maxDepth, int threads = 0);
 
 /// Which mesh and base triangle a WT_PRIM_DISPLACED typed id's index is.
 struct DisplacedTriangleRef {
