@@ -41,7 +41,7 @@ inline bool bvh_prims_closest_root(GeometryScene g, uint root, float3 org, float
         for (uint i = first; i < first + count; ++i) {
           uint prim = g.refs[i];
           float t, u, v;
-          if (geometry_intersect(g, prim, org, dir, tmin, hit->t, skip, WT_NO_HIT, &t, &u, &v)) {
+          if (geometry_intersect(g, prim, org, dir, tmin, hit->t, skip, WT_NO_HIT, false, &t, &u, &v)) {
             hit->t = t;
             hit->b1 = u;
             hit->b2 = v;
@@ -94,7 +94,7 @@ inline bool bvh_prims_occluded_root(GeometryScene g, uint root, float3 org, floa
       if (count > 0) {
         for (uint i = first; i < first + count; ++i) {
           float t, u, v;
-          if (geometry_intersect(g, g.refs[i], org, dir, tmin, tmax, skip, WT_NO_HIT, &t, &u, &v)) return true;
+          if (geometry_intersect(g, g.refs[i], org, dir, tmin, tmax, skip, WT_NO_HIT, true, &t, &u, &v)) return true;
         }
       } else {
         stack_node[sp++] = first;
@@ -166,7 +166,7 @@ inline void bvh_prims_closest(BvhScene scene, GeometryScene g, float3 org, float
           }
 #endif
           float t, u, v;
-          if (geometry_intersect(g, prim, org, dir, tmin, hit->t, skip, WT_NO_HIT, &t, &u, &v)) {
+          if (geometry_intersect(g, prim, org, dir, tmin, hit->t, skip, WT_NO_HIT, false, &t, &u, &v)) {
             hit->t = t;
             hit->b1 = u;
             hit->b2 = v;
@@ -229,7 +229,7 @@ inline bool bvh_prims_occluded(BvhScene scene, GeometryScene g, float3 org, floa
           }
 #endif
           float t, u, v;
-          if (geometry_intersect(g, prim, org, dir, tmin, tmax, skip_a, skip_b, &t, &u, &v)) return true;
+          if (geometry_intersect(g, prim, org, dir, tmin, tmax, skip_a, skip_b, true, &t, &u, &v)) return true;
         }
       } else {
         stack_node[sp++] = first;

@@ -20,7 +20,7 @@ WT_KERNEL void test_displaced_closest(uint count, uint triangles, __global const
   float li = 0.0f, lj = 0.0f;
   for (uint b = 0; b < triangles; ++b) {
     float t, u, v;
-    if (displaced_intersect(rows, info + WT_DISP_INFO_ROWS * b, o, d, tmin, best, &t, &u, &v)) {
+    if (displaced_intersect(rows, info + WT_DISP_INFO_ROWS * b, o, d, tmin, best, false, &t, &u, &v)) {
       best = t;
       hit = b;
       li = u;

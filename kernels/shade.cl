@@ -211,7 +211,7 @@ WT_KERNEL void shade(WtFrameParams frame, WtEnvironment environment, __global co
     float pdf_light;
 #if WT_HAS_PRIMITIVES
     if (prim_type(prim) != WT_PRIM_TRIANGLE) {
-      pdf_light = select * geometry_emitter_pdf(g, prim, ray_o[path].xyz);
+      pdf_light = select > 0.0f ? select * geometry_emitter_pdf(g, prim, ray_o[path].xyz, p, ng, hit) : 0.0f;
     } else
 #endif
     {

@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <chrono>
 #include <cmath>
 #include <cstddef>
@@ -761,6 +762,26 @@ void SceneBuffers::uploadPrimitives(Context& context, const Scene& scene, const 
   if (!geometries.empty()) rows = layoutPrimitiveInstances(scene, rows, geometries, options, instances, geometryTrees);
   m_primitiveCount = rows.count;
   m_skippedPrimitives = rows.skipped;
+  // the emitting displaced base triangles and SDF bricks (their rows' x is the material)
+  m_surfaceEmitters.clear();
+  auto emits = [&](std::uint32_t material) {
+    if (material >= scene.materials.size()) return false;
+    const WtVec4& e = scene.materials[material].emission;
+    return e.x > 0.0f || e.y > 0.0f || e.z > 0.0f;
+  };
+  for (std::uint32_t k = 0; k < rows.count[WT_PRIM_DISPLACED]; ++k) {
+    const std::size_t row = rows.infoFirst[WT_PRIM_DISPLACED] + WT_DISP_INFO_ROWS * std::size_t(k);
+    if (emits(rows.info[row][0]))
+      m_surfaceEmitters.push_back({primId(WT_PRIM_DISPLACED, k), rows.info[row][1] / WT_DISP_MESH_ROWS, rows.info[row + 1][3]});
+  }
+  for (std::uint32_t k = 0; k < rows.count[WT_PRIM_SDF_GRID]; ++k) {
+    const std::size_t row = rows.infoFirst[WT_PRIM_SDF_GRID] + WT_SDF_INFO_ROWS * std::size_t(k);
+    if (!emits(rows.info[row][0])) continue;
+    std::uint32_t crossed = 0;
+    for (std::size_t r = 1; r < WT_SDF_INFO_ROWS; ++r)
+      for (std::uint32_t word : rows.info[row + r]) crossed += std::uint32_t(std::popcount(word));
+    m_surfaceEmitters.push_back({primId(WT_PRIM_SDF_GRID, k), rows.info[row][1], crossed});
+  }
   PrimitiveTree tree = buildPrimitiveTree(rows, options);
   m_primStats = tree.bvh4.stats;
   m_primitiveBuildSeconds = tree.seconds;

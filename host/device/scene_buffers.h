@@ -146,6 +146,14 @@ class SceneBuffers {
       present[type] = type != WT_PRIM_TRIANGLE && m_primitiveCount[type] > 0;
     return present;
   }
+  /// A displaced base triangle or SDF brick whose material emits, as
+  /// gathered: what the light list weighs it by (render/light_list.cpp).
+  struct SurfaceEmitter {
+    std::uint32_t id;       ///< typed id (WT_PRIM_DISPLACED or WT_PRIM_SDF_GRID), as on the device
+    std::uint32_t source;   ///< its Scene::displacedMeshes or Scene::sdfGrids entry
+    std::uint32_t element;  ///< displaced: the base triangle's index in its mesh; SDF: the brick's cells the surface crosses
+  };
+  const std::vector<SurfaceEmitter>& surfaceEmitters() const { return m_surfaceEmitters; }
   /// Non-triangle primitives left out of their BVH (zero size, non-finite).
   std::size_t skippedPrimitives() const { return m_skippedPrimitives; }
   const Bvh4Stats& primitiveBvhStats() const { return m_primStats; }
@@ -239,6 +247,7 @@ class SceneBuffers {
   std::vector<std::int64_t> m_instanceOffset;    ///< per instance: its first scene triangle less its source copy's
   std::vector<bool> m_instanceMirrored;
   std::size_t m_instancedTriangles = 0;
+  std::vector<SurfaceEmitter> m_surfaceEmitters;
   int m_blasStackEntries = 0;
   /// Spheres and curves stored once, per type: the flattened scene's item
   /// -> (device index, instance typed id or 0xffffffff), and device index ->

@@ -3,7 +3,10 @@
 // surface at a hit, and the pre-tessellation the benchmark compares with.
 #include "geometry/primitives.h"
 
+#include "bvh/parallel.h"
+
 #include <algorithm>
+#include <atomic>
 #include <bit>
 #include <cmath>
 #include <cstring>
@@ -398,7 +401,7 @@ TriangleBoxes triangleBoxes(const DisplacedMesh& mesh, const MapView& map, const
 
 void gatherDisplaced(const Scene& scene, PrimitiveRows& rows) { gatherDisplacedTo(scene, rows, WT_DISP_MAX_DEPTH); }
 
-void gatherDisplacedTo(const Scene& scene, PrimitiveRows& rows, std::uint32_t maxDepth) {
+void gatherDisplacedTo(const Scene& scene, PrimitiveRows& rows, std::uint32_t maxDepth, int threads) {
   rows.dataFirst[WT_PRIM_DISPLACED] = std::uint32_t(rows.data.size());
   rows.infoFirst[WT_PRIM_DISPLACED] = std::uint32_t(rows.info.size());
   const std::size_t meshes = scene.displacedMeshes.size();
@@ -464,17 +467,34 @@ void gatherDisplacedTo(const Scene& scene, PrimitiveRows& rows, std::uint32_t ma
       texelWord[mi] = words.size();
       words.insert(words.end(), texelBits.begin(), texelBits.end());
     }
+    // the boxes a chunk of triangles at a time on every thread (each
+    // triangle's alone: the same bytes on any number of threads), appended
+    // in order; a chunk bounds what waits to be appended (32 KiB a triangle at D = 6)
+    constexpr std::size_t kChunk = 1024;
+    std::vector<TriangleBoxes> chunk;
     for (std::size_t ti = 0; ti < m.triangles.size(); ++ti) {
-      const std::array<std::uint32_t, 3>& t = m.triangles[ti];
-      if (!cornersUsable(m, t)) {
-        ++rows.skipped;
-        continue;
+      const std::size_t first = ti - ti % kChunk;
+      if (ti == first) {
+        const std::size_t count = std::min(kChunk, m.triangles.size() - first);
+        chunk.assign(count, TriangleBoxes{});
+        std::atomic<std::size_t> next{0};
+        bvh_detail::runTeam(int(std::min<std::size_t>(std::size_t(bvh_detail::resolveThreads(threads)), count)),
+                            [&](int, int, bvh_detail::Barrier&) {
+                              for (std::size_t k; (k = next.fetch_add(1, std::memory_order_relaxed)) < count;) {
+                                const std::array<std::uint32_t, 3>& t = m.triangles[first + k];
+                                if (cornersUsable(m, t))
+                                  chunk[k] = triangleBoxes(m, map, pyramid.empty() ? nullptr : &pyramid, t, level, depth);
+                                else
+                                  chunk[k].finite = false;
+                              }
+                            });
       }
-      const TriangleBoxes boxes = triangleBoxes(m, map, pyramid.empty() ? nullptr : &pyramid, t, level, depth);
+      const TriangleBoxes& boxes = chunk[ti - first];
       if (!boxes.finite) {
         ++rows.skipped;
         continue;
       }
+      const std::array<std::uint32_t, 3>& t = m.triangles[ti];
       const std::size_t boxRow = boxRows.size();  // from the boxes' first row, made absolute below
       if (level > 0) {
         boxRows.push_back({boxes.root.lo.x, boxes.root.lo.y, boxes.root.lo.z, 0.0f});
@@ -561,6 +581,28 @@ glm::vec3 displacedPoint(const DisplacedMesh& mesh, std::uint32_t triangle, floa
 glm::vec3 displacedVertex(const DisplacedMesh& mesh, std::uint32_t triangle, int perEdge, int i, int j) {
   const MapView map{mesh.map.data(), int(mesh.mapWidth), int(mesh.mapHeight)};
   return microVertex(mesh, map, mesh.triangles[triangle], perEdge, i, j);
+}
+
+double displacedArea(const DisplacedMesh& mesh, std::uint32_t triangle) {
+  const MapView map{mesh.map.data(), int(mesh.mapWidth), int(mesh.mapHeight)};
+  const std::array<std::uint32_t, 3>& t = mesh.triangles[triangle];
+  const int n = 1 << displacedLevel(mesh);
+  // the lattice row by row, then its upright and inverted micro-triangles
+  std::vector<glm::dvec3> grid;
+  std::vector<std::size_t> rowStart(std::size_t(n) + 1);
+  for (int j = 0; j <= n; ++j) {
+    rowStart[std::size_t(j)] = grid.size();
+    for (int i = 0; i + j <= n; ++i) grid.push_back(glm::dvec3(microVertex(mesh, map, t, n, i, j)));
+  }
+  auto at = [&](int i, int j) { return grid[rowStart[std::size_t(j)] + std::size_t(i)]; };
+  auto area = [](glm::dvec3 a, glm::dvec3 b, glm::dvec3 c) { return 0.5 * glm::length(glm::cross(b - a, c - a)); };
+  double sum = 0.0;
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i + j < n; ++i) {
+      sum += area(at(i, j), at(i + 1, j), at(i, j + 1));
+      if (i + j + 2 <= n) sum += area(at(i + 1, j), at(i + 1, j + 1), at(i, j + 1));
+    }
+  return sum;
 }
 
 std::size_t tessellateDisplaced(Scene& scene, int perEdge) {

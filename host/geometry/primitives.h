@@ -145,8 +145,9 @@ bool displacedMeshUsable(const DisplacedMesh& mesh);
 void gatherDisplaced(const Scene& scene, PrimitiveRows& rows);
 /// gatherDisplaced with boxes stored to level min(L - 1, maxDepth,
 /// WT_DISP_MAX_DEPTH) only: tests reach the levels walked untested below
-/// the stored ones at small L.
-void gatherDisplacedTo(const Scene& scene, PrimitiveRows& rows, std::uint32_t maxDepth);
+/// the stored ones at small L. The base triangles' boxes are built on
+/// `threads` threads (0: every hardware thread), the same rows on any number.
+void gatherDisplacedTo(const Scene& scene, PrimitiveRows& rows, std::uint32_t maxDepth, int threads = 0);
 
 /// Which mesh and base triangle a WT_PRIM_DISPLACED typed id's index is.
 struct DisplacedTriangleRef {
@@ -166,6 +167,10 @@ glm::vec3 displacedPoint(const DisplacedMesh& mesh, std::uint32_t triangle, floa
 /// edge (weights (perEdge - i - j, i, j) / perEdge on its corners), as the
 /// kernel computes it for perEdge = 2^L.
 glm::vec3 displacedVertex(const DisplacedMesh& mesh, std::uint32_t triangle, int perEdge, int i, int j);
+
+/// The displaced surface's area over base triangle `triangle`: its 4^L
+/// micro-triangles' areas summed (what light sampling spreads its samples over).
+double displacedArea(const DisplacedMesh& mesh, std::uint32_t triangle);
 
 /// Pre-tessellation, for comparison only: every displaced mesh turned into
 /// triangles, perEdge^2 per base triangle (the kernel's surface exactly

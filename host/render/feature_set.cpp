@@ -42,6 +42,10 @@ FeatureSet sceneFeatures(const Scene& scene, const SceneBuffers& buffers, const 
     if (const WtMaterial* m = material(s.material); m && emits(*m)) f.emissivePrimitives = true;
   for (const Curve& c : scene.curves)
     if (const WtMaterial* m = material(c.material); m && emits(*m)) f.emissivePrimitives = true;
+  for (const DisplacedMesh& d : scene.displacedMeshes)
+    if (const WtMaterial* m = material(d.material); m && emits(*m)) f.emissivePrimitives = true;
+  for (const SdfGrid& g : scene.sdfGrids)
+    if (const WtMaterial* m = material(g.material); m && emits(*m)) f.emissivePrimitives = true;
   f.environmentMap = !settings.environmentMap.empty() && settings.environmentIntensity > 0.0f;
   f.constantSky = settings.environmentMap.empty() &&
                   (settings.background.x > 0.0f || settings.background.y > 0.0f || settings.background.z > 0.0f);

@@ -32,7 +32,7 @@ struct FeatureSet {
   // lights
   bool punctualLights = false;     ///< KHR_lights_punctual
   bool emissiveTriangles = false;  ///< a triangle's material emits
-  bool emissivePrimitives = false; ///< a sphere's or curve's material emits
+  bool emissivePrimitives = false; ///< a sphere's, curve's, displaced mesh's or SDF grid's material emits
   bool emissiveTextures = false;   ///< an emitting material's emission is textured
   bool environmentMap = false;     ///< an equirectangular map lights the scene
   bool constantSky = false;        ///< a constant, non-black background lights the scene

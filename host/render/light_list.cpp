@@ -267,27 +267,54 @@ LightList buildLightList(const Scene& scene, const SceneBuffers& buffers, double
       list.emitterLeaf[triangleLights[k].triangle] = tree.leafOfEmitter[k];
   }
 
-  // emissive spheres, one entry each (the tree holds triangles only)
+  // emissive spheres, displaced base triangles and SDF bricks, one entry
+  // each (the tree holds triangles only)
   const WtGeometry& geometry = buffers.geometry;
-  std::vector<std::pair<std::uint32_t, std::uint32_t>> sphereLights;  // emitter slot, light index
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> primitiveLights;  // emitter slot, light index
+  auto addPrimitive = [&](std::uint32_t deviceId, glm::vec3 le, bool twoSided, double weight) {
+    WtLight l{};
+    l.type = WT_LIGHT_PRIMITIVE;
+    l.triangle = deviceId;
+    l.intensity = {le.x, le.y, le.z, 0.0f};
+    l.direction.w = twoSided ? 1.0f : 0.0f;
+    primitiveLights.push_back({geometry.emitter_first[primType(deviceId)] + primIndex(deviceId),
+                               std::uint32_t(list.lights.size())});
+    power.push_back(weight);
+    list.lights.push_back(l);
+    return &list.lights.back();
+  };
   for (std::size_t i = 0; i < scene.spheres.size(); ++i) {
     const Sphere& sphere = scene.spheres[i];
     const WtVec4& e = scene.materials[sphere.material].emission;
     glm::vec3 le(e.x, e.y, e.z);
     const double area = 4.0 * std::numbers::pi * double(sphere.radius) * double(sphere.radius);
     if (!(luminance(le) > 0.0) || !sphereUsable(sphere) || !std::isfinite(area)) continue;
-    WtLight l{};
-    l.type = WT_LIGHT_PRIMITIVE;
-    // its id on the device (emitting spheres are never instanced, but instanced ones shift them)
-    l.triangle = buffers.devicePrimitive(primId(WT_PRIM_SPHERE, std::uint32_t(i))).first;
-    l.position = {sphere.center.x, sphere.center.y, sphere.center.z, sphere.radius};
-    l.intensity = {le.x, le.y, le.z, 0.0f};
-    sphereLights.push_back({geometry.emitter_first[WT_PRIM_SPHERE] + primIndex(l.triangle),
-                            std::uint32_t(list.lights.size())});
-    power.push_back(std::numbers::pi * area * luminance(le));  // pi * L * area, from the outside
-    list.lights.push_back(l);
+    // its id on the device (emitting spheres are never instanced, but instanced ones shift them);
+    // pi * L * area, from the outside
+    WtLight* l = addPrimitive(buffers.devicePrimitive(primId(WT_PRIM_SPHERE, std::uint32_t(i))).first, le, false,
+                              std::numbers::pi * area * luminance(le));
+    l->position = {sphere.center.x, sphere.center.y, sphere.center.z, sphere.radius};
   }
-  list.emissivePrimitives = sphereLights.size();
+  for (const SceneBuffers::SurfaceEmitter& s : buffers.surfaceEmitters()) {
+    const bool displaced = primType(s.id) == WT_PRIM_DISPLACED;
+    const std::uint32_t material =
+        displaced ? scene.displacedMeshes[s.source].material : scene.sdfGrids[s.source].material;
+    const WtVec4& e = scene.materials[material].emission;
+    const glm::vec3 le(e.x, e.y, e.z);
+    // the displaced surface's own area; a brick's from its crossed cells, a
+    // cell's mean face area each (a weight only: sampling stays unbiased)
+    double area;
+    if (displaced) {
+      area = displacedArea(scene.displacedMeshes[s.source], s.element);
+    } else {
+      const double volume = std::fabs(glm::determinant(glm::dmat3(scene.sdfGrids[s.source].latticeToScene)));
+      area = double(s.element) * std::cbrt(volume * volume);
+    }
+    const bool twoSided = e.w != 0.0f;
+    if (!(luminance(le) > 0.0) || !(area > 0.0) || !std::isfinite(area)) continue;
+    addPrimitive(s.id, le, twoSided, (twoSided ? 2.0 : 1.0) * std::numbers::pi * area * luminance(le));
+  }
+  list.emissivePrimitives = primitiveLights.size();
 
   // environment
   std::uint32_t envIndex = ~0u;
@@ -323,7 +350,7 @@ LightList buildLightList(const Scene& scene, const SceneBuffers& buffers, double
         list.emitterPdfArea[leaf] = float(pick / areas[k++]);
       }
     // the other types' entries hold their selection probability alone
-    for (auto [slot, light] : sphereLights) list.emitterPdfArea[slot] = list.alias[light].pmf;
+    for (auto [slot, light] : primitiveLights) list.emitterPdfArea[slot] = list.alias[light].pmf;
     if (envIndex != ~0u) list.environmentPmf = list.alias[envIndex].pmf;
   }
   return list;

@@ -39,7 +39,7 @@ struct LightList {
   std::uint32_t analyticCount = 0;     ///< lights [0, analyticCount) are point/spot/directional
   float environmentPmf = 0.0f;         ///< selection probability of the environment
   std::size_t emissiveTriangles = 0;
-  std::size_t emissivePrimitives = 0;  ///< emissive primitives of other types (spheres)
+  std::size_t emissivePrimitives = 0;  ///< emissive primitives of other types (spheres, displaced base triangles, SDF bricks)
   bool sampleable = false;             ///< some light has power: NEE may pick from the table
 };
 

@@ -195,8 +195,10 @@ inline bool disp_leaf_hit(DispMesh m, DispTri t, int n, float inv_n, int2 c0, in
 /// and the hit's lattice coordinates (level-L units) in *li, *lj, which
 /// displaced_surface takes back. `rows`: the type's first prim_data row.
 /// The base triangle's own box is the BVH's: the walk starts at its children.
+/// With `any_hit` (shadow rays) the first micro-triangle hit found in the
+/// interval ends the walk, not necessarily the nearest.
 inline bool displaced_intersect(__global const float4* rows, __global const uint4* tri, float3 o, float3 d,
-                                float tmin, float tmax, float* t_hit, float* li, float* lj) {
+                                float tmin, float tmax, bool any_hit, float* t_hit, float* li, float* lj) {
   uint4 info = tri[0];
   DispMesh m = disp_mesh(rows, info.y);
   DispTri t = disp_tri(rows, tri[1]);
@@ -242,6 +244,7 @@ inline bool displaced_intersect(__global const float4* rows, __global const uint
       int2 c[3];
       disp_node_corners(node, level_l, c);
       found |= disp_leaf_hit(m, t, n, inv_n, c[0], c[1], c[2], o, shear, tmin, &best, li, lj);
+      if (found && any_hit) break;
       continue;
     }
     uint inverted = (node >> 27) & 1u;
@@ -395,6 +398,79 @@ inline void displaced_surface(__global const float4* rows, __global const uint4*
   float wb = li * inv_n, wc = lj * inv_n, wa = 1.0f - wb - wc;
   *uv = wa * t.uv[0] + wb * t.uv[1] + wc * t.uv[2];
   *dpdu = sb;
+}
+
+/// The micro-triangle holding lattice point (li, lj) (disp_micro_at): its
+/// displaced corners and whether it is inverted; its barycentrics in *b1, *b2.
+inline bool disp_micro_corners(DispMesh m, DispTri t, int n, float inv_n, float li, float lj, float3* s0, float3* s1,
+                               float3* s2, float* b1, float* b2) {
+  int2 c[3];
+  bool inverted = disp_micro_at(n, li, lj, c, b1, b2);
+  *s0 = disp_vertex(m, t, n, inv_n, c[0].x, c[0].y);
+  *s1 = disp_vertex(m, t, n, inv_n, c[1].x, c[1].y);
+  *s2 = disp_vertex(m, t, n, inv_n, c[2].x, c[2].y);
+  return inverted;
+}
+
+/// A point of base triangle `tri`'s displaced surface sampled for
+/// next-event estimation from p, as solid angle. Uniform in the base
+/// triangle's barycentric domain: each of the 4^L micro-triangles is picked
+/// with probability 4^-L and is sampled uniformly (the lattice maps onto it
+/// affinely), so the area pdf is 1 / (4^L its area), which
+/// displaced_emitter_pdf gives a BSDF hit. False where the micro-triangle
+/// is degenerate or turns its back to p and only its front emits (shade's rule).
+inline bool displaced_sample_emitter(__global const float4* rows, __global const uint4* tri, float3 p, float u1,
+                                     float u2, bool two_sided, float3* wi, float* distance, float3* target,
+                                     float* pdf) {
+  DispMesh m = disp_mesh(rows, tri[0].y);
+  DispTri t = disp_tri(rows, tri[1]);
+  int n = 1 << m.level;
+  float inv_n = 1.0f / (float)n;
+  float su = sqrt(u1);
+  float3 s0, s1, s2;
+  float b1, b2;
+  bool inverted = disp_micro_corners(m, t, n, inv_n, (float)n * (su * (1.0f - u2)), (float)n * (su * u2), &s0, &s1,
+                                     &s2, &b1, &b2);
+  float3 q_error;
+  float3 q = triangle_point(s0, s1, s2, b1, b2, &q_error);
+  float3 e1 = s1 - s0, e2 = s2 - s0;
+  q_error += (float3)(4.0f * FLT_EPSILON * (float)n * (length(e1) + length(e2)));
+  float3 g = cross(e1, e2);
+  float area2 = length(g);
+  float3 to_light = q - p;
+  float d2 = dot(to_light, to_light);
+  if (!(area2 > 0.0f) || !isfinite(area2) || !(d2 > 0.0f) || !isfinite(d2)) return false;
+  float3 ng = (inverted ? -g : g) / area2;
+  float dist = sqrt(d2);
+  float3 w = to_light / dist;
+  float facing = dot(ng, w);
+  if (!two_sided && facing > 0.0f) return false;
+  float cos_light = fabs(facing);
+  if (!(cos_light > 0.0f)) return false;
+  *target = ray_offset_origin(q, q_error, facing < 0.0f ? ng : -ng);
+  *wi = w;
+  *distance = dist;
+  *pdf = d2 / (cos_light * 0.5f * area2 * (float)n * (float)n);
+  return isfinite(*pdf);
+}
+
+/// The solid-angle pdf with which displaced_sample_emitter reaches, from
+/// `origin`, the hit at p (unit geometric normal ng, lattice point (li, lj)).
+inline float displaced_emitter_pdf(__global const float4* rows, __global const uint4* tri, float3 origin, float3 p,
+                                   float3 ng, float li, float lj) {
+  DispMesh m = disp_mesh(rows, tri[0].y);
+  DispTri t = disp_tri(rows, tri[1]);
+  int n = 1 << m.level;
+  float inv_n = 1.0f / (float)n;
+  float3 s0, s1, s2;
+  float b1, b2;
+  disp_micro_corners(m, t, n, inv_n, li, lj, &s0, &s1, &s2, &b1, &b2);
+  float area = 0.5f * length(cross(s1 - s0, s2 - s0));
+  float3 to_hit = p - origin;
+  float d2 = dot(to_hit, to_hit);
+  float cos_light = fabs(dot(ng, to_hit)) * rsqrt(d2);
+  float pdf = d2 / (cos_light * area * (float)n * (float)n);
+  return (area > 0.0f && cos_light > 0.0f && isfinite(pdf)) ? pdf : 0.0f;
 }
 
 #endif  // WT_GEOMETRY_DISPLACED_CL

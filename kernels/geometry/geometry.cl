@@ -18,7 +18,8 @@
 // sampling) needs textured.cl whether instances are compiled in or not.
 #include "bvh.cl"
 
-#if WT_HAS_SPHERES
+// SDF grids' light sampling uses a sphere's cone (sdf_grid.cl includes it too)
+#if WT_HAS_SPHERES || WT_HAS_SDF_GRIDS
 #include "geometry/sphere.cl"
 #endif
 #if WT_HAS_CURVES
@@ -99,9 +100,10 @@ inline bool geometry_instance_occluded(BvhScene scene, GeometryScene g, uint pri
 /// Ray (o, d) against primitive `prim` in (tmin, tmax): the distance and the
 /// type's own hit parameters (u, v), which geometry_surface takes back. A
 /// primitive the ray leaves (skip_a) or aims at (skip_b) is never met at the
-/// ray's start.
+/// ray's start. With `any_hit` (shadow rays) a type may return any hit in
+/// the interval rather than its nearest (displaced meshes stop at the first).
 inline bool geometry_intersect(GeometryScene g, uint prim, float3 o, float3 d, float tmin, float tmax, uint skip_a,
-                               uint skip_b, float* t, float* u, float* v) {
+                               uint skip_b, bool any_hit, float* t, float* u, float* v) {
   bool leaving = prim == skip_a || prim == skip_b;
   *u = 0.0f;
   *v = 0.0f;
@@ -125,7 +127,7 @@ inline bool geometry_intersect(GeometryScene g, uint prim, float3 o, float3 d, f
     case WT_PRIM_DISPLACED:
       return displaced_intersect(g.data + g.header.data_first[WT_PRIM_DISPLACED],
                                  g.info + g.header.info_first[WT_PRIM_DISPLACED] + WT_DISP_INFO_ROWS * prim_index(prim),
-                                 o, d, tmin, tmax, t, u, v);
+                                 o, d, tmin, tmax, any_hit, t, u, v);
 #endif
     default:
       return false;
@@ -230,9 +232,10 @@ inline SurfaceHit geometry_surface(GeometryScene g, __global const float4* tri_v
 
 /// A point of non-triangle emitter `prim` sampled from p, as solid angle:
 /// the direction, the distance, where a shadow ray ends, and the pdf. False
-/// when the type cannot be sampled from p.
-inline bool geometry_sample_emitter(GeometryScene g, uint prim, float3 p, float u1, float u2, float3* wi,
-                                    float* distance, float3* target, float* pdf) {
+/// when the type cannot be sampled from p or the sample carries nothing
+/// (a back face where only the front emits: `two_sided` false).
+inline bool geometry_sample_emitter(GeometryScene g, uint prim, float3 p, float u1, float u2, bool two_sided,
+                                    float3* wi, float* distance, float3* target, float* pdf) {
   switch (prim_type(prim)) {
 #if WT_HAS_SPHERES
     case WT_PRIM_SPHERE: {
@@ -241,18 +244,46 @@ inline bool geometry_sample_emitter(GeometryScene g, uint prim, float3 p, float 
       return *pdf > 0.0f && sphere_sample_cone(sphere, p, u1, u2, wi, distance, target);
     }
 #endif
+#if WT_HAS_SDF_GRIDS
+    case WT_PRIM_SDF_GRID:
+      return sdf_sample_emitter(g.data + g.header.data_first[WT_PRIM_SDF_GRID],
+                                g.info + g.header.info_first[WT_PRIM_SDF_GRID] + WT_SDF_INFO_ROWS * prim_index(prim), p,
+                                u1, u2, two_sided, wi, distance, target, pdf);
+#endif
+#if WT_HAS_DISPLACED
+    case WT_PRIM_DISPLACED:
+      return displaced_sample_emitter(
+          g.data + g.header.data_first[WT_PRIM_DISPLACED],
+          g.info + g.header.info_first[WT_PRIM_DISPLACED] + WT_DISP_INFO_ROWS * prim_index(prim), p, u1, u2,
+          two_sided, wi, distance, target, pdf);
+#endif
     default:
       return false;
   }
 }
 
 /// The solid-angle pdf with which geometry_sample_emitter reaches emitter
-/// `prim` from `origin` (0: it cannot), before the emitter's selection.
-inline float geometry_emitter_pdf(GeometryScene g, uint prim, float3 origin) {
+/// `prim` from `origin` (0: it cannot), before the emitter's selection, at
+/// the hit `hit` (the stored (t, u, v, prim)) whose surface is p with unit
+/// geometric normal ng.
+inline float geometry_emitter_pdf(GeometryScene g, uint prim, float3 origin, float3 p, float3 ng, float4 hit) {
   switch (prim_type(prim)) {
 #if WT_HAS_SPHERES
     case WT_PRIM_SPHERE:
       return sphere_cone_pdf(*geometry_data(g, prim), origin);
+#endif
+#if WT_HAS_SDF_GRIDS
+    case WT_PRIM_SDF_GRID:
+      return sdf_emitter_pdf(g.data + g.header.data_first[WT_PRIM_SDF_GRID],
+                             g.info + g.header.info_first[WT_PRIM_SDF_GRID] + WT_SDF_INFO_ROWS * prim_index(prim),
+                             origin, p);
+#endif
+#if WT_HAS_DISPLACED
+    case WT_PRIM_DISPLACED:
+      return displaced_emitter_pdf(
+          g.data + g.header.data_first[WT_PRIM_DISPLACED],
+          g.info + g.header.info_first[WT_PRIM_DISPLACED] + WT_DISP_INFO_ROWS * prim_index(prim), origin, p, ng,
+          hit.y, hit.z);
 #endif
     default:
       return 0.0f;

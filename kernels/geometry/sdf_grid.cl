@@ -13,6 +13,7 @@
 #define WT_GEOMETRY_SDF_GRID_CL
 
 #include "common.h"
+#include "geometry/sphere.cl"  // the cone of a brick's sphere, for light sampling
 
 /// The interpolant of one cell along a ray, c0 + c1 t + c2 t^2 + c3 t^3.
 typedef struct SdfCubic {
@@ -244,6 +245,71 @@ inline void sdf_surface(__global const float4* rows, uint4 info, float3 o, float
   *uv = (float2)(pl.x / dims.x, pl.y / dims.y);
   float3 bt;
   frame_from_normal(len > 0.0f ? *normal : (float3)(0.0f, 1.0f, 0.0f), dpdu, &bt);
+}
+
+/// A sphere (centre, radius; world) holding brick `info`'s lattice box: its
+/// centre and half-diagonals mapped back by the inverse of the grid's linear
+/// map (cofactors), the radius the longest of them with a relative margin.
+inline float4 sdf_brick_sphere(__global const float4* rows, uint4 info) {
+  SdfBrick k = sdf_brick(rows, info);
+  float3 r0 = k.grid[0].xyz, r1 = k.grid[1].xyz, r2 = k.grid[2].xyz;
+  float3 shift = (float3)(k.grid[0].w, k.grid[1].w, k.grid[2].w);
+  // the inverse's columns: lattice axes as scene vectors
+  float3 c0 = cross(r1, r2), c1 = cross(r2, r0), c2 = cross(r0, r1);
+  float inv_det = 1.0f / dot(r0, c0);
+  c0 *= inv_det, c1 *= inv_det, c2 *= inv_det;
+  float3 lo = convert_float3(k.lo), hi = convert_float3(k.hi);
+  float3 mid = 0.5f * (lo + hi) - shift, half_size = 0.5f * (hi - lo);
+  float3 center = mid.x * c0 + mid.y * c1 + mid.z * c2;
+  float3 a = half_size.x * c0, b = half_size.y * c1, c = half_size.z * c2;
+  float r2max = fmax(fmax(dot(a + b + c, a + b + c), dot(a + b - c, a + b - c)),
+                     fmax(dot(a - b + c, a - b + c), dot(a - b - c, a - b - c)));
+  return (float4)(center, sqrt(r2max) * 1.001f + 1e-6f * length(center));
+}
+
+/// A point of brick `brick` (its WT_SDF_INFO_ROWS prim_info rows) sampled
+/// for next-event estimation from p: a direction uniform in the cone of
+/// the brick's sphere (sdf_brick_sphere), then the ray's first crossing of
+/// the brick (sdf_intersect). The solid-angle pdf is the cone's wherever
+/// the direction crosses the brick (sdf_emitter_pdf), so no point's area
+/// density is needed; a direction that misses carries nothing. False from
+/// inside the sphere (BSDF sampling alone finds the brick there), on a
+/// miss, and on a back face where only the front emits (shade's rule).
+inline bool sdf_sample_emitter(__global const float4* rows, __global const uint4* brick, float3 p, float u1, float u2,
+                               bool two_sided, float3* wi, float* distance, float3* target, float* pdf) {
+  float4 sphere = sdf_brick_sphere(rows, brick[0]);
+  float3 pc = sphere.xyz - p;
+  float d2 = dot(pc, pc);
+  if (!(d2 > sphere.w * sphere.w) || !isfinite(d2)) return false;
+  float one_minus_cos_max = sphere_cone_one_minus_cos(sphere.w, d2);
+  float cos_t, sin_t;
+  float3 dir = sphere_cone_direction(pc / sqrt(d2), one_minus_cos_max, u1, u2, &cos_t, &sin_t);
+  float t, cell;
+  if (!sdf_intersect(rows, brick, p, dir, 0.0f, INFINITY, &t, &cell)) return false;
+  float3 q, q_error, n, dpdu;
+  float2 uv;
+  sdf_surface(rows, brick[0], p, dir, t, cell, &q, &q_error, &n, &uv, &dpdu);
+  float facing = dot(n, dir);
+  if (dot(n, n) == 0.0f || (!two_sided && facing > 0.0f)) return false;
+  *target = ray_offset_origin(q, q_error, facing < 0.0f ? n : -n);
+  *wi = dir;
+  *distance = length(q - p);
+  *pdf = 1.0f / (2.0f * WT_PI * one_minus_cos_max);
+  return *distance > 0.0f;
+}
+
+/// The solid-angle pdf with which sdf_sample_emitter reaches, from
+/// `origin`, a crossing of the brick at p: the cone's where the direction
+/// to p lies in it (by its sine, exact for small cones), else 0.
+inline float sdf_emitter_pdf(__global const float4* rows, __global const uint4* brick, float3 origin, float3 p) {
+  float4 sphere = sdf_brick_sphere(rows, brick[0]);
+  float3 pc = sphere.xyz - origin;
+  float d2 = dot(pc, pc);
+  if (!(d2 > sphere.w * sphere.w) || !isfinite(d2)) return 0.0f;
+  float3 w = pc * rsqrt(d2), dir = normalize(p - origin);
+  float3 across = cross(w, dir);
+  if (!(dot(w, dir) > 0.0f) || dot(across, across) > sphere.w * sphere.w / d2) return 0.0f;
+  return 1.0f / (2.0f * WT_PI * sphere_cone_one_minus_cos(sphere.w, d2));
 }
 
 #endif  // WT_GEOMETRY_SDF_GRID_CL

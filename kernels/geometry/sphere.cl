@@ -71,6 +71,19 @@ inline float sphere_cone_pdf(float4 sphere, float3 p) {
   return 1.0f / (2.0f * WT_PI * sphere_cone_one_minus_cos(sphere.w, d2));
 }
 
+/// A direction uniform in the cone about unit axis w of 1 - cos(half-angle)
+/// `one_minus_cos_max` (pdf 1 / (2 pi one_minus_cos_max)), with its angle's
+/// cosine and sine from the axis.
+inline float3 sphere_cone_direction(float3 w, float one_minus_cos_max, float u1, float u2, float* cos_t, float* sin_t) {
+  float one_minus_cos = u1 * one_minus_cos_max;
+  *cos_t = 1.0f - one_minus_cos;
+  *sin_t = sqrt(fmax(0.0f, one_minus_cos * (2.0f - one_minus_cos)));
+  float phi = 2.0f * WT_PI * u2;
+  float3 t, b;
+  frame_from_normal(w, &t, &b);
+  return *cos_t * w + *sin_t * (cos(phi) * t + sin(phi) * b);
+}
+
 /// A direction uniform in the cone of directions from p that meet the
 /// sphere (pdf sphere_cone_pdf), the distance to the near point it meets
 /// and that point pushed outward past its rounding error (where a shadow
@@ -82,14 +95,8 @@ inline bool sphere_sample_cone(float4 sphere, float3 p, float u1, float u2, floa
   float r = sphere.w;
   if (!(d2 > r * r) || !isfinite(d2)) return false;
   float d = sqrt(d2);
-  float3 w = pc / d;
-  float one_minus_cos = u1 * sphere_cone_one_minus_cos(r, d2);
-  float cos_t = 1.0f - one_minus_cos;
-  float sin_t = sqrt(fmax(0.0f, one_minus_cos * (2.0f - one_minus_cos)));
-  float phi = 2.0f * WT_PI * u2;
-  float3 t, b;
-  frame_from_normal(w, &t, &b);
-  float3 dir = cos_t * w + sin_t * (cos(phi) * t + sin(phi) * b);
+  float cos_t, sin_t;
+  float3 dir = sphere_cone_direction(pc / d, sphere_cone_one_minus_cos(r, d2), u1, u2, &cos_t, &sin_t);
   // the near root along dir; reprojected so the point lies on the sphere
   float reach = d * cos_t - sqrt(fmax(0.0f, r * r - d2 * sin_t * sin_t));
   float3 on, on_error, n, dpdu;

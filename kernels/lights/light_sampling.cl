@@ -247,7 +247,8 @@ inline bool light_sample(LightScene ls, uint index, float3 p, float u1, float u2
   if (light.type == WT_LIGHT_PRIMITIVE) {
     s->prim = light.triangle;
     s->radiance = vec4_xyz(light.intensity);
-    return geometry_sample_emitter(ls.geometry, light.triangle, p, u1, u2, &s->wi, &s->distance, &s->target, &s->pdf);
+    return geometry_sample_emitter(ls.geometry, light.triangle, p, u1, u2, light.direction.w != 0.0f, &s->wi,
+                                   &s->distance, &s->target, &s->pdf);
   }
 #endif
   // environment

@@ -14,12 +14,12 @@
 #define WT_LIGHT_DIRECTIONAL 3  ///< KHR_lights_punctual directional
 #define WT_LIGHT_ENVIRONMENT 4  ///< the environment (constant or map), at most one
 #define WT_LIGHT_TREE 5         ///< the light tree over the emissive triangles (kernels/lights/light_tree.cl), at most one
-#define WT_LIGHT_PRIMITIVE 6    ///< an emissive primitive of another type (a sphere), sampled by geometry_sample_emitter
+#define WT_LIGHT_PRIMITIVE 6    ///< an emissive primitive of another type (a sphere, a displaced base triangle, an SDF brick), sampled by geometry_sample_emitter
 
 /// One light of the scene's light list, 64 bytes.
 typedef struct WtLight {
   WtVec4 position;   ///< point/spot: world position; triangle: w = 1 when both faces emit, y = 1 when its material's emission is textured (materials/textured.cl)
-  WtVec4 direction;  ///< spot/directional: unit world direction the light travels in; triangle: x its material's WT_ALPHA_* where it may have holes (0: none), y alphaCutoff, z the alpha factor, w = 1 when the base colour texture's alpha counts (lights/light_sampling.cl)
+  WtVec4 direction;  ///< spot/directional: unit world direction the light travels in; triangle: x its material's WT_ALPHA_* where it may have holes (0: none), y alphaCutoff, z the alpha factor, w = 1 when the base colour texture's alpha counts (lights/light_sampling.cl); primitive: w = 1 when both faces emit
   WtVec4 intensity;  ///< point/spot: cd per channel; directional: lux; triangle: nits (the material's emission)
   wt_uint type;      ///< WT_LIGHT_*
   wt_uint triangle;  ///< WT_LIGHT_TRIANGLE: leaf-order triangle index; WT_LIGHT_PRIMITIVE: the primitive's typed id (WT_PRIM_TYPE_SHIFT)

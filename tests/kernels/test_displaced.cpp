@@ -18,6 +18,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <map>
 #include <random>
 
@@ -304,6 +305,33 @@ DecodedBoxes decodeBoxes(const TypeRows& rows, std::uint32_t triangle) {
     out.hi.push_back(chi);
   }
   return out;
+}
+
+TEST(DisplacedMeshes, BoxesBuildTheSameOnAnyThreadCount) {
+  // 1280 base triangles (more than a chunk of the threaded build), one with
+  // a non-finite corner among them (left out in its place); boxes stored to
+  // the deepest level the micro-vertices bound exactly (D = L - 1) and
+  // shallower (D = 2 < L - 1: the deepest from the map's range)
+  Scene scene = testSphere(4, 0.2f, -0.1f, glm::vec3(0.3f, -0.2f, 0.1f), 3);
+  DisplacedMesh& mesh = scene.displacedMeshes[0];
+  ASSERT_GT(mesh.triangles.size(), 1024u);
+  mesh.positions.push_back(glm::vec3(std::numeric_limits<float>::quiet_NaN(), 0.0f, 0.0f));
+  mesh.normals.push_back(glm::vec3(0.0f, 1.0f, 0.0f));
+  mesh.texcoords.push_back(glm::vec2(0.5f));
+  mesh.triangles[700][1] = std::uint32_t(mesh.positions.size() - 1);
+  for (std::uint32_t depth : {std::uint32_t(WT_DISP_MAX_DEPTH), 2u}) {
+    PrimitiveRows one, many;
+    gatherDisplacedTo(scene, one, depth, 1);
+    gatherDisplacedTo(scene, many, depth, 5);
+    EXPECT_EQ(one.skipped, 1u);
+    EXPECT_EQ(many.skipped, one.skipped);
+    EXPECT_EQ(many.ids, one.ids);
+    EXPECT_EQ(many.info, one.info);
+    ASSERT_EQ(many.data.size(), one.data.size());
+    EXPECT_EQ(std::memcmp(many.data.data(), one.data.data(), one.data.size() * sizeof(WtVec4)), 0) << "depth " << depth;
+    ASSERT_EQ(many.bounds.size(), one.bounds.size());
+    EXPECT_EQ(std::memcmp(many.bounds.data(), one.bounds.data(), one.bounds.size() * sizeof(Aabb)), 0);
+  }
 }
 
 TEST(DisplacedMeshes, StoredBoxesHoldEveryMicroTriangleAndStayTight) {
