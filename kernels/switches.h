@@ -139,6 +139,17 @@
 #ifndef WT_NO_CTZ
 #define WT_NO_CTZ 0
 #endif
+#ifndef WT_NO_SRET_INLINE
+#define WT_NO_SRET_INLINE 0
+#endif
+// A struct-returning function to inline: LLVM marks its result with
+// llvm.experimental.noalias.scope.decl where it stays in memory (always
+// unoptimised), which Oclgrind lacks (tests/oclgrind/noalias_scope.cl).
+#if WT_NO_SRET_INLINE
+#define WT_INLINE_STRUCT __attribute__((noinline)) inline
+#else
+#define WT_INLINE_STRUCT __attribute__((always_inline)) inline
+#endif
 #ifndef WT_PACKET_LEAF_LANES
 #define WT_PACKET_LEAF_LANES (WT_PACKET_WIDTH == 8 ? 2 : 0)
 #endif

@@ -167,11 +167,14 @@ cl::Program buildProgram(Context& context, const KernelFeatures& features, const
   // argument names let KernelBinding check each kernel against its host declaration at start-up
   std::string options = "-cl-std=CL1.2 -cl-kernel-arg-info";
   for (const std::string& d : kernelDefines(features)) options += " " + d;
-  // Oclgrind (the kernel checker) lacks the llvm.bitreverse, llvm.prefetch
-  // and llvm.cttz intrinsics (tests/oclgrind/prefetch.cl, ctz.cl), and loses
-  // the initialisation of .hi of 16-wide vectors (tests/oclgrind/upper_half.cl).
+  // Oclgrind (the kernel checker) lacks the llvm.bitreverse, llvm.prefetch,
+  // llvm.cttz and llvm.experimental.noalias.scope.decl intrinsics
+  // (tests/oclgrind/prefetch.cl, ctz.cl, noalias_scope.cl), and loses the
+  // initialisation of .hi of 16-wide vectors (tests/oclgrind/upper_half.cl).
   if (context.underOclgrind())
-    options += " -D WT_AVOID_BITREVERSE=1 -D WT_FOLD_THROUGH_MEMORY=1 -D WT_NO_PREFETCH=1 -D WT_NO_CTZ=1";
+    options +=
+        " -D WT_AVOID_BITREVERSE=1 -D WT_FOLD_THROUGH_MEMORY=1 -D WT_NO_PREFETCH=1 -D WT_NO_CTZ=1"
+        " -D WT_NO_SRET_INLINE=1";
   return buildCachedProgram(context, source, options, root).program;
 }
 

@@ -36,8 +36,11 @@ cl::Buffer upload(Context& context, const Array& data, std::size_t& bytes) {
 cl::Buffer readOnlyBuffer(Context& context, const void* data, std::size_t bytes, bool inPlace) {
   // OpenCL rejects zero-sized buffers and a null host pointer: one dummy word
   if (bytes == 0 || data == nullptr) return cl::Buffer(context.context(), CL_MEM_READ_ONLY, sizeof(wt_uint));
-  // a CPU device's kernels address host memory: the buffer can be the array itself
-  if (inPlace && context.info().isCpu)
+  // a CPU device's kernels address host memory: the buffer can be the array
+  // itself; not under Oclgrind, whose uninitialised-value checker takes a
+  // CL_MEM_USE_HOST_PTR buffer's contents as never written (the environment
+  // renders reported every read of its texels and distributions)
+  if (inPlace && context.info().isCpu && !context.underOclgrind())
     return cl::Buffer(context.context(), CL_MEM_READ_ONLY | CL_MEM_USE_HOST_PTR, bytes, const_cast<void*>(data));
   cl::Buffer buffer(context.context(), CL_MEM_READ_ONLY, bytes);
   context.queue().enqueueWriteBuffer(buffer, CL_TRUE, 0, bytes, data);

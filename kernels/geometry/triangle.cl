@@ -105,9 +105,9 @@ typedef struct TriangleLanes {
 /// permuted axes (kx, ky, kz) in xk, yk, zk. ok: the lane is hit in (tmin,
 /// tmax). Loads nothing, for callers whose corners are not stored
 /// (displaced micro-triangles) as well as for triangle_test4_k.
-__attribute__((always_inline)) inline TriangleLanes triangle_test4_lanes(RayShear s, float tmin, float tmax, float4 x0,
-                                                                         float4 y0, float4 z0, float4 x1, float4 y1,
-                                                                         float4 z1, float4 x2, float4 y2, float4 z2) {
+WT_INLINE_STRUCT TriangleLanes triangle_test4_lanes(RayShear s, float tmin, float tmax, float4 x0, float4 y0,
+                                                    float4 z0, float4 x1, float4 y1, float4 z1, float4 x2,
+                                                    float4 y2, float4 z2) {
   float4 az = z0, bz = z1, cz = z2;
   float4 ax = x0 - s.sx * az;
   float4 ay = y0 - s.sy * az;
@@ -159,10 +159,9 @@ __attribute__((always_inline)) inline TriangleLanes triangle_test4_lanes(RayShea
 /// form takes the ray's origin already on its permuted axes (o_k = (org[kx],
 /// org[ky], org[kz]), triangle_origin_k), for callers that keep it per ray
 /// (streams test many leaves with each ray).
-__attribute__((always_inline)) inline TriangleLanes triangle_test4_k(float3 o_k, RayShear s, float tmin, float tmax,
-                                                                      __global const float4* tri_verts, uint block,
-                                                                      uint lane_lo, uint lane_hi, uint skip_a,
-                                                                      uint skip_b) {
+WT_INLINE_STRUCT TriangleLanes triangle_test4_k(float3 o_k, RayShear s, float tmin, float tmax,
+                                                __global const float4* tri_verts, uint block, uint lane_lo,
+                                                uint lane_hi, uint skip_a, uint skip_b) {
   __global const float4* r = tri_verts + WT_TRIANGLE_BLOCK_ROWS * block;
   float ox = o_k.x, oy = o_k.y, oz = o_k.z;
   float4 vx[3], vy[3], vz[3];

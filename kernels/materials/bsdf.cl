@@ -391,6 +391,12 @@ inline PbrView pbr_view_none(void) {
   return v;
 }
 
+// Inlined, pbr_view's result stays in memory in pbr_eval, and LLVM marks
+// it with llvm.experimental.noalias.scope.decl, which Oclgrind does not
+// define (tests/oclgrind/noalias_scope.cl): under Oclgrind it is called.
+#if WT_NO_SRET_INLINE
+__attribute__((noinline))
+#endif
 inline PbrView pbr_view(Bsdf b, float3 wo) {
   PbrView v;
   float mu = wo.z;
