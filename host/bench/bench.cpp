@@ -859,13 +859,14 @@ SceneResult benchScene(Context& context, const std::string& name, const Scene& s
   general.renderSample();
   std::uint64_t raysBefore = renderer.stats().raysTraced;
   double secondsBefore = renderer.stats().seconds, generalBefore = general.stats().seconds;
-  // interleaved, so that both programs see the same machine load; on for a
-  // second at least, since a few samples of a small scene are milliseconds
-  // that one busy moment of the machine can double
-  constexpr double kPathMinSeconds = 1.0;
+  // interleaved, so that both programs see the same machine load; on for
+  // twice --min-time at least (a second by default; 0: exactly --path-spp),
+  // since a few samples of a small scene are milliseconds that one busy
+  // moment of the machine can double
+  const double pathMinSeconds = 2.0 * options.minSeconds;
   int samples = 0;
   while (samples < options.pathSamples ||
-         (renderer.stats().seconds - secondsBefore < kPathMinSeconds && samples < 64 * options.pathSamples)) {
+         (renderer.stats().seconds - secondsBefore < pathMinSeconds && samples < 64 * options.pathSamples)) {
     renderer.renderSample();
     general.renderSample();
     ++samples;
@@ -1107,10 +1108,11 @@ int runBench(const BenchOptions& options) {
               device.platformName.c_str(), embreeText.c_str(), options.bvh.c_str(), options.instancing.c_str(), packetWidth,
               options.packetWidth == 0 && packetWidth == 16 ? widePacketRule.c_str() : "");
   std::printf("rays: primary %dx%d through pixel centres; diffuse and shadow rays from their hits; "
-              "median of %d or more runs (%g s at least) after a warm-up\npaths: %dx%d, %d spp (more, up to a second, "
-              "for the general-program comparison), up to 8 bounces, extend rays counted\n",
+              "median of %d or more runs (%g s at least) after a warm-up\npaths: %dx%d, %d spp (%s), up to 8 bounces, "
+              "extend rays counted\n",
               options.primaryWidth, options.primaryWidth, options.repetitions, options.minSeconds, options.pathWidth,
-              options.pathWidth, options.pathSamples);
+              options.pathWidth, options.pathSamples,
+              options.minSeconds > 0 ? "more, for 2 x --min-time, interleaved with the general program" : "exactly");
   for (const auto& [name, reason] : skipped) std::printf("skipped %s: %s\n", name.c_str(), reason.c_str());
 
   // nodes and SAH: the binary tree (--bvh), then the 4-wide tree collapsed from it (what the kernels traverse)

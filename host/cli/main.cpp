@@ -1321,7 +1321,7 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(1, 8192))->capture_default_str();
   benchCmd->add_option("--path-width", bench.pathWidth, "The path-tracing figure renders N x N pixels")
       ->check(CLI::Range(1, 4096))->capture_default_str();
-  benchCmd->add_option("--path-spp", bench.pathSamples, "The path-tracing figure's samples per pixel (at least)")
+  benchCmd->add_option("--path-spp", bench.pathSamples, "The path-tracing figure's samples per pixel (at least; exactly with --min-time 0)")
       ->check(CLI::Range(1, 1024))->capture_default_str();
   benchCmd->add_option("--tessellate", bench.tessellate,
                        "Each scene with displaced meshes gains a row: the same meshes as triangles, N per base edge "
@@ -1338,7 +1338,7 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(1, 1000))->capture_default_str();
   benchCmd->add_option("--min-time", bench.minSeconds,
                        "Seconds: each tracer's timed runs of a ray set go on past --repetitions until they add up "
-                       "to this, up to 20 x --repetitions runs (0: exactly --repetitions)")
+                       "to this, up to 20 x --repetitions runs (0: exactly --repetitions); the path figure runs for twice this (0: exactly --path-spp)")
       ->check(CLI::Range(0.0, 60.0))->capture_default_str();
   benchCmd->add_option("--embree-api", bench.embreeApi,
                        "Embree reference: how rays are handed over; fastest: each set with every API, "
