@@ -850,15 +850,18 @@ SceneResult benchScene(Context& context, const std::string& name, const Scene& s
   settings.instancing = bvhOptions.instancing;
   settings.packetWidth = options.packetWidth;
   Renderer renderer(context, scene, settings);
-  RenderSettings generalSettings = settings;
-  generalSettings.generalProgram = true;
-  Renderer general(context, scene, generalSettings);
+  std::optional<Renderer> general;
+  if (options.compareProgram == "general") {
+    RenderSettings generalSettings = settings;
+    generalSettings.generalProgram = true;
+    general.emplace(context, scene, generalSettings);
+    result.programSecondsGeneral = general->stats().programSeconds;
+  }
   result.programSeconds = renderer.stats().programSeconds;
-  result.programSecondsGeneral = general.stats().programSeconds;
   renderer.renderSample();  // warm-up
-  general.renderSample();
+  if (general) general->renderSample();
   std::uint64_t raysBefore = renderer.stats().raysTraced;
-  double secondsBefore = renderer.stats().seconds, generalBefore = general.stats().seconds;
+  double secondsBefore = renderer.stats().seconds, generalBefore = general ? general->stats().seconds : 0.0;
   // interleaved, so that both programs see the same machine load; on for
   // twice --min-time at least (a second by default; 0: exactly --path-spp),
   // since a few samples of a small scene are milliseconds that one busy
@@ -868,13 +871,13 @@ SceneResult benchScene(Context& context, const std::string& name, const Scene& s
   while (samples < options.pathSamples ||
          (renderer.stats().seconds - secondsBefore < pathMinSeconds && samples < 64 * options.pathSamples)) {
     renderer.renderSample();
-    general.renderSample();
+    if (general) general->renderSample();
     ++samples;
   }
   result.pathMrays = double(renderer.stats().raysTraced - raysBefore) /
                      (renderer.stats().seconds - secondsBefore) * 1e-6;
   result.pathMsPerSample = (renderer.stats().seconds - secondsBefore) / samples * 1e3;
-  result.pathMsPerSampleGeneral = (general.stats().seconds - generalBefore) / samples * 1e3;
+  if (general) result.pathMsPerSampleGeneral = (general->stats().seconds - generalBefore) / samples * 1e3;
   return result;
 }
 
@@ -1024,6 +1027,12 @@ int runBench(const BenchOptions& options) {
       std::printf("%s{\"name\": %s, \"reason\": %s}", i ? ", " : "", jsonString(skipped[i].first).c_str(),
                   jsonString(skipped[i].second).c_str());
     std::printf("],\n \"scenes\": [\n");
+    // the general program's figures: null where --compare-program none left it out
+    const auto generalFigure = [&](double v) {
+      char text[32] = "null";
+      if (options.compareProgram == "general") std::snprintf(text, sizeof text, "%.3f", v);
+      return std::string(text);
+    };
     for (std::size_t i = 0; i < results.size(); ++i) {
       const SceneResult& r = results[i];
       std::printf("  {\"name\": %s, \"triangles\": %zu, \"bvh_build_s\": %.6f, \"bvh_mtris_per_s\": %.3f, "
@@ -1031,12 +1040,13 @@ int runBench(const BenchOptions& options) {
                   "\"bvh4_mtris_per_s\": %.3f, \"bytes_per_triangle\": %.1f, \"instances\": %zu, \"leaf_misfits\": %zu, \"bvh_copies_placed\": %zu, "
                   "\"bvh_flat_regions\": %zu, \"packet_width\": %d, \"stream_prefetch\": %s, \"embree_build_s\": %.6f, "
                   "\"shadow_targets\": \"%s\", \"path_mrays\": %.3f, \"path_ms_per_sample\": %.3f, "
-                  "\"path_ms_per_sample_general\": %.3f, \"program_build_s\": %.3f, \"program_build_general_s\": %.3f,\n",
+                  "\"path_ms_per_sample_general\": %s, \"program_build_s\": %.3f, \"program_build_general_s\": %s,\n",
                   jsonString(r.name).c_str(), r.triangles, r.buildSeconds,
                   r.buildSeconds > 0 ? r.triangles / r.buildSeconds * 1e-6 : 0.0, r.nodes, r.sah,
                   r.nodes4, r.sah4, r.collapseSeconds, traversableRate(r), r.bytesPerTriangle, r.instances, r.leafMisfits,
                   r.copiesPlaced, r.flatRegions, r.packetWidth, r.streamPrefetch ? "true" : "false", r.embreeBuildSeconds, r.shadowToEmitters ? "emitters" : "bounds", r.pathMrays,
-                  r.pathMsPerSample, r.pathMsPerSampleGeneral, r.programSeconds, r.programSecondsGeneral);
+                  r.pathMsPerSample, generalFigure(r.pathMsPerSampleGeneral).c_str(), r.programSeconds,
+                  generalFigure(r.programSecondsGeneral).c_str());
       std::printf("   \"primitives\": {");
       for (std::uint32_t type = 0, n = 0; type < WT_PRIM_TYPES; ++type)
         if (*primTypeName(type)) std::printf("%s\"%s\": %zu", n++ ? ", " : "", primTypeName(type), r.primitives[type]);
@@ -1112,7 +1122,7 @@ int runBench(const BenchOptions& options) {
               "extend rays counted\n",
               options.primaryWidth, options.primaryWidth, options.repetitions, options.minSeconds, options.pathWidth,
               options.pathWidth, options.pathSamples,
-              options.minSeconds > 0 ? "more, for 2 x --min-time, interleaved with the general program" : "exactly");
+              options.minSeconds > 0 ? "more, for 2 x --min-time" : "exactly");
   for (const auto& [name, reason] : skipped) std::printf("skipped %s: %s\n", name.c_str(), reason.c_str());
 
   // nodes and SAH: the binary tree (--bvh), then the 4-wide tree collapsed from it (what the kernels traverse)
@@ -1129,12 +1139,14 @@ int runBench(const BenchOptions& options) {
   }
 
   // the scene's specialised program against the general one (every switch on), same samples
-  std::printf("\n%-28s %14s %14s %8s %10s %10s\n", "scene", "special ms/spl", "general ms/spl", "speed-up",
-              "build s", "general s");
-  for (const SceneResult& r : results)
-    std::printf("%-28s %14.2f %14.2f %8.3f %10.2f %10.2f\n", r.name.c_str(), r.pathMsPerSample,
-                r.pathMsPerSampleGeneral, r.pathMsPerSample > 0 ? r.pathMsPerSampleGeneral / r.pathMsPerSample : 0.0,
-                r.programSeconds, r.programSecondsGeneral);
+  if (options.compareProgram == "general") {
+    std::printf("\n%-28s %14s %14s %8s %10s %10s\n", "scene", "special ms/spl", "general ms/spl", "speed-up",
+                "build s", "general s");
+    for (const SceneResult& r : results)
+      std::printf("%-28s %14.2f %14.2f %8.3f %10.2f %10.2f\n", r.name.c_str(), r.pathMsPerSample,
+                  r.pathMsPerSampleGeneral, r.pathMsPerSample > 0 ? r.pathMsPerSampleGeneral / r.pathMsPerSample : 0.0,
+                  r.programSeconds, r.programSecondsGeneral);
+  }
 
   // the other geometry types: their one BVH (leaves of typed ids), built and collapsed
   bool anyPrimitives = false;

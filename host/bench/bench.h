@@ -43,6 +43,9 @@ struct BenchOptions {
   /// Builders whose trees are built (median of repetitions) and traced on
   /// the same rays, interleaved, for the tree-quality table; "none" skips it.
   std::vector<std::string> compareBvh{"auto", "lbvh", "ploc", "sah"};
+  /// "general": the path figure also renders with the general program (every
+  /// switch on), samples interleaved, for the specialisation table; "none" skips it.
+  std::string compareProgram = "general";
   /// single, packet, stream or auto: packets (Traversal::kPacket) for the
   /// sets whose packets' rays point nearly the same way (camera rays, shadow
   /// rays to one small light), streams (Traversal::kStream) for the other

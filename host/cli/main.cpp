@@ -1358,6 +1358,10 @@ int main(int argc, char** argv) {
   benchCmd->add_option("--compare-bvh", bench.compareBvh,
                        "Builders whose trees are traced on the same rays (tree quality table); none: --compare-bvh none")
       ->delimiter(',')->check(CLI::IsMember({"auto", "lbvh", "ploc", "sah", "none"}))->capture_default_str();
+  benchCmd->add_option("--compare-program", bench.compareProgram,
+                       "general: the path figure also renders with the general program (every switch on), "
+                       "for the specialised-vs-general table; none: skip it (no second program to build)")
+      ->check(CLI::IsMember({"general", "none"}))->capture_default_str();
   benchCmd->add_option("--traversal", bench.traversal,
                        "single: one ray per work-item; packet: a packet of rays per work-item; stream: shadow rays "
                        "as streams of 64 that walk the tree together; auto: as the renderer chooses from the rays "
