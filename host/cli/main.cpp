@@ -728,6 +728,13 @@ int runScaleOutRender(RenderOptions options, wt::MpiWorld& world) {
       devices.contexts.push_back(std::make_unique<wt::Context>(infos[d]));
       devices.renderers.push_back(std::make_unique<wt::Renderer>(*devices.contexts.back(), loaded->scene, settings));
       devices.names.push_back("device " + std::to_string(infos[d].index) + " (" + infos[d].name + ")");
+      // the image is read through the resolve and tone-map kernels, which
+      // PoCL builds at their first launch: here, not after a signal, when
+      // mpirun's SIGKILL follows in a second and a cold build takes longer
+      if (root) {
+        devices.renderers.back()->resetAccumulation(0);
+        (void)devices.renderers.back()->readImage();
+      }
     }
     identity = wt::checkpointIdentity(loaded->scene, *devices.renderers.front());
     for (const wt::CheckpointField& f : identity) renderHash.bytes(f.key.data(), f.key.size()), renderHash.bytes(f.value.data(), f.value.size());
@@ -892,8 +899,15 @@ int runScaleOutRender(RenderOptions options, wt::MpiWorld& world) {
     if (result.merged.nonFiniteSamples > 0)
       wt::log::warnOnce(std::to_string(result.merged.nonFiniteSamples) + " NaN/Inf samples discarded");
   }
-  // after the image: under mpirun a dying rank leaves rank 0 about a second
-  // before SIGKILL, and the checkpoint waits for the disk (fsync)
+  const std::string kept = done > 0 ? "; the " + std::to_string(done) + " merged samples were written"
+                                    : "; no chunk was merged, nothing written";
+  // said before the checkpoint, which waits for the disk (fsync): under
+  // mpirun a dying rank leaves rank 0 about a second before SIGKILL
+  if (result.interrupted && result.failure.empty())
+    wt::log::error("stopped by a signal after " + std::to_string(done) + " of " + std::to_string(spp) + " samples" +
+                   (world.active() ? " (under mpirun also when a rank died or was killed: mpirun then stops every rank)"
+                                   : "") +
+                   kept);
   finishCheckpoint();
   if (!checkpointError.empty() && result.failure.empty()) result.failure = checkpointError;
   if (options.checkpointSeconds > 0.0 && done > resumed) {
@@ -907,19 +921,13 @@ int runScaleOutRender(RenderOptions options, wt::MpiWorld& world) {
   const bool lost = !result.lostRanks.empty() || !result.lostDevices.empty();
   const bool mustAbort = (world.active() && (lost || !result.failure.empty() || result.interrupted)) ||
                          !result.lostDevices.empty();
-  const std::string kept = done > 0 ? "; the " + std::to_string(done) + " merged samples were written"
-                                    : "; no chunk was merged, nothing written";
   if (!result.failure.empty()) {
     wt::log::error("render failed after " + std::to_string(done) + " of " + std::to_string(spp) +
                    " samples: " + result.failure + kept);
     if (mustAbort) world.abort(1);
     return 1;
   }
-  if (result.interrupted) {
-    wt::log::error("stopped by a signal after " + std::to_string(done) + " of " + std::to_string(spp) + " samples" +
-                   (world.active() ? " (under mpirun also when a rank died or was killed: mpirun then stops every rank)"
-                                   : "") +
-                   kept);
+  if (result.interrupted) {  // said above
     if (mustAbort) world.abort(130);
     return 130;
   }
