@@ -211,18 +211,18 @@ if [ "$mode" = heartbeat ]; then
   cmp "$dir/rank0.exr" "$dir/straight.exr" || fail "rank 0 hung: the resumed image differs from the uninterrupted one"
   echo "rank 0 hung: rank 1 ended the job in $((SECONDS - start)) s naming it; its checkpoint resumed to the same image"
   # rank 1 hangs before it has started: rank 0 names it and ends the job
-  stalled 1:startup startup "${hb[@]}" -q
+  stalled 1:startup startup "${hb[@]}" -q --start-timeout 1
   [ $status -eq 124 ] && fail "startup: rank 0 still waited 60 s for rank 1 to start: $(cat "$dir/startup.log")"
   [ $status -ne 0 ] || fail "startup: the job exited 0 without rank 1"
-  grep -q "error: the job could not start: rank 1 had not finished starting 1 s after rank 0 (--rank-timeout)" \
+  grep -q "error: the job could not start: rank 1 had not finished starting 1 s after rank 0 (--start-timeout)" \
     "$dir/startup.log" || fail "startup: no message naming rank 1: $(cat "$dir/startup.log")"
   [ -f "$dir/startup.exr" ] && fail "startup: an image was written"
   echo "rank 1 hung while starting: the job ended in $((SECONDS - start)) s naming it"
   # rank 0 hangs before it has started: rank 1 names it and ends the job
-  stalled 0:startup startup0 "${hb[@]}" -q
+  stalled 0:startup startup0 "${hb[@]}" -q --start-timeout 1
   [ $status -eq 124 ] && fail "startup0: rank 1 still waited 60 s for rank 0 to start: $(cat "$dir/startup0.log")"
   [ $status -ne 0 ] || fail "startup0: the job exited 0 without rank 0"
-  grep -q "error: the job could not start: rank 0 had not finished starting 1 s after rank 1 (--rank-timeout)" \
+  grep -q "error: the job could not start: rank 0 had not finished starting 1 s after rank 1 (--start-timeout)" \
     "$dir/startup0.log" || fail "startup0: no message naming rank 0: $(cat "$dir/startup0.log")"
   echo "rank 0 hung while starting: the job ended in $((SECONDS - start)) s naming it"
   exit 0

@@ -223,6 +223,7 @@ struct RenderOptions {
   int chunkSpp = 0;    ///< --chunk-spp; 0: defaultChunkSpp
   bool chunkSppGiven = false;
   double rankTimeout = wt::ScaleOutOptions::kDefaultRankTimeout;  ///< --rank-timeout
+  double startTimeout = 0.0;  ///< --start-timeout; 0: the larger of --rank-timeout and its default
   std::string aov;     ///< --aov: names, comma-separated, or "all"
   std::string aovOut;  ///< --aov-out: folder for one EXR per AOV
   std::string debug;   ///< --debug: a view (output/debug_view.h)
@@ -751,7 +752,12 @@ int runScaleOutRender(RenderOptions options, wt::MpiWorld& world) {
     setupError = e.what();
   }
   try {
-    world.agreeOnStart(setupError, renderHash.value(), options.rankTimeout);
+    // a start (scene, BVH, kernel build) takes far longer than a sample
+    // pass, and one rank's cold start longer than another's warm one
+    const double startTimeout = options.startTimeout > 0.0
+                                    ? options.startTimeout
+                                    : std::max(options.rankTimeout, wt::ScaleOutOptions::kDefaultRankTimeout);
+    world.agreeOnStart(setupError, renderHash.value(), startTimeout);
   } catch (const std::exception& e) {
     if (!root) return 1;  // rank 0 reports every rank's failure
     throw;
@@ -1104,7 +1110,7 @@ void groupRenderOptions(CLI::App* cmd) {
        {"--time", "--target-error", "--reference", "--error-log", "--checkpoint", "--resume"}},
       {"AOVs and debugging", {"--aov", "--aov-out", "--debug", "--stop-on-nan"}},
       {"Device, BVH and kernels",
-       {"--device", "--chunk-spp", "--rank-timeout", "--bvh", "--instancing", "--traversal", "--packet-width", "--kernel-dir", "--kernel-cache",
+       {"--device", "--chunk-spp", "--rank-timeout", "--start-timeout", "--bvh", "--instancing", "--traversal", "--packet-width", "--kernel-dir", "--kernel-cache",
         "--general-program"}},
       {"Messages and profiling", {"--quiet", "--verbose", "--profile", "--profile-json"}},
   };
@@ -1224,6 +1230,10 @@ int main(int argc, char** argv) {
                         "others and the image is finished without it; a rank 0 that sends nothing that long ends "
                         "the job. Must exceed the slowest device's sample pass (docs/scale-out.md, Faults)")
       ->check(CLI::PositiveNumber)->capture_default_str();
+  renderCmd->add_option("--start-timeout", render.startTimeout,
+                        "An MPI rank that has not finished starting (scene, BVH, kernel build) this many seconds "
+                        "after another has ends the job, named (default: --rank-timeout, at least 120)")
+      ->check(CLI::PositiveNumber);
   renderCmd->add_option("--scene-index", render.sceneIndex, "glTF scene to render (default: the file's default scene)")
       ->check(CLI::Range(-1, 1 << 20));
   renderCmd->add_option("--look-from", render.lookFrom, "Camera position X,Y,Z in the file's world coordinates")

@@ -327,7 +327,7 @@ void MpiWorld::agreeOnStart(const std::string& error, std::uint64_t renderHash, 
         char text[240];
         std::snprintf(text, sizeof text,
                       "the job could not start: rank 0 had not finished starting %.3g s after rank %d "
-                      "(--rank-timeout); hung or dead while loading the scene or building its program?",
+                      "(--start-timeout); hung or dead while loading the scene or building its program?",
                       timeoutSeconds, m_rank);
         log::error(text);
         abort(1);
@@ -353,7 +353,7 @@ void MpiWorld::agreeOnStart(const std::string& error, std::uint64_t renderHash, 
         for (int r = 1; r < m_size; ++r)
           if (!arrived[std::size_t(r)]) names += (names.empty() ? "" : ", ") + std::to_string(r);
         char text[160];
-        std::snprintf(text, sizeof text, " had not finished starting %.3g s after rank 0 (--rank-timeout)", timeoutSeconds);
+        std::snprintf(text, sizeof text, " had not finished starting %.3g s after rank 0 (--start-timeout)", timeoutSeconds);
         log::error("the job could not start: rank" + std::string(missing > 1 ? "s " : " ") + names + text +
                    "; hung or dead while loading the scene or building its program?");
         abort(1);  // the others wait in the collective
