@@ -20,6 +20,7 @@
 #
 # usage: cli_scale_out.sh WAVETRACE SCRATCH_DIR devices|mpi|heartbeat [WT_MPI]
 set -u
+if [ -n "${WT_TRACE_TS:-}" ]; then PS4='+ $(date +%s.%N) '; set -x; fi
 exe=$1
 dir=$2
 mode=$3
