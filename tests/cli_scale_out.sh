@@ -12,7 +12,9 @@
 #            the image equal to 1 process. Rank 0's device hung: rank 1 renders
 #            every chunk, chunk 0 included, and the image, every AOV and the
 #            ids included, equals 1 process. Rank 0 hung: rank 1 ends the job
-#            naming it, its checkpoint resumes to the uninterrupted image.
+#            naming it, failed even under mpirun --enable-recovery, and its
+#            checkpoint resumes to the uninterrupted image. A rank hung while
+#            starting: the other names it (--start-timeout 1).
 #            Skips (77) without MPI.
 #   devices also: --aov all, --debug, --target-error and --reference on two
 #            devices equal one device with the same --chunk-spp; one of two
@@ -146,11 +148,12 @@ if [ "$mode" = heartbeat ]; then
   }
   # a 2-rank job with the hang $1 (WT_TEST_STALL), NAME $2, --rank-timeout 1,
   # bounded by 60 s, its exit status in $status; the render's options follow
+  # ($recovery: more mpirun options)
   stalled() {
     local stall=$1 name=$2
     shift 2
     start=$SECONDS
-    WT_TEST_STALL=$stall timeout -k 5 60 mpirun --oversubscribe -np 2 "$exe" render "$@" --rank-timeout 1 \
+    WT_TEST_STALL=$stall timeout -k 5 60 mpirun --oversubscribe ${recovery:-} -np 2 "$exe" render "$@" --rank-timeout 1 \
       -o "$dir/$name.exr" >"$dir/$name.log" 2>&1
     status=$?
   }
@@ -193,17 +196,20 @@ if [ "$mode" = heartbeat ]; then
     fail "rank 0's device hung: the image differs from 1 process (every AOV layer, the ids of chunk 0 from rank 1)"
   echo "rank 0's device hung: rank 1 rendered all 48 chunks in $((SECONDS - start)) s; equal, every AOV and the ids included"
   # rank 0 itself hangs (after its first checkpoint): rank 1 hears nothing
-  # from it for --rank-timeout and ends the job naming it; the checkpoint
-  # resumes (double accumulation, no AOVs: a checkpoint holds the image alone)
-  # to the uninterrupted image
+  # from it for --rank-timeout and ends the job naming it, failed even under
+  # mpirun --enable-recovery (whose mpirun exits 0 after any MPI_Abort: rank 1
+  # stops mpirun instead); the checkpoint resumes (double accumulation, no
+  # AOVs: a checkpoint holds the image alone) to the uninterrupted image
   r0=(--width 48 --height 48 --max-bounces 4 --seed 9 --accumulation double --spp 96 --chunk-spp 2)
   "$exe" render "${r0[@]}" -q -o "$dir/straight.exr" >/dev/null 2>&1 || fail "uninterrupted render failed"
   rm -f "$dir/rank0.exr.wtckpt"
-  stalled 0:process rank0 "${r0[@]}" -q --checkpoint 0.1
+  recovery=--enable-recovery stalled 0:process rank0 "${r0[@]}" -q --checkpoint 0.1
   [ $status -eq 124 ] && fail "rank 0 hung: the job still ran after 60 s: $(cat "$dir/rank0.log")"
-  [ $status -ne 0 ] || fail "rank 0 hung: the job exited 0: $(cat "$dir/rank0.log")"
+  [ $status -ne 0 ] || fail "rank 0 hung: the job exited 0 (mpirun --enable-recovery): $(cat "$dir/rank0.log")"
   grep -q "error: rank 1: rank 0 (which merges and writes the image) sent nothing for [0-9.]* s (--rank-timeout 1)" \
     "$dir/rank0.log" || fail "rank 0 hung: no message naming it: $(cat "$dir/rank0.log")"
+  grep -q "error: ending the job as failed by stopping mpirun (SIGTERM): under --enable-recovery" \
+    "$dir/rank0.log" || fail "rank 0 hung: no word of why mpirun was stopped: $(cat "$dir/rank0.log")"
   [ -f "$dir/rank0.exr.wtckpt" ] || fail "rank 0 hung: no checkpoint"
   "$exe" render "${r0[@]}" --resume -o "$dir/rank0.exr" >"$dir/rank0-resume.log" 2>&1 ||
     fail "rank 0 hung: its checkpoint does not resume: $(cat "$dir/rank0-resume.log")"

@@ -9,8 +9,10 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <csignal>
 #include <stdexcept>
 #include <thread>
+#include <iterator>
 #include <unistd.h>
 
 #if WT_MPI
@@ -296,10 +298,45 @@ MpiWorld::~MpiWorld() {
 #endif
 }
 
+namespace {
+
+/// Open MPI's mpirun under --enable-recovery exits 0 whatever its ranks
+/// do (MPI_Abort's code, an exit status, a signal), but not when it is
+/// itself stopped by a signal: the way to end such a job as failed is to
+/// stop the launcher the way a user would. Only for Open MPI's own
+/// launcher and daemon, found as this process's parent; true if signalled.
+[[maybe_unused]] bool stopRecoveringLauncher() {
+  const char* recovery = std::getenv("OMPI_MCA_orte_enable_recovery");
+  if (!recovery || (std::strcmp(recovery, "1") != 0 && std::strcmp(recovery, "true") != 0)) return false;
+  const pid_t parent = getppid();
+  char path[64], name[32] = {};
+  std::snprintf(path, sizeof path, "/proc/%d/comm", int(parent));
+  std::FILE* f = std::fopen(path, "r");
+  if (!f) return false;
+  const bool read = std::fgets(name, sizeof name, f) != nullptr;
+  std::fclose(f);
+  if (!read) return false;
+  name[std::strcspn(name, "\n")] = 0;
+  static const char* const launchers[] = {"mpirun", "mpiexec", "orterun", "orted"};
+  if (std::none_of(std::begin(launchers), std::end(launchers), [&](const char* l) { return std::strcmp(name, l) == 0; }))
+    return false;
+  log::error(std::string("ending the job as failed by stopping ") + name +
+             " (SIGTERM): under --enable-recovery Open MPI's mpirun exits 0 after an MPI_Abort");
+  std::fflush(stderr);
+  return ::kill(parent, SIGTERM) == 0;
+}
+
+}  // namespace
+
 void MpiWorld::abort(int code) const {
   std::fflush(stdout);
   std::fflush(stderr);
 #if WT_MPI
+  if (m_initialized && code != 0 && stopRecoveringLauncher()) {
+    // the launcher stops every rank, this one too (SIGTERM, which sets the
+    // interrupt flag only, then SIGKILL); MPI_Abort only if it does not
+    std::this_thread::sleep_for(std::chrono::seconds(30));
+  }
   if (m_initialized) MPI_Abort(MPI_COMM_WORLD, code);
 #endif
   std::_Exit(code);
