@@ -28,7 +28,9 @@ class MpiWorld {
   int size() const { return m_size; }
   bool active() const { return m_size > 1; }
   /// End every rank of the job now with `code` (a failure rank 0 has
-  /// reported; the others may be blocked or gone).
+  /// reported; the others may be blocked or gone). A non-zero code under
+  /// Open MPI's `mpirun --enable-recovery`, which exits 0 after any
+  /// MPI_Abort, stops the launcher with SIGTERM instead (docs/scale-out.md).
   [[noreturn]] void abort(int code) const;
   /// Every rank passes its start-up failure ("" if none) and the hash of
   /// what it will render; all return normally only if every rank started
