@@ -760,6 +760,10 @@ int runScaleOutRender(RenderOptions options, wt::MpiWorld& world) {
     world.agreeOnStart(setupError, renderHash.value(), startTimeout);
   } catch (const std::exception& e) {
     if (!root) return 1;  // rank 0 reports every rank's failure
+    if (world.launcherIgnoresExitStatus()) {
+      wt::log::error(e.what());
+      world.abort(1);
+    }
     throw;
   }
   const double setupSeconds =

@@ -305,28 +305,37 @@ namespace {
 /// itself stopped by a signal: the way to end such a job as failed is to
 /// stop the launcher the way a user would. Only for Open MPI's own
 /// launcher and daemon, found as this process's parent; true if signalled.
-[[maybe_unused]] bool stopRecoveringLauncher() {
+/// The name of that launcher or daemon, "" where it is not one.
+std::string recoveringLauncher() {
   const char* recovery = std::getenv("OMPI_MCA_orte_enable_recovery");
-  if (!recovery || (std::strcmp(recovery, "1") != 0 && std::strcmp(recovery, "true") != 0)) return false;
-  const pid_t parent = getppid();
+  if (!recovery || (std::strcmp(recovery, "1") != 0 && std::strcmp(recovery, "true") != 0)) return "";
   char path[64], name[32] = {};
-  std::snprintf(path, sizeof path, "/proc/%d/comm", int(parent));
+  std::snprintf(path, sizeof path, "/proc/%d/comm", int(getppid()));
   std::FILE* f = std::fopen(path, "r");
-  if (!f) return false;
+  if (!f) return "";
   const bool read = std::fgets(name, sizeof name, f) != nullptr;
   std::fclose(f);
-  if (!read) return false;
+  if (!read) return "";
   name[std::strcspn(name, "\n")] = 0;
   static const char* const launchers[] = {"mpirun", "mpiexec", "orterun", "orted"};
   if (std::none_of(std::begin(launchers), std::end(launchers), [&](const char* l) { return std::strcmp(name, l) == 0; }))
-    return false;
-  log::error(std::string("ending the job as failed by stopping ") + name +
-             " (SIGTERM): under --enable-recovery Open MPI's mpirun exits 0 after an MPI_Abort");
+    return "";
+  return name;
+}
+
+[[maybe_unused]] bool stopRecoveringLauncher() {
+  const std::string name = recoveringLauncher();
+  if (name.empty()) return false;
+  const pid_t parent = getppid();
+  log::error("ending the job as failed by stopping " + name +
+             " (SIGTERM): under --enable-recovery Open MPI's mpirun exits 0 whatever its ranks' exit status");
   std::fflush(stderr);
   return ::kill(parent, SIGTERM) == 0;
 }
 
 }  // namespace
+
+bool MpiWorld::launcherIgnoresExitStatus() const { return m_initialized && !recoveringLauncher().empty(); }
 
 void MpiWorld::abort(int code) const {
   std::fflush(stdout);
