@@ -6,13 +6,16 @@
 #            mid-render: a clear error, the merged samples written and
 #            checkpointed, and the resumed render equals the uninterrupted
 #            one; a rank that cannot load the scene stops the job at start
-#            with its message (no hang). Skips (77) in a build without MPI.
+#            with its message (no hang), failed even under mpirun
+#            --enable-recovery. Skips (77) in a build without MPI.
 #   heartbeat: rank 1 hung (process or device) or killed without mpirun
 #            ending the job: rank 0 finishes without it within --rank-timeout,
 #            the image equal to 1 process. Rank 0's device hung: rank 1 renders
 #            every chunk, chunk 0 included, and the image, every AOV and the
 #            ids included, equals 1 process. Rank 0 hung: rank 1 ends the job
-#            naming it, its checkpoint resumes to the uninterrupted image.
+#            naming it, failed even under mpirun --enable-recovery, and its
+#            checkpoint resumes to the uninterrupted image. A rank hung while
+#            starting: the other names it (--start-timeout 1).
 #            Skips (77) without MPI.
 #   devices also: --aov all, --debug, --target-error and --reference on two
 #            devices equal one device with the same --chunk-spp; one of two
@@ -20,6 +23,7 @@
 #
 # usage: cli_scale_out.sh WAVETRACE SCRATCH_DIR devices|mpi|heartbeat [WT_MPI]
 set -u
+if [ -n "${WT_TRACE_TS:-}" ]; then PS4='+ $(date +%s.%N) '; set -x; fi
 exe=$1
 dir=$2
 mode=$3
@@ -145,11 +149,12 @@ if [ "$mode" = heartbeat ]; then
   }
   # a 2-rank job with the hang $1 (WT_TEST_STALL), NAME $2, --rank-timeout 1,
   # bounded by 60 s, its exit status in $status; the render's options follow
+  # ($recovery: more mpirun options)
   stalled() {
     local stall=$1 name=$2
     shift 2
     start=$SECONDS
-    WT_TEST_STALL=$stall timeout -k 5 60 mpirun --oversubscribe -np 2 "$exe" render "$@" --rank-timeout 1 \
+    WT_TEST_STALL=$stall timeout -k 5 60 mpirun --oversubscribe ${recovery:-} -np 2 "$exe" render "$@" --rank-timeout 1 \
       -o "$dir/$name.exr" >"$dir/$name.log" 2>&1
     status=$?
   }
@@ -192,17 +197,20 @@ if [ "$mode" = heartbeat ]; then
     fail "rank 0's device hung: the image differs from 1 process (every AOV layer, the ids of chunk 0 from rank 1)"
   echo "rank 0's device hung: rank 1 rendered all 48 chunks in $((SECONDS - start)) s; equal, every AOV and the ids included"
   # rank 0 itself hangs (after its first checkpoint): rank 1 hears nothing
-  # from it for --rank-timeout and ends the job naming it; the checkpoint
-  # resumes (double accumulation, no AOVs: a checkpoint holds the image alone)
-  # to the uninterrupted image
+  # from it for --rank-timeout and ends the job naming it, failed even under
+  # mpirun --enable-recovery (whose mpirun exits 0 after any MPI_Abort: rank 1
+  # stops mpirun instead); the checkpoint resumes (double accumulation, no
+  # AOVs: a checkpoint holds the image alone) to the uninterrupted image
   r0=(--width 48 --height 48 --max-bounces 4 --seed 9 --accumulation double --spp 96 --chunk-spp 2)
   "$exe" render "${r0[@]}" -q -o "$dir/straight.exr" >/dev/null 2>&1 || fail "uninterrupted render failed"
   rm -f "$dir/rank0.exr.wtckpt"
-  stalled 0:process rank0 "${r0[@]}" -q --checkpoint 0.1
+  recovery=--enable-recovery stalled 0:process rank0 "${r0[@]}" -q --checkpoint 0.1
   [ $status -eq 124 ] && fail "rank 0 hung: the job still ran after 60 s: $(cat "$dir/rank0.log")"
-  [ $status -ne 0 ] || fail "rank 0 hung: the job exited 0: $(cat "$dir/rank0.log")"
+  [ $status -ne 0 ] || fail "rank 0 hung: the job exited 0 (mpirun --enable-recovery): $(cat "$dir/rank0.log")"
   grep -q "error: rank 1: rank 0 (which merges and writes the image) sent nothing for [0-9.]* s (--rank-timeout 1)" \
     "$dir/rank0.log" || fail "rank 0 hung: no message naming it: $(cat "$dir/rank0.log")"
+  grep -q "error: ending the job as failed by stopping mpirun (SIGTERM): under --enable-recovery" \
+    "$dir/rank0.log" || fail "rank 0 hung: no word of why mpirun was stopped: $(cat "$dir/rank0.log")"
   [ -f "$dir/rank0.exr.wtckpt" ] || fail "rank 0 hung: no checkpoint"
   "$exe" render "${r0[@]}" --resume -o "$dir/rank0.exr" >"$dir/rank0-resume.log" 2>&1 ||
     fail "rank 0 hung: its checkpoint does not resume: $(cat "$dir/rank0-resume.log")"
@@ -211,18 +219,18 @@ if [ "$mode" = heartbeat ]; then
   cmp "$dir/rank0.exr" "$dir/straight.exr" || fail "rank 0 hung: the resumed image differs from the uninterrupted one"
   echo "rank 0 hung: rank 1 ended the job in $((SECONDS - start)) s naming it; its checkpoint resumed to the same image"
   # rank 1 hangs before it has started: rank 0 names it and ends the job
-  stalled 1:startup startup "${hb[@]}" -q
+  stalled 1:startup startup "${hb[@]}" -q --start-timeout 1
   [ $status -eq 124 ] && fail "startup: rank 0 still waited 60 s for rank 1 to start: $(cat "$dir/startup.log")"
   [ $status -ne 0 ] || fail "startup: the job exited 0 without rank 1"
-  grep -q "error: the job could not start: rank 1 had not finished starting 1 s after rank 0 (--rank-timeout)" \
+  grep -q "error: the job could not start: rank 1 had not finished starting 1 s after rank 0 (--start-timeout)" \
     "$dir/startup.log" || fail "startup: no message naming rank 1: $(cat "$dir/startup.log")"
   [ -f "$dir/startup.exr" ] && fail "startup: an image was written"
   echo "rank 1 hung while starting: the job ended in $((SECONDS - start)) s naming it"
   # rank 0 hangs before it has started: rank 1 names it and ends the job
-  stalled 0:startup startup0 "${hb[@]}" -q
+  stalled 0:startup startup0 "${hb[@]}" -q --start-timeout 1
   [ $status -eq 124 ] && fail "startup0: rank 1 still waited 60 s for rank 0 to start: $(cat "$dir/startup0.log")"
   [ $status -ne 0 ] || fail "startup0: the job exited 0 without rank 0"
-  grep -q "error: the job could not start: rank 0 had not finished starting 1 s after rank 1 (--rank-timeout)" \
+  grep -q "error: the job could not start: rank 0 had not finished starting 1 s after rank 1 (--start-timeout)" \
     "$dir/startup0.log" || fail "startup0: no message naming rank 0: $(cat "$dir/startup0.log")"
   echo "rank 0 hung while starting: the job ended in $((SECONDS - start)) s naming it"
   exit 0
@@ -284,11 +292,13 @@ cmp "$dir/killed.exr" "$dir/straight.exr" || fail "resumed image differs from th
 echo "resumed on 2 ranks to $total samples: equals the uninterrupted render, byte for byte (at ${SECONDS} s)"
 
 # --- a rank that cannot load the scene ------------------------------------------
-out=$(timeout 120 mpirun --oversubscribe -np 1 "$exe" render --width 8 --height 8 --spp 4 -o "$dir/noscene.exr" : \
-  -np 1 "$exe" render "$dir/missing.gltf" --width 8 --height 8 --spp 4 -o "$dir/noscene.exr" 2>&1)
+# under mpirun --enable-recovery, which exits 0 whatever its ranks' exit
+# status: rank 0 stops mpirun (a plain mpirun passes on rank 0's status 1)
+out=$(timeout 120 mpirun --oversubscribe --enable-recovery -np 1 "$exe" render --width 8 --height 8 --spp 4 \
+  -o "$dir/noscene.exr" : -np 1 "$exe" render "$dir/missing.gltf" --width 8 --height 8 --spp 4 -o "$dir/noscene.exr" 2>&1)
 status=$?
 [ $status -eq 124 ] && fail "the job hung when rank 1 could not load its scene"
-[ $status -ne 0 ] || fail "the job exited 0 when rank 1 could not load its scene"
+[ $status -ne 0 ] || fail "the job exited 0 (mpirun --enable-recovery) when rank 1 could not load its scene: $out"
 echo "$out" | grep -q "the job could not start: rank 1: .*missing.gltf" || fail "no rank 1 message: $out"
 [ -f "$dir/noscene.exr" ] && fail "an image was written"
 echo "rank 1 without its scene: the job stopped at start with its message (at ${SECONDS} s)"

@@ -223,6 +223,7 @@ struct RenderOptions {
   int chunkSpp = 0;    ///< --chunk-spp; 0: defaultChunkSpp
   bool chunkSppGiven = false;
   double rankTimeout = wt::ScaleOutOptions::kDefaultRankTimeout;  ///< --rank-timeout
+  double startTimeout = 0.0;  ///< --start-timeout; 0: the larger of --rank-timeout and its default
   std::string aov;     ///< --aov: names, comma-separated, or "all"
   std::string aovOut;  ///< --aov-out: folder for one EXR per AOV
   std::string debug;   ///< --debug: a view (output/debug_view.h)
@@ -728,6 +729,13 @@ int runScaleOutRender(RenderOptions options, wt::MpiWorld& world) {
       devices.contexts.push_back(std::make_unique<wt::Context>(infos[d]));
       devices.renderers.push_back(std::make_unique<wt::Renderer>(*devices.contexts.back(), loaded->scene, settings));
       devices.names.push_back("device " + std::to_string(infos[d].index) + " (" + infos[d].name + ")");
+      // the image is read through the resolve and tone-map kernels, which
+      // PoCL builds at their first launch: here, not after a signal, when
+      // mpirun's SIGKILL follows in a second and a cold build takes longer
+      if (root) {
+        devices.renderers.back()->resetAccumulation(0);
+        (void)devices.renderers.back()->readImage();
+      }
     }
     identity = wt::checkpointIdentity(loaded->scene, *devices.renderers.front());
     for (const wt::CheckpointField& f : identity) renderHash.bytes(f.key.data(), f.key.size()), renderHash.bytes(f.value.data(), f.value.size());
@@ -744,9 +752,18 @@ int runScaleOutRender(RenderOptions options, wt::MpiWorld& world) {
     setupError = e.what();
   }
   try {
-    world.agreeOnStart(setupError, renderHash.value(), options.rankTimeout);
+    // a start (scene, BVH, kernel build) takes far longer than a sample
+    // pass, and one rank's cold start longer than another's warm one
+    const double startTimeout = options.startTimeout > 0.0
+                                    ? options.startTimeout
+                                    : std::max(options.rankTimeout, wt::ScaleOutOptions::kDefaultRankTimeout);
+    world.agreeOnStart(setupError, renderHash.value(), startTimeout);
   } catch (const std::exception& e) {
     if (!root) return 1;  // rank 0 reports every rank's failure
+    if (world.launcherIgnoresExitStatus()) {
+      wt::log::error(e.what());
+      world.abort(1);
+    }
     throw;
   }
   const double setupSeconds =
@@ -892,8 +909,15 @@ int runScaleOutRender(RenderOptions options, wt::MpiWorld& world) {
     if (result.merged.nonFiniteSamples > 0)
       wt::log::warnOnce(std::to_string(result.merged.nonFiniteSamples) + " NaN/Inf samples discarded");
   }
-  // after the image: under mpirun a dying rank leaves rank 0 about a second
-  // before SIGKILL, and the checkpoint waits for the disk (fsync)
+  const std::string kept = done > 0 ? "; the " + std::to_string(done) + " merged samples were written"
+                                    : "; no chunk was merged, nothing written";
+  // said before the checkpoint, which waits for the disk (fsync): under
+  // mpirun a dying rank leaves rank 0 about a second before SIGKILL
+  if (result.interrupted && result.failure.empty())
+    wt::log::error("stopped by a signal after " + std::to_string(done) + " of " + std::to_string(spp) + " samples" +
+                   (world.active() ? " (under mpirun also when a rank died or was killed: mpirun then stops every rank)"
+                                   : "") +
+                   kept);
   finishCheckpoint();
   if (!checkpointError.empty() && result.failure.empty()) result.failure = checkpointError;
   if (options.checkpointSeconds > 0.0 && done > resumed) {
@@ -907,19 +931,13 @@ int runScaleOutRender(RenderOptions options, wt::MpiWorld& world) {
   const bool lost = !result.lostRanks.empty() || !result.lostDevices.empty();
   const bool mustAbort = (world.active() && (lost || !result.failure.empty() || result.interrupted)) ||
                          !result.lostDevices.empty();
-  const std::string kept = done > 0 ? "; the " + std::to_string(done) + " merged samples were written"
-                                    : "; no chunk was merged, nothing written";
   if (!result.failure.empty()) {
     wt::log::error("render failed after " + std::to_string(done) + " of " + std::to_string(spp) +
                    " samples: " + result.failure + kept);
     if (mustAbort) world.abort(1);
     return 1;
   }
-  if (result.interrupted) {
-    wt::log::error("stopped by a signal after " + std::to_string(done) + " of " + std::to_string(spp) + " samples" +
-                   (world.active() ? " (under mpirun also when a rank died or was killed: mpirun then stops every rank)"
-                                   : "") +
-                   kept);
+  if (result.interrupted) {  // said above
     if (mustAbort) world.abort(130);
     return 130;
   }
@@ -1096,7 +1114,7 @@ void groupRenderOptions(CLI::App* cmd) {
        {"--time", "--target-error", "--reference", "--error-log", "--checkpoint", "--resume"}},
       {"AOVs and debugging", {"--aov", "--aov-out", "--debug", "--stop-on-nan"}},
       {"Device, BVH and kernels",
-       {"--device", "--chunk-spp", "--rank-timeout", "--bvh", "--instancing", "--traversal", "--packet-width", "--kernel-dir", "--kernel-cache",
+       {"--device", "--chunk-spp", "--rank-timeout", "--start-timeout", "--bvh", "--instancing", "--traversal", "--packet-width", "--kernel-dir", "--kernel-cache",
         "--general-program"}},
       {"Messages and profiling", {"--quiet", "--verbose", "--profile", "--profile-json"}},
   };
@@ -1216,6 +1234,10 @@ int main(int argc, char** argv) {
                         "others and the image is finished without it; a rank 0 that sends nothing that long ends "
                         "the job. Must exceed the slowest device's sample pass (docs/scale-out.md, Faults)")
       ->check(CLI::PositiveNumber)->capture_default_str();
+  renderCmd->add_option("--start-timeout", render.startTimeout,
+                        "An MPI rank that has not finished starting (scene, BVH, kernel build) this many seconds "
+                        "after another has ends the job, named (default: --rank-timeout, at least 120)")
+      ->check(CLI::PositiveNumber);
   renderCmd->add_option("--scene-index", render.sceneIndex, "glTF scene to render (default: the file's default scene)")
       ->check(CLI::Range(-1, 1 << 20));
   renderCmd->add_option("--look-from", render.lookFrom, "Camera position X,Y,Z in the file's world coordinates")

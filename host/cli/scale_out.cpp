@@ -9,8 +9,10 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <csignal>
 #include <stdexcept>
 #include <thread>
+#include <iterator>
 #include <unistd.h>
 
 #if WT_MPI
@@ -296,10 +298,54 @@ MpiWorld::~MpiWorld() {
 #endif
 }
 
+namespace {
+
+/// Open MPI's mpirun under --enable-recovery exits 0 whatever its ranks
+/// do (MPI_Abort's code, an exit status, a signal), but not when it is
+/// itself stopped by a signal: the way to end such a job as failed is to
+/// stop the launcher the way a user would. Only for Open MPI's own
+/// launcher and daemon, found as this process's parent; true if signalled.
+/// The name of that launcher or daemon, "" where it is not one.
+std::string recoveringLauncher() {
+  const char* recovery = std::getenv("OMPI_MCA_orte_enable_recovery");
+  if (!recovery || (std::strcmp(recovery, "1") != 0 && std::strcmp(recovery, "true") != 0)) return "";
+  char path[64], name[32] = {};
+  std::snprintf(path, sizeof path, "/proc/%d/comm", int(getppid()));
+  std::FILE* f = std::fopen(path, "r");
+  if (!f) return "";
+  const bool read = std::fgets(name, sizeof name, f) != nullptr;
+  std::fclose(f);
+  if (!read) return "";
+  name[std::strcspn(name, "\n")] = 0;
+  static const char* const launchers[] = {"mpirun", "mpiexec", "orterun", "orted"};
+  if (std::none_of(std::begin(launchers), std::end(launchers), [&](const char* l) { return std::strcmp(name, l) == 0; }))
+    return "";
+  return name;
+}
+
+[[maybe_unused]] bool stopRecoveringLauncher() {
+  const std::string name = recoveringLauncher();
+  if (name.empty()) return false;
+  const pid_t parent = getppid();
+  log::error("ending the job as failed by stopping " + name +
+             " (SIGTERM): under --enable-recovery Open MPI's mpirun exits 0 whatever its ranks' exit status");
+  std::fflush(stderr);
+  return ::kill(parent, SIGTERM) == 0;
+}
+
+}  // namespace
+
+bool MpiWorld::launcherIgnoresExitStatus() const { return m_initialized && !recoveringLauncher().empty(); }
+
 void MpiWorld::abort(int code) const {
   std::fflush(stdout);
   std::fflush(stderr);
 #if WT_MPI
+  if (m_initialized && code != 0 && stopRecoveringLauncher()) {
+    // the launcher stops every rank, this one too (SIGTERM, which sets the
+    // interrupt flag only, then SIGKILL); MPI_Abort only if it does not
+    std::this_thread::sleep_for(std::chrono::seconds(30));
+  }
   if (m_initialized) MPI_Abort(MPI_COMM_WORLD, code);
 #endif
   std::_Exit(code);
@@ -327,7 +373,7 @@ void MpiWorld::agreeOnStart(const std::string& error, std::uint64_t renderHash, 
         char text[240];
         std::snprintf(text, sizeof text,
                       "the job could not start: rank 0 had not finished starting %.3g s after rank %d "
-                      "(--rank-timeout); hung or dead while loading the scene or building its program?",
+                      "(--start-timeout); hung or dead while loading the scene or building its program?",
                       timeoutSeconds, m_rank);
         log::error(text);
         abort(1);
@@ -353,7 +399,7 @@ void MpiWorld::agreeOnStart(const std::string& error, std::uint64_t renderHash, 
         for (int r = 1; r < m_size; ++r)
           if (!arrived[std::size_t(r)]) names += (names.empty() ? "" : ", ") + std::to_string(r);
         char text[160];
-        std::snprintf(text, sizeof text, " had not finished starting %.3g s after rank 0 (--rank-timeout)", timeoutSeconds);
+        std::snprintf(text, sizeof text, " had not finished starting %.3g s after rank 0 (--start-timeout)", timeoutSeconds);
         log::error("the job could not start: rank" + std::string(missing > 1 ? "s " : " ") + names + text +
                    "; hung or dead while loading the scene or building its program?");
         abort(1);  // the others wait in the collective

@@ -28,8 +28,13 @@ class MpiWorld {
   int size() const { return m_size; }
   bool active() const { return m_size > 1; }
   /// End every rank of the job now with `code` (a failure rank 0 has
-  /// reported; the others may be blocked or gone).
+  /// reported; the others may be blocked or gone). A non-zero code under
+  /// Open MPI's `mpirun --enable-recovery`, which exits 0 after any
+  /// MPI_Abort, stops the launcher with SIGTERM instead (docs/scale-out.md).
   [[noreturn]] void abort(int code) const;
+  /// Under `mpirun --enable-recovery`: a non-zero exit status after
+  /// MPI_Finalize would not reach the user, only abort's would.
+  bool launcherIgnoresExitStatus() const;
   /// Every rank passes its start-up failure ("" if none) and the hash of
   /// what it will render; all return normally only if every rank started
   /// and all hashes agree, else every rank throws. Rank 0's exception names
