@@ -36,7 +36,7 @@ WT_KERNEL void test_displaced_closest(uint count, uint triangles, __global const
   float3 p, p_error, ng, ns, dpdu;
   float2 uv;
   displaced_surface(rows, info + WT_DISP_INFO_ROWS * hit, li, lj, &p, &p_error, &ng, &ns, &uv, &dpdu);
-  out[3 * i] = (float4)(best, ng);
+  out[3 * i] = (float4)(best, ng.x, ng.y, ng.z);
   out[3 * i + 1] = (float4)(p_error, as_float(hit));
   out[3 * i + 2] = (float4)(ns, 0.0f);
 }

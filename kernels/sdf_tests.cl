@@ -31,6 +31,6 @@ WT_KERNEL void test_sdf_closest(uint count, uint bricks, __global const float4* 
   float3 p, p_error, n, dpdu;
   float2 uv;
   sdf_surface(rows, info[WT_SDF_INFO_ROWS * hit], o, d, best, cell, &p, &p_error, &n, &uv, &dpdu);
-  out[2 * i] = (float4)(best, n);
+  out[2 * i] = (float4)(best, n.x, n.y, n.z);
   out[2 * i + 1] = (float4)(p_error, as_float(hit));
 }

@@ -3,7 +3,9 @@
 // fault) when the halves come from shuffle2; the optimised build is right.
 // packet_load (kernels/bvh_packet.cl) transposes 16 consecutive rays into
 // lanes by two shuffle2 of 16 lanes each, blended by a mask of the low
-// half (-D BLEND here), which both builds run.
+// half (-D BLEND here), which both builds run. Not shuffle2's doing: any
+// vector after the first component of a vector literal crashes the
+// unoptimised checker (vector_literal.cl).
 //   oclgrind-kernel --uninitialized --build-options -cl-opt-disable join_halves.sim              # crashes
 //   oclgrind-kernel --uninitialized --build-options "-cl-opt-disable -D BLEND" join_halves.sim   # 0 4 8 ... 60
 __kernel void transpose(__global const float* in, __global float* out) {
