@@ -164,6 +164,60 @@ TEST(LightTree, ImportanceMatchesItsDefinitionInDouble) {
   EXPECT_GT(inside, compared / 10) << "the cosines must bound some nodes below their scale";
 }
 
+// The device takes both children's importance in one go (two lanes, the
+// early returns as selects): each lane is the shared scalar importance
+// above, on every pair of siblings of a tree at points near and far, with
+// and without a receiver normal, up to float rounding.
+TEST(LightTree, DeviceImportanceOfSiblingsIsTheScalarOne) {
+  std::vector<LightTreeEmitter> emitters = randomEmitters(120, 17);
+  LightTree tree = buildLightTree(emitters);
+  std::vector<cl_uint> first;
+  for (const WtLightNode& node : tree.nodes)
+    if (!node.leaf) first.push_back(node.child);
+  std::mt19937 rng(19);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f), logd(-1.0f, 1.0f);
+  std::vector<cl_uint> pairs;
+  std::vector<cl_float4> ps, ns;
+  for (int trial = 0; trial < 60; ++trial) {
+    glm::vec3 p = std::pow(10.0f, logd(rng)) * glm::vec3(u(rng), u(rng), u(rng));
+    glm::vec3 n = trial % 4 == 0 ? glm::vec3(0.0f) : glm::normalize(glm::vec3(u(rng), u(rng), u(rng)));
+    for (cl_uint c : first) {
+      pairs.push_back(c);
+      ps.push_back({{p.x, p.y, p.z, 0.0f}});
+      ns.push_back({{n.x, n.y, n.z, 0.0f}});
+    }
+  }
+  Context& ctx = test::deviceContext();
+  const cl_uint count = cl_uint(pairs.size());
+  cl::Buffer nodes(ctx.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, tree.nodes.size() * sizeof(WtLightNode),
+                   tree.nodes.data());
+  cl::Buffer pairBuffer(ctx.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, count * 4, pairs.data());
+  cl::Buffer pBuffer(ctx.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, count * sizeof(cl_float4), ps.data());
+  cl::Buffer nBuffer(ctx.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, count * sizeof(cl_float4), ns.data());
+  cl::Buffer out(ctx.context(), CL_MEM_WRITE_ONLY, count * sizeof(cl_float2));
+  cl::Kernel k(test::unitTestProgram(), "test_light_tree_importance2");
+  k.setArg(0, count), k.setArg(1, nodes), k.setArg(2, pairBuffer), k.setArg(3, pBuffer), k.setArg(4, nBuffer),
+      k.setArg(5, out);
+  ctx.launch("test_light_tree_importance2", k, count);
+  std::vector<cl_float2> got(count);
+  ctx.queue().enqueueReadBuffer(out, CL_TRUE, 0, count * sizeof(cl_float2), got.data());
+  int zeros = 0, nonzero = 0;
+  for (cl_uint i = 0; i < count; ++i)
+    for (cl_uint lane = 0; lane < 2; ++lane) {
+      const WtLightNode& node = tree.nodes[pairs[i] + lane];
+      const cl_float4& p = ps[i];
+      const cl_float4& n = ns[i];
+      const float want = light_tree_importance(&node, p.s[0], p.s[1], p.s[2], n.s[0], n.s[1], n.s[2]);
+      const glm::dvec3 c = 0.5 * (glm::dvec3(node.lo_x, node.lo_y, node.lo_z) + glm::dvec3(node.hi_x, node.hi_y, node.hi_z));
+      const glm::dvec3 t = c - glm::dvec3(p.s[0], p.s[1], p.s[2]);
+      const double scale = node.power / glm::dot(t, t);
+      ASSERT_NEAR(got[i].s[lane], want, 1e-5 * want + 1e-5 * scale) << "pair " << i << ", lane " << lane;
+      (want > 0.0f ? nonzero : zeros)++;
+    }
+  EXPECT_GT(zeros, int(count) / 20) << "the test must see zero importances";
+  EXPECT_GT(nonzero, int(count) / 2);
+}
+
 TEST(LightTree, DevicePicksFollowThePmfItReports) {
   std::vector<LightTreeEmitter> emitters = randomEmitters(40, 9);
   LightTree tree = buildLightTree(emitters);
