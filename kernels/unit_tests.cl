@@ -254,6 +254,14 @@ WT_KERNEL void test_light_tree_pmf(uint count, __global const WtLightNode* nodes
   pmf[i] = light_tree_pmf(nodes, leaves[i], p.xyz, n.xyz);
 }
 
+// light_tree_importance2 of sibling pair (first[i], first[i] + 1) at p[i] with normal n[i].
+WT_KERNEL void test_light_tree_importance2(uint count, __global const WtLightNode* nodes, __global const uint* first,
+                                           __global const float4* p, __global const float4* n, __global float2* out) {
+  uint i = get_global_id(0);
+  if (i >= count) return;
+  out[i] = light_tree_importance2(&nodes[first[i]], p[i].xyz, n[i].xyz);
+}
+
 // Nested dielectrics (shared/media.h): walk i meets the boundaries
 // steps[i * step_count + j] = (material, entering), starting outside every
 // volume and crossing each one it meets (transmitted, or passed as a false

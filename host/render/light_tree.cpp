@@ -88,6 +88,10 @@ class Builder {
     n.axis_x = float(cone.axis.x), n.axis_y = float(cone.axis.y), n.axis_z = float(cone.axis.z);
     // rounding to float may only widen the cone
     n.cos_theta_o = cone.theta >= kPi ? -1.0f : std::nextafter(float(std::cos(cone.theta)), -1.0f);
+    n.sin_theta_o = float(std::sqrt(std::max(0.0, 1.0 - double(n.cos_theta_o) * double(n.cos_theta_o))));
+    // of the bounds as stored, as the importance's r^2 is
+    const glm::dvec3 diagonal(double(n.hi_x) - n.lo_x, double(n.hi_y) - n.lo_y, double(n.hi_z) - n.lo_z);
+    n.radius = float(0.5 * glm::length(diagonal));
     n.parent = parent;
     if (end - begin == 1) {
       n.leaf = 1;

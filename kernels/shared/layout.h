@@ -26,7 +26,7 @@
   S(WtLightNode) F(WtLightNode, lo_x) F(WtLightNode, lo_y) F(WtLightNode, lo_z) F(WtLightNode, power) \
   F(WtLightNode, hi_x) F(WtLightNode, hi_y) F(WtLightNode, hi_z) F(WtLightNode, child) F(WtLightNode, axis_x) \
   F(WtLightNode, axis_y) F(WtLightNode, axis_z) F(WtLightNode, cos_theta_o) F(WtLightNode, leaf) \
-  F(WtLightNode, parent) F(WtLightNode, pad0) F(WtLightNode, pad1) \
+  F(WtLightNode, parent) F(WtLightNode, sin_theta_o) F(WtLightNode, radius) \
   S(WtTexture) F(WtTexture, first_level) F(WtTexture, level_count) F(WtTexture, flags) F(WtTexture, pad) \
   S(WtTextureLevel) F(WtTextureLevel, offset) F(WtTextureLevel, width) F(WtTextureLevel, height) \
   F(WtTextureLevel, pad) \

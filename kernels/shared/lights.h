@@ -49,7 +49,8 @@ typedef struct WtLightNode {
   float cos_theta_o;       ///< cosine of the cone's half-angle; -1: any direction (a two-sided emitter below)
   wt_uint leaf;            ///< 1 for a leaf
   wt_uint parent;          ///< WT_LIGHT_NODE_NONE at the root
-  wt_uint pad0, pad1;
+  float sin_theta_o;       ///< sine of the cone's half-angle (0 for -1), so that the importance takes no root for it
+  float radius;            ///< half the bounds' diagonal: the bounding sphere's radius
 } WtLightNode;
 #define WT_LIGHT_NODE_NONE 0xffffffffu
 

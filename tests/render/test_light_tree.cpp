@@ -11,7 +11,9 @@
 #include <glm/gtc/matrix_transform.hpp>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <random>
 
 namespace wt {
@@ -108,6 +110,112 @@ TEST(LightTree, ImportanceIsZeroOnlyWhereNoEmitterCanReach) {
     }
   }
   EXPECT_GT(zeros, 1000) << "the test must see zero importances to check them";
+}
+
+/// The importance's bound in double from the node's bounds, cone axis and
+/// cone cosine alone (the definition, before the node stored its sphere's
+/// radius and its cone's sine).
+double importanceInDouble(const WtLightNode& node, glm::dvec3 p, glm::dvec3 n) {
+  const glm::dvec3 lo(node.lo_x, node.lo_y, node.lo_z), hi(node.hi_x, node.hi_y, node.hi_z);
+  const double r2 = 0.25 * glm::dot(hi - lo, hi - lo);
+  const glm::dvec3 t = 0.5 * (lo + hi) - p;
+  const double d2 = glm::dot(t, t);
+  if (d2 <= r2) return node.power / std::max(r2, 1e-30);
+  const glm::dvec3 w = t / std::sqrt(d2);
+  const double theta_u = std::asin(std::sqrt(r2 / d2));
+  auto cosMinus = [](double a, double b) { return std::cos(std::max(0.0, a - b)); };
+  const double cos_i = n == glm::dvec3(0.0) ? 1.0 : cosMinus(std::acos(std::clamp(glm::dot(n, w), -1.0, 1.0)), theta_u);
+  if (!(cos_i > 0.0)) return 0.0;
+  double cos_e = 1.0;
+  const double theta_o = std::acos(double(node.cos_theta_o));
+  if (theta_o + theta_u < std::numbers::pi) {
+    const double theta = std::acos(std::clamp(-glm::dot(glm::dvec3(node.axis_x, node.axis_y, node.axis_z), w), -1.0, 1.0));
+    cos_e = cosMinus(theta, theta_o + theta_u);
+    if (!(cos_e > 0.0)) return 0.0;
+  }
+  return node.power * cos_i * cos_e / d2;
+}
+
+// The float importance, from the radius and cone sine the build stores,
+// is its bound computed from the definition in double: over every node of
+// a tree at points near and far, up to float rounding where it is not zero
+// (the angles' cosines near 0 cancel, so the tolerance is on the bound's
+// scale, power / d^2); a wrong stored radius or sine moves it by far more.
+TEST(LightTree, ImportanceMatchesItsDefinitionInDouble) {
+  std::vector<LightTreeEmitter> emitters = randomEmitters(300, 11);
+  LightTree tree = buildLightTree(emitters);
+  std::mt19937 rng(13);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f), logd(-1.0f, 1.0f);
+  int compared = 0, inside = 0;
+  for (int trial = 0; trial < 400; ++trial) {
+    glm::vec3 p = std::pow(10.0f, logd(rng)) * glm::vec3(u(rng), u(rng), u(rng));
+    glm::vec3 n = trial % 5 == 0 ? glm::vec3(0.0f) : glm::normalize(glm::vec3(u(rng), u(rng), u(rng)));
+    for (const WtLightNode& node : tree.nodes) {
+      const float got = light_tree_importance(&node, p.x, p.y, p.z, n.x, n.y, n.z);
+      const double want = importanceInDouble(node, glm::dvec3(p), glm::dvec3(n));
+      const glm::dvec3 c = 0.5 * (glm::dvec3(node.lo_x, node.lo_y, node.lo_z) + glm::dvec3(node.hi_x, node.hi_y, node.hi_z));
+      const double scale = node.power / glm::dot(c - glm::dvec3(p), c - glm::dvec3(p));
+      ASSERT_NEAR(got, want, 1e-4 * want + 2e-3 * scale)
+          << "trial " << trial << ", bound scale " << scale;
+      ++compared;
+      inside += want > 0.0 && want < scale;
+    }
+  }
+  EXPECT_GT(inside, compared / 10) << "the cosines must bound some nodes below their scale";
+}
+
+// The device takes both children's importance in one go (two lanes, the
+// early returns as selects): each lane is the shared scalar importance
+// above, on every pair of siblings of a tree at points near and far, with
+// and without a receiver normal, up to float rounding.
+TEST(LightTree, DeviceImportanceOfSiblingsIsTheScalarOne) {
+  std::vector<LightTreeEmitter> emitters = randomEmitters(120, 17);
+  LightTree tree = buildLightTree(emitters);
+  std::vector<cl_uint> first;
+  for (const WtLightNode& node : tree.nodes)
+    if (!node.leaf) first.push_back(node.child);
+  std::mt19937 rng(19);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f), logd(-1.0f, 1.0f);
+  std::vector<cl_uint> pairs;
+  std::vector<cl_float4> ps, ns;
+  for (int trial = 0; trial < 60; ++trial) {
+    glm::vec3 p = std::pow(10.0f, logd(rng)) * glm::vec3(u(rng), u(rng), u(rng));
+    glm::vec3 n = trial % 4 == 0 ? glm::vec3(0.0f) : glm::normalize(glm::vec3(u(rng), u(rng), u(rng)));
+    for (cl_uint c : first) {
+      pairs.push_back(c);
+      ps.push_back({{p.x, p.y, p.z, 0.0f}});
+      ns.push_back({{n.x, n.y, n.z, 0.0f}});
+    }
+  }
+  Context& ctx = test::deviceContext();
+  const cl_uint count = cl_uint(pairs.size());
+  cl::Buffer nodes(ctx.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, tree.nodes.size() * sizeof(WtLightNode),
+                   tree.nodes.data());
+  cl::Buffer pairBuffer(ctx.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, count * 4, pairs.data());
+  cl::Buffer pBuffer(ctx.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, count * sizeof(cl_float4), ps.data());
+  cl::Buffer nBuffer(ctx.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, count * sizeof(cl_float4), ns.data());
+  cl::Buffer out(ctx.context(), CL_MEM_WRITE_ONLY, count * sizeof(cl_float2));
+  cl::Kernel k(test::unitTestProgram(), "test_light_tree_importance2");
+  k.setArg(0, count), k.setArg(1, nodes), k.setArg(2, pairBuffer), k.setArg(3, pBuffer), k.setArg(4, nBuffer),
+      k.setArg(5, out);
+  ctx.launch("test_light_tree_importance2", k, count);
+  std::vector<cl_float2> got(count);
+  ctx.queue().enqueueReadBuffer(out, CL_TRUE, 0, count * sizeof(cl_float2), got.data());
+  int zeros = 0, nonzero = 0;
+  for (cl_uint i = 0; i < count; ++i)
+    for (cl_uint lane = 0; lane < 2; ++lane) {
+      const WtLightNode& node = tree.nodes[pairs[i] + lane];
+      const cl_float4& p = ps[i];
+      const cl_float4& n = ns[i];
+      const float want = light_tree_importance(&node, p.s[0], p.s[1], p.s[2], n.s[0], n.s[1], n.s[2]);
+      const glm::dvec3 c = 0.5 * (glm::dvec3(node.lo_x, node.lo_y, node.lo_z) + glm::dvec3(node.hi_x, node.hi_y, node.hi_z));
+      const glm::dvec3 t = c - glm::dvec3(p.s[0], p.s[1], p.s[2]);
+      const double scale = node.power / glm::dot(t, t);
+      ASSERT_NEAR(got[i].s[lane], want, 1e-5 * want + 1e-5 * scale) << "pair " << i << ", lane " << lane;
+      (want > 0.0f ? nonzero : zeros)++;
+    }
+  EXPECT_GT(zeros, int(count) / 20) << "the test must see zero importances";
+  EXPECT_GT(nonzero, int(count) / 2);
 }
 
 TEST(LightTree, DevicePicksFollowThePmfItReports) {
