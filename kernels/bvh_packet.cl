@@ -267,6 +267,11 @@ inline void packet_permute(RayPacket* p, int code) {
   p->o_kz = pkz == 0 ? p->o[0] : (pkz == 1 ? p->o[1] : p->o[2]);
 }
 
+__attribute__((always_inline)) inline int packet_load_lanes(RayPacket* p, pint* valid, pfloat* tmax, pfloat* codes,
+                                                           pfloat vox, pfloat voy, pfloat voz, pfloat vtn, pfloat vdx,
+                                                           pfloat vdy, pfloat vdz, pfloat vtx, pint in_v,
+                                                           const BvhScene* root);
+
 /// Loads a packet: lane l takes ray index[l] of a batch (o.w = tmin,
 /// d.w = tmax) for l < lanes; the other lanes, and lanes whose ray is not
 /// finite, are left out of `valid`. Each lane's shear is its own ray's
@@ -333,6 +338,17 @@ __attribute__((always_inline)) inline int packet_load(RayPacket* p, pint* valid,
     vdx = packet_vload(dx), vdy = packet_vload(dy), vdz = packet_vload(dz), vtx = packet_vload(tx);
     in_v = packet_vload(in);
   }
+  return packet_load_lanes(p, valid, tmax, codes, vox, voy, voz, vtn, vdx, vdy, vdz, vtx, in_v, root);
+}
+
+/// packet_load from the rays already in lanes (origin, tmin, direction,
+/// tmax per axis; in_v the lanes to trace, whose rays are finite): also the
+/// entry for rays moved into an instance's object space
+/// (kernels/bvh_prims_packet.cl), with no `root`.
+__attribute__((always_inline)) inline int packet_load_lanes(RayPacket* p, pint* valid, pfloat* tmax, pfloat* codes,
+                                                           pfloat vox, pfloat voy, pfloat voz, pfloat vtn, pfloat vdx,
+                                                           pfloat vdy, pfloat vdz, pfloat vtx, pint in_v,
+                                                           const BvhScene* root) {
   // Each lane's permutation, in lanes: triangle_ray_shear's dominant axis
   // kz (x over y over z on ties, as there) and whether that component is
   // negative, as a code 2 kz + negative; a lane left out traces (0, 0, 1),
@@ -506,8 +522,11 @@ inline uint packet_lane_leaf(__global const float4* tri_verts, const RayPacket* 
 /// (tmin, t_best) with its barycentrics and leaf-order triangle, which
 /// replace t_best, b1_best, b2_best and prim_best where one is found (the
 /// other lanes keep theirs).
-__attribute__((always_inline)) inline void packet_closest(BvhScene scene, const RayPacket* p, pint valid, pfloat* t_best, pfloat* b1_best,
-                           pfloat* b2_best, puint* prim_best) {
+/// packet_closest_root starts at node `root` instead of node 0: the root of
+/// an instanced geometry's tree (bvh_closest_root), the packet in its object space.
+__attribute__((always_inline)) inline void packet_closest_root(BvhScene scene, uint root, const RayPacket* p, pint valid,
+                                                               pfloat* t_best, pfloat* b1_best, pfloat* b2_best,
+                                                               puint* prim_best) {
   if (scene.node_count == 0 || !packet_any(valid)) return;
   __global const WtBvh4Node* nodes = (__global const WtBvh4Node*)scene.nodes;
   pfloat tmax = *t_best;
@@ -523,7 +542,7 @@ __attribute__((always_inline)) inline void packet_closest(BvhScene scene, const 
   uint stack_node[WT_BVH_STACK_SIZE];
   float stack_t[WT_BVH_STACK_SIZE];
   int sp = 0;
-  uint node = 0;
+  uint node = root;
   for (;;) {
     __global const WtBvh4Node* n = &nodes[node];
     uint inner[4];
@@ -612,9 +631,15 @@ __attribute__((always_inline)) inline void packet_closest(BvhScene scene, const 
   }
 }
 
+__attribute__((always_inline)) inline void packet_closest(BvhScene scene, const RayPacket* p, pint valid, pfloat* t_best,
+                                                          pfloat* b1_best, pfloat* b2_best, puint* prim_best) {
+  packet_closest_root(scene, 0u, p, valid, t_best, b1_best, b2_best, prim_best);
+}
+
 /// Occlusion of a packet's valid lanes: all ones in a lane whose segment
-/// (tmin, tmax) is blocked.
-__attribute__((always_inline)) inline pint packet_occluded(BvhScene scene, const RayPacket* p, pint valid, pfloat tmax) {
+/// (tmin, tmax) is blocked; from node `root` (packet_closest_root).
+__attribute__((always_inline)) inline pint packet_occluded_root(BvhScene scene, uint root, const RayPacket* p, pint valid,
+                                                                pfloat tmax) {
   pint blocked = (pint)(0);
   if (scene.node_count == 0 || !packet_any(valid)) return blocked;
   __global const WtBvh4Node* nodes = (__global const WtBvh4Node*)scene.nodes;
@@ -630,7 +655,7 @@ __attribute__((always_inline)) inline pint packet_occluded(BvhScene scene, const
 #endif
   uint stack_node[WT_BVH_STACK_SIZE];
   int sp = 0;
-  uint node = 0;
+  uint node = root;
   for (;;) {
     __global const WtBvh4Node* n = &nodes[node];
     int next = -1;
@@ -687,6 +712,10 @@ __attribute__((always_inline)) inline pint packet_occluded(BvhScene scene, const
     if (sp == 0) return blocked;
     node = stack_node[--sp];
   }
+}
+
+__attribute__((always_inline)) inline pint packet_occluded(BvhScene scene, const RayPacket* p, pint valid, pfloat tmax) {
+  return packet_occluded_root(scene, 0u, p, valid, tmax);
 }
 
 /// Lanes of the packet at entries [first, first + WT_PACKET) of a queue of

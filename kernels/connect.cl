@@ -5,6 +5,7 @@
 // (WT_FLAG_COMPACT_SHADOWS); connect_stream takes either.
 #include "bvh_packet.cl"
 #include "bvh_prims.cl"
+#include "bvh_prims_packet.cl"
 #include "bvh_stream.cl"
 
 WT_KERNEL void connect(__global const uint* counters, __global const uint* shadow_queue,
@@ -48,22 +49,13 @@ WT_KERNEL void connect_packet(__global const uint* counters, __global const uint
   int blocked[WT_PACKET];
   packet_vstore(packet_trace_occluded(scene, index, lanes, shadow_o, shadow_d, 0, shadow_skip), blocked);
 #if WT_HAS_PRIMITIVES
+  // the other primitive types as the same packet, for the rays no triangle blocks
   GeometryScene g = WT_GEOMETRY_SCENE;
+  prims_packet_trace_occluded(scene, g, index, lanes, shadow_o, shadow_d, 0, shadow_skip,
+                              WT_HAS_INSTANCES ? hit_instance : 0, blocked);
 #endif
-  for (uint l = 0; l < lanes; ++l) {
-    if (blocked[l]) continue;
-#if WT_HAS_PRIMITIVES
-    // the other primitive types ray by ray, for the rays no triangle blocks
-    uint path = index[l];
-    WT_ALPHA_RAY(scene, path);
-    float4 o = shadow_o[path], d = shadow_d[path];
-    uint2 skip = shadow_skip[path];
-    if (bvh_prims_occluded(scene, g, o.xyz, d.xyz, o.w, d.w, skip.x, skip.y,
-                           WT_HAS_INSTANCES ? hit_instance[path] : WT_NO_HIT))
-      continue;
-#endif
-    radiance[index[l]] += shadow_radiance[index[l]];
-  }
+  for (uint l = 0; l < lanes; ++l)
+    if (!blocked[l]) radiance[index[l]] += shadow_radiance[index[l]];
 }
 
 /// connect for shadow-queue entries [w i, w i + w), w = WT_STREAM_WINDOW,

@@ -1,6 +1,7 @@
 // Stage 2: closest hit for every path in the input queue.
 #include "bvh_packet.cl"
 #include "bvh_prims.cl"
+#include "bvh_prims_packet.cl"
 #include "aov.cl"
 
 WT_KERNEL void extend(__global const uint* counters, uint queue_slot, __global const uint* queue,
@@ -49,24 +50,9 @@ WT_KERNEL void extend_packet(__global const uint* counters, uint queue_slot, __g
   WT_ALPHA_BIND(scene, index[0]);  // packets set each lane's own (packet_set_alpha)
   packet_trace_closest(scene, index, lanes, ray_o, ray_d, ray_skip, hits);
 #if WT_HAS_PRIMITIVES
-  // the other primitive types ray by ray, in front of the triangles' hits
+  // the other primitive types as the same packet, in front of the triangles' hits
   GeometryScene g = WT_GEOMETRY_SCENE;
-  for (uint l = 0; l < lanes; ++l) {
-    uint path = index[l];
-    WT_ALPHA_RAY(scene, path);
-    float4 o = ray_o[path], d = ray_d[path];
-    float4 h = hits[path];
-    Hit hit = {h.x, h.y, h.z, as_uint(h.w)};
-    uint instance = WT_NO_HIT;
-    bvh_prims_closest(scene, g, o.xyz, d.xyz, o.w, ray_skip[path], WT_HAS_INSTANCES ? hit_instance[path] : WT_NO_HIT,
-                      &hit, &instance);
-#if WT_HAS_INSTANCES
-    hit_instance[path] = instance;
-    if (hit.prim != as_uint(h.w) || instance != WT_NO_HIT)
-#else
-    if (hit.prim != as_uint(h.w))
-#endif
-      hits[path] = (float4)(hit.t, hit.b1, hit.b2, as_float(hit.prim));
-  }
+  prims_packet_trace_closest(scene, g, index, lanes, ray_o, ray_d, ray_skip, WT_HAS_INSTANCES ? hit_instance : 0,
+                             hits);
 #endif
 }

@@ -5,6 +5,7 @@
 #include "bvh_packet.cl"
 #include "bvh_stream.cl"
 #include "bvh_prims.cl"
+#include "bvh_prims_packet.cl"
 
 #if WT_HAS_PRIMITIVES
 /// Rays [first, end) that no triangle blocks, against the other primitive types.
@@ -89,16 +90,10 @@ WT_KERNEL void trace_closest_packet(uint count, __global const float4* ray_o, __
   for (uint l = 0; l < WT_PACKET; ++l) index[l] = first + l;
   packet_trace_closest(scene, index, min(count - first, (uint)WT_PACKET), ray_o, ray_d, skip, hits);
 #if WT_HAS_PRIMITIVES
+  // the other primitive types as the same packet (kernels/bvh_prims_packet.cl)
   GeometryScene g = WT_GEOMETRY_SCENE;
-  for (uint i = first; i < min(count, first + WT_PACKET); ++i) {
-    WT_ALPHA_RAY(scene, i);
-    float4 o = ray_o[i], d = ray_d[i], h = hits[i];
-    Hit hit = {h.x, h.y, h.z, as_uint(h.w)};
-    uint instance = WT_NO_HIT;
-    bvh_prims_closest(scene, g, o.xyz, d.xyz, o.w, skip[i], instances[i], &hit, &instance);
-    hits[i] = (float4)(hit.t, hit.b1, hit.b2, as_float(hit.prim));
-    instances[i] = instance;
-  }
+  prims_packet_trace_closest(scene, g, index, min(count - first, (uint)WT_PACKET), ray_o, ray_d, skip, instances,
+                             hits);
 #endif
 }
 
@@ -113,7 +108,17 @@ WT_KERNEL void trace_occluded_packet(uint count, __global const float4* ray_o, _
   uint index[WT_PACKET];
   for (uint l = 0; l < WT_PACKET; ++l) index[l] = first + l;
   uint lanes = min(count - first, (uint)WT_PACKET);
-  puint blocked = as_puint(packet_trace_occluded(scene, index, lanes, ray_o, ray_d, skip, 0)) & 1u;
+  pint blocked_lanes = packet_trace_occluded(scene, index, lanes, ray_o, ray_d, skip, 0);
+#if WT_HAS_PRIMITIVES
+  {
+    int lane_blocked[WT_PACKET];
+    packet_vstore(blocked_lanes, lane_blocked);
+    GeometryScene g = WT_GEOMETRY_SCENE;
+    prims_packet_trace_occluded(scene, g, index, lanes, ray_o, ray_d, skip, 0, instances, lane_blocked);
+    blocked_lanes = packet_vload(lane_blocked);
+  }
+#endif
+  puint blocked = as_puint(blocked_lanes) & 1u;
   if (lanes == WT_PACKET) {
     packet_vstore(blocked, occluded + first);
   } else {
@@ -121,8 +126,4 @@ WT_KERNEL void trace_occluded_packet(uint count, __global const float4* ray_o, _
     packet_vstore(blocked, lane_blocked);
     for (uint l = 0; l < lanes; ++l) occluded[first + l] = lane_blocked[l];
   }
-#if WT_HAS_PRIMITIVES
-  GeometryScene g = WT_GEOMETRY_SCENE;
-  trace_prims_occluded(first, first + lanes, ray_o, ray_d, skip, instances, occluded, scene, g);
-#endif
 }

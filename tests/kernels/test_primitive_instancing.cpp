@@ -64,9 +64,11 @@ struct Placed {
   std::vector<float> scales;
 };
 
-/// Copies turned, scaled uniformly (one mirrored), near and 1e4 from the origin.
-Placed placedGeometry(int copies = 8, int spheres = 30, int curves = 12, bool apart = false) {
-  const Scene geometry = sphereAndCurveGeometry(spheres, curves, 7, apart);
+/// Copies turned, scaled uniformly (one mirrored), near and 1e4 from the
+/// origin; `mesh`: an icosphere in the geometry too (copies of triangles beside those of spheres and curves).
+Placed placedGeometry(int copies = 8, int spheres = 30, int curves = 12, bool apart = false, bool mesh = false) {
+  Scene geometry = sphereAndCurveGeometry(spheres, curves, 7, apart);
+  if (mesh) appendScene(geometry, makeIcosphere(1, glm::vec3(0.2f, -0.3f, 0.1f), 0.35f, geometry.materials[0]));
   std::mt19937 rng(5);
   std::uniform_real_distribution<float> turn(-3.0f, 3.0f), size(0.4f, 1.6f);
   const glm::vec3 places[] = {{0, 0, 0},    {4, 0, 0},       {0, 4, 1},     {-4, -1, 0}, {3.5f, 3.5f, -3},
@@ -213,6 +215,75 @@ TEST(PrimitiveInstancing, HitsMatchTheFlattenedScene) {
     for (std::size_t i = 0; i < rays.size(); ++i) differ += blocked[i] != flatBlocked[i];
     EXPECT_LE(differ, int(rays.size() / 500)) << "traversal " << int(traversal);
   }
+}
+
+/// Packets go on inside instances (kernels/bvh_prims_packet.cl): the packet
+/// traversal's closest and any hits are the single ray's, bit for bit, on
+/// copies turned, scaled, mirrored and 1e4 from the origin, with flat
+/// spheres and curves beside them (a copy scaled unevenly stays flat) and a
+/// mesh in every copy (instanced triangles inside the packet's walk); on
+/// rays at the copies and on rays spawned off what those hit (which skip
+/// that surface on its own copy only). Two hits at exactly one distance may
+/// come out either way (the walks visit nodes in another order).
+TEST(PrimitiveInstancing, PacketsInsideInstancesMatchSingleRays) {
+  Placed p = placedGeometry(8, 30, 12, false, true);
+  p.scene.primitiveInstances[2].transform =
+      glm::scale(p.scene.primitiveInstances[2].transform, glm::dvec3(1, 1.5, 1));
+  Tracer on(test::deviceContext(), p.scene, withInstancing(Instancing::On));
+  ASSERT_EQ(on.sceneBuffers().instanceCount(), 15u + 8u);
+  // whole packets at each copy
+  std::vector<Ray> rays = raysAtCopies(p, 320, 31);
+  const std::vector<RayHit> first = on.traceClosest(rays);
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
+  for (std::size_t i = 0, n = rays.size(); i < n; ++i) {
+    if (first[i].prim == RayHit::kNoHit) continue;
+    Ray r;
+    r.origin = rays[i].origin + first[i].t * rays[i].direction;
+    r.direction = glm::normalize(glm::vec3(unit(rng), unit(rng), unit(rng)) + 1e-3f);
+    r.skip = first[i].prim;
+    rays.push_back(r);
+  }
+  ASSERT_GT(rays.size(), p.centres.size() * 320 * 4 / 3);  // a third of them hit
+  const std::vector<RayHit> single = on.traceClosest(rays, Traversal::kSingle);
+  const std::vector<RayHit> packet = on.traceClosest(rays, Traversal::kPacket);
+  int bad = 0, ties = 0, instanceHits = 0, meshHits = 0, flatHits = 0;
+  for (std::size_t i = 0; i < rays.size(); ++i) {
+    const RayHit &a = single[i], &b = packet[i];
+    instanceHits += a.instance != RayHit::kNoHit && a.triangle == RayHit::kNoHit;
+    meshHits += a.instance != RayHit::kNoHit && a.triangle != RayHit::kNoHit;
+    flatHits += a.instance == RayHit::kNoHit && a.prim != RayHit::kNoHit && a.triangle == RayHit::kNoHit;
+    if (a.prim == b.prim && a.instance == b.instance && (a.prim == RayHit::kNoHit || (a.t == b.t && a.b1 == b.b1 &&
+                                                                                       a.b2 == b.b2)))
+      continue;
+    if (a.prim != RayHit::kNoHit && b.prim != RayHit::kNoHit && a.t == b.t) {
+      ++ties;
+      continue;
+    }
+    if (++bad <= 5)
+      ADD_FAILURE() << "ray " << i << " (skip " << std::hex << rays[i].skip << "): single prim " << a.prim << std::dec
+                    << " t=" << a.t << " instance " << a.instance << ", packet prim " << std::hex << b.prim << std::dec
+                    << " t=" << b.t << " instance " << b.instance;
+  }
+  EXPECT_EQ(bad, 0);
+  EXPECT_LT(ties, int(rays.size() / 200));
+  EXPECT_GT(instanceHits, int(rays.size() / 5));
+  EXPECT_GT(meshHits, int(rays.size() / 50));
+  EXPECT_GT(flatHits, int(rays.size() / 200));
+  // any hits, on segments cut short too
+  for (std::size_t i = 0; i < rays.size(); i += 3) rays[i].tmax = 0.5f;
+  const std::vector<std::uint8_t> singleBlocked = on.traceOccluded(rays, Traversal::kSingle);
+  const std::vector<std::uint8_t> packetBlocked = on.traceOccluded(rays, Traversal::kPacket);
+  int differ = 0, blocked = 0;
+  for (std::size_t i = 0; i < rays.size(); ++i) {
+    blocked += singleBlocked[i];
+    if (singleBlocked[i] != packetBlocked[i] && ++differ <= 5)
+      ADD_FAILURE() << "ray " << i << ": blocked " << int(singleBlocked[i]) << " alone, " << int(packetBlocked[i])
+                    << " in its packet";
+  }
+  EXPECT_EQ(differ, 0);
+  EXPECT_GT(blocked, int(rays.size() / 3));
+  EXPECT_LT(blocked, int(rays.size()) - int(rays.size() / 10));
 }
 
 /// Spheres and curves are stored as the copy whose floats are finest for its

@@ -1,0 +1,581 @@
+// Packets through the primitive BVH (kernels/bvh_prims.cl) and into its
+// instances: one work-item walks the tree of spheres, curves and instances
+// with the WT_PACKET_WIDTH rays of its packet, a node's child boxes tested
+// against every lane at once (packet_box_hit), a leaf's primitives lane by
+// lane with the very calls bvh_prims_closest and bvh_prims_occluded make. A
+// packet that enters an instance goes on inside it as a packet: its lanes'
+// rays are moved into the copy's object space once per visit (each lane by
+// instance_point / instance_vector, the single ray's own arithmetic, so the
+// object-space rays are the same floats), the geometry's tree walked as a
+// packet, and the scene-space packet taken up again after it. Each lane gets
+// the answers its ray gets alone; only the order in which nodes are visited
+// differs (nearest entry among the lanes), so of two hits at exactly the
+// same distance another may win. Inside an instance of triangles the packet
+// is the triangles' own (kernels/bvh_packet.cl: packet_load_lanes, then
+// packet_closest_root / packet_occluded_root from the geometry's root), in
+// one pass per axis permutation as in the scene's tree.
+#ifndef WT_BVH_PRIMS_PACKET_CL
+#define WT_BVH_PRIMS_PACKET_CL
+
+#include "bvh_packet.cl"
+#include "bvh_prims.cl"
+
+#if WT_HAS_PRIMITIVES
+
+/// A packet's rays in one space (the scene's, or an instance's object
+/// space): each lane's ray as scalars, for the primitives' own tests, and
+/// origins, reciprocal directions and tmin as vectors in `box` (only those
+/// fields of it are set), for packet_box_hit.
+typedef struct PrimPacket {
+  RayPacket box;
+  float ox[WT_PACKET], oy[WT_PACKET], oz[WT_PACKET];
+  float dx[WT_PACKET], dy[WT_PACKET], dz[WT_PACKET];
+  float tmin[WT_PACKET];
+  uint skip[WT_PACKET];  ///< the primitive the lane's ray leaves, in this space (WT_NO_HIT: none)
+} PrimPacket;
+
+/// Lane l's ray (o, d) from tmin, leaving `skip`.
+inline void prims_packet_set(PrimPacket* p, int l, float3 o, float3 d, float tmin, uint skip) {
+  p->ox[l] = o.x, p->oy[l] = o.y, p->oz[l] = o.z;
+  p->dx[l] = d.x, p->dy[l] = d.y, p->dz[l] = d.z;
+  p->tmin[l] = tmin;
+  p->skip[l] = skip;
+}
+
+/// The vectors of `box` from the lanes' scalars; the reciprocal directions
+/// by bvh_safe_rcp lane by lane, as the single ray computes its own.
+inline void prims_packet_finish(PrimPacket* p) {
+  float ix[WT_PACKET], iy[WT_PACKET], iz[WT_PACKET];
+  for (int l = 0; l < WT_PACKET; ++l) {
+    float3 inv_d = bvh_safe_rcp((float3)(p->dx[l], p->dy[l], p->dz[l]));
+    ix[l] = inv_d.x, iy[l] = inv_d.y, iz[l] = inv_d.z;
+  }
+  p->box.o[0] = packet_vload(p->ox), p->box.o[1] = packet_vload(p->oy), p->box.o[2] = packet_vload(p->oz);
+  p->box.inv_d[0] = packet_vload(ix), p->box.inv_d[1] = packet_vload(iy), p->box.inv_d[2] = packet_vload(iz);
+  p->box.tmin = packet_vload(p->tmin);
+}
+
+inline float3 prims_packet_org(const PrimPacket* p, int l) { return (float3)(p->ox[l], p->oy[l], p->oz[l]); }
+inline float3 prims_packet_dir(const PrimPacket* p, int l) { return (float3)(p->dx[l], p->dy[l], p->dz[l]); }
+
+#if WT_HAS_INSTANCES
+/// The lanes of `lanes` moved into instance `prim`'s object space: the
+/// packet q, and in *valid those whose object-space ray is finite (a lane
+/// whose ray is not is dropped by the closest walk and blocked by the
+/// occlusion walk, as alone: *not_finite). Lane l leaves its primitive on
+/// this copy only when the copy is the one it leaves (skip_instance[l]).
+inline void prims_packet_into_instance(GeometryScene g, uint prim, const PrimPacket* p, const int* lanes,
+                                       const uint* skip_instance, PrimPacket* q, pint* valid, pint* not_finite) {
+  __global const float4* rows = geometry_instance_rows(g, prim);
+  int in[WT_PACKET], bad[WT_PACKET];
+  for (int l = 0; l < WT_PACKET; ++l) {
+    in[l] = 0, bad[l] = 0;
+    if (!lanes[l]) {
+      // a lane left out: any finite ray, masked out of every test
+      prims_packet_set(q, l, (float3)(0.0f), (float3)(0.0f, 0.0f, 1.0f), 0.0f, WT_NO_HIT);
+      continue;
+    }
+    float3 o = instance_point(rows, prims_packet_org(p, l)), d = instance_vector(rows, prims_packet_dir(p, l));
+    bool finite = bvh_ray_is_finite(o, d);
+    if (!finite) o = (float3)(0.0f), d = (float3)(0.0f, 0.0f, 1.0f);
+    prims_packet_set(q, l, o, d, p->tmin[l], prim == skip_instance[l] ? p->skip[l] : WT_NO_HIT);
+    in[l] = finite ? -1 : 0;
+    bad[l] = finite ? 0 : -1;
+  }
+  prims_packet_finish(q);
+  *valid = packet_vload(in);
+  *not_finite = packet_vload(bad);
+}
+
+/// The lanes of `lanes` moved into instance `prim`'s object space as a
+/// triangle packet (packet_load_lanes: each lane's permutation and shear),
+/// tmax[l] their interval's end; lane l skips its geometry's triangle on
+/// this copy only, and tests alpha with the stream its ray uses on this copy
+/// alone (rng_alpha_instance). *not_finite: the lanes whose object-space
+/// ray is not finite (left out of *valid). Returns packet_load's answer.
+inline int prims_packet_triangles_into(BvhScene scene, GeometryScene g, uint prim, const PrimPacket* p,
+                                       const int* lanes, const uint* index, const uint* skip_instance,
+                                       const float* tmax, RayPacket* q, pint* valid, pfloat* q_tmax, pfloat* codes,
+                                       pint* not_finite) {
+  __global const float4* rows = geometry_instance_rows(g, prim);
+  float ox[WT_PACKET], oy[WT_PACKET], oz[WT_PACKET], dx[WT_PACKET], dy[WT_PACKET], dz[WT_PACKET];
+  int in[WT_PACKET], bad[WT_PACKET];
+  uint skip[WT_PACKET];
+#if WT_HAS_ALPHA
+  uint alpha[WT_PACKET];
+#endif
+  for (int l = 0; l < WT_PACKET; ++l) {
+    float3 o = (float3)(0.0f), d = (float3)(0.0f, 0.0f, 1.0f);
+    bool finite = false;
+    if (lanes[l]) {
+      o = instance_point(rows, prims_packet_org(p, l)), d = instance_vector(rows, prims_packet_dir(p, l));
+      finite = bvh_ray_is_finite(o, d);
+      if (!finite) o = (float3)(0.0f), d = (float3)(0.0f, 0.0f, 1.0f);
+    }
+    ox[l] = o.x, oy[l] = o.y, oz[l] = o.z, dx[l] = d.x, dy[l] = d.y, dz[l] = d.z;
+    in[l] = finite ? -1 : 0;
+    bad[l] = lanes[l] && !finite ? -1 : 0;
+    skip[l] = prim == skip_instance[l] ? p->skip[l] : WT_NO_HIT;
+#if WT_HAS_ALPHA
+    alpha[l] = rng_alpha_instance(rng_alpha_ray(scene.alpha.key, index[l]), prim);
+#endif
+  }
+  int loaded = packet_load_lanes(q, valid, q_tmax, codes, packet_vload(ox), packet_vload(oy), packet_vload(oz),
+                                 packet_vload(p->tmin), packet_vload(dx), packet_vload(dy), packet_vload(dz),
+                                 packet_vload(tmax), packet_vload(in), 0);
+  q->skip_a = packet_vload(skip);
+  q->skip_b = (puint)(WT_NO_HIT);
+#if WT_HAS_ALPHA
+  q->alpha_ray = packet_vload(alpha);
+#endif
+  *not_finite = packet_vload(bad);
+  return loaded;
+}
+
+/// Closest hits narrowed by instance `prim`'s triangles, the lanes of
+/// `lanes` traced as a packet in its object space (geometry_instance_closest
+/// lane by lane). The mask of the lanes it narrowed.
+inline pint prims_packet_triangles_closest(BvhScene scene, GeometryScene g, uint prim, const PrimPacket* p,
+                                           const int* lanes, const uint* index, const uint* skip_instance, float* t,
+                                           float* u, float* v, uint* hit) {
+  RayPacket q;
+  pint valid, not_finite;
+  pfloat tmax, codes;
+  int loaded = prims_packet_triangles_into(scene, g, prim, p, lanes, index, skip_instance, t, &q, &valid, &tmax,
+                                           &codes, &not_finite);
+  if (!packet_any(valid)) return (pint)(0);
+  const pfloat before = tmax;
+  pfloat b1 = packet_vload(u), b2 = packet_vload(v);
+  puint h = packet_vload(hit);
+  uint root = geometry_instance_info(g, prim).x;
+  if (loaded == WT_PACKET_TRACE) {
+    packet_closest_root(scene, root, &q, valid, &tmax, &b1, &b2, &h);
+  } else {
+    for (pint todo = valid; packet_any(todo);) {
+      pint pass = packet_next_pass(&q, codes, &todo);
+      packet_closest_root(scene, root, &q, pass, &tmax, &b1, &b2, &h);
+    }
+  }
+  // a hit is nearer than where the lane searched to (bvh_closest_root's t < tmax)
+  pint won = valid & packet_mask(tmax < before);
+  packet_vstore(tmax, t), packet_vstore(b1, u), packet_vstore(b2, v), packet_vstore(h, hit);
+  return won;
+}
+
+/// The lanes of `lanes` that instance `prim`'s triangles block in (tmin,
+/// tmax[l]), traced as a packet in its object space, or whose object-space
+/// ray is not finite (geometry_instance_occluded lane by lane).
+inline pint prims_packet_triangles_occluded(BvhScene scene, GeometryScene g, uint prim, const PrimPacket* p,
+                                            const int* lanes, const uint* index, const uint* skip_instance,
+                                            const float* tmax) {
+  RayPacket q;
+  pint valid, not_finite;
+  pfloat q_tmax, codes;
+  int loaded = prims_packet_triangles_into(scene, g, prim, p, lanes, index, skip_instance, tmax, &q, &valid, &q_tmax,
+                                           &codes, &not_finite);
+  pint blocked = not_finite;
+  if (!packet_any(valid)) return blocked;
+  uint root = geometry_instance_info(g, prim).x;
+  if (loaded == WT_PACKET_TRACE) return blocked | packet_occluded_root(scene, root, &q, valid, q_tmax);
+  for (pint todo = valid; packet_any(todo);) {
+    pint pass = packet_next_pass(&q, codes, &todo);
+    blocked |= packet_occluded_root(scene, root, &q, pass, q_tmax);
+  }
+  return blocked;
+}
+#endif
+
+/// Closest hits (lane arrays t, u, v, prim) narrowed by the primitives of
+/// the tree whose root is `root`, which holds no instances (an instance's
+/// geometry), for the lanes of `valid`: bvh_prims_closest_root lane by lane.
+/// The mask of the lanes it narrowed.
+inline pint prims_packet_closest_tree(GeometryScene g, uint root, const PrimPacket* p, pint valid, float* t, float* u,
+                                      float* v, uint* prim) {
+  pfloat tmax = packet_vload(t);
+  float reach = packet_max(packet_pick(valid, tmax, (pfloat)(-INFINITY)));
+  int narrowed[WT_PACKET];
+  for (int l = 0; l < WT_PACKET; ++l) narrowed[l] = 0;
+  uint stack_node[WT_BVH_STACK_SIZE];
+  float stack_t[WT_BVH_STACK_SIZE];
+  int sp = 0;
+  uint node = root;
+  for (;;) {
+    __global const WtBvh4Node* n = &g.nodes[node];
+    uint inner[4];
+    float inner_t[4];
+    int inner_count = 0;
+    for (int k = 0; k < 4; ++k) {
+      uint first = n->child[k], count = n->count[k];
+      if (first == WT_BVH4_EMPTY) continue;
+      pfloat enter;
+      pint hit = packet_box_hit(n, k, &p->box, tmax, &enter) & valid;
+      if (!packet_any(hit)) continue;
+      if (count > 0) {
+        int lane_hit[WT_PACKET];
+        packet_vstore(hit, lane_hit);
+        bool won = false;
+        for (uint i = first; i < first + count; ++i) {
+          uint id = g.refs[i];
+          for (int l = 0; l < WT_PACKET; ++l) {
+            if (!lane_hit[l]) continue;
+            float th, uh, vh;
+            if (!geometry_intersect(g, id, prims_packet_org(p, l), prims_packet_dir(p, l), p->tmin[l], t[l],
+                                    p->skip[l], WT_NO_HIT, false, &th, &uh, &vh))
+              continue;
+            t[l] = th, u[l] = uh, v[l] = vh, prim[l] = id;
+            narrowed[l] = -1;
+            won = true;
+          }
+        }
+        if (won) {
+          tmax = packet_vload(t);
+          reach = packet_max(packet_pick(valid, tmax, (pfloat)(-INFINITY)));
+        }
+      } else {
+        // ordered by the nearest entry among the lanes that enter it
+        float key = packet_min(packet_pick(hit, enter, (pfloat)(INFINITY)));
+        int j = inner_count++;
+        for (; j > 0 && inner_t[j - 1] > key; --j) {
+          inner[j] = inner[j - 1];
+          inner_t[j] = inner_t[j - 1];
+        }
+        inner[j] = first;
+        inner_t[j] = key;
+      }
+    }
+    if (inner_count > 0 && inner_t[0] <= reach) {
+      for (int k = inner_count - 1; k >= 1; --k) {
+        if (inner_t[k] > reach) continue;
+        stack_node[sp] = inner[k];
+        stack_t[sp] = inner_t[k];
+        ++sp;
+      }
+      node = inner[0];
+      continue;
+    }
+    for (;;) {
+      if (sp == 0) return packet_vload(narrowed);
+      --sp;
+      if (stack_t[sp] <= reach) break;
+    }
+    node = stack_node[sp];
+  }
+}
+
+/// The lanes of `valid` that a primitive of the tree at `root` (an
+/// instance's geometry, no instances in it) blocks in (tmin, tmax[l]):
+/// bvh_prims_occluded_root lane by lane.
+inline pint prims_packet_occluded_tree(GeometryScene g, uint root, const PrimPacket* p, pint valid, pfloat tmax,
+                                       const float* lane_tmax) {
+  pint open = valid;
+  uint stack_node[WT_BVH_STACK_SIZE];
+  int sp = 0;
+  uint node = root;
+  for (;;) {
+    __global const WtBvh4Node* n = &g.nodes[node];
+    for (int k = 0; k < 4; ++k) {
+      uint first = n->child[k], count = n->count[k];
+      if (first == WT_BVH4_EMPTY) continue;
+      pfloat enter;
+      pint hit = packet_box_hit(n, k, &p->box, tmax, &enter) & open;
+      if (!packet_any(hit)) continue;
+      if (count > 0) {
+        int lane_hit[WT_PACKET];
+        packet_vstore(hit, lane_hit);
+        bool won = false;
+        for (uint i = first; i < first + count; ++i) {
+          uint id = g.refs[i];
+          for (int l = 0; l < WT_PACKET; ++l) {
+            if (!lane_hit[l]) continue;
+            float th, uh, vh;
+            if (!geometry_intersect(g, id, prims_packet_org(p, l), prims_packet_dir(p, l), p->tmin[l], lane_tmax[l],
+                                    p->skip[l], WT_NO_HIT, true, &th, &uh, &vh))
+              continue;
+            lane_hit[l] = 0;
+            won = true;
+          }
+        }
+        if (won) {
+          // lane_hit now holds the entering lanes that are still open
+          open = (open & ~hit) | packet_vload(lane_hit);
+          if (!packet_any(open)) return valid;
+        }
+      } else {
+        stack_node[sp++] = first;
+      }
+    }
+    if (sp == 0) return valid & ~open;
+    node = stack_node[--sp];
+  }
+}
+
+/// Closest hits of a packet's lanes, narrowed by the primitive tree with its
+/// instances: bvh_prims_closest lane by lane. In: lane arrays t, u, v, prim
+/// (the triangles' hits; t their distance or tmax), `index` the lanes' ray
+/// indices (the alpha test's streams, for instanced triangles) and
+/// skip_instance the instance each lane's ray leaves. Out: narrowed hits,
+/// and instance[l] the instance hit or WT_NO_HIT.
+inline void prims_packet_closest(BvhScene scene, GeometryScene g, const PrimPacket* p, pint valid, const uint* index,
+                                 const uint* skip_instance, float* t, float* u, float* v, uint* prim, uint* instance) {
+  if (g.header.node_count == 0 || !packet_any(valid)) return;
+  pfloat tmax = packet_vload(t);
+  float reach = packet_max(packet_pick(valid, tmax, (pfloat)(-INFINITY)));
+  uint stack_node[WT_BVH_STACK_SIZE];
+  float stack_t[WT_BVH_STACK_SIZE];
+  int sp = 0;
+  uint node = 0;
+  for (;;) {
+    __global const WtBvh4Node* n = &g.nodes[node];
+    uint inner[4];
+    float inner_t[4];
+    int inner_count = 0;
+    for (int k = 0; k < 4; ++k) {
+      uint first = n->child[k], count = n->count[k];
+      if (first == WT_BVH4_EMPTY) continue;
+      pfloat enter;
+      pint hit = packet_box_hit(n, k, &p->box, tmax, &enter) & valid;
+      if (!packet_any(hit)) continue;
+      if (count > 0) {
+        int lane_hit[WT_PACKET];
+        packet_vstore(hit, lane_hit);
+        bool won = false;
+        for (uint i = first; i < first + count; ++i) {
+          uint id = g.refs[i];
+#if WT_HAS_INSTANCES
+          if (prim_type(id) == WT_PRIM_INSTANCE) {
+            if (geometry_instance_info(g, id).y & WT_INSTANCE_PRIMITIVES) {
+              // the packet goes on inside, in the copy's object space
+              PrimPacket q;
+              pint inside, not_finite;
+              prims_packet_into_instance(g, id, p, lane_hit, skip_instance, &q, &inside, &not_finite);
+              if (!packet_any(inside)) continue;
+              int lane_won[WT_PACKET];
+              packet_vstore(prims_packet_closest_tree(g, geometry_instance_info(g, id).x, &q, inside, t, u, v, prim),
+                            lane_won);
+              for (int l = 0; l < WT_PACKET; ++l) {
+                if (!lane_won[l]) continue;
+                instance[l] = id;
+                won = true;
+              }
+              continue;
+            }
+            // a copy of triangles: the triangle packet in its object space
+            int lane_won[WT_PACKET];
+            packet_vstore(prims_packet_triangles_closest(scene, g, id, p, lane_hit, index, skip_instance, t, u, v, prim),
+                          lane_won);
+            for (int l = 0; l < WT_PACKET; ++l) {
+              if (!lane_won[l]) continue;
+              instance[l] = id;
+              won = true;
+            }
+            continue;
+          }
+#endif
+          for (int l = 0; l < WT_PACKET; ++l) {
+            if (!lane_hit[l]) continue;
+            float th, uh, vh;
+            if (!geometry_intersect(g, id, prims_packet_org(p, l), prims_packet_dir(p, l), p->tmin[l], t[l],
+                                    p->skip[l], WT_NO_HIT, false, &th, &uh, &vh))
+              continue;
+            t[l] = th, u[l] = uh, v[l] = vh, prim[l] = id;
+            instance[l] = WT_NO_HIT;
+            won = true;
+          }
+        }
+        if (won) {
+          tmax = packet_vload(t);
+          reach = packet_max(packet_pick(valid, tmax, (pfloat)(-INFINITY)));
+        }
+      } else {
+        float key = packet_min(packet_pick(hit, enter, (pfloat)(INFINITY)));
+        int j = inner_count++;
+        for (; j > 0 && inner_t[j - 1] > key; --j) {
+          inner[j] = inner[j - 1];
+          inner_t[j] = inner_t[j - 1];
+        }
+        inner[j] = first;
+        inner_t[j] = key;
+      }
+    }
+    if (inner_count > 0 && inner_t[0] <= reach) {
+      for (int k = inner_count - 1; k >= 1; --k) {
+        if (inner_t[k] > reach) continue;
+        stack_node[sp] = inner[k];
+        stack_t[sp] = inner_t[k];
+        ++sp;
+      }
+      node = inner[0];
+      continue;
+    }
+    for (;;) {
+      if (sp == 0) return;
+      --sp;
+      if (stack_t[sp] <= reach) break;
+    }
+    node = stack_node[sp];
+  }
+}
+
+/// The lanes of `valid` that a primitive, or an instance, blocks in
+/// (tmin, tmax): bvh_prims_occluded lane by lane. skip_b[l]: a second
+/// primitive lane l never meets at its start (the emitter it aims at).
+inline pint prims_packet_occluded(BvhScene scene, GeometryScene g, const PrimPacket* p, pint valid, const float* lane_tmax,
+                                  const uint* index, const uint* skip_b, const uint* skip_instance) {
+  if (g.header.node_count == 0 || !packet_any(valid)) return (pint)(0);
+  pfloat tmax = packet_vload(lane_tmax);
+  pint open = valid;
+  uint stack_node[WT_BVH_STACK_SIZE];
+  int sp = 0;
+  uint node = 0;
+  for (;;) {
+    __global const WtBvh4Node* n = &g.nodes[node];
+    for (int k = 0; k < 4; ++k) {
+      uint first = n->child[k], count = n->count[k];
+      if (first == WT_BVH4_EMPTY) continue;
+      pfloat enter;
+      pint hit = packet_box_hit(n, k, &p->box, tmax, &enter) & open;
+      if (!packet_any(hit)) continue;
+      if (count > 0) {
+        // lane_open: the lanes that entered the leaf and are not blocked yet
+        int lane_open[WT_PACKET];
+        packet_vstore(hit, lane_open);
+        bool won = false;
+        for (uint i = first; i < first + count; ++i) {
+          uint id = g.refs[i];
+#if WT_HAS_INSTANCES
+          if (prim_type(id) == WT_PRIM_INSTANCE) {
+            if (geometry_instance_info(g, id).y & WT_INSTANCE_PRIMITIVES) {
+              PrimPacket q;
+              pint inside, not_finite;
+              prims_packet_into_instance(g, id, p, lane_open, skip_instance, &q, &inside, &not_finite);
+              pint blocked = not_finite;
+              if (packet_any(inside))
+                blocked |= prims_packet_occluded_tree(g, geometry_instance_info(g, id).x, &q, inside, tmax, lane_tmax);
+              if (!packet_any(blocked)) continue;
+              int lane_blocked[WT_PACKET];
+              packet_vstore(blocked, lane_blocked);
+              for (int l = 0; l < WT_PACKET; ++l)
+                if (lane_blocked[l]) lane_open[l] = 0;
+              won = true;
+              continue;
+            }
+            pint blocked = prims_packet_triangles_occluded(scene, g, id, p, lane_open, index, skip_instance, lane_tmax);
+            if (!packet_any(blocked)) continue;
+            int lane_blocked[WT_PACKET];
+            packet_vstore(blocked, lane_blocked);
+            for (int l = 0; l < WT_PACKET; ++l)
+              if (lane_blocked[l]) lane_open[l] = 0;
+            won = true;
+            continue;
+          }
+#endif
+          for (int l = 0; l < WT_PACKET; ++l) {
+            if (!lane_open[l]) continue;
+            float th, uh, vh;
+            if (!geometry_intersect(g, id, prims_packet_org(p, l), prims_packet_dir(p, l), p->tmin[l], lane_tmax[l],
+                                    p->skip[l], skip_b[l], true, &th, &uh, &vh))
+              continue;
+            lane_open[l] = 0;
+            won = true;
+          }
+        }
+        if (won) {
+          open = (open & ~hit) | packet_vload(lane_open);
+          if (!packet_any(open)) return valid;
+        }
+      } else {
+        stack_node[sp++] = first;
+      }
+    }
+    if (sp == 0) return valid & ~open;
+    node = stack_node[--sp];
+  }
+}
+
+/// The rays index[0..lanes) of ray_o / ray_d as a scene-space PrimPacket
+/// leaving skip_a[index[l]] (or skip_ab[..].x), and the mask of the real
+/// lanes whose rays are finite (bvh_prims_closest's and _occluded's first test).
+inline pint prims_packet_load(PrimPacket* p, const uint* index, uint lanes, __global const float4* ray_o,
+                              __global const float4* ray_d, __global const uint* skip_a,
+                              __global const uint2* skip_ab, float* tmax, uint* skip_b) {
+  int in[WT_PACKET];
+  for (uint l = 0; l < WT_PACKET; ++l) {
+    uint i = index[min(l, lanes - 1u)];
+    float4 o = ray_o[i], d = ray_d[i];
+    uint2 ab = skip_ab ? skip_ab[i] : (uint2)(skip_a[i], WT_NO_HIT);
+    bool finite = l < lanes && bvh_ray_is_finite(o.xyz, d.xyz);
+    if (finite) {
+      prims_packet_set(p, l, o.xyz, d.xyz, o.w, ab.x);
+    } else {
+      prims_packet_set(p, l, (float3)(0.0f), (float3)(0.0f, 0.0f, 1.0f), 0.0f, WT_NO_HIT);
+    }
+    tmax[l] = d.w;
+    skip_b[l] = ab.y;
+    in[l] = finite ? -1 : 0;
+  }
+  prims_packet_finish(p);
+  return packet_vload(in);
+}
+
+/// After the triangles' packet (packet_trace_closest wrote hits[index[l]]):
+/// those hits narrowed by the other primitives, lane l's ray index[l]
+/// leaving skip[index[l]] on instance hit_instance[index[l]] (WT_NO_HIT, or
+/// no buffer: none, and none written), which then names the instance hit. A hit is rewritten
+/// only where it changed or an instance was hit (the same stores as
+/// extend's lane-by-lane loop made).
+inline void prims_packet_trace_closest(BvhScene scene, GeometryScene g, const uint* index, uint lanes,
+                                       __global const float4* ray_o, __global const float4* ray_d,
+                                       __global const uint* skip, __global uint* hit_instance,
+                                       __global float4* hits) {
+  PrimPacket p;
+  float t[WT_PACKET], u[WT_PACKET], v[WT_PACKET], tmax[WT_PACKET];
+  uint prim[WT_PACKET], instance[WT_PACKET], skip_instance[WT_PACKET], before[WT_PACKET], unused[WT_PACKET];
+  pint valid = prims_packet_load(&p, index, lanes, ray_o, ray_d, skip, 0, tmax, unused);
+  for (uint l = 0; l < WT_PACKET; ++l) {
+    uint i = index[min(l, lanes - 1u)];
+    float4 h = hits[i];
+    t[l] = h.x, u[l] = h.y, v[l] = h.z, prim[l] = before[l] = as_uint(h.w);
+    instance[l] = WT_NO_HIT;
+    skip_instance[l] = hit_instance ? hit_instance[i] : WT_NO_HIT;
+  }
+  prims_packet_closest(scene, g, &p, valid, index, skip_instance, t, u, v, prim, instance);
+  for (uint l = 0; l < lanes; ++l) {
+    uint i = index[l];
+    if (hit_instance) hit_instance[i] = instance[l];
+    if (prim[l] != before[l] || instance[l] != WT_NO_HIT) hits[i] = (float4)(t[l], u[l], v[l], as_float(prim[l]));
+  }
+}
+
+/// After the triangles' packet: blocked[l] (non-zero where a triangle
+/// blocks ray index[l]) set for the lanes a primitive blocks, lane l
+/// leaving skip_a[index[l]] or skip_ab[index[l]] on instance
+/// hit_instance[index[l]].
+inline void prims_packet_trace_occluded(BvhScene scene, GeometryScene g, const uint* index, uint lanes,
+                                        __global const float4* ray_o, __global const float4* ray_d,
+                                        __global const uint* skip_a, __global const uint2* skip_ab,
+                                        __global const uint* hit_instance, int* blocked) {
+  bool any_open = false;
+  for (uint l = 0; l < lanes; ++l) any_open = any_open || !blocked[l];
+  if (!any_open || g.header.node_count == 0) return;
+  PrimPacket p;
+  float tmax[WT_PACKET];
+  uint skip_b[WT_PACKET], skip_instance[WT_PACKET];
+  int open[WT_PACKET];
+  pint finite = prims_packet_load(&p, index, lanes, ray_o, ray_d, skip_a, skip_ab, tmax, skip_b);
+  for (uint l = 0; l < WT_PACKET; ++l) {
+    uint i = index[min(l, lanes - 1u)];
+    skip_instance[l] = hit_instance ? hit_instance[i] : WT_NO_HIT;
+    open[l] = l < lanes && !blocked[l] ? -1 : 0;
+  }
+  pint todo = packet_vload(open);
+  // a lane whose ray is not finite counts as blocked, as in bvh_prims_occluded
+  pint now = (todo & ~finite) | prims_packet_occluded(scene, g, &p, todo & finite, tmax, index, skip_b, skip_instance);
+  int lane_now[WT_PACKET];
+  packet_vstore(now, lane_now);
+  for (uint l = 0; l < lanes; ++l)
+    if (lane_now[l]) blocked[l] = -1;
+}
+
+#endif  // WT_HAS_PRIMITIVES
+
+#endif  // WT_BVH_PRIMS_PACKET_CL
