@@ -11,6 +11,14 @@
 #include "materials/textured.cl"
 #include "aov.cl"
 
+#if WT_HAS_THIN_SHADOWS
+/// With smooth thin walls that shadow rays cross: how many each shadow ray
+/// may cross (kernels/connect.cl).
+#define WT_THIN_SHADOW_SHADE_PARAMS , __global uint *shadow_walls
+#else
+#define WT_THIN_SHADOW_SHADE_PARAMS
+#endif
+
 /// Weight of emission found by BSDF sampling (pdf_bsdf, solid angle) from a
 /// light that NEE could also have sampled with pdf_light (0: NEE cannot).
 inline float shade_emission_weight(WtFrameParams frame, float pdf_bsdf, float pdf_light) {
@@ -47,7 +55,7 @@ WT_KERNEL void shade(WtFrameParams frame, WtEnvironment environment, __global co
                      __global const WtLightNode* light_tree, __global const uint* emitter_leaf,
                      __global float4* prev_normal, __global const uint* hit_instance, WT_GEOMETRY_PARAMS,
                      __global float2* ray_cone, __global float4* aov_sample, __global uint4* aov_ids,
-                     __global uint4* media, WT_SURFACE_PARAMS) {
+                     __global uint4* media, WT_SURFACE_PARAMS WT_THIN_SHADOW_SHADE_PARAMS) {
   uint i = get_global_id(0);
   if (i >= counters[in_slot]) return;
   // Without WT_FLAG_COMPACT_SHADOWS entry i of the shadow queue is this
@@ -166,6 +174,9 @@ WT_KERNEL void shade(WtFrameParams frame, WtEnvironment environment, __global co
   uint4 media_in = media[path];
   WtMediaStack stack = {{media_in.x, media_in.y, media_in.z, media_in.w}};
   int current = media_current(&stack, materials);
+#if WT_HAS_THIN_SHADOWS
+  float3 absorbed = (float3)(1.0f);  // by the medium along this segment (undone where the ray goes on below)
+#endif
   bool boundary = media_is_boundary(materials, surface.material);
   WtMediaCrossing crossing = {1u, 1.0f, 1.0f, WT_MEDIUM_NONE, WT_MEDIUM_NONE};
   if (boundary) crossing = media_crossing(&stack, materials, surface.material, !inside);
@@ -173,7 +184,14 @@ WT_KERNEL void shade(WtFrameParams frame, WtEnvironment environment, __global co
   // stack's current one, or the boundary's own when leaving one the stack lacks
   if (current >= 0 || (inside && boundary)) {
     float3 sigma = vec4_xyz(current >= 0 ? materials[stack.id[current]].volume : material.volume);
+#if WT_HAS_THIN_SHADOWS
+    if (sigma.x > 0.0f || sigma.y > 0.0f || sigma.z > 0.0f) {
+      absorbed = exp(-sigma * (hit.x * length(dir)));
+      beta *= absorbed;
+    }
+#else
     if (sigma.x > 0.0f || sigma.y > 0.0f || sigma.z > 0.0f) beta *= exp(-sigma * (hit.x * length(dir)));
+#endif
   }
   // a false hit: the surface lies inside a medium that outranks it. The
   // path passes it unchanged and without a bounce of its own (it still takes
@@ -370,6 +388,15 @@ WT_KERNEL void shade(WtFrameParams frame, WtEnvironment environment, __global co
           shadow_d[path] = (float4)(shadow_dir, tmax);
           shadow_radiance[path] = (float4)(contribution, 0.0f);
           shadow_skip[path] = (uint2)(prim, s.prim);
+#if WT_HAS_THIN_SHADOWS
+          // It crosses as many thin walls as a path leaving here along s.wi
+          // could pass straight through: each is a transmission bounce,
+          // below --max-bounces and the transmission limit (a path through
+          // more would stop at a wall, so NEE must not find its light either).
+          int walls_bounces = (int)frame.max_bounces - 1 - (int)frame.bounce;
+          int walls_transmission = (int)frame.max_transmission_bounces - (int)counts.z - (dot(ng, s.wi) > 0.0f ? 0 : 1);
+          shadow_walls[path] = (uint)max(min(walls_bounces, walls_transmission), 0);
+#endif
         }
       }
     }
@@ -395,6 +422,23 @@ WT_KERNEL void shade(WtFrameParams frame, WtEnvironment environment, __global co
   }
   shade_check_finite(frame, counters, path, beta, WT_NONFINITE_THROUGHPUT);
   if (beta.x <= 0.0f && beta.y <= 0.0f && beta.z <= 0.0f) return;
+#if WT_HAS_THIN_SHADOWS
+  // Straight through a wall shadow rays cross: the ray goes on from where it
+  // came (the last vertex, or the camera) past this hit, keeping that
+  // vertex's pdf, normal and cone, so a light it finds is weighed against
+  // NEE from that vertex, which reached the light through this wall
+  // (connect.cl). ray_skip keeps it off this surface and tmin off the ones
+  // before; the media stack is the same on both sides of a thin wall, and
+  // the medium absorbs along the whole ray at its next hit.
+  if ((bs.lobe & WT_LOBE_DELTA) && crossed && material.shadow_pass) {
+    throughput[path] = (float4)(beta / absorbed, pdf_prev);
+    bounce_counts[path] = counts;
+    ray_skip[path] = prim;
+    ray_o[path].w = hit.x;
+    queue_out[atomic_inc(&counters[out_slot])] = path;
+    return;
+  }
+#endif
 
   throughput[path] = (float4)(beta, bs.pdf);
 #if WT_HAS_TEXTURES

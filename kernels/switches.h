@@ -65,6 +65,16 @@
 #elif !WT_SWITCH_IS_BOOL(WT_HAS_IRIDESCENCE)
 #error "WT_HAS_IRIDESCENCE must be 0 or 1"
 #endif
+// A material that shadow rays cross (WtMaterial::shadow_pass: a smooth thin
+// wall): connect weighs them through it, shade continues a path straight
+// through it from its last vertex (kernels/connect.cl). Needs transmission.
+#ifndef WT_HAS_THIN_SHADOWS
+#error "WT_HAS_THIN_SHADOWS not set (kernelDefines)"
+#elif !WT_SWITCH_IS_BOOL(WT_HAS_THIN_SHADOWS)
+#error "WT_HAS_THIN_SHADOWS must be 0 or 1"
+#elif WT_HAS_THIN_SHADOWS && !WT_HAS_TRANSMISSION
+#error "WT_HAS_THIN_SHADOWS needs WT_HAS_TRANSMISSION"
+#endif
 #ifndef WT_HAS_TEXTURES
 #error "WT_HAS_TEXTURES not set (kernelDefines)"
 #elif !WT_SWITCH_IS_BOOL(WT_HAS_TEXTURES)

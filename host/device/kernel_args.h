@@ -28,6 +28,7 @@ namespace wt {
 enum class ParamIf : std::uint8_t {
   Always,
   Alpha,  ///< WT_HAS_ALPHA (kernels/materials/alpha.cl, WT_ALPHA_PARAMS)
+  ThinShadows,  ///< WT_HAS_THIN_SHADOWS (kernels/connect.cl, WT_THIN_SHADOW_PARAMS)
 };
 
 struct KernelParam {
@@ -38,7 +39,10 @@ struct KernelParam {
 /// The compiled-in features that decide which conditional parameters exist.
 struct ParamFeatures {
   bool alpha = false;
-  bool has(ParamIf when) const { return when == ParamIf::Always || (when == ParamIf::Alpha && alpha); }
+  bool thinShadows = false;
+  bool has(ParamIf when) const {
+    return when == ParamIf::Always || (when == ParamIf::Alpha && alpha) || (when == ParamIf::ThinShadows && thinShadows);
+  }
 };
 
 /// Parameters present in every build, in order.

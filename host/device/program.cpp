@@ -124,6 +124,7 @@ void setMaterialFeatures(KernelFeatures& features, std::span<const WtMaterial> m
   features.sheen = any([](const WtMaterial& m) { return m.sheen.x > 0.0f || m.sheen.y > 0.0f || m.sheen.z > 0.0f; });
   features.anisotropy = any([](const WtMaterial& m) { return m.anisotropy > 0.0f; });
   features.iridescence = any([](const WtMaterial& m) { return m.iridescence.x > 0.0f; });
+  features.thinShadows = any([](const WtMaterial& m) { return m.shadow_pass != 0u; });
 }
 
 std::vector<std::string> kernelDefines(const KernelFeatures& features) {
@@ -132,6 +133,7 @@ std::vector<std::string> kernelDefines(const KernelFeatures& features) {
       "-D WT_BVH_STACK_SIZE=" + std::to_string(features.bvhStackSize),
       "-D WT_HAS_PBR=" + std::string(features.pbr ? "1" : "0"),
       "-D WT_HAS_TRANSMISSION=" + std::string(features.pbr && features.transmission ? "1" : "0"),
+      "-D WT_HAS_THIN_SHADOWS=" + std::string(features.pbr && features.transmission && features.thinShadows ? "1" : "0"),
       "-D WT_HAS_TEXTURES=" + std::string(features.textures ? "1" : "0"),
       "-D WT_HAS_VERTEX_COLORS=" + std::string(features.vertexColors ? "1" : "0"),
       "-D WT_HAS_SPECULAR=" + std::string(features.pbr && features.specular ? "1" : "0"),

@@ -24,6 +24,9 @@ struct KernelFeatures {
   int bvhStackSize = 64;          ///< traversal stack entries; >= BVH depth + 1, rounded up to 32
   bool pbr = false;               ///< a material uses the metallic-roughness model (else all are Lambertian)
   bool transmission = false;      ///< a metallic-roughness material transmits (KHR_materials_transmission)
+  /// A material is a smooth thin wall that shadow rays cross
+  /// (WtMaterial::shadow_pass): connect and shade take WT_THIN_SHADOW_PARAMS
+  bool thinShadows = false;
   bool textures = false;          ///< a material reads a texture (materials/textured.cl)
   bool vertexColors = false;      ///< the scene's vertices have COLOR_0
   bool specular = false;          ///< a dielectric's F0 is not 0.04 or its Fresnel is weighted (KHR_materials_specular, KHR_materials_ior)

@@ -4,6 +4,7 @@
 #include "scene/generators.h"
 #include "shared/alpha.h"
 #include "shared/lights.h"
+#include "shared/materials.h"
 
 #include <glm/gtc/matrix_transform.hpp>
 
@@ -377,10 +378,17 @@ SceneBuffers::SceneBuffers(Context& context, const Scene& scene, const BvhBuildO
   m_kernelMaterials = scene.materials;
   if (options.lambertianForms)
     std::transform(m_kernelMaterials.begin(), m_kernelMaterials.end(), m_kernelMaterials.begin(), kernelMaterial);
+  // shadow rays cross smooth thin walls; COLOR_0 would tint a wall's transmission per vertex
+  for (WtMaterial& m : m_kernelMaterials) m.shadow_pass = scene.colors.empty() && thinShadowPass(m) ? 1u : 0u;
   materials = upload(context, m_kernelMaterials, m_attributeBytes);
   uploadPrimitives(context, scene, options, descs);
   uploadSurface(context, scene);
   uploadAlpha(context, scene);
+}
+
+bool thinShadowPass(const WtMaterial& m) {
+  return m.model == WT_MATERIAL_PBR && m.transmission > 0.0f && m.base_color.w < 1.0f && m.volume.w == 0.0f &&
+         m.roughness < WT_PBR_MIN_ROUGHNESS && m.anisotropy == 0.0f && m.texture_mask == 0u;
 }
 
 bool textureIsOpaque(const TextureSet& textures, std::uint32_t texture) {

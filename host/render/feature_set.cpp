@@ -60,6 +60,7 @@ FeatureSet sceneFeatures(const Scene& scene, const SceneBuffers& buffers, const 
   f.anisotropy = layers.anisotropy;
   f.iridescence = layers.iridescence;
   f.transmission = layers.transmission;
+  f.thinShadows = layers.transmission && layers.thinShadows;
   for (const WtMaterial& m : buffers.kernelMaterials()) {
     if (m.model == WT_MATERIAL_DIFFUSE) f.lambertian = true;
     if (m.model == WT_MATERIAL_PBR && m.transmission > 0.0f && m.volume.w > 0.0f &&
@@ -123,6 +124,7 @@ std::vector<std::string> featureNames(const FeatureSet& f) {
   add(f.iridescence, "iridescence");
   add(f.transmission, "transmission");
   add(f.volume, "volume");
+  add(f.thinShadows, "thin_shadows");
   add(f.textures, "textures");
   for (std::uint32_t s = 0; s < WT_TEXTURE_SLOTS; ++s)
     if (f.textureSlots & (1u << s)) names.push_back(std::string("texture:") + kSlots[s]);
@@ -151,6 +153,7 @@ KernelFeatures kernelFeaturesFor(const FeatureSet& f, const DeviceInfo& device, 
   k.bvhStackSize = f.bvhStackSize;
   k.pbr = f.pbr;
   k.transmission = f.transmission;
+  k.thinShadows = f.thinShadows;
   k.specular = f.specular;
   k.clearcoat = f.clearcoat;
   k.sheen = f.sheen;
@@ -172,7 +175,7 @@ KernelFeatures kernelFeaturesFor(const FeatureSet& f, const DeviceInfo& device, 
 KernelFeatures generalKernelFeatures(const FeatureSet& f, const DeviceInfo& device, int requestedPacketWidth) {
   KernelFeatures k = kernelFeaturesFor(f, device, requestedPacketWidth);
   // the integrator is an algorithm, not a feature a scene has: kept
-  k.pbr = k.transmission = k.specular = k.clearcoat = k.sheen = k.anisotropy = k.iridescence = true;
+  k.pbr = k.transmission = k.specular = k.clearcoat = k.sheen = k.anisotropy = k.iridescence = k.thinShadows = true;
   k.textures = k.vertexColors = k.alpha = true;
   k.primitives.fill(true);
   k.primitives[WT_PRIM_TRIANGLE] = false;  // triangles are always compiled in: no switch

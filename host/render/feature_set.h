@@ -46,6 +46,7 @@ struct FeatureSet {
   bool iridescence = false;     ///< KHR_materials_iridescence
   bool transmission = false;    ///< KHR_materials_transmission
   bool volume = false;          ///< KHR_materials_volume (absorption inside a refracting boundary)
+  bool thinShadows = false;     ///< a smooth thin transmitting wall: shadow rays cross it (WtMaterial::shadow_pass)
   bool textures = false;        ///< a material reads a texture (uploaded)
   std::uint32_t textureSlots = 0;  ///< bit s: some material textures slot s (WT_TEXTURE_SLOT_*)
   bool normalMaps = false;      ///< a normal or clear-coat normal texture

@@ -23,6 +23,7 @@ enum class PathNeed : std::uint8_t {
   Textures,   ///< textures are read at the path's footprint (ray_cone)
   Aovs,       ///< the render records AOVs (RenderSettings::aovs, kernels/aov.cl)
   Media,      ///< the kernels refract (WT_HAS_TRANSMISSION): the nested-dielectric stack
+  ThinShadows,  ///< shadow rays cross smooth thin walls (WT_HAS_THIN_SHADOWS): how many each may cross
 };
 
 struct PathNeeds {
@@ -31,10 +32,12 @@ struct PathNeeds {
   bool textures = false;
   bool aovs = false;
   bool media = false;
+  bool thinShadows = false;
   bool has(PathNeed n) const {
     return n == PathNeed::Always || (n == PathNeed::Shadows && shadows) ||
            (n == PathNeed::Instances && instances) || (n == PathNeed::Textures && textures) ||
-           (n == PathNeed::Aovs && aovs) || (n == PathNeed::Media && media);
+           (n == PathNeed::Aovs && aovs) || (n == PathNeed::Media && media) ||
+           (n == PathNeed::ThinShadows && thinShadows && shadows);
   }
 };
 
@@ -64,6 +67,7 @@ struct PathState {
   cl::Buffer shadowQueue;     ///< uint: the shadow rays of a bounce
   cl::Buffer shadowO, shadowD, shadowRadiance;  ///< float4: the shadow ray and what it carries if unblocked
   cl::Buffer shadowSkip;      ///< uint2: the triangle it leaves, the emitter it aims at (neither hit)
+  cl::Buffer shadowWalls;     ///< uint: the thin walls the shadow ray may cross (kernels/connect.cl)
   cl::Buffer state;           ///< float4[4]: accumulation state (accumulate.cl)
   cl::Buffer mean, m2;        ///< float4: resolved mean and second moment
   cl::Buffer sampleCount;     ///< uint: samples folded in
@@ -74,7 +78,7 @@ struct PathState {
   cl::Buffer media;           ///< uint4: the volumes the path is inside (kernels/shared/media.h)
 
   /// Every buffer above, once.
-  static const std::array<PathBufferDesc, 26> kBuffers;
+  static const std::array<PathBufferDesc, 27> kBuffers;
 
   /// Allocate every buffer for `pixels` pixels (one element where `needs` lacks its need).
   void allocate(const cl::Context& context, std::size_t pixels, const PathNeeds& needs);
@@ -88,7 +92,7 @@ struct PathState {
   }
 };
 
-inline const std::array<PathBufferDesc, 26> PathState::kBuffers{{
+inline const std::array<PathBufferDesc, 27> PathState::kBuffers{{
     {"ray_o", "float4", 16, &PathState::rayO, PathNeed::Always},
     {"ray_d", "float4", 16, &PathState::rayD, PathNeed::Always},
     {"hits", "float4", 16, &PathState::hits, PathNeed::Always},
@@ -107,6 +111,7 @@ inline const std::array<PathBufferDesc, 26> PathState::kBuffers{{
     {"shadow_d", "float4", 16, &PathState::shadowD, PathNeed::Shadows},
     {"shadow_radiance", "float4", 16, &PathState::shadowRadiance, PathNeed::Shadows},
     {"shadow_skip", "uint2", 8, &PathState::shadowSkip, PathNeed::Shadows},
+    {"shadow_walls", "uint", 4, &PathState::shadowWalls, PathNeed::ThinShadows},
     {"state", "float4", 64, &PathState::state, PathNeed::Always},
     {"mean", "float4", 16, &PathState::mean, PathNeed::Always},
     {"m2", "float4", 16, &PathState::m2, PathNeed::Always},

@@ -94,7 +94,7 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
   m_stats.programSeconds = lap();
   if (settings.accumulation == WT_ACCUMULATE_DOUBLE && !context.info().fp64)
     throw DeviceError("double-precision accumulation needs fp64, which '" + context.info().name + "' lacks");
-  const ParamFeatures built{features.alpha};
+  const ParamFeatures built{features.alpha, features.pbr && features.transmission && features.thinShadows};
   m_generate = {m_program, built};
   m_extend = {m_program, built};
   m_extendPacket = {m_program, built};
@@ -124,6 +124,7 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
   needs.textures = features.textures;
   needs.aovs = settings.aovs;
   needs.media = features.transmission;
+  needs.thinShadows = built.thinShadows;
   m_path.allocate(ctx, pixels, needs);
   m_counters = cl::Buffer(ctx, CL_MEM_READ_WRITE, WT_COUNTER_COUNT * sizeof(cl_uint));
   auto upload = [&](const auto& data) {
@@ -197,6 +198,18 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
   bindTracing(m_connect);
   bindTracing(m_connectPacket);
   bindTracing(m_connectStream);
+  // connect weighs the thin walls a shadow ray crosses by their materials
+  if (built.thinShadows) {
+    auto bindWalls = [&](auto& k) {
+      k.set("thin_materials", m_scene->materials)
+          .set("thin_tri_info", m_scene->triangleInfo)
+          .set("thin_normals", m_scene->normals)
+          .set("thin_pbr_table", m_pbrTable);
+    };
+    bindWalls(m_connect);
+    bindWalls(m_connectPacket);
+    bindWalls(m_connectStream);
+  }
 
   m_path.bind(m_accumulate);
   m_accumulate.set("counters", m_counters);

@@ -36,14 +36,17 @@ struct Shade {
              "tri_verts", "normals", "materials", "lights", "alias", "emitter_pdf_area", "shadow_queue", "shadow_o",
              "shadow_d", "shadow_radiance", "pbr_table", "bounce_counts", "ray_skip", "shadow_skip", "light_tree",
              "emitter_leaf", "prev_normal", "hit_instance"),
-      kGeometryParams, params("ray_cone", "aov_sample", "aov_ids", "media"), kSurfaceParams);
+      kGeometryParams, params("ray_cone", "aov_sample", "aov_ids", "media"), kSurfaceParams,
+      paramsIf(ParamIf::ThinShadows, params("shadow_walls")));
 };
 
 /// connect, connect_packet and connect_stream: the same parameters.
 inline constexpr auto kConnectParams =
     concatParams(params("counters", "shadow_queue", "shadow_o", "shadow_d", "shadow_radiance", "nodes", "node_count",
                         "tri_verts", "radiance", "shadow_skip", "hit_instance"),
-                 kGeometryParams, kAlphaParams);
+                 kGeometryParams, kAlphaParams,
+                 paramsIf(ParamIf::ThinShadows,
+                          params("shadow_walls", "thin_materials", "thin_tri_info", "thin_normals", "thin_pbr_table")));
 struct Connect {
   static constexpr std::string_view kName = "connect";
   static constexpr auto kParams = kConnectParams;

@@ -36,7 +36,7 @@ WtMaterial makeMaterial(glm::vec3 albedo, glm::vec3 emission, bool twoSided) {
   m.iridescence = {0.0f, 1.3f, 100.0f, 400.0f};
   m.priority = 0u;
   m.dispersion = 0.0f;
-  m.pad0 = m.pad1 = 0u;
+  m.shadow_pass = m.pad1 = 0u;
   return m;
 }
 

@@ -471,7 +471,9 @@ std::vector<StressRow> stressMaterials(Context& context, const StressOptions& op
                              glass("glass of ior 1 (an interface that bends nothing), roughness 0.5", 0.5, 1.0, false),
                              glass("glass of ior 3, roughness 0.2", 0.2, 3.0, false),
                              glass("glass of ior 1.0001 (bends almost nothing), roughness 0.5", 0.5, 1.0001, false),
-                             glass("thin-walled transmission (ior 1.5, roughness 0.3)", 0.3, 1.5, true)});
+                             glass("thin-walled transmission (ior 1.5, roughness 0.3)", 0.3, 1.5, true),
+                             // shadow rays cross it, and paths through it go on from their last vertex
+                             glass("smooth thin-walled transmission (ior 1.5, roughness 0)", 0, 1.5, true)});
   MaterialCase backFacing = make("back-facing shading normals (glossy metal)", pbr(white, 1, 0.3));
   backFacing.normals = MaterialCase::kBackFacing;
   MaterialCase tangent = make("shading normals tangent to the surface (glossy metal)", pbr(white, 1, 0.3));

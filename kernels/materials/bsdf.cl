@@ -696,6 +696,20 @@ inline bool interface_direction(Bsdf b, float3 wo, float3 h, float p_reflect, fl
 }
 #endif
 
+#if WT_HAS_THIN_SHADOWS
+/// What a smooth thin wall passes straight through (wi = -wo) for local wo
+/// (z > 0): the delta transmission's weight times the probability of
+/// sampling it (bsdf_sample), the clear share under the layers, 1 - F,
+/// tinted by the base colour. Shadow rays cross the wall with it
+/// (kernels/connect.cl), so a path that samples that lobe has found the same
+/// light on average.
+inline float3 bsdf_thin_pass(Bsdf b, float3 wo) {
+  PbrView v = pbr_view(b, wo);
+  float f = interface_fresnel(b, wo.z);
+  return b.base * ((1.0f - f) * ((1.0f - b.metallic) * b.transmission * v.w_base));
+}
+#endif
+
 /// Draw a direction for local wo with uniforms u_lobe, u1, u2. False when
 /// nothing is scattered (no allowed lobe, a direction on the wrong side).
 inline bool bsdf_sample(Bsdf b, float3 wo, uint lobes, float u_lobe, float u1, float u2, BsdfSample* s) {

@@ -43,7 +43,7 @@
   F(WtMaterial, alpha_mode) F(WtMaterial, alpha_cutoff) F(WtMaterial, texture_mask) F(WtMaterial, specular) \
   F(WtMaterial, sheen) F(WtMaterial, clearcoat) F(WtMaterial, clearcoat_roughness) F(WtMaterial, anisotropy) \
   F(WtMaterial, anisotropy_rotation) F(WtMaterial, iridescence) F(WtMaterial, priority) F(WtMaterial, dispersion) \
-  F(WtMaterial, pad0) F(WtMaterial, pad1) \
+  F(WtMaterial, shadow_pass) F(WtMaterial, pad1) \
   S(WtMediaStack) F(WtMediaStack, id) \
   S(WtMediaCrossing) F(WtMediaCrossing, real) F(WtMediaCrossing, ior_near) F(WtMediaCrossing, ior_far) \
   F(WtMediaCrossing, near_id) F(WtMediaCrossing, far_id) \

@@ -174,7 +174,8 @@ typedef struct WtMaterial {
   WtVec4 iridescence; ///< KHR_materials_iridescence: x iridescenceFactor in [0,1] (0: none; PBR only), y the film's iridescenceIor, z iridescenceThicknessMinimum, w iridescenceThicknessMaximum (nm); the thickness is w where no thickness texture is read
   wt_uint priority;   ///< nested dielectrics (shared/media.h): where volume boundaries overlap, the medium of higher priority fills the overlap (extras.wavetrace.priority; 0 by default)
   float dispersion;   ///< KHR_materials_dispersion: 20 / V_d (Abbe number V_d); 0: the index is the same at every wavelength (volume boundaries only: shared/media.h)
-  wt_uint pad0, pad1;
+  wt_uint shadow_pass;  ///< 1: a smooth thin wall that shadow rays cross, tinted by its straight-through transmission (SceneBuffers sets it: thinShadowPass; kernels/connect.cl)
+  wt_uint pad1;
 } WtMaterial;
 
 #define WT_ALPHA_OPAQUE 0u  ///< alpha is ignored

@@ -193,6 +193,21 @@ const OneFeature kCases[] = {
        return s;
      },
      noSettings, [] { return with(pbrBase(), {"transmission"}); }},
+    {"thin_shadows",
+     [] {
+       // a smooth thin wall: shadow rays cross it (a rough one, or a volume, above: they do not)
+       Scene s = pbrFloor();
+       s.materials[0] = withTransmission(makePbrMaterial(glm::vec3(0.5f), 0.0f, 0.0f), 1.0f, 1.5f, true);
+       return s;
+     },
+     noSettings, [] { return with(pbrBase(), {"transmission", "thin_shadows"}); }},
+    {"rough_thin_wall",
+     [] {
+       Scene s = pbrFloor();
+       s.materials[0] = withTransmission(s.materials[0], 1.0f, 1.5f, true);
+       return s;
+     },
+     noSettings, [] { return with(pbrBase(), {"transmission"}); }},
     {"transmission_behind_a_metallic_texture",
      [] {
        // metallic factor 1, but a metallic-roughness texture can lower it: the
@@ -305,6 +320,15 @@ TEST(FeatureSwitches, EachFeatureTurnsOnItsSwitchOnly) {
   Scene coat = pbrFloor();
   coat.materials[0] = withClearcoat(coat.materials[0], 1.0f, 0.1f);
   EXPECT_EQ(changed(coat), (std::vector<std::string>{"-D WT_HAS_PBR=1", "-D WT_HAS_CLEARCOAT=1"}));
+  Scene pane = pbrFloor();
+  pane.materials[0] = withTransmission(makePbrMaterial(glm::vec3(0.5f), 0.0f, 0.0f), 1.0f, 1.5f, true);
+  EXPECT_EQ(changed(pane), (std::vector<std::string>{"-D WT_HAS_PBR=1", "-D WT_HAS_TRANSMISSION=1",
+                                                     "-D WT_HAS_THIN_SHADOWS=1"}));
+  // vertex colours would tint the pane per vertex: its shadow rays stop
+  Scene tinted = pane;
+  tinted.colors.assign(tinted.positions.size(), glm::vec4(1.0f));
+  EXPECT_EQ(changed(tinted), (std::vector<std::string>{"-D WT_HAS_PBR=1", "-D WT_HAS_TRANSMISSION=1",
+                                                       "-D WT_HAS_VERTEX_COLORS=1"}));
 }
 
 TEST(FeatureSwitches, NeverDependOnTheImageSizeOrTheSampleCount) {
