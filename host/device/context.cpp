@@ -77,7 +77,9 @@ DeviceInfo selectDevice(const std::string& spec) {
 
 Context::Context(const DeviceInfo& device, bool profiling)
     : m_info(device), m_profiling(profiling),
-      m_oclgrind(device.platformName.find("Oclgrind") != std::string::npos) {
+      m_oclgrind(device.platformName.find("Oclgrind") != std::string::npos),
+      m_widenFirstLaunches(device.isCpu && !device.isGpu &&
+                           device.platformName.find("Portable Computing Language") != std::string::npos) {
   try {
     m_context = cl::Context(device.device);
     m_queue = cl::CommandQueue(m_context, device.device,
@@ -92,6 +94,14 @@ void Context::launch(const char* stage, cl::Kernel& kernel, std::size_t count, s
                      cl::Event* out) {
   if (count == 0) return;
   std::size_t global = (count + localSize - 1) / localSize * localSize;
+  // the extra work-items return at the kernels' count guard
+  // PoCL keeps its work-group functions by program and kernel name, so a new
+  // kernel object of a function launched before needs no wide launch
+  if (m_widenFirstLaunches &&
+      m_launched.emplace(kernel.getInfo<CL_KERNEL_PROGRAM>()(), kernel.getInfo<CL_KERNEL_FUNCTION_NAME>(), localSize)
+          .second)
+    global = std::max(global, (kPoclSmallGridWidth + localSize - 1) / localSize * localSize);
+  m_lastGlobal = global;
   cl::Event event;
   try {
     m_queue.enqueueNDRangeKernel(kernel, cl::NullRange, cl::NDRange(global), cl::NDRange(localSize),

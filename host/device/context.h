@@ -6,8 +6,10 @@
 
 #include <cstddef>
 #include <map>
+#include <set>
 #include <stdexcept>
 #include <string>
+#include <tuple>
 #include <vector>
 
 namespace wt {
@@ -57,6 +59,8 @@ class Context {
 
   /// Enqueue `kernel` over `count` work-items in groups of `localSize`
   /// (global size rounded up; kernels guard with `if (i >= count) return`).
+  /// On PoCL's CPU devices a kernel's first launch here is at least
+  /// kPoclSmallGridWidth wide (widenFirstLaunches()).
   /// With profiling on, the kernel time is added to stageTimes()[stage].
   /// `event`, where given and profiling is on, receives the launch's event
   /// (no event at all with profiling off: that path must cost nothing).
@@ -73,6 +77,14 @@ class Context {
   /// few accommodations; each is documented where it is made.
   bool underOclgrind() const { return m_oclgrind; }
 
+  /// PoCL compiles a second work-group function for a kernel first launched
+  /// narrower than kPoclSmallGridWidth ("-smallgrid" in its cache) and
+  /// reuses a wide one for later narrower launches in the process, so a
+  /// wide first launch makes every image size share one compiled variant.
+  bool widenFirstLaunches() const { return m_widenFirstLaunches; }
+  /// The global size launch() last enqueued (0: none yet).
+  std::size_t lastGlobalSize() const { return m_lastGlobal; }
+
   /// The queue was made with CL_QUEUE_PROFILING_ENABLE.
   bool profiling() const { return m_profiling; }
   const StageTimes& stageTimes() const { return m_times; }
@@ -83,6 +95,9 @@ class Context {
   /// each takes WT_STREAM_WINDOW rays, so groups of 64 would leave a
   /// 200 000-ray batch 13 groups to share among the threads.
   static constexpr std::size_t kStreamLocalSize = 4;
+  /// PoCL's grid_width_specialization_limit on CPU devices (USHRT_MAX):
+  /// grids narrower than this get their own work-group function.
+  static constexpr std::size_t kPoclSmallGridWidth = 65535;
 
  private:
   DeviceInfo m_info;
@@ -90,6 +105,9 @@ class Context {
   cl::CommandQueue m_queue;
   bool m_profiling;
   bool m_oclgrind;
+  bool m_widenFirstLaunches;
+  std::set<std::tuple<cl_program, std::string, std::size_t>> m_launched;  ///< (program, kernel, local size) launched
+  std::size_t m_lastGlobal = 0;
   std::vector<std::pair<std::string, cl::Event>> m_pending;
   StageTimes m_times;
 };

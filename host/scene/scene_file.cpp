@@ -1078,7 +1078,8 @@ class Loader {
       if (!loaded.scene.materialTextures.empty()) {
         std::uint32_t textureBase = 0;
         try {
-          textureBase = m_result.scene.textures.append(loaded.scene.textures);
+          // given up: the included file's texels are not read again
+          textureBase = m_result.scene.textures.append(std::move(loaded.scene.textures));
         } catch (const TextureError& e) {
           fail(where, e.what());
         }

@@ -596,6 +596,21 @@ std::uint32_t TextureSet::append(const TextureSet& other) {
   return textureBase;
 }
 
+std::uint32_t TextureSet::append(TextureSet&& other) {
+  if (!texels.empty()) {
+    const std::uint32_t base = append(other);
+    other = TextureSet{};
+    return base;
+  }
+  // offsets stay: other's texels start at word 0 here too
+  std::vector<wt_uint> moved = std::move(other.texels);
+  other.texels.clear();
+  const std::uint32_t base = append(other);
+  texels = std::move(moved);
+  other = TextureSet{};
+  return base;
+}
+
 std::size_t TextureSet::bytes() const {
   return texels.size() * sizeof(wt_uint) + levels.size() * sizeof(WtTextureLevel) +
          textures.size() * sizeof(WtTexture);

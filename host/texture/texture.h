@@ -107,6 +107,9 @@ class TextureSet {
   /// returns the index its texture 0 now has. Throws TextureError when the
   /// texel array would pass 2^32 uints.
   std::uint32_t append(const TextureSet& other);
+  /// The same for a set the caller gives up: into a set without texels its
+  /// texels move (no copy); otherwise they are copied and `other` is freed.
+  std::uint32_t append(TextureSet&& other);
 
   std::vector<wt_uint> texels;          ///< __global const uint*; empty until an image is added
   std::vector<WtTextureLevel> levels;   ///< __global const WtTextureLevel*

@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <numeric>
 #include <random>
 #include <string>
@@ -486,6 +487,41 @@ TEST(TextureSetPacking, GltfSamplerCodesMapToFlags) {
   const WtTexture& t = set.textures.back();
   EXPECT_EQ(t.first_level, 0u);
   EXPECT_EQ(t.level_count, 2u);
+}
+
+TEST(TextureSetPacking, AppendingASetGivenUpMovesItsTexelsAndMatchesACopy) {
+  auto file = [] {
+    TextureSet set;
+    set.addImage(image8(2, 2, {1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16}), true);
+    set.addTexture(0, 33071, -1, 9728, -1);
+    return set;
+  };
+  auto same = [](const TextureSet& a, const TextureSet& b) {
+    EXPECT_EQ(a.texels, b.texels);
+    ASSERT_EQ(a.levels.size(), b.levels.size());
+    for (std::size_t i = 0; i < a.levels.size(); ++i)
+      EXPECT_EQ(std::memcmp(&a.levels[i], &b.levels[i], sizeof(WtTextureLevel)), 0) << "level " << i;
+    ASSERT_EQ(a.textures.size(), b.textures.size());
+    for (std::size_t i = 0; i < a.textures.size(); ++i)
+      EXPECT_EQ(std::memcmp(&a.textures[i], &b.textures[i], sizeof(WtTexture)), 0) << "texture " << i;
+    EXPECT_EQ(a.imageCount(), b.imageCount());
+  };
+  TextureSet copied, moved;
+  // the first file into a scene without texels: its array itself, not a copy
+  TextureSet first = file(), firstCopy = file();
+  const wt_uint* storage = first.texels.data();
+  EXPECT_EQ(copied.append(firstCopy), 0u);
+  EXPECT_EQ(moved.append(std::move(first)), 0u);
+  EXPECT_EQ(moved.texels.data(), storage);
+  EXPECT_TRUE(first.texels.empty());
+  // a second file: copied behind the first, renumbered alike
+  TextureSet second = file(), secondCopy = file();
+  EXPECT_EQ(copied.append(secondCopy), 1u);
+  EXPECT_EQ(moved.append(std::move(second)), 1u);
+  EXPECT_TRUE(second.texels.empty());
+  same(moved, copied);
+  EXPECT_EQ(moved.levels.back().offset, copied.levels.back().offset);
+  EXPECT_GT(moved.textures[1].first_level, 0u);
 }
 
 TEST(TextureSetPacking, BadInputIsRefused) {
