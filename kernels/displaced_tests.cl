@@ -41,7 +41,8 @@ WT_KERNEL void test_displaced_closest(uint count, uint triangles, __global const
   out[3 * i + 2] = (float4)(ns, 0.0f);
 }
 
-/// Micro-vertex (i, j) (query xyz: base triangle, i, j) as the intersection computes it.
+/// Micro-vertex (i, j) (query xyz: base triangle, i, j) as the intersection
+/// computes it; with query w 1, from the map even where d is stored.
 WT_KERNEL void test_displaced_vertex(uint count, __global const float4* rows, __global const uint4* info,
                                      __global const uint4* query, __global float4* out) {
   uint k = get_global_id(0);
@@ -49,7 +50,8 @@ WT_KERNEL void test_displaced_vertex(uint count, __global const float4* rows, __
   uint4 q = query[k];
   __global const uint4* tri = info + WT_DISP_INFO_ROWS * q.x;
   DispMesh m = disp_mesh(rows, tri[0].y);
-  DispTri t = disp_tri(rows, tri[1]);
+  DispTri t = disp_tri(rows, tri);
+  if (q.w == 1u) t.d = 0;
   int n = 1 << m.level;
   out[k] = (float4)(disp_vertex(m, t, n, 1.0f / (float)n, (int)q.y, (int)q.z), 0.0f);
 }

@@ -71,7 +71,8 @@ float sampleMap(const MapView& m, glm::vec2 uv) {
 /// computes it (exact weights for a power of two; a correctly rounded
 /// quotient otherwise, the same from both triangles of an edge).
 glm::vec3 microVertex(const DisplacedMesh& mesh, const MapView& map, const std::array<std::uint32_t, 3>& t,
-                      int perEdge, int i, int j, glm::vec3* normal = nullptr, glm::vec2* uvOut = nullptr) {
+                      int perEdge, int i, int j, glm::vec3* normal = nullptr, glm::vec2* uvOut = nullptr,
+                      float* displacement = nullptr) {
   const float n = float(perEdge);
   const float wa = float(perEdge - i - j) / n, wb = float(i) / n, wc = float(j) / n;
   const glm::vec3 pa = wa * mesh.positions[t[0]], pb = wb * mesh.positions[t[1]], pc = wc * mesh.positions[t[2]];
@@ -83,6 +84,7 @@ glm::vec3 microVertex(const DisplacedMesh& mesh, const MapView& map, const std::
   if (normal) *normal = nrm;
   if (uvOut) *uvOut = uv;
   const float d = mesh.scale * sampleMap(map, uv) + mesh.offset;
+  if (displacement) *displacement = d;
   const glm::vec3 dn = d * nrm;
   return p + dn;
 }
@@ -287,6 +289,7 @@ std::uint32_t storedDepth(std::uint32_t maxDepth, std::uint32_t level) {
 struct TriangleBoxes {
   Aabb root;
   std::vector<std::uint8_t> blocks;  ///< 24 bytes per sub-triangle of levels 0 to D - 1
+  std::vector<float> displacements;  ///< d at every micro-vertex, row by row (j), where L <= D + 1; else empty
   bool finite = true;
 };
 
@@ -300,11 +303,16 @@ TriangleBoxes triangleBoxes(const DisplacedMesh& mesh, const MapView& map, const
   const std::size_t firstLeaf = nodes - (std::size_t(1) << (2 * depth));
   std::vector<glm::vec3> grid;
   std::vector<std::size_t> rowStart;
+  std::vector<float> displacements;
   if (levelL == 0 || levelL == depth + 1) {
     rowStart.resize(std::size_t(n) + 1);
     for (int j = 0; j <= n; ++j) {
       rowStart[std::size_t(j)] = grid.size();
-      for (int i = 0; i + j <= n; ++i) grid.push_back(microVertex(mesh, map, t, n, i, j));
+      for (int i = 0; i + j <= n; ++i) {
+        float d;
+        grid.push_back(microVertex(mesh, map, t, n, i, j, nullptr, nullptr, &d));
+        displacements.push_back(d);
+      }
     }
   }
   auto vertex = [&](glm::ivec2 c) { return grid[rowStart[std::size_t(c.y)] + std::size_t(c.x)]; };
@@ -355,6 +363,7 @@ TriangleBoxes triangleBoxes(const DisplacedMesh& mesh, const MapView& map, const
   for (std::size_t g = firstLeaf; g-- > 0;)
     for (std::size_t k = 1; k <= 4; ++k) exact[g].extend(exact[4 * g + k]);
   TriangleBoxes out;
+  out.displacements = std::move(displacements);
   const glm::dvec3 rlo(exact[0].lo), rhi(exact[0].hi);
   if (!std::isfinite(rlo.x + rlo.y + rlo.z + rhi.x + rhi.y + rhi.z)) {
     out.finite = false;
@@ -505,7 +514,18 @@ void gatherDisplacedTo(const Scene& scene, PrimitiveRows& rows, std::uint32_t ma
           boxRows.push_back(row);
         }
       }
-      rows.info.push_back({m.material, std::uint32_t(WT_DISP_MESH_ROWS * mi), std::uint32_t(boxRow), 0u});
+      // the micro-vertices' displacements, when computed above: the walk then reads the map nowhere
+      std::uint32_t displacementRow = ~0u;
+      if (!boxes.displacements.empty()) {
+        displacementRow = std::uint32_t(boxRows.size());
+        for (std::size_t v = 0; v < boxes.displacements.size(); v += 4) {
+          WtVec4 row{0, 0, 0, 0};
+          std::memcpy(&row, boxes.displacements.data() + v,
+                      sizeof(float) * std::min<std::size_t>(4, boxes.displacements.size() - v));
+          boxRows.push_back(row);
+        }
+      }
+      rows.info.push_back({m.material, std::uint32_t(WT_DISP_MESH_ROWS * mi), std::uint32_t(boxRow), displacementRow});
       rows.info.push_back({std::uint32_t(vertexRow[mi] + WT_DISP_VERTEX_ROWS * t[0]),
                            std::uint32_t(vertexRow[mi] + WT_DISP_VERTEX_ROWS * t[1]),
                            std::uint32_t(vertexRow[mi] + WT_DISP_VERTEX_ROWS * t[2]), std::uint32_t(ti)});
@@ -516,8 +536,10 @@ void gatherDisplacedTo(const Scene& scene, PrimitiveRows& rows, std::uint32_t ma
   rows.count[WT_PRIM_DISPLACED] = prims;
   // the offsets known now: boxes after the headers and vertices, texels after the boxes
   const std::size_t boxFirst = data.size(), floatBase = 4 * (data.size() + boxRows.size());
-  for (std::size_t r = rows.infoFirst[WT_PRIM_DISPLACED]; r < rows.info.size(); r += WT_DISP_INFO_ROWS)
+  for (std::size_t r = rows.infoFirst[WT_PRIM_DISPLACED]; r < rows.info.size(); r += WT_DISP_INFO_ROWS) {
     rows.info[r][2] += std::uint32_t(boxFirst);
+    if (rows.info[r][3] != ~0u) rows.info[r][3] += std::uint32_t(boxFirst);
+  }
   for (std::size_t mi = 0; mi < meshes; ++mi)
     if (displacedMeshUsable(scene.displacedMeshes[mi])) {
       data[WT_DISP_MESH_ROWS * mi + 1].z = std::bit_cast<float>(std::uint32_t(floatBase + texelWord[mi]));

@@ -1,7 +1,9 @@
 #include "render/light_list.h"
 
+#include "bvh/parallel.h"
 #include "render/light_tree.h"
 
+#include <atomic>
 #include <cmath>
 #include <numbers>
 
@@ -295,7 +297,19 @@ LightList buildLightList(const Scene& scene, const SceneBuffers& buffers, double
                               std::numbers::pi * area * luminance(le));
     l->position = {sphere.center.x, sphere.center.y, sphere.center.z, sphere.radius};
   }
-  for (const SceneBuffers::SurfaceEmitter& s : buffers.surfaceEmitters()) {
+  // the displaced base triangles' areas first, on every thread: each from
+  // its own micro-vertices alone, so the same values on any thread count
+  const std::vector<SceneBuffers::SurfaceEmitter>& emitters = buffers.surfaceEmitters();
+  std::vector<double> displacedAreas(emitters.size(), 0.0);
+  std::atomic<std::size_t> nextEmitter{0};
+  bvh_detail::runTeam(int(std::min<std::size_t>(std::size_t(bvh_detail::resolveThreads(0)), emitters.size())),
+                      [&](int, int, bvh_detail::Barrier&) {
+                        for (std::size_t k; (k = nextEmitter.fetch_add(1, std::memory_order_relaxed)) < emitters.size();)
+                          if (primType(emitters[k].id) == WT_PRIM_DISPLACED)
+                            displacedAreas[k] = displacedArea(scene.displacedMeshes[emitters[k].source], emitters[k].element);
+                      });
+  for (std::size_t k = 0; k < emitters.size(); ++k) {
+    const SceneBuffers::SurfaceEmitter& s = emitters[k];
     const bool displaced = primType(s.id) == WT_PRIM_DISPLACED;
     const std::uint32_t material =
         displaced ? scene.displacedMeshes[s.source].material : scene.sdfGrids[s.source].material;
@@ -305,7 +319,7 @@ LightList buildLightList(const Scene& scene, const SceneBuffers& buffers, double
     // cell's mean face area each (a weight only: sampling stays unbiased)
     double area;
     if (displaced) {
-      area = displacedArea(scene.displacedMeshes[s.source], s.element);
+      area = displacedAreas[k];
     } else {
       const double volume = std::fabs(glm::determinant(glm::dmat3(scene.sdfGrids[s.source].latticeToScene)));
       area = double(s.element) * std::cbrt(volume * volume);

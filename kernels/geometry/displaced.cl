@@ -5,7 +5,10 @@
 // surface is the level-L micro-mesh: the base triangle's barycentric domain
 // cut into 4^L micro-triangles (2^L per edge, WT_PRIM_DISPLACED and the rows
 // in shared/types.h), each micro-vertex displaced exactly, each
-// micro-triangle flat. It is never stored: the ray walks the quadtree of
+// micro-triangle flat. It is never stored, only each micro-vertex's d where
+// the boxes below are exact (a float a vertex, computed on the host by the
+// same float operations as disp_sample, so the same bits, and read instead
+// of four texels): the ray walks the quadtree of
 // sub-triangles (each splits into four at its edge midpoints), testing each
 // sub-triangle's box, and tests the micro-triangles of the sub-triangles
 // it reaches at the finest level, four at a time (triangle_test4_lanes).
@@ -49,6 +52,7 @@ typedef struct DispTri {
   float3 p[3];   ///< positions, world
   float3 n[3];   ///< normals as stored (unit at the corners; interpolated linearly)
   float2 uv[3];  ///< texture coordinates
+  __global const float* d;  ///< d at every micro-vertex, row by row (j), as the map gives it; null: sample the map
 } DispTri;
 
 inline DispMesh disp_mesh(__global const float4* rows, uint mesh_row) {
@@ -69,8 +73,12 @@ inline DispMesh disp_mesh(__global const float4* rows, uint mesh_row) {
   return m;
 }
 
-inline DispTri disp_tri(__global const float4* rows, uint4 corners) {
+/// Base triangle `tri`'s corners and stored displacements (its WT_DISP_INFO_ROWS prim_info rows).
+inline DispTri disp_tri(__global const float4* rows, __global const uint4* tri) {
   DispTri t;
+  uint stored = tri[0].w;
+  t.d = stored == 0xffffffffu ? 0 : (__global const float*)(rows + stored);
+  uint4 corners = tri[1];
   uint idx[3] = {corners.x, corners.y, corners.z};
   for (int k = 0; k < 3; ++k) {
     float4 a = rows[idx[k]], b = rows[idx[k] + 1u];
@@ -111,29 +119,28 @@ inline float disp_sample(DispMesh m, float2 uv) {
   return (a * (1.0f - fx) + b * fx) * (1.0f - fy) + (c * (1.0f - fx) + d * fx) * fy;
 }
 
-/// The base surface at lattice point (i, j) of 2^L per edge (weights
-/// (n - i - j, i, j) / n on corners a, b, c): position, normal, uv. The
-/// same operations in the same order for every triangle, contraction off:
-/// a point on a shared edge is the same bits from both sides.
-inline void disp_base(DispTri t, int n, float inv_n, int i, int j, float3* p, float3* nrm, float2* uv) {
+/// The displaced micro-vertex at lattice point (i, j) of 2^L per edge
+/// (weights (n - i - j, i, j) / n on corners a, b, c): the base position
+/// moved by d along the base normal. The same operations in the same order
+/// for every triangle, contraction off: a point on a shared edge is the
+/// same bits from both sides.
+inline float3 disp_vertex(DispMesh m, DispTri t, int n, float inv_n, int i, int j) {
 #pragma OPENCL FP_CONTRACT OFF
   float wa = (float)(n - i - j) * inv_n, wb = (float)i * inv_n, wc = (float)j * inv_n;
   float3 pa = wa * t.p[0], pb = wb * t.p[1], pc = wc * t.p[2];
-  *p = (pa + pb) + pc;
+  float3 p = (pa + pb) + pc;
   float3 na = wa * t.n[0], nb = wb * t.n[1], nc = wc * t.n[2];
-  *nrm = (na + nb) + nc;
-  float2 ua = wa * t.uv[0], ub = wb * t.uv[1], uc = wc * t.uv[2];
-  *uv = (ua + ub) + uc;
-}
-
-/// The displaced micro-vertex at lattice point (i, j).
-inline float3 disp_vertex(DispMesh m, DispTri t, int n, float inv_n, int i, int j) {
-#pragma OPENCL FP_CONTRACT OFF
-  float3 p, nrm;
-  float2 uv;
-  disp_base(t, n, inv_n, i, j, &p, &nrm, &uv);
-  // no NaN here: the host wrote NaN texels as 0 (gatherDisplaced)
-  float d = m.scale * disp_sample(m, uv) + m.offset;
+  float3 nrm = (na + nb) + nc;
+  float d;
+  if (t.d) {
+    // the host's d, the same float operations on the same uv as below (gatherDisplaced): no map read
+    d = t.d[j * (2 * n + 3 - j) / 2 + i];
+  } else {
+    float2 ua = wa * t.uv[0], ub = wb * t.uv[1], uc = wc * t.uv[2];
+    float2 uv = (ua + ub) + uc;
+    // no NaN here: the host wrote NaN texels as 0 (gatherDisplaced)
+    d = m.scale * disp_sample(m, uv) + m.offset;
+  }
   float3 dn = d * nrm;
   return p + dn;
 }
@@ -190,6 +197,10 @@ inline bool disp_leaf_hit(DispMesh m, DispTri t, int n, float inv_n, int2 c0, in
   return true;
 }
 
+// Larger and smaller of two distances, without fmax and fmin's NaN rules (no NaN here: finite boxes, inv_d finite)
+inline float4 disp_max4(float4 a, float4 b) { return a > b ? a : b; }
+inline float4 disp_min4(float4 a, float4 b) { return a < b ? a : b; }
+
 /// Ray (o, d) against displaced base triangle `tri` (its WT_DISP_INFO_ROWS
 /// prim_info rows) in (tmin, tmax): the nearest micro-triangle hit, its t,
 /// and the hit's lattice coordinates (level-L units) in *li, *lj, which
@@ -201,7 +212,7 @@ inline bool displaced_intersect(__global const float4* rows, __global const uint
                                 float tmin, float tmax, bool any_hit, float* t_hit, float* li, float* lj) {
   uint4 info = tri[0];
   DispMesh m = disp_mesh(rows, info.y);
-  DispTri t = disp_tri(rows, tri[1]);
+  DispTri t = disp_tri(rows, tri);
   uint level_l = m.level, depth = m.depth;
   int n = 1 << level_l;
   float inv_n = 1.0f / (float)n;
@@ -224,6 +235,7 @@ inline bool displaced_intersect(__global const float4* rows, __global const uint
   __global const uchar4* blocks = (__global const uchar4*)(box_rows + 2);
   float3 inv_d = 1.0f / select(d, copysign((float3)(1e-30f), d), fabs(d) < 1e-30f);
   float widen = 1.0f + 2.0f * spawn_gamma(3);
+  // at most 3 pending per level and 4 pushed, and a push writes all four children (the misses past the top)
   uint stack[3 * WT_DISP_MAX_LEVEL + 4], stack_index[3 * WT_DISP_MAX_LEVEL + 4];
   float stack_t[3 * WT_DISP_MAX_LEVEL + 4];
   float4 stack_lo[3 * WT_DISP_MAX_LEVEL + 4], stack_hi[3 * WT_DISP_MAX_LEVEL + 4];
@@ -251,63 +263,56 @@ inline bool displaced_intersect(__global const float4* rows, __global const uint
     uint ci = node & 8191u, cj = (node >> 13) & 8191u;
     uint index = stack_index[sp];
     float4 plo = stack_lo[sp], phi = stack_hi[sp];
-    float te[4] = {stack_t[sp], stack_t[sp], stack_t[sp], stack_t[sp]};
-    float4 clo[4], chi[4];
-    int order[4] = {0, 1, 2, 3};
-    int count = 4;
+    float4 lx, ly, lz, hx, hy, hz, tn;
+    int4 ok;
     if (level < depth) {
       // the four children's boxes: parent low + q step for the lows, parent high - (255 - q) step for the
       // highs, so that 0 and 255 give the parent's own sides exactly
       __global const uchar4* q = blocks + 6u * index;
       float4 step = (phi - plo) * (1.0f / 255.0f);
-      float4 lx = plo.x + convert_float4(q[0]) * step.x, ly = plo.y + convert_float4(q[1]) * step.y,
-             lz = plo.z + convert_float4(q[2]) * step.z;
-      float4 hx = phi.x - (255.0f - convert_float4(q[3])) * step.x,
-             hy = phi.y - (255.0f - convert_float4(q[4])) * step.y,
-             hz = phi.z - (255.0f - convert_float4(q[5])) * step.z;
+      lx = plo.x + convert_float4(q[0]) * step.x, ly = plo.y + convert_float4(q[1]) * step.y,
+      lz = plo.z + convert_float4(q[2]) * step.z;
+      hx = phi.x - (255.0f - convert_float4(q[3])) * step.x, hy = phi.y - (255.0f - convert_float4(q[4])) * step.y,
+      hz = phi.z - (255.0f - convert_float4(q[5])) * step.z;
       float4 tx0 = (lx - o.x) * inv_d.x, tx1 = (hx - o.x) * inv_d.x;
       float4 ty0 = (ly - o.y) * inv_d.y, ty1 = (hy - o.y) * inv_d.y;
       float4 tz0 = (lz - o.z) * inv_d.z, tz1 = (hz - o.z) * inv_d.z;
-      float4 tn = fmax(fmax(fmin(tx0, tx1), fmin(ty0, ty1)), fmax(fmin(tz0, tz1), (float4)(tmin)));
-      float4 tf = fmin(fmin(fmax(tx0, tx1), fmax(ty0, ty1)), fmin(fmax(tz0, tz1), (float4)(best))) * widen;
-      float tna[4], lxa[4], lya[4], lza[4], hxa[4], hya[4], hza[4];
-      int hit[4];
-      vstore4(tn, 0, tna);
-      vstore4(lx, 0, lxa), vstore4(ly, 0, lya), vstore4(lz, 0, lza);
-      vstore4(hx, 0, hxa), vstore4(hy, 0, hya), vstore4(hz, 0, hza);
-      int4 ok = tn <= tf;
-      vstore4(ok, 0, hit);
-      // the children hit, farthest first (pushed first, popped last)
-      count = 0;
-      for (int k = 0; k < 4; ++k) {
-        if (!hit[k]) continue;
-        clo[k] = (float4)(lxa[k], lya[k], lza[k], 0.0f);
-        chi[k] = (float4)(hxa[k], hya[k], hza[k], 0.0f);
-        te[k] = tna[k];
-        int at = count++;
-        while (at > 0 && te[order[at - 1]] < te[k]) {
-          order[at] = order[at - 1];
-          --at;
-        }
-        order[at] = k;
-      }
+      tn = disp_max4(disp_max4(disp_min4(tx0, tx1), disp_min4(ty0, ty1)), disp_max4(disp_min4(tz0, tz1), (float4)(tmin)));
+      float4 tf = disp_min4(disp_min4(disp_max4(tx0, tx1), disp_max4(ty0, ty1)),
+                            disp_min4(disp_max4(tz0, tz1), (float4)(best))) * widen;
+      ok = tn <= tf;
     } else {
       // below the stored depth: every child, in the parent's box, untested
-      for (int k = 0; k < 4; ++k) {
-        clo[k] = plo;
-        chi[k] = phi;
-      }
+      lx = (float4)(plo.x), ly = (float4)(plo.y), lz = (float4)(plo.z);
+      hx = (float4)(phi.x), hy = (float4)(phi.y), hz = (float4)(phi.z);
+      tn = (float4)(stack_t[sp]);
+      ok = (int4)(-1);
     }
-    for (int r = 0; r < count; ++r) {
-      int k = order[r];
+    // the children hit, farthest first (pushed first, popped last), ties in child order: child k goes
+    // to place sp + rank, rank the hit children before it; the others are written past the top, unused
+    float t4[4] = {tn.s0, tn.s1, tn.s2, tn.s3};
+    int h4[4] = {ok.s0 != 0, ok.s1 != 0, ok.s2 != 0, ok.s3 != 0};
+    int count = h4[0] + h4[1] + h4[2] + h4[3];
+    float lo4[3][4] = {{lx.s0, lx.s1, lx.s2, lx.s3}, {ly.s0, ly.s1, ly.s2, ly.s3}, {lz.s0, lz.s1, lz.s2, lz.s3}};
+    float hi4[3][4] = {{hx.s0, hx.s1, hx.s2, hx.s3}, {hy.s0, hy.s1, hy.s2, hy.s3}, {hz.s0, hz.s1, hz.s2, hz.s3}};
+    int misses = 0;
+#pragma unroll
+    for (int k = 0; k < 4; ++k) {
+      int rank = 0;
+#pragma unroll
+      for (int j = 0; j < 4; ++j)
+        rank += (j != k) & h4[j] & ((t4[j] > t4[k]) | ((t4[j] == t4[k]) & (j < k)));
+      int at = sp + (h4[k] ? rank : count + misses);
+      misses += 1 - h4[k];
       uint di = (uint)(inverted ? inv_di[k] : up_di[k]), dj = (uint)(inverted ? inv_dj[k] : up_dj[k]);
       uint kid_inv = (k == 3) ? 1u - inverted : inverted;
-      stack[sp] = disp_node(level + 1u, kid_inv, 2u * ci + di, 2u * cj + dj);
-      stack_index[sp] = 4u * index + 1u + (uint)k;
-      stack_t[sp] = te[k];
-      stack_lo[sp] = clo[k];
-      stack_hi[sp++] = chi[k];
+      stack[at] = disp_node(level + 1u, kid_inv, 2u * ci + di, 2u * cj + dj);
+      stack_index[at] = 4u * index + 1u + (uint)k;
+      stack_t[at] = t4[k];
+      stack_lo[at] = (float4)(lo4[0][k], lo4[1][k], lo4[2][k], 0.0f);
+      stack_hi[at] = (float4)(hi4[0][k], hi4[1][k], hi4[2][k], 0.0f);
     }
+    sp += count;
   }
   if (found) *t_hit = best;
   return found;
@@ -370,7 +375,7 @@ inline void displaced_surface(__global const float4* rows, __global const uint4*
                               float3* p_error, float3* ng, float3* ns, float2* uv, float3* dpdu) {
   uint4 info = tri[0];
   DispMesh m = disp_mesh(rows, info.y);
-  DispTri t = disp_tri(rows, tri[1]);
+  DispTri t = disp_tri(rows, tri);
   int n = 1 << m.level;
   float inv_n = 1.0f / (float)n;
   int2 c[3];
@@ -423,7 +428,7 @@ inline bool displaced_sample_emitter(__global const float4* rows, __global const
                                      float u2, bool two_sided, float3* wi, float* distance, float3* target,
                                      float* pdf) {
   DispMesh m = disp_mesh(rows, tri[0].y);
-  DispTri t = disp_tri(rows, tri[1]);
+  DispTri t = disp_tri(rows, tri);
   int n = 1 << m.level;
   float inv_n = 1.0f / (float)n;
   float su = sqrt(u1);
@@ -459,7 +464,7 @@ inline bool displaced_sample_emitter(__global const float4* rows, __global const
 inline float displaced_emitter_pdf(__global const float4* rows, __global const uint4* tri, float3 origin, float3 p,
                                    float3 ng, float li, float lj) {
   DispMesh m = disp_mesh(rows, tri[0].y);
-  DispTri t = disp_tri(rows, tri[1]);
+  DispTri t = disp_tri(rows, tri);
   int n = 1 << m.level;
   float inv_n = 1.0f / (float)n;
   float3 s0, s1, s2;

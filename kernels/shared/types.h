@@ -89,7 +89,8 @@ typedef struct WtBvh4Node {
 #define WT_INSTANCE_MIRRORED 1u  ///< the transform's determinant is negative (the copy's corners 1 and 2 swapped)
 #define WT_INSTANCE_PRIMITIVES 2u  ///< the root is a node of prim_nodes (spheres, curves), not of nodes (triangles)
 /// A base triangle of a displaced mesh (kernels/geometry/displaced.cl),
-/// intersected as 4^L micro-triangles that are never stored. prim_data: per
+/// intersected as 4^L micro-triangles that are never stored (their
+/// corners' displacements are, up to level WT_DISP_MAX_DEPTH + 1). prim_data: per
 /// mesh WT_DISP_MESH_ROWS rows: (scale, offset, map width, map height),
 /// then as uint bits (L, D the deepest level with stored boxes, the
 /// texels' first float, the palette's first float or ~0); then per vertex WT_DISP_VERTEX_ROWS rows
@@ -99,13 +100,17 @@ typedef struct WtBvh4Node {
 /// children are 4k + 1 to 4k + 4) a block of 24 bytes, its four children's
 /// boxes relative to its own (uchar4 rows: low x, y, z, high x, y, z; low =
 /// parent low + q step, high = parent high - (255 - q) step, step = parent
-/// extent / 255), padded to a whole row; then the maps' texels: floats
+/// extent / 255), padded to a whole row, then where L <= D + 1 (the boxes
+/// exact) the displacement d of every micro-vertex (i, j) of the level-L
+/// lattice, row j after row j - 1 (index j (2^(L+1) + 3 - j) / 2 + i),
+/// padded to a whole row; then the maps' texels: floats
 /// row by row, or for a map of at most 256 distinct values its palette
 /// (the values' bits, sorted) and a
 /// byte a texel in 8 x 8 tiles, rows of ceil(w / 8) tiles. Float
 /// offsets and row indices count from the type's first row. prim_info per
 /// base triangle, WT_DISP_INFO_ROWS rows: (material, its mesh's first row,
-/// its boxes' first row, 0), then its corners' first rows in winding order
+/// its boxes' first row, its displacements' first row or ~0 for none),
+/// then its corners' first rows in winding order
 /// and its index in its mesh (mesh = first row / WT_DISP_MESH_ROWS).
 #define WT_PRIM_DISPLACED 4u
 #define WT_DISP_MESH_ROWS 2       ///< prim_data rows per displaced mesh

@@ -250,15 +250,24 @@ TEST(DisplacedMeshes, LevelsBelowTheStoredBoxesMatchTheReference) {
   }
 }
 
+/// The test sphere at level L with a map of a float per texel (every texel
+/// its own value) and one of an 8-bit image's values (stored as bytes).
+std::pair<Scene, Scene> floatAndByteSpheres(int level) {
+  Scene floats = testSphere(level), bytes = floats;
+  std::vector<float>& fine = floats.displacedMeshes[0].map;
+  for (std::size_t i = 0; i < fine.size(); ++i) fine[i] += float(i) * 0x1p-20f;
+  std::vector<float>& coarse = bytes.displacedMeshes[0].map;
+  for (float& v : coarse) v = std::round(std::clamp(v, 0.0f, 1.0f) * 255.0f) / 255.0f;
+  return {floats, bytes};
+}
+
 TEST(DisplacedMeshes, EightBitMapsAreStoredAsBytesAndDrawTheSameSurface) {
   // a map of at most 256 distinct values (an 8-bit image's) is stored as
   // a byte a texel and a palette of the values, a map of more as floats:
   // both draw the surface the reference samples from the values themselves
-  Scene floats = testSphere(3), bytes = floats;
-  std::vector<float>& fine = floats.displacedMeshes[0].map;
-  for (std::size_t i = 0; i < fine.size(); ++i) fine[i] += float(i) * 0x1p-20f;  // every texel its own value
-  std::vector<float>& coarse = bytes.displacedMeshes[0].map;
-  for (float& v : coarse) v = std::round(std::clamp(v, 0.0f, 1.0f) * 255.0f) / 255.0f;
+  auto [floats, bytes] = floatAndByteSpheres(3);
+  const std::vector<float>& fine = floats.displacedMeshes[0].map;
+  const std::vector<float>& coarse = bytes.displacedMeshes[0].map;
   std::vector<float> distinct(coarse);
   std::sort(distinct.begin(), distinct.end());
   distinct.erase(std::unique(distinct.begin(), distinct.end()), distinct.end());
@@ -271,6 +280,48 @@ TEST(DisplacedMeshes, EightBitMapsAreStoredAsBytesAndDrawTheSameSurface) {
     SCOPED_TRACE(scene == &floats ? "float texels" : "byte texels");
     expectKernelMatchesReference(*scene, 33, -1, 1500);
   }
+}
+
+TEST(DisplacedMeshes, StoredDisplacementsAreTheKernelsMapSamplesBitForBit) {
+  // where the boxes are exact (L <= D + 1) the host stores d at every
+  // micro-vertex and the walk reads no map: every micro-vertex of every
+  // base triangle from the stored d is the one the kernel's own sample of
+  // the map gives, bit for bit, for float and byte texels. Where the boxes
+  // stop above L - 1 nothing is stored.
+  auto [floats, bytes] = floatAndByteSpheres(4);
+  for (const Scene* scene : {&floats, &bytes}) {
+    SCOPED_TRACE(scene == &floats ? "float texels" : "byte texels");
+    const TypeRows rows = typeRows(*scene);
+    const int n = 1 << displacedLevel(scene->displacedMeshes[0]);
+    std::vector<cl_uint4> queries;
+    for (std::uint32_t t = 0; t < rows.count; ++t) {
+      EXPECT_NE(rows.info[WT_DISP_INFO_ROWS * t][3], ~0u) << "base triangle " << t;
+      for (int j = 0; j <= n; ++j)
+        for (int i = 0; i + j <= n; ++i)
+          for (cl_uint fromMap : {0u, 1u}) queries.push_back({{t, cl_uint(i), cl_uint(j), fromMap}});
+    }
+    ASSERT_EQ(queries.size(), std::size_t(rows.count) * (n + 1) * (n + 2));
+    Context& ctx = test::deviceContext();
+    cl::Buffer dataBuf = input(rows.data), infoBuf = input(rows.info), qBuf = input(queries);
+    cl::Buffer out(ctx.context(), CL_MEM_WRITE_ONLY, queries.size() * sizeof(cl_float4));
+    cl::Kernel k(test::testProgram("displaced_tests.cl"), "test_displaced_vertex");
+    k.setArg(0, cl_uint(queries.size())), k.setArg(1, dataBuf), k.setArg(2, infoBuf), k.setArg(3, qBuf),
+        k.setArg(4, out);
+    ctx.launch("test_displaced_vertex", k, queries.size());
+    std::vector<cl_float4> got(queries.size());
+    ctx.queue().enqueueReadBuffer(out, CL_TRUE, 0, got.size() * sizeof(cl_float4), got.data());
+    int differ = 0;
+    for (std::size_t q = 0; q < got.size(); q += 2)
+      if (std::memcmp(got[q].s, got[q + 1].s, 3 * sizeof(float)) != 0 && ++differ <= 5)
+        ADD_FAILURE() << "base triangle " << queries[q].s[0] << " vertex (" << queries[q].s[1] << ", "
+                      << queries[q].s[2] << "): stored (" << got[q].s[0] << ", " << got[q].s[1] << ", " << got[q].s[2]
+                      << ") against the map's (" << got[q + 1].s[0] << ", " << got[q + 1].s[1] << ", "
+                      << got[q + 1].s[2] << ")";
+    EXPECT_EQ(differ, 0);
+  }
+  const TypeRows shallow = typeRows(floats, 1);
+  for (std::uint32_t t = 0; t < shallow.count; ++t)
+    EXPECT_EQ(shallow.info[WT_DISP_INFO_ROWS * t][3], ~0u) << "base triangle " << t << " at D 1 < L - 1";
 }
 
 /// A base triangle's stored boxes decoded as shared/types.h lays them out
