@@ -198,13 +198,20 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
   bindTracing(m_connect);
   bindTracing(m_connectPacket);
   bindTracing(m_connectStream);
-  // connect weighs the thin walls a shadow ray crosses by their materials
+  // connect weighs the thin walls a shadow ray crosses by their materials where it meets them
   if (built.thinShadows) {
     auto bindWalls = [&](auto& k) {
       k.set("thin_materials", m_scene->materials)
           .set("thin_tri_info", m_scene->triangleInfo)
           .set("thin_normals", m_scene->normals)
-          .set("thin_pbr_table", m_pbrTable);
+          .set("thin_pbr_table", m_pbrTable)
+          .set("thin_vertex_uv", m_scene->vertexUv)
+          .set("thin_vertex_color", m_scene->vertexColor)
+          .set("thin_vertex_tangent", m_scene->vertexTangent)
+          .set("thin_material_textures", m_scene->materialTextures)
+          .set("thin_textures", m_scene->textures)
+          .set("thin_texture_levels", m_scene->textureLevels)
+          .set("thin_texels", m_scene->texels);
     };
     bindWalls(m_connect);
     bindWalls(m_connectPacket);

@@ -324,11 +324,11 @@ TEST(FeatureSwitches, EachFeatureTurnsOnItsSwitchOnly) {
   pane.materials[0] = withTransmission(makePbrMaterial(glm::vec3(0.5f), 0.0f, 0.0f), 1.0f, 1.5f, true);
   EXPECT_EQ(changed(pane), (std::vector<std::string>{"-D WT_HAS_PBR=1", "-D WT_HAS_TRANSMISSION=1",
                                                      "-D WT_HAS_THIN_SHADOWS=1"}));
-  // vertex colours would tint the pane per vertex: its shadow rays stop
+  // vertex colours tint the pane per vertex: its shadow rays still cross it, reading them (connect.cl)
   Scene tinted = pane;
   tinted.colors.assign(tinted.positions.size(), glm::vec4(1.0f));
   EXPECT_EQ(changed(tinted), (std::vector<std::string>{"-D WT_HAS_PBR=1", "-D WT_HAS_TRANSMISSION=1",
-                                                       "-D WT_HAS_VERTEX_COLORS=1"}));
+                                                       "-D WT_HAS_THIN_SHADOWS=1", "-D WT_HAS_VERTEX_COLORS=1"}));
 }
 
 TEST(FeatureSwitches, NeverDependOnTheImageSizeOrTheSampleCount) {
