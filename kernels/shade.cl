@@ -30,6 +30,16 @@ inline float shade_emission_weight(WtFrameParams frame, float pdf_bsdf, float pd
   return mis_weight(pdf_bsdf, pdf_light, frame.flags);
 }
 
+#if WT_HAS_TRANSMISSION
+/// What medium `id` (WT_MEDIUM_NONE: air) absorbs along `distance` (world
+/// units; an infinite one crosses no absorbing medium unblocked: 1).
+inline float3 shade_absorption(__global const WtMaterial* materials, uint id, float distance) {
+  if (id == WT_MEDIUM_NONE || isinf(distance)) return (float3)(1.0f);
+  float3 sigma = vec4_xyz(materials[id].volume);
+  return sigma.x > 0.0f || sigma.y > 0.0f || sigma.z > 0.0f ? exp(-sigma * distance) : (float3)(1.0f);
+}
+#endif
+
 /// With WT_FLAG_CHECK_NONFINITE, note the first non-finite value any path
 /// makes (which path, bounce and quantity) for the host to stop at.
 inline void shade_check_finite(WtFrameParams frame, __global uint* counters, uint path, float3 v, uint what) {
@@ -364,6 +374,14 @@ WT_KERNEL void shade(WtFrameParams frame, WtEnvironment environment, __global co
                     ? 1.0f
                     : mis_weight(pdf_light, pdf_bsdf, frame.flags);
       float3 contribution = beta * f_cos * s.radiance * (w / pdf_light);
+#if WT_HAS_TRANSMISSION
+      // the medium on the shadow ray's side absorbs along it, as along a path's segment
+      // (it crosses no volume boundary: those block it)
+      contribution *= shade_absorption(materials,
+                                       boundary ? (dot(ng, s.wi) > 0.0f ? crossing.near_id : crossing.far_id)
+                                                : (current >= 0 ? stack.id[current] : WT_MEDIUM_NONE),
+                                       s.distance);
+#endif
       shade_check_finite(frame, counters, path, contribution, WT_NONFINITE_LIGHT);
       if (contribution.x > 0.0f || contribution.y > 0.0f || contribution.z > 0.0f) {
         // Aim from the offset origin at the target (the sampled point pushed

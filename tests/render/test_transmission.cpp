@@ -318,5 +318,34 @@ TEST(Transmission, ShadowRaysReadATexturedOrVertexColouredPanesTintWhereTheyCros
   }
 }
 
+// Shadow rays inside an absorbing volume (shade.cl): a floor and a lamp
+// inside a large box of absorbing index-1 glass, the camera inside too.
+// Light reaching the floor crosses the medium either way, so NEE (with MIS,
+// and alone) must give what BSDF sampling alone gives, which absorbs along
+// every segment; without absorption along its shadow rays NEE is brighter.
+TEST(Transmission, ShadowRaysInsideAnAbsorbingVolumeAreAbsorbed) {
+  Scene scene = test::makeFloor(1.0f, 0.0f, makeMaterial(glm::vec3(0.8f)));
+  appendScene(scene, test::makeFloor(0.35f, 1.0f, makeMaterial(glm::vec3(0.0f), glm::vec3(8.0f)), /*faceDown=*/true));
+  appendScene(scene, makeBox(glm::vec3(-1.5f, -0.5f, -1.5f), glm::vec3(1.5f, 1.5f, 2.5f),
+                             withTransmission(makePbrMaterial(glm::vec3(1.0f), 0.0f, 0.0f), 1.0f, 1.0f, false,
+                                              glm::vec3(0.2f, 0.6f, 1.2f))));
+  CameraDesc cam;
+  cam.cameraToWorld = glm::inverse(glm::lookAt(glm::vec3(0.0f, 0.3f, 1.6f), glm::vec3(0.0f, 0.0f, 0.0f), glm::vec3(0, 1, 0)));
+  cam.yfov = 0.8f;
+  scene.camera = cam;
+  RenderSettings s = settings();
+  s.width = s.height = 32;
+  s.maxBounces = 4;
+  s.useNee = false;
+  Image reference = render(scene, s, 256);
+  EXPECT_GT(test::blockStat(reference, 0, 16, 32, 32, 0).mean, 0.05) << "the floor is lit";
+  s.useNee = true;
+  for (bool mis : {true, false}) {
+    s.useMis = mis;
+    test::expectSameImage(reference, render(scene, s, 32), 4, 5.0,
+                          mis ? "NEE and MIS inside the medium" : "NEE alone inside the medium");
+  }
+}
+
 }  // namespace
 }  // namespace wt
