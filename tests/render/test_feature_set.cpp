@@ -329,6 +329,14 @@ TEST(FeatureSwitches, EachFeatureTurnsOnItsSwitchOnly) {
   tinted.colors.assign(tinted.positions.size(), glm::vec4(1.0f));
   EXPECT_EQ(changed(tinted), (std::vector<std::string>{"-D WT_HAS_PBR=1", "-D WT_HAS_TRANSMISSION=1",
                                                        "-D WT_HAS_THIN_SHADOWS=1", "-D WT_HAS_VERTEX_COLORS=1"}));
+  // and so do textures (they only scale the roughness down); a rough pane still blocks them
+  Scene texturedPane = pane;
+  test::setBaseColorTexture(texturedPane, 0, test::addCheckerTexture(texturedPane, 4));
+  EXPECT_EQ(changed(texturedPane), (std::vector<std::string>{"-D WT_HAS_PBR=1", "-D WT_HAS_TRANSMISSION=1",
+                                                             "-D WT_HAS_THIN_SHADOWS=1", "-D WT_HAS_TEXTURES=1"}));
+  texturedPane.materials[0].roughness = 0.2f;
+  EXPECT_EQ(changed(texturedPane), (std::vector<std::string>{"-D WT_HAS_PBR=1", "-D WT_HAS_TRANSMISSION=1",
+                                                             "-D WT_HAS_TEXTURES=1"}));
 }
 
 TEST(FeatureSwitches, NeverDependOnTheImageSizeOrTheSampleCount) {
