@@ -478,6 +478,19 @@ inline void prims_packet_trace_occluded(BvhScene scene, GeometryScene g, const u
   bool any_open = false;
   for (uint l = 0; l < lanes; ++l) any_open = any_open || !blocked[l];
   if (!any_open || g.header.node_count == 0) return;
+#if WT_HAS_CURVES && !WT_HAS_INSTANCES
+  // flat curves: each ray alone, as bvh_prims_occluded (shadow rays through
+  // dense hair part at once; the packet's box tests then cost more than the
+  // lanes share)
+  for (uint l = 0; l < lanes; ++l) {
+    if (blocked[l]) continue;
+    uint i = index[l];
+    float4 o = ray_o[i], d = ray_d[i];
+    uint2 ab = skip_ab ? skip_ab[i] : (uint2)(skip_a[i], WT_NO_HIT);
+    if (bvh_prims_occluded(scene, g, o.xyz, d.xyz, o.w, d.w, ab.x, ab.y, WT_NO_HIT)) blocked[l] = -1;
+  }
+  return;
+#endif
   PrimPacket p;
   float tmax[WT_PACKET];
   uint skip_b[WT_PACKET], skip_instance[WT_PACKET];
