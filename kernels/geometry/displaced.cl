@@ -205,22 +205,24 @@ inline float4 disp_min4(float4 a, float4 b) { return a < b ? a : b; }
 /// prim_info rows) in (tmin, tmax): the nearest micro-triangle hit, its t,
 /// and the hit's lattice coordinates (level-L units) in *li, *lj, which
 /// displaced_surface takes back. `rows`: the type's first prim_data row.
-/// The base triangle's own box is the BVH's: the walk starts at its children.
+/// The base triangle's own box (the root's, stored) is tested first: a BVH
+/// leaf bounds several base triangles. The corners are read only when the
+/// walk reaches a leaf (most base triangles a ray enters are left above).
 /// With `any_hit` (shadow rays) the first micro-triangle hit found in the
 /// interval ends the walk, not necessarily the nearest.
 inline bool displaced_intersect(__global const float4* rows, __global const uint4* tri, float3 o, float3 d,
                                 float tmin, float tmax, bool any_hit, float* t_hit, float* li, float* lj) {
   uint4 info = tri[0];
   DispMesh m = disp_mesh(rows, info.y);
-  DispTri t = disp_tri(rows, tri);
   uint level_l = m.level, depth = m.depth;
   int n = 1 << level_l;
   float inv_n = 1.0f / (float)n;
-  RayShear shear = triangle_ray_shear(d);
   float best = tmax;
   bool found = false;
   if (level_l == 0u) {
     // one flat triangle: the base triangle's corners displaced
+    DispTri t = disp_tri(rows, tri);
+    RayShear shear = triangle_ray_shear(d);
     float3 s0 = disp_vertex(m, t, n, inv_n, 0, 0), s1 = disp_vertex(m, t, n, inv_n, 1, 0),
            s2 = disp_vertex(m, t, n, inv_n, 0, 1);
     float th, b1, b2;
@@ -235,6 +237,19 @@ inline bool displaced_intersect(__global const float4* rows, __global const uint
   __global const uchar4* blocks = (__global const uchar4*)(box_rows + 2);
   float3 inv_d = 1.0f / select(d, copysign((float3)(1e-30f), d), fabs(d) < 1e-30f);
   float widen = 1.0f + 2.0f * spawn_gamma(3);
+  float4 root_lo = box_rows[0], root_hi = box_rows[1];
+  {
+    // a BVH leaf's box bounds several base triangles: this one's own first, before its corners are read
+    float3 t0 = (root_lo.xyz - o) * inv_d, t1 = (root_hi.xyz - o) * inv_d;
+    float3 near3 = fmin(t0, t1), far3 = fmax(t0, t1);
+    float enter = fmax(fmax(near3.x, near3.y), fmax(near3.z, tmin));
+    float leave = fmin(fmin(far3.x, far3.y), fmin(far3.z, best)) * widen;
+    if (!(enter <= leave)) return false;
+  }
+  // the corners and the shear only where a leaf is reached
+  DispTri t;
+  RayShear shear;
+  bool corners = false;
   // at most 3 pending per level and 4 pushed, and a push writes all four children (the misses past the top)
   uint stack[3 * WT_DISP_MAX_LEVEL + 4], stack_index[3 * WT_DISP_MAX_LEVEL + 4];
   float stack_t[3 * WT_DISP_MAX_LEVEL + 4];
@@ -243,8 +258,8 @@ inline bool displaced_intersect(__global const float4* rows, __global const uint
   stack[sp] = disp_node(0u, 0u, 0u, 0u);
   stack_index[sp] = 0u;
   stack_t[sp] = tmin;
-  stack_lo[sp] = box_rows[0];
-  stack_hi[sp++] = box_rows[1];
+  stack_lo[sp] = root_lo;
+  stack_hi[sp++] = root_hi;
   const int up_di[4] = {0, 1, 0, 0}, up_dj[4] = {0, 0, 1, 0};
   const int inv_di[4] = {1, 0, 1, 1}, inv_dj[4] = {0, 1, 1, 1};
   while (sp > 0) {
@@ -255,6 +270,11 @@ inline bool displaced_intersect(__global const float4* rows, __global const uint
     if (level + 1u == level_l) {
       int2 c[3];
       disp_node_corners(node, level_l, c);
+      if (!corners) {
+        t = disp_tri(rows, tri);
+        shear = triangle_ray_shear(d);
+        corners = true;
+      }
       found |= disp_leaf_hit(m, t, n, inv_n, c[0], c[1], c[2], o, shear, tmin, &best, li, lj);
       if (found && any_hit) break;
       continue;
