@@ -166,6 +166,32 @@ inline void disp_node_corners(uint node, uint level_l, int2* c) {
   }
 }
 
+/// The six micro-vertices q[0..5] of a leaf from the stored displacements,
+/// less o, in the shear's axis order: disp_vertex's float operations in
+/// the same order, one vertex a lane (the same bits as six calls).
+inline void disp_leaf_vertices(DispTri t, int n, float inv_n, const int2* q, float3 o, RayShear shear, float* x,
+                               float* y, float* z) {
+#pragma OPENCL FP_CONTRACT OFF
+  int8 i = (int8)(q[0].x, q[1].x, q[2].x, q[3].x, q[4].x, q[5].x, q[0].x, q[0].x);
+  int8 j = (int8)(q[0].y, q[1].y, q[2].y, q[3].y, q[4].y, q[5].y, q[0].y, q[0].y);
+  float8 wa = convert_float8((int8)(n) - i - j) * inv_n, wb = convert_float8(i) * inv_n, wc = convert_float8(j) * inv_n;
+  int8 at = j * ((int8)(2 * n + 3) - j) / 2 + i;
+  float8 d = (float8)(t.d[at.s0], t.d[at.s1], t.d[at.s2], t.d[at.s3], t.d[at.s4], t.d[at.s5], t.d[at.s0], t.d[at.s0]);
+  float8 px = (wa * t.p[0].x + wb * t.p[1].x) + wc * t.p[2].x;
+  float8 py = (wa * t.p[0].y + wb * t.p[1].y) + wc * t.p[2].y;
+  float8 pz = (wa * t.p[0].z + wb * t.p[1].z) + wc * t.p[2].z;
+  float8 nx = (wa * t.n[0].x + wb * t.n[1].x) + wc * t.n[2].x;
+  float8 ny = (wa * t.n[0].y + wb * t.n[1].y) + wc * t.n[2].y;
+  float8 nz = (wa * t.n[0].z + wb * t.n[1].z) + wc * t.n[2].z;
+  float8 ax = (px + d * nx) - o.x, ay = (py + d * ny) - o.y, az = (pz + d * nz) - o.z;
+  float8 sx = shear.kx == 0 ? ax : (shear.kx == 1 ? ay : az);
+  float8 sy = shear.ky == 0 ? ax : (shear.ky == 1 ? ay : az);
+  float8 sz = shear.kz == 0 ? ax : (shear.kz == 1 ? ay : az);
+  x[0] = sx.s0, x[1] = sx.s1, x[2] = sx.s2, x[3] = sx.s3, x[4] = sx.s4, x[5] = sx.s5;
+  y[0] = sy.s0, y[1] = sy.s1, y[2] = sy.s2, y[3] = sy.s3, y[4] = sy.s4, y[5] = sy.s5;
+  z[0] = sz.s0, z[1] = sz.s1, z[2] = sz.s2, z[3] = sz.s3, z[4] = sz.s4, z[5] = sz.s5;
+}
+
 /// The four micro-triangles of level L - 1 node `node` (corners c) against
 /// the ray, at once: the six micro-vertices (corners A, B, C, midpoints AB,
 /// AC, BC) displaced, the children's corner triples of `child_k` in the
@@ -174,11 +200,15 @@ inline bool disp_leaf_hit(DispMesh m, DispTri t, int n, float inv_n, int2 c0, in
                           RayShear shear, float tmin, float* best, float* li, float* lj) {
   int2 q[6] = {c0, c1, c2, (c0 + c1) / 2, (c0 + c2) / 2, (c1 + c2) / 2};
   float x[6], y[6], z[6];
-  for (int k = 0; k < 6; ++k) {
-    float3 a = disp_vertex(m, t, n, inv_n, q[k].x, q[k].y) - o;
-    x[k] = vec3_component(a, shear.kx);
-    y[k] = vec3_component(a, shear.ky);
-    z[k] = vec3_component(a, shear.kz);
+  if (t.d) {
+    disp_leaf_vertices(t, n, inv_n, q, o, shear, x, y, z);
+  } else {
+    for (int k = 0; k < 6; ++k) {
+      float3 a = disp_vertex(m, t, n, inv_n, q[k].x, q[k].y) - o;
+      x[k] = vec3_component(a, shear.kx);
+      y[k] = vec3_component(a, shear.ky);
+      z[k] = vec3_component(a, shear.kz);
+    }
   }
   // lanes: (A, AB, AC), (AB, B, BC), (AC, BC, C), (AB, AC, BC), as the quadtree's children
   TriangleLanes h = triangle_test4_lanes(
