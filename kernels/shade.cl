@@ -243,20 +243,21 @@ WT_KERNEL void shade(WtFrameParams frame, WtEnvironment environment, __global co
       uint leaf = emitter_leaf[prim];
       if (select > 0.0f && leaf != WT_LIGHT_NODE_NONE)
         select *= light_tree_pmf(light_tree, leaf, ray_o[path].xyz, prev_normal[path].xyz);
+      float3 p0, p1, p2;
 #if WT_HAS_QUAD_LIGHTS
       // half of a rectangle light: the pdf its sampler has, from the same corners
       uint quad = emitter_quad[prim];
       if (quad != WT_NO_QUAD) {
-        float3 c, e1, e2;
-        light_quad_rect(tri_verts, lights[quad], &c, &e1, &e2);
-        pdf_light = light_quad_pdf(select, ray_o[path].xyz, c, e1, e2, hit.x, dir, ng);
-      } else
-#endif
-      {
-        float3 p0, p1, p2;
+        light_quad_rect(tri_verts, lights[quad], &p0, &p1, &p2);
+        pdf_light = light_quad_pdf(select, ray_o[path].xyz, p0, p1, p2, hit.x, dir, ng);
+      } else {
         triangle_corners(tri_verts, prim, &p0, &p1, &p2);
         pdf_light = light_triangle_pdf(select, ray_o[path].xyz, p0, p1, p2, hit.x, dir, ng);
       }
+#else
+      triangle_corners(tri_verts, prim, &p0, &p1, &p2);
+      pdf_light = light_triangle_pdf(select, ray_o[path].xyz, p0, p1, p2, hit.x, dir, ng);
+#endif
     }
     float3 emitted = beta * le * shade_emission_weight(frame, pdf_prev, pdf_light);
     shade_check_finite(frame, counters, path, emitted, WT_NONFINITE_EMISSION);
