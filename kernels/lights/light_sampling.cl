@@ -158,36 +158,60 @@ inline void light_quad_rect(__global const float4* tri_verts, WtLight light, flo
   *e2 = (k == 0u ? p2 : (k == 1u ? p0 : p1)) - *c;
 }
 
-/// Solid angle of rectangle (c, e1, e2) seen from p: its two triangles'
-/// (Van Oosterom and Strackee), accurate where it is small, unlike the sum
-/// of its four angles less 2 pi.
-inline float light_quad_solid_angle(float3 p, float3 c, float3 e1, float3 e2) {
-  float3 d = c + e1 + e2;
-  return light_triangle_solid_angle(p, c, c + e1, d) + light_triangle_solid_angle(p, c, d, c + e2);
+/// Rectangle (c, e1, e2) seen from a point in the rectangle's own frame
+/// (Urena et al.): the point's offsets to its edges along e1 (x0 < x1) and
+/// e2 (y0 < y1), minus its distance from the plane (z0 <= 0), and the
+/// distances to the corners (x0, y0) and (x0, y1).
+typedef struct RectView {
+  float x0, y0, x1, y1, z0;
+  float l00, l01;
+} RectView;
+
+/// The view of rectangle (c, e1, e2) from p (*v) and its solid angle: its
+/// two triangles' by Van Oosterom and Strackee from the frame's coordinates,
+/// their two half-angles summed in one atan2 (accurate where it is small,
+/// unlike the sum of its four angles less 2 pi).
+inline float light_rect_view(float3 p, float3 c, float3 e1, float3 e2, RectView* v) {
+  float ex = length(e1), ey = length(e2);
+  float3 x = e1 / ex, y = e2 / ey;
+  float3 d = c - p;
+  float z0 = -fabs(dot(d, normalize(cross(x, y))));
+  float x0 = dot(d, x), y0 = dot(d, y), x1 = x0 + ex, y1 = y0 + ey;
+  float z2 = z0 * z0;
+  float l00 = sqrt(x0 * x0 + y0 * y0 + z2), l10 = sqrt(x1 * x1 + y0 * y0 + z2);
+  float l11 = sqrt(x1 * x1 + y1 * y1 + z2), l01 = sqrt(x0 * x0 + y1 * y1 + z2);
+  *v = (RectView){x0, y0, x1, y1, z0, l00, l01};
+  // triangles (00, 10, 11) and (00, 11, 01): tan(omega / 2) = n / e of unit corner vectors
+  float triple = -z0 * ex * ey;
+  float d_00_11 = (x0 * x1 + y0 * y1 + z2) / (l00 * l11);
+  float n1 = triple / (l00 * l10 * l11), n2 = triple / (l00 * l11 * l01);
+  float e_1 = 1.0f + (x0 * x1 + y0 * y0 + z2) / (l00 * l10) + d_00_11 + (x1 * x1 + y0 * y1 + z2) / (l10 * l11);
+  float e_2 = 1.0f + d_00_11 + (x0 * x0 + y0 * y1 + z2) / (l00 * l01) + (x0 * x1 + y1 * y1 + z2) / (l11 * l01);
+  // each half-angle is in [0, pi] and their sum below pi: one atan2 of the sum
+  return 2.0f * wt_atan2(n1 * e_2 + n2 * e_1, e_1 * e_2 - n1 * n2);
 }
 
-/// A point uniform in the solid angle of rectangle (c, e1, e2) (e1 and e2
-/// perpendicular) seen from p, of solid angle `solid_angle`, as its
-/// coordinates (s, t) along e1 and e2 in [0, 1] (Urena, Fajardo and King
-/// 2013, "An Area-Preserving Parametrization for Spherical Rectangles").
-/// The angle k of the paper enters only by its cosine and sine, from those
-/// of the two angles it is made of, and the sub-rectangle's area by its own,
-/// so that no difference of angles near pi loses the area when it is small.
-inline float2 light_sample_spherical_rect(float3 p, float3 c, float3 e1, float3 e2, float solid_angle, float u1,
-                                          float u2) {
-  // the local frame: x along e1, y along e2, z away from p
-  float ex = length(e1), ey = length(e2);
-  float3 x = e1 / ex, y = e2 / ey, z = normalize(cross(x, y));
-  float3 d = c - p;
-  float z0 = dot(d, z);
-  if (z0 > 0.0f) z0 = -z0;
-  float x0 = dot(d, x), y0 = dot(d, y), x1 = x0 + ex, y1 = y0 + ey;
+/// Solid angle of rectangle (c, e1, e2) seen from p.
+inline float light_quad_solid_angle(float3 p, float3 c, float3 e1, float3 e2) {
+  RectView v;
+  return light_rect_view(p, c, e1, e2, &v);
+}
+
+/// A point uniform in the solid angle `solid_angle` of a rectangle of view
+/// v, as its coordinates (s, t) along e1 and e2 in [0, 1] (Urena, Fajardo
+/// and King 2013, "An Area-Preserving Parametrization for Spherical
+/// Rectangles"). The angle k of the paper enters only by its cosine and
+/// sine, from those of the two angles it is made of, and the sub-rectangle's
+/// area by its own, so that no difference of angles near pi loses the area
+/// when it is small.
+inline float2 light_sample_spherical_rect(RectView v, float solid_angle, float u1, float u2) {
+  float x0 = v.x0, y0 = v.y0, x1 = v.x1, y1 = v.y1, z0 = v.z0;
   float z2 = z0 * z0;
   // the angles at the x0 edge, g2 (corner x0, y1) and g3 (x0, y0), by cosine and sine
   float l0 = sqrt(z2 + y0 * y0), l2 = sqrt(z2 + y1 * y1), l3 = sqrt(z2 + x0 * x0);
   float inv23 = 1.0f / (l2 * l3), inv30 = 1.0f / (l3 * l0);
-  float cos_g2 = x0 * y1 * inv23, sin_g2 = -z0 * sqrt(x0 * x0 + y1 * y1 + z2) * inv23;
-  float cos_g3 = -x0 * y0 * inv30, sin_g3 = -z0 * sqrt(x0 * x0 + y0 * y0 + z2) * inv30;
+  float cos_g2 = x0 * y1 * inv23, sin_g2 = -z0 * v.l01 * inv23;
+  float cos_g3 = -x0 * y0 * inv30, sin_g3 = -z0 * v.l00 * inv30;
   // k = 2 pi - g2 - g3, then au = k + u1 solid_angle
   float cos_k = cos_g2 * cos_g3 - sin_g2 * sin_g3, sin_k = -(sin_g2 * cos_g3 + cos_g2 * sin_g3);
   float cos_a;
@@ -205,11 +229,29 @@ inline float2 light_sample_spherical_rect(float3 p, float3 c, float3 e1, float3 
   float hv = h0 + u2 * (h1 - h0), hv2 = hv * hv;
   float yv = hv2 < 1.0f - 1e-6f ? hv * dd / sqrt(1.0f - hv2) : y1;
   yv = clamp(yv, y0, y1);
-  return (float2)(clamp((xu - x0) / ex, 0.0f, 1.0f), clamp((yv - y0) / ey, 0.0f, 1.0f));
+  return (float2)(clamp((xu - x0) / (x1 - x0), 0.0f, 1.0f), clamp((yv - y0) / (y1 - y0), 0.0f, 1.0f));
+}
+
+// Spherical rectangles only where the rectangle is large for its distance:
+// area sampling's variance beyond solid angle sampling's grows with (size /
+// distance)^2, the area over the squared distance to the centre, and below
+// this ratio it is hardly more while it needs no solid angle at all. Tested
+// at run time per shading point, from nothing but the two.
+#define WT_QUAD_SPHERICAL_MIN_RATIO 0.25f
+
+/// Whether the rectangle (c, e1, e2) of area `area` is sampled by solid
+/// angle from p: a large one for its distance, subtending what
+/// light_use_spherical allows (*v, *solid_angle then its view).
+inline bool light_quad_spherical(float3 p, float3 c, float3 e1, float3 e2, float area, RectView* v,
+                                 float* solid_angle) {
+  float3 to_centre = c + 0.5f * (e1 + e2) - p;
+  if (!(area >= WT_QUAD_SPHERICAL_MIN_RATIO * dot(to_centre, to_centre))) return false;
+  *solid_angle = light_rect_view(p, c, e1, e2, v);
+  return light_use_spherical(*solid_angle);
 }
 
 /// Sample rectangle (c, e1, e2) from p: by solid angle where
-/// light_use_spherical says so, else uniformly by area; *st the point's
+/// light_quad_spherical says so, else uniformly by area; *st the point's
 /// coordinates along e1 and e2. Fills wi, distance, target and pdf of *s.
 /// False for a point behind a single-sided light's front (e1 x e2).
 inline bool light_sample_rect(float3 p, float3 c, float3 e1, float3 e2, bool two_sided, float u1, float u2,
@@ -221,9 +263,10 @@ inline bool light_sample_rect(float3 p, float3 c, float3 e1, float3 e2, bool two
   // a single-sided light lights only its front (its first half's winding) side
   float height = dot(n, p - c);
   if (!two_sided && !(height > 0.0f)) return false;
-  float solid_angle = light_quad_solid_angle(p, c, e1, e2);
-  bool spherical = light_use_spherical(solid_angle);
-  float2 st = spherical ? light_sample_spherical_rect(p, c, e1, e2, solid_angle, u1, u2) : (float2)(u1, u2);
+  RectView view;
+  float solid_angle = 0.0f;
+  bool spherical = light_quad_spherical(p, c, e1, e2, area, &view, &solid_angle);
+  float2 st = spherical ? light_sample_spherical_rect(view, solid_angle, u1, u2) : (float2)(u1, u2);
   // the point by its first half's barycentrics (outside it past the diagonal), where its rounding error is known
   float3 q_error;
   float3 q = triangle_point(c, c + e1, c + e2, st.x, st.y, &q_error);
@@ -391,8 +434,10 @@ inline float light_triangle_pdf(float pdf_area, float3 origin, float3 p0, float3
 inline float light_quad_pdf(float pdf_area, float3 origin, float3 c, float3 e1, float3 e2, float distance, float3 wi,
                             float3 n_geometric) {
   if (!(pdf_area > 0.0f)) return 0.0f;
-  float solid_angle = light_quad_solid_angle(origin, c, e1, e2);
-  if (light_use_spherical(solid_angle)) return pdf_area * length(cross(e1, e2)) / solid_angle;
+  float area = length(cross(e1, e2));
+  RectView view;
+  float solid_angle = 0.0f;
+  if (light_quad_spherical(origin, c, e1, e2, area, &view, &solid_angle)) return pdf_area * area / solid_angle;
   float cos_light = fabs(dot(n_geometric, wi));
   return cos_light > 0.0f ? pdf_area * distance * distance / cos_light : 0.0f;
 }

@@ -329,20 +329,21 @@ RectView makeRect(glm::dvec3 p, glm::dvec3 c, glm::dvec3 e1, glm::dvec3 up, doub
   return {p, c, e1, e2, twoSided};
 }
 
-/// The views the rectangle tests share (all but one from the front): near
-/// (about 3 sr), far (1.6e-2 sr), near the spherical threshold (2.1e-3 sr),
-/// grazing (9e-3 sr), almost a hemisphere from the back of a two-sided light
-/// (6.13 sr), a turned rectangle (0.19 sr), and a small distant one seen at
-/// 15 degrees, sampled by area (about 6e-4 sr).
+/// The views the rectangle tests share (all but one from the front), by
+/// solid angle where light_quad_spherical says so: near (3 sr; area over
+/// squared distance to the centre 8.3), farther (0.6 sr, 0.72), almost a
+/// hemisphere from the back of a two-sided light (6.13 sr), a turned
+/// rectangle (0.93 sr, 1.24); by area: far (2.1e-3 sr, 2e-3), grazing (9e-3
+/// sr, 0.12), and small and distant, seen at 15 degrees (6e-4 sr).
 std::vector<RectView> rectViews() {
   const glm::dvec3 c{0.0, 0.0, 0.0}, e1{1.0, 0.0, 0.0}, up{0.0, 0.0, 1.0};
   return {
       makeRect({0.4, 0.3, 0.25}, c, e1, up, 0.6),
-      makeRect({0.5, -0.2, 6.0}, c, e1, up, 0.6),
+      makeRect({0.6, 0.2, 0.9}, c, e1, up, 0.6),
       makeRect({0.7, 0.1, 17.0}, c, e1, up, 0.6),
       makeRect({2.5, 1.2, 0.15}, c, e1, up, 0.6),
       makeRect({0.5, 0.3, -0.01}, c, e1, up, 0.6, true),
-      makeRect({0.9, -0.4, 1.1}, {0.2, -0.1, 0.3}, {0.6, 0.3, -0.2}, {0.3, -0.1, 0.8}, 0.45),
+      makeRect({0.6, 0.1, 0.7}, {0.2, -0.1, 0.3}, {0.6, 0.3, -0.2}, {0.3, -0.1, 0.8}, 0.45),
       makeRect({8.0, 0.2, 30.0}, c, e1, up, 0.6),
   };
 }
@@ -357,7 +358,7 @@ double chiSquareLimit(int dof) {
 
 // The rectangle sampler: every direction meets the rectangle where the
 // sampler says it does; directions are uniform in its solid angle where
-// light_use_spherical chooses it (counts on a 6 x 6 grid of the rectangle
+// light_quad_spherical chooses it (counts on a 6 x 6 grid of the rectangle
 // against each cell's solid angle, chi-square at P(fail) = 1e-4 per view),
 // uniform in area below it (against the cells' areas); the sampler's pdf is
 // 1 / solid angle there, d^2 / (cos area) here, and the pdf an emitter hit
@@ -388,7 +389,9 @@ TEST(LightSampling, QuadSamplingIsUniformInSolidAngleAndHitsTheRectangle) {
   for (std::size_t s = 0; s < shapes.size(); ++s) {
     const RectView& v = shapes[s];
     const double omega = rectSolidAngle(v), area = rectArea(v);
-    const bool spherical = omega >= 1e-3 && omega <= 6.2;
+    // light_quad_spherical
+    const glm::dvec3 toCentre = v.c + 0.5 * (v.e1 + v.e2) - v.p;
+    const bool spherical = area >= 0.25 * glm::dot(toCentre, toCentre) && omega >= 1e-3 && omega <= 6.2;
     // the cells' expected shares
     std::vector<double> expected(std::size_t(m * m));
     for (int i = 0; i < m; ++i)
