@@ -18,6 +18,13 @@
 #else
 #define WT_THIN_SHADOW_SHADE_PARAMS
 #endif
+#if WT_HAS_QUAD_LIGHTS
+/// With rectangle lights: per leaf-order triangle, the light-list index of
+/// the WT_LIGHT_QUAD it is half of (WT_NO_QUAD: none), for the pdf of its emission.
+#define WT_QUAD_SHADE_PARAMS , __global const uint *emitter_quad
+#else
+#define WT_QUAD_SHADE_PARAMS
+#endif
 
 /// Weight of emission found by BSDF sampling (pdf_bsdf, solid angle) from a
 /// light that NEE could also have sampled with pdf_light (0: NEE cannot).
@@ -65,7 +72,7 @@ WT_KERNEL void shade(WtFrameParams frame, WtEnvironment environment, __global co
                      __global const WtLightNode* light_tree, __global const uint* emitter_leaf,
                      __global float4* prev_normal, __global const uint* hit_instance, WT_GEOMETRY_PARAMS,
                      __global float2* ray_cone, __global float4* aov_sample, __global uint4* aov_ids,
-                     __global uint4* media, WT_SURFACE_PARAMS WT_THIN_SHADOW_SHADE_PARAMS) {
+                     __global uint4* media, WT_SURFACE_PARAMS WT_THIN_SHADOW_SHADE_PARAMS WT_QUAD_SHADE_PARAMS) {
   uint i = get_global_id(0);
   if (i >= counters[in_slot]) return;
   // Without WT_FLAG_COMPACT_SHADOWS entry i of the shadow queue is this
@@ -247,8 +254,20 @@ WT_KERNEL void shade(WtFrameParams frame, WtEnvironment environment, __global co
       if (select > 0.0f && leaf != WT_LIGHT_NODE_NONE)
         select *= light_tree_pmf(light_tree, leaf, ray_o[path].xyz, prev_normal[path].xyz);
       float3 p0, p1, p2;
+#if WT_HAS_QUAD_LIGHTS
+      // half of a rectangle light: the pdf its sampler has, from the same corners
+      uint quad = emitter_quad[prim];
+      if (quad != WT_NO_QUAD) {
+        light_quad_rect(tri_verts, lights[quad], &p0, &p1, &p2);
+        pdf_light = light_quad_pdf(select, ray_o[path].xyz, p0, p1, p2, hit.x, dir, ng);
+      } else {
+        triangle_corners(tri_verts, prim, &p0, &p1, &p2);
+        pdf_light = light_triangle_pdf(select, ray_o[path].xyz, p0, p1, p2, hit.x, dir, ng);
+      }
+#else
       triangle_corners(tri_verts, prim, &p0, &p1, &p2);
       pdf_light = light_triangle_pdf(select, ray_o[path].xyz, p0, p1, p2, hit.x, dir, ng);
+#endif
     }
     float3 emitted = beta * le * shade_emission_weight(frame, pdf_prev, pdf_light);
     shade_check_finite(frame, counters, path, emitted, WT_NONFINITE_EMISSION);

@@ -37,7 +37,7 @@ struct Shade {
              "shadow_d", "shadow_radiance", "pbr_table", "bounce_counts", "ray_skip", "shadow_skip", "light_tree",
              "emitter_leaf", "prev_normal", "hit_instance"),
       kGeometryParams, params("ray_cone", "aov_sample", "aov_ids", "media"), kSurfaceParams,
-      paramsIf(ParamIf::ThinShadows, params("shadow_walls")));
+      paramsIf(ParamIf::ThinShadows, params("shadow_walls")), paramsIf(ParamIf::QuadLights, params("emitter_quad")));
 };
 
 /// connect, connect_packet and connect_stream: the same parameters.

@@ -164,9 +164,24 @@ const OneFeature kCases[] = {
      [] {
        Scene s = lambertFloor();
        s.materials[0] = makeMaterial(glm::vec3(0.5f), glm::vec3(2.0f));
+       s.triangles.pop_back();  // half of the square: no rectangle
        return s;
      },
      noSettings, [] { return with(lambertBase(), {"emissive_triangles"}); }},
+    {"quad_light",
+     [] {
+       Scene s = lambertFloor();
+       s.materials[0] = makeMaterial(glm::vec3(0.5f), glm::vec3(2.0f));
+       return s;
+     },
+     noSettings, [] { return with(lambertBase(), {"emissive_triangles", "quad_lights"}); }},
+    {"quad_light_as_triangles",
+     [] {
+       Scene s = lambertFloor();
+       s.materials[0] = makeMaterial(glm::vec3(0.5f), glm::vec3(2.0f));
+       return s;
+     },
+     [](RenderSettings& s) { s.quadLights = false; }, [] { return with(lambertBase(), {"emissive_triangles"}); }},
     {"emissive_sphere",
      [] {
        Scene s = lambertFloor();
@@ -310,6 +325,9 @@ TEST(FeatureSwitches, EachFeatureTurnsOnItsSwitchOnly) {
   Scene sphere = lambertFloor();
   sphere.spheres.push_back({glm::vec3(0.0f, 0.5f, 0.0f), 0.25f, 0});
   EXPECT_EQ(changed(sphere), std::vector<std::string>{"-D WT_HAS_SPHERES=1"});
+  Scene lamp = lambertFloor();
+  lamp.materials[0] = makeMaterial(glm::vec3(0.5f), glm::vec3(2.0f));
+  EXPECT_EQ(changed(lamp), std::vector<std::string>{"-D WT_HAS_QUAD_LIGHTS=1"});
   Scene mask = lambertFloor();
   mask.materials[0].alpha_mode = WT_ALPHA_MASK;
   mask.materials[0].alpha = 0.25f;
