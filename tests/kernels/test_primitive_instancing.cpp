@@ -6,6 +6,7 @@
 // surface they leave, the same image within noise, and the memory it saves.
 #include "../render/render_helpers.h"
 #include "core/spawn.h"
+#include "device/scene_buffers.h"
 #include "device_fixture.h"
 #include "geometry/primitives.h"
 #include "instancing_checks.h"
@@ -147,19 +148,20 @@ bool grazes(const Scene& scene, const PrimitiveRows& rows, const Ray& r, std::ui
 /// its transform (an uneven scale turns spheres into ellipsoids, which a
 /// flattened copy is not) stays flat.
 TEST(PrimitiveInstancing, CopiesBecomeInstances) {
+  // the uploaded buffers alone: a Tracer would also build a program these checks never run
   const Placed p = placedGeometry();
-  Tracer on(test::deviceContext(), p.scene, withInstancing(Instancing::On));
-  EXPECT_EQ(on.sceneBuffers().instanceCount(), 16u);
-  EXPECT_TRUE(on.sceneBuffers().primitivesInstanced());
-  Tracer off(test::deviceContext(), p.scene, withInstancing(Instancing::Off));
-  EXPECT_EQ(off.sceneBuffers().instanceCount(), 0u);
-  EXPECT_FALSE(off.sceneBuffers().primitivesInstanced());
+  SceneBuffers on(test::deviceContext(), p.scene, withInstancing(Instancing::On));
+  EXPECT_EQ(on.instanceCount(), 16u);
+  EXPECT_TRUE(on.primitivesInstanced());
+  SceneBuffers off(test::deviceContext(), p.scene, withInstancing(Instancing::Off));
+  EXPECT_EQ(off.instanceCount(), 0u);
+  EXPECT_FALSE(off.primitivesInstanced());
 
   Scene uneven = p.scene;
   uneven.primitiveInstances[2].transform = glm::scale(uneven.primitiveInstances[2].transform, glm::dvec3(1, 1.5, 1));
   uneven.primitiveInstances[5].transform = glm::translate(uneven.primitiveInstances[5].transform, glm::dvec3(0, 0.1, 0));
-  Tracer some(test::deviceContext(), uneven, withInstancing(Instancing::On));
-  EXPECT_EQ(some.sceneBuffers().instanceCount(), 14u);
+  SceneBuffers some(test::deviceContext(), uneven, withInstancing(Instancing::On));
+  EXPECT_EQ(some.instanceCount(), 14u);
 }
 
 /// Closest and any hits, in every traversal mode: the instanced form against
@@ -435,8 +437,8 @@ TEST(PrimitiveInstancing, WhiteInstancedCopiesInUniformSky) {
   }
   Scene scene = placeCopies(geometry, transforms);
   {
-    Tracer on(test::deviceContext(), scene, withInstancing(Instancing::On));
-    ASSERT_EQ(on.sceneBuffers().instanceCount(), 4u);
+    SceneBuffers on(test::deviceContext(), scene, withInstancing(Instancing::On));
+    ASSERT_EQ(on.instanceCount(), 4u);
   }
   RenderSettings settings;
   settings.width = settings.height = 24;
@@ -479,8 +481,8 @@ TEST(PrimitiveInstancing, SceneFileInstancesAreStoredOnce) {
   const Scene& scene = file.scene;
   ASSERT_EQ(scene.primitiveInstances.size(), 6u);
   {
-    Tracer on(test::deviceContext(), scene, withInstancing(Instancing::On));
-    EXPECT_EQ(on.sceneBuffers().instanceCount(), 6u);
+    SceneBuffers on(test::deviceContext(), scene, withInstancing(Instancing::On));
+    EXPECT_EQ(on.instanceCount(), 6u);
   }
   RenderSettings settings;
   settings.width = 48;
@@ -498,16 +500,17 @@ TEST(PrimitiveInstancing, SceneFileInstancesAreStoredOnce) {
 /// Memory: 98 copies of spheres and curves stored once take about 1/98 of
 /// the flattened form's primitive bytes, plus the instances' rows and tree.
 TEST(PrimitiveInstancing, StoredOnce) {
+  // the uploaded buffers alone: a Tracer would also build a program these checks never run
   const Scene geometry = sphereAndCurveGeometry(200, 100, 9);
   std::vector<glm::mat4> transforms;
   for (int c = 0; c < 98; ++c)
     transforms.push_back(glm::translate(glm::mat4(1.0f), glm::vec3(3.0f * float(c % 14), 3.0f * float(c / 14), 0)));
   const Scene scene = placeCopies(geometry, transforms);
-  Tracer on(test::deviceContext(), scene, withInstancing(Instancing::On));
-  Tracer off(test::deviceContext(), scene, withInstancing(Instancing::Off));
-  ASSERT_EQ(on.sceneBuffers().instanceCount(), 2u * 98u);
-  const double flatBytes = double(off.sceneBuffers().primitiveBytes);
-  const double ratio = double(on.sceneBuffers().primitiveBytes) / flatBytes;
+  SceneBuffers on(test::deviceContext(), scene, withInstancing(Instancing::On));
+  SceneBuffers off(test::deviceContext(), scene, withInstancing(Instancing::Off));
+  ASSERT_EQ(on.instanceCount(), 2u * 98u);
+  const double flatBytes = double(off.primitiveBytes);
+  const double ratio = double(on.primitiveBytes) / flatBytes;
   // per instance: 6 rows of 16 bytes, an info row, a typed id and its share of a node
   const double overhead = 2.0 * 98.0 * (7 * 16 + 4 + 128.0 / 2) / flatBytes;
   EXPECT_LT(ratio, 1.0 / 98.0 * 1.1 + overhead);
