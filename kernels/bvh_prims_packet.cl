@@ -1,8 +1,11 @@
 // Packets through the primitive BVH (kernels/bvh_prims.cl) and into its
 // instances: one work-item walks the tree of spheres, curves and instances
 // with the WT_PACKET_WIDTH rays of its packet, a node's child boxes tested
-// against every lane at once (packet_box_hit), a leaf's primitives lane by
-// lane with the very calls bvh_prims_closest and bvh_prims_occluded make. A
+// against every lane at once (packet_box_hit), a leaf's primitives a lane
+// at a time (each entering lane through the whole leaf, so a blocked one
+// stops there) with the very calls bvh_prims_closest and bvh_prims_occluded
+// make; closest and any hits are one walk (`any`, a constant where it is
+// called, so each compiles to its own). A
 // packet that enters an instance goes on inside it as a packet: its lanes'
 // rays are moved into the copy's object space once per visit (each lane by
 // instance_point / instance_vector, the single ray's own arithmetic, so the
@@ -185,93 +188,119 @@ inline pint prims_packet_triangles_occluded(BvhScene scene, GeometryScene g, uin
 }
 #endif
 
-/// Closest hits (lane arrays t, u, v, prim) narrowed by the primitives of
-/// the tree whose root is `root`, which holds no instances (an instance's
-/// geometry), for the lanes of `valid`: bvh_prims_closest_root lane by lane.
-/// The mask of the lanes it narrowed.
-inline pint prims_packet_closest_tree(GeometryScene g, uint root, const PrimPacket* p, pint valid, float* t, float* u,
-                                      float* v, uint* prim) {
-  pfloat tmax = packet_vload(t);
-  float reach = packet_max(packet_pick(valid, tmax, (pfloat)(-INFINITY)));
-  int narrowed[WT_PACKET];
-  for (int l = 0; l < WT_PACKET; ++l) narrowed[l] = 0;
-  uint stack_node[WT_BVH_STACK_SIZE];
-  float stack_t[WT_BVH_STACK_SIZE];
-  int sp = 0;
-  uint node = root;
-  for (;;) {
-    __global const WtBvh4Node* n = &g.nodes[node];
-    uint inner[4];
-    float inner_t[4];
-    int inner_count = 0;
-    for (int k = 0; k < 4; ++k) {
-      uint first = n->child[k], count = n->count[k];
-      if (first == WT_BVH4_EMPTY) continue;
-      pfloat enter;
-      pint hit = packet_box_hit(n, k, &p->box, tmax, &enter) & valid;
-      if (!packet_any(hit)) continue;
-      if (count > 0) {
-        int lane_hit[WT_PACKET];
-        packet_vstore(hit, lane_hit);
-        bool won = false;
-        for (uint i = first; i < first + count; ++i) {
-          uint id = g.refs[i];
-          for (int l = 0; l < WT_PACKET; ++l) {
-            if (!lane_hit[l]) continue;
-            float th, uh, vh;
-            if (!geometry_intersect(g, id, prims_packet_org(p, l), prims_packet_dir(p, l), p->tmin[l], t[l],
-                                    p->skip[l], WT_NO_HIT, false, &th, &uh, &vh))
-              continue;
-            t[l] = th, u[l] = uh, v[l] = vh, prim[l] = id;
-            narrowed[l] = -1;
-            won = true;
-          }
-        }
-        if (won) {
-          tmax = packet_vload(t);
-          reach = packet_max(packet_pick(valid, tmax, (pfloat)(-INFINITY)));
-        }
-      } else {
-        // ordered by the nearest entry among the lanes that enter it
-        float key = packet_min(packet_pick(hit, enter, (pfloat)(INFINITY)));
-        int j = inner_count++;
-        for (; j > 0 && inner_t[j - 1] > key; --j) {
-          inner[j] = inner[j - 1];
-          inner_t[j] = inner_t[j - 1];
-        }
-        inner[j] = first;
-        inner_t[j] = key;
-      }
-    }
-    if (inner_count > 0 && inner_t[0] <= reach) {
-      for (int k = inner_count - 1; k >= 1; --k) {
-        if (inner_t[k] > reach) continue;
-        stack_node[sp] = inner[k];
-        stack_t[sp] = inner_t[k];
-        ++sp;
-      }
-      node = inner[0];
-      continue;
-    }
-    for (;;) {
-      if (sp == 0) return packet_vload(narrowed);
-      --sp;
-      if (stack_t[sp] <= reach) break;
-    }
-    node = stack_node[sp];
+/// A walk's stack: nodes, and (closest hits) the nearest entry among the
+/// lanes that entered each.
+typedef struct PrimWalk {
+  uint node[WT_BVH_STACK_SIZE];
+  float t[WT_BVH_STACK_SIZE];
+  int sp;
+  uint inner[4];  ///< this node's inner children that lanes enter (closest: nearest entry first)
+  float inner_t[4];
+  int inner_count;
+} PrimWalk;
+
+/// Inner child `first`, which the lanes of `hit` enter at `enter`, for the
+/// walk: stacked as it comes (any hit), or put in order among this node's
+/// (closest hit).
+__attribute__((always_inline)) inline void prims_walk_push(PrimWalk* w, bool any, uint first, pint hit, pfloat enter) {
+  if (any) {
+    w->node[w->sp++] = first;
+    return;
   }
+  float key = packet_min(packet_pick(hit, enter, (pfloat)(INFINITY)));
+  int j = w->inner_count++;
+  for (; j > 0 && w->inner_t[j - 1] > key; --j) {
+    w->inner[j] = w->inner[j - 1];
+    w->inner_t[j] = w->inner_t[j - 1];
+  }
+  w->inner[j] = first;
+  w->inner_t[j] = key;
 }
 
-/// The lanes of `valid` that a primitive of the tree at `root` (an
-/// instance's geometry, no instances in it) blocks in (tmin, tmax[l]):
-/// bvh_prims_occluded_root lane by lane.
-inline pint prims_packet_occluded_tree(GeometryScene g, uint root, const PrimPacket* p, pint valid, pfloat tmax,
-                                       const float* lane_tmax) {
-  pint open = valid;
-  uint stack_node[WT_BVH_STACK_SIZE];
-  int sp = 0;
-  uint node = root;
+/// The walk's next node into *node, false when it is done: the last
+/// stacked (any hit); the nearest inner child of this node that a lane may
+/// reach before `reach` (the farthest lane's end), the others stacked, else
+/// the last stacked within reach (closest hit).
+__attribute__((always_inline)) inline bool prims_walk_next(PrimWalk* w, bool any, float reach, uint* node) {
+  int count = w->inner_count;
+  w->inner_count = 0;
+  if (any) {
+    if (w->sp == 0) return false;
+    *node = w->node[--w->sp];
+    return true;
+  }
+  if (count > 0 && w->inner_t[0] <= reach) {
+    for (int k = count - 1; k >= 1; --k) {
+      if (w->inner_t[k] > reach) continue;
+      w->node[w->sp] = w->inner[k];
+      w->t[w->sp] = w->inner_t[k];
+      ++w->sp;
+    }
+    *node = w->inner[0];
+    return true;
+  }
   for (;;) {
+    if (w->sp == 0) return false;
+    --w->sp;
+    if (w->t[w->sp] <= reach) break;
+  }
+  *node = w->node[w->sp];
+  return true;
+}
+
+/// The primitives refs[first, first + count) (no instances) against the
+/// lanes of lane_hit, each lane's ray alone (geometry_intersect in (tmin,
+/// t[l]), leaving skip and skip_b[l]; no skip_b: none), a lane at a time
+/// (so one the leaf blocks stops at once): where one hits, found[l] set,
+/// and the lane narrowed to it (closest hit: t, u, v, prim; instance[l]
+/// none where `instance` is given) or left out of lane_hit (any hit).
+/// Whether any hit.
+__attribute__((always_inline)) inline bool prims_packet_leaf(GeometryScene g, uint first, uint count,
+                                                             const PrimPacket* p, bool any, const uint* skip_b,
+                                                             int* lane_hit, int* found, float* t, float* u, float* v,
+                                                             uint* prim, uint* instance) {
+  bool won = false;
+  for (int l = 0; l < WT_PACKET; ++l) {
+    if (!lane_hit[l]) continue;
+    float3 o = prims_packet_org(p, l), d = prims_packet_dir(p, l);
+    for (uint i = first; i < first + count; ++i) {
+      uint id = g.refs[i];
+      float th, uh, vh;
+      if (!geometry_intersect(g, id, o, d, p->tmin[l], t[l], p->skip[l], skip_b ? skip_b[l] : WT_NO_HIT, any, &th,
+                              &uh, &vh))
+        continue;
+      found[l] = -1;
+      won = true;
+      // a blocked lane is done; a narrowed one goes on with the nearer end
+      if (any) {
+        lane_hit[l] = 0;
+        break;
+      }
+      t[l] = th, u[l] = uh, v[l] = vh, prim[l] = id;
+      if (instance) instance[l] = WT_NO_HIT;
+    }
+  }
+  return won;
+}
+
+/// The primitives of the tree whose root is `root`, which holds no
+/// instances (an instance's geometry), for the lanes of `valid`:
+/// bvh_prims_closest_root lane by lane, or with `any`
+/// bvh_prims_occluded_root. Closest: lane arrays t, u, v, prim narrowed,
+/// and the mask of the lanes narrowed returned. Any: the lanes blocked in
+/// (tmin, t[l]) returned, the arrays untouched.
+__attribute__((always_inline)) inline pint prims_packet_tree(GeometryScene g, uint root, const PrimPacket* p,
+                                                             pint valid, bool any, float* t, float* u, float* v,
+                                                             uint* prim) {
+  pfloat tmax = packet_vload(t);
+  pint open = valid;  // any: the lanes not blocked yet
+  float reach = packet_max(packet_pick(valid, tmax, (pfloat)(-INFINITY)));
+  int found[WT_PACKET];
+  for (int l = 0; l < WT_PACKET; ++l) found[l] = 0;
+  PrimWalk w;
+  w.sp = 0, w.inner_count = 0;
+  uint node = root;
+  do {
     __global const WtBvh4Node* n = &g.nodes[node];
     for (int k = 0; k < 4; ++k) {
       uint first = n->child[k], count = n->count[k];
@@ -279,155 +308,48 @@ inline pint prims_packet_occluded_tree(GeometryScene g, uint root, const PrimPac
       pfloat enter;
       pint hit = packet_box_hit(n, k, &p->box, tmax, &enter) & open;
       if (!packet_any(hit)) continue;
-      if (count > 0) {
-        int lane_hit[WT_PACKET];
-        packet_vstore(hit, lane_hit);
-        bool won = false;
-        for (uint i = first; i < first + count; ++i) {
-          uint id = g.refs[i];
-          for (int l = 0; l < WT_PACKET; ++l) {
-            if (!lane_hit[l]) continue;
-            float th, uh, vh;
-            if (!geometry_intersect(g, id, prims_packet_org(p, l), prims_packet_dir(p, l), p->tmin[l], lane_tmax[l],
-                                    p->skip[l], WT_NO_HIT, true, &th, &uh, &vh))
-              continue;
-            lane_hit[l] = 0;
-            won = true;
-          }
-        }
-        if (won) {
-          // lane_hit now holds the entering lanes that are still open
-          open = (open & ~hit) | packet_vload(lane_hit);
-          if (!packet_any(open)) return valid;
-        }
-      } else {
-        stack_node[sp++] = first;
+      if (count == 0) {
+        prims_walk_push(&w, any, first, hit, enter);
+        continue;
+      }
+      int lane_hit[WT_PACKET];
+      packet_vstore(hit, lane_hit);
+      bool won = prims_packet_leaf(g, first, count, p, any, 0, lane_hit, found, t, u, v, prim, 0);
+      if (won && any) {
+        open = valid & ~packet_vload(found);
+        if (!packet_any(open)) return valid;
+      } else if (won) {
+        tmax = packet_vload(t);
+        reach = packet_max(packet_pick(valid, tmax, (pfloat)(-INFINITY)));
       }
     }
-    if (sp == 0) return valid & ~open;
-    node = stack_node[--sp];
-  }
+  } while (prims_walk_next(&w, any, reach, &node));
+  return packet_vload(found);
 }
 
-/// Closest hits of a packet's lanes, narrowed by the primitive tree with its
-/// instances: bvh_prims_closest lane by lane. In: lane arrays t, u, v, prim
-/// (the triangles' hits; t their distance or tmax), `index` the lanes' ray
-/// indices (the alpha test's streams, for instanced triangles) and
-/// skip_instance the instance each lane's ray leaves. Out: narrowed hits,
-/// and instance[l] the instance hit or WT_NO_HIT.
-inline void prims_packet_closest(BvhScene scene, GeometryScene g, const PrimPacket* p, pint valid, const uint* index,
-                                 const uint* skip_instance, float* t, float* u, float* v, uint* prim, uint* instance) {
-  if (g.header.node_count == 0 || !packet_any(valid)) return;
-  pfloat tmax = packet_vload(t);
-  float reach = packet_max(packet_pick(valid, tmax, (pfloat)(-INFINITY)));
-  uint stack_node[WT_BVH_STACK_SIZE];
-  float stack_t[WT_BVH_STACK_SIZE];
-  int sp = 0;
-  uint node = 0;
-  for (;;) {
-    __global const WtBvh4Node* n = &g.nodes[node];
-    uint inner[4];
-    float inner_t[4];
-    int inner_count = 0;
-    for (int k = 0; k < 4; ++k) {
-      uint first = n->child[k], count = n->count[k];
-      if (first == WT_BVH4_EMPTY) continue;
-      pfloat enter;
-      pint hit = packet_box_hit(n, k, &p->box, tmax, &enter) & valid;
-      if (!packet_any(hit)) continue;
-      if (count > 0) {
-        int lane_hit[WT_PACKET];
-        packet_vstore(hit, lane_hit);
-        bool won = false;
-        for (uint i = first; i < first + count; ++i) {
-          uint id = g.refs[i];
-#if WT_HAS_INSTANCES
-          if (prim_type(id) == WT_PRIM_INSTANCE) {
-            if (geometry_instance_info(g, id).y & WT_INSTANCE_PRIMITIVES) {
-              // the packet goes on inside, in the copy's object space
-              PrimPacket q;
-              pint inside, not_finite;
-              prims_packet_into_instance(g, id, p, lane_hit, skip_instance, &q, &inside, &not_finite);
-              if (!packet_any(inside)) continue;
-              int lane_won[WT_PACKET];
-              packet_vstore(prims_packet_closest_tree(g, geometry_instance_info(g, id).x, &q, inside, t, u, v, prim),
-                            lane_won);
-              for (int l = 0; l < WT_PACKET; ++l) {
-                if (!lane_won[l]) continue;
-                instance[l] = id;
-                won = true;
-              }
-              continue;
-            }
-            // a copy of triangles: the triangle packet in its object space
-            int lane_won[WT_PACKET];
-            packet_vstore(prims_packet_triangles_closest(scene, g, id, p, lane_hit, index, skip_instance, t, u, v, prim),
-                          lane_won);
-            for (int l = 0; l < WT_PACKET; ++l) {
-              if (!lane_won[l]) continue;
-              instance[l] = id;
-              won = true;
-            }
-            continue;
-          }
-#endif
-          for (int l = 0; l < WT_PACKET; ++l) {
-            if (!lane_hit[l]) continue;
-            float th, uh, vh;
-            if (!geometry_intersect(g, id, prims_packet_org(p, l), prims_packet_dir(p, l), p->tmin[l], t[l],
-                                    p->skip[l], WT_NO_HIT, false, &th, &uh, &vh))
-              continue;
-            t[l] = th, u[l] = uh, v[l] = vh, prim[l] = id;
-            instance[l] = WT_NO_HIT;
-            won = true;
-          }
-        }
-        if (won) {
-          tmax = packet_vload(t);
-          reach = packet_max(packet_pick(valid, tmax, (pfloat)(-INFINITY)));
-        }
-      } else {
-        float key = packet_min(packet_pick(hit, enter, (pfloat)(INFINITY)));
-        int j = inner_count++;
-        for (; j > 0 && inner_t[j - 1] > key; --j) {
-          inner[j] = inner[j - 1];
-          inner_t[j] = inner_t[j - 1];
-        }
-        inner[j] = first;
-        inner_t[j] = key;
-      }
-    }
-    if (inner_count > 0 && inner_t[0] <= reach) {
-      for (int k = inner_count - 1; k >= 1; --k) {
-        if (inner_t[k] > reach) continue;
-        stack_node[sp] = inner[k];
-        stack_t[sp] = inner_t[k];
-        ++sp;
-      }
-      node = inner[0];
-      continue;
-    }
-    for (;;) {
-      if (sp == 0) return;
-      --sp;
-      if (stack_t[sp] <= reach) break;
-    }
-    node = stack_node[sp];
-  }
-}
-
-/// The lanes of `valid` that a primitive, or an instance, blocks in
-/// (tmin, tmax): bvh_prims_occluded lane by lane. skip_b[l]: a second
+/// The primitive tree with its instances for the lanes of `valid`:
+/// bvh_prims_closest lane by lane, or with `any` bvh_prims_occluded. In:
+/// lane arrays t (closest: the triangles' hits' distance or tmax, with u,
+/// v, prim their hits; any: tmax), `index` the lanes' ray indices (the
+/// alpha test's streams, for instanced triangles), skip_instance the
+/// instance each lane's ray leaves, skip_b[l] (any; or none) a second
 /// primitive lane l never meets at its start (the emitter it aims at).
-inline pint prims_packet_occluded(BvhScene scene, GeometryScene g, const PrimPacket* p, pint valid, const float* lane_tmax,
-                                  const uint* index, const uint* skip_b, const uint* skip_instance) {
+/// Closest: narrowed hits, instance[l] the instance hit or WT_NO_HIT.
+/// Returns the lanes narrowed, or blocked.
+__attribute__((always_inline)) inline pint prims_packet_walk(BvhScene scene, GeometryScene g, const PrimPacket* p,
+                                                             pint valid, bool any, const uint* index,
+                                                             const uint* skip_b, const uint* skip_instance, float* t,
+                                                             float* u, float* v, uint* prim, uint* instance) {
   if (g.header.node_count == 0 || !packet_any(valid)) return (pint)(0);
-  pfloat tmax = packet_vload(lane_tmax);
-  pint open = valid;
-  uint stack_node[WT_BVH_STACK_SIZE];
-  int sp = 0;
+  pfloat tmax = packet_vload(t);
+  pint open = valid;  // any: the lanes not blocked yet
+  float reach = packet_max(packet_pick(valid, tmax, (pfloat)(-INFINITY)));
+  int found[WT_PACKET];
+  for (int l = 0; l < WT_PACKET; ++l) found[l] = 0;
+  PrimWalk w;
+  w.sp = 0, w.inner_count = 0;
   uint node = 0;
-  for (;;) {
+  do {
     __global const WtBvh4Node* n = &g.nodes[node];
     for (int k = 0; k < 4; ++k) {
       uint first = n->child[k], count = n->count[k];
@@ -435,61 +357,60 @@ inline pint prims_packet_occluded(BvhScene scene, GeometryScene g, const PrimPac
       pfloat enter;
       pint hit = packet_box_hit(n, k, &p->box, tmax, &enter) & open;
       if (!packet_any(hit)) continue;
-      if (count > 0) {
-        // lane_open: the lanes that entered the leaf and are not blocked yet
-        int lane_open[WT_PACKET];
-        packet_vstore(hit, lane_open);
-        bool won = false;
-        for (uint i = first; i < first + count; ++i) {
-          uint id = g.refs[i];
-#if WT_HAS_INSTANCES
-          if (prim_type(id) == WT_PRIM_INSTANCE) {
-            if (geometry_instance_info(g, id).y & WT_INSTANCE_PRIMITIVES) {
-              PrimPacket q;
-              pint inside, not_finite;
-              prims_packet_into_instance(g, id, p, lane_open, skip_instance, &q, &inside, &not_finite);
-              pint blocked = not_finite;
-              if (packet_any(inside))
-                blocked |= prims_packet_occluded_tree(g, geometry_instance_info(g, id).x, &q, inside, tmax, lane_tmax);
-              if (!packet_any(blocked)) continue;
-              int lane_blocked[WT_PACKET];
-              packet_vstore(blocked, lane_blocked);
-              for (int l = 0; l < WT_PACKET; ++l)
-                if (lane_blocked[l]) lane_open[l] = 0;
-              won = true;
-              continue;
-            }
-            pint blocked = prims_packet_triangles_occluded(scene, g, id, p, lane_open, index, skip_instance, lane_tmax);
-            if (!packet_any(blocked)) continue;
-            int lane_blocked[WT_PACKET];
-            packet_vstore(blocked, lane_blocked);
-            for (int l = 0; l < WT_PACKET; ++l)
-              if (lane_blocked[l]) lane_open[l] = 0;
-            won = true;
-            continue;
+      if (count == 0) {
+        prims_walk_push(&w, any, first, hit, enter);
+        continue;
+      }
+      // lane_hit: the lanes that entered the leaf (any hit: and are not blocked yet)
+      int lane_hit[WT_PACKET];
+      packet_vstore(hit, lane_hit);
+#if !WT_HAS_INSTANCES
+      bool won = prims_packet_leaf(g, first, count, p, any, skip_b, lane_hit, found, t, u, v, prim, instance);
+#else
+      bool won = false;
+      for (uint i = first; i < first + count; ++i) {
+        uint id = g.refs[i];
+        if (prim_type(id) == WT_PRIM_INSTANCE) {
+          pint now;
+          if (geometry_instance_info(g, id).y & WT_INSTANCE_PRIMITIVES) {
+            // the packet goes on inside, in the copy's object space; a lane whose ray is not finite there is
+            // dropped (closest) or blocked (any), as alone
+            PrimPacket q;
+            pint inside, not_finite;
+            prims_packet_into_instance(g, id, p, lane_hit, skip_instance, &q, &inside, &not_finite);
+            now = any ? not_finite : (pint)(0);
+            if (packet_any(inside))
+              now |= prims_packet_tree(g, geometry_instance_info(g, id).x, &q, inside, any, t, u, v, prim);
+          } else {
+            // a copy of triangles: the triangle packet in its object space
+            now = any ? prims_packet_triangles_occluded(scene, g, id, p, lane_hit, index, skip_instance, t)
+                      : prims_packet_triangles_closest(scene, g, id, p, lane_hit, index, skip_instance, t, u, v, prim);
           }
-#endif
+          if (!packet_any(now)) continue;
+          int lane_now[WT_PACKET];
+          packet_vstore(now, lane_now);
           for (int l = 0; l < WT_PACKET; ++l) {
-            if (!lane_open[l]) continue;
-            float th, uh, vh;
-            if (!geometry_intersect(g, id, prims_packet_org(p, l), prims_packet_dir(p, l), p->tmin[l], lane_tmax[l],
-                                    p->skip[l], skip_b[l], true, &th, &uh, &vh))
-              continue;
-            lane_open[l] = 0;
-            won = true;
+            if (!lane_now[l]) continue;
+            found[l] = -1;
+            if (any) lane_hit[l] = 0;
+            else instance[l] = id;
           }
+          won = true;
+          continue;
         }
-        if (won) {
-          open = (open & ~hit) | packet_vload(lane_open);
-          if (!packet_any(open)) return valid;
-        }
-      } else {
-        stack_node[sp++] = first;
+        won |= prims_packet_leaf(g, i, 1u, p, any, skip_b, lane_hit, found, t, u, v, prim, instance);
+      }
+#endif
+      if (won && any) {
+        open = valid & ~packet_vload(found);
+        if (!packet_any(open)) return valid;
+      } else if (won) {
+        tmax = packet_vload(t);
+        reach = packet_max(packet_pick(valid, tmax, (pfloat)(-INFINITY)));
       }
     }
-    if (sp == 0) return valid & ~open;
-    node = stack_node[--sp];
-  }
+  } while (prims_walk_next(&w, any, reach, &node));
+  return packet_vload(found);
 }
 
 /// The rays index[0..lanes) of ray_o / ray_d as a scene-space PrimPacket
@@ -538,7 +459,7 @@ inline void prims_packet_trace_closest(BvhScene scene, GeometryScene g, const ui
     instance[l] = WT_NO_HIT;
     skip_instance[l] = hit_instance ? hit_instance[i] : WT_NO_HIT;
   }
-  prims_packet_closest(scene, g, &p, valid, index, skip_instance, t, u, v, prim, instance);
+  prims_packet_walk(scene, g, &p, valid, false, index, 0, skip_instance, t, u, v, prim, instance);
   for (uint l = 0; l < lanes; ++l) {
     uint i = index[l];
     if (hit_instance) hit_instance[i] = instance[l];
@@ -557,6 +478,19 @@ inline void prims_packet_trace_occluded(BvhScene scene, GeometryScene g, const u
   bool any_open = false;
   for (uint l = 0; l < lanes; ++l) any_open = any_open || !blocked[l];
   if (!any_open || g.header.node_count == 0) return;
+#if WT_HAS_CURVES && !WT_HAS_INSTANCES
+  // flat curves: each ray alone, as bvh_prims_occluded (shadow rays through
+  // dense hair part at once; the packet's box tests then cost more than the
+  // lanes share)
+  for (uint l = 0; l < lanes; ++l) {
+    if (blocked[l]) continue;
+    uint i = index[l];
+    float4 o = ray_o[i], d = ray_d[i];
+    uint2 ab = skip_ab ? skip_ab[i] : (uint2)(skip_a[i], WT_NO_HIT);
+    if (bvh_prims_occluded(scene, g, o.xyz, d.xyz, o.w, d.w, ab.x, ab.y, WT_NO_HIT)) blocked[l] = -1;
+  }
+  return;
+#endif
   PrimPacket p;
   float tmax[WT_PACKET];
   uint skip_b[WT_PACKET], skip_instance[WT_PACKET];
@@ -569,7 +503,8 @@ inline void prims_packet_trace_occluded(BvhScene scene, GeometryScene g, const u
   }
   pint todo = packet_vload(open);
   // a lane whose ray is not finite counts as blocked, as in bvh_prims_occluded
-  pint now = (todo & ~finite) | prims_packet_occluded(scene, g, &p, todo & finite, tmax, index, skip_b, skip_instance);
+  pint now = (todo & ~finite) |
+             prims_packet_walk(scene, g, &p, todo & finite, true, index, skip_b, skip_instance, tmax, 0, 0, 0, 0);
   int lane_now[WT_PACKET];
   packet_vstore(now, lane_now);
   for (uint l = 0; l < lanes; ++l)

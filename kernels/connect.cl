@@ -8,29 +8,74 @@
 #include "bvh_prims_packet.cl"
 #include "bvh_stream.cl"
 #include "materials/bsdf.cl"
+// expanded where shade.cl first includes it (expandKernelSource): no change to the program
+#include "materials/textured.cl"
 
 #if WT_HAS_THIN_SHADOWS
 /// With smooth thin walls that shadow rays cross (WtMaterial::shadow_pass):
-/// how many each shadow ray may cross (shade), and what weighs a wall.
+/// how many each shadow ray may cross (shade), and what weighs a wall: its
+/// material, normals and (triangles) the vertex colours and textures that
+/// tint it.
 #define WT_THIN_SHADOW_PARAMS                                                                                    \
   , __global const uint *shadow_walls, __global const WtMaterial *thin_materials,                               \
-      __global const uint4 *thin_tri_info, __global const float4 *thin_normals, __global const float *thin_pbr_table
-#define WT_THIN_WALLS {thin_materials, thin_tri_info, thin_normals, thin_pbr_table}
+      __global const uint4 *thin_tri_info, __global const float4 *thin_normals, __global const float *thin_pbr_table, \
+      __global const float4 *thin_vertex_uv, __global const float4 *thin_vertex_color,                           \
+      __global const float4 *thin_vertex_tangent, __global const WtTextureRef *thin_material_textures,           \
+      __global const WtTexture *thin_textures, __global const WtTextureLevel *thin_texture_levels,               \
+      __global const uint *thin_texels
+#define WT_THIN_WALLS                                                                                            \
+  {thin_materials, thin_tri_info, thin_normals, thin_pbr_table,                                                  \
+   {thin_vertex_uv, thin_vertex_color, thin_vertex_tangent, thin_material_textures, thin_textures,              \
+    thin_texture_levels, thin_texels}}
 
 typedef struct ThinWalls {
   __global const WtMaterial* materials;
   __global const uint4* tri_info;
   __global const float4* normals;
   __global const float* pbr_table;
+  SurfaceScene surface;  ///< vertex colours and textures (textured.cl)
 } ThinWalls;
+
+#if WT_HAS_TEXTURES || WT_HAS_VERTEX_COLORS
+/// Material `index` (`m`) at a triangle's hit (barycentrics b) as shade
+/// reads it (material_at): tinted by COLOR_0 and its textures, *ns bent by
+/// its normal map, *coat_ns the coat's own normal (zero: none). Textures
+/// are read at their finest level: a shadow ray has no footprint of its
+/// own, and the finest level is what the paths' filtered reads converge to
+/// (their cones narrow with the sample index).
+inline WtMaterial connect_wall_material(GeometryScene g, __global const float4* tri_verts, ThinWalls t, uint prim,
+                                        uint instance, float2 b, uint index, WtMaterial m, float3* ns,
+                                        float3* coat_ns) {
+  *coat_ns = (float3)(0.0f);
+  if (prim_type(prim) != WT_PRIM_TRIANGLE) return m;
+  float3 p0, p1, p2;
+  triangle_corners(tri_verts, prim, &p0, &p1, &p2);
+#if WT_HAS_INSTANCES
+  __global const float4* to_world = instance != WT_NO_HIT ? geometry_instance_rows(g, instance) + 3 : 0;
+  if (to_world) p0 = instance_point(to_world, p0), p1 = instance_point(to_world, p1), p2 = instance_point(to_world, p2);
+#endif
+  SurfacePoint sp = surface_point(t.surface, t.tri_info[prim], b.x, b.y, p0, p1, p2, 0.0f);
+#if WT_HAS_INSTANCES
+  if (to_world && dot(sp.tangent, sp.tangent) > 0.0f) {
+    sp.tangent = normalize(instance_vector(to_world, sp.tangent));
+    if (geometry_instance_info(g, instance).y & WT_INSTANCE_MIRRORED) sp.sign = -sp.sign;
+  }
+#endif
+#if WT_HAS_TEXTURES && WT_HAS_CLEARCOAT
+  *coat_ns = clearcoat_normal(t.surface, index, m.texture_mask, sp, *ns);  // before the base's map bends ns
+#endif
+  return material_at(t.surface, index, m, sp, ns);
+}
+#endif
 
 /// What a shadow ray that something blocked still carries: the product of
 /// the straight-through transmission (bsdf_thin_pass) of the walls it
 /// crosses, at most `walls` of them, or 0 where any other surface, or one
 /// wall more, is in the way. The closest hits one after another, so each
-/// wall is weighed from the side the ray meets, as shade weighs a path that
-/// crosses it; glass that bends light (a volume boundary) and rough walls
-/// block, their light found by BSDF sampling and by NEE at their own vertices.
+/// wall is weighed from the side the ray meets, at the point it meets, as
+/// shade weighs a path that crosses it; glass that bends light (a volume
+/// boundary) and rough walls block, their light found by BSDF sampling and
+/// by NEE at their own vertices.
 inline float3 connect_through_walls(BvhScene scene, GeometryScene g, ThinWalls t, float4 o, float4 d, uint2 skip,
                                     uint skip_instance, uint walls) {
   float3 pass = (float3)(1.0f);
@@ -52,14 +97,32 @@ inline float3 connect_through_walls(BvhScene scene, GeometryScene g, ThinWalls t
     SurfaceHit sh = geometry_surface(g, scene.tri_verts, t.tri_info, t.normals, hit.prim, instance, o.xyz, d.xyz, h);
     WtMaterial m = t.materials[sh.material];
     if (!m.shadow_pass || dot(sh.ng, sh.ng) == 0.0f) return (float3)(0.0f);
-    // the shading normal as shade turns it: to the ray's side, else the geometric one
+    // the normals and the material as shade has them at this point
     float3 wo = -d.xyz, ng = sh.ng, ns = sh.ns;
+#if WT_HAS_TEXTURES || WT_HAS_VERTEX_COLORS
+    float3 coat_ns;
+    m = connect_wall_material(g, scene.tri_verts, t, hit.prim, instance, (float2)(hit.b1, hit.b2), sh.material, m, &ns,
+                              &coat_ns);
+#endif
     if (dot(ng, wo) < 0.0f) ng = -ng;
     if (dot(ns, ng) < 0.0f) ns = -ns;
     if (dot(ns, wo) <= 0.0f) ns = ng;
-    // isotropic and without a coat normal: only the cosine matters
-    float mu = fmin(dot(wo, ns), 1.0f);
-    pass *= bsdf_thin_pass(bsdf_make(m, t.pbr_table, 0), (float3)(sqrt(fmax(1.0f - mu * mu, 0.0f)), 0.0f, mu));
+#if WT_HAS_TEXTURES
+    if (m.texture_mask & (1u << WT_TEXTURE_SLOT_NORMAL)) ns = shading_normal_reflecting(ns, ng, wo);
+#endif
+    Bsdf b = bsdf_make(m, t.pbr_table, 0);
+    float3 frame_t, frame_b;
+    frame_from_normal(ns, &frame_t, &frame_b);
+#if WT_HAS_TEXTURES && WT_HAS_CLEARCOAT
+    if (dot(coat_ns, coat_ns) > 0.0f) {
+      if (dot(coat_ns, ng) < 0.0f) coat_ns = -coat_ns;
+      if (dot(coat_ns, wo) <= 0.0f) coat_ns = ng;
+      coat_ns = shading_normal_reflecting(coat_ns, ng, wo);
+      bsdf_coat_normal(&b, (float3)(dot(coat_ns, frame_t), dot(coat_ns, frame_b), dot(coat_ns, ns)));
+    }
+#endif
+    // isotropic (no anisotropy on such walls): the frame's turn about ns does not matter
+    pass *= bsdf_thin_pass(b, (float3)(dot(wo, frame_t), dot(wo, frame_b), dot(wo, ns)));
     if (!(pass.x > 0.0f || pass.y > 0.0f || pass.z > 0.0f)) return (float3)(0.0f);
   }
 }

@@ -18,6 +18,13 @@
 #else
 #define WT_THIN_SHADOW_SHADE_PARAMS
 #endif
+#if WT_HAS_QUAD_LIGHTS
+/// With rectangle lights: per leaf-order triangle, the light-list index of
+/// the WT_LIGHT_QUAD it is half of (WT_NO_QUAD: none), for the pdf of its emission.
+#define WT_QUAD_SHADE_PARAMS , __global const uint *emitter_quad
+#else
+#define WT_QUAD_SHADE_PARAMS
+#endif
 
 /// Weight of emission found by BSDF sampling (pdf_bsdf, solid angle) from a
 /// light that NEE could also have sampled with pdf_light (0: NEE cannot).
@@ -29,6 +36,16 @@ inline float shade_emission_weight(WtFrameParams frame, float pdf_bsdf, float pd
   if (!(frame.flags & WT_FLAG_MIS)) return 0.0f;
   return mis_weight(pdf_bsdf, pdf_light, frame.flags);
 }
+
+#if WT_HAS_TRANSMISSION
+/// What medium `id` (WT_MEDIUM_NONE: air) absorbs along `distance` (world
+/// units; an infinite one crosses no absorbing medium unblocked: 1).
+inline float3 shade_absorption(__global const WtMaterial* materials, uint id, float distance) {
+  if (id == WT_MEDIUM_NONE || isinf(distance)) return (float3)(1.0f);
+  float3 sigma = vec4_xyz(materials[id].volume);
+  return sigma.x > 0.0f || sigma.y > 0.0f || sigma.z > 0.0f ? exp(-sigma * distance) : (float3)(1.0f);
+}
+#endif
 
 /// With WT_FLAG_CHECK_NONFINITE, note the first non-finite value any path
 /// makes (which path, bounce and quantity) for the host to stop at.
@@ -55,7 +72,7 @@ WT_KERNEL void shade(WtFrameParams frame, WtEnvironment environment, __global co
                      __global const WtLightNode* light_tree, __global const uint* emitter_leaf,
                      __global float4* prev_normal, __global const uint* hit_instance, WT_GEOMETRY_PARAMS,
                      __global float2* ray_cone, __global float4* aov_sample, __global uint4* aov_ids,
-                     __global uint4* media, WT_SURFACE_PARAMS WT_THIN_SHADOW_SHADE_PARAMS) {
+                     __global uint4* media, WT_SURFACE_PARAMS WT_THIN_SHADOW_SHADE_PARAMS WT_QUAD_SHADE_PARAMS) {
   uint i = get_global_id(0);
   if (i >= counters[in_slot]) return;
   // Without WT_FLAG_COMPACT_SHADOWS entry i of the shadow queue is this
@@ -237,8 +254,20 @@ WT_KERNEL void shade(WtFrameParams frame, WtEnvironment environment, __global co
       if (select > 0.0f && leaf != WT_LIGHT_NODE_NONE)
         select *= light_tree_pmf(light_tree, leaf, ray_o[path].xyz, prev_normal[path].xyz);
       float3 p0, p1, p2;
+#if WT_HAS_QUAD_LIGHTS
+      // half of a rectangle light: the pdf its sampler has, from the same corners
+      uint quad = emitter_quad[prim];
+      if (quad != WT_NO_QUAD) {
+        light_quad_rect(tri_verts, lights[quad], &p0, &p1, &p2);
+        pdf_light = light_quad_pdf(select, ray_o[path].xyz, p0, p1, p2, hit.x, dir, ng);
+      } else {
+        triangle_corners(tri_verts, prim, &p0, &p1, &p2);
+        pdf_light = light_triangle_pdf(select, ray_o[path].xyz, p0, p1, p2, hit.x, dir, ng);
+      }
+#else
       triangle_corners(tri_verts, prim, &p0, &p1, &p2);
       pdf_light = light_triangle_pdf(select, ray_o[path].xyz, p0, p1, p2, hit.x, dir, ng);
+#endif
     }
     float3 emitted = beta * le * shade_emission_weight(frame, pdf_prev, pdf_light);
     shade_check_finite(frame, counters, path, emitted, WT_NONFINITE_EMISSION);
@@ -364,6 +393,14 @@ WT_KERNEL void shade(WtFrameParams frame, WtEnvironment environment, __global co
                     ? 1.0f
                     : mis_weight(pdf_light, pdf_bsdf, frame.flags);
       float3 contribution = beta * f_cos * s.radiance * (w / pdf_light);
+#if WT_HAS_TRANSMISSION
+      // the medium on the shadow ray's side absorbs along it, as along a path's segment
+      // (it crosses no volume boundary: those block it)
+      contribution *= shade_absorption(materials,
+                                       boundary ? (dot(ng, s.wi) > 0.0f ? crossing.near_id : crossing.far_id)
+                                                : (current >= 0 ? stack.id[current] : WT_MEDIUM_NONE),
+                                       s.distance);
+#endif
       shade_check_finite(frame, counters, path, contribution, WT_NONFINITE_LIGHT);
       if (contribution.x > 0.0f || contribution.y > 0.0f || contribution.z > 0.0f) {
         // Aim from the offset origin at the target (the sampled point pushed

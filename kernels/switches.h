@@ -75,6 +75,13 @@
 #elif WT_HAS_THIN_SHADOWS && !WT_HAS_TRANSMISSION
 #error "WT_HAS_THIN_SHADOWS needs WT_HAS_TRANSMISSION"
 #endif
+// Two emissive triangles make a rectangle light (WT_LIGHT_QUAD): NEE
+// samples it as one, by solid angle, and shade takes WT_QUAD_SHADE_PARAMS.
+#ifndef WT_HAS_QUAD_LIGHTS
+#error "WT_HAS_QUAD_LIGHTS not set (kernelDefines)"
+#elif !WT_SWITCH_IS_BOOL(WT_HAS_QUAD_LIGHTS)
+#error "WT_HAS_QUAD_LIGHTS must be 0 or 1"
+#endif
 #ifndef WT_HAS_TEXTURES
 #error "WT_HAS_TEXTURES not set (kernelDefines)"
 #elif !WT_SWITCH_IS_BOOL(WT_HAS_TEXTURES)

@@ -131,6 +131,35 @@ WT_KERNEL void test_spherical_triangle(uint count, __global const float4* verts,
   out[2 * i + 1] = (float4)(test_spherical_triangle_arvo(A, B, C, omega, u[i].x, u[i].y), 0.0f);
 }
 
+/// Rectangle i, views[4 i ..]: (p, two-sided), (c, 1 / area), e1, e2, sampled
+/// from p with uniforms u[i] by light_sample_rect: out[3 i] (wi, distance),
+/// out[3 i + 1] (s, t, the sampler's pdf, the emission's pdf light_quad_pdf
+/// gives the same direction with selection 1 / area), out[3 i + 2]
+/// (solid angle, 1 where sampled, 0).
+WT_KERNEL void test_quad_sample(uint count, __global const float4* views, __global const float2* u,
+                                __global float4* out) {
+  uint i = get_global_id(0);
+  if (i >= count) return;
+  float3 p = views[4 * i].xyz, c = views[4 * i + 1].xyz, e1 = views[4 * i + 2].xyz, e2 = views[4 * i + 3].xyz;
+  LightSample s;
+  float2 st = (float2)(0.0f);
+  bool ok = light_sample_rect(p, c, e1, e2, views[4 * i].w != 0.0f, u[i].x, u[i].y, &s, &st);
+  float pdf_hit = 0.0f;
+  if (ok) pdf_hit = light_quad_pdf(views[4 * i + 1].w, p, c, e1, e2, s.distance, s.wi, normalize(cross(e1, e2)));
+  out[3 * i] = ok ? (float4)(s.wi, s.distance) : (float4)(0.0f);
+  out[3 * i + 1] = (float4)(st, ok ? s.pdf : 0.0f, pdf_hit);
+  out[3 * i + 2] = (float4)(light_quad_solid_angle(p, c, e1, e2), ok ? 1.0f : 0.0f, 0.0f, 0.0f);
+}
+
+/// light_quad_pdf of rectangle views[4 i ..] (as test_quad_sample's) for the
+/// direction and distance dirs[i] (wi, distance): out[i].
+WT_KERNEL void test_quad_pdf(uint count, __global const float4* views, __global const float4* dirs, __global float* out) {
+  uint i = get_global_id(0);
+  if (i >= count) return;
+  float3 p = views[4 * i].xyz, c = views[4 * i + 1].xyz, e1 = views[4 * i + 2].xyz, e2 = views[4 * i + 3].xyz;
+  out[i] = light_quad_pdf(views[4 * i + 1].w, p, c, e1, e2, dirs[i].w, dirs[i].xyz, normalize(cross(e1, e2)));
+}
+
 #include "shared/sampler.h"
 #include "sampler.cl"
 

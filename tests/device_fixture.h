@@ -50,6 +50,7 @@ inline cl::Program testProgram(const std::string& root) {
     features.pbr = true;  // the metallic-roughness BSDF's tests need it compiled in
     features.transmission = true;
     features.specular = features.clearcoat = features.sheen = features.anisotropy = features.iridescence = true;  // and every layer
+    features.quadLights = true;  // the rectangle lights' sampler (tests/kernels/test_light_sampling.cpp)
     it = shared.programs.emplace(root, buildProgram(deviceContext(), features, root)).first;
   }
   return it->second;

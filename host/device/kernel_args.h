@@ -29,6 +29,7 @@ enum class ParamIf : std::uint8_t {
   Always,
   Alpha,  ///< WT_HAS_ALPHA (kernels/materials/alpha.cl, WT_ALPHA_PARAMS)
   ThinShadows,  ///< WT_HAS_THIN_SHADOWS (kernels/connect.cl, WT_THIN_SHADOW_PARAMS)
+  QuadLights,   ///< WT_HAS_QUAD_LIGHTS (kernels/shade.cl, WT_QUAD_SHADE_PARAMS)
 };
 
 struct KernelParam {
@@ -40,8 +41,10 @@ struct KernelParam {
 struct ParamFeatures {
   bool alpha = false;
   bool thinShadows = false;
+  bool quadLights = false;
   bool has(ParamIf when) const {
-    return when == ParamIf::Always || (when == ParamIf::Alpha && alpha) || (when == ParamIf::ThinShadows && thinShadows);
+    return when == ParamIf::Always || (when == ParamIf::Alpha && alpha) || (when == ParamIf::ThinShadows && thinShadows) ||
+           (when == ParamIf::QuadLights && quadLights);
   }
 };
 

@@ -27,6 +27,10 @@ struct KernelFeatures {
   /// A material is a smooth thin wall that shadow rays cross
   /// (WtMaterial::shadow_pass): connect and shade take WT_THIN_SHADOW_PARAMS
   bool thinShadows = false;
+  /// Two emissive triangles make a rectangle light, sampled as one
+  /// (WT_LIGHT_QUAD; set by the renderer from its light list): shade takes
+  /// WT_QUAD_SHADE_PARAMS
+  bool quadLights = false;
   bool textures = false;          ///< a material reads a texture (materials/textured.cl)
   bool vertexColors = false;      ///< the scene's vertices have COLOR_0
   bool specular = false;          ///< a dielectric's F0 is not 0.04 or its Fresnel is weighted (KHR_materials_specular, KHR_materials_ior)

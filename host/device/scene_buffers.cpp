@@ -378,8 +378,8 @@ SceneBuffers::SceneBuffers(Context& context, const Scene& scene, const BvhBuildO
   m_kernelMaterials = scene.materials;
   if (options.lambertianForms)
     std::transform(m_kernelMaterials.begin(), m_kernelMaterials.end(), m_kernelMaterials.begin(), kernelMaterial);
-  // shadow rays cross smooth thin walls; COLOR_0 would tint a wall's transmission per vertex
-  for (WtMaterial& m : m_kernelMaterials) m.shadow_pass = scene.colors.empty() && thinShadowPass(m) ? 1u : 0u;
+  // shadow rays cross smooth thin walls (tinted where they meet them: COLOR_0 and textures too)
+  for (WtMaterial& m : m_kernelMaterials) m.shadow_pass = thinShadowPass(m) ? 1u : 0u;
   materials = upload(context, m_kernelMaterials, m_attributeBytes);
   uploadPrimitives(context, scene, options, descs);
   uploadSurface(context, scene);
@@ -387,8 +387,11 @@ SceneBuffers::SceneBuffers(Context& context, const Scene& scene, const BvhBuildO
 }
 
 bool thinShadowPass(const WtMaterial& m) {
-  return m.model == WT_MATERIAL_PBR && m.transmission > 0.0f && m.base_color.w < 1.0f && m.volume.w == 0.0f &&
-         m.roughness < WT_PBR_MIN_ROUGHNESS && m.anisotropy == 0.0f && m.texture_mask == 0u;
+  // textures only multiply the factors: the roughness and the anisotropy stay below theirs, metallic below 1
+  // where its factor is or a metallic-roughness texture scales it (setMaterialFeatures' dielectric share)
+  const bool dielectric = m.base_color.w < 1.0f || (m.texture_mask & (1u << WT_TEXTURE_SLOT_METALLIC_ROUGHNESS)) != 0u;
+  return m.model == WT_MATERIAL_PBR && m.transmission > 0.0f && dielectric && m.volume.w == 0.0f &&
+         m.roughness < WT_PBR_MIN_ROUGHNESS && m.anisotropy == 0.0f;
 }
 
 bool textureIsOpaque(const TextureSet& textures, std::uint32_t texture) {

@@ -48,11 +48,11 @@ bool triangleMayHaveHoles(const Scene& scene, std::uint32_t tri, const std::vect
 /// Whether shadow rays may cross material `m` (WtMaterial::shadow_pass): a
 /// metallic-roughness thin wall (no KHR_materials_volume) that transmits
 /// and is smooth everywhere (roughness below WT_PBR_MIN_ROUGHNESS, no
-/// anisotropy), so light crosses it straight, and whose straight-through
-/// transmission is the same all over (no texture; COLOR_0, which tints the
-/// base, is the caller's to rule out). Such a wall has no vertex of its own
-/// that could sample a light behind it: shadow rays through it are the only
-/// way NEE finds that light (kernels/connect.cl).
+/// anisotropy; textures only scale these factors down), so light crosses it
+/// straight. Its tint (COLOR_0, textures) is read where a shadow ray meets
+/// it. Such a wall has no vertex of its own that could sample a light
+/// behind it: shadow rays through it are the only way NEE finds that light
+/// (kernels/connect.cl).
 bool thinShadowPass(const WtMaterial& m);
 
 /// Whether texture `texture` of the scene's TextureSet is opaque: its

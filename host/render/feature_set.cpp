@@ -1,6 +1,7 @@
 #include "render/feature_set.h"
 
 #include "device/scene_buffers.h"
+#include "render/light_list.h"
 #include "render/renderer.h"
 #include "scene/scene.h"
 
@@ -46,6 +47,8 @@ FeatureSet sceneFeatures(const Scene& scene, const SceneBuffers& buffers, const 
     if (const WtMaterial* m = material(d.material); m && emits(*m)) f.emissivePrimitives = true;
   for (const SdfGrid& g : scene.sdfGrids)
     if (const WtMaterial* m = material(g.material); m && emits(*m)) f.emissivePrimitives = true;
+  // the light list makes the same pairs (buildLightList)
+  f.quadLights = f.emissiveTriangles && settings.quadLights && !findQuadLights(scene, buffers).empty();
   f.environmentMap = !settings.environmentMap.empty() && settings.environmentIntensity > 0.0f;
   f.constantSky = settings.environmentMap.empty() &&
                   (settings.background.x > 0.0f || settings.background.y > 0.0f || settings.background.z > 0.0f);
@@ -111,6 +114,7 @@ std::vector<std::string> featureNames(const FeatureSet& f) {
   add(f.instances, "instances");
   add(f.punctualLights, "punctual_lights");
   add(f.emissiveTriangles, "emissive_triangles");
+  add(f.quadLights, "quad_lights");
   add(f.emissivePrimitives, "emissive_primitives");
   add(f.emissiveTextures, "emissive_textures");
   add(f.environmentMap, "environment_map");
@@ -154,6 +158,7 @@ KernelFeatures kernelFeaturesFor(const FeatureSet& f, const DeviceInfo& device, 
   k.pbr = f.pbr;
   k.transmission = f.transmission;
   k.thinShadows = f.thinShadows;
+  k.quadLights = f.quadLights;
   k.specular = f.specular;
   k.clearcoat = f.clearcoat;
   k.sheen = f.sheen;
@@ -176,7 +181,7 @@ KernelFeatures generalKernelFeatures(const FeatureSet& f, const DeviceInfo& devi
   KernelFeatures k = kernelFeaturesFor(f, device, requestedPacketWidth);
   // the integrator is an algorithm, not a feature a scene has: kept
   k.pbr = k.transmission = k.specular = k.clearcoat = k.sheen = k.anisotropy = k.iridescence = k.thinShadows = true;
-  k.textures = k.vertexColors = k.alpha = true;
+  k.textures = k.vertexColors = k.alpha = k.quadLights = true;
   k.primitives.fill(true);
   k.primitives[WT_PRIM_TRIANGLE] = false;  // triangles are always compiled in: no switch
   return k;

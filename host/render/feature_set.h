@@ -34,6 +34,7 @@ struct FeatureSet {
   bool emissiveTriangles = false;  ///< a triangle's material emits
   bool emissivePrimitives = false; ///< a sphere's, curve's, displaced mesh's or SDF grid's material emits
   bool emissiveTextures = false;   ///< an emitting material's emission is textured
+  bool quadLights = false;         ///< two emissive triangles make a rectangle light (findQuadLights; RenderSettings::quadLights)
   bool environmentMap = false;     ///< an equirectangular map lights the scene
   bool constantSky = false;        ///< a constant, non-black background lights the scene
   // surfaces

@@ -3,9 +3,13 @@
 #include "bvh/parallel.h"
 #include "render/light_tree.h"
 
+#include <algorithm>
+#include <array>
 #include <atomic>
+#include <bit>
 #include <cmath>
 #include <numbers>
+#include <tuple>
 
 namespace wt {
 
@@ -158,6 +162,69 @@ double meanCoverage(const Scene& scene, const WtTriangle& t) {
   return sum / double(kSide * kSide);
 }
 
+std::vector<QuadLight> findQuadLights(const Scene& scene, const SceneBuffers& buffers) {
+  // each candidate half: its right-angle corner and the diagonal opposite it, keyed by material and the diagonal's ends
+  struct Half {
+    std::uint32_t material;
+    std::array<float, 3> lo, hi;  ///< the diagonal's ends, ordered
+    std::uint32_t leaf, corner;
+  };
+  std::vector<Half> halves;
+  const std::vector<std::uint32_t>& order = buffers.leafOrder();
+  auto pos = [&](std::uint32_t v) { return glm::dvec3(scene.positions[v].x, scene.positions[v].y, scene.positions[v].z); };
+  for (std::size_t leaf = 0; leaf < order.size(); ++leaf) {
+    if (order[leaf] == SceneBuffers::kNoTriangle || buffers.triangleInstance(order[leaf]) != SceneBuffers::kNoTriangle)
+      continue;
+    const WtTriangle& t = scene.triangles[order[leaf]];
+    const WtMaterial& m = scene.materials[t.material];
+    if (!(luminance(glm::vec3(m.emission.x, m.emission.y, m.emission.z)) > 0.0) ||
+        (m.texture_mask & (1u << WT_TEXTURE_SLOT_EMISSIVE)) || m.alpha_mode == WT_ALPHA_MASK || m.alpha_mode == WT_ALPHA_BLEND)
+      continue;
+    const std::array<std::uint32_t, 3> v = {t.v0, t.v1, t.v2};
+    for (std::uint32_t k = 0; k < 3; ++k) {
+      const glm::dvec3 c = pos(v[k]), e1 = pos(v[(k + 1) % 3]) - c, e2 = pos(v[(k + 2) % 3]) - c;
+      const double l1 = glm::length(e1), l2 = glm::length(e2);
+      if (!(l1 > 0.0 && l2 > 0.0 && std::isfinite(l1 * l2)) || !(std::fabs(glm::dot(e1, e2)) <= kQuadTolerance * l1 * l2))
+        continue;
+      auto key = [&](std::uint32_t w) {
+        return std::array<float, 3>{scene.positions[w].x, scene.positions[w].y, scene.positions[w].z};
+      };
+      std::array<float, 3> a = key(v[(k + 1) % 3]), b = key(v[(k + 2) % 3]);
+      if (b < a) std::swap(a, b);
+      halves.push_back({t.material, a, b, std::uint32_t(leaf), k});
+      break;  // at most one right angle
+    }
+  }
+  auto sameKey = [](const Half& x, const Half& y) { return x.material == y.material && x.lo == y.lo && x.hi == y.hi; };
+  std::sort(halves.begin(), halves.end(), [](const Half& x, const Half& y) {
+    return std::tie(x.material, x.lo, x.hi, x.leaf) < std::tie(y.material, y.lo, y.hi, y.leaf);
+  });
+  std::vector<QuadLight> quads;
+  std::vector<bool> used(halves.size(), false);
+  for (std::size_t i = 0; i < halves.size(); ++i) {
+    if (used[i]) continue;
+    const WtTriangle& ti = scene.triangles[order[halves[i].leaf]];
+    const std::array<std::uint32_t, 3> vi = {ti.v0, ti.v1, ti.v2};
+    const glm::dvec3 c = pos(vi[halves[i].corner]), a = pos(vi[(halves[i].corner + 1) % 3]),
+                     b = pos(vi[(halves[i].corner + 2) % 3]);
+    const glm::dvec3 normal = glm::cross(a - c, b - c);
+    for (std::size_t j = i + 1; j < halves.size() && sameKey(halves[i], halves[j]); ++j) {
+      if (used[j]) continue;
+      const WtTriangle& tj = scene.triangles[order[halves[j].leaf]];
+      const std::array<std::uint32_t, 3> vj = {tj.v0, tj.v1, tj.v2};
+      const glm::dvec3 d = pos(vj[halves[j].corner]);
+      const glm::dvec3 nj = glm::cross(pos(vj[(halves[j].corner + 1) % 3]) - d, pos(vj[(halves[j].corner + 2) % 3]) - d);
+      // the far corner where the first half's edges put it, and both windings facing the same way
+      if (!(glm::length(d - (a + b - c)) <= kQuadTolerance * glm::length(a - b)) || !(glm::dot(normal, nj) > 0.0)) continue;
+      used[i] = used[j] = true;
+      quads.push_back({halves[i].leaf, halves[i].corner, halves[j].leaf});
+      break;
+    }
+  }
+  std::sort(quads.begin(), quads.end(), [](const QuadLight& x, const QuadLight& y) { return x.first < y.first; });
+  return quads;
+}
+
 double environmentPowerEstimate(const Scene& scene, double meanLuminance) {
   Aabb box = scene.bounds();
   double r = box.empty() ? 1.0 : 0.5 * glm::length(box.extent());
@@ -166,7 +233,7 @@ double environmentPowerEstimate(const Scene& scene, double meanLuminance) {
 }
 
 LightList buildLightList(const Scene& scene, const SceneBuffers& buffers, double environmentPower,
-                         LightSampler sampler, bool coverageWeights) {
+                         LightSampler sampler, bool coverageWeights, bool quadLights) {
   LightList list;
   std::vector<double> power;
   Aabb box = scene.bounds();
@@ -192,11 +259,43 @@ LightList buildLightList(const Scene& scene, const SceneBuffers& buffers, double
   }
   list.analyticCount = std::uint32_t(list.lights.size());
 
-  // emissive triangles, in leaf order (as the kernels index them)
+  // emissive triangles, in leaf order (as the kernels index them); a
+  // rectangle's two halves are one light, where its first half comes
   const std::vector<std::uint32_t>& order = buffers.leafOrder();
   std::vector<std::uint32_t> lightOfLeaf(order.size(), ~0u);
-  std::vector<double> areas;
+  std::vector<double> lightArea(list.lights.size(), 0.0);  ///< per light so far: a triangle's or rectangle's area
+  std::vector<std::uint32_t> otherHalf(list.lights.size(), ~0u);  ///< per light: a rectangle's second half
+  std::vector<QuadLight> quads = quadLights ? findQuadLights(scene, buffers) : std::vector<QuadLight>{};
+  std::vector<std::uint32_t> quadOfLeaf(order.size(), ~0u);
+  for (std::size_t q = 0; q < quads.size(); ++q) quadOfLeaf[quads[q].first] = quadOfLeaf[quads[q].second] = std::uint32_t(q);
+  auto pos = [&](std::uint32_t v) { return glm::dvec3(scene.positions[v].x, scene.positions[v].y, scene.positions[v].z); };
   for (std::size_t leaf = 0; leaf < order.size(); ++leaf) {
+    if (quadOfLeaf[leaf] != ~0u) {
+      const QuadLight& quad = quads[quadOfLeaf[leaf]];
+      if (leaf != quad.first) continue;  // its light came with the first half
+      const WtTriangle& t = scene.triangles[order[leaf]];
+      const std::array<std::uint32_t, 3> v = {t.v0, t.v1, t.v2};
+      const glm::dvec3 c = pos(v[quad.corner]);
+      const double area = glm::length(glm::cross(pos(v[(quad.corner + 1) % 3]) - c, pos(v[(quad.corner + 2) % 3]) - c));
+      const WtVec4& e = scene.materials[t.material].emission;
+      const glm::vec3 le(e.x, e.y, e.z);
+      WtLight l{};
+      l.type = WT_LIGHT_QUAD;
+      l.triangle = std::uint32_t(leaf);
+      l.intensity = {le.x, le.y, le.z, 0.0f};
+      const bool twoSided = e.w != 0.0f;
+      l.position.w = twoSided ? 1.0f : 0.0f;
+      l.position.x = float(quad.corner);
+      l.position.y = std::bit_cast<float>(quad.second);
+      lightOfLeaf[quad.first] = lightOfLeaf[quad.second] = std::uint32_t(list.lights.size());
+      power.push_back((twoSided ? 2.0 : 1.0) * std::numbers::pi * area * luminance(le));
+      lightArea.push_back(area);
+      otherHalf.push_back(quad.second);
+      list.lights.push_back(l);
+      list.emissiveTriangles += 2;
+      ++list.quadLights;
+      continue;
+    }
     // padding before an instanced geometry; its triangles never emit (SceneBuffers)
     if (order[leaf] == SceneBuffers::kNoTriangle || buffers.triangleInstance(order[leaf]) != SceneBuffers::kNoTriangle)
       continue;
@@ -209,7 +308,6 @@ LightList buildLightList(const Scene& scene, const SceneBuffers& buffers, double
     const bool textured = scene.materials[t.material].texture_mask & (1u << WT_TEXTURE_SLOT_EMISSIVE);
     const glm::vec3 average = textured ? glm::vec3(averageEmissiveTexture(scene, t)) * le : le;
     if (!(luminance(average) > 0.0)) continue;
-    auto pos = [&](std::uint32_t v) { return glm::dvec3(scene.positions[v].x, scene.positions[v].y, scene.positions[v].z); };
     double area = 0.5 * glm::length(glm::cross(pos(t.v1) - pos(t.v0), pos(t.v2) - pos(t.v0)));
     if (!(area > 0.0)) continue;
     WtLight l{};
@@ -230,19 +328,23 @@ LightList buildLightList(const Scene& scene, const SceneBuffers& buffers, double
     // floored: 64 points may miss what little is there, and NEE must still reach it (unbiased)
     const double coverage = coverageWeights ? std::max(meanCoverage(scene, t), kMinCoverageWeight) : 1.0;
     power.push_back((twoSided ? 2.0 : 1.0) * std::numbers::pi * area * luminance(average) * coverage);
-    areas.push_back(area);
+    lightArea.push_back(area);
+    otherHalf.push_back(~0u);
     list.lights.push_back(l);
+    ++list.emissiveTriangles;
   }
-  list.emissiveTriangles = areas.size();
+  // the tree by emitters as NEE picks them: a rectangle is one
+  const std::size_t emitterCount = list.lights.size() - list.analyticCount;
   const bool useTree = sampler == LightSampler::Tree ||
-                       (sampler == LightSampler::Auto && list.emissiveTriangles >= kLightTreeMinEmitters);
+                       (sampler == LightSampler::Auto && emitterCount >= kLightTreeMinEmitters);
   list.emitterLeaf.assign(order.size(), WT_LIGHT_NODE_NONE);
+  list.emitterQuad.assign(order.size(), WT_NO_QUAD);
 
   // With the tree, the triangles move behind one WT_LIGHT_TREE entry of
   // their total power; the table picks among the entries before them.
   std::uint32_t treeEntry = ~0u;
   std::vector<WtLight> triangleLights;
-  if (useTree && list.emissiveTriangles > 0) {
+  if (useTree && emitterCount > 0) {
     const std::size_t first = list.analyticCount;
     triangleLights.assign(list.lights.begin() + std::ptrdiff_t(first), list.lights.end());
     std::vector<double> trianglePower(power.begin() + std::ptrdiff_t(first), power.end());
@@ -259,14 +361,23 @@ LightList buildLightList(const Scene& scene, const SceneBuffers& buffers, double
     std::vector<LightTreeEmitter> emitters(triangleLights.size());
     for (std::size_t k = 0; k < triangleLights.size(); ++k) {
       const WtTriangle& t = scene.triangles[order[triangleLights[k].triangle]];
-      auto pos = [&](std::uint32_t v) { return glm::vec3(scene.positions[v].x, scene.positions[v].y, scene.positions[v].z); };
-      emitters[k] = {pos(t.v0), pos(t.v1), pos(t.v2), trianglePower[k], triangleLights[k].position.w != 0.0f,
+      auto corner = [&](std::uint32_t v) { return glm::vec3(scene.positions[v].x, scene.positions[v].y, scene.positions[v].z); };
+      emitters[k] = {corner(t.v0), corner(t.v1), corner(t.v2), trianglePower[k], triangleLights[k].position.w != 0.0f,
                      std::uint32_t(k)};
+      // a rectangle's fourth corner: its first half's two diagonal ends less its right-angle corner
+      if (triangleLights[k].type == WT_LIGHT_QUAD) {
+        const std::array<glm::vec3, 3> p = {emitters[k].p0, emitters[k].p1, emitters[k].p2};
+        const std::uint32_t c = std::uint32_t(triangleLights[k].position.x);
+        emitters[k].p3 = p[(c + 1) % 3] + p[(c + 2) % 3] - p[c];
+        emitters[k].quad = true;
+      }
     }
     LightTree tree = buildLightTree(emitters);
     list.tree = std::move(tree.nodes);
-    for (std::size_t k = 0; k < triangleLights.size(); ++k)
+    for (std::size_t k = 0; k < triangleLights.size(); ++k) {
       list.emitterLeaf[triangleLights[k].triangle] = tree.leafOfEmitter[k];
+      if (const std::uint32_t second = otherHalf[first + k]; second != ~0u) list.emitterLeaf[second] = tree.leafOfEmitter[k];
+    }
   }
 
   // emissive spheres, displaced base triangles and SDF bricks, one entry
@@ -340,12 +451,17 @@ LightList buildLightList(const Scene& scene, const SceneBuffers& buffers, double
     list.lights.push_back(l);
   }
   // the tree's leaves point at the triangles, stored after the table's entries
+  std::uint32_t treeBase = 0;
   if (treeEntry != ~0u) {
-    const std::uint32_t base = std::uint32_t(list.lights.size());
+    treeBase = std::uint32_t(list.lights.size());
     list.lights.insert(list.lights.end(), triangleLights.begin(), triangleLights.end());
     for (WtLightNode& n : list.tree)
-      if (n.leaf) n.child += base;
+      if (n.leaf) n.child += treeBase;
   }
+  // each rectangle's halves point at its light, where it ended up
+  for (std::size_t leaf = 0; leaf < order.size(); ++leaf)
+    if (quadOfLeaf[leaf] != ~0u)
+      list.emitterQuad[leaf] = treeEntry != ~0u ? treeBase + (lightOfLeaf[leaf] - list.analyticCount) : lightOfLeaf[leaf];
 
   list.alias = buildAliasTable(power);
   std::size_t emitterSlots = order.size();
@@ -356,12 +472,11 @@ LightList buildLightList(const Scene& scene, const SceneBuffers& buffers, double
   for (double p : power) total += p;
   list.sampleable = total > 0.0;
   if (list.sampleable) {
-    std::size_t k = 0;
     for (std::size_t leaf = 0; leaf < order.size(); ++leaf)
       if (lightOfLeaf[leaf] != ~0u) {
         // the tree entry's probability, to be multiplied by the tree's choice on the device
         float pick = treeEntry != ~0u ? list.alias[treeEntry].pmf : list.alias[lightOfLeaf[leaf]].pmf;
-        list.emitterPdfArea[leaf] = float(pick / areas[k++]);
+        list.emitterPdfArea[leaf] = float(pick / lightArea[lightOfLeaf[leaf]]);
       }
     // the other types' entries hold their selection probability alone
     for (auto [slot, light] : primitiveLights) list.emitterPdfArea[slot] = list.alias[light].pmf;

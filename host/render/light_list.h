@@ -36,12 +36,41 @@ struct LightList {
   std::vector<float> emitterPdfArea;
   std::vector<WtLightNode> tree;       ///< the light tree (empty without it)
   std::vector<std::uint32_t> emitterLeaf;  ///< per leaf-order triangle: its tree leaf, WT_LIGHT_NODE_NONE when not in the tree
+  /// per leaf-order triangle: the index in `lights` of the WT_LIGHT_QUAD it is half of, WT_NO_QUAD when none
+  std::vector<std::uint32_t> emitterQuad;
   std::uint32_t analyticCount = 0;     ///< lights [0, analyticCount) are point/spot/directional
   float environmentPmf = 0.0f;         ///< selection probability of the environment
-  std::size_t emissiveTriangles = 0;
+  std::size_t emissiveTriangles = 0;   ///< the triangles among the lights (a quad light's two included)
+  std::size_t quadLights = 0;          ///< WT_LIGHT_QUAD lights (findQuadLights)
   std::size_t emissivePrimitives = 0;  ///< emissive primitives of other types (spheres, displaced base triangles, SDF bricks)
   bool sampleable = false;             ///< some light has power: NEE may pick from the table
 };
+
+/// Two emissive triangles that make one rectangle: one light, sampled by
+/// solid angle as a spherical rectangle (kernels/lights/light_sampling.cl).
+struct QuadLight {
+  std::uint32_t first = 0;   ///< leaf-order index of the half with the lower index
+  std::uint32_t corner = 0;  ///< its corner (0, 1, 2) at the rectangle's right angle; the other two end the diagonal
+  std::uint32_t second = 0;  ///< leaf-order index of the other half
+};
+
+/// How far from a rectangle a pair may be, relative to its diagonal: the
+/// cosine of the angle at each half's right angle, and the distance of the
+/// second half's far corner from where the first half's edges put it. At
+/// 1e-5 the rectangle sampled and the two triangles hit differ by a sliver
+/// of about that share of the area (a bias far below any render's noise),
+/// while rectangles whose corners were rounded to float (1e-7 relative),
+/// also after a node's transform, are all found.
+constexpr double kQuadTolerance = 1e-5;
+
+/// The pairs of emissive triangles (leaf order, not instanced) that make a
+/// rectangle light: a shared diagonal (the same two positions), the same
+/// material with untextured emission and no holes (alphaMode OPAQUE), a
+/// right angle opposite the diagonal in each and the two windings facing the
+/// same way, within kQuadTolerance; a general parallelogram stays two
+/// triangles (spherical-rectangle sampling needs a rectangle). Sorted by
+/// `first`; a triangle is in at most one pair.
+std::vector<QuadLight> findQuadLights(const Scene& scene, const SceneBuffers& buffers);
 
 /// Walker/Vose alias table for weights >= 0 (not all zero). pmf = weight / sum.
 std::vector<WtAliasSlot> buildAliasTable(std::span<const double> weights);
@@ -51,8 +80,12 @@ std::vector<WtAliasSlot> buildAliasTable(std::span<const double> weights);
 /// light, see environmentPowerEstimate). `coverageWeights`: an emitter with
 /// holes weighs by its meanCoverage (at least kMinCoverageWeight), else by
 /// its emission alone (for comparison; unbiased either way).
+/// `quadLights`: pairs findQuadLights finds are one WT_LIGHT_QUAD each (the
+/// program must then be built with KernelFeatures::quadLights), else two
+/// triangle lights.
 LightList buildLightList(const Scene& scene, const SceneBuffers& buffers, double environmentPower,
-                         LightSampler sampler = LightSampler::Auto, bool coverageWeights = true);
+                         LightSampler sampler = LightSampler::Auto, bool coverageWeights = true,
+                         bool quadLights = true);
 
 /// The least share of its power an emitter with holes is weighed by.
 constexpr double kMinCoverageWeight = 1e-3;

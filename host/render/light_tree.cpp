@@ -173,6 +173,10 @@ LightTree buildLightTree(std::span<const LightTreeEmitter> emitters) {
     Item it;
     for (glm::vec3 p : {e.p0, e.p1, e.p2}) it.box.extend(glm::dvec3(p));
     it.centroid = (glm::dvec3(e.p0) + glm::dvec3(e.p1) + glm::dvec3(e.p2)) / 3.0;
+    if (e.quad) {
+      it.box.extend(glm::dvec3(e.p3));
+      it.centroid = 0.25 * (glm::dvec3(e.p0) + glm::dvec3(e.p1) + glm::dvec3(e.p2) + glm::dvec3(e.p3));
+    }
     glm::dvec3 n = glm::cross(glm::dvec3(e.p1) - glm::dvec3(e.p0), glm::dvec3(e.p2) - glm::dvec3(e.p0));
     if (!(glm::length(n) > 0.0)) continue;
     it.cone = {glm::normalize(n), e.twoSided ? kPi : 0.0};

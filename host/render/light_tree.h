@@ -24,6 +24,8 @@ struct LightTreeEmitter {
   double power = 0.0;     ///< estimated power (luminance), as the light list's
   bool twoSided = false;
   std::uint32_t light = 0;  ///< index into the light list
+  glm::vec3 p3{0.0f};     ///< a rectangle's fourth corner (quad only; p0, p1, p2 its first half)
+  bool quad = false;      ///< a rectangle light (WT_LIGHT_QUAD): bounds and centroid take p3 too
 };
 
 struct LightTree {

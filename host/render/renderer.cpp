@@ -74,7 +74,7 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
                                            settings.environmentRotationDegrees);
   double envLum = m_environment.meanLuminance;
   m_lights = buildLightList(scene, *m_scene, envLum > 0.0 ? environmentPowerEstimate(scene, envLum) : 0.0,
-                            settings.lightSampler, settings.lightCoverageWeights);
+                            settings.lightSampler, settings.lightCoverageWeights, settings.quadLights);
 
   m_features = sceneFeatures(scene, *m_scene, settings);
   m_kernelFeatures = renderKernelFeatures(m_features, context.info(), settings, *m_scene);
@@ -94,7 +94,11 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
   m_stats.programSeconds = lap();
   if (settings.accumulation == WT_ACCUMULATE_DOUBLE && !context.info().fp64)
     throw DeviceError("double-precision accumulation needs fp64, which '" + context.info().name + "' lacks");
-  const ParamFeatures built{features.alpha, features.pbr && features.transmission && features.thinShadows};
+  // the feature set found the light list's rectangles (findQuadLights both times)
+  if (m_lights.quadLights > 0 && !features.quadLights)
+    throw std::logic_error("the light list has rectangle lights the program was built without");
+  const ParamFeatures built{features.alpha, features.pbr && features.transmission && features.thinShadows,
+                            features.quadLights};
   m_generate = {m_program, built};
   m_extend = {m_program, built};
   m_extendPacket = {m_program, built};
@@ -140,6 +144,7 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
   m_emitterPdfBuffer = upload(m_lights.emitterPdfArea);
   m_lightTree = upload(m_lights.tree);
   m_emitterLeaf = upload(m_lights.emitterLeaf);
+  if (built.quadLights) m_emitterQuad = upload(m_lights.emitterQuad);
   EnvironmentUpload env = environmentUpload(m_environment);
   // m_environment is the renderer's own and never changes: read in place where the device can
   auto uploadSpan = [&](auto span) { return readOnlyBuffer(context, span.data(), span.size_bytes(), true); };
@@ -192,19 +197,27 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
       .set("pbr_table", m_pbrTable)
       .set("light_tree", m_lightTree)
       .set("emitter_leaf", m_emitterLeaf);
+  if (built.quadLights) m_shade.set("emitter_quad", m_emitterQuad);
   bindGeometry(m_shade, *m_scene);
   bindSurface(m_shade, *m_scene);
 
   bindTracing(m_connect);
   bindTracing(m_connectPacket);
   bindTracing(m_connectStream);
-  // connect weighs the thin walls a shadow ray crosses by their materials
+  // connect weighs the thin walls a shadow ray crosses by their materials where it meets them
   if (built.thinShadows) {
     auto bindWalls = [&](auto& k) {
       k.set("thin_materials", m_scene->materials)
           .set("thin_tri_info", m_scene->triangleInfo)
           .set("thin_normals", m_scene->normals)
-          .set("thin_pbr_table", m_pbrTable);
+          .set("thin_pbr_table", m_pbrTable)
+          .set("thin_vertex_uv", m_scene->vertexUv)
+          .set("thin_vertex_color", m_scene->vertexColor)
+          .set("thin_vertex_tangent", m_scene->vertexTangent)
+          .set("thin_material_textures", m_scene->materialTextures)
+          .set("thin_textures", m_scene->textures)
+          .set("thin_texture_levels", m_scene->textureLevels)
+          .set("thin_texels", m_scene->texels);
     };
     bindWalls(m_connect);
     bindWalls(m_connectPacket);

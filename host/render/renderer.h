@@ -65,6 +65,10 @@ struct RenderSettings {
   /// exactly Lambertian rendered as the Lambertian model (kernelMaterial,
   /// the same image up to float rounding); false: by the general model.
   bool lambertianForms = true;
+  /// Developer setting (A/B, tests): two emissive triangles that make a
+  /// rectangle are one light, sampled by solid angle (findQuadLights); false:
+  /// two triangle lights, as before.
+  bool quadLights = true;
   std::uint32_t accumulation = WT_ACCUMULATE_KAHAN;  ///< WT_ACCUMULATE_* (double needs fp64)
   BvhBuilder bvhBuilder = BvhBuilder::Auto;  ///< which tree the scene's BVH is (host/bvh/builders.h)
   Instancing instancing = Instancing::Off;   ///< whether repeated geometry is stored once (SceneBuffers)
@@ -279,7 +283,7 @@ class Renderer {
   cl::Buffer m_envTexels, m_envMarginal, m_envConditional;
   cl::Buffer m_lightBuffer, m_aliasBuffer, m_emitterPdfBuffer;
   cl::Buffer m_pbrTable;
-  cl::Buffer m_lightTree, m_emitterLeaf;
+  cl::Buffer m_lightTree, m_emitterLeaf, m_emitterQuad;
   PathState m_path;      ///< per pixel: path state, queues, shadow rays, accumulation
   cl::Buffer m_counters;  ///< WT_COUNTER_*
   RenderStats m_stats;

@@ -37,7 +37,7 @@ struct Shade {
              "shadow_d", "shadow_radiance", "pbr_table", "bounce_counts", "ray_skip", "shadow_skip", "light_tree",
              "emitter_leaf", "prev_normal", "hit_instance"),
       kGeometryParams, params("ray_cone", "aov_sample", "aov_ids", "media"), kSurfaceParams,
-      paramsIf(ParamIf::ThinShadows, params("shadow_walls")));
+      paramsIf(ParamIf::ThinShadows, params("shadow_walls")), paramsIf(ParamIf::QuadLights, params("emitter_quad")));
 };
 
 /// connect, connect_packet and connect_stream: the same parameters.
@@ -46,7 +46,9 @@ inline constexpr auto kConnectParams =
                         "tri_verts", "radiance", "shadow_skip", "hit_instance"),
                  kGeometryParams, kAlphaParams,
                  paramsIf(ParamIf::ThinShadows,
-                          params("shadow_walls", "thin_materials", "thin_tri_info", "thin_normals", "thin_pbr_table")));
+                          params("shadow_walls", "thin_materials", "thin_tri_info", "thin_normals", "thin_pbr_table",
+                                 "thin_vertex_uv", "thin_vertex_color", "thin_vertex_tangent", "thin_material_textures",
+                                 "thin_textures", "thin_texture_levels", "thin_texels")));
 struct Connect {
   static constexpr std::string_view kName = "connect";
   static constexpr auto kParams = kConnectParams;

@@ -11,7 +11,8 @@
 //
 // Per-configuration options (prefix --a- or --b-): kernel-dir DIR (kernels
 // from that folder), rr-depth D, sampler independent|sobol, rr 0|1,
-// lambertian-forms 0|1 (RenderSettings::lambertianForms).
+// lambertian-forms 0|1 (RenderSettings::lambertianForms), quad-lights 0|1
+// (RenderSettings::quadLights).
 #include "device/context.h"
 #include "device/program.h"
 #include "output/image_io.h"
@@ -56,6 +57,7 @@ void setOption(Config& c, const std::string& name, const std::string& v) {
   else if (name == "rr-depth") c.settings.rrMinDepth = toInt(name, v);
   else if (name == "rr") c.settings.useRussianRoulette = toInt(name, v) != 0;
   else if (name == "lambertian-forms") c.settings.lambertianForms = toInt(name, v) != 0;
+  else if (name == "quad-lights") c.settings.quadLights = toInt(name, v) != 0;
   else if (name == "sampler") {
     if (v != "independent" && v != "sobol") usage("--sampler: independent or sobol");
     c.settings.sobol = v == "sobol";

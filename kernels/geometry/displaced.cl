@@ -166,6 +166,32 @@ inline void disp_node_corners(uint node, uint level_l, int2* c) {
   }
 }
 
+/// The six micro-vertices q[0..5] of a leaf from the stored displacements,
+/// less o, in the shear's axis order: disp_vertex's float operations in
+/// the same order, one vertex a lane (the same bits as six calls).
+inline void disp_leaf_vertices(DispTri t, int n, float inv_n, const int2* q, float3 o, RayShear shear, float* x,
+                               float* y, float* z) {
+#pragma OPENCL FP_CONTRACT OFF
+  int8 i = (int8)(q[0].x, q[1].x, q[2].x, q[3].x, q[4].x, q[5].x, q[0].x, q[0].x);
+  int8 j = (int8)(q[0].y, q[1].y, q[2].y, q[3].y, q[4].y, q[5].y, q[0].y, q[0].y);
+  float8 wa = convert_float8((int8)(n) - i - j) * inv_n, wb = convert_float8(i) * inv_n, wc = convert_float8(j) * inv_n;
+  int8 at = j * ((int8)(2 * n + 3) - j) / 2 + i;
+  float8 d = (float8)(t.d[at.s0], t.d[at.s1], t.d[at.s2], t.d[at.s3], t.d[at.s4], t.d[at.s5], t.d[at.s0], t.d[at.s0]);
+  float8 px = (wa * t.p[0].x + wb * t.p[1].x) + wc * t.p[2].x;
+  float8 py = (wa * t.p[0].y + wb * t.p[1].y) + wc * t.p[2].y;
+  float8 pz = (wa * t.p[0].z + wb * t.p[1].z) + wc * t.p[2].z;
+  float8 nx = (wa * t.n[0].x + wb * t.n[1].x) + wc * t.n[2].x;
+  float8 ny = (wa * t.n[0].y + wb * t.n[1].y) + wc * t.n[2].y;
+  float8 nz = (wa * t.n[0].z + wb * t.n[1].z) + wc * t.n[2].z;
+  float8 ax = (px + d * nx) - o.x, ay = (py + d * ny) - o.y, az = (pz + d * nz) - o.z;
+  float8 sx = shear.kx == 0 ? ax : (shear.kx == 1 ? ay : az);
+  float8 sy = shear.ky == 0 ? ax : (shear.ky == 1 ? ay : az);
+  float8 sz = shear.kz == 0 ? ax : (shear.kz == 1 ? ay : az);
+  x[0] = sx.s0, x[1] = sx.s1, x[2] = sx.s2, x[3] = sx.s3, x[4] = sx.s4, x[5] = sx.s5;
+  y[0] = sy.s0, y[1] = sy.s1, y[2] = sy.s2, y[3] = sy.s3, y[4] = sy.s4, y[5] = sy.s5;
+  z[0] = sz.s0, z[1] = sz.s1, z[2] = sz.s2, z[3] = sz.s3, z[4] = sz.s4, z[5] = sz.s5;
+}
+
 /// The four micro-triangles of level L - 1 node `node` (corners c) against
 /// the ray, at once: the six micro-vertices (corners A, B, C, midpoints AB,
 /// AC, BC) displaced, the children's corner triples of `child_k` in the
@@ -174,11 +200,15 @@ inline bool disp_leaf_hit(DispMesh m, DispTri t, int n, float inv_n, int2 c0, in
                           RayShear shear, float tmin, float* best, float* li, float* lj) {
   int2 q[6] = {c0, c1, c2, (c0 + c1) / 2, (c0 + c2) / 2, (c1 + c2) / 2};
   float x[6], y[6], z[6];
-  for (int k = 0; k < 6; ++k) {
-    float3 a = disp_vertex(m, t, n, inv_n, q[k].x, q[k].y) - o;
-    x[k] = vec3_component(a, shear.kx);
-    y[k] = vec3_component(a, shear.ky);
-    z[k] = vec3_component(a, shear.kz);
+  if (t.d) {
+    disp_leaf_vertices(t, n, inv_n, q, o, shear, x, y, z);
+  } else {
+    for (int k = 0; k < 6; ++k) {
+      float3 a = disp_vertex(m, t, n, inv_n, q[k].x, q[k].y) - o;
+      x[k] = vec3_component(a, shear.kx);
+      y[k] = vec3_component(a, shear.ky);
+      z[k] = vec3_component(a, shear.kz);
+    }
   }
   // lanes: (A, AB, AC), (AB, B, BC), (AC, BC, C), (AB, AC, BC), as the quadtree's children
   TriangleLanes h = triangle_test4_lanes(
@@ -205,22 +235,24 @@ inline float4 disp_min4(float4 a, float4 b) { return a < b ? a : b; }
 /// prim_info rows) in (tmin, tmax): the nearest micro-triangle hit, its t,
 /// and the hit's lattice coordinates (level-L units) in *li, *lj, which
 /// displaced_surface takes back. `rows`: the type's first prim_data row.
-/// The base triangle's own box is the BVH's: the walk starts at its children.
+/// The base triangle's own box (the root's, stored) is tested first: a BVH
+/// leaf bounds several base triangles. The corners are read only when the
+/// walk reaches a leaf (most base triangles a ray enters are left above).
 /// With `any_hit` (shadow rays) the first micro-triangle hit found in the
 /// interval ends the walk, not necessarily the nearest.
 inline bool displaced_intersect(__global const float4* rows, __global const uint4* tri, float3 o, float3 d,
                                 float tmin, float tmax, bool any_hit, float* t_hit, float* li, float* lj) {
   uint4 info = tri[0];
   DispMesh m = disp_mesh(rows, info.y);
-  DispTri t = disp_tri(rows, tri);
   uint level_l = m.level, depth = m.depth;
   int n = 1 << level_l;
   float inv_n = 1.0f / (float)n;
-  RayShear shear = triangle_ray_shear(d);
   float best = tmax;
   bool found = false;
   if (level_l == 0u) {
     // one flat triangle: the base triangle's corners displaced
+    DispTri t = disp_tri(rows, tri);
+    RayShear shear = triangle_ray_shear(d);
     float3 s0 = disp_vertex(m, t, n, inv_n, 0, 0), s1 = disp_vertex(m, t, n, inv_n, 1, 0),
            s2 = disp_vertex(m, t, n, inv_n, 0, 1);
     float th, b1, b2;
@@ -235,6 +267,19 @@ inline bool displaced_intersect(__global const float4* rows, __global const uint
   __global const uchar4* blocks = (__global const uchar4*)(box_rows + 2);
   float3 inv_d = 1.0f / select(d, copysign((float3)(1e-30f), d), fabs(d) < 1e-30f);
   float widen = 1.0f + 2.0f * spawn_gamma(3);
+  float4 root_lo = box_rows[0], root_hi = box_rows[1];
+  {
+    // a BVH leaf's box bounds several base triangles: this one's own first, before its corners are read
+    float3 t0 = (root_lo.xyz - o) * inv_d, t1 = (root_hi.xyz - o) * inv_d;
+    float3 near3 = fmin(t0, t1), far3 = fmax(t0, t1);
+    float enter = fmax(fmax(near3.x, near3.y), fmax(near3.z, tmin));
+    float leave = fmin(fmin(far3.x, far3.y), fmin(far3.z, best)) * widen;
+    if (!(enter <= leave)) return false;
+  }
+  // the corners and the shear only where a leaf is reached
+  DispTri t;
+  RayShear shear;
+  bool corners = false;
   // at most 3 pending per level and 4 pushed, and a push writes all four children (the misses past the top)
   uint stack[3 * WT_DISP_MAX_LEVEL + 4], stack_index[3 * WT_DISP_MAX_LEVEL + 4];
   float stack_t[3 * WT_DISP_MAX_LEVEL + 4];
@@ -243,8 +288,8 @@ inline bool displaced_intersect(__global const float4* rows, __global const uint
   stack[sp] = disp_node(0u, 0u, 0u, 0u);
   stack_index[sp] = 0u;
   stack_t[sp] = tmin;
-  stack_lo[sp] = box_rows[0];
-  stack_hi[sp++] = box_rows[1];
+  stack_lo[sp] = root_lo;
+  stack_hi[sp++] = root_hi;
   const int up_di[4] = {0, 1, 0, 0}, up_dj[4] = {0, 0, 1, 0};
   const int inv_di[4] = {1, 0, 1, 1}, inv_dj[4] = {0, 1, 1, 1};
   while (sp > 0) {
@@ -255,6 +300,11 @@ inline bool displaced_intersect(__global const float4* rows, __global const uint
     if (level + 1u == level_l) {
       int2 c[3];
       disp_node_corners(node, level_l, c);
+      if (!corners) {
+        t = disp_tri(rows, tri);
+        shear = triangle_ray_shear(d);
+        corners = true;
+      }
       found |= disp_leaf_hit(m, t, n, inv_n, c[0], c[1], c[2], o, shear, tmin, &best, li, lj);
       if (found && any_hit) break;
       continue;

@@ -145,6 +145,157 @@ inline float3 light_sample_spherical_triangle(float3 A, float3 B, float3 C, floa
   return normalize(cos_theta * B + sin_theta * light_orthonormal(c_prime, B));
 }
 
+#if WT_HAS_QUAD_LIGHTS
+/// A rectangle light's corner c at its right angle and its edges e1, e2
+/// (world), from its first half's corners as stored: the sampler and the
+/// pdf of an emitter hit read the same floats.
+inline void light_quad_rect(__global const float4* tri_verts, WtLight light, float3* c, float3* e1, float3* e2) {
+  float3 p0, p1, p2;
+  triangle_corners(tri_verts, light.triangle, &p0, &p1, &p2);
+  uint k = (uint)light.position.x;
+  *c = k == 0u ? p0 : (k == 1u ? p1 : p2);
+  *e1 = (k == 0u ? p1 : (k == 1u ? p2 : p0)) - *c;
+  *e2 = (k == 0u ? p2 : (k == 1u ? p0 : p1)) - *c;
+}
+
+/// Rectangle (c, e1, e2) seen from a point in the rectangle's own frame
+/// (Urena et al.): the point's offsets to its edges along e1 (x0 < x1) and
+/// e2 (y0 < y1), minus its distance from the plane (z0 <= 0), and the
+/// distances to the corners (x0, y0) and (x0, y1).
+typedef struct RectView {
+  float x0, y0, x1, y1, z0;
+  float l00, l01;
+} RectView;
+
+/// The view of rectangle (c, e1, e2) from p (*v) and its solid angle: its
+/// two triangles' by Van Oosterom and Strackee from the frame's coordinates,
+/// their two half-angles summed in one atan2 (accurate where it is small,
+/// unlike the sum of its four angles less 2 pi).
+inline float light_rect_view(float3 p, float3 c, float3 e1, float3 e2, RectView* v) {
+  float ex = length(e1), ey = length(e2);
+  float3 x = e1 / ex, y = e2 / ey;
+  float3 d = c - p;
+  float z0 = -fabs(dot(d, normalize(cross(x, y))));
+  float x0 = dot(d, x), y0 = dot(d, y), x1 = x0 + ex, y1 = y0 + ey;
+  float z2 = z0 * z0;
+  float l00 = sqrt(x0 * x0 + y0 * y0 + z2), l10 = sqrt(x1 * x1 + y0 * y0 + z2);
+  float l11 = sqrt(x1 * x1 + y1 * y1 + z2), l01 = sqrt(x0 * x0 + y1 * y1 + z2);
+  *v = (RectView){x0, y0, x1, y1, z0, l00, l01};
+  // triangles (00, 10, 11) and (00, 11, 01): tan(omega / 2) = n / e of unit corner vectors
+  float triple = -z0 * ex * ey;
+  float d_00_11 = (x0 * x1 + y0 * y1 + z2) / (l00 * l11);
+  float n1 = triple / (l00 * l10 * l11), n2 = triple / (l00 * l11 * l01);
+  float e_1 = 1.0f + (x0 * x1 + y0 * y0 + z2) / (l00 * l10) + d_00_11 + (x1 * x1 + y0 * y1 + z2) / (l10 * l11);
+  float e_2 = 1.0f + d_00_11 + (x0 * x0 + y0 * y1 + z2) / (l00 * l01) + (x0 * x1 + y1 * y1 + z2) / (l11 * l01);
+  // each half-angle is in [0, pi] and their sum below pi: one atan2 of the sum
+  return 2.0f * wt_atan2(n1 * e_2 + n2 * e_1, e_1 * e_2 - n1 * n2);
+}
+
+/// Solid angle of rectangle (c, e1, e2) seen from p.
+inline float light_quad_solid_angle(float3 p, float3 c, float3 e1, float3 e2) {
+  RectView v;
+  return light_rect_view(p, c, e1, e2, &v);
+}
+
+/// A point uniform in the solid angle `solid_angle` of a rectangle of view
+/// v, as its coordinates (s, t) along e1 and e2 in [0, 1] (Urena, Fajardo
+/// and King 2013, "An Area-Preserving Parametrization for Spherical
+/// Rectangles"). The angle k of the paper enters only by its cosine and
+/// sine, from those of the two angles it is made of, and the sub-rectangle's
+/// area by its own, so that no difference of angles near pi loses the area
+/// when it is small.
+inline float2 light_sample_spherical_rect(RectView v, float solid_angle, float u1, float u2) {
+  float x0 = v.x0, y0 = v.y0, x1 = v.x1, y1 = v.y1, z0 = v.z0;
+  float z2 = z0 * z0;
+  // the angles at the x0 edge, g2 (corner x0, y1) and g3 (x0, y0), by cosine and sine
+  float l0 = sqrt(z2 + y0 * y0), l2 = sqrt(z2 + y1 * y1), l3 = sqrt(z2 + x0 * x0);
+  float inv23 = 1.0f / (l2 * l3), inv30 = 1.0f / (l3 * l0);
+  float cos_g2 = x0 * y1 * inv23, sin_g2 = -z0 * v.l01 * inv23;
+  float cos_g3 = -x0 * y0 * inv30, sin_g3 = -z0 * v.l00 * inv30;
+  // k = 2 pi - g2 - g3, then au = k + u1 solid_angle
+  float cos_k = cos_g2 * cos_g3 - sin_g2 * sin_g3, sin_k = -(sin_g2 * cos_g3 + cos_g2 * sin_g3);
+  float cos_a;
+  float sin_a = wt_sincospi(u1 * (solid_angle * (1.0f / WT_PI)), &cos_a);
+  float cos_au = cos_k * cos_a - sin_k * sin_a, sin_au = sin_k * cos_a + cos_k * sin_a;
+  float b0 = -y0 / l0, b1 = y1 / l2;
+  // the x of the sub-rectangle's far edge
+  float fu = (cos_au * b0 - b1) / sin_au;
+  float cu = clamp(copysign(1.0f, fu) * rsqrt(fu * fu + b0 * b0), -1.0f, 1.0f);
+  float xu = -(cu * z0) / sqrt(fmax(1.0f - cu * cu, 1e-30f));
+  xu = clamp(xu, x0, x1);
+  // then y along that edge, uniform in the solid angle's measure there
+  float dd = sqrt(xu * xu + z2);
+  float h0 = y0 / sqrt(dd * dd + y0 * y0), h1 = y1 / sqrt(dd * dd + y1 * y1);
+  float hv = h0 + u2 * (h1 - h0), hv2 = hv * hv;
+  float yv = hv2 < 1.0f - 1e-6f ? hv * dd / sqrt(1.0f - hv2) : y1;
+  yv = clamp(yv, y0, y1);
+  return (float2)(clamp((xu - x0) / (x1 - x0), 0.0f, 1.0f), clamp((yv - y0) / (y1 - y0), 0.0f, 1.0f));
+}
+
+// Spherical rectangles only where the rectangle is large for its distance:
+// area sampling's variance beyond solid angle sampling's grows with (size /
+// distance)^2, the area over the squared distance to the centre, and below
+// this ratio it is hardly more while it needs no solid angle at all. Tested
+// at run time per shading point, from nothing but the two.
+#define WT_QUAD_SPHERICAL_MIN_RATIO 0.25f
+
+/// Whether the rectangle (c, e1, e2) of area `area` is sampled by solid
+/// angle from p: a large one for its distance, subtending what
+/// light_use_spherical allows (*v, *solid_angle then its view).
+inline bool light_quad_spherical(float3 p, float3 c, float3 e1, float3 e2, float area, RectView* v,
+                                 float* solid_angle) {
+  float3 to_centre = c + 0.5f * (e1 + e2) - p;
+  if (!(area >= WT_QUAD_SPHERICAL_MIN_RATIO * dot(to_centre, to_centre))) return false;
+  *solid_angle = light_rect_view(p, c, e1, e2, v);
+  return light_use_spherical(*solid_angle);
+}
+
+/// Sample rectangle (c, e1, e2) from p: by solid angle where
+/// light_quad_spherical says so, else uniformly by area; *st the point's
+/// coordinates along e1 and e2. Fills wi, distance, target and pdf of *s.
+/// False for a point behind a single-sided light's front (e1 x e2).
+inline bool light_sample_rect(float3 p, float3 c, float3 e1, float3 e2, bool two_sided, float u1, float u2,
+                              LightSample* s, float2* st_out) {
+  float3 n = cross(e1, e2);
+  float area = length(n);
+  if (!(area > 0.0f)) return false;
+  n /= area;
+  // a single-sided light lights only its front (its first half's winding) side
+  float height = dot(n, p - c);
+  if (!two_sided && !(height > 0.0f)) return false;
+  RectView view;
+  float solid_angle = 0.0f;
+  bool spherical = light_quad_spherical(p, c, e1, e2, area, &view, &solid_angle);
+  float2 st = spherical ? light_sample_spherical_rect(view, solid_angle, u1, u2) : (float2)(u1, u2);
+  // the point by its first half's barycentrics (outside it past the diagonal), where its rounding error is known
+  float3 q_error;
+  float3 q = triangle_point(c, c + e1, c + e2, st.x, st.y, &q_error);
+  float3 to_light = q - p;
+  float d2 = dot(to_light, to_light);
+  if (!(d2 > 0.0f)) return false;
+  s->distance = sqrt(d2);
+  s->wi = to_light / s->distance;
+  float cos_light = fabs(dot(n, s->wi));
+  if (!(cos_light > 0.0f)) return false;
+  s->target = ray_offset_origin(q, q_error, height > 0.0f ? n : -n);
+  s->pdf = spherical ? 1.0f / solid_angle : d2 / (cos_light * area);
+  *st_out = st;
+  return true;
+}
+
+/// Sample rectangle light `light` from p (light_sample_rect).
+inline bool light_sample_quad(LightScene ls, WtLight light, float3 p, float u1, float u2, LightSample* s) {
+  float3 c, e1, e2;
+  light_quad_rect(ls.tri_verts, light, &c, &e1, &e2);
+  float2 st;
+  if (!light_sample_rect(p, c, e1, e2, light.position.w != 0.0f, u1, u2, s, &st)) return false;
+  s->radiance = vec4_xyz(light.intensity);
+  // the half the point is on, past the diagonal the second (its shadow ray skips it)
+  s->prim = st.x + st.y <= 1.0f ? light.triangle : as_uint(light.position.y);
+  return true;
+}
+#endif
+
 /// Pick a light with probability proportional to its power.
 inline uint light_pick(LightScene ls, float u, float* pmf) {
   float scaled = u * (float)ls.light_count;
@@ -243,6 +394,9 @@ inline bool light_sample(LightScene ls, uint index, float3 p, float u1, float u2
     s->radiance = light_triangle_radiance(ls, light, b1, b2);
     return true;
   }
+#if WT_HAS_QUAD_LIGHTS
+  if (light.type == WT_LIGHT_QUAD) return light_sample_quad(ls, light, p, u1, u2, s);
+#endif
 #if WT_HAS_PRIMITIVES
   if (light.type == WT_LIGHT_PRIMITIVE) {
     s->prim = light.triangle;
@@ -272,6 +426,22 @@ inline float light_triangle_pdf(float pdf_area, float3 origin, float3 p0, float3
   float cos_light = fabs(dot(n_geometric, wi));
   return cos_light > 0.0f ? pdf_area * distance * distance / cos_light : 0.0f;
 }
+
+#if WT_HAS_QUAD_LIGHTS
+/// light_triangle_pdf for rectangle (c, e1, e2), as light_sample_quad
+/// decides between spherical and area sampling; `pdf_area` is the
+/// rectangle's selection probability over its area (both halves hold it).
+inline float light_quad_pdf(float pdf_area, float3 origin, float3 c, float3 e1, float3 e2, float distance, float3 wi,
+                            float3 n_geometric) {
+  if (!(pdf_area > 0.0f)) return 0.0f;
+  float area = length(cross(e1, e2));
+  RectView view;
+  float solid_angle = 0.0f;
+  if (light_quad_spherical(origin, c, e1, e2, area, &view, &solid_angle)) return pdf_area * area / solid_angle;
+  float cos_light = fabs(dot(n_geometric, wi));
+  return cos_light > 0.0f ? pdf_area * distance * distance / cos_light : 0.0f;
+}
+#endif
 
 /// MIS weight of a strategy with pdf `a` against one with pdf `b`.
 inline float mis_weight(float a, float b, uint flags) {

@@ -15,14 +15,15 @@
 #define WT_LIGHT_ENVIRONMENT 4  ///< the environment (constant or map), at most one
 #define WT_LIGHT_TREE 5         ///< the light tree over the emissive triangles (kernels/lights/light_tree.cl), at most one
 #define WT_LIGHT_PRIMITIVE 6    ///< an emissive primitive of another type (a sphere, a displaced base triangle, an SDF brick), sampled by geometry_sample_emitter
+#define WT_LIGHT_QUAD 7         ///< two emissive triangles that make a rectangle (host/render/light_list.h, findQuadLights), sampled as one (WT_HAS_QUAD_LIGHTS)
 
 /// One light of the scene's light list, 64 bytes.
 typedef struct WtLight {
-  WtVec4 position;   ///< point/spot: world position; triangle: w = 1 when both faces emit, y = 1 when its material's emission is textured (materials/textured.cl)
+  WtVec4 position;   ///< point/spot: world position; triangle: w = 1 when both faces emit, y = 1 when its material's emission is textured (materials/textured.cl); quad: w as a triangle's, x the corner (0, 1, 2) of its first half where the rectangle's right angle is, y the other half's leaf-order index (its bits)
   WtVec4 direction;  ///< spot/directional: unit world direction the light travels in; triangle: x its material's WT_ALPHA_* where it may have holes (0: none), y alphaCutoff, z the alpha factor, w = 1 when the base colour texture's alpha counts (lights/light_sampling.cl); primitive: w = 1 when both faces emit
-  WtVec4 intensity;  ///< point/spot: cd per channel; directional: lux; triangle: nits (the material's emission)
+  WtVec4 intensity;  ///< point/spot: cd per channel; directional: lux; triangle, quad: nits (the material's emission)
   wt_uint type;      ///< WT_LIGHT_*
-  wt_uint triangle;  ///< WT_LIGHT_TRIANGLE: leaf-order triangle index; WT_LIGHT_PRIMITIVE: the primitive's typed id (WT_PRIM_TYPE_SHIFT)
+  wt_uint triangle;  ///< WT_LIGHT_TRIANGLE: leaf-order triangle index; WT_LIGHT_QUAD: its first half's; WT_LIGHT_PRIMITIVE: the primitive's typed id (WT_PRIM_TYPE_SHIFT)
   float cos_inner;   ///< spot: cosine of the inner cone angle (full intensity inside)
   float cos_outer;   ///< spot: cosine of the outer cone angle (zero outside)
 } WtLight;
@@ -53,6 +54,8 @@ typedef struct WtLightNode {
   float radius;            ///< half the bounds' diagonal: the bounding sphere's radius
 } WtLightNode;
 #define WT_LIGHT_NODE_NONE 0xffffffffu
+/// LightList::emitterQuad of a triangle that is no rectangle's half.
+#define WT_NO_QUAD 0xffffffffu
 
 /// Integrator switches that may change between renders without a rebuild.
 #define WT_MIS_BALANCE 0

@@ -26,8 +26,16 @@ cl::Program programFor(bool alpha, const std::string& root) {
   const std::string key = root + (alpha ? " with alpha" : "");
   auto it = programs.find(key);
   if (it == programs.end()) {
+    // switches other tests build too (a small scene on this device; a
+    // textured one where it has holes), so that PoCL's cache compiles each
+    // program once in the suite: the parameters depend on alpha alone
+    // (ParamFeatures)
     KernelFeatures features;
-    features.alpha = alpha;
+    features.bvhStackSize = 32;
+    features.packetWidth = packetWidthFor(test::deviceContext().info());
+    features.integratorMinimal = root != "trace.cl";  // the tracers' own integrator setting (Tracer)
+    features.alpha = features.textures = alpha;
+    features.pbr = alpha && root != "trace.cl";
     it = programs.emplace(key, buildProgram(test::deviceContext(), features, root)).first;
   }
   return it->second;

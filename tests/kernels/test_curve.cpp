@@ -351,45 +351,8 @@ TEST(Curves, AnyHitAgreesWithClosestHitInEveryTraversal) {
   }
 }
 
-/// Rays spawned where `rays` hit, as shade spawns them: from the hit
-/// reprojected onto the segment (curvePoint) and pushed past its rounding
-/// error, outwards into a random direction of the outer hemisphere, or
-/// inwards into the opposite one; skipping the segment they leave. Directions
-/// closer than `minCosine` to the surface's plane are not drawn.
-struct Spawned {
-  std::vector<Ray> out, in;
-  std::vector<std::uint32_t> from;
-};
-
-Spawned spawnFrom(const PrimitiveRows& rows, std::span<const Ray> rays, std::span<const RayHit> hits,
-                  std::uint32_t seed, float minCosine = 0.0f) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
-  Spawned s;
-  for (std::size_t i = 0; i < rays.size(); ++i) {
-    if (hits[i].prim == RayHit::kNoHit || primType(hits[i].prim) != WT_PRIM_CURVE) continue;
-    const CurveSegment seg = curveSegment(rows, primIndex(hits[i].prim));
-    glm::vec3 error, n;
-    const glm::vec3 p = curvePoint(seg, rays[i].origin, rays[i].direction, hits[i].t, &error, &n);
-    glm::vec3 w;
-    do {
-      do w = glm::vec3(unit(rng), unit(rng), unit(rng));
-      while (glm::dot(w, w) > 1.0f || glm::dot(w, w) < 1e-3f);
-      w = glm::normalize(w);
-    } while (std::fabs(glm::dot(w, n)) < minCosine);
-    if (glm::dot(w, n) < 0.0f) w = -w;
-    Ray r;
-    r.skip = hits[i].prim;
-    r.origin = offsetRayOrigin(p, error, n);
-    r.direction = w;  // away from the surface: reflection
-    s.out.push_back(r);
-    r.origin = offsetRayOrigin(p, error, -n);
-    r.direction = -w;  // into the curve: refraction
-    s.in.push_back(r);
-    s.from.push_back(hits[i].prim);
-  }
-  return s;
-}
+using test::Spawned;
+using test::spawnFrom;
 
 TEST(Curves, SpawnedRaysLeaveTheSurfaceOrCrossItOnce) {
   const Scene scene = curveField(6);
@@ -427,6 +390,14 @@ TEST(Curves, SpawnedRaysLeaveTheSurfaceOrCrossItOnce) {
   EXPECT_EQ(badOut, 0) << "of " << s.from.size() << " rays leaving a curve";
   EXPECT_EQ(badIn, 0) << "of " << s.from.size() << " rays entering a curve";
   EXPECT_GT(reentered, int(0.5 * double(s.from.size())));  // the rest leave through a neighbour's wall
+}
+
+TEST(Curves, PacketsMatchSingleRaysAtCurveEnds) {
+  const Scene scene = curveField(8);
+  const PrimitiveRows rows = gatherPrimitives(scene);
+  Tracer tracer(test::deviceContext(), scene);
+  test::expectCurvePacketsMatchSingleRays(
+      tracer, rows, test::raysAtCurveEnds(rows, test::testSize(400, 60), tracer.packetWidth(), 9));
 }
 
 /// A bent tube: `joints` joints on a helix of radius 1.5 and pitch 2.5,

@@ -506,6 +506,47 @@ TEST(DisplacedMeshes, AnyHitAgreesWithClosestHitInEveryTraversal) {
   });
 }
 
+TEST(DisplacedMeshes, AnyHitAgreesWithClosestHitOnRaysLeavingTheSurface) {
+  // shadow rays as a renderer makes them: from points on a rough surface
+  // (320 base triangles whose shells overlap their neighbours', so a ray
+  // starts inside several) to targets outside the sphere or beyond its far
+  // side, ending short of the target. Any hit and closest hit run the same
+  // micro-triangle tests, so they must agree exactly, however the walks
+  // cull boxes and stop early.
+  const glm::vec3 center(0.3f, -0.2f, 0.1f);
+  const Scene scene = testSphere(3, 0.2f, -0.1f, center, 2);
+  const std::vector<Ray> at = raysAtSphere(center, test::testSize(3000, 300), 27);
+  const std::vector<KernelHit> hits = kernelClosest(scene, at);
+  std::mt19937 rng(28);
+  std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
+  std::vector<Ray> rays;
+  for (std::size_t i = 0; i < at.size(); ++i) {
+    if (hits[i].t < 0.0f) continue;
+    const glm::vec3 p = at[i].origin + hits[i].t * at[i].direction;
+    glm::vec3 w;
+    do w = glm::vec3(unit(rng), unit(rng), unit(rng));
+    while (glm::dot(w, w) > 1.0f || glm::dot(w, w) < 1e-3f);
+    const glm::vec3 target = center + (i % 2 ? 3.0f : 1.3f) * glm::normalize(w);
+    const glm::vec3 n = glm::dot(hits[i].normal, target - p) >= 0.0f ? hits[i].normal : -hits[i].normal;
+    Ray r;
+    r.origin = offsetRayOrigin(p, hits[i].error, n);
+    const float distance = glm::length(target - r.origin);
+    r.direction = (target - r.origin) / distance;
+    r.tmin = 0.0f;
+    r.tmax = (1.0f - 1e-4f) * distance;
+    rays.push_back(r);
+  }
+  ASSERT_GT(rays.size(), at.size() / 12);
+  Tracer tracer(test::deviceContext(), scene);
+  const std::vector<RayHit> closest = tracer.traceClosest(rays);
+  std::size_t blocked = 0;
+  for (const RayHit& h : closest) blocked += h.prim != RayHit::kNoHit;
+  // both answers common, or agreement would prove little
+  EXPECT_GT(blocked, rays.size() / 10);
+  EXPECT_LT(blocked, rays.size() - rays.size() / 10);
+  test::expectAnyHitAgreesWithClosestHit(scene, rays, [](std::size_t) { return false; });
+}
+
 TEST(DisplacedMeshes, SpawnedRaysLeaveTheSurfaceOrCrossIt) {
   // gentle bumps (amplitude 0.02 on radius 1) far from the origin: rays
   // spawned outward within 45 degrees of the micro-triangle's normal meet

@@ -6,6 +6,7 @@
 // leave, the same image for a seed, and the memory it saves.
 #include "../render/render_helpers.h"
 #include "core/spawn.h"
+#include "device/scene_buffers.h"
 #include "device_fixture.h"
 #include "instancing_checks.h"
 #include "scene/generators.h"
@@ -84,15 +85,16 @@ std::vector<Ray> raysAtCopies(const Placed& p, std::size_t perCopy, std::uint32_
 /// Instancing::On stores the icosphere once with one instance per copy that
 /// is not flattened; the soup stays flat.
 TEST(Instancing, CopiesBecomeInstances) {
+  // the uploaded buffers alone: a Tracer would also build a program these checks never run
   const Placed p = placedIcospheres();
-  Tracer on(test::deviceContext(), p.scene, withInstancing(Instancing::On));
-  EXPECT_EQ(on.sceneBuffers().instanceCount(), 8u);
-  EXPECT_EQ(on.sceneBuffers().instancedTriangles(), 8u * 1279u);
-  Tracer off(test::deviceContext(), p.scene, withInstancing(Instancing::Off));
-  EXPECT_EQ(off.sceneBuffers().instanceCount(), 0u);
+  SceneBuffers on(test::deviceContext(), p.scene, withInstancing(Instancing::On));
+  EXPECT_EQ(on.instanceCount(), 8u);
+  EXPECT_EQ(on.instancedTriangles(), 8u * 1279u);
+  SceneBuffers off(test::deviceContext(), p.scene, withInstancing(Instancing::Off));
+  EXPECT_EQ(off.instanceCount(), 0u);
   // Auto keeps a scene this small flat
-  Tracer automatic(test::deviceContext(), p.scene, withInstancing(Instancing::Auto));
-  EXPECT_EQ(automatic.sceneBuffers().instanceCount(), 0u);
+  SceneBuffers automatic(test::deviceContext(), p.scene, withInstancing(Instancing::Auto));
+  EXPECT_EQ(automatic.instanceCount(), 0u);
   // and stores copies once where their flattened form outgrows the cache
   EXPECT_TRUE(SceneBuffers::instancingPays(std::size_t(1) << 20, std::uint64_t(32) << 20));
   EXPECT_FALSE(SceneBuffers::instancingPays(std::size_t(1) << 20, std::uint64_t(128) << 20));
@@ -275,16 +277,17 @@ TEST(Instancing, RendersMatchTheFlattenedScene) {
 /// Memory: 98 copies of a geometry stored once take about 1/98 of the
 /// flattened form's triangle bytes, plus the instances' rows and tree.
 TEST(Instancing, StoredOnce) {
+  // the uploaded buffers alone: a Tracer would also build a program these checks never run
   const Scene mesh = makeIcosphere(4, glm::vec3(0.0f), 1.0f, makeMaterial(glm::vec3(0.5f)));  // 5120 triangles
   std::vector<glm::mat4> transforms;
   for (int c = 0; c < 98; ++c)
     transforms.push_back(glm::translate(glm::mat4(1.0f), glm::vec3(3.0f * float(c % 14), 3.0f * float(c / 14), 0)));
   const Scene scene = placeCopies(mesh, transforms);
-  Tracer on(test::deviceContext(), scene, withInstancing(Instancing::On));
-  Tracer off(test::deviceContext(), scene, withInstancing(Instancing::Off));
-  const double ratio = double(on.sceneBuffers().triangleBytes()) / double(off.sceneBuffers().triangleBytes());
+  SceneBuffers on(test::deviceContext(), scene, withInstancing(Instancing::On));
+  SceneBuffers off(test::deviceContext(), scene, withInstancing(Instancing::Off));
+  const double ratio = double(on.triangleBytes()) / double(off.triangleBytes());
   // per instance: 6 rows of 16 bytes, an info row, a typed id and its share of a node
-  const double overhead = 98.0 * (7 * 16 + 4 + 128.0 / 2) / double(off.sceneBuffers().triangleBytes());
+  const double overhead = 98.0 * (7 * 16 + 4 + 128.0 / 2) / double(off.triangleBytes());
   EXPECT_LT(ratio, 1.0 / 98.0 * 1.1 + overhead);
   EXPECT_GT(ratio, 1.0 / 98.0 * 0.9);
 }

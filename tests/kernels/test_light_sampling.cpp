@@ -15,6 +15,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <numbers>
 #include <random>
 
 namespace wt {
@@ -277,6 +278,233 @@ TEST(LightSampling, SphericalTriangleSamplingIsUniformInSolidAngle) {
     // 35 degrees of freedom: P(chi2 > 75.6) = 1e-4
     EXPECT_LT(chi2, 75.6) << "view " << s << " (solid angle " << omega << "): counts " << ::testing::PrintToString(counts)
                           << " expected " << ::testing::PrintToString(expected);
+  }
+}
+
+// Rectangle lights (lights/light_sampling.cl, light_sample_rect and
+// light_quad_pdf): a rectangle (corner c, perpendicular edges e1, e2) and a
+// shading point p, in double for the host's side of the checks.
+struct RectView {
+  glm::dvec3 p, c, e1, e2;
+  bool twoSided = false;
+};
+
+double rectArea(const RectView& v) { return glm::length(glm::cross(v.e1, v.e2)); }
+
+/// Solid angle of the rectangle seen from p: its two triangles'.
+double rectSolidAngle(const RectView& v) {
+  const glm::dvec3 d = v.c + v.e1 + v.e2;
+  return solidAngle(v.p, v.c, v.c + v.e1, d) + solidAngle(v.p, v.c, d, v.c + v.e2);
+}
+
+/// Where the ray p + t w (unit w) meets the rectangle's plane: (s, t) along
+/// e1 and e2, and the distance; distance <= 0 when it does not.
+glm::dvec3 rectPlaneHit(const RectView& v, glm::dvec3 w) {
+  const glm::dvec3 n = glm::cross(v.e1, v.e2);
+  const double denom = glm::dot(n, w);
+  if (denom == 0.0) return glm::dvec3(-1.0);
+  const double t = glm::dot(n, v.c - v.p) / denom;
+  const glm::dvec3 q = v.p + t * w - v.c;
+  return {glm::dot(q, v.e1) / glm::dot(v.e1, v.e1), glm::dot(q, v.e2) / glm::dot(v.e2, v.e2), t};
+}
+
+/// The views as the kernels take them: (p, two-sided), (c, 1 / area), e1, e2,
+/// rounded to float (and the doubles moved to what the device sees).
+std::vector<cl_float4> packRects(std::vector<RectView>& views) {
+  std::vector<cl_float4> packed;
+  for (RectView& v : views) {
+    for (glm::dvec3* x : {&v.p, &v.c, &v.e1, &v.e2}) *x = glm::dvec3(glm::vec3(*x));
+    packed.push_back({{float(v.p.x), float(v.p.y), float(v.p.z), v.twoSided ? 1.0f : 0.0f}});
+    packed.push_back({{float(v.c.x), float(v.c.y), float(v.c.z), float(1.0 / rectArea(v))}});
+    packed.push_back({{float(v.e1.x), float(v.e1.y), float(v.e1.z), 0.0f}});
+    packed.push_back({{float(v.e2.x), float(v.e2.y), float(v.e2.z), 0.0f}});
+  }
+  return packed;
+}
+
+/// A rectangle with corner c, first edge e1 and second edge of length
+/// `width`, perpendicular to e1 and `up`, whose front faces `up`'s side.
+RectView makeRect(glm::dvec3 p, glm::dvec3 c, glm::dvec3 e1, glm::dvec3 up, double width, bool twoSided = false) {
+  const glm::dvec3 e2 = width * glm::normalize(glm::cross(glm::normalize(up), e1));
+  return {p, c, e1, e2, twoSided};
+}
+
+/// The views the rectangle tests share (all but one from the front), by
+/// solid angle where light_quad_spherical says so: near (3 sr; area over
+/// squared distance to the centre 8.3), farther (0.6 sr, 0.72), almost a
+/// hemisphere from the back of a two-sided light (6.13 sr), a turned
+/// rectangle (0.93 sr, 1.24); by area: far (2.1e-3 sr, 2e-3), grazing (9e-3
+/// sr, 0.12), and small and distant, seen at 15 degrees (6e-4 sr).
+std::vector<RectView> rectViews() {
+  const glm::dvec3 c{0.0, 0.0, 0.0}, e1{1.0, 0.0, 0.0}, up{0.0, 0.0, 1.0};
+  return {
+      makeRect({0.4, 0.3, 0.25}, c, e1, up, 0.6),
+      makeRect({0.6, 0.2, 0.9}, c, e1, up, 0.6),
+      makeRect({0.7, 0.1, 17.0}, c, e1, up, 0.6),
+      makeRect({2.5, 1.2, 0.15}, c, e1, up, 0.6),
+      makeRect({0.5, 0.3, -0.01}, c, e1, up, 0.6, true),
+      makeRect({0.6, 0.1, 0.7}, {0.2, -0.1, 0.3}, {0.6, 0.3, -0.2}, {0.3, -0.1, 0.8}, 0.45),
+      makeRect({8.0, 0.2, 30.0}, c, e1, up, 0.6),
+  };
+}
+
+/// chi-square quantile with `dof` degrees of freedom exceeded with
+/// probability about 1e-4 (Wilson-Hilferty).
+double chiSquareLimit(int dof) {
+  const double k = dof, z = 3.719;
+  const double h = 1.0 - 2.0 / (9.0 * k) + z * std::sqrt(2.0 / (9.0 * k));
+  return k * h * h * h;
+}
+
+// The rectangle sampler: every direction meets the rectangle where the
+// sampler says it does; directions are uniform in its solid angle where
+// light_quad_spherical chooses it (counts on a 6 x 6 grid of the rectangle
+// against each cell's solid angle, chi-square at P(fail) = 1e-4 per view),
+// uniform in area below it (against the cells' areas); the sampler's pdf is
+// 1 / solid angle there, d^2 / (cos area) here, and the pdf an emitter hit
+// computes for the same direction (light_quad_pdf) is the same.
+TEST(LightSampling, QuadSamplingIsUniformInSolidAngleAndHitsTheRectangle) {
+  const int m = 6;
+  const cl_uint perView = test::testSize(1 << 17, 1 << 15);
+  std::vector<RectView> shapes = rectViews();
+  std::vector<cl_float4> packedShapes = packRects(shapes);
+  std::vector<cl_float4> views;
+  std::vector<cl_float2> u;
+  for (std::size_t s = 0; s < shapes.size(); ++s)
+    for (cl_uint i = 0; i < perView; ++i) {
+      views.insert(views.end(), packedShapes.begin() + std::ptrdiff_t(4 * s), packedShapes.begin() + std::ptrdiff_t(4 * s + 4));
+      u.push_back({{rng_uniform(i, 0u, 0u, 0u, 9u), rng_uniform(i, 0u, 0u, 1u, 9u)}});
+    }
+  Context& ctx = test::deviceContext();
+  const cl_uint n = cl_uint(u.size());
+  cl::Buffer vb(ctx.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, views.size() * 16, views.data());
+  cl::Buffer ub(ctx.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, n * 8, u.data());
+  cl::Buffer out(ctx.context(), CL_MEM_WRITE_ONLY, 3 * std::size_t(n) * 16);
+  cl::Kernel k(test::unitTestProgram(), "test_quad_sample");
+  k.setArg(0, n), k.setArg(1, vb), k.setArg(2, ub), k.setArg(3, out);
+  ctx.launch("test_quad_sample", k, n);
+  std::vector<cl_float4> got(3 * std::size_t(n));
+  ctx.queue().enqueueReadBuffer(out, CL_TRUE, 0, got.size() * 16, got.data());
+
+  for (std::size_t s = 0; s < shapes.size(); ++s) {
+    const RectView& v = shapes[s];
+    const double omega = rectSolidAngle(v), area = rectArea(v);
+    // light_quad_spherical
+    const glm::dvec3 toCentre = v.c + 0.5 * (v.e1 + v.e2) - v.p;
+    const bool spherical = area >= 0.25 * glm::dot(toCentre, toCentre) && omega >= 1e-3 && omega <= 6.2;
+    // the cells' expected shares
+    std::vector<double> expected(std::size_t(m * m));
+    for (int i = 0; i < m; ++i)
+      for (int j = 0; j < m; ++j) {
+        RectView cell = v;
+        cell.c = v.c + double(i) / m * v.e1 + double(j) / m * v.e2;
+        cell.e1 = v.e1 / double(m), cell.e2 = v.e2 / double(m);
+        expected[std::size_t(i * m + j)] = perView * (spherical ? rectSolidAngle(cell) / omega : 1.0 / (m * m));
+      }
+    std::vector<double> counts(expected.size(), 0.0);
+    int outside = 0, missed = 0, pdfOff = 0;
+    double worstPdf = 0.0;
+    for (cl_uint k2 = 0; k2 < perView; ++k2) {
+      const std::size_t at = 3 * (s * perView + k2);
+      const cl_float4 wd = got[at], st = got[at + 1], info = got[at + 2];
+      if (info.s[1] == 0.0f) {
+        ++missed;
+        continue;
+      }
+      const glm::dvec3 w = glm::normalize(glm::dvec3(wd.s[0], wd.s[1], wd.s[2]));
+      const glm::dvec3 hit = rectPlaneHit(v, w);
+      // where the direction meets the plane is the point the sampler reports, on the rectangle
+      if (!(hit.x >= -1e-4 && hit.x <= 1.0 + 1e-4 && hit.y >= -1e-4 && hit.y <= 1.0 + 1e-4) ||
+          !(std::fabs(hit.x - st.s[0]) <= 1e-3 && std::fabs(hit.y - st.s[1]) <= 1e-3) ||
+          !(std::fabs(hit.z - wd.s[3]) <= 1e-4 * hit.z)) {
+        if (++outside <= 3)
+          ADD_FAILURE() << "view " << s << ": sampled (" << st.s[0] << ", " << st.s[1] << ") at " << wd.s[3]
+                        << ", its direction meets the plane at (" << hit.x << ", " << hit.y << ") at " << hit.z;
+        continue;
+      }
+      const double cosLight = std::fabs(glm::dot(glm::normalize(glm::cross(v.e1, v.e2)), w));
+      const double want = spherical ? 1.0 / omega : hit.z * hit.z / (cosLight * area);
+      const double err = std::max(std::fabs(st.s[2] - want), double(std::fabs(st.s[3] - st.s[2]))) / want;
+      worstPdf = std::max(worstPdf, err);
+      pdfOff += !(err <= 1e-3);
+      const int i = std::clamp(int(hit.x * m), 0, m - 1), j = std::clamp(int(hit.y * m), 0, m - 1);
+      counts[std::size_t(i * m + j)] += 1.0;
+    }
+    EXPECT_EQ(missed, 0) << "view " << s;
+    EXPECT_EQ(outside, 0) << "view " << s;
+    EXPECT_EQ(pdfOff, 0) << "view " << s << ": worst relative pdf error " << worstPdf;
+    double chi2 = 0.0;
+    for (std::size_t c = 0; c < counts.size(); ++c) chi2 += (counts[c] - expected[c]) * (counts[c] - expected[c]) / expected[c];
+    EXPECT_LT(chi2, chiSquareLimit(m * m - 1))
+        << "view " << s << " (solid angle " << omega << (spherical ? ", spherical" : ", by area") << "): counts "
+        << ::testing::PrintToString(counts) << " expected " << ::testing::PrintToString(expected);
+  }
+}
+
+// The pdf an emitter hit gets (light_quad_pdf, with selection 1 / area)
+// integrates to 1 over the sphere of directions, for every view (spherical
+// and by area): a Monte Carlo estimate over directions uniform in a cone
+// holding the rectangle (the whole sphere where none is narrower), within 4.5
+// standard errors of its own sample variance.
+TEST(LightSampling, QuadPdfIntegratesToOneOverTheSphere) {
+  const std::size_t perView = test::testSize(1 << 17, 1 << 15);
+  std::vector<RectView> shapes = rectViews();
+  const std::vector<cl_float4> packedShapes = packRects(shapes);
+  std::mt19937 rng(17);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  std::vector<cl_float4> views, dirs;
+  std::vector<std::size_t> viewOf;
+  std::vector<double> coneSolidAngle(shapes.size());
+  for (std::size_t s = 0; s < shapes.size(); ++s) {
+    const RectView& v = shapes[s];
+    // the cone about the centre's direction through the farthest corner, a little wider
+    const glm::dvec3 axis = glm::normalize(v.c + 0.5 * (v.e1 + v.e2) - v.p);
+    double cosMax = 1.0;
+    for (glm::dvec3 corner : {v.c, v.c + v.e1, v.c + v.e2, v.c + v.e1 + v.e2})
+      cosMax = std::min(cosMax, glm::dot(axis, glm::normalize(corner - v.p)));
+    const double theta = std::min(1.05 * std::acos(cosMax) + 1e-3, std::numbers::pi);
+    const double cosTheta = std::cos(theta);
+    coneSolidAngle[s] = 2.0 * std::numbers::pi * (1.0 - cosTheta);
+    glm::dvec3 t = glm::normalize(glm::cross(axis, std::fabs(axis.x) < 0.9 ? glm::dvec3(1, 0, 0) : glm::dvec3(0, 1, 0)));
+    const glm::dvec3 b = glm::cross(axis, t);
+    for (std::size_t k = 0; k < perView; ++k) {
+      const double z = 1.0 - unit(rng) * (1.0 - cosTheta), phi = 2.0 * std::numbers::pi * unit(rng);
+      const double r = std::sqrt(std::max(0.0, 1.0 - z * z));
+      const glm::dvec3 w = z * axis + r * std::cos(phi) * t + r * std::sin(phi) * b;
+      const glm::dvec3 hit = rectPlaneHit(v, w);
+      if (!(hit.z > 0.0 && hit.x >= 0.0 && hit.x <= 1.0 && hit.y >= 0.0 && hit.y <= 1.0)) {
+        viewOf.push_back(~std::size_t{0});
+        continue;
+      }
+      views.insert(views.end(), packedShapes.begin() + std::ptrdiff_t(4 * s), packedShapes.begin() + std::ptrdiff_t(4 * s + 4));
+      dirs.push_back({{float(w.x), float(w.y), float(w.z), float(hit.z)}});
+      viewOf.push_back(s);
+    }
+  }
+  Context& ctx = test::deviceContext();
+  const cl_uint n = cl_uint(dirs.size());
+  cl::Buffer vb(ctx.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, views.size() * 16, views.data());
+  cl::Buffer db(ctx.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, dirs.size() * 16, dirs.data());
+  cl::Buffer out(ctx.context(), CL_MEM_WRITE_ONLY, std::size_t(n) * 4);
+  cl::Kernel k(test::unitTestProgram(), "test_quad_pdf");
+  k.setArg(0, n), k.setArg(1, vb), k.setArg(2, db), k.setArg(3, out);
+  ctx.launch("test_quad_pdf", k, n);
+  std::vector<float> pdf(n);
+  ctx.queue().enqueueReadBuffer(out, CL_TRUE, 0, std::size_t(n) * 4, pdf.data());
+
+  std::vector<double> sum(shapes.size(), 0.0), sum2(shapes.size(), 0.0);
+  std::size_t next = 0;
+  for (std::size_t k2 = 0; k2 < viewOf.size(); ++k2) {
+    if (viewOf[k2] == ~std::size_t{0}) continue;
+    const std::size_t s = viewOf[k2];
+    const double f = double(pdf[next++]) * coneSolidAngle[s];
+    sum[s] += f, sum2[s] += f * f;
+  }
+  for (std::size_t s = 0; s < shapes.size(); ++s) {
+    const double mean = sum[s] / perView;
+    const double se = std::sqrt(std::max(0.0, sum2[s] / perView - mean * mean) / perView);
+    EXPECT_LT(std::fabs(mean - 1.0), 4.5 * se + 1e-4)
+        << "view " << s << " (solid angle " << rectSolidAngle(shapes[s]) << "): integral " << mean << ", standard error " << se;
   }
 }
 

@@ -6,11 +6,14 @@
 // surface they leave, the same image within noise, and the memory it saves.
 #include "../render/render_helpers.h"
 #include "core/spawn.h"
+#include "device/scene_buffers.h"
 #include "device_fixture.h"
 #include "geometry/primitives.h"
 #include "instancing_checks.h"
+#include "primitive_checks.h"
 #include "scene/generators.h"
 #include "scene/scene_file.h"
+#include "test_util.h"
 
 #include <gtest/gtest.h>
 #include <glm/gtc/matrix_transform.hpp>
@@ -145,19 +148,20 @@ bool grazes(const Scene& scene, const PrimitiveRows& rows, const Ray& r, std::ui
 /// its transform (an uneven scale turns spheres into ellipsoids, which a
 /// flattened copy is not) stays flat.
 TEST(PrimitiveInstancing, CopiesBecomeInstances) {
+  // the uploaded buffers alone: a Tracer would also build a program these checks never run
   const Placed p = placedGeometry();
-  Tracer on(test::deviceContext(), p.scene, withInstancing(Instancing::On));
-  EXPECT_EQ(on.sceneBuffers().instanceCount(), 16u);
-  EXPECT_TRUE(on.sceneBuffers().primitivesInstanced());
-  Tracer off(test::deviceContext(), p.scene, withInstancing(Instancing::Off));
-  EXPECT_EQ(off.sceneBuffers().instanceCount(), 0u);
-  EXPECT_FALSE(off.sceneBuffers().primitivesInstanced());
+  SceneBuffers on(test::deviceContext(), p.scene, withInstancing(Instancing::On));
+  EXPECT_EQ(on.instanceCount(), 16u);
+  EXPECT_TRUE(on.primitivesInstanced());
+  SceneBuffers off(test::deviceContext(), p.scene, withInstancing(Instancing::Off));
+  EXPECT_EQ(off.instanceCount(), 0u);
+  EXPECT_FALSE(off.primitivesInstanced());
 
   Scene uneven = p.scene;
   uneven.primitiveInstances[2].transform = glm::scale(uneven.primitiveInstances[2].transform, glm::dvec3(1, 1.5, 1));
   uneven.primitiveInstances[5].transform = glm::translate(uneven.primitiveInstances[5].transform, glm::dvec3(0, 0.1, 0));
-  Tracer some(test::deviceContext(), uneven, withInstancing(Instancing::On));
-  EXPECT_EQ(some.sceneBuffers().instanceCount(), 14u);
+  SceneBuffers some(test::deviceContext(), uneven, withInstancing(Instancing::On));
+  EXPECT_EQ(some.instanceCount(), 14u);
 }
 
 /// Closest and any hits, in every traversal mode: the instanced form against
@@ -233,57 +237,44 @@ TEST(PrimitiveInstancing, PacketsInsideInstancesMatchSingleRays) {
   ASSERT_EQ(on.sceneBuffers().instanceCount(), 15u + 8u);
   // whole packets at each copy
   std::vector<Ray> rays = raysAtCopies(p, 320, 31);
-  const std::vector<RayHit> first = on.traceClosest(rays);
-  std::mt19937 rng(3);
-  std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
-  for (std::size_t i = 0, n = rays.size(); i < n; ++i) {
-    if (first[i].prim == RayHit::kNoHit) continue;
-    Ray r;
-    r.origin = rays[i].origin + first[i].t * rays[i].direction;
-    r.direction = glm::normalize(glm::vec3(unit(rng), unit(rng), unit(rng)) + 1e-3f);
-    r.skip = first[i].prim;
-    rays.push_back(r);
-  }
+  const std::vector<Ray> spawned = test::raysFromHitPoints(rays, on.traceClosest(rays), 3);
+  rays.insert(rays.end(), spawned.begin(), spawned.end());
   ASSERT_GT(rays.size(), p.centres.size() * 320 * 4 / 3);  // a third of them hit
-  const std::vector<RayHit> single = on.traceClosest(rays, Traversal::kSingle);
-  const std::vector<RayHit> packet = on.traceClosest(rays, Traversal::kPacket);
-  int bad = 0, ties = 0, instanceHits = 0, meshHits = 0, flatHits = 0;
-  for (std::size_t i = 0; i < rays.size(); ++i) {
-    const RayHit &a = single[i], &b = packet[i];
+  // two hits at one distance: touching spheres, a curve's joint, a mesh's edge
+  int ties = 0;
+  const std::vector<RayHit> single =
+      test::expectPacketClosestMatchesSingle(on, rays, [](const RayHit&, const RayHit&) { return true; }, &ties);
+  int instanceHits = 0, meshHits = 0, flatHits = 0;
+  for (const RayHit& a : single) {
     instanceHits += a.instance != RayHit::kNoHit && a.triangle == RayHit::kNoHit;
     meshHits += a.instance != RayHit::kNoHit && a.triangle != RayHit::kNoHit;
     flatHits += a.instance == RayHit::kNoHit && a.prim != RayHit::kNoHit && a.triangle == RayHit::kNoHit;
-    if (a.prim == b.prim && a.instance == b.instance && (a.prim == RayHit::kNoHit || (a.t == b.t && a.b1 == b.b1 &&
-                                                                                       a.b2 == b.b2)))
-      continue;
-    if (a.prim != RayHit::kNoHit && b.prim != RayHit::kNoHit && a.t == b.t) {
-      ++ties;
-      continue;
-    }
-    if (++bad <= 5)
-      ADD_FAILURE() << "ray " << i << " (skip " << std::hex << rays[i].skip << "): single prim " << a.prim << std::dec
-                    << " t=" << a.t << " instance " << a.instance << ", packet prim " << std::hex << b.prim << std::dec
-                    << " t=" << b.t << " instance " << b.instance;
   }
-  EXPECT_EQ(bad, 0);
   EXPECT_LT(ties, int(rays.size() / 200));
   EXPECT_GT(instanceHits, int(rays.size() / 5));
   EXPECT_GT(meshHits, int(rays.size() / 50));
   EXPECT_GT(flatHits, int(rays.size() / 200));
   // any hits, on segments cut short too
   for (std::size_t i = 0; i < rays.size(); i += 3) rays[i].tmax = 0.5f;
-  const std::vector<std::uint8_t> singleBlocked = on.traceOccluded(rays, Traversal::kSingle);
-  const std::vector<std::uint8_t> packetBlocked = on.traceOccluded(rays, Traversal::kPacket);
-  int differ = 0, blocked = 0;
-  for (std::size_t i = 0; i < rays.size(); ++i) {
-    blocked += singleBlocked[i];
-    if (singleBlocked[i] != packetBlocked[i] && ++differ <= 5)
-      ADD_FAILURE() << "ray " << i << ": blocked " << int(singleBlocked[i]) << " alone, " << int(packetBlocked[i])
-                    << " in its packet";
-  }
-  EXPECT_EQ(differ, 0);
+  int blocked = 0;
+  for (std::uint8_t b : test::expectPacketOcclusionMatchesSingle(on, rays)) blocked += b;
   EXPECT_GT(blocked, int(rays.size() / 3));
   EXPECT_LT(blocked, int(rays.size()) - int(rays.size() / 10));
+}
+
+/// Curve ends inside instances: packets aimed across the silhouettes of the
+/// curves' free ends in every copy (turned, scaled, mirrored, 1e4 away) and
+/// the rays spawned off what they hit get the single rays' closest hits and
+/// occlusion (test::expectCurvePacketsMatchSingleRays), the copies' lanes
+/// moved into object space and walked there as a packet.
+TEST(PrimitiveInstancing, PacketsMatchSingleRaysAtInstancedCurveEnds) {
+  const Placed p = placedGeometry(8, 30, 12, false, true);
+  Tracer on(test::deviceContext(), p.scene, withInstancing(Instancing::On));
+  ASSERT_EQ(on.sceneBuffers().instanceCount(), 3u * 8u);
+  // the flattened segments: every copy's ends in scene space, as the hits name them
+  const PrimitiveRows rows = gatherPrimitives(p.scene);
+  test::expectCurvePacketsMatchSingleRays(on, rows,
+                                          test::raysAtCurveEnds(rows, test::testSize(240, 40), on.packetWidth(), 19));
 }
 
 /// Spheres and curves are stored as the copy whose floats are finest for its
@@ -446,8 +437,8 @@ TEST(PrimitiveInstancing, WhiteInstancedCopiesInUniformSky) {
   }
   Scene scene = placeCopies(geometry, transforms);
   {
-    Tracer on(test::deviceContext(), scene, withInstancing(Instancing::On));
-    ASSERT_EQ(on.sceneBuffers().instanceCount(), 4u);
+    SceneBuffers on(test::deviceContext(), scene, withInstancing(Instancing::On));
+    ASSERT_EQ(on.instanceCount(), 4u);
   }
   RenderSettings settings;
   settings.width = settings.height = 24;
@@ -490,8 +481,8 @@ TEST(PrimitiveInstancing, SceneFileInstancesAreStoredOnce) {
   const Scene& scene = file.scene;
   ASSERT_EQ(scene.primitiveInstances.size(), 6u);
   {
-    Tracer on(test::deviceContext(), scene, withInstancing(Instancing::On));
-    EXPECT_EQ(on.sceneBuffers().instanceCount(), 6u);
+    SceneBuffers on(test::deviceContext(), scene, withInstancing(Instancing::On));
+    EXPECT_EQ(on.instanceCount(), 6u);
   }
   RenderSettings settings;
   settings.width = 48;
@@ -509,16 +500,17 @@ TEST(PrimitiveInstancing, SceneFileInstancesAreStoredOnce) {
 /// Memory: 98 copies of spheres and curves stored once take about 1/98 of
 /// the flattened form's primitive bytes, plus the instances' rows and tree.
 TEST(PrimitiveInstancing, StoredOnce) {
+  // the uploaded buffers alone: a Tracer would also build a program these checks never run
   const Scene geometry = sphereAndCurveGeometry(200, 100, 9);
   std::vector<glm::mat4> transforms;
   for (int c = 0; c < 98; ++c)
     transforms.push_back(glm::translate(glm::mat4(1.0f), glm::vec3(3.0f * float(c % 14), 3.0f * float(c / 14), 0)));
   const Scene scene = placeCopies(geometry, transforms);
-  Tracer on(test::deviceContext(), scene, withInstancing(Instancing::On));
-  Tracer off(test::deviceContext(), scene, withInstancing(Instancing::Off));
-  ASSERT_EQ(on.sceneBuffers().instanceCount(), 2u * 98u);
-  const double flatBytes = double(off.sceneBuffers().primitiveBytes);
-  const double ratio = double(on.sceneBuffers().primitiveBytes) / flatBytes;
+  SceneBuffers on(test::deviceContext(), scene, withInstancing(Instancing::On));
+  SceneBuffers off(test::deviceContext(), scene, withInstancing(Instancing::Off));
+  ASSERT_EQ(on.instanceCount(), 2u * 98u);
+  const double flatBytes = double(off.primitiveBytes);
+  const double ratio = double(on.primitiveBytes) / flatBytes;
   // per instance: 6 rows of 16 bytes, an info row, a typed id and its share of a node
   const double overhead = 2.0 * 98.0 * (7 * 16 + 4 + 128.0 / 2) / flatBytes;
   EXPECT_LT(ratio, 1.0 / 98.0 * 1.1 + overhead);

@@ -38,13 +38,20 @@ TEST(Program, KernelDirectoryOverridesEmbeddedSources) {
 }
 
 // The render program holds the stages; the tracers are a program of their own.
+// Built with the switches a small triangle scene gets on this device (the
+// minimal integrator's for the stages, the tracer's own), which other tests
+// build too: PoCL's cache then compiles each program once in the suite.
 TEST(Program, EmbeddedKernelsBuild) {
-  cl::Program program = buildProgram(test::deviceContext(), KernelFeatures{});
+  KernelFeatures features;
+  features.bvhStackSize = 32;
+  features.packetWidth = packetWidthFor(test::deviceContext().info());
+  cl::Program program = buildProgram(test::deviceContext(), features);
   for (const char* name : {"generate", "extend", "shade", "connect", "accumulate", "tonemap", "tonemap_log_luminance",
                            "tonemap_exposure", "extend_packet", "connect_packet"})
     EXPECT_NO_THROW(cl::Kernel(program, name)) << name;
   EXPECT_THROW(cl::Kernel(program, "trace_closest"), cl::Error) << "the tracers are not render stages";
-  cl::Program trace = buildProgram(test::deviceContext(), KernelFeatures{}, "trace.cl");
+  features.integratorMinimal = false;  // as Tracer builds it
+  cl::Program trace = buildProgram(test::deviceContext(), features, "trace.cl");
   for (const char* name : {"trace_closest", "trace_occluded", "trace_closest_packet", "trace_occluded_packet",
                            "trace_occluded_stream"})
     EXPECT_NO_THROW(cl::Kernel(trace, name)) << name;

@@ -164,9 +164,24 @@ const OneFeature kCases[] = {
      [] {
        Scene s = lambertFloor();
        s.materials[0] = makeMaterial(glm::vec3(0.5f), glm::vec3(2.0f));
+       s.triangles.pop_back();  // half of the square: no rectangle
        return s;
      },
      noSettings, [] { return with(lambertBase(), {"emissive_triangles"}); }},
+    {"quad_light",
+     [] {
+       Scene s = lambertFloor();
+       s.materials[0] = makeMaterial(glm::vec3(0.5f), glm::vec3(2.0f));
+       return s;
+     },
+     noSettings, [] { return with(lambertBase(), {"emissive_triangles", "quad_lights"}); }},
+    {"quad_light_as_triangles",
+     [] {
+       Scene s = lambertFloor();
+       s.materials[0] = makeMaterial(glm::vec3(0.5f), glm::vec3(2.0f));
+       return s;
+     },
+     [](RenderSettings& s) { s.quadLights = false; }, [] { return with(lambertBase(), {"emissive_triangles"}); }},
     {"emissive_sphere",
      [] {
        Scene s = lambertFloor();
@@ -310,6 +325,9 @@ TEST(FeatureSwitches, EachFeatureTurnsOnItsSwitchOnly) {
   Scene sphere = lambertFloor();
   sphere.spheres.push_back({glm::vec3(0.0f, 0.5f, 0.0f), 0.25f, 0});
   EXPECT_EQ(changed(sphere), std::vector<std::string>{"-D WT_HAS_SPHERES=1"});
+  Scene lamp = lambertFloor();
+  lamp.materials[0] = makeMaterial(glm::vec3(0.5f), glm::vec3(2.0f));
+  EXPECT_EQ(changed(lamp), std::vector<std::string>{"-D WT_HAS_QUAD_LIGHTS=1"});
   Scene mask = lambertFloor();
   mask.materials[0].alpha_mode = WT_ALPHA_MASK;
   mask.materials[0].alpha = 0.25f;
@@ -324,11 +342,19 @@ TEST(FeatureSwitches, EachFeatureTurnsOnItsSwitchOnly) {
   pane.materials[0] = withTransmission(makePbrMaterial(glm::vec3(0.5f), 0.0f, 0.0f), 1.0f, 1.5f, true);
   EXPECT_EQ(changed(pane), (std::vector<std::string>{"-D WT_HAS_PBR=1", "-D WT_HAS_TRANSMISSION=1",
                                                      "-D WT_HAS_THIN_SHADOWS=1"}));
-  // vertex colours would tint the pane per vertex: its shadow rays stop
+  // vertex colours tint the pane per vertex: its shadow rays still cross it, reading them (connect.cl)
   Scene tinted = pane;
   tinted.colors.assign(tinted.positions.size(), glm::vec4(1.0f));
   EXPECT_EQ(changed(tinted), (std::vector<std::string>{"-D WT_HAS_PBR=1", "-D WT_HAS_TRANSMISSION=1",
-                                                       "-D WT_HAS_VERTEX_COLORS=1"}));
+                                                       "-D WT_HAS_THIN_SHADOWS=1", "-D WT_HAS_VERTEX_COLORS=1"}));
+  // and so do textures (they only scale the roughness down); a rough pane still blocks them
+  Scene texturedPane = pane;
+  test::setBaseColorTexture(texturedPane, 0, test::addCheckerTexture(texturedPane, 4));
+  EXPECT_EQ(changed(texturedPane), (std::vector<std::string>{"-D WT_HAS_PBR=1", "-D WT_HAS_TRANSMISSION=1",
+                                                             "-D WT_HAS_THIN_SHADOWS=1", "-D WT_HAS_TEXTURES=1"}));
+  texturedPane.materials[0].roughness = 0.2f;
+  EXPECT_EQ(changed(texturedPane), (std::vector<std::string>{"-D WT_HAS_PBR=1", "-D WT_HAS_TRANSMISSION=1",
+                                                             "-D WT_HAS_TEXTURES=1"}));
 }
 
 TEST(FeatureSwitches, NeverDependOnTheImageSizeOrTheSampleCount) {

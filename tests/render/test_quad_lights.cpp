@@ -1,0 +1,162 @@
+// Rectangle lights: findQuadLights pairs exactly the emissive triangles that
+// make a rectangle (one light each, its two halves pointing at it), and a
+// scene lit by rectangles renders the same with them sampled as spherical
+// rectangles as with their triangles sampled apart (RenderSettings::quadLights).
+#include "render/light_list.h"
+#include "render/render_helpers.h"
+#include "test_util.h"
+
+#include <glm/gtc/matrix_transform.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <set>
+#include <utility>
+
+namespace wt {
+namespace {
+
+/// Appends triangles (a, b, c) and (a, c, d) of material `material`: a
+/// rectangle split along a-c when the corners make one.
+void addQuad(Scene& scene, glm::vec3 a, glm::vec3 b, glm::vec3 c, glm::vec3 d, std::uint32_t material) {
+  const std::uint32_t first = std::uint32_t(scene.positions.size());
+  for (glm::vec3 p : {a, b, c, d}) {
+    scene.positions.push_back({p.x, p.y, p.z, 0});
+    scene.normals.push_back({0, 0, 0, 0});
+    scene.texcoords.emplace_back(0.0f);
+  }
+  scene.triangles.push_back({first, first + 1, first + 2, material});
+  scene.triangles.push_back({first, first + 2, first + 3, material});
+}
+
+/// Rectangle (c, e1, e2), e1 and e2 perpendicular, facing e1 x e2.
+void addRect(Scene& scene, glm::vec3 c, glm::vec3 e1, glm::vec3 e2, std::uint32_t material) {
+  addQuad(scene, c, c + e1, c + e1 + e2, c + e2, material);
+}
+
+std::uint32_t addMaterial(Scene& scene, const WtMaterial& m, const char* name) {
+  scene.materials.push_back(m);
+  scene.materialNames.push_back(name);
+  return std::uint32_t(scene.materials.size() - 1);
+}
+
+// Found: an axis-aligned rectangle, and one turned by an odd angle whose
+// corners were rounded to float. Not found: a parallelogram, a rectangle
+// whose halves differ in material, one with a half turned over, one whose far
+// corner is off by 1e-3 of the diagonal (100 x kQuadTolerance), one with
+// holes (BLEND), and the floor, which does not emit. Each rectangle is one
+// light of both halves' power; both halves point at it, with the
+// rectangle's selection probability over its area.
+TEST(QuadLights, FoundExactlyWhereTwoTrianglesMakeARectangle) {
+  Scene scene = test::makeFloor(2.0f, 0.0f, makeMaterial(glm::vec3(0.7f)));
+  const std::uint32_t lamp = addMaterial(scene, makeMaterial(glm::vec3(0.0f), glm::vec3(2.0f)), "lamp");
+  const std::uint32_t twin = addMaterial(scene, makeMaterial(glm::vec3(0.0f), glm::vec3(2.0f)), "twin");
+  WtMaterial holed = makeMaterial(glm::vec3(0.0f), glm::vec3(2.0f));
+  holed.alpha_mode = WT_ALPHA_BLEND;
+  holed.alpha = 0.5f;
+  const std::uint32_t blend = addMaterial(scene, holed, "blend");
+  const glm::vec3 down(0.0f, 0.0f, 0.3f), side(0.4f, 0.0f, 0.0f);
+  const std::size_t axisAligned = scene.triangles.size();
+  addRect(scene, {-1.5f, 1.0f, -1.5f}, side, down, lamp);
+  // turned about an odd axis: corners rounded to float
+  const glm::mat3 turn = glm::mat3(glm::rotate(glm::mat4(1.0f), 0.7316f, glm::normalize(glm::vec3(0.3f, 0.8f, -0.52f))));
+  const std::size_t turned = scene.triangles.size();
+  addRect(scene, {-0.5f, 1.2f, -1.5f}, turn * side, turn * down, lamp);
+  addQuad(scene, {0.5f, 1.0f, -1.5f}, glm::vec3(0.5f, 1.0f, -1.5f) + side,
+          glm::vec3(0.5f, 1.0f, -1.5f) + side + down + glm::vec3(0.1f, 0.0f, 0.0f),
+          glm::vec3(0.5f, 1.0f, -1.5f) + down + glm::vec3(0.1f, 0.0f, 0.0f), lamp);  // a parallelogram
+  addRect(scene, {-1.5f, 1.0f, 0.0f}, side, down, lamp);  // halves of two materials
+  scene.triangles.back().material = twin;
+  addRect(scene, {-0.5f, 1.0f, 0.0f}, side, down, lamp);  // a half turned over
+  std::swap(scene.triangles.back().v1, scene.triangles.back().v2);
+  {
+    const glm::vec3 c(0.5f, 1.0f, 0.0f);
+    const float off = 1e-3f * glm::length(side + down);  // the far corner, off the rectangle
+    addQuad(scene, c, c + side, c + side + down + glm::vec3(0.0f, off, 0.0f), c + down, lamp);
+  }
+  addRect(scene, {1.5f, 1.0f, 0.0f}, side, down, blend);
+
+  RenderSettings settings;
+  settings.width = settings.height = 4;
+  settings.lightSampler = LightSampler::Power;
+  Renderer renderer(test::deviceContext(), scene, settings);
+  const LightList& list = renderer.lights();
+  const std::vector<std::uint32_t>& order = renderer.sceneBuffers().leafOrder();
+  const std::vector<QuadLight> quads = findQuadLights(scene, renderer.sceneBuffers());
+  std::set<std::pair<std::uint32_t, std::uint32_t>> pairs;
+  for (const QuadLight& q : quads)
+    pairs.insert({std::min(order[q.first], order[q.second]), std::max(order[q.first], order[q.second])});
+  const std::set<std::pair<std::uint32_t, std::uint32_t>> want = {
+      {std::uint32_t(axisAligned), std::uint32_t(axisAligned + 1)}, {std::uint32_t(turned), std::uint32_t(turned + 1)}};
+  EXPECT_EQ(pairs, want);
+  ASSERT_EQ(list.quadLights, 2u);
+  // 7 lamps of 2 triangles: 2 rectangles and 10 triangles
+  EXPECT_EQ(list.emissiveTriangles, 14u);
+  const double rectArea = glm::length(side) * glm::length(down);
+  // a triangle light of the same emission, opaque: the twin half's
+  std::uint32_t triangleLight = ~0u;
+  for (std::uint32_t i = list.analyticCount; i < list.lights.size(); ++i)
+    if (list.lights[i].type == WT_LIGHT_TRIANGLE && scene.triangles[order[list.lights[i].triangle]].material == twin)
+      triangleLight = i;
+  ASSERT_NE(triangleLight, ~0u);
+  for (const QuadLight& q : quads) {
+    const std::uint32_t light = list.emitterQuad[q.first];
+    ASSERT_LT(light, list.lights.size());
+    EXPECT_EQ(list.emitterQuad[q.second], light);
+    EXPECT_EQ(list.lights[light].type, std::uint32_t(WT_LIGHT_QUAD));
+    EXPECT_EQ(list.lights[light].triangle, q.first);
+    // pi L area, both halves' power: twice a triangle's of the same emission and half the area
+    EXPECT_NEAR(list.alias[light].pmf / list.alias[triangleLight].pmf, 2.0, 1e-5);
+    EXPECT_NEAR(list.emitterPdfArea[q.first], list.alias[light].pmf / rectArea, 1e-5 * list.emitterPdfArea[q.first]);
+    EXPECT_EQ(list.emitterPdfArea[q.second], list.emitterPdfArea[q.first]);
+  }
+  std::size_t marked = 0;
+  for (std::uint32_t l : list.emitterQuad) marked += l != WT_NO_QUAD;
+  EXPECT_EQ(marked, 4u);
+  // off: two triangle lights each
+  settings.quadLights = false;
+  Renderer apart(test::deviceContext(), scene, settings);
+  EXPECT_EQ(apart.lights().quadLights, 0u);
+  EXPECT_EQ(apart.lights().lights.size(), 14u);
+}
+
+/// A diffuse floor lit by a large rectangle close above it (sampled by
+/// solid angle from the floor below) and a small, distant, tilted two-sided
+/// one (by area from most of the floor), seen from above and in front.
+Scene quadLitScene() {
+  Scene scene = test::makeFloor(2.0f, 0.0f, makeMaterial(glm::vec3(0.7f)));
+  const std::uint32_t big = addMaterial(scene, makeMaterial(glm::vec3(0.0f), glm::vec3(2.0f)), "big");
+  const std::uint32_t small = addMaterial(scene, makeMaterial(glm::vec3(0.0f), glm::vec3(150.0f), true), "small");
+  addRect(scene, {-0.6f, 0.35f, -0.4f}, {1.2f, 0.0f, 0.0f}, {0.0f, 0.0f, 0.8f}, big);
+  addRect(scene, {1.2f, 1.6f, -1.0f}, {0.08f, 0.0f, 0.0f}, {0.0f, 0.03f, 0.06f}, small);
+  CameraDesc camera;
+  camera.cameraToWorld =
+      glm::inverse(glm::lookAt(glm::vec3(0.0f, 1.8f, 3.0f), glm::vec3(0.0f, 0.2f, 0.0f), glm::vec3(0, 1, 0)));
+  scene.camera = camera;
+  return scene;
+}
+
+// The same image, rectangles sampled as one or as two triangles each, NEE
+// with MIS, the lights picked by power and by the light tree (4 x 4 blocks,
+// z 4.5 from the two renders' own variances).
+TEST(QuadLights, RenderTheSameAsTheirTriangles) {
+  const Scene scene = quadLitScene();
+  for (LightSampler sampler : {LightSampler::Power, LightSampler::Tree}) {
+    RenderSettings settings;
+    settings.width = settings.height = 32;
+    settings.maxBounces = 3;
+    settings.lightSampler = sampler;
+    settings.seed = 11;
+    const Image quads = test::render(scene, settings, 256);
+    settings.quadLights = false;
+    settings.seed = 12;
+    const Image triangles = test::render(scene, settings, 256);
+    const double worst = test::expectSameImage(quads, triangles, 4, 4.5,
+                                               sampler == LightSampler::Power ? "lights by power" : "light tree");
+    std::printf("rectangle lights against their triangles (%s): worst |z| %.2f\n",
+                sampler == LightSampler::Power ? "power" : "tree", worst);
+  }
+}
+
+}  // namespace
+}  // namespace wt
