@@ -188,4 +188,15 @@ std::string clErrorName(int code) {
   }
 }
 
+std::optional<cl::Program> Context::builtProgram(const std::string& key) const {
+  for (const auto& [k, program] : m_programs)
+    if (k == key) return program;
+  return std::nullopt;
+}
+
+void Context::keepProgram(const std::string& key, const cl::Program& program) {
+  if (m_programs.size() == kKeptPrograms) m_programs.erase(m_programs.begin());
+  m_programs.emplace_back(key, program);
+}
+
 }  // namespace wt

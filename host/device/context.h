@@ -6,6 +6,7 @@
 
 #include <cstddef>
 #include <map>
+#include <optional>
 #include <set>
 #include <stdexcept>
 #include <string>
@@ -85,6 +86,13 @@ class Context {
   /// The global size launch() last enqueued (0: none yet).
   std::size_t lastGlobalSize() const { return m_lastGlobal; }
 
+  /// A program built here before with the same key (programCacheKey, hex):
+  /// a second renderer or tracer with the same switches takes it instead of
+  /// building it again. Kept: the last kKeptPrograms built.
+  std::optional<cl::Program> builtProgram(const std::string& key) const;
+  void keepProgram(const std::string& key, const cl::Program& program);
+  static constexpr std::size_t kKeptPrograms = 16;
+
   /// The queue was made with CL_QUEUE_PROFILING_ENABLE.
   bool profiling() const { return m_profiling; }
   const StageTimes& stageTimes() const { return m_times; }
@@ -109,6 +117,7 @@ class Context {
   std::set<std::tuple<cl_program, std::string, std::size_t>> m_launched;  ///< (program, kernel, local size) launched
   std::size_t m_lastGlobal = 0;
   std::vector<std::pair<std::string, cl::Event>> m_pending;
+  std::vector<std::pair<std::string, cl::Program>> m_programs;  ///< oldest first
   StageTimes m_times;
 };
 

@@ -1,6 +1,7 @@
 #include "device/program.h"
 
 #include "core/embedded.h"
+#include "core/log.h"
 #include "device/program_cache.h"
 #include "geometry/primitives.h"
 
@@ -178,7 +179,14 @@ cl::Program buildProgram(Context& context, const KernelFeatures& features, const
     options +=
         " -D WT_AVOID_BITREVERSE=1 -D WT_FOLD_THROUGH_MEMORY=1 -D WT_NO_PREFETCH=1 -D WT_NO_CTZ=1"
         " -D WT_NO_SRET_INLINE=1";
-  return buildCachedProgram(context, source, options, root).program;
+  const std::string key = toHex(programCacheKey(context.info(), source, options));
+  if (std::optional<cl::Program> built = context.builtProgram(key)) {
+    log::debug("program " + root + ": built in this context already");
+    return *built;
+  }
+  cl::Program program = buildCachedProgram(context, source, options, root).program;
+  context.keepProgram(key, program);
+  return program;
 }
 
 }  // namespace wt

@@ -37,6 +37,31 @@ TEST(Program, KernelDirectoryOverridesEmbeddedSources) {
   EXPECT_NE(source.find("// from disk"), std::string::npos);
 }
 
+// A second renderer or tracer with the same switches in one context takes
+// the program built already; another switch or an edited source builds anew.
+TEST(Program, TheSameProgramIsBuiltOncePerContext) {
+  std::filesystem::path dir = test::scratchDir("built_once");
+  std::ofstream(dir / "wavetrace.cl") << "__kernel void k(__global int* x) { x[0] = WT_BVH_STACK_SIZE; }\n";
+  struct Restore {
+    ~Restore() { setKernelDirectory(std::nullopt); }
+  } restore;
+  setKernelDirectory(dir);
+  KernelFeatures a;
+  a.bvhStackSize = 32;
+  KernelFeatures b = a;
+  b.bvhStackSize = 48;
+  Context& context = test::deviceContext();
+  cl::Program first = buildProgram(context, a);
+  cl::Program again = buildProgram(context, a);
+  cl::Program other = buildProgram(context, b);
+  std::ofstream(dir / "wavetrace.cl") << "__kernel void k(__global int* x) { x[0] = -WT_BVH_STACK_SIZE; }\n";
+  cl::Program edited = buildProgram(context, a);
+  EXPECT_EQ(first(), again());
+  EXPECT_NE(first(), other());
+  EXPECT_NE(first(), edited());
+  EXPECT_NE(other(), edited());
+}
+
 // The render program holds the stages; the tracers are a program of their own.
 // Built with the switches a small triangle scene gets on this device (the
 // minimal integrator's for the stages, the tracer's own), which other tests
