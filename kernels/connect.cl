@@ -48,19 +48,7 @@ inline WtMaterial connect_wall_material(GeometryScene g, __global const float4* 
                                         float3* coat_ns) {
   *coat_ns = (float3)(0.0f);
   if (prim_type(prim) != WT_PRIM_TRIANGLE) return m;
-  float3 p0, p1, p2;
-  triangle_corners(tri_verts, prim, &p0, &p1, &p2);
-#if WT_HAS_INSTANCES
-  __global const float4* to_world = instance != WT_NO_HIT ? geometry_instance_rows(g, instance) + 3 : 0;
-  if (to_world) p0 = instance_point(to_world, p0), p1 = instance_point(to_world, p1), p2 = instance_point(to_world, p2);
-#endif
-  SurfacePoint sp = surface_point(t.surface, t.tri_info[prim], b.x, b.y, p0, p1, p2, 0.0f);
-#if WT_HAS_INSTANCES
-  if (to_world && dot(sp.tangent, sp.tangent) > 0.0f) {
-    sp.tangent = normalize(instance_vector(to_world, sp.tangent));
-    if (geometry_instance_info(g, instance).y & WT_INSTANCE_MIRRORED) sp.sign = -sp.sign;
-  }
-#endif
+  SurfacePoint sp = triangle_surface_point(g, tri_verts, t.surface, t.tri_info[prim], prim, instance, b.x, b.y, 0.0f);
 #if WT_HAS_TEXTURES && WT_HAS_CLEARCOAT
   *coat_ns = clearcoat_normal(t.surface, index, m.texture_mask, sp, *ns);  // before the base's map bends ns
 #endif

@@ -55,6 +55,31 @@ inline void shade_check_finite(WtFrameParams frame, __global uint* counters, uin
     counters[WT_COUNTER_NONFINITE_WHERE] = frame.bounce | (what << 16);
 }
 
+#if WT_HAS_TEXTURES || WT_HAS_VERTEX_COLORS || WT_HAS_ANISOTROPY
+/// The surface point the material reads at a triangle's hit (barycentrics
+/// b1, b2), in world space: an instance's corners and tangent taken out of
+/// object space, the bitangent's sign flipped on a mirrored copy. Shade and
+/// the thin-wall shadow rays (connect.cl) read materials through it.
+inline SurfacePoint triangle_surface_point(GeometryScene g, __global const float4* tri_verts, SurfaceScene ss,
+                                           uint4 info, uint prim, uint instance, float b1, float b2,
+                                           float footprint) {
+  float3 p0, p1, p2;
+  triangle_corners(tri_verts, prim, &p0, &p1, &p2);
+#if WT_HAS_INSTANCES
+  __global const float4* to_world = instance != WT_NO_HIT ? geometry_instance_rows(g, instance) + 3 : 0;
+  if (to_world) p0 = instance_point(to_world, p0), p1 = instance_point(to_world, p1), p2 = instance_point(to_world, p2);
+#endif
+  SurfacePoint sp = surface_point(ss, info, b1, b2, p0, p1, p2, footprint);
+#if WT_HAS_INSTANCES
+  if (to_world && dot(sp.tangent, sp.tangent) > 0.0f) {
+    sp.tangent = normalize(instance_vector(to_world, sp.tangent));
+    if (geometry_instance_info(g, instance).y & WT_INSTANCE_MIRRORED) sp.sign = -sp.sign;
+  }
+#endif
+  return sp;
+}
+#endif
+
 WT_KERNEL void shade(WtFrameParams frame, WtEnvironment environment, __global const float4* env_texels,
                      __global const float* env_marginal_cdf, __global const float* env_conditional_cdf,
                      __global uint* counters, uint in_slot, uint out_slot,
@@ -159,19 +184,7 @@ WT_KERNEL void shade(WtFrameParams frame, WtEnvironment environment, __global co
 #if WT_HAS_TEXTURES || WT_HAS_VERTEX_COLORS || WT_HAS_ANISOTROPY
   // triangles (an instance's too) carry vertex attributes and textures
   if (prim_type(prim) == WT_PRIM_TRIANGLE) {
-    float3 p0, p1, p2;
-    triangle_corners(tri_verts, prim, &p0, &p1, &p2);
-#if WT_HAS_INSTANCES
-    __global const float4* to_world = instance != WT_NO_HIT ? geometry_instance_rows(g, instance) + 3 : 0;
-    if (to_world) p0 = instance_point(to_world, p0), p1 = instance_point(to_world, p1), p2 = instance_point(to_world, p2);
-#endif
-    SurfacePoint sp = surface_point(ss, tri_info[prim], hit.y, hit.z, p0, p1, p2, footprint);
-#if WT_HAS_INSTANCES
-    if (to_world && dot(sp.tangent, sp.tangent) > 0.0f) {
-      sp.tangent = normalize(instance_vector(to_world, sp.tangent));
-      if (geometry_instance_info(g, instance).y & WT_INSTANCE_MIRRORED) sp.sign = -sp.sign;
-    }
-#endif
+    SurfacePoint sp = triangle_surface_point(g, tri_verts, ss, tri_info[prim], prim, instance, hit.y, hit.z, footprint);
 #if WT_AOV && WT_HAS_TEXTURES
     aov_uv = sp.uv.xy;
 #endif
