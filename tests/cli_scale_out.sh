@@ -8,7 +8,12 @@
 #            one; a rank that cannot load the scene stops the job at start
 #            with its message (no hang), failed even under mpirun
 #            --enable-recovery. Skips (77) in a build without MPI.
-#   heartbeat: rank 1 hung (process or device) or killed without mpirun
+#   lost:    rank 1 stops (SIGSTOP) holding a chunk: rank 0 gives up on it
+#            after --rank-timeout, its chunk is rendered again and the image
+#            equals 1 process; continued (SIGCONT) while rank 0 still runs,
+#            rank 1 hears that it was given up on and does not end the job.
+#            Skips (77) without MPI.
+#   heartbeat: rank 1's device hung, or rank 1 killed without mpirun
 #            ending the job: rank 0 finishes without it within --rank-timeout,
 #            the image equal to 1 process. Rank 0's device hung: rank 1 renders
 #            every chunk, chunk 0 included, and the image, every AOV and the
@@ -21,7 +26,7 @@
 #            devices equal one device with the same --chunk-spp; one of two
 #            devices hung: the other finishes the same image.
 #
-# usage: cli_scale_out.sh WAVETRACE SCRATCH_DIR devices|mpi|heartbeat [WT_MPI]
+# usage: cli_scale_out.sh WAVETRACE SCRATCH_DIR devices|mpi|lost|heartbeat [WT_MPI]
 set -u
 if [ -n "${WT_TRACE_TS:-}" ]; then PS4='+ $(date +%s.%N) '; set -x; fi
 exe=$1
@@ -129,24 +134,55 @@ export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
 # every job bounded: a hang fails the section it is in, with its log
 mpi=(timeout -k 5 120 mpirun --oversubscribe -np 2)
 
+# A worker rank that hangs, stops, or dies without a launcher that ends the
+# job: rank 0 notices within --rank-timeout, hands its chunks out again (its
+# own device takes them) and finishes the image, the same as 1 process byte
+# for byte (the merge is in chunk order, whoever rendered a chunk).
+lostCheck() {  # $1: the case, $2: the job's exit status, $3: "held" if rank 1 surely held a chunk
+  [ "$2" -eq 124 ] && fail "$1: rank 0 still waited 60 s after rank 1 stopped: $(cat "$dir/$1.log")"
+  [ "$2" -eq 0 ] || fail "$1: exit status $2: $(cat "$dir/$1.log")"
+  # silent, or (killed) a receive from it that failed or stopped mid-message
+  grep -Eq "warning: rank 1 (showed no progress for [0-9.]* s \(--rank-timeout 1\)|failed while sending|stopped sending)" \
+    "$dir/$1.log" ||
+    fail "$1: no message naming rank 1: $(cat "$dir/$1.log")"
+  [ "${3:-}" != held ] || grep -q "its chunks [0-9]* (samples [0-9]*-[0-9]*).* were handed out again" "$dir/$1.log" ||
+    fail "$1: rank 1 held no chunk (nothing to hand out again): $(cat "$dir/$1.log")"
+  cmp "$dir/$1.exr" "$dir/process.exr" || fail "$1: the image differs from 1 process"
+}
+
+if [ "$mode" = lost ]; then
+  # rank 1 stops itself (SIGSTOP, every thread: WT_TEST_STALL=1:pause) once it
+  # holds a chunk; rank 0, having lost it, goes on for 2 --rank-timeout
+  lost=(--width 24 --height 16 --max-bounces 4 --seed 9 --aov all --spp 32 --chunk-spp 2)
+  "$exe" render "${lost[@]}" -q -o "$dir/process.exr" >/dev/null 2>&1 || fail "1 process failed"
+  start=$SECONDS
+  WT_TEST_STALL=1:pause timeout -k 5 60 mpirun --oversubscribe -np 2 "$exe" render "${lost[@]}" -q --rank-timeout 1 \
+    -o "$dir/paused.exr" >"$dir/paused.log" 2>&1 &
+  job=$!
+  for _ in $(seq 1200); do
+    grep -q "warning: rank 1 showed no progress" "$dir/paused.log" && break
+    kill -0 $job 2>/dev/null || fail "the job ended before rank 0 gave up on rank 1: $(cat "$dir/paused.log")"
+    sleep 0.05
+  done
+  grep -q "warning: rank 1 showed no progress" "$dir/paused.log" ||
+    fail "rank 0 did not give up on rank 1 within 60 s: $(cat "$dir/paused.log")"
+  rank1=$(rankPid 1 $job)
+  [ -n "$rank1" ] || fail "rank 1's process not found: $(cat "$dir/paused.log")"
+  [ "$(ps -o stat= -p "$rank1" | cut -c1)" = T ] || fail "rank 1 is not stopped: $(ps -o stat= -p "$rank1")"
+  kill -CONT "$rank1"
+  wait $job
+  lostCheck paused $? held
+  # it came back while rank 0 ran: it heard the release instead of taking rank
+  # 0's silence towards it for a hung rank 0 (that would end the job, failed)
+  grep -q "warning: rank 1: rank 0 gave up on this rank" "$dir/paused.log" ||
+    fail "paused: rank 1, continued, was not told it was given up on: $(cat "$dir/paused.log")"
+  echo "rank 1 stopped holding a chunk: rank 0 finished without it, equal to 1 process; continued, it let the job end (in $((SECONDS - start)) s)"
+  exit 0
+fi
+
 if [ "$mode" = heartbeat ]; then
-  # A worker rank that hangs, or dies without a launcher that ends the job:
-  # rank 0 notices within --rank-timeout, hands its chunks out again (its
-  # own device takes them) and finishes the image, the same as 1 process
-  # byte for byte (the merge is in chunk order, whoever rendered a chunk).
   hb=(--width 48 --height 48 --max-bounces 4 --seed 9 --aov all --spp 96 --chunk-spp 2)
   "$exe" render "${hb[@]}" -q -o "$dir/process.exr" >/dev/null 2>&1 || fail "1 process failed"
-  lostCheck() {  # $1: the case, $2: the job's exit status, $3: "held" if rank 1 surely held a chunk
-    [ "$2" -eq 124 ] && fail "$1: rank 0 still waited 60 s after rank 1 stopped: $(cat "$dir/$1.log")"
-    [ "$2" -eq 0 ] || fail "$1: exit status $2: $(cat "$dir/$1.log")"
-    # silent, or (killed) a receive from it that failed or stopped mid-message
-    grep -Eq "warning: rank 1 (showed no progress for [0-9.]* s \(--rank-timeout 1\)|failed while sending|stopped sending)" \
-      "$dir/$1.log" ||
-      fail "$1: no message naming rank 1: $(cat "$dir/$1.log")"
-    [ "${3:-}" != held ] || grep -q "its chunks [0-9]* (samples [0-9]*-[0-9]*).* were handed out again" "$dir/$1.log" ||
-      fail "$1: rank 1 held no chunk (nothing to hand out again): $(cat "$dir/$1.log")"
-    cmp "$dir/$1.exr" "$dir/process.exr" || fail "$1: the image differs from 1 process"
-  }
   # a 2-rank job with the hang $1 (WT_TEST_STALL), NAME $2, --rank-timeout 1,
   # bounded by 60 s, its exit status in $status; the render's options follow
   # ($recovery: more mpirun options)
@@ -157,11 +193,8 @@ if [ "$mode" = heartbeat ]; then
     WT_TEST_STALL=$stall timeout -k 5 60 mpirun --oversubscribe ${recovery:-} -np 2 "$exe" render "$@" --rank-timeout 1 \
       -o "$dir/$name.exr" >"$dir/$name.log" 2>&1
     status=$?
+    return $status
   }
-  # rank 1's main thread stops talking once it holds a chunk (a hung process)
-  stalled 1:process hung "${hb[@]}" -q
-  lostCheck hung $status held
-  echo "rank 1 hung holding a chunk: rank 0 finished without it in $((SECONDS - start)) s, the image equals 1 process"
   # rank 1's device hangs on its chunk while its heartbeat goes on: no progress
   stalled 1:device device "${hb[@]}" -q
   lostCheck device $status held
@@ -218,21 +251,29 @@ if [ "$mode" = heartbeat ]; then
     fail "rank 0 hung: the checkpoint held no samples: $(cat "$dir/rank0-resume.log")"
   cmp "$dir/rank0.exr" "$dir/straight.exr" || fail "rank 0 hung: the resumed image differs from the uninterrupted one"
   echo "rank 0 hung: rank 1 ended the job in $((SECONDS - start)) s naming it; its checkpoint resumed to the same image"
-  # rank 1 hangs before it has started: rank 0 names it and ends the job
-  stalled 1:startup startup "${hb[@]}" -q --start-timeout 1
+  # rank 1 hangs before it has started: rank 0 names it and ends the job;
+  # and rank 0 hangs before it has started: rank 1 names it. Both jobs at
+  # once: each waits on its own --start-timeout, which load only lengthens
+  start=$SECONDS
+  stalled 1:startup startup "${hb[@]}" -q --start-timeout 1 &
+  startup1=$!
+  stalled 0:startup startup0 "${hb[@]}" -q --start-timeout 1 &
+  startup0=$!
+  wait $startup1
+  status=$?
   [ $status -eq 124 ] && fail "startup: rank 0 still waited 60 s for rank 1 to start: $(cat "$dir/startup.log")"
   [ $status -ne 0 ] || fail "startup: the job exited 0 without rank 1"
   grep -q "error: the job could not start: rank 1 had not finished starting 1 s after rank 0 (--start-timeout)" \
     "$dir/startup.log" || fail "startup: no message naming rank 1: $(cat "$dir/startup.log")"
   [ -f "$dir/startup.exr" ] && fail "startup: an image was written"
-  echo "rank 1 hung while starting: the job ended in $((SECONDS - start)) s naming it"
-  # rank 0 hangs before it has started: rank 1 names it and ends the job
-  stalled 0:startup startup0 "${hb[@]}" -q --start-timeout 1
+  wait $startup0
+  status=$?
+  echo "rank 1 hung while starting: the job ended naming it"
   [ $status -eq 124 ] && fail "startup0: rank 1 still waited 60 s for rank 0 to start: $(cat "$dir/startup0.log")"
   [ $status -ne 0 ] || fail "startup0: the job exited 0 without rank 0"
   grep -q "error: the job could not start: rank 0 had not finished starting 1 s after rank 1 (--start-timeout)" \
     "$dir/startup0.log" || fail "startup0: no message naming rank 0: $(cat "$dir/startup0.log")"
-  echo "rank 0 hung while starting: the job ended in $((SECONDS - start)) s naming it"
+  echo "rank 0 hung while starting: the job ended naming it (both in $((SECONDS - start)) s)"
   exit 0
 fi
 

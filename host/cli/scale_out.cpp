@@ -104,18 +104,29 @@ static_assert(sizeof(ResultHeader) == 48);
 /// makes that rank's main thread stop talking (a hung or dead process): a
 /// worker once it holds its first chunk, rank 0 once it has checkpointed (or
 /// merged) a chunk; "RANK:device" makes the first of that rank's devices to
-/// take a chunk hang on it (a hung device; a worker's heartbeat goes on).
+/// take a chunk hang on it (a hung device; a worker's heartbeat goes on);
+/// "RANK:pause" (a worker) makes that rank stop itself (SIGSTOP: every
+/// thread) once it holds its first chunk, until the test continues it
+/// (SIGCONT), and makes rank 0, having lost a rank, go on taking messages
+/// for 2 --rank-timeout before it ends the job: time for the lost rank to
+/// come back, hear that it was given up on, and not end the job itself.
 /// Rank 0 is also the only process of a render without MPI.
 struct StallHook {
-  bool process = false, device = false;
+  bool process = false, device = false, pause = false;
+  bool linger = false;  ///< rank 0: a worker pauses
   explicit StallHook(int rank) {
     const char* v = std::getenv("WT_TEST_STALL");
     if (!v) return;
     const std::string s(v);
     const std::size_t colon = s.find(':');
-    if (colon == std::string::npos || std::atoi(s.substr(0, colon).c_str()) != rank) return;
-    process = s.substr(colon + 1) == "process";
-    device = s.substr(colon + 1) == "device";
+    if (colon == std::string::npos) return;
+    const int target = std::atoi(s.substr(0, colon).c_str());
+    const std::string mode = s.substr(colon + 1);
+    linger = rank == 0 && target != 0 && mode == "pause";
+    if (target != rank) return;
+    process = mode == "process";
+    device = mode == "device";
+    pause = mode == "pause" && rank != 0;
   }
   [[noreturn]] static void forever() {
     while (true) std::this_thread::sleep_for(std::chrono::seconds(1));
@@ -481,6 +492,7 @@ ScaleOutResult coordinateRender(DeviceSet& devices, const ScaleOutOptions& optio
   auto lastReport = t0, lastCheckpoint = t0;
   [[maybe_unused]] auto lastBeat = t0;  // rank 0's heartbeat (MPI only)
   const StallHook stall(0);
+  std::optional<Clock::time_point> lingerFrom;  // the test hook (StallHook::linger)
   int checkpointed = resumed;
   const bool tty = isatty(STDERR_FILENO);
   int remoteActive = world.size() - 1;
@@ -739,6 +751,13 @@ ScaleOutResult coordinateRender(DeviceSet& devices, const ScaleOutOptions& optio
     }
     if (!options.quiet && since(lastReport) > (tty ? 0.1 : 5.0)) progress(false);
     if (threads.allFinished() && remoteActive == 0) {
+      if (stall.linger && !result.lostRanks.empty()) {  // the test hook: a lost rank comes back
+        if (!lingerFrom) lingerFrom = Clock::now();
+        if (since(*lingerFrom) < 2.0 * options.rankTimeoutSeconds) {
+          std::this_thread::sleep_for(std::chrono::milliseconds(1));
+          continue;
+        }
+      }
       // the last results may have arrived after the drain above
       while (std::optional<ChunkResult> r = results.pop(0.0)) take(std::move(*r), 0, true);
       break;
@@ -787,7 +806,7 @@ int serveRender([[maybe_unused]] DeviceSet& devices, [[maybe_unused]] const MpiW
   ResultQueue results;
   std::atomic<bool> stop{false};
   int requested = 0, status = 0, supplied = 0;
-  bool stopped = false;
+  bool stopped = false, paused = false;
   DeviceThreads threads(devices, fed, results, stop, stall.device);
   auto lastBeat = Clock::now(), lastHeard = Clock::now();
   bool released = false;
@@ -866,6 +885,7 @@ int serveRender([[maybe_unused]] DeviceSet& devices, [[maybe_unused]] const MpiW
         stopped = true, fed.close();
     }
     if (stall.process && supplied > 0) StallHook::forever();
+    if (stall.pause && supplied > 0 && !paused) paused = true, std::raise(SIGSTOP);
     // the sample passes done so far: rank 0 takes a count that stands still
     // while this rank holds a chunk for a hang (--rank-timeout)
     if (since(lastBeat) >= heartbeatSeconds(rankTimeoutSeconds)) {
