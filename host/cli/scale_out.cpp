@@ -315,8 +315,9 @@ namespace {
 /// do (MPI_Abort's code, an exit status, a signal), but not when it is
 /// itself stopped by a signal: the way to end such a job as failed is to
 /// stop the launcher the way a user would. Only for Open MPI's own
-/// launcher and daemon, found as this process's parent; true if signalled.
-/// The name of that launcher or daemon, "" where it is not one.
+/// launcher, found as this process's parent: not its daemon (orted, the
+/// parent of a rank on another machine), whose stop leaves mpirun waiting
+/// forever. The name of that launcher, "" where it is not one.
 std::string recoveringLauncher() {
   const char* recovery = std::getenv("OMPI_MCA_orte_enable_recovery");
   if (!recovery || (std::strcmp(recovery, "1") != 0 && std::strcmp(recovery, "true") != 0)) return "";
@@ -328,7 +329,7 @@ std::string recoveringLauncher() {
   std::fclose(f);
   if (!read) return "";
   name[std::strcspn(name, "\n")] = 0;
-  static const char* const launchers[] = {"mpirun", "mpiexec", "orterun", "orted"};
+  static const char* const launchers[] = {"mpirun", "mpiexec", "orterun"};
   if (std::none_of(std::begin(launchers), std::end(launchers), [&](const char* l) { return std::strcmp(name, l) == 0; }))
     return "";
   return name;
