@@ -12,7 +12,8 @@
 #            after --rank-timeout, its chunk is rendered again and the image
 #            equals 1 process; continued (SIGCONT) while rank 0 still runs,
 #            rank 1 hears that it was given up on and does not end the job.
-#            Skips (77) without MPI.
+#            The whole job stopped longer than --rank-timeout, then continued:
+#            no rank is lost. Skips (77) without MPI.
 #   heartbeat: rank 1's device hung, or rank 1 killed without mpirun
 #            ending the job: rank 0 finishes without it within --rank-timeout,
 #            the image equal to 1 process. Rank 0's device hung: rank 1 renders
@@ -153,10 +154,10 @@ lostCheck() {  # $1: the case, $2: the job's exit status, $3: "held" if rank 1 s
 if [ "$mode" = lost ]; then
   # rank 1 stops itself (SIGSTOP, every thread: WT_TEST_STALL=1:pause) once it
   # holds a chunk; rank 0, having lost it, goes on for 2 --rank-timeout
-  lost=(--width 24 --height 16 --max-bounces 4 --seed 9 --aov all --spp 32 --chunk-spp 2)
-  "$exe" render "${lost[@]}" -q -o "$dir/process.exr" >/dev/null 2>&1 || fail "1 process failed"
+  lost=(--width 24 --height 16 --max-bounces 4 --seed 9 --aov all --chunk-spp 2)
+  "$exe" render "${lost[@]}" --spp 32 -q -o "$dir/process.exr" >/dev/null 2>&1 || fail "1 process failed"
   start=$SECONDS
-  WT_TEST_STALL=1:pause timeout -k 5 60 mpirun --oversubscribe -np 2 "$exe" render "${lost[@]}" -q --rank-timeout 1 \
+  WT_TEST_STALL=1:pause timeout -k 5 60 mpirun --oversubscribe -np 2 "$exe" render "${lost[@]}" --spp 32 -q --rank-timeout 1 \
     -o "$dir/paused.exr" >"$dir/paused.log" 2>&1 &
   job=$!
   for _ in $(seq 1200); do
@@ -177,6 +178,34 @@ if [ "$mode" = lost ]; then
   grep -q "warning: rank 1: rank 0 gave up on this rank" "$dir/paused.log" ||
     fail "paused: rank 1, continued, was not told it was given up on: $(cat "$dir/paused.log")"
   echo "rank 1 stopped holding a chunk: rank 0 finished without it, equal to 1 process; continued, it let the job end (in $((SECONDS - start)) s)"
+  # the whole job stopped for longer than --rank-timeout and continued (as
+  # Slurm's scontrol suspend/resume does), each rank in turn first: the
+  # watchers do not count the time they were stopped themselves, so neither
+  # rank takes the other for lost; then mpirun is stopped (SIGTERM)
+  start=$SECONDS
+  "${mpi[@]}" "$exe" render "${lost[@]}" -q --spp 1000000 --rank-timeout 1 --checkpoint 0.1 \
+    -o "$dir/suspended.exr" >"$dir/suspended.log" 2>&1 &
+  job=$!
+  waitForFile "$dir/suspended.exr.wtckpt" $job
+  rank0=$(rankPid 0 $job) rank1=$(rankPid 1 $job)
+  [ -n "$rank0" ] && [ -n "$rank1" ] || fail "suspended: the ranks' processes not found: $(cat "$dir/suspended.log")"
+  for first in "$rank0 $rank1" "$rank1 $rank0"; do
+    read -r a b <<<"$first"
+    kill -STOP "$rank0" "$rank1" || fail "suspended: the job ended: $(cat "$dir/suspended.log")"
+    sleep 1.5
+    kill -CONT "$a"
+    sleep 0.3
+    kill -CONT "$b"
+    sleep 0.5  # both run: the next stop finds no message of this one waiting
+  done
+  kill -0 "$rank0" "$rank1" || fail "suspended: the job ended: $(cat "$dir/suspended.log")"
+  kill -TERM "$(pgrep -P $job)"
+  wait $job
+  grep -q "stopped by a signal after [0-9]* of 1000000 samples" "$dir/suspended.log" ||
+    fail "suspended: rank 0 did not end the job on mpirun's signal: $(cat "$dir/suspended.log")"
+  grep -q "warning: rank\|warning: device\|sent nothing" "$dir/suspended.log" &&
+    fail "suspended: a rank or device was taken for lost: $(cat "$dir/suspended.log")"
+  echo "the job stopped twice for 1.5 s (--rank-timeout 1) and continued: no rank lost (in $((SECONDS - start)) s)"
   exit 0
 fi
 

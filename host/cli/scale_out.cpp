@@ -133,6 +133,28 @@ struct StallHook {
   }
 };
 
+/// The time a watching loop itself did not run: a gap between two of its
+/// turns longer than `limit` (its process was stopped, by SIGSTOP or a
+/// suspended Slurm job, or not scheduled). A watcher moves its clocks of the
+/// others on by it: their silence counts only while the watcher ran, so a
+/// job stopped and continued as a whole loses no rank.
+class AwayClock {
+ public:
+  explicit AwayClock(double limitSeconds)
+      : m_limit(std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(limitSeconds))) {}
+  /// The time away since the last call; zero within the limit.
+  Clock::duration away() {
+    const Clock::time_point now = Clock::now();
+    const Clock::duration gap = now - m_last;
+    m_last = now;
+    return gap > m_limit ? gap : Clock::duration::zero();
+  }
+
+ private:
+  Clock::duration m_limit;
+  Clock::time_point m_last = Clock::now();
+};
+
 /// What the coordinator sees of one device thread: the chunk it holds and
 /// its sample passes, so that a hung device can be told from a slow one.
 struct DeviceWatch {
@@ -544,8 +566,17 @@ ScaleOutResult coordinateRender(DeviceSet& devices, const ScaleOutOptions& optio
     Clock::time_point since;
   };
   std::vector<DeviceSeen> seen(devices.renderers.size(), DeviceSeen{-1, 0, t0});
+  // called before every check of a silence: a stop anywhere in the loop is discounted
+  AwayClock awayClock(heartbeatSeconds(options.rankTimeoutSeconds));
+  auto discountAway = [&] {
+    const Clock::duration gap = awayClock.away();
+    for (RankState& r : ranks) r.lastProgress += gap;
+    for (DeviceSeen& d : seen) d.since += gap;
+    return gap;
+  };
   auto watchDevices = [&] {
     DeviceThreads& threads = *shared->threads;
+    discountAway();
     const auto now = Clock::now();
     for (std::size_t d = 0; d < threads.size(); ++d) {
       DeviceWatch& w = threads.watch(d);
@@ -609,6 +640,7 @@ ScaleOutResult coordinateRender(DeviceSet& devices, const ScaleOutOptions& optio
   DeviceThreads& threads = *shared->threads;
   while (true) try {
     bool busy = false;
+    discountAway();
     beat();
     while (std::optional<ChunkResult> r = results.pop(0.0)) take(std::move(*r), 0, true), busy = true;
 #if WT_MPI
@@ -625,7 +657,7 @@ ScaleOutResult coordinateRender(DeviceSet& devices, const ScaleOutOptions& optio
       busy = true;
       int bytes = 0;
       MPI_Get_count(&status, MPI_BYTE, &bytes);
-      const auto receiveStart = Clock::now();
+      auto receiveStart = Clock::now();
       std::vector<std::uint8_t> message(std::size_t(std::max(bytes, 0)));
       const int from = status.MPI_SOURCE;
       RankState& sender = ranks[std::size_t(from)];
@@ -638,6 +670,7 @@ ScaleOutResult coordinateRender(DeviceSet& devices, const ScaleOutOptions& optio
       while (!failed && !received && !timedOut && !interrupted) {
         failed = MPI_Test(&request, &received, MPI_STATUS_IGNORE) != MPI_SUCCESS;
         if (received || failed) break;
+        receiveStart += discountAway();
         timedOut = since(receiveStart) > options.rankTimeoutSeconds;
         interrupted = options.interrupted && options.interrupted();
         beat();
@@ -712,18 +745,18 @@ ScaleOutResult coordinateRender(DeviceSet& devices, const ScaleOutOptions& optio
       }
     // only with every waiting message taken: heartbeats that queued while this
     // thread was busy (merging, receiving a large result) count
-    if (drained)
-      for (int r = 1; r < world.size(); ++r) {
-        RankState& st = ranks[std::size_t(r)];
-        const double silent = since(st.lastProgress);
-        if (!st.lost && !st.finished && silent > options.rankTimeoutSeconds) {
-          char why[160];
-          std::snprintf(why, sizeof why, "showed no progress for %.3g s (--rank-timeout %g)%s", silent,
-                        options.rankTimeoutSeconds,
-                        st.chunks.empty() ? "" : ": no message, or heartbeats with no sample pass done");
-          loseRank(r, why);
-        }
+    if (drained) discountAway();
+    for (int r = 1; drained && r < world.size(); ++r) {
+      RankState& st = ranks[std::size_t(r)];
+      const double silent = since(st.lastProgress);
+      if (!st.lost && !st.finished && silent > options.rankTimeoutSeconds) {
+        char why[160];
+        std::snprintf(why, sizeof why, "showed no progress for %.3g s (--rank-timeout %g)%s", silent,
+                      options.rankTimeoutSeconds,
+                      st.chunks.empty() ? "" : ": no message, or heartbeats with no sample pass done");
+        loseRank(r, why);
       }
+    }
 #endif
     watchDevices();
     if (threads.live() == 0 && remoteActive == 0 && !plan.settled()) {
@@ -814,7 +847,9 @@ int serveRender([[maybe_unused]] DeviceSet& devices, [[maybe_unused]] const MpiW
   // rank 0 sends a heartbeat as often as the workers do: a rank 0 that is
   // silent for the timeout is hung or dead, and with it the job (unless it
   // released this rank: then it ends the job itself)
+  AwayClock awayClock(heartbeatSeconds(rankTimeoutSeconds));
   auto takeRootHeartbeats = [&] {
+    lastHeard += awayClock.away();
     for (const int tag : {kTagHeartbeat, kTagRelease})
       for (int flag = 1; flag;) {
         MPI_Iprobe(0, tag, MPI_COMM_WORLD, &flag, MPI_STATUS_IGNORE);
@@ -829,6 +864,7 @@ int serveRender([[maybe_unused]] DeviceSet& devices, [[maybe_unused]] const MpiW
                         ": rank 0 gave up on this rank (no progress within --rank-timeout); it waits for rank 0 "
                         "to end the job");
       }
+    lastHeard += awayClock.away();
     const double silent = since(lastHeard);
     if (released || silent <= rankTimeoutSeconds) return;
     char text[400];
