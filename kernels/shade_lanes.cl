@@ -13,81 +13,86 @@
 
 #define WT_SHADE_LANES_WIDTH 8
 
+// Every helper inlined: a lane vector passed by pointer to a called function
+// lives in memory, which PoCL keeps per work-item of the group.
+#define WT_LANES_INLINE inline __attribute__((always_inline))
+
 typedef struct V8 {
   float8 x, y, z;
 } V8;
 
-inline V8 v8(float8 x, float8 y, float8 z) { return (V8){x, y, z}; }
-inline V8 v8_splat(float3 a) { return (V8){(float8)(a.x), (float8)(a.y), (float8)(a.z)}; }
-inline V8 v8_add(V8 a, V8 b) { return (V8){a.x + b.x, a.y + b.y, a.z + b.z}; }
-inline V8 v8_sub(V8 a, V8 b) { return (V8){a.x - b.x, a.y - b.y, a.z - b.z}; }
-inline V8 v8_mul(V8 a, V8 b) { return (V8){a.x * b.x, a.y * b.y, a.z * b.z}; }
-inline V8 v8_scale(V8 a, float8 s) { return (V8){a.x * s, a.y * s, a.z * s}; }
-inline V8 v8_div(V8 a, float8 s) { return (V8){a.x / s, a.y / s, a.z / s}; }
-inline V8 v8_neg(V8 a) { return (V8){-a.x, -a.y, -a.z}; }
-inline float8 v8_dot(V8 a, V8 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
-inline V8 v8_cross(V8 a, V8 b) {
+WT_LANES_INLINE V8 v8(float8 x, float8 y, float8 z) { return (V8){x, y, z}; }
+WT_LANES_INLINE V8 v8_splat(float3 a) { return (V8){(float8)(a.x), (float8)(a.y), (float8)(a.z)}; }
+WT_LANES_INLINE V8 v8_add(V8 a, V8 b) { return (V8){a.x + b.x, a.y + b.y, a.z + b.z}; }
+WT_LANES_INLINE V8 v8_sub(V8 a, V8 b) { return (V8){a.x - b.x, a.y - b.y, a.z - b.z}; }
+WT_LANES_INLINE V8 v8_mul(V8 a, V8 b) { return (V8){a.x * b.x, a.y * b.y, a.z * b.z}; }
+WT_LANES_INLINE V8 v8_scale(V8 a, float8 s) { return (V8){a.x * s, a.y * s, a.z * s}; }
+WT_LANES_INLINE V8 v8_div(V8 a, float8 s) { return (V8){a.x / s, a.y / s, a.z / s}; }
+WT_LANES_INLINE V8 v8_neg(V8 a) { return (V8){-a.x, -a.y, -a.z}; }
+WT_LANES_INLINE float8 v8_dot(V8 a, V8 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+WT_LANES_INLINE V8 v8_cross(V8 a, V8 b) {
   return (V8){a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
 }
-inline float8 v8_length(V8 a) { return sqrt(v8_dot(a, a)); }
-inline V8 v8_normalize(V8 a) { return v8_div(a, v8_length(a)); }
+WT_LANES_INLINE float8 v8_length(V8 a) { return sqrt(v8_dot(a, a)); }
+WT_LANES_INLINE V8 v8_normalize(V8 a) { return v8_div(a, v8_length(a)); }
 /// m ? b : a, per lane (m: a comparison's -1 or 0).
-inline V8 v8_select(V8 a, V8 b, int8 m) { return (V8){select(a.x, b.x, m), select(a.y, b.y, m), select(a.z, b.z, m)}; }
-inline int8 v8_positive(V8 a) { return a.x > 0.0f || a.y > 0.0f || a.z > 0.0f; }
+WT_LANES_INLINE V8 v8_select(V8 a, V8 b, int8 m) { return (V8){select(a.x, b.x, m), select(a.y, b.y, m), select(a.z, b.z, m)}; }
+WT_LANES_INLINE int8 v8_positive(V8 a) { return a.x > 0.0f || a.y > 0.0f || a.z > 0.0f; }
 
 /// Lane k of a (k a constant once the lane loops unroll).
-inline float lane_f(float8 a, int k) {
+WT_LANES_INLINE float lane_f(float8 a, int k) {
   float v[8];
   vstore8(a, 0, v);
   return v[k];
 }
-inline uint lane_u(uint8 a, int k) {
+WT_LANES_INLINE uint lane_u(uint8 a, int k) {
   uint v[8];
   vstore8(a, 0, v);
   return v[k];
 }
-inline int lane_i(int8 a, int k) {
+WT_LANES_INLINE int lane_i(int8 a, int k) {
   int v[8];
   vstore8(a, 0, v);
   return v[k];
 }
-inline float3 lane_v(V8 a, int k) { return (float3)(lane_f(a.x, k), lane_f(a.y, k), lane_f(a.z, k)); }
+WT_LANES_INLINE float3 lane_v(V8 a, int k) { return (float3)(lane_f(a.x, k), lane_f(a.y, k), lane_f(a.z, k)); }
 
 /// Element `offset` of rows of `stride` floats at each lane's row.
-inline float8 gather_f(__global const float* base, uint8 row, uint stride, uint offset) {
+WT_LANES_INLINE float8 gather_f(__global const float* base, uint8 row, uint stride, uint offset) {
   uint8 i = row * stride + offset;
   return (float8)(base[i.s0], base[i.s1], base[i.s2], base[i.s3], base[i.s4], base[i.s5], base[i.s6], base[i.s7]);
 }
-inline uint8 gather_u(__global const uint* base, uint8 row, uint stride, uint offset) {
+WT_LANES_INLINE uint8 gather_u(__global const uint* base, uint8 row, uint stride, uint offset) {
   uint8 i = row * stride + offset;
   return (uint8)(base[i.s0], base[i.s1], base[i.s2], base[i.s3], base[i.s4], base[i.s5], base[i.s6], base[i.s7]);
 }
-inline V8 gather_v(__global const float4* rows, uint8 row) {
+WT_LANES_INLINE V8 gather_v(__global const float4* rows, uint8 row) {
   __global const float* f = (__global const float*)rows;
   return v8(gather_f(f, row, 4u, 0u), gather_f(f, row, 4u, 1u), gather_f(f, row, 4u, 2u));
 }
 
 /// Rows `row` of a float4 buffer set to (v, w) where m.
-inline void scatter_v(__global float4* rows, uint8 row, int8 m, V8 v, float8 w) {
+WT_LANES_INLINE void scatter_v(__global float4* rows, uint8 row, int8 m, V8 v, float8 w) {
+  #pragma unroll
   for (int k = 0; k < WT_SHADE_LANES_WIDTH; ++k)
     if (lane_i(m, k)) rows[lane_u(row, k)] = (float4)(lane_v(v, k), lane_f(w, k));
 }
 
 // ---- the sampler (sampler.cl, shared/rng.h, shared/sampler.h) on lanes
 
-inline uint8 rng_hash8(uint8 x) {
+WT_LANES_INLINE uint8 rng_hash8(uint8 x) {
   uint8 state = x * 747796405u + 2891336453u;
   uint8 word = ((state >> ((state >> 28u) + 4u)) ^ state) * 277803737u;
   return (word >> 22u) ^ word;
 }
-inline uint8 sampler_reverse_bits8(uint8 x) {
+WT_LANES_INLINE uint8 sampler_reverse_bits8(uint8 x) {
   x = ((x >> 1u) & 0x55555555u) | ((x & 0x55555555u) << 1u);
   x = ((x >> 2u) & 0x33333333u) | ((x & 0x33333333u) << 2u);
   x = ((x >> 4u) & 0x0f0f0f0fu) | ((x & 0x0f0f0f0fu) << 4u);
   x = ((x >> 8u) & 0x00ff00ffu) | ((x & 0x00ff00ffu) << 8u);
   return (x >> 16u) | (x << 16u);
 }
-inline uint8 sampler_lk_permute8(uint8 x, uint8 seed) {
+WT_LANES_INLINE uint8 sampler_lk_permute8(uint8 x, uint8 seed) {
   x ^= x * 0x3d20adeau;
   x += seed;
   x *= (seed >> 16u) | 1u;
@@ -95,7 +100,7 @@ inline uint8 sampler_lk_permute8(uint8 x, uint8 seed) {
   x ^= x * 0x53a22864u;
   return x;
 }
-inline uint8 sampler_sobol_pascal8(uint8 index) {
+WT_LANES_INLINE uint8 sampler_sobol_pascal8(uint8 index) {
   index ^= (index >> 1u) & 0x55555555u;
   index ^= (index >> 2u) & 0x33333333u;
   index ^= (index >> 4u) & 0x0f0f0f0fu;
@@ -105,7 +110,7 @@ inline uint8 sampler_sobol_pascal8(uint8 index) {
 }
 
 /// sampler_get2 for each lane's pixel: dimensions dim and dim + 1, bit for bit.
-inline __attribute__((always_inline)) void sampler_get2_8(WtFrameParams frame, uint8 pixel, uint dim, float8* a,
+WT_LANES_INLINE void sampler_get2_8(WtFrameParams frame, uint8 pixel, uint dim, float8* a,
                                                           float8* b) {
   if (frame.flags & WT_FLAG_SOBOL) {
     uint8 group_seed = rng_hash8(frame.seed ^ rng_hash8(pixel ^ rng_hash((frame.bounce << 8u) + (dim >> 1u) + 0x9e3779b9u)));
@@ -124,7 +129,7 @@ inline __attribute__((always_inline)) void sampler_get2_8(WtFrameParams frame, u
 
 // ---- common.h, shared/spawn.h and shared/trig.h on lanes
 
-inline float8 wt_sincospi8(float8 x, float8* cos_out) {
+WT_LANES_INLINE float8 wt_sincospi8(float8 x, float8* cos_out) {
   float8 k = rint(2.0f * x);
   float8 r = x - 0.5f * k;
   float8 t = 3.14159265358979323846f * r;
@@ -141,7 +146,7 @@ inline float8 wt_sincospi8(float8 x, float8* cos_out) {
   return sin_v;
 }
 
-inline float8 wt_atan2_8(float8 y, float8 x) {
+WT_LANES_INLINE float8 wt_atan2_8(float8 y, float8 x) {
   float8 ax = fabs(x), ay = fabs(y);
   float8 t = ay / ax;
   int8 high = t > 2.414213562373095f;
@@ -155,38 +160,38 @@ inline float8 wt_atan2_8(float8 y, float8 x) {
   return copysign(a, y);
 }
 
-inline float8 spawn_next_up8(float8 v) {
+WT_LANES_INLINE float8 spawn_next_up8(float8 v) {
   float8 w = select(v, (float8)(0.0f), v == 0.0f);
   uint8 bits = as_uint8(w);
   float8 up = as_float8(select(bits - 1u, bits + 1u, w > 0.0f));
   return select(up, v, v == INFINITY);
 }
-inline float8 spawn_next_down8(float8 v) {
+WT_LANES_INLINE float8 spawn_next_down8(float8 v) {
   float8 w = select(v, (float8)(-0.0f), v == 0.0f);
   uint8 bits = as_uint8(w);
   float8 down = as_float8(select(bits + 1u, bits - 1u, w > 0.0f));
   return select(down, v, v == -INFINITY);
 }
-inline float8 spawn_offset_coordinate8(float8 p, float8 offset) {
+WT_LANES_INLINE float8 spawn_offset_coordinate8(float8 p, float8 offset) {
   float8 moved = p + offset;
   return select(select(moved, spawn_next_down8(moved), offset < 0.0f), spawn_next_up8(moved), offset > 0.0f);
 }
-inline V8 ray_offset_origin8(V8 p, V8 p_error, V8 n) {
+WT_LANES_INLINE V8 ray_offset_origin8(V8 p, V8 p_error, V8 n) {
   float8 d = fabs(n.x) * p_error.x + fabs(n.y) * p_error.y + fabs(n.z) * p_error.z;
   V8 offset = v8_scale(n, d);
   return v8(spawn_offset_coordinate8(p.x, offset.x), spawn_offset_coordinate8(p.y, offset.y),
             spawn_offset_coordinate8(p.z, offset.z));
 }
-inline float8 spawn_barycentric_error8(float8 b0, float8 b1, float8 b2, float8 p0, float8 p1, float8 p2) {
+WT_LANES_INLINE float8 spawn_barycentric_error8(float8 b0, float8 b1, float8 b2, float8 p0, float8 p1, float8 p2) {
   return spawn_gamma(7) * (fabs(b0 * p0) + fabs(b1 * p1) + fabs(b2 * p2)) + spawn_gamma(2) * fabs(p0);
 }
-inline V8 triangle_point8(V8 p0, V8 p1, V8 p2, float8 b1, float8 b2, V8* error) {
+WT_LANES_INLINE V8 triangle_point8(V8 p0, V8 p1, V8 p2, float8 b1, float8 b2, V8* error) {
   float8 b0 = 1.0f - b1 - b2;
   *error = v8(spawn_barycentric_error8(b0, b1, b2, p0.x, p1.x, p2.x), spawn_barycentric_error8(b0, b1, b2, p0.y, p1.y, p2.y),
               spawn_barycentric_error8(b0, b1, b2, p0.z, p1.z, p2.z));
   return v8_add(v8_add(v8_scale(p0, b0), v8_scale(p1, b1)), v8_scale(p2, b2));
 }
-inline void frame_from_normal8(V8 n, V8* t, V8* b) {
+WT_LANES_INLINE void frame_from_normal8(V8 n, V8* t, V8* b) {
   float8 sign = copysign((float8)(1.0f), n.z);
   float8 a = -1.0f / (sign + n.z);
   float8 c = n.x * n.y * a;
@@ -195,7 +200,7 @@ inline void frame_from_normal8(V8 n, V8* t, V8* b) {
 }
 
 /// Each lane's triangle's corners (triangle_corners).
-inline void triangle_corners8(__global const float4* tri_verts, uint8 prim, V8* p0, V8* p1, V8* p2) {
+WT_LANES_INLINE void triangle_corners8(__global const float4* tri_verts, uint8 prim, V8* p0, V8* p1, V8* p2) {
   __global const float* f = (__global const float*)tri_verts;
   uint8 lane = (prim >> 2u) * (4u * WT_TRIANGLE_BLOCK_ROWS) + (prim & 3u);
   *p0 = v8(gather_f(f, lane, 1u, 0u), gather_f(f, lane, 1u, 4u), gather_f(f, lane, 1u, 8u));
@@ -205,22 +210,22 @@ inline void triangle_corners8(__global const float4* tri_verts, uint8 prim, V8* 
 
 // ---- lights/light_sampling.cl on lanes
 
-inline float8 light_triangle_solid_angle8(V8 p, V8 p0, V8 p1, V8 p2) {
+WT_LANES_INLINE float8 light_triangle_solid_angle8(V8 p, V8 p0, V8 p1, V8 p2) {
   V8 a = v8_sub(p0, p), b = v8_sub(p1, p), c = v8_sub(p2, p);
   float8 la = v8_length(a), lb = v8_length(b), lc = v8_length(c);
   float8 numerator = fabs(v8_dot(a, v8_cross(b, c)));
   float8 denominator = la * lb * lc + v8_dot(a, b) * lc + v8_dot(a, c) * lb + v8_dot(b, c) * la;
   return fabs(2.0f * wt_atan2_8(numerator, denominator));
 }
-inline int8 light_use_spherical8(float8 solid_angle) {
+WT_LANES_INLINE int8 light_use_spherical8(float8 solid_angle) {
   return solid_angle >= WT_SPHERICAL_MIN_SOLID_ANGLE && solid_angle <= WT_SPHERICAL_MAX_SOLID_ANGLE;
 }
-inline V8 light_orthonormal8(V8 a, V8 b) {
+WT_LANES_INLINE V8 light_orthonormal8(V8 a, V8 b) {
   V8 v = v8_sub(a, v8_scale(b, v8_dot(a, b)));
   float8 l = v8_length(v);
   return v8_select(v8_splat((float3)(0.0f)), v8_div(v, l), l > 0.0f);
 }
-inline V8 light_sample_spherical_triangle8(V8 A, V8 B, V8 C, float8 solid_angle, float8 u1, float8 u2) {
+WT_LANES_INLINE V8 light_sample_spherical_triangle8(V8 A, V8 B, V8 C, float8 solid_angle, float8 u1, float8 u2) {
   V8 n_ab = light_orthonormal8(B, A), n_ac = light_orthonormal8(C, A);
   float8 cos_alpha = clamp(v8_dot(n_ab, n_ac), -1.0f, 1.0f);
   float8 sin_alpha = sqrt(fmax(0.0f, 1.0f - cos_alpha * cos_alpha));
@@ -246,7 +251,7 @@ typedef struct LightSample8 {
 } LightSample8;
 
 /// light_sample's WT_LIGHT_TRIANGLE case for lanes `m`; `row` the lights' rows (16 floats each).
-inline void light_sample_triangle8(__global const float* lrow, __global const float4* tri_verts, uint8 index, int8 m,
+WT_LANES_INLINE void light_sample_triangle8(__global const float* lrow, __global const float4* tri_verts, uint8 index, int8 m,
                                    V8 p, float8 u1, float8 u2, LightSample8* s) {
   uint8 t = as_uint8(gather_f(lrow, index, 16u, 13u));
   float8 two_sided = gather_f(lrow, index, 16u, 3u);
@@ -314,7 +319,7 @@ typedef struct RectView8 {
   float8 x0, y0, x1, y1, z0, l00, l01;
 } RectView8;
 
-inline float8 light_rect_view8(V8 p, V8 c, V8 e1, V8 e2, RectView8* v) {
+WT_LANES_INLINE float8 light_rect_view8(V8 p, V8 c, V8 e1, V8 e2, RectView8* v) {
   float8 ex = v8_length(e1), ey = v8_length(e2);
   V8 x = v8_div(e1, ex), y = v8_div(e2, ey);
   V8 d = v8_sub(c, p);
@@ -332,7 +337,7 @@ inline float8 light_rect_view8(V8 p, V8 c, V8 e1, V8 e2, RectView8* v) {
   return 2.0f * wt_atan2_8(n1 * e_2 + n2 * e_1, e_1 * e_2 - n1 * n2);
 }
 
-inline void light_sample_spherical_rect8(RectView8 v, float8 solid_angle, float8 u1, float8 u2, float8* s_out,
+WT_LANES_INLINE void light_sample_spherical_rect8(RectView8 v, float8 solid_angle, float8 u1, float8 u2, float8* s_out,
                                          float8* t_out) {
   float8 x0 = v.x0, y0 = v.y0, x1 = v.x1, y1 = v.y1, z0 = v.z0;
   float8 z2 = z0 * z0;
@@ -359,7 +364,7 @@ inline void light_sample_spherical_rect8(RectView8 v, float8 solid_angle, float8
 }
 
 /// light_sample_quad for lanes `m`.
-inline void light_sample_quad8(__global const float* lrow, __global const float4* tri_verts, uint8 index, int8 m,
+WT_LANES_INLINE void light_sample_quad8(__global const float* lrow, __global const float4* tri_verts, uint8 index, int8 m,
                                V8 p, float8 u1, float8 u2, LightSample8* s) {
   uint8 first = as_uint8(gather_f(lrow, index, 16u, 13u));
   uint8 second = as_uint8(gather_f(lrow, index, 16u, 1u));
@@ -420,7 +425,7 @@ inline void light_sample_quad8(__global const float* lrow, __global const float4
 // ---- lights/light_tree.cl on lanes
 
 /// light_tree_importance2's terms for one node per lane (rows of 16 floats, WtLightNode).
-inline float8 light_tree_importance8(__global const float* nf, uint8 node, V8 p, V8 n) {
+WT_LANES_INLINE float8 light_tree_importance8(__global const float* nf, uint8 node, V8 p, V8 n) {
   float8 power = gather_f(nf, node, 16u, 3u);
   float8 lo_x = gather_f(nf, node, 16u, 0u), lo_y = gather_f(nf, node, 16u, 1u), lo_z = gather_f(nf, node, 16u, 2u);
   float8 hi_x = gather_f(nf, node, 16u, 4u), hi_y = gather_f(nf, node, 16u, 5u), hi_z = gather_f(nf, node, 16u, 6u);
@@ -449,7 +454,7 @@ inline float8 light_tree_importance8(__global const float* nf, uint8 node, V8 p,
 
 /// light_tree_pick for lanes `m`, all lanes descending together: each
 /// lane's light-list index (WT_NO_HIT, *pmf 0, where nothing can reach it).
-inline uint8 light_tree_pick8(__global const WtLightNode* nodes, V8 p, V8 n, float8 u, int8 m, float8* pmf) {
+WT_LANES_INLINE uint8 light_tree_pick8(__global const WtLightNode* nodes, V8 p, V8 n, float8 u, int8 m, float8* pmf) {
   __global const float* nf = (__global const float*)nodes;
   __global const uint* nu = (__global const uint*)nodes;
   uint8 k = (uint8)(0u);
@@ -532,6 +537,7 @@ WT_KERNEL void shade(WtFrameParams frame, WtEnvironment environment, __global co
   const int8 valid = entry < count;
   const bool compact_shadows = (frame.flags & WT_FLAG_COMPACT_SHADOWS) != 0u;
   if (!compact_shadows && (frame.flags & WT_FLAG_SHADOW_QUEUE))
+    #pragma unroll
     for (int k = 0; k < WT_SHADE_LANES_WIDTH; ++k)
       if (lane_i(valid, k)) shadow_queue[first + k] = WT_NO_HIT;
 #if WT_HAS_QUAD_LIGHTS
@@ -727,6 +733,7 @@ WT_KERNEL void shade(WtFrameParams frame, WtEnvironment environment, __global co
     float8 tmax = select((float8)(INFINITY), target_len * (1.0f - WT_SHADOW_MARGIN), finite_light);
     int8 queued = carries && v8_positive(contribution) && tmax > 0.0f;
     if (any(queued)) {
+      #pragma unroll
       for (int k = 0; k < WT_SHADE_LANES_WIDTH; ++k) {
         if (!lane_i(queued, k)) continue;
         uint pk = lane_u(path, k);
@@ -767,6 +774,7 @@ WT_KERNEL void shade(WtFrameParams frame, WtEnvironment environment, __global co
   scatter_v(ray_o, path, go, origin, (float8)(0.0f));
   scatter_v(ray_d, path, go, wi, (float8)(INFINITY));
   uint survivors = 0u;
+  #pragma unroll
   for (int k = 0; k < WT_SHADE_LANES_WIDTH; ++k) {
     if (!lane_i(go, k)) continue;
     uint pk = lane_u(path, k);
@@ -777,6 +785,7 @@ WT_KERNEL void shade(WtFrameParams frame, WtEnvironment environment, __global co
     ++survivors;
   }
   uint slot = atomic_add(&counters[out_slot], survivors);
+  #pragma unroll
   for (int k = 0; k < WT_SHADE_LANES_WIDTH; ++k)
     if (lane_i(go, k)) queue_out[slot++] = lane_u(path, k);
 }

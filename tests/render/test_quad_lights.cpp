@@ -9,6 +9,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <set>
 #include <utility>
@@ -161,22 +162,29 @@ TEST(QuadLights, RenderTheSameAsTheirTriangles) {
 // Shade on float8 lanes (kernels/shade_lanes.cl, RenderSettings::shadeLanes)
 // against one path per work-item (shade.cl): the same image within noise
 // (4 x 4 blocks, z 4.5 from the two renders' own variances). The scene has
-// every light the lanes reach: rectangles (by solid angle and by area), a
-// lone emissive triangle, a point light and a constant sky (one lane at a
-// time), picked by power and by the light tree; a corner of a wall next to
+// every light the lanes reach: rectangles (by solid angle and by area),
+// lone emissive triangles (by solid angle and by area), a point light and a
+// constant sky (one lane at a time), picked by power and by the light tree; a corner of a wall next to
 // the floor sends paths back and forth.
 TEST(QuadLights, ShadeLanesRenderTheSameAsOnePathPerWorkItem) {
   Scene scene = quadLitScene();
   const std::uint32_t tri = addMaterial(scene, makeMaterial(glm::vec3(0.0f), glm::vec3(6.0f), true), "triangle");
   const std::uint32_t wall = addMaterial(scene, makeMaterial(glm::vec3(0.8f, 0.3f, 0.2f)), "wall");
   addRect(scene, {-2.0f, 0.0f, -1.2f}, {0.0f, 1.5f, 0.0f}, {4.0f, 0.0f, 0.0f}, wall);
-  const std::uint32_t first = std::uint32_t(scene.positions.size());
-  for (glm::vec3 p : {glm::vec3(0.9f, 0.9f, 0.3f), glm::vec3(1.2f, 0.9f, 0.6f), glm::vec3(0.8f, 1.1f, 0.7f)}) {
-    scene.positions.push_back({p.x, p.y, p.z, 0});
-    scene.normals.push_back({0, 0, 0, 0});
-    scene.texcoords.emplace_back(0.0f);
+  // a triangle near enough to be sampled by solid angle, and a tiny one by area
+  const std::uint32_t tiny = addMaterial(scene, makeMaterial(glm::vec3(0.0f), glm::vec3(3000.0f), true), "tiny");
+  for (auto [corners, material] : {std::pair{std::array{glm::vec3(0.9f, 0.9f, 0.3f), glm::vec3(1.2f, 0.9f, 0.6f),
+                                                        glm::vec3(0.8f, 1.1f, 0.7f)}, tri},
+                                   std::pair{std::array{glm::vec3(-0.5f, 1.8f, 0.5f), glm::vec3(-0.45f, 1.8f, 0.5f),
+                                                        glm::vec3(-0.5f, 1.8f, 0.55f)}, tiny}}) {
+    const std::uint32_t first = std::uint32_t(scene.positions.size());
+    for (glm::vec3 p : corners) {
+      scene.positions.push_back({p.x, p.y, p.z, 0});
+      scene.normals.push_back({0, 0, 0, 0});
+      scene.texcoords.emplace_back(0.0f);
+    }
+    scene.triangles.push_back({first, first + 1, first + 2, material});
   }
-  scene.triangles.push_back({first, first + 1, first + 2, tri});
   PunctualLight point;
   point.position = glm::vec3(-1.0f, 1.2f, 1.0f);
   point.intensity = glm::vec3(0.6f, 0.8f, 1.0f);
@@ -185,6 +193,7 @@ TEST(QuadLights, ShadeLanesRenderTheSameAsOnePathPerWorkItem) {
     RenderSettings settings;
     settings.width = settings.height = 32;
     settings.maxBounces = 3;
+    settings.rrMinDepth = 1;  // roulette where it weighs
     settings.lightSampler = sampler;
     settings.background = glm::vec3(0.2f, 0.25f, 0.3f);
     settings.seed = 21;
