@@ -14,8 +14,14 @@
 #define WT_SHADE_LANES_WIDTH 8
 
 // Every helper inlined: a lane vector passed by pointer to a called function
-// lives in memory, which PoCL keeps per work-item of the group.
+// lives in memory, which PoCL keeps per work-item of the group. Under
+// Oclgrind, which lacks what inlining a struct's return makes, not inlined
+// (as WT_INLINE_STRUCT).
+#if WT_NO_SRET_INLINE
+#define WT_LANES_INLINE __attribute__((noinline)) inline
+#else
 #define WT_LANES_INLINE inline __attribute__((always_inline))
+#endif
 
 typedef struct V8 {
   float8 x, y, z;
@@ -85,6 +91,14 @@ WT_LANES_INLINE uint8 rng_hash8(uint8 x) {
   uint8 word = ((state >> ((state >> 28u) + 4u)) ^ state) * 277803737u;
   return (word >> 22u) ^ word;
 }
+#if WT_AVOID_BITREVERSE
+// Oclgrind cannot run llvm.bitreverse (shared/sampler.h): lane by lane
+WT_LANES_INLINE uint8 sampler_reverse_bits8(uint8 x) {
+  return (uint8)(sampler_reverse_bits(x.s0), sampler_reverse_bits(x.s1), sampler_reverse_bits(x.s2),
+                 sampler_reverse_bits(x.s3), sampler_reverse_bits(x.s4), sampler_reverse_bits(x.s5),
+                 sampler_reverse_bits(x.s6), sampler_reverse_bits(x.s7));
+}
+#else
 WT_LANES_INLINE uint8 sampler_reverse_bits8(uint8 x) {
   x = ((x >> 1u) & 0x55555555u) | ((x & 0x55555555u) << 1u);
   x = ((x >> 2u) & 0x33333333u) | ((x & 0x33333333u) << 2u);
@@ -92,6 +106,7 @@ WT_LANES_INLINE uint8 sampler_reverse_bits8(uint8 x) {
   x = ((x >> 8u) & 0x00ff00ffu) | ((x & 0x00ff00ffu) << 8u);
   return (x >> 16u) | (x << 16u);
 }
+#endif
 WT_LANES_INLINE uint8 sampler_lk_permute8(uint8 x, uint8 seed) {
   x ^= x * 0x3d20adeau;
   x += seed;
