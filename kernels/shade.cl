@@ -80,6 +80,9 @@ inline SurfacePoint triangle_surface_point(GeometryScene g, __global const float
 }
 #endif
 
+#if WT_SHADE_LANES
+#include "shade_lanes.cl"
+#else
 WT_KERNEL void shade(WtFrameParams frame, WtEnvironment environment, __global const float4* env_texels,
                      __global const float* env_marginal_cdf, __global const float* env_conditional_cdf,
                      __global uint* counters, uint in_slot, uint out_slot,
@@ -515,3 +518,4 @@ WT_KERNEL void shade(WtFrameParams frame, WtEnvironment environment, __global co
 #if WT_HAS_TRANSMISSION
 #undef frame
 #endif
+#endif  // WT_SHADE_LANES

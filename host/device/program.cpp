@@ -148,6 +148,7 @@ std::vector<std::string> kernelDefines(const KernelFeatures& features) {
       "-D WT_STREAM_PREFETCH=" + std::string(features.streamPrefetch ? "1" : "0"),
       "-D WT_AOV=" + std::string(features.aov ? "1" : "0"),
       "-D WT_BVH_COST=" + std::string(features.aov && features.bvhCost ? "1" : "0"),
+      "-D WT_SHADE_LANES=" + std::string(features.shadeLanes ? "1" : "0"),
   };
   for (const PrimitiveType& type : primitiveTypes())
     defines.push_back("-D " + std::string(type.define) + "=" + (features.primitives[type.id] ? "1" : "0"));

@@ -6,6 +6,7 @@
 #include "shared/types.h"
 
 #include <array>
+#include <cstddef>
 
 #include <filesystem>
 #include <optional>
@@ -55,7 +56,15 @@ struct KernelFeatures {
   /// WT_BVH_COST: traversal counts the nodes a ray visits (the bvh-cost
   /// debug view only; needs aov)
   bool bvhCost = false;
+  /// WT_SHADE_LANES: shade runs eight paths per work-item on float8 lanes
+  /// (kernels/shade_lanes.cl); set by the renderer (renderKernelFeatures)
+  /// where every surface is a Lambertian triangle, and launched over a
+  /// work-item per kShadeLanes queue entries
+  bool shadeLanes = false;
 };
+
+/// Paths one shade work-item takes with KernelFeatures::shadeLanes (WT_SHADE_LANES_WIDTH).
+inline constexpr std::size_t kShadeLanes = 8;
 
 /// Whether streams (kernels/bvh_stream.cl) should ask for a node's children
 /// as it arrives, and keep their rays in order rather than grouped by

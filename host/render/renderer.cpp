@@ -249,6 +249,10 @@ KernelFeatures renderKernelFeatures(const FeatureSet& features, const DeviceInfo
                                              : kernelFeaturesFor(features, device, settings.packetWidth);
   k.aov = settings.aovs;
   k.bvhCost = settings.aovs && settings.bvhCost;
+  // shade on float8 lanes where every surface is a Lambertian triangle (kernels/shade_lanes.cl)
+  k.shadeLanes = settings.shadeLanes && !settings.generalProgram && !k.integratorMinimal && !k.pbr && !k.textures &&
+                 !k.vertexColors && !k.alpha && !k.aov &&
+                 std::none_of(k.primitives.begin(), k.primitives.end(), [](bool on) { return on; });
   // streams ask for a node's children early where the scene outgrows the cache (as the Tracer's)
   k.streamPrefetch = streamPrefetchFor(device, buffers.uploadedBytes);
   return k;
@@ -386,7 +390,8 @@ void Renderer::renderSample() {
         .set("out_slot", outSlot)
         .set("queue_in", *queueIn)
         .set("queue_out", *queueOut);
-    launch(m_shade, alive, event(Command::Shade, bounce));
+    launch(m_shade, m_kernelFeatures.shadeLanes ? (alive + kShadeLanes - 1) / kShadeLanes : alive,
+           event(Command::Shade, bounce));
 
     // connect: shadow rays of this bounce (count read on the device); shade
     // makes none at the last bounce, which it shades for emission only

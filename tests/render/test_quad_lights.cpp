@@ -9,6 +9,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <set>
 #include <utility>
@@ -154,6 +155,55 @@ TEST(QuadLights, RenderTheSameAsTheirTriangles) {
     const double worst = test::expectSameImage(quads, triangles, 4, 4.5,
                                                sampler == LightSampler::Power ? "lights by power" : "light tree");
     std::printf("rectangle lights against their triangles (%s): worst |z| %.2f\n",
+                sampler == LightSampler::Power ? "power" : "tree", worst);
+  }
+}
+
+// Shade on float8 lanes (kernels/shade_lanes.cl, RenderSettings::shadeLanes)
+// against one path per work-item (shade.cl): the same image within noise
+// (4 x 4 blocks, z 4.5 from the two renders' own variances). The scene has
+// every light the lanes reach: rectangles (by solid angle and by area),
+// lone emissive triangles (by solid angle and by area), a point light and a
+// constant sky (one lane at a time), picked by power and by the light tree; a corner of a wall next to
+// the floor sends paths back and forth.
+TEST(QuadLights, ShadeLanesRenderTheSameAsOnePathPerWorkItem) {
+  Scene scene = quadLitScene();
+  const std::uint32_t tri = addMaterial(scene, makeMaterial(glm::vec3(0.0f), glm::vec3(6.0f), true), "triangle");
+  const std::uint32_t wall = addMaterial(scene, makeMaterial(glm::vec3(0.8f, 0.3f, 0.2f)), "wall");
+  addRect(scene, {-2.0f, 0.0f, -1.2f}, {0.0f, 1.5f, 0.0f}, {4.0f, 0.0f, 0.0f}, wall);
+  // a triangle near enough to be sampled by solid angle, and a tiny one by area
+  const std::uint32_t tiny = addMaterial(scene, makeMaterial(glm::vec3(0.0f), glm::vec3(3000.0f), true), "tiny");
+  for (auto [corners, material] : {std::pair{std::array{glm::vec3(0.9f, 0.9f, 0.3f), glm::vec3(1.2f, 0.9f, 0.6f),
+                                                        glm::vec3(0.8f, 1.1f, 0.7f)}, tri},
+                                   std::pair{std::array{glm::vec3(-0.5f, 1.8f, 0.5f), glm::vec3(-0.45f, 1.8f, 0.5f),
+                                                        glm::vec3(-0.5f, 1.8f, 0.55f)}, tiny}}) {
+    const std::uint32_t first = std::uint32_t(scene.positions.size());
+    for (glm::vec3 p : corners) {
+      scene.positions.push_back({p.x, p.y, p.z, 0});
+      scene.normals.push_back({0, 0, 0, 0});
+      scene.texcoords.emplace_back(0.0f);
+    }
+    scene.triangles.push_back({first, first + 1, first + 2, material});
+  }
+  PunctualLight point;
+  point.position = glm::vec3(-1.0f, 1.2f, 1.0f);
+  point.intensity = glm::vec3(0.6f, 0.8f, 1.0f);
+  scene.lights.push_back(point);
+  for (LightSampler sampler : {LightSampler::Power, LightSampler::Tree}) {
+    RenderSettings settings;
+    settings.width = settings.height = 32;
+    settings.maxBounces = 3;
+    settings.rrMinDepth = 1;  // roulette where it weighs
+    settings.lightSampler = sampler;
+    settings.background = glm::vec3(0.2f, 0.25f, 0.3f);
+    settings.seed = 21;
+    const Image lanes = test::render(scene, settings, 256);
+    settings.shadeLanes = false;
+    settings.seed = 22;
+    const Image single = test::render(scene, settings, 256);
+    const double worst = test::expectSameImage(lanes, single, 4, 4.5,
+                                               sampler == LightSampler::Power ? "lights by power" : "light tree");
+    std::printf("shade on lanes against one path per work-item (%s): worst |z| %.2f\n",
                 sampler == LightSampler::Power ? "power" : "tree", worst);
   }
 }
