@@ -11,9 +11,11 @@
 
 #include <glm/gtc/matrix_transform.hpp>
 
+#include <array>
 #include <cmath>
 #include <numbers>
 #include <string>
+#include <utility>
 
 namespace wt {
 namespace {
@@ -169,7 +171,7 @@ double dielectricFresnel(double cosI, double eta) {
   return 0.5 * (rs * rs + rp * rp);
 }
 
-double srgbToLinear(double c) { return c <= 0.04045 ? c / 12.92 : std::pow((c + 0.055) / 1.055, 2.4); }
+double srgbDecoded(double c) { return c <= 0.04045 ? c / 12.92 : std::pow((c + 0.055) / 1.055, 2.4); }
 
 /// The glass's texture is kGlassTexels x kGlassTexels, finer than the
 /// quad's triangles (4 x 4 texels to a cell of two triangles), so that a
@@ -240,7 +242,7 @@ glm::dvec3 glassPass(std::uint32_t i) {
   const double f = dielectricFresnel(1.0 / std::sqrt(5.0), kGlassIor);
   const std::array<std::uint8_t, 4> t = glassTexel(i);
   glm::dvec3 pass;
-  for (int c = 0; c < 3; ++c) pass[c] = double(kGlassFactor[c]) * srgbToLinear(t[c] / 255.0) * (1.0 - f);
+  for (int c = 0; c < 3; ++c) pass[c] = double(kGlassFactor[c]) * srgbDecoded(t[c] / 255.0) * (1.0 - f);
   return pass;
 }
 
