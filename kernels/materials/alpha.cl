@@ -76,6 +76,12 @@ typedef struct AlphaTriangle {
   WtAlphaMaterial m;
 } AlphaTriangle;
 
+// Inlined, its result stays in memory in optimised builds (extend's alpha
+// test), and LLVM marks it with llvm.experimental.noalias.scope.decl, which
+// Oclgrind does not define (tests/oclgrind/noalias_scope.cl): under Oclgrind it is called.
+#if WT_NO_SRET_INLINE
+__attribute__((noinline))
+#endif
 inline AlphaTriangle alpha_triangle(AlphaScene a, uint prim) {
   AlphaTriangle tri;
   tri.v = a.tri_info[prim];

@@ -4,7 +4,8 @@
 // does not define: "fatal: Undefined external function:
 // llvm.experimental.noalias.scope.decl" and clCreateKernel fails (`restrict`
 // parameters do the same). Optimised builds do it where the result is
-// indexed by a variable (pbr_view in pbr_eval, kernels/materials/bsdf.cl),
+// indexed by a variable (pbr_view in pbr_eval, kernels/materials/bsdf.cl;
+// alpha_triangle in the alpha test, kernels/materials/alpha.cl),
 // unoptimised ones for every always_inline function (triangle_test4_lanes and
 // triangle_test4_k, kernels/geometry/triangle.cl). Under Oclgrind the host
 // defines WT_NO_SRET_INLINE (here -D NO_SRET_INLINE) and they are called.

@@ -11,9 +11,11 @@
 
 #include <glm/gtc/matrix_transform.hpp>
 
+#include <array>
 #include <cmath>
 #include <numbers>
 #include <string>
+#include <utility>
 
 namespace wt {
 namespace {
@@ -157,6 +159,151 @@ TEST(AlphaRender, BlendShadowThroughInstancedCopiesMultiplies) {
   s.instancing = Instancing::On;
   ASSERT_GT(SceneBuffers(test::deviceContext(), scene, {.instancing = Instancing::On}).instanceCount(), 0u);
   expectShadowFraction(render(scene, s, 64), 0.49, "two instanced copies");
+}
+
+// ---- shadows through alpha-tested glass ---------------------------------------------
+
+/// Reflectance of a dielectric interface of relative index eta at cos_i (unpolarised).
+double dielectricFresnel(double cosI, double eta) {
+  const double sin2T = (1.0 - cosI * cosI) / (eta * eta);
+  const double cosT = std::sqrt(1.0 - sin2T);
+  const double rs = (cosI - eta * cosT) / (cosI + eta * cosT), rp = (eta * cosI - cosT) / (eta * cosI + cosT);
+  return 0.5 * (rs * rs + rp * rp);
+}
+
+double srgbDecoded(double c) { return c <= 0.04045 ? c / 12.92 : std::pow((c + 0.055) / 1.055, 2.4); }
+
+/// The glass's texture is kGlassTexels x kGlassTexels, finer than the
+/// quad's triangles (4 x 4 texels to a cell of two triangles), so that a
+/// point read elsewhere in its triangle reads another texel.
+constexpr std::uint32_t kGlassTexels = 8;
+
+/// Texel i = x + kGlassTexels y of the glass's texture: a colour of its own and alpha 4 i / 255.
+std::array<std::uint8_t, 4> glassTexel(std::uint32_t i) {
+  return {std::uint8_t(255 - 3 * i), std::uint8_t(60 + 3 * i), std::uint8_t(40 + 13 * ((5 * i) % 16)), std::uint8_t(4 * i)};
+}
+
+const glm::vec3 kGlassFactor(0.95f, 0.9f, 0.8f);
+const double kGlassIor = 1.5;
+
+/// shadowScene with a smooth thin glass quad (base colour kGlassFactor
+/// times the texture glassTexel, alpha mode `mode`, cutoff 0.3) in place of
+/// the black one, stored once and placed twice by instances: the copy that
+/// casts the shadow turned, scaled and mirrored, the other under the floor.
+/// Shadow rays cross such glass (connect.cl), so the floor under a texel
+/// that is there gets kGlassFactor x its colour x (1 - F) of the light.
+Scene glassShadowScene(std::uint32_t mode) {
+  Scene scene = test::makeFloor(10.0f, 0.0f, makeMaterial(glm::vec3(kAlbedo)));
+  const WtMaterial glass = withAlpha(withTransmission(makePbrMaterial(kGlassFactor, 0.0f, 0.0f), 1.0f, float(kGlassIor), true),
+                                     mode, 1.0f, 0.3f);
+  // the quad over [-1, 1]^2 at y = 1 with appendQuad's coordinates (two periods), 128 triangles
+  Scene quad = makeGrid(8, glm::vec3(0.0f, 1.0f, 0.0f), 1.0f, glm::vec3(1, 0, 0), glm::vec3(0, 0, 1), glass);
+  const glm::mat4 place = glm::translate(glm::mat4(1.0f), glm::vec3(0.3f, 1.0f, -0.2f)) *
+                          glm::rotate(glm::mat4(1.0f), 0.7f, glm::vec3(0, 1, 0)) *
+                          glm::scale(glm::mat4(1.0f), glm::vec3(2.0f, 2.0f, -2.0f));
+  const glm::mat4 toMesh = glm::inverse(place) * glm::translate(glm::mat4(1.0f), glm::vec3(0.0f, -1.0f, 0.0f));
+  for (std::size_t v = 0; v < quad.positions.size(); ++v) {
+    WtVec4& p = quad.positions[v];
+    quad.texcoords[v] = glm::vec2(p.x + 1.0f, p.z + 1.0f);
+    const glm::vec3 m(toMesh * glm::vec4(p.x, p.y, p.z, 1.0f));
+    p = {m.x, m.y, m.z, 0.0f};
+  }
+  const glm::mat4 copies[] = {glm::translate(glm::mat4(1.0f), glm::vec3(0.0f, 1.0f, 0.0f)) * place,
+                              glm::translate(glm::mat4(1.0f), glm::vec3(0.0f, -4.0f, 0.0f)) * place};
+  appendScene(scene, placeCopies(quad, copies));
+  DecodedImage image;
+  image.width = image.height = kGlassTexels;
+  image.name = "glass";
+  for (std::uint32_t i = 0; i < kGlassTexels * kGlassTexels; ++i)
+    for (std::uint8_t c : glassTexel(i)) image.rgba8.push_back(c);
+  setBaseColorTexture(scene, 1, scene.textures.addTexture(scene.textures.addImage(image, true), -1, -1, kNearest, kNearest));
+  PunctualLight light;
+  light.type = WT_LIGHT_DIRECTIONAL;
+  light.direction = glm::normalize(glm::vec3(2.0f, -1.0f, 0.0f));
+  light.intensity = kLightIntensity;
+  scene.lights.push_back(light);
+  scene.camera = test::topDownCamera(glm::vec3(2.0f, 5.0f, 0.0f), 0.5f);
+  return scene;
+}
+
+/// The texel whose shadow pixel (px, py) of a side x side view of
+/// glassShadowScene shows: the floor point (x, 0, z) under the pixel's
+/// centre sees the light through the quad at (x - 2, 1, z), whose
+/// coordinates are (x - 1, z + 1).
+std::uint32_t shadowTexel(int px, int py, int side) {
+  const double x = 2.0 + 0.5 * (2.0 * (px + 0.5) / side - 1.0), z = -0.5 * (1.0 - 2.0 * (py + 0.5) / side);
+  const double u = x - 1.0, v = z + 1.0;
+  const auto texel = [](double t) { return std::uint32_t(std::floor((t - std::floor(t)) * kGlassTexels)); };
+  return texel(u) + kGlassTexels * texel(v);
+}
+
+/// What the floor under texel i gets of the light where the texel is there.
+glm::dvec3 glassPass(std::uint32_t i) {
+  const double f = dielectricFresnel(1.0 / std::sqrt(5.0), kGlassIor);
+  const std::array<std::uint8_t, 4> t = glassTexel(i);
+  glm::dvec3 pass;
+  for (int c = 0; c < 3; ++c) pass[c] = double(kGlassFactor[c]) * srgbDecoded(t[c] / 255.0) * (1.0 - f);
+  return pass;
+}
+
+RenderSettings glassSettings(Traversal shadows) {
+  RenderSettings s = settings(32, true);
+  s.maxBounces = 2;  // a shadow ray from the floor may cross one wall, and nothing else lights it
+  s.instancing = Instancing::On;
+  s.shadowTraversal = shadows;
+  return s;
+}
+
+const std::pair<Traversal, const char*> kShadowTraversals[] = {
+    {Traversal::kSingle, "single rays"}, {Traversal::kPacket, "packets"}, {Traversal::kStream, "streams"}};
+
+// MASK glass (cutoff 0.3: texels 0 to 19 are holes): shadow rays pass the
+// holes whole and the rest of the glass tinted by its texel's colour, read
+// in the turned and mirrored instance where they cross it. Every pixel is
+// exactly one texel's answer, for shadow rays alone, in packets and in
+// streams. Fails when connect reads the wall's texture elsewhere than the
+// alpha test does, ignores the texture, or lets no light through the glass.
+TEST(AlphaRender, CutOutGlassPassesItsHolesWholeAndTintsTheRest) {
+  const Scene scene = glassShadowScene(WT_ALPHA_MASK);
+  ASSERT_EQ(SceneBuffers(test::deviceContext(), scene, {.instancing = Instancing::On}).instanceCount(), 2u);
+  for (const auto& [traversal, what] : kShadowTraversals) {
+    const Image img = render(scene, glassSettings(traversal), 2);
+    int bad = 0;
+    for (int py = 0; py < img.height; ++py)
+      for (int px = 0; px < img.width; ++px) {
+        const std::uint32_t texel = shadowTexel(px, py, img.width);
+        const glm::dvec3 expected = litRadiance() * (glassTexel(texel)[3] < 0.3 * 255 ? glm::dvec3(1.0) : glassPass(texel));
+        for (int c = 0; c < 3; ++c) {
+          const double got = img.rgb[3 * (std::size_t(py) * img.width + px) + c];
+          // float rounding of the light, the decoded texel and Fresnel
+          if (std::abs(got - expected[c]) > 1e-5 * litRadiance()[c] && ++bad <= 5)
+            ADD_FAILURE() << what << ": pixel (" << px << ", " << py << ") texel " << texel << " channel " << c
+                          << ": " << got << ", expected " << expected[c];
+        }
+      }
+    EXPECT_EQ(bad, 0) << what;
+  }
+}
+
+// BLEND glass: a texel of alpha a is there for a share a of the shadow
+// rays, so the floor under it gets (1 - a) + a x the glass's tint of the
+// light on average, within 5 standard errors of each texel's 16 pixels.
+TEST(AlphaRender, BlendedGlassPassesItsShareWholeAndTintsTheRest) {
+  const Scene scene = glassShadowScene(WT_ALPHA_BLEND);
+  const int side = 32, texelPixels = side / int(kGlassTexels);
+  const Image img = render(scene, glassSettings(Traversal::kPacket), 16);
+  for (int ty = 0; ty < int(kGlassTexels); ++ty)
+    for (int tx = 0; tx < int(kGlassTexels); ++tx) {
+      const int x0 = tx * texelPixels, y0 = ty * texelPixels;
+      const std::uint32_t texel = shadowTexel(x0, y0, side);
+      const double a = glassTexel(texel)[3] / 255.0;
+      for (int c = 0; c < 3; ++c) {
+        const test::BlockStat s = blockStat(img, x0, y0, x0 + texelPixels, y0 + texelPixels, c);
+        const double expected = litRadiance()[c] * (1.0 - a + a * glassPass(texel)[c]);
+        EXPECT_NEAR(s.mean, expected, 5.0 * std::sqrt(s.varianceOfMean) + 1e-5 * litRadiance()[c])
+            << "texel " << texel << " (alpha " << a << "), channel " << c;
+      }
+    }
 }
 
 // The alpha factor alone: MASK 0.4 under the cutoff 0.5 casts no shadow,
