@@ -55,3 +55,14 @@ WT_KERNEL void test_displaced_vertex(uint count, __global const float4* rows, __
   int n = 1 << m.level;
   out[k] = (float4)(disp_vertex(m, t, n, 1.0f / (float)n, (int)q.y, (int)q.z), 0.0f);
 }
+
+/// disp_slab_interval per case: slab[k] = (unit normal xyz, unused), bounds[k]
+/// = (lo, hi), ray (origin, direction); out[k] = (enter, leave).
+WT_KERNEL void test_displaced_slab(uint count, __global const float4* slab, __global const float2* bounds,
+                                   __global const float4* ray_o, __global const float4* ray_d, __global float2* out) {
+  uint k = get_global_id(0);
+  if (k >= count) return;
+  float enter, leave;
+  disp_slab_interval(slab[k].xyz, bounds[k].x, bounds[k].y, ray_o[k].xyz, ray_d[k].xyz, &enter, &leave);
+  out[k] = (float2)(enter, leave);
+}

@@ -288,6 +288,8 @@ std::uint32_t storedDepth(std::uint32_t maxDepth, std::uint32_t level) {
 /// texels (the pyramid's). Every box is widened by a sliver past rounding.
 struct TriangleBoxes {
   Aabb root;
+  glm::vec3 slabNormal{0.0f};  ///< the base triangle's unit face normal (zero where it has no area)
+  float slabLo = 0.0f, slabHi = 0.0f;  ///< every micro-vertex v has slabLo <= dot(slabNormal, v) <= slabHi
   std::vector<std::uint8_t> blocks;  ///< 24 bytes per sub-triangle of levels 0 to D - 1
   std::vector<float> displacements;  ///< d at every micro-vertex, row by row (j), where L <= D + 1; else empty
   bool finite = true;
@@ -316,6 +318,18 @@ TriangleBoxes triangleBoxes(const DisplacedMesh& mesh, const MapView& map, const
     }
   }
   auto vertex = [&](glm::ivec2 c) { return grid[rowStart[std::size_t(c.y)] + std::size_t(c.x)]; };
+  // the slab along the face normal (as stored, a float vector): the heights of the points that bound the shell
+  glm::dvec3 faceNormal = glm::cross(glm::dvec3(mesh.positions[t[1]]) - glm::dvec3(mesh.positions[t[0]]),
+                                     glm::dvec3(mesh.positions[t[2]]) - glm::dvec3(mesh.positions[t[0]]));
+  const double faceLength = glm::length(faceNormal);
+  const glm::vec3 slabNormal = faceLength > 0.0 && std::isfinite(faceLength) ? glm::vec3(faceNormal / faceLength) : glm::vec3(0.0f);
+  double slabLo = std::numeric_limits<double>::infinity(), slabHi = -slabLo;
+  auto height = [&](const glm::dvec3& p) {
+    const double h = glm::dot(glm::dvec3(slabNormal), p);
+    slabLo = std::min(slabLo, h);
+    slabHi = std::max(slabHi, h);
+  };
+  for (const glm::vec3& v : grid) height(glm::dvec3(v));
   std::vector<QuadNode> level{QuadNode{}};
   for (std::uint32_t l = 0; l < depth; ++l) {
     std::vector<QuadNode> next;
@@ -354,6 +368,8 @@ TriangleBoxes triangleBoxes(const DisplacedMesh& mesh, const MapView& map, const
         for (double d : {double(mesh.scale) * r.x + mesh.offset, double(mesh.scale) * r.y + mesh.offset}) {
           lo = glm::min(lo, p[e] + d * nn[e]);
           hi = glm::max(hi, p[e] + d * nn[e]);
+          // the sub-triangle's surface is a convex combination of these six points: so are its heights
+          height(p[e] + d * nn[e]);
         }
       // float rounding here is a few ulps: the margin below covers it
       box.lo = glm::vec3(lo);
@@ -377,6 +393,12 @@ TriangleBoxes triangleBoxes(const DisplacedMesh& mesh, const MapView& map, const
   }
   const double margin = 4e-6 * big + 1e-6 * extent;
   const float inf = std::numeric_limits<float>::infinity();
+  // a height is a dot product of a unit vector: up to sqrt(3) times a coordinate's rounding
+  out.slabNormal = slabNormal;
+  out.slabLo = float(slabLo - 2.0 * margin);
+  if (double(out.slabLo) > slabLo - 2.0 * margin) out.slabLo = std::nextafter(out.slabLo, -inf);
+  out.slabHi = float(slabHi + 2.0 * margin);
+  if (double(out.slabHi) < slabHi + 2.0 * margin) out.slabHi = std::nextafter(out.slabHi, inf);
   for (int a = 0; a < 3; ++a) {
     out.root.lo[a] = float(rlo[a] - margin);
     if (double(out.root.lo[a]) > rlo[a] - margin) out.root.lo[a] = std::nextafter(out.root.lo[a], -inf);
@@ -504,10 +526,12 @@ void gatherDisplacedTo(const Scene& scene, PrimitiveRows& rows, std::uint32_t ma
         continue;
       }
       const std::array<std::uint32_t, 3>& t = m.triangles[ti];
+      // the slab's direction one row before the boxes, which prim_info names
+      if (level > 0) boxRows.push_back({boxes.slabNormal.x, boxes.slabNormal.y, boxes.slabNormal.z, 0.0f});
       const std::size_t boxRow = boxRows.size();  // from the boxes' first row, made absolute below
       if (level > 0) {
-        boxRows.push_back({boxes.root.lo.x, boxes.root.lo.y, boxes.root.lo.z, 0.0f});
-        boxRows.push_back({boxes.root.hi.x, boxes.root.hi.y, boxes.root.hi.z, 0.0f});
+        boxRows.push_back({boxes.root.lo.x, boxes.root.lo.y, boxes.root.lo.z, boxes.slabLo});
+        boxRows.push_back({boxes.root.hi.x, boxes.root.hi.y, boxes.root.hi.z, boxes.slabHi});
         for (std::size_t b = 0; b < boxes.blocks.size(); b += 16) {
           WtVec4 row{0, 0, 0, 0};
           std::memcpy(&row, boxes.blocks.data() + b, std::min<std::size_t>(16, boxes.blocks.size() - b));

@@ -15,7 +15,10 @@
 // The boxes are stored, eight bits a coordinate relative to the parent's
 // box (rounded outwards), computed on the host from the micro-vertices
 // themselves (gatherDisplaced): exact bounds of the flat micro-triangles,
-// far tighter than bounds from the map's range over texels. Below the
+// far tighter than bounds from the map's range over texels. Beside the
+// root's box, a slab along the face normal bounds the whole shell: a
+// tilted triangle's box is far thicker than its shell, and a ray leaving
+// the surface crosses its neighbours' boxes above their shells. Below the
 // stored depth (levels past WT_DISP_MAX_DEPTH + 1) a sub-triangle's box
 // bounds all of its descendants, which the walk then visits untested.
 // This is a min-max hierarchy as in Thonat et al. 2021 ("Tessellation-free
@@ -227,6 +230,28 @@ inline bool disp_leaf_hit(DispMesh m, DispTri t, int n, float inv_n, int2 c0, in
   return true;
 }
 
+/// The part of the ray (o, d) inside the slab lo <= dot(nrm, p) <= hi, widened
+/// past every rounding of this computation: *enter at most, *leave at least
+/// the exact distances for the stored floats (an unbounded interval where the
+/// ray runs too close to parallel to the slab to tell, or nrm is zero).
+inline void disp_slab_interval(float3 nrm, float lo, float hi, float3 o, float3 d, float* enter, float* leave) {
+  float s = dot(nrm, o), ds = dot(nrm, d);
+  float3 an = fabs(nrm);
+  // a dot product of three is within gamma(3) of the sum of its terms' magnitudes
+  float es = spawn_gamma(5) * (dot(an, fabs(o)) + fmax(fabs(lo), fabs(hi)));
+  float ed = spawn_gamma(5) * dot(an, fabs(d));
+  float ad = fabs(ds);
+  *enter = -INFINITY;
+  *leave = INFINITY;
+  if (!(ad > 2.0f * ed)) return;
+  // distances to the entering and the leaving side along |ds|, numerators widened by their error
+  float ne = (ds > 0.0f ? lo - s : s - hi) - es, nx = (ds > 0.0f ? hi - s : s - lo) + es;
+  float te = ne / (ne >= 0.0f ? ad + ed : ad - ed), tx = nx / (nx >= 0.0f ? ad - ed : ad + ed);
+  // fmax, fmin: a NaN (overflowing input) leaves that side open
+  *enter = fmax(te - spawn_gamma(2) * fabs(te), -INFINITY);
+  *leave = fmin(tx + spawn_gamma(2) * fabs(tx), INFINITY);
+}
+
 // Larger and smaller of two distances, without fmax and fmin's NaN rules (no NaN here: finite boxes, inv_d finite)
 inline float4 disp_max4(float4 a, float4 b) { return a > b ? a : b; }
 inline float4 disp_min4(float4 a, float4 b) { return a < b ? a : b; }
@@ -236,7 +261,9 @@ inline float4 disp_min4(float4 a, float4 b) { return a < b ? a : b; }
 /// and the hit's lattice coordinates (level-L units) in *li, *lj, which
 /// displaced_surface takes back. `rows`: the type's first prim_data row.
 /// The base triangle's own box (the root's, stored) is tested first: a BVH
-/// leaf bounds several base triangles. The corners are read only when the
+/// leaf bounds several base triangles; then its slab along the face normal
+/// (the shell's heights), which also bounds the ray's part every box below
+/// is tested on. The corners are read only when the
 /// walk reaches a leaf (most base triangles a ray enters are left above).
 /// With `any_hit` (shadow rays) the first micro-triangle hit found in the
 /// interval ends the walk, not necessarily the nearest.
@@ -268,6 +295,7 @@ inline bool displaced_intersect(__global const float4* rows, __global const uint
   float3 inv_d = 1.0f / select(d, copysign((float3)(1e-30f), d), fabs(d) < 1e-30f);
   float widen = 1.0f + 2.0f * spawn_gamma(3);
   float4 root_lo = box_rows[0], root_hi = box_rows[1];
+  float slab_enter, slab_leave;
   {
     // a BVH leaf's box bounds several base triangles: this one's own first, before its corners are read
     float3 t0 = (root_lo.xyz - o) * inv_d, t1 = (root_hi.xyz - o) * inv_d;
@@ -275,7 +303,12 @@ inline bool displaced_intersect(__global const float4* rows, __global const uint
     float enter = fmax(fmax(near3.x, near3.y), fmax(near3.z, tmin));
     float leave = fmin(fmin(far3.x, far3.y), fmin(far3.z, best)) * widen;
     if (!(enter <= leave)) return false;
+    // the shell's slab along the face normal, thinner than the box where the triangle is tilted: the walk
+    // tests every box below on the ray's part inside it too
+    disp_slab_interval(box_rows[-1].xyz, root_lo.w, root_hi.w, o, d, &slab_enter, &slab_leave);
+    if (!(fmax(enter, slab_enter) <= fmin(leave, slab_leave * widen))) return false;
   }
+  float4 slab_enter4 = (float4)(slab_enter);
   // the corners and the shear only where a leaf is reached
   DispTri t;
   RayShear shear;
@@ -329,8 +362,9 @@ inline bool displaced_intersect(__global const float4* rows, __global const uint
       float4 tz0 = (lz - o.z) * inv_d.z, tz1 = (hz - o.z) * inv_d.z;
       tn = disp_max4(disp_max4(disp_min4(tx0, tx1), disp_min4(ty0, ty1)), disp_max4(disp_min4(tz0, tz1), (float4)(tmin)));
       float4 tf = disp_min4(disp_min4(disp_max4(tx0, tx1), disp_max4(ty0, ty1)),
-                            disp_min4(disp_max4(tz0, tz1), (float4)(best))) * widen;
-      ok = tn <= tf;
+                            disp_min4(disp_max4(tz0, tz1), (float4)(fmin(best, slab_leave)))) * widen;
+      // the order stays the boxes' own (tn); the slab only drops children
+      ok = disp_max4(tn, slab_enter4) <= tf;
     } else {
       // below the stored depth: every child, in the parent's box, untested
       lx = (float4)(plo.x), ly = (float4)(plo.y), lz = (float4)(plo.z);

@@ -95,9 +95,11 @@ typedef struct WtBvh4Node {
 /// then as uint bits (L, D the deepest level with stored boxes, the
 /// texels' first float, the palette's first float or ~0); then per vertex WT_DISP_VERTEX_ROWS rows
 /// (position xyz and u, normal xyz and v); then per base triangle (L > 0)
-/// its boxes: two rows (the whole triangle's box: low xyz, high xyz, w 0),
-/// then for each sub-triangle of levels 0 to D - 1 in level order (node k's
-/// children are 4k + 1 to 4k + 4) a block of 24 bytes, its four children's
+/// its slab's direction nrm (xyz: the unit face normal, or zero), then its
+/// boxes: two rows (the whole triangle's box: low xyz, high xyz; in w the
+/// least and the largest height dot(nrm, p) over its shell), then for each
+/// sub-triangle of levels 0 to D - 1 in level order (node k's children are
+/// 4k + 1 to 4k + 4) a block of 24 bytes, its four children's
 /// boxes relative to its own (uchar4 rows: low x, y, z, high x, y, z; low =
 /// parent low + q step, high = parent high - (255 - q) step, step = parent
 /// extent / 255), padded to a whole row, then where L <= D + 1 (the boxes

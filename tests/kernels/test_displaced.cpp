@@ -4,7 +4,8 @@
 // triangle tested without the BVH, then through every traversal; any hit
 // against closest hit; rays spawned from a hit; micro-vertices on shared
 // edges bit for bit; rays aimed at the seams between base triangles'
-// shells; zero displacement against the base mesh's triangles.
+// shells; zero displacement against the base mesh's triangles; the
+// slab along each face normal against every micro-vertex and in the kernel.
 #include "device/tracer.h"
 #include "device_fixture.h"
 #include "geometry/primitives.h"
@@ -330,6 +331,8 @@ TEST(DisplacedMeshes, StoredDisplacementsAreTheKernelsMapSamplesBitForBit) {
 struct DecodedBoxes {
   std::uint32_t level = 0, depth = 0;
   std::vector<glm::vec3> lo, hi;
+  glm::vec3 slabNormal{0.0f};  ///< the slab's direction, and its heights lo <= dot(slabNormal, p) <= hi
+  float slabLo = 0.0f, slabHi = 0.0f;
 };
 
 DecodedBoxes decodeBoxes(const TypeRows& rows, std::uint32_t triangle) {
@@ -340,6 +343,9 @@ DecodedBoxes decodeBoxes(const TypeRows& rows, std::uint32_t triangle) {
   const WtVec4 lo = rows.data[info[2]], hi = rows.data[info[2] + 1];
   out.lo.push_back({lo.x, lo.y, lo.z});
   out.hi.push_back({hi.x, hi.y, hi.z});
+  const WtVec4 slab = rows.data[info[2] - 1];
+  out.slabNormal = {slab.x, slab.y, slab.z};
+  out.slabLo = lo.w, out.slabHi = hi.w;
   const auto* bytes = reinterpret_cast<const std::uint8_t*>(&rows.data[info[2] + 2]);
   std::size_t nodes = 0;
   for (std::uint32_t l = 0; l <= out.depth; ++l) nodes += std::size_t(1) << (2 * l);
@@ -356,6 +362,26 @@ DecodedBoxes decodeBoxes(const TypeRows& rows, std::uint32_t triangle) {
     out.hi.push_back(chi);
   }
   return out;
+}
+
+/// Every micro-vertex of every base triangle as the kernel displaces it,
+/// base triangle by base triangle, each lattice row j after row j - 1.
+std::vector<glm::vec3> kernelVertices(const TypeRows& rows, int n) {
+  std::vector<cl_uint4> queries;
+  for (std::uint32_t b = 0; b < rows.count; ++b)
+    for (int j = 0; j <= n; ++j)
+      for (int i = 0; i + j <= n; ++i) queries.push_back({{b, cl_uint(i), cl_uint(j), 0}});
+  Context& ctx = test::deviceContext();
+  cl::Buffer dataBuf = input(rows.data), infoBuf = input(rows.info), qBuf = input(queries);
+  cl::Buffer out(ctx.context(), CL_MEM_WRITE_ONLY, queries.size() * sizeof(cl_float4));
+  cl::Kernel k(test::testProgram("displaced_tests.cl"), "test_displaced_vertex");
+  k.setArg(0, cl_uint(queries.size())), k.setArg(1, dataBuf), k.setArg(2, infoBuf), k.setArg(3, qBuf), k.setArg(4, out);
+  ctx.launch("test_displaced_vertex", k, queries.size());
+  std::vector<cl_float4> got(queries.size());
+  ctx.queue().enqueueReadBuffer(out, CL_TRUE, 0, got.size() * sizeof(cl_float4), got.data());
+  std::vector<glm::vec3> verts(got.size());
+  for (std::size_t q = 0; q < got.size(); ++q) verts[q] = glm::vec3(got[q].s[0], got[q].s[1], got[q].s[2]);
+  return verts;
 }
 
 TEST(DisplacedMeshes, BoxesBuildTheSameOnAnyThreadCount) {
@@ -396,18 +422,7 @@ TEST(DisplacedMeshes, StoredBoxesHoldEveryMicroTriangleAndStayTight) {
     const TypeRows rows = typeRows(scene, depth);
     const int levelL = int(displacedLevel(scene.displacedMeshes[0])), n = 1 << levelL;
     // the kernel's micro-vertices, every lattice point of every base triangle
-    std::vector<cl_uint4> queries;
-    for (std::uint32_t b = 0; b < rows.count; ++b)
-      for (int j = 0; j <= n; ++j)
-        for (int i = 0; i + j <= n; ++i) queries.push_back({{b, cl_uint(i), cl_uint(j), 0}});
-    Context& ctx = test::deviceContext();
-    cl::Buffer dataBuf = input(rows.data), infoBuf = input(rows.info), qBuf = input(queries);
-    cl::Buffer out(ctx.context(), CL_MEM_WRITE_ONLY, queries.size() * sizeof(cl_float4));
-    cl::Kernel k(test::testProgram("displaced_tests.cl"), "test_displaced_vertex");
-    k.setArg(0, cl_uint(queries.size())), k.setArg(1, dataBuf), k.setArg(2, infoBuf), k.setArg(3, qBuf), k.setArg(4, out);
-    ctx.launch("test_displaced_vertex", k, queries.size());
-    std::vector<cl_float4> verts(queries.size());
-    ctx.queue().enqueueReadBuffer(out, CL_TRUE, 0, verts.size() * sizeof(cl_float4), verts.data());
+    const std::vector<glm::vec3> verts = kernelVertices(rows, n);
     const std::size_t perTriangle = std::size_t(n + 1) * std::size_t(n + 2) / 2;
     int outside = 0, loose = 0, leaves = 0;
     for (std::uint32_t b = 0; b < rows.count; ++b) {
@@ -417,8 +432,7 @@ TEST(DisplacedMeshes, StoredBoxesHoldEveryMicroTriangleAndStayTight) {
       auto vertex = [&](int i, int j) {
         std::size_t at = b * perTriangle;
         for (int r = 0; r < j; ++r) at += std::size_t(n + 1 - r);
-        const cl_float4 v = verts[at + std::size_t(i)];
-        return glm::vec3(v.s[0], v.s[1], v.s[2]);
+        return verts[at + std::size_t(i)];
       };
       // nodes in level order with their corners in the level-L lattice: child k of corners (A, B, C) takes
       // (A, AB, AC), (AB, B, BC), (AC, BC, C), (AB, AC, BC)
@@ -459,6 +473,131 @@ TEST(DisplacedMeshes, StoredBoxesHoldEveryMicroTriangleAndStayTight) {
       EXPECT_GT(leaves, 0);
     }
   }
+}
+
+TEST(DisplacedMeshes, StoredSlabsHoldEveryMicroVertexAndStayThin) {
+  // each base triangle's slab (its unit face normal, and the least and the
+  // largest height along it) holds every micro-vertex as the kernel
+  // displaces it, so the flat micro-triangles between them; where the
+  // micro-vertices are stored (L <= D + 1) it is no thicker than their own
+  // heights and the host's rounding margin (2 (4e-6 |p|max + 1e-6 extent) a
+  // side); deeper it comes from the map's range over each level-D sub-triangle
+  for (int depth : {-1, 1}) {
+    SCOPED_TRACE("box depth " + std::to_string(depth));
+    const Scene scene = testSphere(4, 0.3f, -0.15f);
+    const DisplacedMesh& mesh = scene.displacedMeshes[0];
+    const TypeRows rows = typeRows(scene, depth);
+    const int n = 1 << displacedLevel(mesh);
+    const std::vector<glm::vec3> verts = kernelVertices(rows, n);
+    const std::size_t perTriangle = std::size_t(n + 1) * std::size_t(n + 2) / 2;
+    int outside = 0, thick = 0, tilted = 0;
+    for (std::uint32_t b = 0; b < rows.count; ++b) {
+      const DecodedBoxes boxes = decodeBoxes(rows, b);
+      const std::array<std::uint32_t, 3>& t = mesh.triangles[b];
+      const glm::dvec3 nrm(boxes.slabNormal);
+      const glm::dvec3 e1 = glm::dvec3(mesh.positions[t[1]] - mesh.positions[t[0]]);
+      const glm::dvec3 e2 = glm::dvec3(mesh.positions[t[2]] - mesh.positions[t[0]]);
+      // the face normal: unit, across both base edges
+      if ((std::abs(glm::length(nrm) - 1.0) > 1e-6 || std::abs(glm::dot(nrm, e1)) > 1e-6 * glm::length(e1) ||
+           std::abs(glm::dot(nrm, e2)) > 1e-6 * glm::length(e2)) &&
+          ++tilted <= 5)
+        ADD_FAILURE() << "triangle " << b << ": the slab's direction is not the unit face normal";
+      Real lo = std::numeric_limits<Real>::infinity(), hi = -lo;
+      glm::vec3 vlo(std::numeric_limits<float>::infinity()), vhi(-vlo.x);
+      for (std::size_t v = 0; v < perTriangle; ++v) {
+        const glm::vec3 p = verts[b * perTriangle + v];
+        const Real h = Real(nrm.x) * p.x + Real(nrm.y) * p.y + Real(nrm.z) * p.z;
+        lo = std::min(lo, h), hi = std::max(hi, h);
+        vlo = glm::min(vlo, p), vhi = glm::max(vhi, p);
+      }
+      if ((lo < Real(boxes.slabLo) || hi > Real(boxes.slabHi)) && ++outside <= 5)
+        ADD_FAILURE() << "triangle " << b << ": heights [" << double(lo) << ", " << double(hi) << "] outside the slab ["
+                      << boxes.slabLo << ", " << boxes.slabHi << "]";
+      if (depth >= 0) continue;
+      const glm::dvec3 mag = glm::max(glm::abs(glm::dvec3(vlo)), glm::abs(glm::dvec3(vhi))), ext = glm::dvec3(vhi - vlo);
+      const double big = std::max({mag.x, mag.y, mag.z}), extent = std::max({ext.x, ext.y, ext.z});
+      // the host's margin is from the root box, a little wider than the vertices' own (its boxes' margin)
+      const double pad = 2.0 * (4e-6 * (big + 1e-3) + 1e-6 * 2.0 * extent) + 1e-7;
+      if ((Real(boxes.slabLo) < lo - pad || Real(boxes.slabHi) > hi + pad) && ++thick <= 5)
+        ADD_FAILURE() << "triangle " << b << ": slab [" << boxes.slabLo << ", " << boxes.slabHi
+                      << "] thicker than its heights [" << double(lo) << ", " << double(hi) << "] need";
+    }
+    EXPECT_EQ(tilted, 0);
+    EXPECT_EQ(outside, 0);
+    EXPECT_EQ(thick, 0);
+  }
+}
+
+TEST(DisplacedMeshes, SlabIntervalHoldsTheExactOneAndStaysNear) {
+  // disp_slab_interval against long double for the stored floats: the
+  // interval it gives holds the exact part of the ray inside the slab
+  // (enter no later, leave no earlier), is finite wherever the ray is not
+  // close to parallel, and stays within its error terms' size of the exact
+  // ends; rays near the origin, a thousand units away, and nearly parallel
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> unit(-1.0f, 1.0f), u01(0.0f, 1.0f);
+  const std::size_t count = 4000;
+  std::vector<cl_float4> slab(count), o(count), d(count);
+  std::vector<cl_float2> bounds(count);
+  for (std::size_t k = 0; k < count; ++k) {
+    const glm::vec3 nrm = glm::normalize(glm::vec3(unit(rng), unit(rng), unit(rng)));
+    const float far = k % 3 == 0 ? 1000.0f : 1.0f;
+    const glm::vec3 origin = far * glm::vec3(unit(rng), unit(rng), unit(rng));
+    const float lo = far * unit(rng), hi = lo + (k % 5 == 0 ? 1e-4f : 0.5f) * u01(rng);
+    glm::vec3 dir = glm::normalize(glm::vec3(unit(rng), unit(rng), unit(rng)));
+    // every fourth nearly along the slab: its normal component removed, then a little put back
+    if (k % 4 == 0) dir = glm::normalize(dir - glm::dot(dir, nrm) * nrm + std::ldexp(unit(rng), -int(k % 24)) * nrm);
+    slab[k] = {{nrm.x, nrm.y, nrm.z, 0.0f}};
+    bounds[k] = {{lo, hi}};
+    o[k] = {{origin.x, origin.y, origin.z, 0.0f}};
+    d[k] = {{dir.x, dir.y, dir.z, 0.0f}};
+  }
+  Context& ctx = test::deviceContext();
+  cl::Buffer sBuf = input(slab), bBuf = input(bounds), oBuf = input(o), dBuf = input(d);
+  cl::Buffer out(ctx.context(), CL_MEM_WRITE_ONLY, count * sizeof(cl_float2));
+  cl::Kernel kern(test::testProgram("displaced_tests.cl"), "test_displaced_slab");
+  kern.setArg(0, cl_uint(count)), kern.setArg(1, sBuf), kern.setArg(2, bBuf), kern.setArg(3, oBuf),
+      kern.setArg(4, dBuf), kern.setArg(5, out);
+  ctx.launch("test_displaced_slab", kern, count);
+  std::vector<cl_float2> got(count);
+  ctx.queue().enqueueReadBuffer(out, CL_TRUE, 0, count * sizeof(cl_float2), got.data());
+  int loose = 0, wrong = 0, open = 0, finite = 0;
+  for (std::size_t k = 0; k < count; ++k) {
+    Real s = 0, ds = 0, as = 0, ad = 0;
+    for (int a = 0; a < 3; ++a) {
+      s += Real(slab[k].s[a]) * Real(o[k].s[a]), ds += Real(slab[k].s[a]) * Real(d[k].s[a]);
+      as += std::abs(Real(slab[k].s[a]) * Real(o[k].s[a])), ad += std::abs(Real(slab[k].s[a]) * Real(d[k].s[a]));
+    }
+    const Real lo = bounds[k].s[0], hi = bounds[k].s[1], enter = got[k].s[0], leave = got[k].s[1];
+    if (ds == 0) {
+      if (!(std::isinf(enter) && std::isinf(leave)) && (s >= lo && s <= hi) && ++wrong <= 5)
+        ADD_FAILURE() << "case " << k << ": a ray inside and along the slab cut short";
+      continue;
+    }
+    const Real a = (lo - s) / ds, b = (hi - s) / ds, want0 = std::min(a, b), want1 = std::max(a, b);
+    if ((enter > want0 || leave < want1) && ++wrong <= 5)
+      ADD_FAILURE() << "case " << k << ": [" << double(enter) << ", " << double(leave) << "] does not hold the exact ["
+                    << double(want0) << ", " << double(want1) << "]";
+    // unbounded only where the direction's part along the normal is within ~1e-6 of its size
+    if (std::isinf(enter) || std::isinf(leave)) {
+      ++open;
+      if (std::abs(ds) > 1e-5L * ad && ++loose <= 5)
+        ADD_FAILURE() << "case " << k << ": unbounded though |dot(n, d)| " << double(std::abs(ds));
+      continue;
+    }
+    ++finite;
+    // the error terms, first order: a few ulps of the heights over |dot(n, d)|, and the ends scaled by the
+    // relative error of dot(n, d) (a few ulps of its terms' magnitudes over its size)
+    const Real slack = 1e-5L * ((as + std::max(std::abs(lo), std::abs(hi))) + (std::abs(want0) + std::abs(want1)) * ad) /
+                       std::abs(ds);
+    if ((want0 - enter > slack || leave - want1 > slack) && ++loose <= 5)
+      ADD_FAILURE() << "case " << k << ": [" << double(enter) << ", " << double(leave) << "] far wider than ["
+                    << double(want0) << ", " << double(want1) << "]";
+  }
+  EXPECT_EQ(wrong, 0);
+  EXPECT_EQ(loose, 0);
+  EXPECT_GT(finite, int(count / 2));
+  EXPECT_GT(open, 0);
 }
 
 TEST(DisplacedMeshes, ShadingNormalsFaceOutAndFollowTheBumps) {
