@@ -39,7 +39,7 @@ WT_SPAWN_INLINE float spawn_next_up(float v) {
   if (v == INFINITY) return v;
   if (v == 0.0f) v = 0.0f;
   wt_uint bits = WT_FLOAT_TO_BITS(v);
-  bits = v > 0.0f ? bits + 1u : bits - 1u;
+  bits = v >= 0.0f ? bits + 1u : bits - 1u;
   return WT_BITS_TO_FLOAT(bits);
 }
 

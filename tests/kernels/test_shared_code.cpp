@@ -13,6 +13,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <random>
 #include <tuple>
 
@@ -81,6 +82,32 @@ TEST(SharedCode, LambertSamplesAreCosineDistributed) {
     // 63 degrees of freedom: P(chi2 > 103.4) = 0.001
     EXPECT_LT(chi2, 103.4) << "histogram of (cos^2, azimuth): " << ::testing::PrintToString(counts);
   }
+}
+
+// The one-ulp steps that push a spawned origin off a surface are
+// std::nextafter towards +-infinity, bit for bit, zeros and denormals
+// included (a coordinate that lands exactly on 0 must step to the smallest
+// denormal, never to a NaN).
+TEST(SharedCode, NextFloatStepsAreNextafterAtZerosDenormalsAndLimits) {
+  std::vector<float> values = {0.0f, -0.0f, std::numeric_limits<float>::denorm_min(),
+                               -std::numeric_limits<float>::denorm_min(), std::numeric_limits<float>::min(),
+                               -std::numeric_limits<float>::min(), 1.0f, -1.0f, 3.0e-39f, -3.0e-39f,
+                               std::numeric_limits<float>::max(), -std::numeric_limits<float>::max()};
+  std::mt19937 rng(4);
+  for (int i = 0; i < 2000; ++i) {
+    std::uint32_t bits = rng();
+    float v;
+    std::memcpy(&v, &bits, sizeof v);
+    if (std::isfinite(v)) values.push_back(v);
+  }
+  auto same = [](float a, float b) { return std::memcmp(&a, &b, sizeof a) == 0; };
+  const float inf = std::numeric_limits<float>::infinity();
+  for (float v : values) {
+    EXPECT_TRUE(same(spawn_next_up(v), std::nextafter(v, inf))) << v << " -> " << spawn_next_up(v);
+    EXPECT_TRUE(same(spawn_next_down(v), std::nextafter(v, -inf))) << v << " -> " << spawn_next_down(v);
+  }
+  EXPECT_EQ(spawn_next_up(inf), inf);
+  EXPECT_EQ(spawn_next_down(-inf), -inf);
 }
 
 // Random triangles of every size from 1e-6 to 1e4, up to 1e7 from the world
