@@ -178,7 +178,7 @@ WT_LANES_INLINE float8 wt_atan2_8(float8 y, float8 x) {
 WT_LANES_INLINE float8 spawn_next_up8(float8 v) {
   float8 w = select(v, (float8)(0.0f), v == 0.0f);
   uint8 bits = as_uint8(w);
-  float8 up = as_float8(select(bits - 1u, bits + 1u, w > 0.0f));
+  float8 up = as_float8(select(bits - 1u, bits + 1u, w >= 0.0f));
   return select(up, v, v == INFINITY);
 }
 WT_LANES_INLINE float8 spawn_next_down8(float8 v) {
