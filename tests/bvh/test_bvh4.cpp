@@ -8,6 +8,7 @@
 #include "bvh/builders.h"
 #include "bvh/bvh_checks.h"
 #include "scene/generators.h"
+#include "test_util.h"
 
 #include <gtest/gtest.h>
 
@@ -287,7 +288,7 @@ double bruteForceCollapseCost(const Bvh& binary, const Bvh4Options& options) {
 TEST(Bvh4, CollapseIsTheCheapestOfAllCollapsesOnSmallTrees) {
   int cases = 0;
   for (std::uint32_t count : {2u, 3u, 4u, 5u})  // 5 leaves: more than four slots, so nodes nest
-    for (int seed = 0; seed < 8; ++seed) {
+    for (int seed = 0; seed < int(test::testSize(8, 2)); ++seed) {
       Scene scene = makeTriangleSoup(count, 100 * count + seed, 0.3f + 0.2f * float(seed));
       std::vector<Aabb> prims = triangleBounds(scene);
       BvhBuildOptions binaryOptions;
@@ -310,7 +311,7 @@ TEST(Bvh4, CollapseIsTheCheapestOfAllCollapsesOnSmallTrees) {
             ++cases;
           }
     }
-  EXPECT_EQ(cases, 4 * 8 * 4 * 3 * 4);
+  EXPECT_EQ(cases, 4 * int(test::testSize(8, 2)) * 4 * 3 * 4);
 }
 
 /// The collapse this one replaced: each 4-wide node takes a binary node's two

@@ -78,7 +78,7 @@ TEST_P(TraversalLeafSize, RandomSoupMatchesBruteForce) {
   const BvhBuildOptions options = this->options();
   for (std::uint32_t seed : {1u, 2u}) {
     Scene scene = makeTriangleSoup(3000, seed, 0.15f);
-    expectAgreement(scene, randomRays(4000, seed + 100), options);
+    expectAgreement(scene, randomRays(test::testSize(4000, 500), seed + 100), options);
   }
 }
 
@@ -139,7 +139,7 @@ TEST(Traversal, PlacedCopiesMatchBruteForce) {
     BvhBuildOptions options;
     options.builder = BvhBuilder::Auto;
     options.maxLeafSize = leaf;
-    expectAgreement(scene, randomRays(test::testSize(4000, 1000), 31 + leaf), options);
+    expectAgreement(scene, randomRays(test::testSize(4000, 250), 31 + leaf), options);
     // the copies' shared tree is what was traced (all but the flattened one)
     EXPECT_EQ(Tracer(test::deviceContext(), scene, options).sceneBuffers().bvhStats().copiesPlaced, 23u);
   }

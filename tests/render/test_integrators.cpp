@@ -202,7 +202,7 @@ TEST(Integrators, WhiteLayeredSpheresUnderAUniformSkyReflectEverything) {
     RenderSettings s = small(Integrator::Path, 8);
     s.background = glm::vec3(1.0f, 0.5f, 0.25f);
     s.maxBounces = 4;
-    expectUniform(render(scene, s, 128), s.background, 0.01, 5.0, name);
+    expectUniform(render(scene, s, test::testSize(128, 32)), s.background, 0.01, 5.0, name);
   }
   const glm::vec3 base(0.8f, 0.5f, 0.2f);
   Scene lambert = makeIcosphere(3, glm::vec3(0.0f), 1.0f, withSpecular(makePbrMaterial(base, 0.0f, 0.3f), 0.0f));

@@ -145,7 +145,7 @@ TEST(TexturedLights, HoledEmittersEmitOnlyWhereTheyAreThere) {
     const std::string what = mode == WT_ALPHA_MASK ? "a MASK lamp, half of it holes" : "a BLEND lamp of alpha 0.5";
     Scene scene = holedLampScene(mode);
     Image img = test::render(scene, holedLampSettings(Integrator::Path), 256);
-    Image reference = test::render(scene, holedLampSettings(Integrator::Minimal), 4096);
+    Image reference = test::render(scene, holedLampSettings(Integrator::Minimal), test::testSize(4096, 1024));
     test::expectSameImage(reference, img, 4, 5.0, what);
     test::BlockStat floor = test::blockStat(img, 0, 12, 16, 16, 0);
     double ratio = floor.mean / fullFloor.mean;
