@@ -80,27 +80,31 @@ inline SurfacePoint triangle_surface_point(GeometryScene g, __global const float
 }
 #endif
 
+/// shade's parameters, the same for one path per work-item and for lanes
+#define WT_SHADE_KERNEL_PARAMS \
+  WtFrameParams frame, WtEnvironment environment, __global const float4* env_texels, \
+  __global const float* env_marginal_cdf, __global const float* env_conditional_cdf, \
+  __global uint* counters, uint in_slot, uint out_slot, \
+  __global const uint* queue_in, __global uint* queue_out, \
+  __global float4* ray_o, __global float4* ray_d, \
+  __global const float4* hits, __global float4* throughput, \
+  __global float4* radiance, __global const uint4* tri_info, \
+  __global const float4* tri_verts, __global const float4* normals, \
+  __global const WtMaterial* materials, __global const WtLight* lights, \
+  __global const WtAliasSlot* alias, __global const float* emitter_pdf_area, \
+  __global uint* shadow_queue, __global float4* shadow_o, \
+  __global float4* shadow_d, __global float4* shadow_radiance, \
+  __global const float* pbr_table, __global ushort4* bounce_counts, \
+  __global uint* ray_skip, __global uint2* shadow_skip, \
+  __global const WtLightNode* light_tree, __global const uint* emitter_leaf, \
+  __global float4* prev_normal, __global const uint* hit_instance, WT_GEOMETRY_PARAMS, \
+  __global float2* ray_cone, __global float4* aov_sample, __global uint4* aov_ids, \
+  __global uint4* media, WT_SURFACE_PARAMS WT_THIN_SHADOW_SHADE_PARAMS WT_QUAD_SHADE_PARAMS
+
 #if WT_SHADE_LANES
 #include "shade_lanes.cl"
 #else
-WT_KERNEL void shade(WtFrameParams frame, WtEnvironment environment, __global const float4* env_texels,
-                     __global const float* env_marginal_cdf, __global const float* env_conditional_cdf,
-                     __global uint* counters, uint in_slot, uint out_slot,
-                     __global const uint* queue_in, __global uint* queue_out,
-                     __global float4* ray_o, __global float4* ray_d,
-                     __global const float4* hits, __global float4* throughput,
-                     __global float4* radiance, __global const uint4* tri_info,
-                     __global const float4* tri_verts, __global const float4* normals,
-                     __global const WtMaterial* materials, __global const WtLight* lights,
-                     __global const WtAliasSlot* alias, __global const float* emitter_pdf_area,
-                     __global uint* shadow_queue, __global float4* shadow_o,
-                     __global float4* shadow_d, __global float4* shadow_radiance,
-                     __global const float* pbr_table, __global ushort4* bounce_counts,
-                     __global uint* ray_skip, __global uint2* shadow_skip,
-                     __global const WtLightNode* light_tree, __global const uint* emitter_leaf,
-                     __global float4* prev_normal, __global const uint* hit_instance, WT_GEOMETRY_PARAMS,
-                     __global float2* ray_cone, __global float4* aov_sample, __global uint4* aov_ids,
-                     __global uint4* media, WT_SURFACE_PARAMS WT_THIN_SHADOW_SHADE_PARAMS WT_QUAD_SHADE_PARAMS) {
+WT_KERNEL void shade(WT_SHADE_KERNEL_PARAMS) {
   uint i = get_global_id(0);
   if (i >= counters[in_slot]) return;
   // Without WT_FLAG_COMPACT_SHADOWS entry i of the shadow queue is this

@@ -265,6 +265,19 @@ typedef struct LightSample8 {
   uint8 prim;
 } LightSample8;
 
+/// An area light's sample on the lanes of m (never a delta light).
+WT_LANES_INLINE void light_sample8_take(LightSample8* s, int8 m, int8 ok, V8 wi, float8 distance, V8 target,
+                                        float8 pdf, V8 le, uint8 prim) {
+  s->ok = select(s->ok, ok, m);
+  s->wi = v8_select(s->wi, wi, m);
+  s->distance = select(s->distance, distance, m);
+  s->target = v8_select(s->target, target, m);
+  s->pdf = select(s->pdf, pdf, m);
+  s->radiance = v8_select(s->radiance, le, m);
+  s->is_delta = select(s->is_delta, (int8)(0), m);
+  s->prim = select(s->prim, prim, m);
+}
+
 /// light_sample's WT_LIGHT_TRIANGLE case for lanes `m`; `row` the lights' rows (16 floats each).
 WT_LANES_INLINE void light_sample_triangle8(__global const float* lrow, __global const float4* tri_verts, uint8 index, int8 m,
                                    V8 p, float8 u1, float8 u2, LightSample8* s) {
@@ -319,14 +332,7 @@ WT_LANES_INLINE void light_sample_triangle8(__global const float* lrow, __global
     target = v8_select(target, s_target, spherical);
     pdf = select(pdf, 1.0f / solid_angle, spherical);
   }
-  s->ok = select(s->ok, ok, m);
-  s->wi = v8_select(s->wi, wi, m);
-  s->distance = select(s->distance, distance, m);
-  s->target = v8_select(s->target, target, m);
-  s->pdf = select(s->pdf, pdf, m);
-  s->radiance = v8_select(s->radiance, le, m);
-  s->is_delta = select(s->is_delta, (int8)(0), m);
-  s->prim = select(s->prim, t, m);
+  light_sample8_take(s, m, ok, wi, distance, target, pdf, le, t);
 }
 
 #if WT_HAS_QUAD_LIGHTS
@@ -426,14 +432,7 @@ WT_LANES_INLINE void light_sample_quad8(__global const float* lrow, __global con
   ok = ok && cos_light > 0.0f;
   V8 target = ray_offset_origin8(q, q_error, v8_select(v8_neg(n), n, height > 0.0f));
   float8 pdf = select(d2 / (cos_light * area), 1.0f / solid_angle, spherical);
-  s->ok = select(s->ok, ok, m);
-  s->wi = v8_select(s->wi, wi, m);
-  s->distance = select(s->distance, distance, m);
-  s->target = v8_select(s->target, target, m);
-  s->pdf = select(s->pdf, pdf, m);
-  s->radiance = v8_select(s->radiance, le, m);
-  s->is_delta = select(s->is_delta, (int8)(0), m);
-  s->prim = select(s->prim, select(second, first, st_x + st_y <= 1.0f), m);
+  light_sample8_take(s, m, ok, wi, distance, target, pdf, le, select(second, first, st_x + st_y <= 1.0f));
 }
 #endif
 
@@ -527,24 +526,7 @@ inline float3 shade_lane_emission(WtFrameParams frame, EnvScene env, __global co
   return le * shade_emission_weight(frame, pdf_prev, pdf_light);
 }
 
-WT_KERNEL void shade(WtFrameParams frame, WtEnvironment environment, __global const float4* env_texels,
-                     __global const float* env_marginal_cdf, __global const float* env_conditional_cdf,
-                     __global uint* counters, uint in_slot, uint out_slot,
-                     __global const uint* queue_in, __global uint* queue_out,
-                     __global float4* ray_o, __global float4* ray_d,
-                     __global const float4* hits, __global float4* throughput,
-                     __global float4* radiance, __global const uint4* tri_info,
-                     __global const float4* tri_verts, __global const float4* normals,
-                     __global const WtMaterial* materials, __global const WtLight* lights,
-                     __global const WtAliasSlot* alias, __global const float* emitter_pdf_area,
-                     __global uint* shadow_queue, __global float4* shadow_o,
-                     __global float4* shadow_d, __global float4* shadow_radiance,
-                     __global const float* pbr_table, __global ushort4* bounce_counts,
-                     __global uint* ray_skip, __global uint2* shadow_skip,
-                     __global const WtLightNode* light_tree, __global const uint* emitter_leaf,
-                     __global float4* prev_normal, __global const uint* hit_instance, WT_GEOMETRY_PARAMS,
-                     __global float2* ray_cone, __global float4* aov_sample, __global uint4* aov_ids,
-                     __global uint4* media, WT_SURFACE_PARAMS WT_THIN_SHADOW_SHADE_PARAMS WT_QUAD_SHADE_PARAMS) {
+WT_KERNEL void shade(WT_SHADE_KERNEL_PARAMS) {
   const uint count = counters[in_slot];
   const uint first = get_global_id(0) * WT_SHADE_LANES_WIDTH;
   if (first >= count) return;
