@@ -71,6 +71,17 @@ RenderSettings settings(int side, bool packets) {
 const float kAlbedo = 0.8f;
 const glm::vec3 kLightIntensity(2.0f, 3.0f, 4.0f);  // lux
 
+/// The shadow scenes' directional light along (2, -1, 0) and their camera
+/// looking down on the shadow.
+void lightFromTheSideAndCameraAbove(Scene& scene) {
+  PunctualLight light;
+  light.type = WT_LIGHT_DIRECTIONAL;
+  light.direction = glm::normalize(glm::vec3(2.0f, -1.0f, 0.0f));
+  light.intensity = kLightIntensity;
+  scene.lights.push_back(light);
+  scene.camera = test::topDownCamera(glm::vec3(2.0f, 5.0f, 0.0f), 0.5f);
+}
+
 /// A floor (albedo kAlbedo) lit by a directional light travelling along
 /// (2, -1, 0) past `quad` (a quad over [-1, 1]^2 at y = 1, black), seen from
 /// above where the shadow of the quad's middle [-0.5, 0.5]^2 falls: x in
@@ -80,12 +91,7 @@ Scene shadowScene(const WtMaterial& quad, bool rampTexture) {
   Scene scene = test::makeFloor(10.0f, 0.0f, makeMaterial(glm::vec3(kAlbedo)));
   appendQuad(scene, 1.0f, 1.0f, quad, 2.0f);  // two periods over [-1, 1]: one over the middle
   if (rampTexture) setBaseColorTexture(scene, 1, addRampTexture(scene));
-  PunctualLight light;
-  light.type = WT_LIGHT_DIRECTIONAL;
-  light.direction = glm::normalize(glm::vec3(2.0f, -1.0f, 0.0f));
-  light.intensity = kLightIntensity;
-  scene.lights.push_back(light);
-  scene.camera = test::topDownCamera(glm::vec3(2.0f, 5.0f, 0.0f), 0.5f);
+  lightFromTheSideAndCameraAbove(scene);
   return scene;
 }
 
@@ -217,12 +223,7 @@ Scene glassShadowScene(std::uint32_t mode) {
   for (std::uint32_t i = 0; i < kGlassTexels * kGlassTexels; ++i)
     for (std::uint8_t c : glassTexel(i)) image.rgba8.push_back(c);
   setBaseColorTexture(scene, 1, scene.textures.addTexture(scene.textures.addImage(image, true), -1, -1, kNearest, kNearest));
-  PunctualLight light;
-  light.type = WT_LIGHT_DIRECTIONAL;
-  light.direction = glm::normalize(glm::vec3(2.0f, -1.0f, 0.0f));
-  light.intensity = kLightIntensity;
-  scene.lights.push_back(light);
-  scene.camera = test::topDownCamera(glm::vec3(2.0f, 5.0f, 0.0f), 0.5f);
+  lightFromTheSideAndCameraAbove(scene);
   return scene;
 }
 
