@@ -1259,7 +1259,8 @@ int main(int argc, char** argv) {
                         "A worker rank or a device of a split render that shows no progress for this many seconds "
                         "(no message, or no sample pass done on the chunk it holds) is lost; its chunks go to the "
                         "others and the image is finished without it; a rank 0 that sends nothing that long ends "
-                        "the job. Must exceed the slowest device's sample pass (docs/scale-out.md, Faults)")
+                        "the job, and a rank 0 blocked that long inside one MPI call writes what it merged and "
+                        "ends it. Must exceed the slowest device's sample pass (docs/scale-out.md, Faults)")
       ->check(CLI::PositiveNumber)->capture_default_str();
   renderCmd->add_option("--start-timeout", render.startTimeout,
                         "An MPI rank that has not finished starting (scene, BVH, kernel build) this many seconds "
