@@ -3,7 +3,7 @@
 #   devices: two contexts (--device 0,0) give the EXR, variance layer
 #            included, byte for byte, of one device with the same --chunk-spp.
 #   mpi:     2 ranks give the 1-process image byte for byte; rank 1 killed
-#            mid-render: a clear error, the merged samples written and
+#            mid-render: a clear error naming it, the merged samples written and
 #            checkpointed, and the resumed render equals the uninterrupted
 #            one; a rank that cannot load the scene stops the job at start
 #            with its message (no hang), failed even under mpirun
@@ -403,6 +403,9 @@ status=$?
 grep -q "stopped by a signal after [0-9]* of 1000000 samples (under mpirun also when a rank died" "$dir/killed.log" ||
   fail "no clear error: $(cat "$dir/killed.log")"
 grep -q "merged samples were written" "$dir/killed.log" || fail "nothing written: $(cat "$dir/killed.log")"
+# named: the rank heard from least recently, or (died mid-message) the rank lost
+grep -Eq "the rank silent longest: rank 1 on host [^ ]+, for [0-9.]+ s\)|warning: rank 1 (failed while sending|stopped sending)" \
+  "$dir/killed.log" || fail "rank 1 not named: $(cat "$dir/killed.log")"
 [ -f "$dir/killed.exr" ] || fail "no partial image"
 done=$(grep -a -o -m1 'samples_done [0-9]*' "$dir/killed.exr.wtckpt" | head -1 | cut -d' ' -f2)
 [ -n "$done" ] && [ "$done" -gt 0 ] || fail "no samples_done in the checkpoint"

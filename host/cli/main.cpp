@@ -890,7 +890,10 @@ int runScaleOutRender(RenderOptions options, wt::MpiWorld& world) {
     // mpirun a dying rank leaves rank 0 about a second before SIGKILL
     if (result.interrupted && result.failure.empty())
       wt::log::error("stopped by a signal after " + std::to_string(done) + " of " + std::to_string(spp) + " samples" +
-                     (world.active() ? " (under mpirun also when a rank died or was killed: mpirun then stops every rank)"
+                     (world.active() ? " (under mpirun also when a rank died or was killed: mpirun then stops every rank" +
+                                           (result.silentLongest.empty() ? std::string()
+                                                                         : "; the rank silent longest: " + result.silentLongest) +
+                                           ")"
                                      : "") +
                      kept);
     const bool failedBefore = !result.failure.empty();

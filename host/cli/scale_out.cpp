@@ -610,12 +610,26 @@ ScaleOutResult coordinateRender(DeviceSet& devices, const ScaleOutOptions& optio
   struct RankState {
     bool lost = false, finished = false;
     Clock::time_point lastProgress;  ///< the last message that showed progress
+    Clock::time_point lastMessage;   ///< the last message of any kind
     std::uint64_t passes = 0;        ///< its heartbeat's pass count
     std::set<int> chunks;            ///< chunks assigned to it, not yet returned
     int requests = 0;                ///< its devices' requests not yet answered
   };
   std::vector<RankState> ranks(std::size_t(world.size()));
-  for (RankState& r : ranks) r.lastProgress = t0;
+  for (RankState& r : ranks) r.lastProgress = r.lastMessage = t0;
+  // after a signal or a block: the rank most likely gone, "" if none is running
+  auto silentLongest = [&] {
+    int quiet = -1;
+    double quietFor = 0.0;
+    for (int r = 1; r < world.size(); ++r) {
+      const RankState& st = ranks[std::size_t(r)];
+      if (!st.lost && !st.finished && since(st.lastMessage) > quietFor) quiet = r, quietFor = since(st.lastMessage);
+    }
+    if (quiet < 0) return std::string();
+    char text[200];
+    std::snprintf(text, sizeof text, "rank %d on host %s, for %.3g s", quiet, world.host(quiet).c_str(), quietFor);
+    return std::string(text);
+  };
   [[maybe_unused]] std::vector<std::vector<std::uint8_t>> abandoned;  // buffers of receives cancelled from lost ranks
   // a silent rank: its chunks go back to the plan, for the others (rank 0's
   // own devices wait for them); whatever it sends later is dropped
@@ -657,7 +671,7 @@ ScaleOutResult coordinateRender(DeviceSet& devices, const ScaleOutOptions& optio
   AwayClock awayClock(heartbeatSeconds(options.rankTimeoutSeconds));
   auto discountAway = [&] {
     const Clock::duration gap = awayClock.away();
-    for (RankState& r : ranks) r.lastProgress += gap;
+    for (RankState& r : ranks) r.lastProgress += gap, r.lastMessage += gap;
     for (DeviceSeen& d : seen) d.since += gap;
     return gap;
   };
@@ -764,17 +778,7 @@ ScaleOutResult coordinateRender(DeviceSet& devices, const ScaleOutOptions& optio
                       signalled ? " when a signal came (mpirun stops every rank when one dies)"
                                 : " for longer than --rank-timeout");
         std::string failure = text;
-        int quiet = -1;
-        double quietFor = 0.0;
-        for (int r = 1; r < world.size(); ++r)
-          if (!ranks[std::size_t(r)].lost && !ranks[std::size_t(r)].finished &&
-              since(ranks[std::size_t(r)].lastProgress) > quietFor)
-            quiet = r, quietFor = since(ranks[std::size_t(r)].lastProgress);
-        if (quiet > 0) {
-          std::snprintf(text, sizeof text, "; the rank silent longest: rank %d on host %s, for %.3g s", quiet,
-                        world.host(quiet).c_str(), quietFor);
-          failure += text;
-        }
+        if (const std::string quiet = silentLongest(); !quiet.empty()) failure += "; the rank silent longest: " + quiet;
         stop = true;
         plan.cancel();
         threads.join();
@@ -857,6 +861,7 @@ ScaleOutResult coordinateRender(DeviceSet& devices, const ScaleOutOptions& optio
         loseRank(from, why);
         continue;
       }
+      sender.lastMessage = Clock::now();
       if (sender.lost) continue;  // too late: its chunks went to the others
       if (status.MPI_TAG != kTagHeartbeat) sender.lastProgress = Clock::now();
       switch (status.MPI_TAG) {
@@ -934,6 +939,7 @@ ScaleOutResult coordinateRender(DeviceSet& devices, const ScaleOutOptions& optio
     if (options.interrupted && options.interrupted()) {
       // under mpirun also what a dying rank brings: mpirun stops the job
       result.interrupted = true;
+      result.silentLongest = silentLongest();
       break;
     }
     const double elapsed = since(t0);

@@ -112,6 +112,9 @@ struct ScaleOutResult {
   Moments merged;            ///< the merged prefix of the samples
   std::string failure;       ///< a device or rank failed: who and why
   bool interrupted = false;  ///< stopped by a signal (under mpirun also: a rank died)
+  /// When stopped by a signal: the running worker rank heard from least recently,
+  /// "rank N on host H, for S s" ("" if none): under mpirun likely the one that died.
+  std::string silentLongest;
   HaltReason reason = HaltReason::None;
   double seconds = 0.0;      ///< wall time from the first chunk
   double mergeSeconds = 0.0; ///< of it, merging on this process
