@@ -29,7 +29,8 @@
 #            Open MPI blocks rank 0 inside MPI reporting the lost peer, and
 #            rank 0's watchdog writes the merged samples (equal to 1 process)
 #            before mpirun's SIGKILL, naming rank 1. Under mpirun
-#            --enable-recovery the job is refused at start. Skips (77)
+#            --enable-recovery the job is refused at start, also with rank 0
+#            on the second host (no hang). Skips (77)
 #            without MPI or without a network interface other than lo.
 #   devices also: --aov all, --debug, --target-error and --reference on two
 #            devices equal one device with the same --chunk-spp; one of two
@@ -201,6 +202,18 @@ if [ "$mode" = hosts ]; then
     "$dir/recovery.log" || fail "--enable-recovery: no message naming it: $(cat "$dir/recovery.log")"
   [ -f "$dir/recovery.exr" ] && fail "--enable-recovery: an image was written"
   echo "mpirun --enable-recovery across hosts: refused at start, exit status $status, in $((SECONDS - start)) s"
+  # every rank on the second host: rank 0 cannot stop mpirun, and there any
+  # non-zero exit status leaves mpirun waiting forever: refused, exit 0
+  start=$SECONDS
+  printf 'wt-second-host slots=2\n' >"$dir/hosts2"
+  timeout -k 5 30 mpirun --hostfile "$dir/hosts2" -np 2 --mca plm_rsh_agent "$dir/agent" --enable-recovery "$exe" render \
+    "${dbl[@]}" -q --spp 4 -o "$dir/recovery2.exr" >"$dir/recovery2.log" 2>&1
+  status=$?
+  [ $status -eq 124 ] && fail "--enable-recovery, rank 0 on the second host: the job hung: $(cat "$dir/recovery2.log")"
+  grep -q "error: the job could not start: rank 0: started by Open MPI's daemon (orted)" "$dir/recovery2.log" ||
+    fail "--enable-recovery, rank 0 on the second host: not refused by name: $(cat "$dir/recovery2.log")"
+  [ -f "$dir/recovery2.exr" ] && fail "--enable-recovery, rank 0 on the second host: an image was written"
+  echo "the same with rank 0 on the second host: refused, exit status $status, in $((SECONDS - start)) s"
   exit 0
 fi
 

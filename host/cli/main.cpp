@@ -760,10 +760,16 @@ int runScaleOutRender(RenderOptions options, wt::MpiWorld& world) {
                                     : std::max(options.rankTimeout, wt::ScaleOutOptions::kDefaultRankTimeout);
     world.agreeOnStart(setupError, renderHash.value(), startTimeout);
   } catch (const std::exception& e) {
-    if (!root) return 1;  // rank 0 reports every rank's failure
+    // on orted's machine under --enable-recovery a non-zero status hangs mpirun: 0, the error said
+    const bool onlyZeroEnds = world.onRecoveringDaemon();
+    if (!root) return onlyZeroEnds ? 0 : 1;  // rank 0 reports every rank's failure
     if (world.launcherIgnoresExitStatus()) {
       wt::log::error(e.what());
       world.abort(1);
+    }
+    if (onlyZeroEnds) {
+      wt::log::error(std::string(e.what()) + " (exit status 0: there mpirun waits forever after any other)");
+      return 0;
     }
     throw;
   }

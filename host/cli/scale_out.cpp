@@ -452,8 +452,10 @@ std::string MpiWorld::host(int rank) const {
   return rank >= 0 && std::size_t(rank) < m_hosts.size() ? m_hosts[std::size_t(rank)] : std::string("?");
 }
 
+bool MpiWorld::onRecoveringDaemon() const { return m_initialized && underRecovery() && parentName() == "orted"; }
+
 std::string MpiWorld::unsupportedLaunch() const {
-  if (!m_initialized || !underRecovery() || parentName() != "orted") return "";
+  if (!onRecoveringDaemon()) return "";
   return "started by Open MPI's daemon (orted) on a machine other than mpirun's, under mpirun --enable-recovery: "
          "across machines Open MPI 4.1 then cannot end a job whose rank died or hung (it waits forever); run "
          "without --enable-recovery";

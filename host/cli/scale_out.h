@@ -49,6 +49,10 @@ class MpiWorld {
   static constexpr int kCompleteWithLosses = 3;
   /// The host a rank runs on (MPI_Get_processor_name, exchanged at start).
   std::string host(int rank) const;
+  /// Under `mpirun --enable-recovery`, started by Open MPI's daemon (orted):
+  /// there any non-zero exit status, even after MPI_Finalize, leaves mpirun
+  /// waiting forever (Open MPI 4.1.4), so only 0 ends the job.
+  bool onRecoveringDaemon() const;
   /// Why this rank must not run ("" if it may): under `mpirun
   /// --enable-recovery` a rank started by Open MPI's daemon (orted, on a
   /// machine other than mpirun's), where Open MPI 4.1 cannot end a job whose
