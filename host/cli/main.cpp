@@ -793,7 +793,7 @@ int runScaleOutRender(RenderOptions options, wt::MpiWorld& world) {
                 std::to_string(int(setupSeconds * 1e3)) + " ms");
 
   // Slurm's PMIx plugin SIGKILLs the whole step about a second after any task dies, with no signal before
-  if (world.active() && std::getenv("SLURM_STEP_ID") && std::getenv("PMIX_RANK") && options.checkpointSeconds <= 0.0)
+  if (world.active() && world.launchedBySrun() && options.checkpointSeconds <= 0.0)
     wt::log::warnOnce("under srun --mpi=pmix, Slurm kills every rank (SIGKILL) about a second after one dies, "
                       "whatever --kill-on-bad-exit says: rank 0 cannot write the merged samples then; only "
                       "--checkpoint keeps them (docs/scale-out.md, Faults)");
