@@ -3,7 +3,7 @@
 #   devices: two contexts (--device 0,0) give the EXR, variance layer
 #            included, byte for byte, of one device with the same --chunk-spp.
 #   mpi:     2 ranks give the 1-process image byte for byte; rank 1 killed
-#            mid-render: a clear error, the merged samples written and
+#            mid-render: a clear error naming it, the merged samples written and
 #            checkpointed, and the resumed render equals the uninterrupted
 #            one; a rank that cannot load the scene stops the job at start
 #            with its message (no hang), failed even under mpirun
@@ -23,11 +23,20 @@
 #            checkpoint resumes to the uninterrupted image. A rank hung while
 #            starting: the other names it (--start-timeout 1).
 #            Skips (77) without MPI.
+#   hosts:   two hosts on this machine: mpirun's hostfile names a second
+#            host whose rsh agent runs Open MPI's daemon (orted) here, so rank
+#            1 talks to rank 0 over TCP, as across machines. Rank 1 killed:
+#            Open MPI blocks rank 0 inside MPI reporting the lost peer, and
+#            rank 0's watchdog writes the merged samples (equal to 1 process)
+#            before mpirun's SIGKILL, naming rank 1. Under mpirun
+#            --enable-recovery the job is refused at start, also with rank 0
+#            on the second host (no hang). Skips (77)
+#            without MPI or without a network interface other than lo.
 #   devices also: --aov all, --debug, --target-error and --reference on two
 #            devices equal one device with the same --chunk-spp; one of two
 #            devices hung: the other finishes the same image.
 #
-# usage: cli_scale_out.sh WAVETRACE SCRATCH_DIR devices|mpi|lost|heartbeat [WT_MPI]
+# usage: cli_scale_out.sh WAVETRACE SCRATCH_DIR devices|mpi|lost|heartbeat|hosts [WT_MPI]
 set -u
 if [ -n "${WT_TRACE_TS:-}" ]; then PS4='+ $(date +%s.%N) '; set -x; fi
 exe=$1
@@ -150,6 +159,63 @@ lostCheck() {  # $1: the case, $2: the job's exit status, $3: "held" if rank 1 s
     fail "$1: rank 1 held no chunk (nothing to hand out again): $(cat "$dir/$1.log")"
   cmp "$dir/$1.exr" "$dir/process.exr" || fail "$1: the image differs from 1 process"
 }
+
+if [ "$mode" = hosts ]; then
+  ls /sys/class/net 2>/dev/null | grep -qvx lo ||
+    { echo "SKIP: no network interface other than lo (Open MPI's TCP transport between the two hosts needs one)"; exit 77; }
+  # the rsh agent: Open MPI calls it as `agent HOST COMMAND...` (ssh's syntax); it runs COMMAND here
+  printf '#!/bin/sh\nshift\nexec sh -c "$*"\n' >"$dir/agent"
+  chmod +x "$dir/agent"
+  printf 'localhost slots=1\nwt-second-host slots=1\n' >"$dir/hosts"
+  hosts=(mpirun --hostfile "$dir/hosts" -np 2 --map-by node --mca plm_rsh_agent "$dir/agent")
+  dbl=(--width 24 --height 16 --max-bounces 4 --seed 9 --accumulation double --chunk-spp 2)
+  start=$SECONDS
+  timeout -k 5 60 "${hosts[@]}" "$exe" render "${dbl[@]}" -q --spp 1000000 --checkpoint 0.2 -o "$dir/killed.exr" \
+    >"$dir/killed.log" 2>&1 &
+  job=$!
+  waitForFile "$dir/killed.exr.wtckpt" $job
+  rank1=$(for p in $(pgrep -f "wavetrace render.*$dir/killed.exr"); do
+    tr '\0' '\n' <"/proc/$p/environ" 2>/dev/null | grep -qx OMPI_COMM_WORLD_RANK=1 && echo "$p"; done)
+  [ -n "$rank1" ] || fail "rank 1's process not found: $(cat "$dir/killed.log")"
+  [ "$(cat "/proc/$(awk '{print $4}' "/proc/$rank1/stat")/comm")" = orted ] || fail "rank 1 is not orted's child"
+  sleep 0.3
+  kill -9 "$rank1"
+  wait $job
+  status=$?
+  [ $status -eq 124 ] && fail "the job did not end within 60 s of rank 1 being killed: $(cat "$dir/killed.log")"
+  [ $status -ne 0 ] || fail "the job exited 0 after a rank was killed"
+  line=$(grep "^error: render failed after [0-9]* of 1000000 samples: rank 0 was blocked for [0-9.]* s inside Open MPI (.* rank 1 on host .*; the [0-9]* merged samples were written" "$dir/killed.log") ||
+    fail "no error naming the block and rank 1, or nothing written: $(cat "$dir/killed.log")"
+  done=$(echo "$line" | sed -E 's/.*render failed after ([0-9]+) of.*/\1/')
+  "$exe" render "${dbl[@]}" -q --spp "$done" -o "$dir/process.exr" >/dev/null 2>&1 || fail "1 process failed"
+  cmp "$dir/killed.exr" "$dir/process.exr" || fail "the image of the $done merged samples differs from 1 process"
+  echo "rank 1 killed on the second host: rank 0, blocked in Open MPI, wrote its $done samples (equal to 1 process) in $((SECONDS - start)) s"
+  # across hosts Open MPI 4.1's mpirun --enable-recovery cannot end a job
+  # whose rank died or hung: refused at start, failed (rank 0 stops mpirun)
+  start=$SECONDS
+  timeout -k 5 60 "${hosts[@]}" --enable-recovery "$exe" render "${dbl[@]}" -q --spp 4 -o "$dir/recovery.exr" \
+    >"$dir/recovery.log" 2>&1
+  status=$?
+  [ $status -eq 124 ] && fail "--enable-recovery: the job hung: $(cat "$dir/recovery.log")"
+  [ $status -ne 0 ] || fail "--enable-recovery across hosts: the job exited 0: $(cat "$dir/recovery.log")"
+  grep -q "error: the job could not start: rank 1: started by Open MPI's daemon (orted) .* under mpirun --enable-recovery" \
+    "$dir/recovery.log" || fail "--enable-recovery: no message naming it: $(cat "$dir/recovery.log")"
+  [ -f "$dir/recovery.exr" ] && fail "--enable-recovery: an image was written"
+  echo "mpirun --enable-recovery across hosts: refused at start, exit status $status, in $((SECONDS - start)) s"
+  # every rank on the second host: rank 0 cannot stop mpirun, and there any
+  # non-zero exit status leaves mpirun waiting forever: refused, exit 0
+  start=$SECONDS
+  printf 'wt-second-host slots=2\n' >"$dir/hosts2"
+  timeout -k 5 30 mpirun --hostfile "$dir/hosts2" -np 2 --mca plm_rsh_agent "$dir/agent" --enable-recovery "$exe" render \
+    "${dbl[@]}" -q --spp 4 -o "$dir/recovery2.exr" >"$dir/recovery2.log" 2>&1
+  status=$?
+  [ $status -eq 124 ] && fail "--enable-recovery, rank 0 on the second host: the job hung: $(cat "$dir/recovery2.log")"
+  grep -q "error: the job could not start: rank 0: started by Open MPI's daemon (orted)" "$dir/recovery2.log" ||
+    fail "--enable-recovery, rank 0 on the second host: not refused by name: $(cat "$dir/recovery2.log")"
+  [ -f "$dir/recovery2.exr" ] && fail "--enable-recovery, rank 0 on the second host: an image was written"
+  echo "the same with rank 0 on the second host: refused, exit status $status, in $((SECONDS - start)) s"
+  exit 0
+fi
 
 if [ "$mode" = lost ]; then
   # rank 1 stops itself (SIGSTOP, every thread: WT_TEST_STALL=1:pause) once it
@@ -350,6 +416,9 @@ status=$?
 grep -q "stopped by a signal after [0-9]* of 1000000 samples (under mpirun also when a rank died" "$dir/killed.log" ||
   fail "no clear error: $(cat "$dir/killed.log")"
 grep -q "merged samples were written" "$dir/killed.log" || fail "nothing written: $(cat "$dir/killed.log")"
+# named: the rank heard from least recently, or (died mid-message) the rank lost
+grep -Eq "the rank silent longest: rank 1 on host [^ ]+, for [0-9.]+ s\)|warning: rank 1 (failed while sending|stopped sending)" \
+  "$dir/killed.log" || fail "rank 1 not named: $(cat "$dir/killed.log")"
 [ -f "$dir/killed.exr" ] || fail "no partial image"
 done=$(grep -a -o -m1 'samples_done [0-9]*' "$dir/killed.exr.wtckpt" | head -1 | cut -d' ' -f2)
 [ -n "$done" ] && [ "$done" -gt 0 ] || fail "no samples_done in the checkpoint"

@@ -751,6 +751,7 @@ int runScaleOutRender(RenderOptions options, wt::MpiWorld& world) {
   } catch (const std::exception& e) {
     setupError = e.what();
   }
+  if (setupError.empty()) setupError = world.unsupportedLaunch();
   try {
     // a start (scene, BVH, kernel build) takes far longer than a sample
     // pass, and one rank's cold start longer than another's warm one
@@ -759,10 +760,16 @@ int runScaleOutRender(RenderOptions options, wt::MpiWorld& world) {
                                     : std::max(options.rankTimeout, wt::ScaleOutOptions::kDefaultRankTimeout);
     world.agreeOnStart(setupError, renderHash.value(), startTimeout);
   } catch (const std::exception& e) {
-    if (!root) return 1;  // rank 0 reports every rank's failure
+    // on orted's machine under --enable-recovery a non-zero status hangs mpirun: 0, the error said
+    const bool onlyZeroEnds = world.onRecoveringDaemon();
+    if (!root) return onlyZeroEnds ? 0 : 1;  // rank 0 reports every rank's failure
     if (world.launcherIgnoresExitStatus()) {
       wt::log::error(e.what());
       world.abort(1);
+    }
+    if (onlyZeroEnds) {
+      wt::log::error(std::string(e.what()) + " (exit status 0: there mpirun waits forever after any other)");
+      return 0;
     }
     throw;
   }
@@ -785,6 +792,11 @@ int runScaleOutRender(RenderOptions options, wt::MpiWorld& world) {
                 "; chunks of " + std::to_string(chunkSpp) + " samples; set up in " +
                 std::to_string(int(setupSeconds * 1e3)) + " ms");
 
+  // Slurm's PMIx plugin SIGKILLs the whole step about a second after any task dies, with no signal before
+  if (world.active() && world.launchedBySrun() && options.checkpointSeconds <= 0.0)
+    wt::log::warnOnce("under srun --mpi=pmix, Slurm kills every rank (SIGKILL) about a second after one dies, "
+                      "whatever --kill-on-bad-exit says: rank 0 cannot write the merged samples then; only "
+                      "--checkpoint keeps them (docs/scale-out.md, Faults)");
   wt::ScaleOutOptions run;
   run.samplesPerPixel = spp;
   run.chunkSpp = chunkSpp;
@@ -865,6 +877,75 @@ int runScaleOutRender(RenderOptions options, wt::MpiWorld& world) {
       });
     };
   const int resumed = start->sampleEnd;
+  // whatever happened, keep what was merged; the exit status, and whether
+  // only an abort may end the process (a lost device's thread is left behind)
+  auto keepMerged = [&](wt::ScaleOutResult& result, int& code) -> bool {
+    const int done = result.merged.sampleEnd;
+    if (done > 0) {
+      wt::Renderer& out = *devices.renderers[std::size_t(result.outputDevice)];
+      out.restoreAccumulation(wt::accumulationFromMoments(result.merged, settings.accumulation));
+      wt::Image image = out.readImage();
+      wt::applyDebugView(image, options.debugView);
+      writeOutputs(options, image, say);
+      if (result.merged.nonFiniteSamples > 0)
+        wt::log::warnOnce(std::to_string(result.merged.nonFiniteSamples) + " NaN/Inf samples discarded");
+    }
+    const std::string kept = done > 0 ? "; the " + std::to_string(done) + " merged samples were written"
+                                      : "; no chunk was merged, nothing written";
+    // said before the checkpoint, which waits for the disk (fsync): under
+    // mpirun a dying rank leaves rank 0 about a second before SIGKILL
+    if (result.interrupted && result.failure.empty())
+      wt::log::error("stopped by a signal after " + std::to_string(done) + " of " + std::to_string(spp) + " samples" +
+                     (world.active() ? " (under mpirun also when a rank died or was killed: mpirun then stops every rank" +
+                                           (result.silentLongest.empty() ? std::string()
+                                                                         : "; the rank silent longest: " + result.silentLongest) +
+                                           ")"
+                                     : "") +
+                     kept);
+    const bool failedBefore = !result.failure.empty();
+    auto sayFailure = [&] {
+      wt::log::error("render failed after " + std::to_string(done) + " of " + std::to_string(spp) +
+                     " samples: " + result.failure + kept);
+    };
+    if (failedBefore) sayFailure();  // before the checkpoint too
+    finishCheckpoint();
+    if (!checkpointError.empty() && result.failure.empty()) result.failure = checkpointError;
+    if (options.checkpointSeconds > 0.0 && done > resumed) {
+      try {
+        saveCheckpoint(result.merged);
+      } catch (const std::exception& e) {
+        if (result.failure.empty()) result.failure = e.what();
+      }
+    }
+    // a lost device's thread is left behind: only an abort ends the process safely
+    const bool lost = !result.lostRanks.empty() || !result.lostDevices.empty();
+    const bool mustAbort = (world.active() && (lost || !result.failure.empty() || result.interrupted)) ||
+                           !result.lostDevices.empty();
+    if (!result.failure.empty()) {
+      if (!failedBefore) sayFailure();
+      code = 1;
+      return mustAbort;
+    }
+    if (result.interrupted) {  // said above
+      code = 130;
+      return mustAbort;
+    }
+    if (mustAbort) {
+      // the image is whole (the lost ranks' and devices' chunks were rendered
+      // again); they may still run or hang, and MPI_Finalize or a return
+      // (destroying the devices) would wait for them
+      wt::log::info("finished without " + std::to_string(result.lostRanks.size()) + " lost rank(s) and " +
+                    std::to_string(result.lostDevices.size()) + " lost device(s); ending (the image is complete)");
+    }
+    code = 0;
+    return mustAbort;
+  };
+  // rank 0 stuck inside MPI (MpiGate in cli/scale_out.cpp): keep what was merged from the watchdog
+  run.rescue = [&](wt::ScaleOutResult& result) {
+    int code = 1;
+    (void)keepMerged(result, code);
+    world.exitWithoutMpi(code);
+  };
   wt::ScaleOutResult result = wt::coordinateRender(devices, run, std::move(*start), world);
   const int done = result.merged.sampleEnd;
   std::string byRank;
@@ -899,57 +980,12 @@ int runScaleOutRender(RenderOptions options, wt::MpiWorld& world) {
     std::fflush(stdout);
   }
 
-  // whatever happened, keep what was merged
-  if (done > 0) {
-    wt::Renderer& out = *devices.renderers[std::size_t(result.outputDevice)];
-    out.restoreAccumulation(wt::accumulationFromMoments(result.merged, settings.accumulation));
-    wt::Image image = out.readImage();
-    wt::applyDebugView(image, options.debugView);
-    writeOutputs(options, image, say);
-    if (result.merged.nonFiniteSamples > 0)
-      wt::log::warnOnce(std::to_string(result.merged.nonFiniteSamples) + " NaN/Inf samples discarded");
-  }
-  const std::string kept = done > 0 ? "; the " + std::to_string(done) + " merged samples were written"
-                                    : "; no chunk was merged, nothing written";
-  // said before the checkpoint, which waits for the disk (fsync): under
-  // mpirun a dying rank leaves rank 0 about a second before SIGKILL
-  if (result.interrupted && result.failure.empty())
-    wt::log::error("stopped by a signal after " + std::to_string(done) + " of " + std::to_string(spp) + " samples" +
-                   (world.active() ? " (under mpirun also when a rank died or was killed: mpirun then stops every rank)"
-                                   : "") +
-                   kept);
-  finishCheckpoint();
-  if (!checkpointError.empty() && result.failure.empty()) result.failure = checkpointError;
-  if (options.checkpointSeconds > 0.0 && done > resumed) {
-    try {
-      saveCheckpoint(result.merged);
-    } catch (const std::exception& e) {
-      if (result.failure.empty()) result.failure = e.what();
-    }
-  }
-  // a lost device's thread is left behind: only an abort ends the process safely
-  const bool lost = !result.lostRanks.empty() || !result.lostDevices.empty();
-  const bool mustAbort = (world.active() && (lost || !result.failure.empty() || result.interrupted)) ||
-                         !result.lostDevices.empty();
-  if (!result.failure.empty()) {
-    wt::log::error("render failed after " + std::to_string(done) + " of " + std::to_string(spp) +
-                   " samples: " + result.failure + kept);
-    if (mustAbort) world.abort(1);
-    return 1;
-  }
-  if (result.interrupted) {  // said above
-    if (mustAbort) world.abort(130);
-    return 130;
-  }
-  if (mustAbort) {
-    // the image is whole (the lost ranks' and devices' chunks were rendered
-    // again); they may still run or hang, and MPI_Finalize or a return
-    // (destroying the devices) would wait for them
-    wt::log::info("finished without " + std::to_string(result.lostRanks.size()) + " lost rank(s) and " +
-                  std::to_string(result.lostDevices.size()) + " lost device(s); ending (the image is complete)");
-    world.abort(0);
-  }
-  return 0;
+  int code = 0;
+  const bool mustAbort = keepMerged(result, code);
+  // under srun an MPI_Abort(0) comes back as 137, a killed task's status, as when the image is lost
+  if (mustAbort && code == 0 && world.launchedBySrun()) code = wt::MpiWorld::kCompleteWithLosses;
+  if (mustAbort) world.abort(code);
+  return code;
 }
 
 int runInfo(RenderOptions options) {
@@ -1232,7 +1268,8 @@ int main(int argc, char** argv) {
                         "A worker rank or a device of a split render that shows no progress for this many seconds "
                         "(no message, or no sample pass done on the chunk it holds) is lost; its chunks go to the "
                         "others and the image is finished without it; a rank 0 that sends nothing that long ends "
-                        "the job. Must exceed the slowest device's sample pass (docs/scale-out.md, Faults)")
+                        "the job, and a rank 0 blocked that long inside one MPI call writes what it merged and "
+                        "ends it. Must exceed the slowest device's sample pass (docs/scale-out.md, Faults)")
       ->check(CLI::PositiveNumber)->capture_default_str();
   renderCmd->add_option("--start-timeout", render.startTimeout,
                         "An MPI rank that has not finished starting (scene, BVH, kernel build) this many seconds "

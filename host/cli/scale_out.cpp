@@ -155,6 +155,50 @@ class AwayClock {
   Clock::time_point m_last = Clock::now();
 };
 
+/// Rank 0's main thread holds this gate except inside MPI calls. Open MPI
+/// can block a call for good (across machines its TCP transport, reporting
+/// a peer that died, waits on mpirun, which is ending the job); a watchdog
+/// that takes the gate then finds the merged samples as the main thread left
+/// them, and the main thread, should the call return, waits at the gate.
+class MpiGate {
+ public:
+  MpiGate() { m_mutex.lock(); }  // on the main thread
+  /// Around one MPI call of the main thread; `peer`: the rank it talks to, -1: any.
+  class Call {
+   public:
+    Call(MpiGate* gate, const char* name, int peer) : m_gate(gate) {
+      if (!m_gate) return;
+      m_gate->m_name = name;
+      m_gate->m_peer = peer;
+      m_gate->m_start = Clock::now().time_since_epoch().count();
+      m_gate->m_mutex.unlock();
+    }
+    ~Call() {
+      if (!m_gate) return;
+      m_gate->m_mutex.lock();
+      m_gate->m_start = 0;
+    }
+    Call(const Call&) = delete;
+    Call& operator=(const Call&) = delete;
+
+   private:
+    MpiGate* m_gate;
+  };
+  /// When the main thread's current MPI call began (0: none), its name and peer.
+  Clock::rep callStart() const { return m_start.load(); }
+  const char* callName() const { return m_name.load(); }
+  int callPeer() const { return m_peer.load(); }
+  /// The watchdog: the main thread is inside an MPI call, or waits at the gate after one.
+  bool take() { return m_mutex.try_lock(); }
+  void giveBack() { m_mutex.unlock(); }
+
+ private:
+  std::mutex m_mutex;
+  std::atomic<Clock::rep> m_start{0};
+  std::atomic<const char*> m_name{""};
+  std::atomic<int> m_peer{-1};
+};
+
 /// What the coordinator sees of one device thread: the chunk it holds and
 /// its sample passes, so that a hung device can be told from a slow one.
 struct DeviceWatch {
@@ -340,9 +384,12 @@ namespace {
 /// launcher, found as this process's parent: not its daemon (orted, the
 /// parent of a rank on another machine), whose stop leaves mpirun waiting
 /// forever. The name of that launcher, "" where it is not one.
-std::string recoveringLauncher() {
+bool underRecovery() {
   const char* recovery = std::getenv("OMPI_MCA_orte_enable_recovery");
-  if (!recovery || (std::strcmp(recovery, "1") != 0 && std::strcmp(recovery, "true") != 0)) return "";
+  return recovery && (std::strcmp(recovery, "1") == 0 || std::strcmp(recovery, "true") == 0);
+}
+
+std::string parentName() {
   char path[64], name[32] = {};
   std::snprintf(path, sizeof path, "/proc/%d/comm", int(getppid()));
   std::FILE* f = std::fopen(path, "r");
@@ -351,9 +398,14 @@ std::string recoveringLauncher() {
   std::fclose(f);
   if (!read) return "";
   name[std::strcspn(name, "\n")] = 0;
+  return name;
+}
+
+std::string recoveringLauncher() {
+  if (!underRecovery()) return "";
+  const std::string name = parentName();
   static const char* const launchers[] = {"mpirun", "mpiexec", "orterun"};
-  if (std::none_of(std::begin(launchers), std::end(launchers), [&](const char* l) { return std::strcmp(name, l) == 0; }))
-    return "";
+  if (std::none_of(std::begin(launchers), std::end(launchers), [&](const char* l) { return name == l; })) return "";
   return name;
 }
 
@@ -383,6 +435,30 @@ void MpiWorld::abort(int code) const {
   if (m_initialized) MPI_Abort(MPI_COMM_WORLD, code);
 #endif
   std::_Exit(code);
+}
+
+void MpiWorld::exitWithoutMpi(int code) const {
+  std::fflush(stdout);
+  std::fflush(stderr);
+  if (m_initialized && code != 0) (void)stopRecoveringLauncher();
+  std::_Exit(code);
+}
+
+bool MpiWorld::launchedBySrun() const {
+  return m_initialized && std::getenv("SLURM_STEP_ID") && !std::getenv("OMPI_COMM_WORLD_SIZE");
+}
+
+std::string MpiWorld::host(int rank) const {
+  return rank >= 0 && std::size_t(rank) < m_hosts.size() ? m_hosts[std::size_t(rank)] : std::string("?");
+}
+
+bool MpiWorld::onRecoveringDaemon() const { return m_initialized && underRecovery() && parentName() == "orted"; }
+
+std::string MpiWorld::unsupportedLaunch() const {
+  if (!onRecoveringDaemon()) return "";
+  return "started by Open MPI's daemon (orted) on a machine other than mpirun's, under mpirun --enable-recovery: "
+         "across machines Open MPI 4.1 then cannot end a job whose rank died or hung (it waits forever); run "
+         "without --enable-recovery";
 }
 
 void MpiWorld::agreeOnStart(const std::string& error, std::uint64_t renderHash, [[maybe_unused]] double timeoutSeconds) {
@@ -442,16 +518,25 @@ void MpiWorld::agreeOnStart(const std::string& error, std::uint64_t renderHash, 
     }
     for (int r = 1; r < m_size; ++r) MPI_Send(nullptr, 0, MPI_INT, r, kTagStarted, MPI_COMM_WORLD);
   }
-  constexpr int kMessage = 1024;
-  std::vector<char> mine(kMessage + 8, 0), all(std::size_t(m_size) * (kMessage + 8));
+  // each entry: the hash, the start-up error, the host name (to name a lost rank's machine)
+  constexpr int kMessage = 1024, kHost = 64, kEntry = 8 + kMessage + kHost;
+  std::vector<char> mine(kEntry, 0), all(std::size_t(m_size) * kEntry);
   std::memcpy(mine.data(), &renderHash, 8);
   std::strncpy(mine.data() + 8, error.c_str(), kMessage - 1);
-  MPI_Allgather(mine.data(), kMessage + 8, MPI_CHAR, all.data(), kMessage + 8, MPI_CHAR, MPI_COMM_WORLD);
+  {
+    char name[MPI_MAX_PROCESSOR_NAME + 1] = {};
+    int length = 0;
+    MPI_Get_processor_name(name, &length);
+    std::strncpy(mine.data() + 8 + kMessage, name, kHost - 1);
+  }
+  MPI_Allgather(mine.data(), kEntry, MPI_CHAR, all.data(), kEntry, MPI_CHAR, MPI_COMM_WORLD);
   std::string report;
   std::uint64_t hash0;
   std::memcpy(&hash0, all.data(), 8);
+  m_hosts.clear();
   for (int r = 0; r < m_size; ++r) {
-    const char* entry = all.data() + std::size_t(r) * (kMessage + 8);
+    const char* entry = all.data() + std::size_t(r) * kEntry;
+    m_hosts.emplace_back(entry + 8 + kMessage);
     std::uint64_t hash;
     std::memcpy(&hash, entry, 8);
     std::string message(entry + 8);
@@ -515,6 +600,9 @@ ScaleOutResult coordinateRender(DeviceSet& devices, const ScaleOutOptions& optio
   auto lastReport = t0, lastCheckpoint = t0;
   [[maybe_unused]] auto lastBeat = t0;  // rank 0's heartbeat (MPI only)
   const StallHook stall(0);
+  // the watchdog's gate (MpiGate), where a rescue is given and MPI is in use
+  std::optional<MpiGate> gateHolder;
+  MpiGate* gate = world.active() && options.rescue ? &gateHolder.emplace() : nullptr;
   std::optional<Clock::time_point> lingerFrom;  // the test hook (StallHook::linger)
   int checkpointed = resumed;
   const bool tty = isatty(STDERR_FILENO);
@@ -524,12 +612,26 @@ ScaleOutResult coordinateRender(DeviceSet& devices, const ScaleOutOptions& optio
   struct RankState {
     bool lost = false, finished = false;
     Clock::time_point lastProgress;  ///< the last message that showed progress
+    Clock::time_point lastMessage;   ///< the last message of any kind
     std::uint64_t passes = 0;        ///< its heartbeat's pass count
     std::set<int> chunks;            ///< chunks assigned to it, not yet returned
     int requests = 0;                ///< its devices' requests not yet answered
   };
   std::vector<RankState> ranks(std::size_t(world.size()));
-  for (RankState& r : ranks) r.lastProgress = t0;
+  for (RankState& r : ranks) r.lastProgress = r.lastMessage = t0;
+  // after a signal or a block: the rank most likely gone, "" if none is running
+  auto silentLongest = [&] {
+    int quiet = -1;
+    double quietFor = 0.0;
+    for (int r = 1; r < world.size(); ++r) {
+      const RankState& st = ranks[std::size_t(r)];
+      if (!st.lost && !st.finished && since(st.lastMessage) > quietFor) quiet = r, quietFor = since(st.lastMessage);
+    }
+    if (quiet < 0) return std::string();
+    char text[200];
+    std::snprintf(text, sizeof text, "rank %d on host %s, for %.3g s", quiet, world.host(quiet).c_str(), quietFor);
+    return std::string(text);
+  };
   [[maybe_unused]] std::vector<std::vector<std::uint8_t>> abandoned;  // buffers of receives cancelled from lost ranks
   // a silent rank: its chunks go back to the plan, for the others (rank 0's
   // own devices wait for them); whatever it sends later is dropped
@@ -554,6 +656,7 @@ ScaleOutResult coordinateRender(DeviceSet& devices, const ScaleOutOptions& optio
     // it may be alive (a hung device): it must not take rank 0's silence
     // towards it for a hung rank 0 and end the job before the image is written
     const int lost = 1;
+    MpiGate::Call call(gate, "MPI_Send", rank);
     MPI_Send(&lost, 1, MPI_INT, rank, kTagRelease, MPI_COMM_WORLD);
 #endif
   };
@@ -570,7 +673,7 @@ ScaleOutResult coordinateRender(DeviceSet& devices, const ScaleOutOptions& optio
   AwayClock awayClock(heartbeatSeconds(options.rankTimeoutSeconds));
   auto discountAway = [&] {
     const Clock::duration gap = awayClock.away();
-    for (RankState& r : ranks) r.lastProgress += gap;
+    for (RankState& r : ranks) r.lastProgress += gap, r.lastMessage += gap;
     for (DeviceSeen& d : seen) d.since += gap;
     return gap;
   };
@@ -607,8 +710,10 @@ ScaleOutResult coordinateRender(DeviceSet& devices, const ScaleOutOptions& optio
 #if WT_MPI
     if (since(lastBeat) < heartbeatSeconds(options.rankTimeoutSeconds)) return;
     for (int r = 1; r < world.size(); ++r)
-      if (!ranks[std::size_t(r)].lost && !ranks[std::size_t(r)].finished)
+      if (!ranks[std::size_t(r)].lost && !ranks[std::size_t(r)].finished) {
+        MpiGate::Call call(gate, "MPI_Send", r);
         MPI_Send(nullptr, 0, MPI_BYTE, r, kTagHeartbeat, MPI_COMM_WORLD);
+      }
     lastBeat = Clock::now();
 #endif
   };
@@ -638,6 +743,59 @@ ScaleOutResult coordinateRender(DeviceSet& devices, const ScaleOutOptions& optio
 
   shared->threads = std::make_unique<DeviceThreads>(devices, shared->source, results, stop, stall.device);
   DeviceThreads& threads = *shared->threads;
+  // the watchdog: a main thread inside one MPI call for 0.3 s once a signal
+  // has come (mpirun's SIGKILL follows its SIGTERM by a second), or for
+  // --rank-timeout (nothing else would end the job), is given up on: the
+  // devices are stopped and the merged samples go to options.rescue
+  std::atomic<bool> watchdogEnd{false};
+  std::thread watchdog;
+  struct JoinWatchdog {
+    std::atomic<bool>& end;
+    std::thread& thread;
+    ~JoinWatchdog() {
+      end = true;
+      if (thread.joinable()) thread.join();
+    }
+  } joinWatchdog{watchdogEnd, watchdog};
+  if (gate)
+    watchdog = std::thread([&] {
+      AwayClock awayClock(heartbeatSeconds(options.rankTimeoutSeconds));
+      Clock::rep seen = 0;
+      Clock::time_point callFrom = Clock::now();
+      while (!watchdogEnd) {
+        std::this_thread::sleep_for(std::chrono::milliseconds(10));
+        const Clock::duration away = awayClock.away();
+        const Clock::rep start = gate->callStart();
+        if (start == 0) continue;
+        if (start != seen) seen = start, callFrom = Clock::time_point(Clock::duration(start));
+        const bool signalled = options.interrupted && options.interrupted();
+        if (!signalled) callFrom += away;  // a stopped process's time is not the call's
+        const double in = since(callFrom);
+        if (in <= (signalled ? 0.3 : options.rankTimeoutSeconds) || !gate->take()) continue;
+        const int peer = gate->callPeer();
+        char text[480];
+        std::snprintf(text, sizeof text, "rank 0 was blocked for %.3g s inside Open MPI (%s%s)%s", in,
+                      gate->callName(),
+                      peer > 0 ? (" with rank " + std::to_string(peer) + " on host " + world.host(peer)).c_str() : "",
+                      signalled ? " when a signal came (mpirun stops every rank when one dies)"
+                                : " for longer than --rank-timeout");
+        std::string failure = text;
+        if (const std::string quiet = silentLongest(); !quiet.empty()) failure += "; the rank silent longest: " + quiet;
+        stop = true;
+        plan.cancel();
+        threads.join();
+        for (std::size_t d = 0; d < threads.size(); ++d)
+          if (!threads.watch(d).lost) {
+            result.outputDevice = int(d);
+            break;
+          }
+        result.failure = failure;
+        result.seconds = since(t0);
+        result.chunks = merge.mergedChunks();
+        result.merged = merge.merged();
+        options.rescue(result);  // does not return
+      }
+    });
   while (true) try {
     bool busy = false;
     discountAway();
@@ -649,7 +807,10 @@ ScaleOutResult coordinateRender(DeviceSet& devices, const ScaleOutOptions& optio
     for (int flag = 1, batch = 0; world.active() && flag && batch < 16; ++batch) {
       beat();
       MPI_Status status;
-      MPI_Iprobe(MPI_ANY_SOURCE, MPI_ANY_TAG, MPI_COMM_WORLD, &flag, &status);
+      {
+        MpiGate::Call call(gate, "MPI_Iprobe", -1);
+        MPI_Iprobe(MPI_ANY_SOURCE, MPI_ANY_TAG, MPI_COMM_WORLD, &flag, &status);
+      }
       if (!flag) {
         drained = true;
         break;
@@ -665,10 +826,17 @@ ScaleOutResult coordinateRender(DeviceSet& devices, const ScaleOutOptions& optio
       // past the signal mpirun then sends, nor past the rank timeout
       MPI_Request request;
       int received = 0;
-      bool failed = MPI_Irecv(message.data(), bytes, MPI_BYTE, from, status.MPI_TAG, MPI_COMM_WORLD, &request) != MPI_SUCCESS;
+      bool failed = false;
+      {
+        MpiGate::Call call(gate, "MPI_Irecv", from);
+        failed = MPI_Irecv(message.data(), bytes, MPI_BYTE, from, status.MPI_TAG, MPI_COMM_WORLD, &request) != MPI_SUCCESS;
+      }
       bool timedOut = false, interrupted = false;
       while (!failed && !received && !timedOut && !interrupted) {
-        failed = MPI_Test(&request, &received, MPI_STATUS_IGNORE) != MPI_SUCCESS;
+        {
+          MpiGate::Call call(gate, "MPI_Test", from);
+          failed = MPI_Test(&request, &received, MPI_STATUS_IGNORE) != MPI_SUCCESS;
+        }
         if (received || failed) break;
         receiveStart += discountAway();
         timedOut = since(receiveStart) > options.rankTimeoutSeconds;
@@ -681,6 +849,7 @@ ScaleOutResult coordinateRender(DeviceSet& devices, const ScaleOutOptions& optio
         // a rank that died mid-message (under a launcher that lets the job
         // go on, the receive fails) or stopped sending: lost, not the job
         if (timedOut) {
+          MpiGate::Call call(gate, "MPI_Cancel", from);
           MPI_Cancel(&request);
           MPI_Request_free(&request);
         }
@@ -694,6 +863,7 @@ ScaleOutResult coordinateRender(DeviceSet& devices, const ScaleOutOptions& optio
         loseRank(from, why);
         continue;
       }
+      sender.lastMessage = Clock::now();
       if (sender.lost) continue;  // too late: its chunks went to the others
       if (status.MPI_TAG != kTagHeartbeat) sender.lastProgress = Clock::now();
       switch (status.MPI_TAG) {
@@ -735,9 +905,11 @@ ScaleOutResult coordinateRender(DeviceSet& devices, const ScaleOutOptions& optio
       for (RankState& st = ranks[std::size_t(r)]; st.requests > 0 && !st.lost; --st.requests) {
         if (std::optional<SampleChunk> c = plan.next()) {
           const int assign[3] = {c->index, c->firstSample, c->sampleCount};
+          MpiGate::Call call(gate, "MPI_Send", r);
           MPI_Send(assign, 3, MPI_INT, r, kTagAssign, MPI_COMM_WORLD);
           st.chunks.insert(c->index);
         } else if (plan.settled()) {
+          MpiGate::Call call(gate, "MPI_Send", r);
           MPI_Send(nullptr, 0, MPI_INT, r, kTagStop, MPI_COMM_WORLD);
         } else {
           break;
@@ -769,6 +941,7 @@ ScaleOutResult coordinateRender(DeviceSet& devices, const ScaleOutOptions& optio
     if (options.interrupted && options.interrupted()) {
       // under mpirun also what a dying rank brings: mpirun stops the job
       result.interrupted = true;
+      result.silentLongest = silentLongest();
       break;
     }
     const double elapsed = since(t0);
@@ -806,9 +979,14 @@ ScaleOutResult coordinateRender(DeviceSet& devices, const ScaleOutOptions& optio
   // ended early (a failure, a signal): the workers still running must not
   // end the job while rank 0 writes the image
   for (int r = 1, ending = 0; r < world.size(); ++r)
-    if (!ranks[std::size_t(r)].lost && !ranks[std::size_t(r)].finished)
+    if (!ranks[std::size_t(r)].lost && !ranks[std::size_t(r)].finished) {
+      MpiGate::Call call(gate, "MPI_Send", r);
       MPI_Send(&ending, 1, MPI_INT, r, kTagRelease, MPI_COMM_WORLD);
+    }
 #endif
+  watchdogEnd = true;
+  if (watchdog.joinable()) watchdog.join();
+  if (gate) gate->giveBack();
   stop = true;
   plan.cancel();
   threads.join();

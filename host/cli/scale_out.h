@@ -35,6 +35,29 @@ class MpiWorld {
   /// Under `mpirun --enable-recovery`: a non-zero exit status after
   /// MPI_Finalize would not reach the user, only abort's would.
   bool launcherIgnoresExitStatus() const;
+  /// End this process with `code` without calling MPI (from a thread other
+  /// than the one that calls MPI, which may be blocked inside it): under
+  /// `mpirun --enable-recovery` a non-zero code first stops the launcher, as
+  /// abort does.
+  [[noreturn]] void exitWithoutMpi(int code) const;
+  /// Started by Slurm's srun (not by mpirun, also where mpirun runs in a
+  /// Slurm job): Slurm kills every task when one ends without MPI_Finalize,
+  /// so an MPI_Abort(0) reaches the user as the killed tasks' 137.
+  bool launchedBySrun() const;
+  /// The exit status of a job that wrote its whole image but lost a rank or
+  /// a device, under srun, where 0 cannot be had (docs/scale-out.md, Faults).
+  static constexpr int kCompleteWithLosses = 3;
+  /// The host a rank runs on (MPI_Get_processor_name, exchanged at start).
+  std::string host(int rank) const;
+  /// Under `mpirun --enable-recovery`, started by Open MPI's daemon (orted):
+  /// there any non-zero exit status, even after MPI_Finalize, leaves mpirun
+  /// waiting forever (Open MPI 4.1.4), so only 0 ends the job.
+  bool onRecoveringDaemon() const;
+  /// Why this rank must not run ("" if it may): under `mpirun
+  /// --enable-recovery` a rank started by Open MPI's daemon (orted, on a
+  /// machine other than mpirun's), where Open MPI 4.1 cannot end a job whose
+  /// rank died or hung (docs/scale-out.md).
+  std::string unsupportedLaunch() const;
   /// Every rank passes its start-up failure ("" if none) and the hash of
   /// what it will render; all return normally only if every rank started
   /// and all hashes agree, else every rank throws. Rank 0's exception names
@@ -49,6 +72,7 @@ class MpiWorld {
  private:
   int m_rank = 0, m_size = 1;
   bool m_initialized = false;
+  std::vector<std::string> m_hosts;
 };
 
 /// The devices of one process, each with its own context and renderer.
@@ -57,6 +81,8 @@ struct DeviceSet {
   std::vector<std::unique_ptr<Renderer>> renderers;
   std::vector<std::string> names;  ///< "device 1 (cpu-haswell)"
 };
+
+struct ScaleOutResult;
 
 struct ScaleOutOptions {
   int samplesPerPixel = 64;  ///< total, counting resumed samples
@@ -70,6 +96,11 @@ struct ScaleOutOptions {
   /// Called with the merged prefix after each chunk merged, in chunk order
   /// (--reference's error log).
   std::function<void(const Moments&)> merged;
+  /// Rank 0's last resort, called on a watchdog thread when its main thread
+  /// is stuck inside one MPI call (0.3 s once a signal has come, else
+  /// --rank-timeout): the devices are stopped and `result` holds what was
+  /// merged; it writes that and ends the process without calling MPI.
+  std::function<void(ScaleOutResult&)> rescue;
   /// A worker rank that shows no progress for this long (no message, or
   /// heartbeats whose pass count stands still while it holds a chunk) is
   /// lost: its chunks go to the others (--rank-timeout).
@@ -85,6 +116,9 @@ struct ScaleOutResult {
   Moments merged;            ///< the merged prefix of the samples
   std::string failure;       ///< a device or rank failed: who and why
   bool interrupted = false;  ///< stopped by a signal (under mpirun also: a rank died)
+  /// When stopped by a signal: the running worker rank heard from least recently,
+  /// "rank N on host H, for S s" ("" if none): under mpirun likely the one that died.
+  std::string silentLongest;
   HaltReason reason = HaltReason::None;
   double seconds = 0.0;      ///< wall time from the first chunk
   double mergeSeconds = 0.0; ///< of it, merging on this process
