@@ -448,9 +448,14 @@ Scene placeCopies(const Scene& mesh, std::span<const glm::mat4> transforms) {
   scene.sourceName = mesh.sourceName + " copies";
   scene.materials = mesh.materials;
   scene.materialNames = mesh.materialNames;
+  scene.materialTextures = mesh.materialTextures;
+  scene.textures = mesh.textures;
   for (const glm::mat4& transform : transforms) {
     const std::uint32_t vertexBase = std::uint32_t(scene.positions.size());
-    const glm::mat3 normalMatrix = glm::transpose(glm::inverse(glm::mat3(transform)));
+    const glm::mat3 linear(transform);
+    const glm::mat3 normalMatrix = glm::transpose(glm::inverse(linear));
+    // a mirroring transform swaps two corners, as the loader does, so the front face stays in front
+    const bool flip = glm::determinant(linear) < 0.0f;
     for (std::size_t v = 0; v < mesh.positions.size(); ++v) {
       const WtVec4& p = mesh.positions[v];
       const glm::vec3 moved(transform * glm::vec4(p.x, p.y, p.z, 1.0f));
@@ -461,10 +466,19 @@ Scene placeCopies(const Scene& mesh, std::span<const glm::mat4> transforms) {
       scene.normals.push_back({normal.x, normal.y, normal.z, 0.0f});
       scene.texcoords.push_back(v < mesh.texcoords.size() ? mesh.texcoords[v] : glm::vec2(0.0f));
     }
+    // the attributes only some meshes have, as the loader places them: TEXCOORD_1 and COLOR_0 as they
+    // are, a tangent moved with the surface (the linear part) and its bitangent's side flipped by a mirror
+    scene.texcoords1.insert(scene.texcoords1.end(), mesh.texcoords1.begin(), mesh.texcoords1.end());
+    scene.colors.insert(scene.colors.end(), mesh.colors.begin(), mesh.colors.end());
+    for (const glm::vec4& t : mesh.tangents) {
+      const glm::vec3 moved = linear * glm::vec3(t);
+      const float length = glm::length(moved);
+      scene.tangents.push_back(length > 0.0f && std::isfinite(length)
+                                   ? glm::vec4(moved / length, (t.w < 0.0f) != flip ? -1.0f : 1.0f)
+                                   : glm::vec4(0.0f));
+    }
     scene.instances.push_back(
         {std::uint32_t(scene.triangles.size()), std::uint32_t(mesh.triangles.size()), 0, glm::dmat4(transform)});
-    // a mirroring transform swaps two corners, as the loader does, so the front face stays in front
-    const bool flip = glm::determinant(glm::mat3(transform)) < 0.0f;
     for (WtTriangle t : mesh.triangles) {
       t.v0 += vertexBase, t.v1 += vertexBase, t.v2 += vertexBase;
       if (flip) std::swap(t.v1, t.v2);

@@ -65,11 +65,13 @@ Scene makeHairScene(std::uint32_t guides = 100, std::uint32_t children = 100, st
 void appendScene(Scene& dst, const Scene& src);
 
 /// One copy of `mesh`'s triangles per transform (points by the matrix,
-/// normals by its inverse transpose; a mirroring one swaps two corners so the
-/// front face stays in front, as the glTF loader does), each recorded in
-/// Scene::instances with its transform as a copy of one geometry; likewise
-/// its spheres and curves (radii by the cube root of the determinant) in
-/// Scene::primitiveInstances; the materials once.
+/// normals by its inverse transpose, tangents by its linear part; a mirroring
+/// one swaps two corners so the front face stays in front and flips the
+/// bitangent's side, as the glTF loader does; texture coordinates and vertex
+/// colours kept), each recorded in Scene::instances with its transform as a
+/// copy of one geometry; likewise its spheres and curves (radii by the cube
+/// root of the determinant) in Scene::primitiveInstances; the materials and
+/// their textures once.
 Scene placeCopies(const Scene& mesh, std::span<const glm::mat4> transforms);
 
 /// A Lambertian material; emission from the front face only unless twoSided.

@@ -5,16 +5,22 @@
 // in every traversal mode, spawned rays that never meet the surface they
 // leave, the same image for a seed, and the memory it saves.
 #include "../render/render_helpers.h"
+#include "attribute_grid.h"
 #include "core/spawn.h"
 #include "device/scene_buffers.h"
 #include "device_fixture.h"
 #include "instancing_checks.h"
 #include "scene/generators.h"
+#include "scene/gltf_loader.h"
+#include "test_util.h"
+#include "texture_helpers.h"
 
 #include <gtest/gtest.h>
 #include <glm/gtc/matrix_transform.hpp>
 
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <random>
 #include <string>
 
@@ -272,6 +278,88 @@ TEST(Instancing, RendersMatchTheFlattenedScene) {
   settings.instancing = Instancing::On;
   const Image instanced = test::render(p.scene, settings, 64);
   test::expectSameImage(flat, instanced, 6, 4.5, "instanced against flattened");
+}
+
+/// attributeGridDoc's grid (8 x 8 cells) loaded from a file, placed by `placements` as `layout` says.
+Scene loadAttributeGrid(std::span<const test::Placement> placements, test::GridLayout layout, const std::string& name) {
+  const std::filesystem::path path = test::scratchDir("instancing") / (name + ".gltf");
+  const std::string text = test::attributeGridDoc(8, placements, layout).embedded();
+  std::ofstream(path, std::ios::binary).write(text.data(), std::streamsize(text.size()));
+  GltfLoadOptions options;
+  options.recenter = false;
+  return loadGltf(path.string(), options);
+}
+
+/// Material 0 reads a 4 x 4 base colour texture (sRGB, TEXCOORD_0) and a
+/// 4 x 4 normal map tilted a different way per texel (TEXCOORD_1), both nearest.
+void addGridTextures(Scene& scene) {
+  DecodedImage colour, normal;
+  colour.width = colour.height = normal.width = normal.height = 4;
+  colour.name = "colour", normal.name = "normal";
+  for (int i = 0; i < 16; ++i) {
+    for (int c : {255 - 9 * i, 90 + 10 * i, 60 + 12 * ((7 * i) % 16), 255}) colour.rgba8.push_back(std::uint8_t(c));
+    const float a = 0.9f * float(i), x = 0.55f * std::cos(a), y = 0.55f * std::sin(a);
+    for (float c : {x, y, std::sqrt(1.0f - x * x - y * y)}) normal.rgba8.push_back(std::uint8_t(std::lround(127.5f * (c + 1.0f))));
+    normal.rgba8.push_back(255);
+  }
+  const std::uint32_t colourTexture = scene.textures.addTexture(scene.textures.addImage(colour, true), -1, -1,
+                                                                test::kNearest, test::kNearest);
+  const std::uint32_t normalTexture = scene.textures.addTexture(scene.textures.addImage(normal, false), -1, -1,
+                                                                test::kNearest, test::kNearest);
+  test::setBaseColorTexture(scene, 0, colourTexture);
+  test::setMaterialTexture(scene, 0, WT_TEXTURE_SLOT_NORMAL, normalTexture);
+  scene.materialTextures[WT_TEXTURE_SLOT_NORMAL].texcoord = 1;
+}
+
+/// A glTF mesh with vertex colours, a second set of texture coordinates and
+/// tangents from the file, textured (base colour on the first set, a normal
+/// map on the second), placed four times by nodes sharing it (turned;
+/// turned, scaled and mirrored; two out of view), all stored once, renders
+/// as the same mesh placed by placeCopies with the two copies in view each a
+/// geometry of its own (flattened; the two out of view stay instanced, so
+/// both scenes build one program): same seed, directional light, one
+/// bounce, so each sample is a function of where it meets the surface and
+/// the images differ by float rounding. Fails where a copy loses or misplaces
+/// a vertex attribute (placeCopies, the loader, or the instance's tangent
+/// and bitangent side in shade).
+TEST(Instancing, CopiesKeepTheirVertexColoursSecondCoordinatesAndTangents) {
+  const test::Placement placements[] = {
+      {{-1.6f, 0.0f, 0.1f}, glm::angleAxis(0.5f, glm::vec3(0.0f, 1.0f, 0.0f)), {1.0f, 1.0f, 1.0f}},
+      {{1.6f, 0.0f, -0.1f}, glm::angleAxis(-0.8f, glm::vec3(0.0f, 1.0f, 0.0f)), {1.2f, 1.0f, -0.8f}},
+      {{-30.0f, 0.0f, 0.0f}},
+      {{30.0f, 0.0f, 0.0f}}};
+  Scene instanced = loadAttributeGrid(placements, test::GridLayout::kNodesShareAMesh, "shared");
+  addGridTextures(instanced);
+  const test::Placement identity;
+  Scene mesh = loadAttributeGrid(std::span(&identity, 1), test::GridLayout::kNodesShareAMesh, "alone");
+  addGridTextures(mesh);
+  std::vector<glm::mat4> transforms;
+  for (const test::Placement& p : placements) transforms.push_back(p.matrix());
+  Scene flat = placeCopies(mesh, transforms);
+  ASSERT_EQ(flat.instances.size(), 4u);
+  flat.instances[0].geometry = 1, flat.instances[1].geometry = 2;
+  for (Scene* scene : {&instanced, &flat}) {
+    PunctualLight light;
+    light.type = WT_LIGHT_DIRECTIONAL;
+    light.direction = glm::normalize(glm::vec3(0.6f, -1.0f, 0.35f));
+    light.intensity = glm::vec3(3.0f);
+    scene->lights.push_back(light);
+    scene->camera = test::topDownCamera(glm::vec3(0.0f, 5.0f, 0.0f), 3.2f);
+  }
+  RenderSettings settings;
+  settings.width = settings.height = 32;
+  settings.maxBounces = 1;
+  settings.seed = 3;
+  settings.instancing = Instancing::On;
+  const auto renderOf = [&](const Scene& scene, std::uint32_t instances) {
+    Renderer renderer(test::deviceContext(), scene, settings);
+    EXPECT_EQ(renderer.sceneBuffers().instanceCount(), instances);
+    for (int s = 0; s < 8; ++s) renderer.renderSample();
+    EXPECT_EQ(renderer.stats().nonFiniteSamples, 0u);
+    return renderer.readImage();
+  };
+  const Image one = renderOf(instanced, 4), other = renderOf(flat, 2);
+  test::expectSameImage(one, other, 4, 4.5, "stored once against written out per copy");
 }
 
 /// Memory: 98 copies of a geometry stored once take about 1/98 of the

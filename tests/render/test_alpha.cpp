@@ -307,6 +307,46 @@ TEST(AlphaRender, BlendedGlassPassesItsShareWholeAndTintsTheRest) {
     }
 }
 
+// Camera rays through the same cut-out glass, looking straight down on the
+// floor beside its shadow (x, z in [-0.5, 0.5], lit unshadowed; the glass's
+// coordinates there are shadowTexel's): through a hole every sample sees
+// the lit floor, through the rest the floor tinted as a shadow ray would
+// find it at normal incidence, kGlassFactor x the texel's colour x (1 -
+// F(1, 1.5)) on average (a sample reflects to the black sky with
+// probability F). Per texel within 5 standard errors of its 16 pixels.
+// Fails when the instance's texture is read elsewhere or not at all, or the
+// alpha test or the glass's transmission is wrong for camera rays.
+TEST(AlphaRender, CameraRaysThroughCutOutGlassSeeTheHolesWholeAndTheRestTinted) {
+  Scene scene = glassShadowScene(WT_ALPHA_MASK);
+  scene.camera = test::topDownCamera(glm::vec3(0.0f, 5.0f, 0.0f), 0.5f);
+  const int side = 32, texelPixels = side / int(kGlassTexels);
+  const Image img = render(scene, glassSettings(Traversal::kPacket), 32);
+  const double f = dielectricFresnel(1.0, kGlassIor);
+  int holes = 0;
+  for (int ty = 0; ty < int(kGlassTexels); ++ty)
+    for (int tx = 0; tx < int(kGlassTexels); ++tx) {
+      const int x0 = tx * texelPixels, y0 = ty * texelPixels;
+      const std::uint32_t texel = shadowTexel(x0, y0, side);
+      const std::array<std::uint8_t, 4> t = glassTexel(texel);
+      if (t[3] < 0.3 * 255) {
+        ++holes;
+        for (int y = y0; y < y0 + texelPixels; ++y)
+          for (int x = x0; x < x0 + texelPixels; ++x)
+            for (int c = 0; c < 3; ++c)
+              EXPECT_NEAR(img.rgb[3 * (std::size_t(y) * side + x) + c], litRadiance()[c], 1e-5 * litRadiance()[c])
+                  << "hole texel " << texel << ", pixel (" << x << ", " << y << ") channel " << c;
+        continue;
+      }
+      for (int c = 0; c < 3; ++c) {
+        const test::BlockStat s = blockStat(img, x0, y0, x0 + texelPixels, y0 + texelPixels, c);
+        const double expected = litRadiance()[c] * double(kGlassFactor[c]) * srgbDecoded(t[c] / 255.0) * (1.0 - f);
+        EXPECT_NEAR(s.mean, expected, 5.0 * std::sqrt(s.varianceOfMean) + 1e-5 * litRadiance()[c])
+            << "texel " << texel << ", channel " << c;
+      }
+    }
+  EXPECT_EQ(holes, 20);  // alpha 4 i / 255 below 0.3: texels 0 to 19
+}
+
 // The alpha factor alone: MASK 0.4 under the cutoff 0.5 casts no shadow,
 // 0.6 a whole one.
 TEST(AlphaRender, MaskFactorAloneCastsAllOrNothing) {

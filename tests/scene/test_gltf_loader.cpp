@@ -2,9 +2,11 @@
 // transforms checked numerically, every validation error checked for the
 // file and element it names, and a mutation fuzz that must never crash.
 #include "device/program.h"
+#include "scene/generators.h"
 #include "scene/gltf_doc.h"
 #include "scene/gltf_loader.h"
 
+#include "attribute_grid.h"
 #include "test_util.h"
 
 #include <gtest/gtest.h>
@@ -523,6 +525,70 @@ TEST(GltfLoader, PlacedCopiesShareAGeometry) {
   EXPECT_EQ(s.instances[0].geometry, s.instances[2].geometry);
   EXPECT_NE(s.instances[0].geometry, s.instances[3].geometry);
   EXPECT_EQ(s.instances[3].triangleCount, 2u);
+}
+
+// One mesh with every per-vertex attribute placed twice (turned; turned,
+// scaled unevenly and mirrored): nodes sharing it, EXT_mesh_gpu_instancing
+// and the mesh written out once per copy load the same vertices, and
+// placeCopies places the mesh loaded alone the same way (within the float
+// rounding of the loader's double placement). On the mirrored copy the
+// bitangent's side flips, so the placed bitangent still points where the
+// mesh's bitangent went.
+TEST(GltfLoader, EveryLayoutAndPlaceCopiesKeepTheVertexAttributesOfEachCopy) {
+  const test::Placement placements[] = {
+      {{1.0f, 2.0f, 3.0f}, glm::angleAxis(0.7f, glm::normalize(glm::vec3(1.0f, 2.0f, 3.0f))), {1.0f, 1.0f, 1.0f}},
+      {{-2.0f, 0.5f, 1.0f}, glm::angleAxis(-0.9f, glm::vec3(0.0f, 1.0f, 0.0f)), {1.5f, 0.5f, -2.0f}}};
+  GltfLoadOptions options;
+  options.recenter = false;
+  const test::Placement identity;
+  const Scene mesh = loadDoc(test::attributeGridDoc(2, std::span(&identity, 1), test::GridLayout::kNodesShareAMesh), options);
+  ASSERT_EQ(mesh.positions.size(), 9u);
+  ASSERT_EQ(mesh.colors.size(), 9u);
+  ASSERT_EQ(mesh.tangents.size(), 9u);
+  ASSERT_EQ(mesh.texcoords1.size(), 9u);
+  const glm::mat4 transforms[] = {placements[0].matrix(), placements[1].matrix()};
+  const Scene placed = placeCopies(mesh, transforms);
+  const float eps = 1e-5f;  // float rounding of coordinates below 10
+  const auto same = [&](glm::vec4 a, glm::vec4 b, const std::string& what) {
+    return glm::all(glm::lessThanEqual(glm::abs(a - b), glm::vec4(eps))) ? ::testing::AssertionSuccess()
+                                                                         : ::testing::AssertionFailure() << what;
+  };
+  const auto vec = [](const WtVec4& v) { return glm::vec4(v.x, v.y, v.z, v.w); };
+  for (test::GridLayout layout :
+       {test::GridLayout::kNodesShareAMesh, test::GridLayout::kGpuInstancing, test::GridLayout::kMeshPerCopy}) {
+    SCOPED_TRACE("layout " + std::to_string(int(layout)));
+    const Scene s = loadDoc(test::attributeGridDoc(2, placements, layout), options);
+    expectConsistent(s);
+    ASSERT_EQ(s.positions.size(), placed.positions.size());
+    ASSERT_EQ(s.colors.size(), placed.colors.size());
+    ASSERT_EQ(s.tangents.size(), placed.tangents.size());
+    ASSERT_EQ(s.texcoords1.size(), placed.texcoords1.size());
+    ASSERT_EQ(s.triangles.size(), placed.triangles.size());
+    ASSERT_EQ(s.instances.size(), 2u);
+    EXPECT_EQ(s.instances[0].geometry == s.instances[1].geometry, layout != test::GridLayout::kMeshPerCopy);
+    for (std::size_t t = 0; t < s.triangles.size(); ++t) {
+      const WtTriangle &a = s.triangles[t], &b = placed.triangles[t];
+      EXPECT_TRUE(a.v0 == b.v0 && a.v1 == b.v1 && a.v2 == b.v2 && a.material == b.material) << "triangle " << t;
+    }
+    for (std::size_t v = 0; v < s.positions.size(); ++v) {
+      const std::string at = "vertex " + std::to_string(v);
+      EXPECT_TRUE(same(vec(s.positions[v]), vec(placed.positions[v]), "position at " + at));
+      EXPECT_TRUE(same(vec(s.normals[v]), vec(placed.normals[v]), "normal at " + at));
+      EXPECT_TRUE(same(glm::vec4(s.texcoords[v], s.texcoords1[v]), glm::vec4(placed.texcoords[v], placed.texcoords1[v]),
+                       "texture coordinates at " + at));
+      EXPECT_TRUE(same(s.colors[v], placed.colors[v], "colour at " + at));
+      EXPECT_TRUE(same(s.tangents[v], placed.tangents[v], "tangent at " + at));
+      // the copy's own data: the mesh's colour, and its bitangent carried along
+      const std::size_t source = v % mesh.positions.size();
+      EXPECT_EQ(placed.colors[v], mesh.colors[source]) << at;
+      const glm::mat3 linear(transforms[v / mesh.positions.size()]);
+      const glm::vec4 t = mesh.tangents[source];
+      const glm::vec3 n(vec(mesh.normals[source])), bitangent = t.w * glm::cross(n, glm::vec3(t));
+      const glm::vec4 tp = s.tangents[v];
+      const glm::vec3 np(vec(s.normals[v])), placedBitangent = tp.w * glm::cross(np, glm::vec3(tp));
+      EXPECT_GT(glm::dot(placedBitangent, linear * bitangent), 0.0f) << "the bitangent turned over at " << at;
+    }
+  }
 }
 
 TEST(GltfLoader, DeepHierarchyDoesNotOverflowTheStack) {
