@@ -1,6 +1,7 @@
-// Stage 3 for scenes whose surfaces are all Lambertian triangles (no
-// textures, holes, other primitive types, AOVs; the path integrator): the
-// shade kernel over eight paths per work-item on float8 lanes. PoCL runs a
+// Stage 3 for scenes whose surfaces are all triangles, Lambertian or
+// metallic-roughness without extensions (no textures, holes, other primitive
+// types, AOVs; the path integrator): the shade kernel over eight paths per
+// work-item on float8 lanes. PoCL runs a
 // work-group as a loop over its items and vectorises that loop only when the
 // body is scalar, straight-line code, which shade is not (float3 values,
 // loops, atomics), so the work-items are made wide by hand. The same
@@ -8,7 +9,8 @@
 // tree and lights other than triangles and rectangles take shade.cl's scalar
 // functions one lane at a time; the rest (the surface, light picking,
 // triangle and rectangle sampling, the Lambertian BSDF, roulette) runs on
-// all lanes at once. The host launches one work-item per WT_SHADE_LANES_WIDTH
+// all lanes at once; a metallic-roughness surface's BSDF is bsdf.cl's, one
+// lane at a time. The host launches one work-item per WT_SHADE_LANES_WIDTH
 // queue entries.
 
 #define WT_SHADE_LANES_WIDTH 8
@@ -526,6 +528,61 @@ inline float3 shade_lane_emission(WtFrameParams frame, EnvScene env, __global co
   return le * shade_emission_weight(frame, pdf_prev, pdf_light);
 }
 
+/// Counter c (x diffuse, y specular, z transmission) of each lane's path's bounce_counts.
+WT_LANES_INLINE uint8 gather_count8(__global const ushort4* bounce_counts, uint8 path, uint c) {
+  __global const ushort* cf = (__global const ushort*)bounce_counts;
+  uint8 i = 4u * path + c;
+  return convert_uint8((ushort8)(cf[i.s0], cf[i.s1], cf[i.s2], cf[i.s3], cf[i.s4], cf[i.s5], cf[i.s6], cf[i.s7]));
+}
+
+#if WT_HAS_PBR
+// ---- metallic-roughness surfaces: bsdf.cl's evaluation and sampling, one lane at a time
+
+/// bsdf_eval on the lanes of m: *f_cos and *pdf take its values there.
+WT_LANES_INLINE void bsdf_eval_lanes(__global const WtMaterial* materials, __global const float* table, uint8 material,
+                                     int8 inside, uint8 lobes, int8 m, V8 wo, V8 wi, V8* f_cos, float8* pdf) {
+  float fx[8], fy[8], fz[8], pd[8];
+  vstore8(f_cos->x, 0, fx), vstore8(f_cos->y, 0, fy), vstore8(f_cos->z, 0, fz), vstore8(*pdf, 0, pd);
+  #pragma unroll 1
+  for (int k = 0; k < WT_SHADE_LANES_WIDTH; ++k) {
+    if (!lane_i(m, k)) continue;
+    Bsdf b = bsdf_make(materials[lane_u(material, k)], table, lane_i(inside, k));
+    float3 f = bsdf_eval(b, lane_v(wo, k), lane_v(wi, k), lane_u(lobes, k), &pd[k]);
+    fx[k] = f.x, fy[k] = f.y, fz[k] = f.z;
+  }
+  *f_cos = v8(vload8(0, fx), vload8(0, fy), vload8(0, fz));
+  *pdf = vload8(0, pd);
+}
+
+/// bsdf_sample on the lanes of m: where it scatters (the lanes it returns),
+/// *wi, *weight, *pdf and *lobe take the sample.
+WT_LANES_INLINE int8 bsdf_sample_lanes(__global const WtMaterial* materials, __global const float* table, uint8 material,
+                                       int8 inside, uint8 lobes, int8 m, V8 wo, float8 u_lobe, float8 u1, float8 u2,
+                                       V8* wi, V8* weight, float8* pdf, uint8* lobe) {
+  float wx[8], wy[8], wz[8], gx[8], gy[8], gz[8], pd[8];
+  uint lb[8];
+  int ok[8];
+  vstore8(wi->x, 0, wx), vstore8(wi->y, 0, wy), vstore8(wi->z, 0, wz);
+  vstore8(weight->x, 0, gx), vstore8(weight->y, 0, gy), vstore8(weight->z, 0, gz);
+  vstore8(*pdf, 0, pd), vstore8(*lobe, 0, lb), vstore8((int8)(0), 0, ok);
+  #pragma unroll 1
+  for (int k = 0; k < WT_SHADE_LANES_WIDTH; ++k) {
+    if (!lane_i(m, k)) continue;
+    Bsdf b = bsdf_make(materials[lane_u(material, k)], table, lane_i(inside, k));
+    BsdfSample bs;
+    if (!bsdf_sample(b, lane_v(wo, k), lane_u(lobes, k), lane_f(u_lobe, k), lane_f(u1, k), lane_f(u2, k), &bs)) continue;
+    ok[k] = -1;
+    wx[k] = bs.wi.x, wy[k] = bs.wi.y, wz[k] = bs.wi.z;
+    gx[k] = bs.weight.x, gy[k] = bs.weight.y, gz[k] = bs.weight.z;
+    pd[k] = bs.pdf, lb[k] = bs.lobe;
+  }
+  *wi = v8(vload8(0, wx), vload8(0, wy), vload8(0, wz));
+  *weight = v8(vload8(0, gx), vload8(0, gy), vload8(0, gz));
+  *pdf = vload8(0, pd), *lobe = vload8(0, lb);
+  return vload8(0, ok);
+}
+#endif
+
 WT_KERNEL void shade(WT_SHADE_KERNEL_PARAMS) {
   const uint count = counters[in_slot];
   const uint first = get_global_id(0) * WT_SHADE_LANES_WIDTH;
@@ -629,13 +686,21 @@ WT_KERNEL void shade(WT_SHADE_KERNEL_PARAMS) {
   V8 frame_t, frame_b;
   frame_from_normal8(ns, &frame_t, &frame_b);
   float8 wo_z = v8_dot(wo, ns);
-  __global const ushort* cf = (__global const ushort*)bounce_counts;
-  uint8 diffuse_count = convert_uint8((ushort8)(cf[4 * path.s0], cf[4 * path.s1], cf[4 * path.s2], cf[4 * path.s3],
-                                               cf[4 * path.s4], cf[4 * path.s5], cf[4 * path.s6], cf[4 * path.s7]));
   // a Lambertian surface scatters by its diffuse lobe alone: past its limit
   // neither light sampling nor the BSDF finds anything (shade.cl's lobes)
-  int8 diffuse = diffuse_count < frame.max_diffuse_bounces;
+  int8 diffuse = gather_count8(bounce_counts, path, 0u) < frame.max_diffuse_bounces;
+#if WT_HAS_PBR
+  // a metallic-roughness one by the lobes shade.cl allows its path
+  int8 pbr = active && gather_u((__global const uint*)mf, material, mstride,
+                                __builtin_offsetof(WtMaterial, model) / sizeof(float)) == WT_MATERIAL_PBR;
+  uint8 lobes = (as_uint8(diffuse) & WT_LOBE_DIFFUSE) |
+                (as_uint8(gather_count8(bounce_counts, path, 1u) < frame.max_specular_bounces) & WT_LOBE_SPECULAR) |
+                (as_uint8(gather_count8(bounce_counts, path, 2u) < frame.max_transmission_bounces) & WT_LOBE_TRANSMISSION);
+  active = active && (diffuse || (pbr && (lobes & WT_LOBE_SPECULAR) != 0u));
+  V8 wo_local = v8(v8_dot(wo, frame_t), v8_dot(wo, frame_b), wo_z);
+#else
   active = active && diffuse;
+#endif
   if (!any(active)) return;
   V8 origin = ray_offset_origin8(p, p_error, ng);
   float8 u_pick, u_rr, u_lobe, u_tree;
@@ -711,6 +776,12 @@ WT_KERNEL void shade(WT_SHADE_KERNEL_PARAMS) {
     int8 eval_ok = connect && diffuse && wo_z > 0.0f && wi_z > 0.0f;
     float8 pdf_bsdf = select((float8)(0.0f), wi_z / WT_PI, eval_ok);
     V8 f_cos = v8_select(v8_splat((float3)(0.0f)), v8_scale(base, wi_z / WT_PI), eval_ok);
+#if WT_HAS_PBR
+    int8 pbr_connect = connect && pbr;
+    if (any(pbr_connect))
+      bsdf_eval_lanes(materials, pbr_table, material, inside, lobes, pbr_connect, wo_local,
+                      v8(v8_dot(s.wi, frame_t), v8_dot(s.wi, frame_b), wi_z), &f_cos, &pdf_bsdf);
+#endif
     float8 pdf_light = s.pdf * pmf;
     float8 a = pdf_light, b = pdf_bsdf;
     if (frame.flags & WT_FLAG_POWER_HEURISTIC) a *= a, b *= b;
@@ -749,13 +820,22 @@ WT_KERNEL void shade(WT_SHADE_KERNEL_PARAMS) {
   float8 cos_phi;
   float8 sin_phi = wt_sincospi8(2.0f * u_b2, &cos_phi);
   float8 r = sqrt(u_b1);
-  float8 wl_x = r * cos_phi, wl_y = r * sin_phi, wl_z = sqrt(fmax(0.0f, 1.0f - u_b1));
-  float8 pdf = wl_z / WT_PI;
-  V8 f_cos = v8_scale(base, wl_z / WT_PI);
-  int8 go = active && diffuse && wo_z > 0.0f && wl_z > 0.0f && pdf > 0.0f && v8_positive(f_cos);
-  V8 wi = v8_add(v8_add(v8_scale(frame_t, wl_x), v8_scale(frame_b, wl_y)), v8_scale(ns, wl_z));
+  V8 wl = v8(r * cos_phi, r * sin_phi, sqrt(fmax(0.0f, 1.0f - u_b1)));
+  float8 pdf = wl.z / WT_PI;
+  V8 f_cos = v8_scale(base, wl.z / WT_PI);
+  int8 go = active && diffuse && wo_z > 0.0f && wl.z > 0.0f && pdf > 0.0f && v8_positive(f_cos);
+  V8 weight = v8_div(f_cos, pdf);
+#if WT_HAS_PBR
+  // or the metallic-roughness BSDF's techniques
+  uint8 lobe = (uint8)(WT_LOBE_DIFFUSE);
+  int8 pbr_go = active && pbr;
+  if (any(pbr_go))
+    go = select(go, bsdf_sample_lanes(materials, pbr_table, material, inside, lobes, pbr_go, wo_local, u_lobe, u_b1,
+                                      u_b2, &wl, &weight, &pdf, &lobe), pbr);
+#endif
+  V8 wi = v8_add(v8_add(v8_scale(frame_t, wl.x), v8_scale(frame_b, wl.y)), v8_scale(ns, wl.z));
   go = go && v8_dot(wi, ng) > 0.0f;
-  beta = v8_mul(beta, v8_div(f_cos, pdf));
+  beta = v8_mul(beta, weight);
   if ((frame.flags & WT_FLAG_RR) && frame.bounce >= frame.rr_min_depth) {
     float8 q = fmin(fmax(beta.x, fmax(beta.y, beta.z)), 0.95f);
     go = go && u_rr < q;
@@ -776,7 +856,12 @@ WT_KERNEL void shade(WT_SHADE_KERNEL_PARAMS) {
     if (!lane_i(go, k)) continue;
     uint pk = lane_u(path, k);
     ushort4 counts = bounce_counts[pk];
+#if WT_HAS_PBR
+    if (lane_u(lobe, k) & WT_LOBE_DIFFUSE) counts.x++;
+    else counts.y++;
+#else
     counts.x++;
+#endif
     bounce_counts[pk] = counts;
     ray_skip[pk] = lane_u(prim, k);
     ++survivors;
