@@ -208,17 +208,18 @@ TEST(QuadLights, ShadeLanesRenderTheSameAsOnePathPerWorkItem) {
   }
 }
 
-// The same for metallic-roughness surfaces (bsdf.cl's BSDF on the lanes, one
-// lane at a time) beside a Lambertian one: a rough copper floor under the
-// rectangles (where light sampling and the BSDF's share by MIS), a rough
-// dielectric (GGX over its diffuse base), a near-mirror metal (a delta lobe)
-// and a half-metal, also lit by a point light, with the diffuse and specular
-// bounce limits apart so that a path's lobes run out one at a time.
+// The same for metallic-roughness surfaces (kernels/shade_lanes.cl's GGX on
+// lanes) beside a Lambertian one: a rough copper floor under the rectangles
+// (where light sampling and the BSDF share by MIS), a rough dielectric (GGX
+// over its diffuse base), a near-mirror half-metal (a delta lobe picked
+// against a diffuse one) and a rough half-metal, also lit by a point light,
+// with the diffuse and specular bounce limits apart so that a path's lobes
+// run out one at a time.
 TEST(QuadLights, ShadeLanesRenderMetallicRoughnessTheSameAsOnePathPerWorkItem) {
   Scene scene = quadLitScene();
-  scene.materials[0] = makePbrMaterial(glm::vec3(0.95f, 0.64f, 0.54f), 1.0f, 0.3f);
+  scene.materials[0] = makePbrMaterial(glm::vec3(0.95f, 0.64f, 0.54f), 1.0f, 0.5f);
   const std::uint32_t plastic = addMaterial(scene, makePbrMaterial(glm::vec3(0.2f, 0.4f, 0.8f), 0.0f, 0.5f), "plastic");
-  const std::uint32_t mirror = addMaterial(scene, makePbrMaterial(glm::vec3(0.9f), 1.0f, 0.01f), "mirror");
+  const std::uint32_t mirror = addMaterial(scene, makePbrMaterial(glm::vec3(0.9f), 0.5f, 0.01f), "mirror");
   const std::uint32_t half = addMaterial(scene, makePbrMaterial(glm::vec3(0.7f, 0.7f, 0.3f), 0.5f, 0.7f), "half");
   const std::uint32_t white = addMaterial(scene, makeMaterial(glm::vec3(0.8f)), "white");
   addRect(scene, {-2.0f, 0.0f, -1.2f}, {0.0f, 1.5f, 0.0f}, {2.0f, 0.0f, 0.0f}, plastic);
