@@ -159,6 +159,20 @@ TEST(QuadLights, RenderTheSameAsTheirTriangles) {
   }
 }
 
+/// Renders `scene` on shade's lanes (seed `seed`) and one path per work-item
+/// (seed + 1), 256 spp each, and expects the same image (4 x 4 blocks, z 4.5);
+/// the worst |z|.
+double shadeLanesAgainstOnePath(const Scene& scene, RenderSettings settings, std::uint32_t seed, const char* what) {
+  settings.seed = seed;
+  const Image lanes = test::render(scene, settings, 256);
+  settings.shadeLanes = false;
+  settings.seed = seed + 1;
+  const Image single = test::render(scene, settings, 256);
+  const double worst = test::expectSameImage(lanes, single, 4, 4.5, what);
+  std::printf("shade on lanes against one path per work-item (%s): worst |z| %.2f\n", what, worst);
+  return worst;
+}
+
 // Shade on float8 lanes (kernels/shade_lanes.cl, RenderSettings::shadeLanes)
 // against one path per work-item (shade.cl): the same image within noise
 // (4 x 4 blocks, z 4.5 from the two renders' own variances). The scene has
@@ -196,15 +210,7 @@ TEST(QuadLights, ShadeLanesRenderTheSameAsOnePathPerWorkItem) {
     settings.rrMinDepth = 1;  // roulette where it weighs
     settings.lightSampler = sampler;
     settings.background = glm::vec3(0.2f, 0.25f, 0.3f);
-    settings.seed = 21;
-    const Image lanes = test::render(scene, settings, 256);
-    settings.shadeLanes = false;
-    settings.seed = 22;
-    const Image single = test::render(scene, settings, 256);
-    const double worst = test::expectSameImage(lanes, single, 4, 4.5,
-                                               sampler == LightSampler::Power ? "lights by power" : "light tree");
-    std::printf("shade on lanes against one path per work-item (%s): worst |z| %.2f\n",
-                sampler == LightSampler::Power ? "power" : "tree", worst);
+    shadeLanesAgainstOnePath(scene, settings, 21, sampler == LightSampler::Power ? "lights by power" : "light tree");
   }
 }
 
@@ -237,13 +243,7 @@ TEST(QuadLights, ShadeLanesRenderMetallicRoughnessTheSameAsOnePathPerWorkItem) {
   settings.maxSpecularBounces = 2;
   settings.rrMinDepth = 1;
   settings.background = glm::vec3(0.2f, 0.25f, 0.3f);
-  settings.seed = 31;
-  const Image lanes = test::render(scene, settings, 256);
-  settings.shadeLanes = false;
-  settings.seed = 32;
-  const Image single = test::render(scene, settings, 256);
-  const double worst = test::expectSameImage(lanes, single, 4, 4.5, "metallic-roughness");
-  std::printf("metallic-roughness on lanes against one path per work-item: worst |z| %.2f\n", worst);
+  shadeLanesAgainstOnePath(scene, settings, 31, "metallic-roughness");
 }
 
 }  // namespace
