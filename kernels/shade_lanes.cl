@@ -1,17 +1,16 @@
 // Stage 3 for scenes whose surfaces are all triangles, Lambertian or
 // metallic-roughness without extensions (no textures, holes, other primitive
 // types, AOVs; the path integrator): the shade kernel over eight paths per
-// work-item on float8 lanes. PoCL runs a
-// work-group as a loop over its items and vectorises that loop only when the
-// body is scalar, straight-line code, which shade is not (float3 values,
-// loops, atomics), so the work-items are made wide by hand. The same
-// estimator as shade.cl, term for term: the miss, emission hits, the light
-// tree and lights other than triangles and rectangles take shade.cl's scalar
-// functions one lane at a time; the rest (the surface, light picking,
-// triangle and rectangle sampling, the Lambertian BSDF, roulette) runs on
-// all lanes at once, and so does the metallic-roughness BSDF without
-// extensions (GGX and the diffuse base, bsdf.cl's terms in its order). The host launches one work-item per WT_SHADE_LANES_WIDTH
-// queue entries.
+// work-item on float8 lanes. PoCL runs a work-group as a loop over its items
+// and vectorises that loop only when the body is scalar, straight-line code,
+// which shade is not (float3 values, loops, atomics), so the work-items are
+// made wide by hand. The same estimator as shade.cl, term for term: the
+// miss, emission hits, the light tree and lights other than triangles and
+// rectangles take shade.cl's scalar functions one lane at a time; the rest
+// (the surface, light picking, triangle and rectangle sampling, the
+// Lambertian BSDF, the metallic-roughness BSDF without extensions in
+// bsdf.cl's order, roulette) runs on all lanes at once. The host launches one
+// work-item per WT_SHADE_LANES_WIDTH queue entries.
 
 #define WT_SHADE_LANES_WIDTH 8
 
