@@ -1,15 +1,16 @@
-// Stage 3 for scenes whose surfaces are all Lambertian triangles (no
-// textures, holes, other primitive types, AOVs; the path integrator): the
-// shade kernel over eight paths per work-item on float8 lanes. PoCL runs a
-// work-group as a loop over its items and vectorises that loop only when the
-// body is scalar, straight-line code, which shade is not (float3 values,
-// loops, atomics), so the work-items are made wide by hand. The same
-// estimator as shade.cl, term for term: the miss, emission hits, the light
-// tree and lights other than triangles and rectangles take shade.cl's scalar
-// functions one lane at a time; the rest (the surface, light picking,
-// triangle and rectangle sampling, the Lambertian BSDF, roulette) runs on
-// all lanes at once. The host launches one work-item per WT_SHADE_LANES_WIDTH
-// queue entries.
+// Stage 3 for scenes whose surfaces are all triangles, Lambertian or
+// metallic-roughness without extensions (no textures, holes, other primitive
+// types, AOVs; the path integrator): the shade kernel over eight paths per
+// work-item on float8 lanes. PoCL runs a work-group as a loop over its items
+// and vectorises that loop only when the body is scalar, straight-line code,
+// which shade is not (float3 values, loops, atomics), so the work-items are
+// made wide by hand. The same estimator as shade.cl, term for term: the
+// miss, emission hits, the light tree and lights other than triangles and
+// rectangles take shade.cl's scalar functions one lane at a time; the rest
+// (the surface, light picking, triangle and rectangle sampling, the
+// Lambertian BSDF, the metallic-roughness BSDF without extensions in
+// bsdf.cl's order, roulette) runs on all lanes at once. The host launches one
+// work-item per WT_SHADE_LANES_WIDTH queue entries.
 
 #define WT_SHADE_LANES_WIDTH 8
 
@@ -526,6 +527,164 @@ inline float3 shade_lane_emission(WtFrameParams frame, EnvScene env, __global co
   return le * shade_emission_weight(frame, pdf_prev, pdf_light);
 }
 
+/// Counter c (x diffuse, y specular, z transmission) of each lane's path's bounce_counts.
+WT_LANES_INLINE uint8 gather_count8(__global const ushort4* bounce_counts, uint8 path, uint c) {
+  __global const ushort* cf = (__global const ushort*)bounce_counts;
+  uint8 i = 4u * path + c;
+  return convert_uint8((ushort8)(cf[i.s0], cf[i.s1], cf[i.s2], cf[i.s3], cf[i.s4], cf[i.s5], cf[i.s6], cf[i.s7]));
+}
+
+#if WT_HAS_PBR
+// ---- bsdf.cl's metallic-roughness BSDF on lanes, for scenes without its
+// extensions (switches.h): the base's GGX reflection (metal, and the
+// dielectric's F0 WT_PBR_DIELECTRIC_F0) with its multiple scattering over the
+// diffuse base; shared/ggx.h and shared/materials.h term for term.
+
+WT_LANES_INLINE float8 ggx_d8(V8 h, float8 alpha) {
+  float8 a2 = alpha * alpha;
+  float8 t = (h.x * h.x + h.y * h.y) / a2 + h.z * h.z;
+  return select(1.0f / (WT_GGX_PI * a2 * t * t), (float8)(0.0f), h.z <= 0.0f);
+}
+WT_LANES_INLINE float8 ggx_lambda8(V8 v, float8 alpha) {
+  float8 z2 = v.z * v.z;
+  float8 a2_tan2 = alpha * alpha * (v.x * v.x + v.y * v.y) / z2;
+  return select(0.5f * (sqrt(1.0f + a2_tan2) - 1.0f), (float8)(INFINITY), z2 <= 0.0f);
+}
+/// ggx_schlick(0, c): (1 - c)^5
+WT_LANES_INLINE float8 ggx_schlick_m5_8(float8 c) {
+  float8 m = fmin(fmax(1.0f - c, 0.0f), 1.0f);
+  float8 m2 = m * m;
+  return m2 * m2 * m;
+}
+WT_LANES_INLINE V8 ggx_sample_visible_normal8(V8 v, float8 alpha, float8 u1, float8 u2) {
+  V8 sv = v8_normalize(v8(alpha * v.x, alpha * v.y, v.z));
+  float8 lensq = sv.x * sv.x + sv.y * sv.y;
+  float8 inv = 1.0f / sqrt(lensq);
+  int8 tilted = lensq > 0.0f;
+  float8 t1x = select((float8)(1.0f), -sv.y * inv, tilted), t1y = select((float8)(0.0f), sv.x * inv, tilted);
+  float8 t2x = -sv.z * t1y, t2y = sv.z * t1x, t2z = sv.x * t1y - sv.y * t1x;
+  float8 cos_phi;
+  float8 sin_phi = wt_sincospi8(2.0f * u2, &cos_phi);
+  float8 r = sqrt(u1);
+  float8 p1 = r * cos_phi, p2 = r * sin_phi;
+  float8 s = 0.5f * (1.0f + sv.z);
+  p2 = (1.0f - s) * sqrt(fmax(0.0f, 1.0f - p1 * p1)) + s * p2;
+  float8 p3 = sqrt(fmax(0.0f, 1.0f - p1 * p1 - p2 * p2));
+  V8 n = v8(p1 * t1x + p2 * t2x + p3 * sv.x, p1 * t1y + p2 * t2y + p3 * sv.y, p2 * t2z + p3 * sv.z);
+  return v8_normalize(v8(alpha * n.x, alpha * n.y, fmax(n.z, 0.0f)));
+}
+
+/// pbr_table_lookup of each lane's (mu, row).
+WT_LANES_INLINE float8 pbr_table_lookup8(__global const float* table, uint offset, float8 mu, float8 y) {
+  float8 x = sqrt(fmin(fmax(mu, 0.0f), 1.0f)) * (float)(WT_PBR_TABLE_N - 1);
+  uint8 x0 = convert_uint8(fmin(x, (float)(WT_PBR_TABLE_N - 2))), y0 = convert_uint8(fmin(y, (float)(WT_PBR_TABLE_N - 2)));
+  float8 fx = x - convert_float8(x0), fy = y - convert_float8(y0);
+  uint8 i = y0 * WT_PBR_TABLE_N + x0;
+  float8 r00 = gather_f(table, i, 1u, offset), r01 = gather_f(table, i, 1u, offset + 1u);
+  float8 r10 = gather_f(table, i, 1u, offset + WT_PBR_TABLE_N), r11 = gather_f(table, i, 1u, offset + WT_PBR_TABLE_N + 1u);
+  float8 a = r00 + fx * (r01 - r00);
+  float8 b = r10 + fx * (r11 - r10);
+  return a + fy * (b - a);
+}
+/// pbr_table_average at each lane's row.
+WT_LANES_INLINE float8 pbr_table_average8(__global const float* table, uint offset, float8 y) {
+  uint8 y0 = convert_uint8(fmin(y, (float)(WT_PBR_TABLE_N - 2)));
+  float8 fy = y - convert_float8(y0);
+  float8 a = gather_f(table, y0, 1u, offset), b = gather_f(table, y0, 1u, offset + 1u);
+  return a + fy * (b - a);
+}
+
+/// A metallic-roughness material at the lanes' hits with its view of wo
+/// (Bsdf and PbrView without the layers), and its techniques' probabilities.
+typedef struct Pbr8 {
+  V8 base;
+  float8 metallic, alpha, row;  ///< row: the tables' (pbr_table_roughness_coord)
+  int8 mirror;
+  float8 e, s, spec_ss;         ///< PbrView's
+  float8 e_avg, s_avg;          ///< base_average's
+  float8 t_specular, t_diffuse; ///< bsdf_techniques'
+} Pbr8;
+
+/// pbr_moments at cosines mu: E and S.
+WT_LANES_INLINE float8 pbr_moments8(__global const float* table, Pbr8 b, float8 mu, float8* s) {
+  *s = select(pbr_table_lookup8(table, WT_PBR_TABLE_S, mu, b.row), ggx_schlick_m5_8(mu), b.mirror);
+  return select(pbr_table_lookup8(table, WT_PBR_TABLE_E, mu, b.row), (float8)(1.0f), b.mirror);
+}
+/// pbr_dielectric_albedo for F0 WT_PBR_DIELECTRIC_F0 and specular 1.
+WT_LANES_INLINE float8 pbr_dielectric_albedo8(float8 e, float8 s, float8 fms) {
+  return WT_PBR_DIELECTRIC_F0 * e + (1.0f - WT_PBR_DIELECTRIC_F0) * s + fms * (1.0f - e);
+}
+
+/// bsdf_make, pbr_view and bsdf_techniques at local wo for the lanes' materials.
+WT_LANES_INLINE Pbr8 pbr_make8(__global const WtMaterial* materials, __global const float* table, uint8 material, V8 base,
+                               float8 wo_z, int8 diffuse, int8 specular) {
+  __global const float* mf = (__global const float*)materials;
+  const uint mstride = sizeof(WtMaterial) / sizeof(float);
+  Pbr8 b;
+  b.base = base;
+  b.metallic = gather_f(mf, material, mstride, 3u);
+  float8 roughness = gather_f(mf, material, mstride, __builtin_offsetof(WtMaterial, roughness) / sizeof(float));
+  b.alpha = roughness * roughness;
+  b.mirror = roughness < WT_PBR_MIN_ROUGHNESS;
+  b.row = sqrt(fmin(fmax((roughness - WT_PBR_MIN_ROUGHNESS) / (1.0f - WT_PBR_MIN_ROUGHNESS), 0.0f), 1.0f)) *
+          (float)(WT_PBR_TABLE_N - 1);
+  b.e = pbr_moments8(table, b, wo_z, &b.s);
+  b.spec_ss = pbr_dielectric_albedo8(b.e, b.s, (float8)(0.0f));
+  b.e_avg = select(pbr_table_average8(table, WT_PBR_TABLE_E_AVG, b.row), (float8)(1.0f), b.mirror);
+  b.s_avg = select(pbr_table_average8(table, WT_PBR_TABLE_S_AVG, b.row), (float8)(1.0f / 21.0f), b.mirror);
+  float8 opaque = 1.0f - b.metallic;
+  float8 t_spec = select((float8)(0.0f), b.metallic * b.e + opaque * b.spec_ss, specular);
+  float8 t_diff = select((float8)(0.0f),
+                         b.metallic * (1.0f - b.e) + opaque * (0.2126f * ((1.0f - b.spec_ss) * base.x) +
+                                                               0.7152f * ((1.0f - b.spec_ss) * base.y) +
+                                                               0.0722f * ((1.0f - b.spec_ss) * base.z)),
+                         diffuse);
+  float8 sum = t_spec + t_diff;
+  int8 some = sum > 0.0f;
+  b.t_specular = select((float8)(0.0f), t_spec / sum, some);
+  b.t_diffuse = select((float8)(0.0f), t_diff / sum, some);
+  return b;
+}
+
+/// pbr_eval: f |cos| for local wo, wi of the lanes' materials; *pdf the mixture's density.
+WT_LANES_INLINE V8 pbr_eval8(Pbr8 b, V8 wo, V8 wi, int8 diffuse, int8 specular, __global const float* table, float8* pdf) {
+  int8 ok = wo.z > 0.0f && wi.z > 0.0f;
+  V8 h = v8_normalize(v8_add(wo, wi));
+  float8 oh = fmax(v8_dot(wo, h), 0.0f);
+  float8 m5 = ggx_schlick_m5_8(oh);
+  float8 s_i;
+  float8 e_i = pbr_moments8(table, b, wi.z, &s_i);
+  const float f_avg = WT_PBR_DIELECTRIC_F0 + (1.0f - WT_PBR_DIELECTRIC_F0) / 21.0f;
+  float8 fms = f_avg * f_avg * b.e_avg / (1.0f - f_avg * (1.0f - b.e_avg));
+  float8 opaque = 1.0f - b.metallic;
+  // the GGX lobe and its multiple scattering
+  int8 spec = ok && specular && !b.mirror;
+  float8 d = ggx_d8(h, b.alpha);
+  float8 dv = d * (1.0f / (1.0f + ggx_lambda8(wo, b.alpha) + ggx_lambda8(wi, b.alpha))) / (4.0f * wo.z * wi.z);
+  V8 f_metal = v8_add(b.base, v8_scale(v8_sub(v8_splat((float3)(1.0f)), b.base), m5));
+  float8 f_dielectric = WT_PBR_DIELECTRIC_F0 + (1.0f - WT_PBR_DIELECTRIC_F0) * m5;
+  V8 f = v8(( b.metallic * f_metal.x + opaque * f_dielectric) * dv, (b.metallic * f_metal.y + opaque * f_dielectric) * dv,
+         (b.metallic * f_metal.z + opaque * f_dielectric) * dv);
+  float8 ms = (1.0f - b.e) * (1.0f - e_i) / (WT_PI * fmax(1.0f - b.e_avg, 1e-6f));
+  V8 fa = v8_add(b.base, v8_scale(v8_sub(v8_splat((float3)(1.0f)), b.base), 1.0f / 21.0f));
+  V8 fms_metal = v8(fa.x * fa.x * b.e_avg / (1.0f - fa.x * (1.0f - b.e_avg)), fa.y * fa.y * b.e_avg / (1.0f - fa.y * (1.0f - b.e_avg)),
+                    fa.z * fa.z * b.e_avg / (1.0f - fa.z * (1.0f - b.e_avg)));
+  f = v8_add(f, v8(( b.metallic * fms_metal.x + opaque * fms) * ms, (b.metallic * fms_metal.y + opaque * fms) * ms,
+                   (b.metallic * fms_metal.z + opaque * fms) * ms));
+  f = v8_select(v8_splat((float3)(0.0f)), f, spec);
+  float8 pdf_spec = select((float8)(0.0f), (1.0f / (1.0f + ggx_lambda8(wo, b.alpha))) * d / (4.0f * wo.z), spec);
+  // the diffuse base under what the GGX lobe leaves, both ways
+  int8 diff = ok && diffuse;
+  float8 spec_avg = WT_PBR_DIELECTRIC_F0 * b.e_avg + (1.0f - WT_PBR_DIELECTRIC_F0) * b.s_avg + fms * (1.0f - b.e_avg);
+  float8 spec_o = pbr_dielectric_albedo8(b.e, b.s, fms), spec_i = pbr_dielectric_albedo8(e_i, s_i, fms);
+  float8 keep = (1.0f / WT_PI) * (1.0f - spec_o) * (1.0f - spec_i) / fmax(1.0f - spec_avg, 1e-6f);
+  f = v8_add(f, v8_select(v8_splat((float3)(0.0f)), v8_scale(v8_scale(b.base, opaque), keep), diff));
+  float8 pdf_diffuse = select((float8)(0.0f), wi.z / WT_PI, diff);
+  *pdf = select((float8)(0.0f), b.t_specular * pdf_spec + b.t_diffuse * pdf_diffuse, ok);
+  return v8_scale(f, wi.z);
+}
+#endif
+
 WT_KERNEL void shade(WT_SHADE_KERNEL_PARAMS) {
   const uint count = counters[in_slot];
   const uint first = get_global_id(0) * WT_SHADE_LANES_WIDTH;
@@ -629,13 +788,24 @@ WT_KERNEL void shade(WT_SHADE_KERNEL_PARAMS) {
   V8 frame_t, frame_b;
   frame_from_normal8(ns, &frame_t, &frame_b);
   float8 wo_z = v8_dot(wo, ns);
-  __global const ushort* cf = (__global const ushort*)bounce_counts;
-  uint8 diffuse_count = convert_uint8((ushort8)(cf[4 * path.s0], cf[4 * path.s1], cf[4 * path.s2], cf[4 * path.s3],
-                                               cf[4 * path.s4], cf[4 * path.s5], cf[4 * path.s6], cf[4 * path.s7]));
   // a Lambertian surface scatters by its diffuse lobe alone: past its limit
   // neither light sampling nor the BSDF finds anything (shade.cl's lobes)
-  int8 diffuse = diffuse_count < frame.max_diffuse_bounces;
+  int8 diffuse = gather_count8(bounce_counts, path, 0u) < frame.max_diffuse_bounces;
+#if WT_HAS_PBR
+  // a metallic-roughness one by the lobes shade.cl allows its path
+  int8 pbr = active && gather_u((__global const uint*)mf, material, mstride,
+                                __builtin_offsetof(WtMaterial, model) / sizeof(float)) == WT_MATERIAL_PBR;
+  uint8 lobes = (as_uint8(diffuse) & WT_LOBE_DIFFUSE) |
+                (as_uint8(gather_count8(bounce_counts, path, 1u) < frame.max_specular_bounces) & WT_LOBE_SPECULAR) |
+                (as_uint8(gather_count8(bounce_counts, path, 2u) < frame.max_transmission_bounces) & WT_LOBE_TRANSMISSION);
+  int8 specular = (lobes & WT_LOBE_SPECULAR) != 0u;
+  active = active && (diffuse || (pbr && specular));
+  V8 wo_local = v8(v8_dot(wo, frame_t), v8_dot(wo, frame_b), wo_z);
+  Pbr8 mat;
+  if (any(pbr)) mat = pbr_make8(materials, pbr_table, material, base, wo_z, diffuse, specular);
+#else
   active = active && diffuse;
+#endif
   if (!any(active)) return;
   V8 origin = ray_offset_origin8(p, p_error, ng);
   float8 u_pick, u_rr, u_lobe, u_tree;
@@ -711,6 +881,16 @@ WT_KERNEL void shade(WT_SHADE_KERNEL_PARAMS) {
     int8 eval_ok = connect && diffuse && wo_z > 0.0f && wi_z > 0.0f;
     float8 pdf_bsdf = select((float8)(0.0f), wi_z / WT_PI, eval_ok);
     V8 f_cos = v8_select(v8_splat((float3)(0.0f)), v8_scale(base, wi_z / WT_PI), eval_ok);
+#if WT_HAS_PBR
+    int8 pbr_connect = connect && pbr;
+    if (any(pbr_connect)) {
+      float8 pdf_pbr;
+      V8 f_pbr = pbr_eval8(mat, wo_local, v8(v8_dot(s.wi, frame_t), v8_dot(s.wi, frame_b), wi_z), diffuse, specular,
+                           pbr_table, &pdf_pbr);
+      f_cos = v8_select(f_cos, f_pbr, pbr_connect);
+      pdf_bsdf = select(pdf_bsdf, pdf_pbr, pbr_connect);
+    }
+#endif
     float8 pdf_light = s.pdf * pmf;
     float8 a = pdf_light, b = pdf_bsdf;
     if (frame.flags & WT_FLAG_POWER_HEURISTIC) a *= a, b *= b;
@@ -749,13 +929,44 @@ WT_KERNEL void shade(WT_SHADE_KERNEL_PARAMS) {
   float8 cos_phi;
   float8 sin_phi = wt_sincospi8(2.0f * u_b2, &cos_phi);
   float8 r = sqrt(u_b1);
-  float8 wl_x = r * cos_phi, wl_y = r * sin_phi, wl_z = sqrt(fmax(0.0f, 1.0f - u_b1));
-  float8 pdf = wl_z / WT_PI;
-  V8 f_cos = v8_scale(base, wl_z / WT_PI);
-  int8 go = active && diffuse && wo_z > 0.0f && wl_z > 0.0f && pdf > 0.0f && v8_positive(f_cos);
-  V8 wi = v8_add(v8_add(v8_scale(frame_t, wl_x), v8_scale(frame_b, wl_y)), v8_scale(ns, wl_z));
+  V8 wl = v8(r * cos_phi, r * sin_phi, sqrt(fmax(0.0f, 1.0f - u_b1)));
+  float8 pdf = wl.z / WT_PI;
+  V8 f_cos = v8_scale(base, wl.z / WT_PI);
+  int8 go = active && diffuse && wo_z > 0.0f && wl.z > 0.0f && pdf > 0.0f && v8_positive(f_cos);
+  V8 weight = v8_div(f_cos, pdf);
+#if WT_HAS_PBR
+  // or the metallic-roughness BSDF's techniques
+  uint8 lobe = (uint8)(WT_LOBE_DIFFUSE);
+  int8 pbr_go = active && pbr;
+  if (any(pbr_go)) {
+    // bsdf_sample: the GGX lobe (or its mirror) or the cosine lobe by u_lobe
+    int8 glossy = u_lobe < mat.t_specular;
+    int8 delta = glossy && mat.mirror;
+    V8 h = ggx_sample_visible_normal8(wo_local, mat.alpha, u_b1, u_b2);
+    V8 reflected = v8_sub(v8_scale(h, 2.0f * v8_dot(wo_local, h)), wo_local);
+    V8 w = v8_select(wl, v8_select(reflected, v8(-wo_local.x, -wo_local.y, wo_local.z), delta), glossy);
+    float8 pdf_pbr;
+    V8 f_pbr = pbr_eval8(mat, wo_local, w, diffuse, specular, pbr_table, &pdf_pbr);
+    int8 ok = pbr_go && wo_z > 0.0f && w.z > 0.0f && (glossy || (diffuse && mat.t_diffuse > 0.0f)) && pdf_pbr > 0.0f &&
+              v8_positive(f_pbr);
+    // the mirror: F at mu_o over the probability of its technique (pbr_mirror)
+    float8 m5 = ggx_schlick_m5_8(wo_local.z);
+    float8 opaque = 1.0f - mat.metallic;
+    float8 fd = WT_PBR_DIELECTRIC_F0 + (1.0f - WT_PBR_DIELECTRIC_F0) * m5;
+    V8 f_mirror = v8(mat.metallic * (mat.base.x + (1.0f - mat.base.x) * m5) + opaque * fd,
+                     mat.metallic * (mat.base.y + (1.0f - mat.base.y) * m5) + opaque * fd,
+                     mat.metallic * (mat.base.z + (1.0f - mat.base.z) * m5) + opaque * fd);
+    int8 ok_delta = pbr_go && wo_z > 0.0f && mat.t_specular > 0.0f && w.z > 0.0f && v8_positive(f_mirror);
+    wl = v8_select(wl, w, pbr);
+    weight = v8_select(weight, v8_select(v8_div(f_pbr, pdf_pbr), v8_div(f_mirror, mat.t_specular), delta), pbr);
+    pdf = select(pdf, select(pdf_pbr, (float8)(0.0f), delta), pbr);
+    lobe = select(lobe, select((uint8)(WT_LOBE_DIFFUSE), (uint8)(WT_LOBE_SPECULAR), glossy), pbr);
+    go = select(go, select(ok, ok_delta, delta), pbr);
+  }
+#endif
+  V8 wi = v8_add(v8_add(v8_scale(frame_t, wl.x), v8_scale(frame_b, wl.y)), v8_scale(ns, wl.z));
   go = go && v8_dot(wi, ng) > 0.0f;
-  beta = v8_mul(beta, v8_div(f_cos, pdf));
+  beta = v8_mul(beta, weight);
   if ((frame.flags & WT_FLAG_RR) && frame.bounce >= frame.rr_min_depth) {
     float8 q = fmin(fmax(beta.x, fmax(beta.y, beta.z)), 0.95f);
     go = go && u_rr < q;
@@ -776,7 +987,12 @@ WT_KERNEL void shade(WT_SHADE_KERNEL_PARAMS) {
     if (!lane_i(go, k)) continue;
     uint pk = lane_u(path, k);
     ushort4 counts = bounce_counts[pk];
+#if WT_HAS_PBR
+    if (lane_u(lobe, k) & WT_LOBE_DIFFUSE) counts.x++;
+    else counts.y++;
+#else
     counts.x++;
+#endif
     bounce_counts[pk] = counts;
     ray_skip[pk] = lane_u(prim, k);
     ++survivors;

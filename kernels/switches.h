@@ -140,16 +140,17 @@
 #error "WT_BVH_COST needs WT_AOV (the count goes to aov_sample)"
 #endif
 // Shade over eight paths per work-item on float8 lanes (kernels/shade_lanes.cl):
-// only for Lambertian triangles without textures, vertex colours, holes,
-// other primitive types or AOVs, under the path integrator.
+// only for triangles, Lambertian or metallic-roughness without extensions,
+// textures, vertex colours, holes or AOVs, under the path integrator.
 #ifndef WT_SHADE_LANES
 #error "WT_SHADE_LANES not set (kernelDefines)"
 #elif !WT_SWITCH_IS_BOOL(WT_SHADE_LANES)
 #error "WT_SHADE_LANES must be 0 or 1"
-#elif WT_SHADE_LANES && (WT_HAS_PBR || WT_HAS_TEXTURES || WT_HAS_VERTEX_COLORS || WT_HAS_ALPHA || WT_AOV || \
+#elif WT_SHADE_LANES && (WT_HAS_TRANSMISSION || WT_HAS_SPECULAR || WT_HAS_CLEARCOAT || WT_HAS_SHEEN || \
+                         WT_HAS_ANISOTROPY || WT_HAS_IRIDESCENCE || WT_HAS_THIN_SHADOWS || WT_HAS_TEXTURES || WT_HAS_VERTEX_COLORS || WT_HAS_ALPHA || WT_AOV || \
                          WT_INTEGRATOR_MINIMAL || WT_HAS_SPHERES || WT_HAS_CURVES || WT_HAS_INSTANCES || \
                          WT_HAS_SDF_GRIDS || WT_HAS_DISPLACED)
-#error "WT_SHADE_LANES needs Lambertian triangles alone under the path integrator"
+#error "WT_SHADE_LANES needs untextured Lambertian or plain metallic-roughness triangles under the path integrator"
 #endif
 
 // Not features (the image is the same either way), so they may be left out

@@ -58,7 +58,8 @@ struct KernelFeatures {
   bool bvhCost = false;
   /// WT_SHADE_LANES: shade runs eight paths per work-item on float8 lanes
   /// (kernels/shade_lanes.cl); set by the renderer (renderKernelFeatures)
-  /// where every surface is a Lambertian triangle, and launched over a
+  /// where every surface is a triangle, Lambertian or metallic-roughness
+  /// without extensions or textures, and launched over a
   /// work-item per kShadeLanes queue entries
   bool shadeLanes = false;
 };

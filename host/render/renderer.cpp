@@ -249,9 +249,11 @@ KernelFeatures renderKernelFeatures(const FeatureSet& features, const DeviceInfo
                                              : kernelFeaturesFor(features, device, settings.packetWidth);
   k.aov = settings.aovs;
   k.bvhCost = settings.aovs && settings.bvhCost;
-  // shade on float8 lanes where every surface is a Lambertian triangle (kernels/shade_lanes.cl)
-  k.shadeLanes = settings.shadeLanes && !settings.generalProgram && !k.integratorMinimal && !k.pbr && !k.textures &&
-                 !k.vertexColors && !k.alpha && !k.aov &&
+  // shade on float8 lanes where every surface is a triangle, Lambertian or
+  // metallic-roughness without extensions (kernels/shade_lanes.cl)
+  k.shadeLanes = settings.shadeLanes && !settings.generalProgram && !k.integratorMinimal && !k.transmission &&
+                 !k.thinShadows && !k.specular && !k.clearcoat && !k.sheen && !k.anisotropy && !k.iridescence &&
+                 !k.textures && !k.vertexColors && !k.alpha && !k.aov &&
                  std::none_of(k.primitives.begin(), k.primitives.end(), [](bool on) { return on; });
   // streams ask for a node's children early where the scene outgrows the cache (as the Tracer's)
   k.streamPrefetch = streamPrefetchFor(device, buffers.uploadedBytes);

@@ -70,8 +70,8 @@ struct RenderSettings {
   /// two triangle lights, as before.
   bool quadLights = true;
   /// Developer setting (A/B, tests): shade runs eight paths per work-item on
-  /// float8 lanes where every surface is a Lambertian triangle
-  /// (KernelFeatures::shadeLanes); false: one path per work-item, as shade.cl.
+  /// float8 lanes where every surface is a triangle, Lambertian or plain
+  /// metallic-roughness (KernelFeatures::shadeLanes); false: one path per work-item, as shade.cl.
   bool shadeLanes = true;
   std::uint32_t accumulation = WT_ACCUMULATE_KAHAN;  ///< WT_ACCUMULATE_* (double needs fp64)
   BvhBuilder bvhBuilder = BvhBuilder::Auto;  ///< which tree the scene's BVH is (host/bvh/builders.h)

@@ -159,6 +159,20 @@ TEST(QuadLights, RenderTheSameAsTheirTriangles) {
   }
 }
 
+/// Renders `scene` on shade's lanes (seed `seed`) and one path per work-item
+/// (seed + 1), 256 spp each, and expects the same image (4 x 4 blocks, z 4.5);
+/// the worst |z|.
+double shadeLanesAgainstOnePath(const Scene& scene, RenderSettings settings, std::uint32_t seed, const char* what) {
+  settings.seed = seed;
+  const Image lanes = test::render(scene, settings, 256);
+  settings.shadeLanes = false;
+  settings.seed = seed + 1;
+  const Image single = test::render(scene, settings, 256);
+  const double worst = test::expectSameImage(lanes, single, 4, 4.5, what);
+  std::printf("shade on lanes against one path per work-item (%s): worst |z| %.2f\n", what, worst);
+  return worst;
+}
+
 // Shade on float8 lanes (kernels/shade_lanes.cl, RenderSettings::shadeLanes)
 // against one path per work-item (shade.cl): the same image within noise
 // (4 x 4 blocks, z 4.5 from the two renders' own variances). The scene has
@@ -196,16 +210,40 @@ TEST(QuadLights, ShadeLanesRenderTheSameAsOnePathPerWorkItem) {
     settings.rrMinDepth = 1;  // roulette where it weighs
     settings.lightSampler = sampler;
     settings.background = glm::vec3(0.2f, 0.25f, 0.3f);
-    settings.seed = 21;
-    const Image lanes = test::render(scene, settings, 256);
-    settings.shadeLanes = false;
-    settings.seed = 22;
-    const Image single = test::render(scene, settings, 256);
-    const double worst = test::expectSameImage(lanes, single, 4, 4.5,
-                                               sampler == LightSampler::Power ? "lights by power" : "light tree");
-    std::printf("shade on lanes against one path per work-item (%s): worst |z| %.2f\n",
-                sampler == LightSampler::Power ? "power" : "tree", worst);
+    shadeLanesAgainstOnePath(scene, settings, 21, sampler == LightSampler::Power ? "lights by power" : "light tree");
   }
+}
+
+// The same for metallic-roughness surfaces (kernels/shade_lanes.cl's GGX on
+// lanes) beside a Lambertian one: a rough copper floor under the rectangles
+// (where light sampling and the BSDF share by MIS), a rough dielectric (GGX
+// over its diffuse base), a near-mirror half-metal (a delta lobe picked
+// against a diffuse one) and a rough half-metal, also lit by a point light,
+// with the diffuse and specular bounce limits apart so that a path's lobes
+// run out one at a time.
+TEST(QuadLights, ShadeLanesRenderMetallicRoughnessTheSameAsOnePathPerWorkItem) {
+  Scene scene = quadLitScene();
+  scene.materials[0] = makePbrMaterial(glm::vec3(0.95f, 0.64f, 0.54f), 1.0f, 0.5f);
+  const std::uint32_t plastic = addMaterial(scene, makePbrMaterial(glm::vec3(0.2f, 0.4f, 0.8f), 0.0f, 0.5f), "plastic");
+  const std::uint32_t mirror = addMaterial(scene, makePbrMaterial(glm::vec3(0.9f), 0.5f, 0.01f), "mirror");
+  const std::uint32_t half = addMaterial(scene, makePbrMaterial(glm::vec3(0.7f, 0.7f, 0.3f), 0.5f, 0.7f), "half");
+  const std::uint32_t white = addMaterial(scene, makeMaterial(glm::vec3(0.8f)), "white");
+  addRect(scene, {-2.0f, 0.0f, -1.2f}, {0.0f, 1.5f, 0.0f}, {2.0f, 0.0f, 0.0f}, plastic);
+  addRect(scene, {0.0f, 0.0f, -1.2f}, {0.0f, 1.5f, 0.0f}, {2.0f, 0.0f, 0.0f}, mirror);
+  addRect(scene, {-1.2f, 0.0f, 0.4f}, {0.0f, 0.0f, 0.5f}, {0.0f, 0.6f, 0.0f}, white);
+  addRect(scene, {1.2f, 0.0f, 0.4f}, {0.0f, 0.6f, 0.0f}, {0.0f, 0.0f, 0.5f}, half);
+  PunctualLight point;
+  point.position = glm::vec3(-1.0f, 1.2f, 1.0f);
+  point.intensity = glm::vec3(0.6f, 0.8f, 1.0f);
+  scene.lights.push_back(point);
+  RenderSettings settings;
+  settings.width = settings.height = 32;
+  settings.maxBounces = 3;
+  settings.maxDiffuseBounces = 1;
+  settings.maxSpecularBounces = 2;
+  settings.rrMinDepth = 1;
+  settings.background = glm::vec3(0.2f, 0.25f, 0.3f);
+  shadeLanesAgainstOnePath(scene, settings, 31, "metallic-roughness");
 }
 
 }  // namespace
