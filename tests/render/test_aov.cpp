@@ -184,7 +184,10 @@ TEST(Aov, RenderWithoutAovsIsUnchangedAndAllocatesNone) {
   // without AOVs their buffers hold one element each.
   Scene scene = mirrorScene(0.3f, glm::vec3(0.2f, 0.5f, 0.7f));
   appendScene(scene, test::makeFloor(0.3f, kHeight * 1.5f, makeMaterial(glm::vec3(0.0f), glm::vec3(5.0f)), true));
-  Renderer plain(test::deviceContext(), scene, aovSettings(false));
+  // shade's lanes take no AOVs (renderKernelFeatures): both one path per work-item
+  RenderSettings noAovs = aovSettings(false);
+  noAovs.shadeLanes = false;
+  Renderer plain(test::deviceContext(), scene, noAovs);
   Renderer withAovs(test::deviceContext(), scene, aovSettings(true));
   for (int s = 0; s < 3; ++s) plain.renderSample(), withAovs.renderSample();
   Image a = plain.readImage(), b = withAovs.readImage();
