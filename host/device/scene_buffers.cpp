@@ -368,6 +368,7 @@ SceneBuffers::SceneBuffers(Context& context, const Scene& scene, const BvhBuildO
     const WtTriangle& t = scene.triangles[m_leafToScene[i]];
     info[i] = {t.v0, t.v1, t.v2, t.material};
   }
+  m_storedTriangles = triangles;
   std::size_t bytes = 0;
   nodes = upload(context, allNodes, bytes);
   triVerts = upload(context, blocks, bytes);

@@ -220,6 +220,8 @@ class SceneBuffers {
   std::size_t geometryBytes() const { return uploadedBytes + primitiveBytes + m_attributeBytes; }
   /// Triangles left out of the BVH (zero area or non-finite vertices).
   std::size_t skippedTriangles() const { return m_skippedTriangles; }
+  /// Triangles in triVerts and triangleInfo (leaf order; 0: both hold one dummy entry).
+  std::size_t storedTriangles() const { return m_storedTriangles; }
   /// Traversal stack entries the BVH needs, for KernelFeatures::bvhStackSize.
   int stackSize() const;
 
@@ -249,6 +251,7 @@ class SceneBuffers {
   std::vector<std::uint32_t> m_leafToScene;
   std::vector<std::uint32_t> m_sceneToLeaf;
   std::size_t m_skippedTriangles = 0;
+  std::size_t m_storedTriangles = 0;
   Bvh4Stats m_primStats;
   std::array<std::size_t, WT_PRIM_TYPES> m_primitiveCount{};
   std::size_t m_skippedPrimitives = 0;

@@ -250,8 +250,10 @@ KernelFeatures renderKernelFeatures(const FeatureSet& features, const DeviceInfo
   k.aov = settings.aovs;
   k.bvhCost = settings.aovs && settings.bvhCost;
   // shade on float8 lanes where every surface is a triangle, Lambertian or
-  // metallic-roughness without extensions (kernels/shade_lanes.cl)
-  k.shadeLanes = settings.shadeLanes && !settings.generalProgram && !k.integratorMinimal && !k.transmission &&
+  // metallic-roughness without extensions (kernels/shade_lanes.cl; its misses
+  // read triangle 0, so there must be one)
+  k.shadeLanes = settings.shadeLanes && !settings.generalProgram && buffers.storedTriangles() > 0 &&
+                 !k.integratorMinimal && !k.transmission &&
                  !k.thinShadows && !k.specular && !k.clearcoat && !k.sheen && !k.anisotropy && !k.iridescence &&
                  !k.textures && !k.vertexColors && !k.alpha && !k.aov &&
                  std::none_of(k.primitives.begin(), k.primitives.end(), [](bool on) { return on; });
