@@ -95,6 +95,17 @@ waitForFile() {
   done
   fail "no $1 after 120 s"
 }
+# kill rank process $1 of the job $2 0.3 s from now and wait for the job,
+# which must end (timeout's 124 means it did not within $3 s) non-zero;
+# $4: its log. Sets status.
+killRankAndWait() {
+  sleep 0.3
+  kill -9 "$1"
+  wait "$2"
+  status=$?
+  [ $status -eq 124 ] && fail "the job did not end within $3 s of rank 1 being killed: $(cat "$4")"
+  [ $status -ne 0 ] || fail "the job exited 0 after a rank was killed"
+}
 
 if [ "$mode" = devices ]; then
   "$exe" render "${common[@]}" -v --spp 24 --chunk-spp 3 --device 0,0 -o "$dir/two.exr" >"$dir/two.log" 2>&1 ||
@@ -178,12 +189,7 @@ if [ "$mode" = hosts ]; then
     tr '\0' '\n' <"/proc/$p/environ" 2>/dev/null | grep -qx OMPI_COMM_WORLD_RANK=1 && echo "$p"; done)
   [ -n "$rank1" ] || fail "rank 1's process not found: $(cat "$dir/killed.log")"
   [ "$(cat "/proc/$(awk '{print $4}' "/proc/$rank1/stat")/comm")" = orted ] || fail "rank 1 is not orted's child"
-  sleep 0.3
-  kill -9 "$rank1"
-  wait $job
-  status=$?
-  [ $status -eq 124 ] && fail "the job did not end within 60 s of rank 1 being killed: $(cat "$dir/killed.log")"
-  [ $status -ne 0 ] || fail "the job exited 0 after a rank was killed"
+  killRankAndWait "$rank1" $job 60 "$dir/killed.log"
   line=$(grep "^error: render failed after [0-9]* of 1000000 samples: rank 0 was blocked for [0-9.]* s inside Open MPI (.* rank 1 on host .*; the [0-9]* merged samples were written" "$dir/killed.log") ||
     fail "no error naming the block and rank 1, or nothing written: $(cat "$dir/killed.log")"
   done=$(echo "$line" | sed -E 's/.*render failed after ([0-9]+) of.*/\1/')
@@ -407,12 +413,7 @@ job=$!
 waitForFile "$dir/killed.exr.wtckpt" $job
 rank1=$(rankPid 1 $job)
 [ -n "$rank1" ] || fail "rank 1's process not found among mpirun's children: $(ps -o pid,ppid,stat,comm --ppid $job) $(cat "$dir/killed.log")"
-sleep 0.3
-kill -9 "$rank1"
-wait $job
-status=$?
-[ $status -eq 124 ] && fail "the job did not end within 120 s of rank 1 being killed: $(cat "$dir/killed.log")"
-[ $status -ne 0 ] || fail "the job exited 0 after a rank was killed"
+killRankAndWait "$rank1" $job 120 "$dir/killed.log"
 grep -q "stopped by a signal after [0-9]* of 1000000 samples (under mpirun also when a rank died" "$dir/killed.log" ||
   fail "no clear error: $(cat "$dir/killed.log")"
 grep -q "merged samples were written" "$dir/killed.log" || fail "nothing written: $(cat "$dir/killed.log")"
