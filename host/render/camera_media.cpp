@@ -41,7 +41,10 @@ WtMediaStack cameraMediaStack(const Scene& scene, glm::vec3 point) {
   const std::size_t count = scene.materials.size();
   std::vector<char> boundary(count, 0);
   bool any = false;
-  for (std::size_t m = 0; m < count; ++m) any |= bool(boundary[m] = char(media_is_boundary(scene.materials.data(), wt_uint(m))));
+  for (std::size_t m = 0; m < count; ++m) {
+    boundary[m] = char(media_is_boundary(scene.materials.data(), wt_uint(m)));
+    any |= boundary[m] != 0;
+  }
   if (!any) return stack;
 
   // per material: leaving minus entering crossings along each ray, and the nearest boundary
