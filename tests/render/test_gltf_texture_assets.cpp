@@ -13,8 +13,8 @@
 //     at the top and bluer on the left, whether it is geometry or a normal map.
 // World coordinates of quads, domes and spheres were computed from each
 // model's JSON and .bin with python3 (json + struct), as the comments say.
-// Alpha modes (MASK, BLEND) are not checked here: the loader draws them
-// OPAQUE for now, and only surfaces drawn OPAQUE in the file are measured.
+// Alpha modes (MASK, BLEND): AlphaBlendModeTest's panels against its
+// OPAQUE one, pixel by pixel.
 #include "render/render_helpers.h"
 #include "output/image_io.h"
 #include "scene/gltf_loader.h"
@@ -744,6 +744,125 @@ TEST(GltfTextureAssets, VertexColorTestMultipliesBaseColor) {
     std::printf("%s: leaks %d, shape %.3f, brightest %.3f\n", col.name, leaks, shape, brightest);
   }
   if (testing::Test::HasFailure()) ADD_FAILURE() << "render: " << keepImage(image, "VertexColorTest");
+}
+
+// ---------------------------------------------------------------------------
+// AlphaBlendModeTest
+
+// Five 1.1 x 1.87 panels facing +Z at z = 0 (AlphaBlendModeTest.bin), x
+// centres -3 (OPAQUE), -1.5 (BLEND), 0 (MASK, cutoff 0.25), 1.5 (MASK, the
+// default cutoff 0.5), 3 (MASK, 0.75), y in [0.1, 1.97], each showing
+// AlphaBlendLabels.png at u = 0.125 + (x - centre + 0.55) / 2, v = 0.05 +
+// (1.97 - y) / 2. For u in [0.3, 0.65] the texture's alpha rises down the
+// panel (0 near v 0.11, 1 near v 0.89) and is the same across it. The bed
+// behind the panels and the decals and arrows in front of them are removed,
+// so a hole shows the hidden environment: black. The OPAQUE panel's
+// radiance L at the same place on the panel predicts the others pixel by
+// pixel: a MASK panel shows L where alpha >= its cutoff and 0 below it, the
+// BLEND panel alpha L on average.
+TEST(GltfTextureAssets, AlphaBlendModeTestCutsAndBlendsAtTheTexturesAlpha) {
+  WT_REQUIRE_ASSET(dir, "gltf/AlphaBlendModeTest/glTF");
+  Scene scene = loadModel(dir / "AlphaBlendModeTest.gltf");
+  std::vector<WtTriangle> panels;
+  for (const WtTriangle& t : scene.triangles) {
+    bool inPlane = true;
+    for (std::uint32_t v : {t.v0, t.v1, t.v2}) inPlane = inPlane && std::abs(scene.positions[v].z) < 1e-4f;
+    if (inPlane && scene.materialNames[t.material] != "MatBed") panels.push_back(t);
+  }
+  ASSERT_EQ(panels.size(), 10u) << "expected the five panels' quads";
+  scene.triangles = panels;
+  scene.instances.clear();
+
+  // the texture's alpha (linear), read by stb_image
+  int tw = 0, th = 0, channels = 0;
+  stbi_set_flip_vertically_on_load(0);
+  unsigned char* texels = stbi_load((dir / "AlphaBlendLabels.png").c_str(), &tw, &th, &channels, 4);
+  ASSERT_NE(texels, nullptr);
+  std::vector<float> alphaRow(std::size_t(th), 0.0f);  // at u = 0.475, the gradient's middle
+  for (int y = 0; y < th; ++y) alphaRow[y] = texels[4 * (std::size_t(y) * tw + tw * 475 / 1000) + 3] / 255.0f;
+  stbi_image_free(texels);
+
+  const float ppu = 48.0f;  // 1.5 world units between panels: 72 whole pixels
+  const View view{{-3.625f, 0.0f}, {3.625f, 2.0f}, ppu};  // whole pixels: 348 x 96
+  const Image image = renderView(scene, view, whiteFurnace(), 16);
+  // alpha averaged over the pixel's rows of texels (8 points down the pixel)
+  auto pixelAlpha = [&](float y, float* lo, float* hi) {
+    double sum = 0.0;
+    *lo = 1.0f, *hi = 0.0f;
+    for (int j = 0; j < 8; ++j) {
+      const float yy = y + view.unitsPerPixel() * ((float(j) + 0.5f) / 8.0f - 0.5f);
+      const float v = 0.05f + (1.97f - yy) * 0.5f;
+      const float a = alphaRow[std::clamp(int(std::floor(v * float(th))), 0, th - 1)];
+      sum += a, *lo = std::min(*lo, a), *hi = std::max(*hi, a);
+    }
+    return float(sum / 8.0);
+  };
+  struct Panel {
+    const char* name;
+    float centre;
+    float cutoff;  ///< < 0: BLEND
+  };
+  const Panel tested[] = {{"BLEND", -1.5f, -1.0f}, {"MASK 0.25", 0.0f, 0.25f}, {"MASK 0.5", 1.5f, 0.5f},
+                          {"MASK 0.75", 3.0f, 0.75f}};
+  for (const Panel& panel : tested) {
+    SCOPED_TRACE(panel.name);
+    const int shift = int(std::lround((panel.centre + 3.0f) * ppu));  // pixels from the OPAQUE panel
+    // BLEND: six bands down the gradient; MASK: kept and cut pixels
+    const int kBands = 6;
+    glm::dvec3 blendSum[kBands] = {}, predictedSum[kBands] = {}, varSum[kBands] = {};
+    glm::dvec3 keptDiff(0.0), keptVar(0.0), keptLevel(0.0);
+    int kept = 0, cut = 0, cutLit = 0;
+    for (int y = 0; y < image.height; ++y)
+      for (int x = 0; x < image.width; ++x) {
+        const glm::vec2 p = view.world(x, y);
+        const float local = p.x - panel.centre;
+        if (local < -0.15f || local > 0.45f || p.y < 0.3f || p.y > 1.85f) continue;
+        const int xo = x - shift;
+        ASSERT_GE(xo, 0);
+        ASSERT_NEAR(view.world(xo, y).x + 3.0f, local, 1e-3f);
+        const std::size_t k = std::size_t(y) * image.width + x, ko = std::size_t(y) * image.width + xo;
+        float lo, hi;
+        const float a = pixelAlpha(p.y, &lo, &hi);
+        glm::dvec3 L, Lo, var, varo;
+        for (int c = 0; c < 3; ++c) {
+          L[c] = image.rgb[3 * k + c], Lo[c] = image.rgb[3 * ko + c];
+          var[c] = image.rgbVariance[3 * k + c] / std::max<std::uint32_t>(image.samples[k], 1);
+          varo[c] = image.rgbVariance[3 * ko + c] / std::max<std::uint32_t>(image.samples[ko], 1);
+        }
+        if (panel.cutoff < 0.0f) {
+          const int band = std::clamp(int((p.y - 0.3f) / (1.55f / kBands)), 0, kBands - 1);
+          blendSum[band] += L, predictedSum[band] += double(a) * Lo, varSum[band] += var + double(a) * a * varo;
+        } else if (lo >= panel.cutoff + 0.02f) {
+          ++kept, keptDiff += L - Lo, keptVar += var + varo, keptLevel += Lo;
+        } else if (hi <= panel.cutoff - 0.02f) {
+          ++cut;
+          if (L.x != 0.0 || L.y != 0.0 || L.z != 0.0) ++cutLit;
+        }
+      }
+    if (panel.cutoff < 0.0f) {
+      for (int b = 0; b < kBands; ++b)
+        std::printf("BLEND band %d: rendered %.2f, predicted %.2f (green), se %.3f\n", b, blendSum[b].y,
+                    predictedSum[b].y, std::sqrt(varSum[b].y));
+      for (int b = 0; b < kBands; ++b)
+        for (int c = 0; c < 3; ++c) {
+          // 5 standard errors, plus 1% for alpha and colour varying together
+          // inside a pixel (alpha moves 0.034 across one)
+          const double tolerance = 5.0 * std::sqrt(varSum[b][c]) + 0.01 * predictedSum[b][c];
+          EXPECT_NEAR(blendSum[b][c], predictedSum[b][c], tolerance)
+              << "band " << b << " (from y 0.3 up), channel " << c;
+        }
+    } else {
+      std::printf("%s: %d pixels kept (green differs by %.3f, se %.3f), %d cut (%d of them lit)\n", panel.name, kept,
+                  keptDiff.y, std::sqrt(keptVar.y), cut, cutLit);
+      EXPECT_GT(kept, 200) << "too few pixels above the cutoff";
+      EXPECT_GT(cut, 200) << "too few pixels below the cutoff";
+      EXPECT_EQ(cutLit, 0) << "of " << cut << " pixels whose alpha is below the cutoff";
+      for (int c = 0; c < 3; ++c)
+        EXPECT_NEAR(keptDiff[c], 0.0, 5.0 * std::sqrt(keptVar[c]) + 1e-4 * keptLevel[c])
+            << "channel " << c << ": " << kept << " pixels above the cutoff against the OPAQUE panel's";
+    }
+  }
+  if (testing::Test::HasFailure()) ADD_FAILURE() << "render: " << keepImage(image, "AlphaBlendModeTest");
 }
 
 // ---------------------------------------------------------------------------
