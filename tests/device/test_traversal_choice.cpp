@@ -103,9 +103,9 @@ TEST(TraversalChoice, PrimitiveScaleCountsEveryType) {
   mixed.curves = curve.curves;
   mixed.spheres.push_back(Sphere{glm::vec3(5.0f, 0.0f, 0.0f), 0.5f, 0});
   EXPECT_NEAR(scaleOf(mixed), std::sqrt((1.0 + cone + pi) / 4.0), 1e-6);
-  // a displaced icosahedron: its base triangles' flat areas, as the same icosahedron of triangles
-  const Scene flat = makeIcosphere(0, glm::vec3(0.0f), 1.0f, white);
-  const Scene displaced = makeDisplacedSphere(0, glm::vec3(0.0f), 1.0f, 4, 0.1f, 0.0f, 2, white);
+  // a displaced icosphere (triangles of unequal areas): its base triangles' flat areas, as the same icosphere of triangles
+  const Scene flat = makeIcosphere(1, glm::vec3(0.0f), 1.0f, white);
+  const Scene displaced = makeDisplacedSphere(1, glm::vec3(0.0f), 1.0f, 4, 0.1f, 0.0f, 2, white);
   ASSERT_EQ(displaced.triangles.size(), 0u);
   EXPECT_NEAR(scaleOf(displaced), scaleOf(flat), 1e-6 * scaleOf(flat));
   // the plane z = 3.5 (voxel units) through 8^3 cells 0.25 wide: one brick of
