@@ -756,6 +756,7 @@ std::pair<std::size_t, std::size_t> blockOf(const Rows& all, const std::array<st
 void SceneBuffers::uploadPrimitives(Context& context, const Scene& scene, const BvhBuildOptions& options,
                                     std::vector<InstanceDesc> instances) {
   PrimitiveRows rows = gatherPrimitives(scene, instances);
+  m_primitiveScale = wt::primitiveScale(scene, rows);  // the flat rows: every copy as rays meet it
   std::vector<InstancedPrimitives> geometries;
   if (options.instancing != Instancing::Off && !scene.primitiveInstances.empty()) {
     geometries = choosePrimitiveGeometries(scene, rows);

@@ -149,6 +149,8 @@ class SceneBuffers {
   std::size_t primitiveBytes = 0;  ///< primNodes + primRefs + primData + primInfo
   /// Primitives of `type` (WT_PRIM_*) the scene has, left out or not.
   std::size_t primitiveCount(std::uint32_t type) const { return m_primitiveCount[type]; }
+  /// The scene's primitiveScale (every type, copies counted flat), for chooseTraversal.
+  double primitiveScale() const { return m_primitiveScale; }
   /// Which types beside triangles the scene has (KernelFeatures::primitives).
   std::array<bool, WT_PRIM_TYPES> primitiveTypesPresent() const {
     std::array<bool, WT_PRIM_TYPES> present{};
@@ -254,6 +256,7 @@ class SceneBuffers {
   std::size_t m_storedTriangles = 0;
   Bvh4Stats m_primStats;
   std::array<std::size_t, WT_PRIM_TYPES> m_primitiveCount{};
+  double m_primitiveScale = 1.0;
   std::size_t m_skippedPrimitives = 0;
   double m_primitiveBuildSeconds = 0.0;
   std::vector<std::uint32_t> m_sceneToInstance;  ///< empty without instances

@@ -17,8 +17,7 @@ Tracer::Tracer(Context& context, const Scene& scene, const BvhBuildOptions& opti
     : m_context(context), m_scene(std::make_unique<SceneBuffers>(context, scene, options)),
       m_packetWidth(packetWidthFor(context.info(), packetWidth, scene.triangles.size())),
       m_streamPrefetch(prefetch == StreamPrefetch::kAuto ? streamPrefetchFor(context.info(), m_scene->uploadedBytes)
-                                                         : prefetch == StreamPrefetch::kOn),
-      m_primitiveScale(wt::primitiveScale(scene)) {
+                                                         : prefetch == StreamPrefetch::kOn) {
   // the scene's switches (sceneFeatures), less what tracing without shading never reads
   KernelFeatures features =
       kernelFeaturesFor(sceneFeatures(scene, *m_scene, RenderSettings{}), context.info(), m_packetWidth);
@@ -100,29 +99,6 @@ RayBatchStats measureRays(std::span<const Ray> rays, std::size_t width, std::siz
   return stats;
 }
 
-double primitiveScale(const Scene& scene) {
-  double area = 0.0;
-  std::size_t counted = 0;
-  for (const WtTriangle& t : scene.triangles) {
-    const glm::dvec3 p0(scene.positions[t.v0].x, scene.positions[t.v0].y, scene.positions[t.v0].z);
-    const glm::dvec3 p1(scene.positions[t.v1].x, scene.positions[t.v1].y, scene.positions[t.v1].z);
-    const glm::dvec3 p2(scene.positions[t.v2].x, scene.positions[t.v2].y, scene.positions[t.v2].z);
-    const double a = 0.5 * glm::length(glm::cross(p1 - p0, p2 - p0));
-    if (std::isfinite(a)) area += a, ++counted;
-  }
-  for (const Sphere& s : scene.spheres) {
-    const double a = 4.0 * 3.14159265358979 * double(s.radius) * s.radius;
-    if (std::isfinite(a)) area += a, ++counted;
-  }
-  if (counted > 0 && area > 0.0) return std::sqrt(area / double(counted));
-  // curves, SDF grids: the bounds spread over the primitives as over a surface
-  const Aabb b = scene.bounds();
-  const glm::dvec3 diagonal(double(b.hi.x) - b.lo.x, double(b.hi.y) - b.lo.y, double(b.hi.z) - b.lo.z);
-  const std::size_t prims = std::max<std::size_t>(1, scene.curves.size() + scene.sdfGrids.size());
-  const double d = glm::length(diagonal);
-  return std::isfinite(d) && d > 0.0 ? d / std::sqrt(double(prims)) : 1.0;
-}
-
 Traversal chooseTraversal(const RayBatchStats& stats, double scale, bool occlusion, bool cpu) {
   const bool streams = occlusion && cpu;
   const Traversal incoherent = streams ? Traversal::kStream : Traversal::kSingle;
@@ -137,7 +113,7 @@ Traversal chooseTraversal(const RayBatchStats& stats, double scale, bool occlusi
 }
 
 Traversal Tracer::chooseTraversal(std::span<const Ray> rays, bool occlusion) const {
-  return wt::chooseTraversal(measureRays(rays, std::size_t(m_packetWidth)), m_primitiveScale, occlusion,
+  return wt::chooseTraversal(measureRays(rays, std::size_t(m_packetWidth)), primitiveScale(), occlusion,
                              m_context.info().isCpu);
 }
 

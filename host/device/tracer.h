@@ -73,11 +73,6 @@ struct RayBatchStats {
 /// the batch's size).
 RayBatchStats measureRays(std::span<const Ray> rays, std::size_t width, std::size_t maxPackets = 2048);
 
-/// A scene's length scale for the traversal choice: the square root of its
-/// surfaces' mean area per primitive (triangles and spheres), or, with
-/// neither, the bounds' diagonal over the square root of the primitive count.
-double primitiveScale(const Scene& scene);
-
 /// Below this packetCoherence a packet's rays leave each other's boxes
 /// within a few levels of the root, whatever their origins: no packets.
 inline constexpr double kPacketMinCoherence = 0.95;
@@ -124,7 +119,7 @@ class Tracer {
   /// rng_alpha_ray(key, i), whichever the traversal. 0 until set.
   void setAlphaKey(std::uint32_t key) { m_alphaKey = key; }
   /// The scene's primitiveScale, for chooseTraversal.
-  double primitiveScale() const { return m_primitiveScale; }
+  double primitiveScale() const { return m_scene->primitiveScale(); }
   /// chooseTraversal for these rays on this tracer's scene, device and packet width.
   Traversal chooseTraversal(std::span<const Ray> rays, bool occlusion) const;
   /// Kernel time of the last trace call (profiling events), seconds.
@@ -151,7 +146,6 @@ class Tracer {
   cl::Buffer m_instances;  ///< per ray: in, the instance of the surface it leaves; out, the instance hit
   std::size_t m_capacity = 0;
   std::uint32_t m_alphaKey = 0;
-  double m_primitiveScale = 0.0;
   double m_lastKernelSeconds = 0.0;
 };
 

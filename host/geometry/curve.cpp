@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <numbers>
 
 namespace wt {
 namespace {
@@ -208,6 +209,13 @@ CurveSegment curveSegment(const PrimitiveRows& rows, std::uint32_t index) {
   s.u0 = std::bit_cast<float>(info[2]);
   s.u1 = std::bit_cast<float>(info[3]);
   return s;
+}
+
+double curveSegmentArea(const Scene&, const PrimitiveRows& rows, std::uint32_t index) {
+  const CurveSegment c = curveSegment(rows, index);
+  const double r0 = c.p0.w, r1 = c.p1.w;
+  const double length = glm::length(glm::dvec3(c.p1) - glm::dvec3(c.p0));
+  return std::numbers::pi * (r0 + r1) * std::sqrt(length * length + (r1 - r0) * (r1 - r0));
 }
 
 glm::vec3 curvePoint(const CurveSegment& segment, glm::vec3 o, glm::vec3 d, float t, glm::vec3* error,

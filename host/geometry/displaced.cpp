@@ -586,6 +586,14 @@ DisplacedTriangleRef displacedTriangle(const PrimitiveRows& rows, std::uint32_t 
   return {rows.info[row][1] / WT_DISP_MESH_ROWS, rows.info[row + 1][3]};
 }
 
+double displacedBaseArea(const Scene& scene, const PrimitiveRows& rows, std::uint32_t index) {
+  const DisplacedTriangleRef ref = displacedTriangle(rows, index);
+  const DisplacedMesh& mesh = scene.displacedMeshes[ref.mesh];
+  const std::array<std::uint32_t, 3>& t = mesh.triangles[ref.triangle];
+  const glm::dvec3 p0(mesh.positions[t[0]]), p1(mesh.positions[t[1]]), p2(mesh.positions[t[2]]);
+  return 0.5 * glm::length(glm::cross(p1 - p0, p2 - p0));
+}
+
 glm::vec3 displacedPoint(const DisplacedMesh& mesh, std::uint32_t triangle, float li, float lj, glm::vec3* error,
                          glm::vec3* normal, glm::vec3* shading) {
   const MapView map{mesh.map.data(), int(mesh.mapWidth), int(mesh.mapHeight)};

@@ -2,16 +2,17 @@
 #include "geometry/primitives.h"
 
 #include <array>
+#include <cmath>
 
 namespace wt {
 
 std::span<const PrimitiveType> primitiveTypes() {
   static constexpr std::array<PrimitiveType, 5> kTypes = {{
-      {WT_PRIM_SPHERE, "spheres", "WT_HAS_SPHERES", gatherSpheres},
-      {WT_PRIM_CURVE, "curve segments", "WT_HAS_CURVES", gatherCurves},
-      {WT_PRIM_INSTANCE, "instances", "WT_HAS_INSTANCES", nullptr},
-      {WT_PRIM_SDF_GRID, "SDF bricks", "WT_HAS_SDF_GRIDS", gatherSdfGrids},
-      {WT_PRIM_DISPLACED, "displaced triangles", "WT_HAS_DISPLACED", gatherDisplaced},
+      {WT_PRIM_SPHERE, "spheres", "WT_HAS_SPHERES", gatherSpheres, sphereArea},
+      {WT_PRIM_CURVE, "curve segments", "WT_HAS_CURVES", gatherCurves, curveSegmentArea},
+      {WT_PRIM_INSTANCE, "instances", "WT_HAS_INSTANCES", nullptr, nullptr},
+      {WT_PRIM_SDF_GRID, "SDF bricks", "WT_HAS_SDF_GRIDS", gatherSdfGrids, sdfBrickArea},
+      {WT_PRIM_DISPLACED, "displaced triangles", "WT_HAS_DISPLACED", gatherDisplaced, displacedBaseArea},
   }};
   return kTypes;
 }
@@ -32,6 +33,31 @@ PrimitiveRows gatherPrimitives(const Scene& scene, std::span<const InstanceDesc>
       gatherInstances(instances, rows);
   }
   return rows;
+}
+
+double primitiveScale(const Scene& scene, const PrimitiveRows& rows) {
+  double area = 0.0;
+  std::size_t counted = 0;
+  auto add = [&](double a) {
+    if (std::isfinite(a)) area += a, ++counted;
+  };
+  for (const WtTriangle& t : scene.triangles) {
+    const glm::dvec3 p0(scene.positions[t.v0].x, scene.positions[t.v0].y, scene.positions[t.v0].z);
+    const glm::dvec3 p1(scene.positions[t.v1].x, scene.positions[t.v1].y, scene.positions[t.v1].z);
+    const glm::dvec3 p2(scene.positions[t.v2].x, scene.positions[t.v2].y, scene.positions[t.v2].z);
+    add(0.5 * glm::length(glm::cross(p1 - p0, p2 - p0)));
+  }
+  std::array<double (*)(const Scene&, const PrimitiveRows&, std::uint32_t), WT_PRIM_TYPES> areaOf{};
+  for (const PrimitiveType& t : primitiveTypes()) areaOf[t.id] = t.area;
+  for (std::uint32_t id : rows.ids)
+    if (const auto f = areaOf[primType(id)]) add(f(scene, rows, primIndex(id)));
+  if (counted > 0 && area > 0.0) return std::sqrt(area / double(counted));
+  // no surface to measure: the bounds spread over the primitives as over a surface
+  const Aabb b = scene.bounds();
+  const glm::dvec3 diagonal(double(b.hi.x) - b.lo.x, double(b.hi.y) - b.lo.y, double(b.hi.z) - b.lo.z);
+  const std::size_t prims = std::max<std::size_t>(1, scene.triangles.size() + rows.ids.size());
+  const double d = glm::length(diagonal);
+  return std::isfinite(d) && d > 0.0 ? d / std::sqrt(double(prims)) : 1.0;
 }
 
 }  // namespace wt

@@ -34,6 +34,9 @@ struct PrimitiveType {
   /// Its boxes, typed ids and rows from the scene; null for instances, which
   /// SceneBuffers lays out from the geometries it stores once.
   void (*gather)(const Scene&, PrimitiveRows&);
+  /// The surface area of gathered primitive `index` (a typed id's index),
+  /// for primitiveScale; null for instances, whose copies the scene holds flat.
+  double (*area)(const Scene&, const PrimitiveRows&, std::uint32_t index);
 };
 
 /// Every type beside triangles, in the order gatherPrimitives lays them out.
@@ -63,6 +66,8 @@ bool sphereUsable(const Sphere& sphere);
 /// (material) per sphere, by scene index; radius <= 0 or a non-finite value
 /// leaves the sphere out.
 void gatherSpheres(const Scene& scene, PrimitiveRows& rows);
+/// A gathered sphere's area, 4 pi r^2.
+double sphereArea(const Scene& scene, const PrimitiveRows& rows, std::uint32_t index);
 
 /// B-spline pieces are subdivided until each one's control points lie within
 /// this fraction of its smallest radius of the straight segment that
@@ -92,6 +97,8 @@ struct CurveSegment {
 };
 /// Segment `index` (a WT_PRIM_CURVE typed id's index) of gathered rows.
 CurveSegment curveSegment(const PrimitiveRows& rows, std::uint32_t index);
+/// A gathered segment's area: its round cone's side, pi (r0 + r1) times the slant length.
+double curveSegmentArea(const Scene& scene, const PrimitiveRows& rows, std::uint32_t index);
 
 /// curve_surface (kernels/geometry/curve.cl) on the host: where ray (o, d)
 /// meets the segment at t, reprojected onto its hull, with its rounding
@@ -114,6 +121,11 @@ bool sdfGridUsable(const SdfGrid& grid);
 /// combination), boxed around those cells, grid by grid, bricks x fastest.
 /// count: the bricks kept.
 void gatherSdfGrids(const Scene& scene, PrimitiveRows& rows);
+/// A gathered brick's surface area, estimated as its crossed cells times a
+/// cell's mean face area (the light list's weight for an emitting brick).
+double sdfBrickArea(const Scene& scene, const PrimitiveRows& rows, std::uint32_t index);
+/// A grid cell's mean face area: its volume to the power 2/3.
+double sdfCellArea(const SdfGrid& grid);
 
 /// sdf_surface (kernels/geometry/sdf_grid.cl) on the host: where ray (o, d)
 /// crossed brick `index` (a WT_PRIM_SDF_GRID typed id's index) at t in
@@ -154,6 +166,9 @@ struct DisplacedTriangleRef {
   std::uint32_t mesh = 0, triangle = 0;
 };
 DisplacedTriangleRef displacedTriangle(const PrimitiveRows& rows, std::uint32_t index);
+/// A gathered base triangle's flat area (the displaced surface's is
+/// displacedArea, 4^L triangles' worth of work).
+double displacedBaseArea(const Scene& scene, const PrimitiveRows& rows, std::uint32_t index);
 
 /// displaced_surface (kernels/geometry/displaced.cl) on the host: the
 /// point of base triangle `triangle` at lattice point (li, lj) (the hit's
@@ -196,5 +211,12 @@ void gatherInstances(std::span<const InstanceDesc> instances, PrimitiveRows& row
 
 /// Every type's rows; instances as given (SceneBuffers builds their geometries first).
 PrimitiveRows gatherPrimitives(const Scene& scene, std::span<const InstanceDesc> instances = {});
+
+/// A scene's length scale for the traversal choice (chooseTraversal): the
+/// square root of its surfaces' mean area per primitive, over the triangles
+/// and every gathered primitive (`rows`: gatherPrimitives' flat rows, a copy
+/// of an instance counted as its own primitives, as rays meet it); with no
+/// area, the bounds' diagonal over the square root of the primitive count.
+double primitiveScale(const Scene& scene, const PrimitiveRows& rows);
 
 }  // namespace wt

@@ -2,6 +2,7 @@
 #include "geometry/primitives.h"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 
 namespace wt {
@@ -178,6 +179,19 @@ glm::vec3 sdfGridPoint(const PrimitiveRows& rows, std::uint32_t index, glm::vec3
   const float gamma3 = 3.0f * 0.5f * kEps / (1.0f - 3.0f * 0.5f * kEps);
   *error = gamma3 * (glm::abs(o) + glm::abs(t * d)) + glm::vec3(grid[3].w * offLattice);
   return p;
+}
+
+double sdfBrickArea(const Scene& scene, const PrimitiveRows& rows, std::uint32_t index) {
+  const std::size_t row = rows.infoFirst[WT_PRIM_SDF_GRID] + WT_SDF_INFO_ROWS * std::size_t(index);
+  std::uint32_t crossed = 0;
+  for (std::size_t r = 1; r < WT_SDF_INFO_ROWS; ++r)
+    for (std::uint32_t word : rows.info[row + r]) crossed += std::uint32_t(std::popcount(word));
+  return double(crossed) * sdfCellArea(scene.sdfGrids[rows.info[row][1]]);
+}
+
+double sdfCellArea(const SdfGrid& grid) {
+  const double volume = std::abs(glm::determinant(glm::dmat3(grid.latticeToScene)));
+  return std::cbrt(volume * volume);
 }
 
 }  // namespace wt

@@ -1,6 +1,8 @@
 // Spheres on the host: their boxes and rows (kernels/geometry/sphere.cl).
 #include "geometry/primitives.h"
 
+#include <numbers>
+
 #include <cmath>
 
 namespace wt {
@@ -33,6 +35,11 @@ void gatherSpheres(const Scene& scene, PrimitiveRows& rows) {
     rows.bounds.push_back(box);
     rows.ids.push_back(primId(WT_PRIM_SPHERE, std::uint32_t(i)));
   }
+}
+
+double sphereArea(const Scene& scene, const PrimitiveRows&, std::uint32_t index) {
+  const double r = scene.spheres[index].radius;
+  return 4.0 * std::numbers::pi * r * r;
 }
 
 }  // namespace wt

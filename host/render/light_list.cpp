@@ -432,8 +432,7 @@ LightList buildLightList(const Scene& scene, const SceneBuffers& buffers, double
     if (displaced) {
       area = displacedAreas[k];
     } else {
-      const double volume = std::fabs(glm::determinant(glm::dmat3(scene.sdfGrids[s.source].latticeToScene)));
-      area = double(s.element) * std::cbrt(volume * volume);
+      area = double(s.element) * sdfCellArea(scene.sdfGrids[s.source]);
     }
     const bool twoSided = e.w != 0.0f;
     if (!(luminance(le) > 0.0) || !(area > 0.0) || !std::isfinite(area)) continue;

@@ -79,7 +79,7 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
   m_features = sceneFeatures(scene, *m_scene, settings);
   m_kernelFeatures = renderKernelFeatures(m_features, context.info(), settings, *m_scene);
   m_packetWidth = m_kernelFeatures.packetWidth;
-  m_primitiveScale = primitiveScale(scene);
+  m_primitiveScale = m_scene->primitiveScale();
   {
     // the volumes the camera is inside, found on the host once (Cycles finds them too; Mitsuba asks the scene)
     WtMediaStack stack;

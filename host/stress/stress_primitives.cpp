@@ -46,6 +46,8 @@ std::string sphereSceneJson(double translate, double scale) {
       R"(    {"type": "sphere", "center": )" + p(-0.6, 0.5, 0) + R"(, "radius": )" + r(0.5) + R"(, "material": "glass"},
     {"type": "sphere", "center": )" + p(0.6, 0.4, 0.2) + R"(, "radius": )" + r(0.4) + R"(, "material": "metal"},
     {"type": "sphere", "center": )" + p(0.1, 0.05, 0.9) + R"(, "radius": )" + r(0.05) + R"(, "material": "white"},
+    {"type": "curves", "radius": )" + r(0.02) + R"(, "material": "metal", "strands": [[)" + p(-0.2, 0.05, 0.5) + ", " +
+          p(0.0, 0.25, 0.6) + ", " + p(0.25, 0.1, 0.7) + ", " + p(0.45, 0.3, 0.55) + R"(]]},
 )");
 }
 
@@ -121,7 +123,7 @@ std::vector<StressRow> sphereTransforms(Context& context, const StressOptions& o
   for (const Case& c : cases) {
     const auto start = std::chrono::steady_clock::now();
     const Rendered r = renderCase(c.translate, c.scale, c.recenter);
-    rows.push_back(stress_rows::agreementRow("spheres from 1e-3 to 1e3 of the view (glass, metal, an emitter): " + c.name,
+    rows.push_back(stress_rows::agreementRow("spheres and a curve from 1e-3 to 1e3 of the view (glass, metal, an emitter): " + c.name,
                                              r, reference, study, "against the untransformed scene", start));
   }
   return rows;

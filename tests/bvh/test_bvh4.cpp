@@ -7,6 +7,8 @@
 #include "bvh/bvh4.h"
 #include "bvh/builders.h"
 #include "bvh/bvh_checks.h"
+#include "device/scene_buffers.h"
+#include "geometry/primitives.h"
 #include "scene/generators.h"
 #include "test_util.h"
 
@@ -19,6 +21,7 @@
 #include <functional>
 #include <limits>
 #include <map>
+#include <unordered_map>
 #include <random>
 #include <utility>
 #include <vector>
@@ -666,6 +669,77 @@ TEST(Bvh4, SahRegressionIcosphere) {
   RecordProperty("bvh4_collapse_cost", std::to_string(tree.stats.collapseCost));
   EXPECT_LE(binary, kBinary * kSahSlack);
   EXPECT_LE(tree.stats.collapseCost, kBvh4 * kSahSlack);
+}
+
+/// The primitive tree over every type beside triangles at once (spheres,
+/// curve segments, an SDF grid's bricks, displaced base triangles): every
+/// kept primitive sits in a leaf (once, but for a curve segment's pieces),
+/// a leaf's box holds the gathered box of each primitive it names, an inner
+/// slot's box holds its child's boxes, and no leaf names an unknown id.
+TEST(Bvh4, PrimitiveTreeOverEveryTypeKeepsTheInvariants) {
+  const WtMaterial white = makeMaterial(glm::vec3(0.5f));
+  Scene scene = makeSphereField(300, 5);
+  scene.displacedMeshes = makeDisplacedSphere(1, glm::vec3(40.0f, 0.0f, 0.0f), 3.0f, 8, 0.3f, 0.0f, 2, white).displacedMeshes;
+  std::mt19937 rng(9);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+  for (int c = 0; c < 40; ++c) {  // bent strands, some diagonal (split into pieces)
+    scene.curves.push_back({std::uint32_t(scene.curvePoints.size()), 6, 0, c % 2 ? CurveBasis::kLinear : CurveBasis::kBSpline});
+    glm::vec3 p(20.0f * u(rng), 5.0f + u(rng), 20.0f * u(rng));
+    for (int k = 0; k < 6; ++k, p += glm::vec3(u(rng), 1.0f, u(rng))) scene.curvePoints.push_back({p.x, p.y, p.z, 0.02f});
+  }
+  SdfGrid grid;  // a ball of radius 10 cells in 24^3 cells of 0.5: several bricks
+  grid.cells = glm::uvec3(24);
+  for (int z = 0; z <= 24; ++z)
+    for (int y = 0; y <= 24; ++y)
+      for (int x = 0; x <= 24; ++x) grid.values.push_back(glm::length(glm::vec3(x, y, z) - glm::vec3(12.0f)) - 10.0f);
+  grid.latticeToScene = glm::dmat4(0.5);
+  grid.latticeToScene[3] = glm::dvec4(-30.0, 0.0, 0.0, 1.0);
+  scene.sdfGrids.push_back(grid);
+  const PrimitiveRows rows = gatherPrimitives(scene);
+  for (std::uint32_t type : {WT_PRIM_SPHERE, WT_PRIM_CURVE, WT_PRIM_SDF_GRID, WT_PRIM_DISPLACED})
+    ASSERT_GT(rows.count[type], 1u) << primTypeName(type);
+  const PrimitiveTree tree = buildPrimitiveTree(rows, BvhBuildOptions{});
+  std::unordered_map<std::uint32_t, std::size_t> row;
+  for (std::size_t i = 0; i < rows.ids.size(); ++i) row[rows.ids[i]] = i;
+  std::unordered_map<std::uint32_t, int> seen;
+  auto inside = [](const Aabb& a, const Aabb& b) {
+    return glm::all(glm::greaterThanEqual(a.lo, b.lo)) && glm::all(glm::lessThanEqual(a.hi, b.hi));
+  };
+  std::size_t problems = 0;
+  std::function<void(std::uint32_t)> visit = [&](std::uint32_t n) {
+    const WtBvh4Node& node = tree.bvh4.nodes[n];
+    for (int k = 0; k < 4; ++k) {
+      if (node.child[k] == WT_BVH4_EMPTY) continue;
+      const Aabb box = slotBox(node, k);
+      if (node.count[k] == 0) {
+        const WtBvh4Node& child = tree.bvh4.nodes[node.child[k]];
+        for (int j = 0; j < 4; ++j)
+          if (child.child[j] != WT_BVH4_EMPTY && !inside(slotBox(child, j), box))
+            ADD_FAILURE() << "node " << node.child[k] << " slot " << j << " leaves its parent's box", ++problems;
+        visit(node.child[k]);
+        continue;
+      }
+      for (std::uint32_t i = node.child[k]; i < node.child[k] + node.count[k]; ++i) {
+        const std::uint32_t id = tree.refs[i];
+        const auto at = row.find(id);
+        if (at == row.end()) {
+          ADD_FAILURE() << "a leaf names id " << id << ", which was not gathered", ++problems;
+          continue;
+        }
+        ++seen[id];
+        // a curve segment's piece holds only its part of the segment (Curves.DiagonalSegmentsEnterTheTreeInPieces)
+        if (primType(id) != WT_PRIM_CURVE && !inside(rows.bounds[at->second], box))
+          ADD_FAILURE() << primTypeName(primType(id)) << " " << primIndex(id) << " leaves its leaf's box", ++problems;
+      }
+    }
+  };
+  visit(0);
+  for (std::uint32_t id : rows.ids) {
+    const int times = seen.count(id) ? seen[id] : 0;
+    if (times == 0 || (primType(id) != WT_PRIM_CURVE && times != 1))
+      ADD_FAILURE() << primTypeName(primType(id)) << " " << primIndex(id) << " is in " << times << " leaves", ++problems;
+    if (problems > 20) break;
+  }
 }
 
 }  // namespace

@@ -1,11 +1,13 @@
 // chooseTraversal on synthetic batches: what the measured statistics say
 // and which traversal they lead to, with no device involved.
 #include "device/tracer.h"
+#include "geometry/primitives.h"
 #include "scene/generators.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <numbers>
 #include <random>
 #include <vector>
 
@@ -78,10 +80,46 @@ TEST(TraversalChoice, MeasuresCoherenceOctantsAndOriginSpread) {
 TEST(TraversalChoice, PrimitiveScaleIsTheRootOfTheMeanArea) {
   // a unit square as two triangles of area 1/2
   Scene square = makeGrid(1, glm::vec3(0.0f), 0.5f, glm::vec3(1, 0, 0), glm::vec3(0, 1, 0), makeMaterial(glm::vec3(0.5f)));
-  EXPECT_NEAR(primitiveScale(square), std::sqrt(0.5), 1e-6);
+  EXPECT_NEAR(primitiveScale(square, gatherPrimitives(square)), std::sqrt(0.5), 1e-6);
   // 100 x 100 quads on the same square: 20 000 triangles of 1/20 000
   Scene fine = makeGrid(100, glm::vec3(0.0f), 0.5f, glm::vec3(1, 0, 0), glm::vec3(0, 1, 0), makeMaterial(glm::vec3(0.5f)));
-  EXPECT_NEAR(primitiveScale(fine), std::sqrt(1.0 / 20000.0), 1e-6);
+  EXPECT_NEAR(primitiveScale(fine, gatherPrimitives(fine)), std::sqrt(1.0 / 20000.0), 1e-6);
+}
+
+TEST(TraversalChoice, PrimitiveScaleCountsEveryType) {
+  constexpr double pi = std::numbers::pi;
+  const WtMaterial white = makeMaterial(glm::vec3(0.5f));
+  auto scaleOf = [](const Scene& scene) { return primitiveScale(scene, gatherPrimitives(scene)); };
+  // one round cone 2 long, radii 0.1 and 0.2: its side, pi (r0 + r1) times the slant length
+  Scene curve;
+  curve.materials.push_back(white);
+  curve.curvePoints = {WtVec4{0, 0, 0, 0.1f}, WtVec4{2, 0, 0, 0.2f}};
+  curve.curves.push_back(Curve{0, 2, 0, CurveBasis::kLinear});
+  const double cone = pi * 0.3 * std::sqrt(4.0 + 0.01);
+  EXPECT_NEAR(scaleOf(curve), std::sqrt(cone), 1e-6);
+  // beside a sphere of radius 0.5 (area pi) and a unit square of two triangles: the mean of all four
+  Scene mixed = makeGrid(1, glm::vec3(0.0f, 0.0f, -5.0f), 0.5f, glm::vec3(1, 0, 0), glm::vec3(0, 1, 0), white);
+  mixed.curvePoints = curve.curvePoints;
+  mixed.curves = curve.curves;
+  mixed.spheres.push_back(Sphere{glm::vec3(5.0f, 0.0f, 0.0f), 0.5f, 0});
+  EXPECT_NEAR(scaleOf(mixed), std::sqrt((1.0 + cone + pi) / 4.0), 1e-6);
+  // a displaced icosphere (triangles of unequal areas): its base triangles' flat areas, as the same icosphere of triangles
+  const Scene flat = makeIcosphere(1, glm::vec3(0.0f), 1.0f, white);
+  const Scene displaced = makeDisplacedSphere(1, glm::vec3(0.0f), 1.0f, 4, 0.1f, 0.0f, 2, white);
+  ASSERT_EQ(displaced.triangles.size(), 0u);
+  EXPECT_NEAR(scaleOf(displaced), scaleOf(flat), 1e-6 * scaleOf(flat));
+  // the plane z = 3.5 (voxel units) through 8^3 cells 0.25 wide: one brick of
+  // 64 crossed cells, the plane's 2 x 2 inside the grid
+  Scene sdf;
+  sdf.materials.push_back(white);
+  SdfGrid grid;
+  grid.cells = glm::uvec3(8);
+  for (int z = 0; z <= 8; ++z)
+    for (int i = 0; i < 81; ++i) grid.values.push_back(float(z) - 3.5f);
+  grid.latticeToScene = glm::dmat4(0.25);
+  grid.latticeToScene[3][3] = 1.0;
+  sdf.sdfGrids.push_back(grid);
+  EXPECT_NEAR(scaleOf(sdf), 2.0, 1e-6);
 }
 
 TEST(TraversalChoice, CameraRaysInPacketsRandomRaysNot) {

@@ -848,6 +848,7 @@ TEST_P(SceneFileErrors, NameTheFileAndTheField) {
   writeFile(testDir() / "sky.hdr", "x");
   writeFile(testDir() / "square.ply", plySquare());
   writeFile(testDir() / "map.exr", "x");
+  writeFile(testDir() / "ball.raw", std::string(32, '\0'));
   const BadFile& c = GetParam();
   EXPECT_CONTAINS(errorOf(c.json), "scene.json: " + c.message);
 }
@@ -1102,6 +1103,36 @@ const BadFile kBadFiles[] = {
         BadFile{"MaterialUnknown", material(R"("colour": [1, 1, 1])"), "materials.m.colour: unknown field"},
         BadFile{"MaterialNameQuoted", doc(R"("materials": {"my glass": {"ior": "x"}})"),
                 "materials[\"my glass\"].ior: must be a number, got \"x\""},
+        BadFile{"MaterialNameEmpty", doc(R"("materials": {"": {"roughness": 0.5}})"),
+                "materials[\"\"]: a material needs a name"},
+        BadFile{"MaterialEmissionBeyondFloat", material(R"("emission": [1e39, 0, 0])"),
+                "materials.m.emission: is beyond the range of a float"},
+        // the paths that every reader shares: a name that is not a string, an empty file name
+        BadFile{"MaterialNameNotAString", sphere(R"(, "material": 3)"), "objects[0].material: must be a string, got 3"},
+        BadFile{"GltfFileEmpty", objects(R"({"type": "gltf", "file": ""})"), "objects[0].file: must name a file, got \"\""},
+        BadFile{"MeshFileEmpty", objects(R"({"type": "mesh", "file": ""})"), "objects[0].file: must name a file, got \"\""},
+        BadFile{"CurvesFileEmpty", objects(R"({"type": "curves", "file": ""})"),
+                "objects[0].file: must name a file, got \"\""},
+        BadFile{"SdfFileEmpty", objects(R"({"type": "sdf", "file": ""})"), "objects[0].file: must name a file, got \"\""},
+        BadFile{"DisplacedMeshEmpty", objects(R"({"type": "displaced", "mesh": "", "displacement": "map.exr", "scale": 1})"),
+                "objects[0].mesh: must name a file, got \"\""},
+        BadFile{"DisplacedMapEmpty",
+                objects(R"({"type": "displaced", "mesh": "square.ply", "displacement": "", "scale": 1})"),
+                "objects[0].displacement: must name a file, got \"\""},
+        BadFile{"DisplacedScaleBeyondFloat",
+                objects(R"({"type": "displaced", "mesh": "square.ply", "displacement": "map.exr", "scale": 1e39})"),
+                "objects[0]: scale and offset must be within the range of a float"},
+        BadFile{"EnvironmentMapEmpty", doc(R"("environment": {"map": ""})"), "environment.map: must name a file, got \"\""},
+        BadFile{"EnvironmentIntensityBeyondFloat", doc(R"("environment": {"map": "sky.hdr", "intensity": 1e39})"),
+                "environment.intensity: is beyond the range of a float"},
+        BadFile{"SpheresCentresNotAnArray", objects(R"({"type": "spheres", "centers": 3, "radius": 1})"),
+                "objects[0].centers: must be an array of [x, y, z] centres, got 3"},
+        BadFile{"CurvesStrandsNotAnArray", objects(R"({"type": "curves", "strands": 3})"),
+                "objects[0].strands: must be an array of strands"},
+        BadFile{"CurvesStrandsEmpty", objects(R"({"type": "curves", "strands": []})"),
+                "objects[0].strands: must be an array of strands"},
+        BadFile{"SdfBoxInsideOut", objects(R"({"type": "sdf", "file": "ball.raw", "resolution": [2, 2, 2], "box": [0, 0, 0, 1, 0, 1]})"),
+                "objects[0].box: the maximum must exceed the minimum on every axis"},
 };
 
 INSTANTIATE_TEST_SUITE_P(All, SceneFileErrors, ::testing::ValuesIn(kBadFiles),
