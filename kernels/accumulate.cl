@@ -4,12 +4,13 @@
 // AccumulatePass offers: single, single with compensated (Kahan) updates, and
 // double where the device has fp64. The per-pixel state is 64 bytes in every
 // mode; accumulate_resolve turns it into float mean and m2 for tonemapping
-// and read-back.
+// and read-back. Part of the frame program (frame.cl): reads WT_AOV only.
 #ifndef WT_ACCUMULATE_CL
 #define WT_ACCUMULATE_CL
 
-#include "common.h"
-#include "aov.cl"
+#include "shared/types.h"
+#include "base.h"
+#include "aov_fold.cl"
 
 /// One Welford update in single precision.
 inline void accumulate_single(float4 x, float n, float4* mean, float4* m2) {
@@ -21,7 +22,7 @@ inline void accumulate_single(float4 x, float n, float4* mean, float4* m2) {
 
 /// The same with each increment compensated (Kahan): the low bits an
 /// increment loses against a large running value are carried to the next.
-/// Relies on FP_CONTRACT OFF (common.h): a fused multiply-add would undo it.
+/// Relies on FP_CONTRACT OFF (base.h): a fused multiply-add would undo it.
 inline void accumulate_kahan(float4 x, float n, float4* mean, float4* m2, float4* c_mean,
                              float4* c_m2) {
   float4 delta = x - *mean;

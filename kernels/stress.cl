@@ -4,6 +4,7 @@
 #ifndef WT_STRESS_CL
 #define WT_STRESS_CL
 
+#include "common.h"
 #include "accumulate.cl"
 
 // `samples` running-mean updates per work-item of values keyed like the

@@ -1,7 +1,8 @@
 // Stage 5: exposure (manual, physical or automatic), white balance, the tone
 // mapping operator (shared/tonemap.h), the sRGB curve and a dithered 8-bit
-// quantisation. The mean image is only read: the EXR stays linear.
-#include "common.h"
+// quantisation. The mean image is only read: the EXR stays linear. Part of
+// the frame program (frame.cl): reads no compile-time switch.
+#include "base.h"
 #include "shared/tonemap.h"
 
 // Auto exposure, pass 1: work-item i sums log2 of the luminance of pixels

@@ -1,9 +1,8 @@
 // The render program: the wavefront stages only, specialised by -D options
-// from kernelDefines() (host/device/program.cpp). The bench's tracers
-// (trace.cl) and the stress suite's kernels (stress.cl) are programs of their own.
+// from kernelDefines() (host/device/program.cpp). Accumulation and tone
+// mapping (frame.cl), the bench's tracers (trace.cl) and the stress suite's
+// kernels (stress.cl) are programs of their own.
 #include "generate.cl"
 #include "extend.cl"
 #include "shade.cl"
 #include "connect.cl"
-#include "accumulate.cl"
-#include "tonemap.cl"

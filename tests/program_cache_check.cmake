@@ -1,7 +1,8 @@
 # The program cache through the command line (`wavetrace render -v`): the
 # first run on an empty cache compiles and stores, the second loads; two
 # processes started together on an empty cache both succeed and leave one
-# valid entry; other build options (the minimal integrator) miss.
+# valid entry per program (the render program and the frame program); other
+# build options (the minimal integrator) miss, and share the frame program.
 # Inputs: EXE (wavetrace), SCRATCH (a folder this test may empty).
 set(cache "${SCRATCH}/kernels")
 file(REMOVE_RECURSE "${SCRATCH}")
@@ -21,18 +22,19 @@ function(render name pattern)
   endif()
 endfunction()
 
-function(expect_one_entry when)
+# one entry each for wavetrace.cl and frame.cl, and no temporary files
+function(expect_two_entries when)
   file(GLOB entries "${cache}/*")
   list(LENGTH entries count)
-  if(NOT count EQUAL 1 OR NOT entries MATCHES "/[0-9a-f]+\\.bin$")
-    message(FATAL_ERROR "${when}: expected one entry and no temporary files in ${cache}, found: ${entries}")
+  if(NOT count EQUAL 2 OR NOT entries MATCHES "^[^;]*/[0-9a-f]+\\.bin;[^;]*/[0-9a-f]+\\.bin$")
+    message(FATAL_ERROR "${when}: expected two entries and no temporary files in ${cache}, found: ${entries}")
   endif()
 endfunction()
 
 # empty cache: compiled and stored; then loaded
-render(first "program wavetrace.cl: cache miss, compiled in [0-9.]+ s, binary [0-9.]+ MB" ${cached})
-expect_one_entry("after the first run")
-render(second "program wavetrace.cl: cache hit, loaded [0-9.]+ MB in [0-9.]+ s" ${cached})
+render(first "program wavetrace.cl: cache miss, compiled in [0-9.]+ s, binary [0-9.]+ MB.*program frame.cl: cache miss" ${cached})
+expect_two_entries("after the first run")
+render(second "program wavetrace.cl: cache hit, loaded [0-9.]+ MB in [0-9.]+ s.*program frame.cl: cache hit" ${cached})
 # the loaded program renders the same image
 file(SHA256 "${SCRATCH}/first.png" compiled)
 file(SHA256 "${SCRATCH}/second.png" loaded)
@@ -63,11 +65,11 @@ endif()
 if("${err}" MATCHES "warning: kernel cache")
   message(FATAL_ERROR "together: a process found a damaged entry")
 endif()
-expect_one_entry("after two runs at once")
+expect_two_entries("after two runs at once")
 render(after_together "program wavetrace.cl: cache hit" ${cached})
 
-# other build options: a miss, not the first entry
-render(minimal "program wavetrace.cl: cache miss" ${cached} --integrator minimal)
+# other build options: a miss, not the first entry; the frame program is the same
+render(minimal "program wavetrace.cl: cache miss.*program frame.cl: cache hit" ${cached} --integrator minimal)
 render(minimal_again "program wavetrace.cl: cache hit" ${cached} --integrator minimal)
 
 # off: compiled, nothing stored

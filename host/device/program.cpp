@@ -167,10 +167,27 @@ int packetWidthFor(const DeviceInfo& device, int requested, std::size_t triangle
   return triangles > kWidePacketMaxTriangles ? 8 : 16;
 }
 
-cl::Program buildProgram(Context& context, const KernelFeatures& features, const std::string& root) {
+namespace {
+
+/// kernels/<root> built with `options` (after the common ones), once per context and through the program cache.
+cl::Program buildRoot(Context& context, const std::string& root, const std::string& extraOptions) {
   std::string source = expandKernelSource(root);
   // argument names let KernelBinding check each kernel against its host declaration at start-up
-  std::string options = "-cl-std=CL1.2 -cl-kernel-arg-info";
+  const std::string options = "-cl-std=CL1.2 -cl-kernel-arg-info" + extraOptions;
+  const std::string key = toHex(programCacheKey(context.info(), source, options));
+  if (std::optional<cl::Program> built = context.builtProgram(key)) {
+    log::debug("program " + root + ": built in this context already");
+    return *built;
+  }
+  cl::Program program = buildCachedProgram(context, source, options, root).program;
+  context.keepProgram(key, program);
+  return program;
+}
+
+}  // namespace
+
+cl::Program buildProgram(Context& context, const KernelFeatures& features, const std::string& root) {
+  std::string options;
   for (const std::string& d : kernelDefines(features)) options += " " + d;
   // Oclgrind (the kernel checker) lacks the llvm.bitreverse, llvm.prefetch,
   // llvm.cttz and llvm.experimental.noalias.scope.decl intrinsics
@@ -180,14 +197,15 @@ cl::Program buildProgram(Context& context, const KernelFeatures& features, const
     options +=
         " -D WT_AVOID_BITREVERSE=1 -D WT_FOLD_THROUGH_MEMORY=1 -D WT_NO_PREFETCH=1 -D WT_NO_CTZ=1"
         " -D WT_NO_SRET_INLINE=1";
-  const std::string key = toHex(programCacheKey(context.info(), source, options));
-  if (std::optional<cl::Program> built = context.builtProgram(key)) {
-    log::debug("program " + root + ": built in this context already");
-    return *built;
-  }
-  cl::Program program = buildCachedProgram(context, source, options, root).program;
-  context.keepProgram(key, program);
-  return program;
+  return buildRoot(context, root, options);
+}
+
+std::vector<std::string> frameProgramDefines(bool aov) { return {"-D WT_AOV=" + std::string(aov ? "1" : "0")}; }
+
+cl::Program buildFrameProgram(Context& context, bool aov) {
+  std::string options;
+  for (const std::string& d : frameProgramDefines(aov)) options += " " + d;
+  return buildRoot(context, "frame.cl", options);
 }
 
 }  // namespace wt

@@ -122,4 +122,14 @@ std::string expandKernelSource(const std::string& file);
 cl::Program buildProgram(Context& context, const KernelFeatures& features,
                          const std::string& root = "wavetrace.cl");
 
+/// The frame program's build options: WT_AOV (accumulate's AOV fold), the
+/// only switch its kernels read.
+std::vector<std::string> frameProgramDefines(bool aov);
+
+/// Build the frame program (kernels/frame.cl: accumulate, accumulate_resolve
+/// and the tonemap kernels) like buildProgram. Its code reads no scene
+/// switch, so every feature set shares one build per context (and one entry
+/// in the program cache and PoCL's): a new scene compiles the render stages only.
+cl::Program buildFrameProgram(Context& context, bool aov);
+
 }  // namespace wt

@@ -33,8 +33,11 @@ std::uint64_t environmentHash(const Environment& env) {
 
 std::uint64_t kernelHash(const KernelFeatures& features) {
   Fnv64 h;
-  const std::string source = expandKernelSource("wavetrace.cl");
-  h.bytes(source.data(), source.size());
+  // the frame program holds the accumulation state's format
+  for (const char* root : {"wavetrace.cl", "frame.cl"}) {
+    const std::string source = expandKernelSource(root);
+    h.bytes(source.data(), source.size());
+  }
   for (const std::string& d : kernelDefines(features)) {
     h.bytes(d.data(), d.size());
     h.bytes("\n", 1);

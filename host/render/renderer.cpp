@@ -91,6 +91,7 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
   const KernelFeatures& features = m_kernelFeatures;
   m_stats.lightsSeconds = lap();
   m_program = buildProgram(context, features);
+  m_frameProgram = buildFrameProgram(context, features.aov);
   m_stats.programSeconds = lap();
   if (settings.accumulation == WT_ACCUMULATE_DOUBLE && !context.info().fp64)
     throw DeviceError("double-precision accumulation needs fp64, which '" + context.info().name + "' lacks");
@@ -106,9 +107,9 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
   m_connect = {m_program, built};
   m_connectPacket = {m_program, built};
   m_connectStream = {m_program, built};
-  m_accumulate = {m_program, built};
-  m_resolve = {m_program, built};
-  m_tonemapper = Tonemapper(context, m_program, built, std::size_t(settings.width) * std::size_t(settings.height));
+  m_accumulate = {m_frameProgram, built};
+  m_resolve = {m_frameProgram, built};
+  m_tonemapper = Tonemapper(context, m_frameProgram, built, std::size_t(settings.width) * std::size_t(settings.height));
   m_stats.kernelsSeconds = lap();
 
   // connect runs only where shade can queue shadow rays: the same count of

@@ -255,6 +255,7 @@ class Renderer {
   cl_uint4 m_cameraMedia{};  ///< the medium stack every path starts with (cameraMediaStack)
   std::unique_ptr<SceneBuffers> m_scene;
   cl::Program m_program;
+  cl::Program m_frameProgram;  ///< accumulate and tonemap (buildFrameProgram), shared by every feature set
   KernelArgs<stage::Generate> m_generate;
   KernelArgs<stage::Extend> m_extend;
   KernelArgs<stage::ExtendPacket> m_extendPacket;

@@ -127,9 +127,9 @@ float Tonemapper::autoExposure() {
 void tonemapImage(Context& context, Image& image, const TonemapSettings& s, float exposureStops,
                   float* autoExposure) {
   const std::size_t pixels = std::size_t(image.width) * std::size_t(image.height);
-  // the stage alone: kernels/tonemap.cl is a program root of its own
+  // the renderer's frame program: the same build a render loads
   static_assert(sizeof(cl_float4) == 16);
-  cl::Program program = buildProgram(context, KernelFeatures{}, "tonemap.cl");
+  cl::Program program = buildFrameProgram(context, false);
   std::vector<cl_float4> mean(pixels);
   for (std::size_t i = 0; i < pixels; ++i)
     mean[i] = {{image.rgb[3 * i], image.rgb[3 * i + 1], image.rgb[3 * i + 2], 1.0f}};

@@ -8,7 +8,9 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cctype>
 #include <filesystem>
+#include <string>
 #include <vector>
 
 namespace wt {
@@ -33,22 +35,65 @@ TEST(Embedded, TestKernelsAreNotShipped) {
 }
 
 // The render program holds the wavefront stages (with the stream traversal
-// its shadow rays may take); the tracers and the stress kernels are
-// programs of their own.
+// its shadow rays may take); accumulation and tone mapping (the frame
+// program), the tracers and the stress kernels are programs of their own.
 TEST(Embedded, ProgramsHoldTheirOwnKernelsOnly) {
   const std::string render = expandKernelSource("wavetrace.cl");
-  for (const char* stage :
-       {"generate(", "extend(", "shade(", "connect(", "connect_stream(", "accumulate(", "tonemap("})
+  for (const char* stage : {"generate(", "extend(", "shade(", "connect(", "connect_stream("})
     EXPECT_NE(render.find(std::string("WT_KERNEL void ") + stage), std::string::npos) << stage;
-  for (const char* foreign : {"#line 1 \"trace.cl\"", "#line 1 \"stress.cl\"",
-                              "WT_KERNEL void trace_", "WT_KERNEL void test_"})
+  for (const char* foreign : {"#line 1 \"trace.cl\"", "#line 1 \"stress.cl\"", "#line 1 \"accumulate.cl\"",
+                              "#line 1 \"tonemap.cl\"", "WT_KERNEL void trace_", "WT_KERNEL void test_"})
     EXPECT_EQ(render.find(foreign), std::string::npos) << foreign << " in the render program";
+  const std::string frame = expandKernelSource("frame.cl");
+  for (const char* stage :
+       {"accumulate(", "accumulate_resolve(", "tonemap_log_luminance(", "tonemap_exposure(", "tonemap("})
+    EXPECT_NE(frame.find(std::string("WT_KERNEL void ") + stage), std::string::npos) << stage;
+  EXPECT_EQ(frame.find("WT_KERNEL void shade("), std::string::npos);
   const std::string trace = expandKernelSource("trace.cl");
   EXPECT_NE(trace.find("WT_KERNEL void trace_occluded_stream("), std::string::npos);
   EXPECT_EQ(trace.find("WT_KERNEL void shade("), std::string::npos);
   const std::string stress = expandKernelSource("stress.cl");
   EXPECT_NE(stress.find("WT_KERNEL void test_accumulate("), std::string::npos);
   EXPECT_EQ(stress.find("WT_KERNEL void shade("), std::string::npos);
+}
+
+/// `source` without its comments, so that a switch named in one is not counted as read.
+std::string withoutComments(const std::string& source) {
+  std::string out;
+  for (std::size_t i = 0; i < source.size();) {
+    if (source.compare(i, 2, "//") == 0) {
+      i = source.find('\n', i);
+      if (i == std::string::npos) break;
+    } else if (source.compare(i, 2, "/*") == 0) {
+      std::size_t end = source.find("*/", i + 2);
+      i = end == std::string::npos ? source.size() : end + 2;
+    } else {
+      out += source[i++];
+    }
+  }
+  return out;
+}
+
+// The frame program is built once for every feature set (buildFrameProgram),
+// so its code must read no switch of the render program's but the ones
+// frameProgramDefines gives it: another would silently read as 0.
+TEST(Embedded, TheFrameProgramReadsOnlyItsOwnSwitches) {
+  const std::string frame = withoutComments(expandKernelSource("frame.cl"));
+  std::vector<std::string> given;
+  for (const std::string& d : frameProgramDefines(false)) given.push_back(d.substr(3, d.find('=') - 3));  // "-D NAME=v"
+  KernelFeatures every;
+  every.primitives.fill(true);
+  for (const std::string& d : kernelDefines(every)) {
+    const std::string name = d.substr(3, d.find('=') - 3);
+    bool read = false;
+    for (std::size_t at = frame.find(name); at != std::string::npos && !read; at = frame.find(name, at + 1)) {
+      const std::size_t end = at + name.size();
+      read = end == frame.size() || !(std::isalnum(static_cast<unsigned char>(frame[end])) || frame[end] == '_');
+    }
+    const bool isGiven = std::find(given.begin(), given.end(), name) != given.end();
+    EXPECT_EQ(read, isGiven) << name << (read ? " is read by the frame program, which is not built with it"
+                                              : " is given to the frame program, which never reads it");
+  }
 }
 
 TEST(Embedded, IncludesExpandOnceWithLineMarkers) {

@@ -62,7 +62,8 @@ TEST(Program, TheSameProgramIsBuiltOncePerContext) {
   EXPECT_NE(other(), edited());
 }
 
-// The render program holds the stages; the tracers are a program of their own.
+// The render program holds the stages; accumulation and tone mapping (the
+// frame program) and the tracers are programs of their own.
 // Built with the switches a small triangle scene gets on this device (the
 // minimal integrator's for the stages, the tracer's own), which other tests
 // build too: PoCL's cache then compiles each program once in the suite.
@@ -71,10 +72,14 @@ TEST(Program, EmbeddedKernelsBuild) {
   features.bvhStackSize = 32;
   features.packetWidth = packetWidthFor(test::deviceContext().info());
   cl::Program program = buildProgram(test::deviceContext(), features);
-  for (const char* name : {"generate", "extend", "shade", "connect", "accumulate", "tonemap", "tonemap_log_luminance",
-                           "tonemap_exposure", "extend_packet", "connect_packet"})
+  for (const char* name : {"generate", "extend", "shade", "connect", "extend_packet", "connect_packet"})
     EXPECT_NO_THROW(cl::Kernel(program, name)) << name;
   EXPECT_THROW(cl::Kernel(program, "trace_closest"), cl::Error) << "the tracers are not render stages";
+  cl::Program frame = buildFrameProgram(test::deviceContext(), false);
+  for (const char* name : {"accumulate", "accumulate_resolve", "tonemap", "tonemap_log_luminance", "tonemap_exposure"}) {
+    EXPECT_NO_THROW(cl::Kernel(frame, name)) << name;
+    EXPECT_THROW(cl::Kernel(program, name), cl::Error) << name << " is in the frame program, not the render program";
+  }
   features.integratorMinimal = false;  // as Tracer builds it
   cl::Program trace = buildProgram(test::deviceContext(), features, "trace.cl");
   for (const char* name : {"trace_closest", "trace_occluded", "trace_closest_packet", "trace_occluded_packet",

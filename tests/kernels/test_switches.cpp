@@ -11,11 +11,11 @@
 namespace wt {
 namespace {
 
-/// The build log of the render program built with `options`; `built` says
-/// whether the build succeeded.
-std::string buildLog(const std::string& options, bool* built) {
+/// The build log of the render program (or `root`) built with `options`;
+/// `built` says whether the build succeeded.
+std::string buildLog(const std::string& options, bool* built, const std::string& root = "wavetrace.cl") {
   Context& context = test::deviceContext();
-  cl::Program program(context.context(), expandKernelSource("wavetrace.cl"));
+  cl::Program program(context.context(), expandKernelSource(root));
   *built = true;
   try {
     program.build({context.info().device}, options.c_str());
@@ -41,6 +41,15 @@ TEST(Switches, EveryMissingSwitchFailsTheBuildNamingIt) {
     EXPECT_NE(log.find(name + " not set"), std::string::npos)
         << "the build log does not name " << name << ":\n" << log.substr(0, 2000);
   }
+}
+
+TEST(Switches, TheFrameProgramWithoutItsSwitchFailsNamingIt) {
+  // kernels/frame.cl reads WT_AOV alone (frameProgramDefines), and checks it itself
+  ASSERT_EQ(frameProgramDefines(false).size(), 1u);
+  bool built = true;
+  const std::string log = buildLog("-cl-std=CL1.2", &built, "frame.cl");
+  EXPECT_FALSE(built) << "the frame program built without WT_AOV";
+  EXPECT_NE(log.find("WT_AOV not set"), std::string::npos) << log.substr(0, 2000);
 }
 
 TEST(Switches, APacketWidthOtherThan8Or16FailsTheBuild) {
