@@ -139,9 +139,10 @@
 #elif WT_BVH_COST && !WT_AOV
 #error "WT_BVH_COST needs WT_AOV (the count goes to aov_sample)"
 #endif
-// Shade over eight paths per work-item on float8 lanes (kernels/shade_lanes.cl):
-// only for triangles, Lambertian or metallic-roughness without extensions,
-// textures, vertex colours, holes or AOVs, under the path integrator.
+// Shade over 8 or 16 (WT_SHADE_LANES_WIDTH) paths per work-item on vector
+// lanes (kernels/shade_lanes.cl): only for triangles, Lambertian or
+// metallic-roughness without extensions, textures, vertex colours, holes or
+// AOVs, under the path integrator.
 #ifndef WT_SHADE_LANES
 #error "WT_SHADE_LANES not set (kernelDefines)"
 #elif !WT_SWITCH_IS_BOOL(WT_SHADE_LANES)
@@ -151,6 +152,8 @@
                          WT_INTEGRATOR_MINIMAL || WT_HAS_SPHERES || WT_HAS_CURVES || WT_HAS_INSTANCES || \
                          WT_HAS_SDF_GRIDS || WT_HAS_DISPLACED)
 #error "WT_SHADE_LANES needs untextured Lambertian or plain metallic-roughness triangles under the path integrator"
+#elif WT_SHADE_LANES && WT_SHADE_LANES_WIDTH != 8 && WT_SHADE_LANES_WIDTH != 16
+#error "WT_SHADE_LANES_WIDTH must be 8 or 16 (kernelDefines)"
 #endif
 
 // Not features (the image is the same either way), so they may be left out

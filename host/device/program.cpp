@@ -150,6 +150,7 @@ std::vector<std::string> kernelDefines(const KernelFeatures& features) {
       "-D WT_BVH_COST=" + std::string(features.aov && features.bvhCost ? "1" : "0"),
       "-D WT_SHADE_LANES=" + std::string(features.shadeLanes ? "1" : "0"),
   };
+  if (features.shadeLanes) defines.push_back("-D WT_SHADE_LANES_WIDTH=" + std::to_string(features.shadeLanesWidth));
   for (const PrimitiveType& type : primitiveTypes())
     defines.push_back("-D " + std::string(type.define) + "=" + (features.primitives[type.id] ? "1" : "0"));
   return defines;
@@ -165,6 +166,13 @@ int packetWidthFor(const DeviceInfo& device, int requested, std::size_t triangle
     throw DeviceError("packet width " + std::to_string(requested) + " is not supported (8 or 16)");
   if (device.nativeFloatWidth < 16) return 8;
   return triangles > kWidePacketMaxTriangles ? 8 : 16;
+}
+
+int shadeLanesWidthFor(const DeviceInfo& device, int requested) {
+  if (requested == 8 || requested == 16) return requested;
+  if (requested != 0)
+    throw DeviceError("shade lanes width " + std::to_string(requested) + " is not supported (8 or 16)");
+  return device.nativeFloatWidth < 16 ? 8 : 16;
 }
 
 namespace {

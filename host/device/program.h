@@ -56,16 +56,19 @@ struct KernelFeatures {
   /// WT_BVH_COST: traversal counts the nodes a ray visits (the bvh-cost
   /// debug view only; needs aov)
   bool bvhCost = false;
-  /// WT_SHADE_LANES: shade runs eight paths per work-item on float8 lanes
-  /// (kernels/shade_lanes.cl); set by the renderer (renderKernelFeatures)
-  /// where every surface is a triangle, Lambertian or metallic-roughness
-  /// without extensions or textures, and launched over a
-  /// work-item per kShadeLanes queue entries
+  /// WT_SHADE_LANES: shade runs shadeLanesWidth paths per work-item on
+  /// vector lanes (kernels/shade_lanes.cl); set by the renderer
+  /// (renderKernelFeatures) where every surface is a triangle, Lambertian or
+  /// metallic-roughness without extensions or textures, and launched over a
+  /// work-item per shadeLanesWidth queue entries
   bool shadeLanes = false;
+  int shadeLanesWidth = 8;  ///< WT_SHADE_LANES_WIDTH: 8 or 16 (shadeLanesWidthFor); only with shadeLanes
 };
 
-/// Paths one shade work-item takes with KernelFeatures::shadeLanes (WT_SHADE_LANES_WIDTH).
-inline constexpr std::size_t kShadeLanes = 8;
+/// Paths per shade work-item on lanes: `requested` (8 or 16) when non-zero,
+/// else 16 where the device's native float vector is 16 wide (AVX-512 CPUs),
+/// else 8. Throws DeviceError for any other request.
+int shadeLanesWidthFor(const DeviceInfo& device, int requested = 0);
 
 /// Whether streams (kernels/bvh_stream.cl) should ask for a node's children
 /// as it arrives, and keep their rays in order rather than grouped by

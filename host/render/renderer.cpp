@@ -250,7 +250,7 @@ KernelFeatures renderKernelFeatures(const FeatureSet& features, const DeviceInfo
                                              : kernelFeaturesFor(features, device, settings.packetWidth);
   k.aov = settings.aovs;
   k.bvhCost = settings.aovs && settings.bvhCost;
-  // shade on float8 lanes where every surface is a triangle, Lambertian or
+  // shade on vector lanes where every surface is a triangle, Lambertian or
   // metallic-roughness without extensions (kernels/shade_lanes.cl; its misses
   // read triangle 0, so there must be one)
   k.shadeLanes = settings.shadeLanes && !settings.generalProgram && buffers.storedTriangles() > 0 &&
@@ -258,6 +258,7 @@ KernelFeatures renderKernelFeatures(const FeatureSet& features, const DeviceInfo
                  !k.thinShadows && !k.specular && !k.clearcoat && !k.sheen && !k.anisotropy && !k.iridescence &&
                  !k.textures && !k.vertexColors && !k.alpha && !k.aov &&
                  std::none_of(k.primitives.begin(), k.primitives.end(), [](bool on) { return on; });
+  if (k.shadeLanes) k.shadeLanesWidth = shadeLanesWidthFor(device, settings.shadeLanesWidth);
   // streams ask for a node's children early where the scene outgrows the cache (as the Tracer's)
   k.streamPrefetch = streamPrefetchFor(device, buffers.uploadedBytes);
   return k;
@@ -395,7 +396,8 @@ void Renderer::renderSample() {
         .set("out_slot", outSlot)
         .set("queue_in", *queueIn)
         .set("queue_out", *queueOut);
-    launch(m_shade, m_kernelFeatures.shadeLanes ? (alive + kShadeLanes - 1) / kShadeLanes : alive,
+    const std::size_t lanes = std::size_t(m_kernelFeatures.shadeLanesWidth);
+    launch(m_shade, m_kernelFeatures.shadeLanes ? (alive + lanes - 1) / lanes : alive,
            event(Command::Shade, bounce));
 
     // connect: shadow rays of this bounce (count read on the device); shade

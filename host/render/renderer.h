@@ -69,10 +69,11 @@ struct RenderSettings {
   /// rectangle are one light, sampled by solid angle (findQuadLights); false:
   /// two triangle lights, as before.
   bool quadLights = true;
-  /// Developer setting (A/B, tests): shade runs eight paths per work-item on
-  /// float8 lanes where every surface is a triangle, Lambertian or plain
+  /// Developer setting (A/B, tests): shade runs several paths per work-item on
+  /// vector lanes where every surface is a triangle, Lambertian or plain
   /// metallic-roughness (KernelFeatures::shadeLanes); false: one path per work-item, as shade.cl.
   bool shadeLanes = true;
+  int shadeLanesWidth = 0;  ///< developer setting: paths per lanes work-item, 8 or 16; 0: by the device (shadeLanesWidthFor)
   std::uint32_t accumulation = WT_ACCUMULATE_KAHAN;  ///< WT_ACCUMULATE_* (double needs fp64)
   BvhBuilder bvhBuilder = BvhBuilder::Auto;  ///< which tree the scene's BVH is (host/bvh/builders.h)
   Instancing instancing = Instancing::Off;   ///< whether repeated geometry is stored once (SceneBuffers)

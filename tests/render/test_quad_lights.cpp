@@ -2,6 +2,7 @@
 // make a rectangle (one light each, its two halves pointing at it), and a
 // scene lit by rectangles renders the same with them sampled as spherical
 // rectangles as with their triangles sampled apart (RenderSettings::quadLights).
+#include "device/program.h"
 #include "render/light_list.h"
 #include "render/render_helpers.h"
 #include "test_util.h"
@@ -173,7 +174,8 @@ double shadeLanesAgainstOnePath(const Scene& scene, RenderSettings settings, std
   return worst;
 }
 
-// Shade on float8 lanes (kernels/shade_lanes.cl, RenderSettings::shadeLanes)
+// Shade on 8 lanes (kernels/shade_lanes.cl, RenderSettings::shadeLanes; the
+// metallic-roughness test below takes the device's width, 16 on AVX-512)
 // against one path per work-item (shade.cl): the same image within noise
 // (4 x 4 blocks, z 4.5 from the two renders' own variances). The scene has
 // every light the lanes reach: rectangles (by solid angle and by area),
@@ -210,6 +212,7 @@ TEST(QuadLights, ShadeLanesRenderTheSameAsOnePathPerWorkItem) {
     settings.rrMinDepth = 1;  // roulette where it weighs
     settings.lightSampler = sampler;
     settings.background = glm::vec3(0.2f, 0.25f, 0.3f);
+    settings.shadeLanesWidth = 8;
     shadeLanesAgainstOnePath(scene, settings, 21, sampler == LightSampler::Power ? "lights by power" : "light tree");
   }
 }
@@ -244,6 +247,21 @@ TEST(QuadLights, ShadeLanesRenderMetallicRoughnessTheSameAsOnePathPerWorkItem) {
   settings.rrMinDepth = 1;
   settings.background = glm::vec3(0.2f, 0.25f, 0.3f);
   shadeLanesAgainstOnePath(scene, settings, 31, "metallic-roughness");
+}
+
+TEST(QuadLights, ShadeLanesWidthByDevice) {
+  // 16 lanes where the device's float vector is 16 wide, 8 elsewhere; an
+  // explicit 8 or 16 wins; anything else is refused
+  DeviceInfo device;
+  device.nativeFloatWidth = 16;
+  EXPECT_EQ(shadeLanesWidthFor(device), 16);
+  EXPECT_EQ(shadeLanesWidthFor(device, 8), 8);
+  device.nativeFloatWidth = 8;
+  EXPECT_EQ(shadeLanesWidthFor(device), 8);
+  device.nativeFloatWidth = 1;
+  EXPECT_EQ(shadeLanesWidthFor(device), 8);
+  EXPECT_EQ(shadeLanesWidthFor(device, 16), 16);
+  EXPECT_THROW(shadeLanesWidthFor(device, 4), DeviceError);
 }
 
 }  // namespace
