@@ -48,7 +48,7 @@ inline WtMaterial connect_wall_material(GeometryScene g, __global const float4* 
                                         float3* coat_ns) {
   *coat_ns = (float3)(0.0f);
   if (prim_type(prim) != WT_PRIM_TRIANGLE) return m;
-  SurfacePoint sp = triangle_surface_point(g, tri_verts, t.surface, t.tri_info[prim], prim, instance, b.x, b.y, (float4)(0.0f));
+  SurfacePoint sp = triangle_surface_point(g, tri_verts, t.surface, t.tri_info[prim], prim, instance, b.x, b.y, 0.0f);
 #if WT_HAS_TEXTURES && WT_HAS_CLEARCOAT
   *coat_ns = clearcoat_normal(t.surface, index, m.texture_mask, sp, *ns);  // before the base's map bends ns
 #endif

@@ -62,7 +62,7 @@ inline void shade_check_finite(WtFrameParams frame, __global uint* counters, uin
 /// the thin-wall shadow rays (connect.cl) read materials through it.
 inline SurfacePoint triangle_surface_point(GeometryScene g, __global const float4* tri_verts, SurfaceScene ss,
                                            uint4 info, uint prim, uint instance, float b1, float b2,
-                                           float4 footprint) {
+                                           float footprint) {
   float3 p0, p1, p2;
   triangle_corners(tri_verts, prim, &p0, &p1, &p2);
 #if WT_HAS_INSTANCES
@@ -170,28 +170,13 @@ WT_KERNEL void shade(WT_SHADE_KERNEL_PARAMS) {
   // the path's footprint here (textured.cl): its spread so far and this segment's cone
   float footprint = 0.0f;
   float cone_angle = 0.0f;
-  float4 surface_footprint = (float4)(0.0f);  // what the material reads (textured.cl's surface_point)
 #if WT_HAS_TEXTURES
   if (frame.flags & WT_FLAG_TEXTURE_FOOTPRINT) {
     float2 cone = ray_cone[path];
     float dir_len = length(dir);
-    float cos_hit = fmax(fabs(dot(ng, dir)) / dir_len, 1e-4f);
-    float segment = hit.x * dir_len * cone.y;
-    footprint = cone.x + segment * rsqrt(cos_hit);  // the circle of the ellipse's area; the path spread carries it on
+    float cos_hit = fabs(dot(ng, dir)) / dir_len;
+    footprint = cone.x + hit.x * dir_len * cone.y * rsqrt(fmax(cos_hit, 1e-4f));
     cone_angle = cone.y;
-    surface_footprint.w = footprint;
-    if (frame.flags & WT_FLAG_TEXTURE_ANISOTROPIC) {
-      // the cone's ellipse: as wide across, 1/cos as long along the ray's
-      // projection; the camera's own width (orthographic) stretches too, a
-      // later bounce's spread stays a circle
-      float isotropic = frame.bounce == 0u ? 0.0f : cone.x, stretched = cone.x + segment - isotropic;
-      float3 along = dir - ng * (dot(ng, dir) / dot(ng, ng));
-      float along_len = length(along);
-      if (along_len > 0.0f && isfinite(along_len)) {
-        surface_footprint.w = isotropic + stretched;
-        surface_footprint.xyz = along * ((isotropic + stretched / cos_hit) / along_len);
-      }
-    }
   }
 #endif
 #if WT_AOV
@@ -206,7 +191,7 @@ WT_KERNEL void shade(WT_SHADE_KERNEL_PARAMS) {
 #if WT_HAS_TEXTURES || WT_HAS_VERTEX_COLORS || WT_HAS_ANISOTROPY
   // triangles (an instance's too) carry vertex attributes and textures
   if (prim_type(prim) == WT_PRIM_TRIANGLE) {
-    SurfacePoint sp = triangle_surface_point(g, tri_verts, ss, tri_info[prim], prim, instance, hit.y, hit.z, surface_footprint);
+    SurfacePoint sp = triangle_surface_point(g, tri_verts, ss, tri_info[prim], prim, instance, hit.y, hit.z, footprint);
 #if WT_AOV && WT_HAS_TEXTURES
     aov_uv = sp.uv.xy;
 #endif

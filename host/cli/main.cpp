@@ -338,8 +338,7 @@ wt::RenderSettings renderSettings(const RenderOptions& options) {
   settings.useRussianRoulette = !options.noRr;
   settings.powerHeuristic = options.misHeuristic == "power";
   settings.sobol = options.sampler == "sobol";
-  settings.textureFootprint = options.textureFilter != "finest";
-  settings.textureAnisotropic = options.textureFilter == "anisotropic";
+  settings.textureFootprint = options.textureFilter == "footprint";
   settings.lightSampler = options.lightSampler == "power" ? wt::LightSampler::Power
                           : options.lightSampler == "tree" ? wt::LightSampler::Tree
                                                            : wt::LightSampler::Auto;
@@ -1215,10 +1214,8 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"independent", "sobol"}))->capture_default_str();
   renderCmd->add_option("--texture-filter", render.textureFilter,
                          "footprint: textures read at the mip level of the path's footprint (ray cone at the camera hit, "
-                         "path spread after); anisotropic: the same footprint as the cone's ellipse on the surface, up to 8 "
-                         "trilinear probes along its long axis; finest: always the finest level (point sampling, slower "
-                         "to converge)")
-      ->check(CLI::IsMember({"footprint", "anisotropic", "finest"}))->capture_default_str();
+                         "path spread after); finest: always the finest level (point sampling, slower to converge)")
+      ->check(CLI::IsMember({"footprint", "finest"}))->capture_default_str();
   renderCmd->add_option("--light-sampler", render.lightSampler,
                         "path: how NEE picks an emissive triangle: power (alias table), tree (light tree, by "
                         "importance at the shading point) or auto (the tree from 8 emitters on)")

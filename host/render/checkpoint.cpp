@@ -158,7 +158,7 @@ std::vector<CheckpointField> checkpointIdentity(const Scene& scene, const Render
       {"russian_roulette", path && s.useRussianRoulette ? "yes" : "no"},
       {"rr_depth", std::to_string(s.rrMinDepth)},
       {"sampler", s.sobol ? "sobol" : "independent"},
-      {"texture_filter", !s.textureFootprint ? "finest" : s.textureAnisotropic ? "anisotropic" : "footprint"},
+      {"texture_filter", s.textureFootprint ? "footprint" : "finest"},
       {"light_sampler", lightSamplerName(s.lightSampler)},
       {"accumulation", accumulationName(s.accumulation)},
       {"bvh", bvhBuilderName(s.bvhBuilder)},

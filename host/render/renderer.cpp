@@ -39,7 +39,6 @@ WtFrameParams frameParams(const RenderSettings& s, const LightList& lights, int 
   }
   if (s.sobol) p.flags |= WT_FLAG_SOBOL;
   if (s.textureFootprint) p.flags |= WT_FLAG_TEXTURE_FOOTPRINT;
-  if (s.textureFootprint && s.textureAnisotropic) p.flags |= WT_FLAG_TEXTURE_ANISOTROPIC;
   p.accumulate_mode = s.accumulation;
   if (s.environmentHidden) p.flags |= WT_FLAG_ENV_HIDDEN;
   if (s.stopOnNonFinite) p.flags |= WT_FLAG_CHECK_NONFINITE;

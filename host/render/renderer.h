@@ -57,7 +57,6 @@ struct RenderSettings {
   int rrMinDepth = 3;           ///< path: first bounce at which roulette may end a path
   bool sobol = false;           ///< Owen-scrambled Sobol instead of independent random numbers
   bool textureFootprint = true;  ///< textures read at the mip level of the path's footprint (else the finest level)
-  bool textureAnisotropic = false;  ///< with textureFootprint: the camera cone's ellipse, probed along its long axis
   LightSampler lightSampler = LightSampler::Auto;  ///< path: how NEE picks among emissive triangles
   /// Developer setting (tests): the light list weighs an emitter with holes by
   /// its mean coverage (buildLightList); false: by its emission alone.

@@ -155,34 +155,4 @@ inline float texture_lod(__global const WtTexture* textures, __global const WtTe
   return texels > 0.0f ? log2(texels) : 0.0f;
 }
 
-/// Most trilinear probes along an anisotropic footprint's long axis; a
-/// longer ellipse reads a coarser level (its short axis is widened).
-#define WT_TEXTURE_MAX_PROBES 8
-
-/// Linear RGBA of `texture` over the elliptical footprint centred at `uv`
-/// with axes `a` and `b` (UV vectors, whole widths): the level of the short
-/// axis in level-0 texels, probed at n = ceil(long / short) points (at most
-/// WT_TEXTURE_MAX_PROBES) evenly along the long axis, each covering 1/n of it.
-inline float4 texture_sample_ellipse(__global const WtTexture* textures, __global const WtTextureLevel* levels,
-                                     __global const uint* texels, uint texture, float2 uv, float2 a, float2 b) {
-  WtTextureLevel l = levels[textures[texture].first_level];
-  float2 size = (float2)((float)l.width, (float)l.height);
-  float la = length(a * size), lb = length(b * size);
-  if (lb > la) {
-    float2 t = a;
-    a = b, b = t;
-    float tl = la;
-    la = lb, lb = tl;
-  }
-  float probes = ceil(la / lb);
-  int n = probes >= 1.0f ? (int)fmin(probes, (float)WT_TEXTURE_MAX_PROBES) : 1;  // NaN, 0/0: one probe
-  float texels_across = fmax(lb, la / (float)WT_TEXTURE_MAX_PROBES);
-  float lod = texels_across > 0.0f ? log2(texels_across) : 0.0f;
-  if (n == 1) return texture_sample(textures, levels, texels, texture, uv, lod);
-  float4 sum = (float4)(0.0f);
-  for (int i = 0; i < n; ++i)
-    sum += texture_sample(textures, levels, texels, texture, uv + a * (((float)i + 0.5f) / (float)n - 0.5f), lod);
-  return sum / (float)n;
-}
-
 #endif  // WT_MATERIALS_TEXTURE_CL

@@ -38,17 +38,13 @@ typedef struct SurfacePoint {
   float3 tangent;    ///< world, unit; zero: none
   float sign;        ///< the bitangent is sign * cross(n, tangent)
   float footprint;   ///< world width of the path's footprint here; 0: the finest level
-  float4 uv_long;    ///< an anisotropic footprint's long axis in UV (xy set 0, zw set 1); zero: isotropic
-  float4 uv_short;   ///< and its short axis
 } SurfacePoint;
 
 /// The attributes at barycentrics (b1, b2) of the triangle with vertices
 /// `v` and corners p0, p1, p2, all in one space (an instance's: its object
-/// space, whose tangent the caller moves into the world). `footprint`: w the
-/// footprint's width (isotropic), or where xyz is non-zero its width across
-/// and xyz its long axis (whole length, in the plane), in the corners' space.
+/// space, whose tangent the caller moves into the world).
 inline SurfacePoint surface_point(SurfaceScene ss, uint4 v, float b1, float b2, float3 p0, float3 p1, float3 p2,
-                                  float4 footprint) {
+                                  float footprint) {
   SurfacePoint sp;
   float b0 = 1.0f - b1 - b2;
   sp.color = (float4)(1.0f);
@@ -59,26 +55,14 @@ inline SurfacePoint surface_point(SurfaceScene ss, uint4 v, float b1, float b2, 
   sp.uv_scale = (float2)(0.0f);
   sp.tangent = (float3)(0.0f);
   sp.sign = 1.0f;
-  sp.footprint = footprint.w;
-  sp.uv_long = sp.uv_short = (float4)(0.0f);
+  sp.footprint = footprint;
 #if WT_HAS_TEXTURES
   float4 t0 = ss.uv[v.x], t1 = ss.uv[v.y], t2 = ss.uv[v.z];
   sp.uv = b0 * t0 + b1 * t1 + b2 * t2;
-  float3 n = cross(p1 - p0, p2 - p0);
-  float world_area = length(n);
+  float world_area = length(cross(p1 - p0, p2 - p0));
   float4 e1 = t1 - t0, e2 = t2 - t0;
   float2 uv_area = (float2)(fabs(e1.x * e2.y - e1.y * e2.x), fabs(e1.z * e2.w - e1.w * e2.z));
-  if (world_area > 0.0f && isfinite(world_area)) {
-    sp.uv_scale = sqrt(uv_area / world_area);
-    if (dot(footprint.xyz, footprint.xyz) > 0.0f) {
-      // the ellipse's axes through the triangle's uv gradient: x = a e1 + b e2 in the plane
-      float3 across = normalize(cross(n, footprint.xyz)) * footprint.w;
-      float nn = world_area * world_area;
-      float3 da = cross(p2 - p0, n) / nn, db = cross(n, p1 - p0) / nn;
-      sp.uv_long = dot(footprint.xyz, da) * e1 + dot(footprint.xyz, db) * e2;
-      sp.uv_short = dot(across, da) * e1 + dot(across, db) * e2;
-    }
-  }
+  if (world_area > 0.0f && isfinite(world_area)) sp.uv_scale = sqrt(uv_area / world_area);
 #endif
 #if WT_HAS_TEXTURES || WT_HAS_ANISOTROPY
   // the tangent: normal maps and the anisotropy direction
@@ -103,12 +87,6 @@ inline float4 material_texture(SurfaceScene ss, uint material, uint slot, Surfac
   // the transform scales the footprint by the square root of its area change
   float stretch = sqrt(fabs(r.transform_u.x * r.transform_v.y - r.transform_u.y * r.transform_v.x));
   float per_world = (r.texcoord == 1u ? sp.uv_scale.y : sp.uv_scale.x) * stretch;
-  float4 axes = r.texcoord == 1u ? (float4)(sp.uv_long.zw, sp.uv_short.zw) : (float4)(sp.uv_long.xy, sp.uv_short.xy);
-  if (any(axes != (float4)(0.0f))) {
-    float2 a = (float2)(r.transform_u.x * axes.x + r.transform_u.y * axes.y, r.transform_v.x * axes.x + r.transform_v.y * axes.y);
-    float2 b = (float2)(r.transform_u.x * axes.z + r.transform_u.y * axes.w, r.transform_v.x * axes.z + r.transform_v.y * axes.w);
-    return texture_sample_ellipse(ss.textures, ss.levels, ss.texels, r.texture, uv, a, b);
-  }
   float lod = texture_lod(ss.textures, ss.levels, r.texture, sp.footprint * per_world);
   return texture_sample(ss.textures, ss.levels, ss.texels, r.texture, uv, lod);
 }

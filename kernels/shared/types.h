@@ -272,7 +272,6 @@ typedef struct WtFrameParams {
 #define WT_FLAG_COMPACT_SHADOWS 128u ///< shade appends shadow rays to its queue with an atomic counter, dense for connect_packet; otherwise entry i is item i's (WT_NO_HIT: none) and no atomic is contended
 #define WT_FLAG_TEXTURE_FOOTPRINT 256u ///< textures are read at the mip level of the path's footprint (materials/textured.cl); otherwise at the finest
 #define WT_FLAG_SHADOW_QUEUE 512u ///< the connect stage runs: shade clears its shadow-queue entries (without it the shadow buffers hold one entry)
-#define WT_FLAG_TEXTURE_ANISOTROPIC 1024u ///< with WT_FLAG_TEXTURE_FOOTPRINT: the footprint is the cone's ellipse on the surface, read as trilinear probes along its long axis (materials/texture.cl)
 
 /// Slots of the queue-counter buffer.
 #define WT_COUNTER_QUEUE_A 0      ///< paths in queue A
