@@ -160,19 +160,26 @@ bool streamPrefetchFor(const DeviceInfo& device, std::size_t sceneBytes) {
   return device.globalCacheBytes == 0 || sceneBytes > device.globalCacheBytes;
 }
 
-int packetWidthFor(const DeviceInfo& device, int requested, std::size_t triangles) {
+namespace {
+
+/// `requested` (8 or 16) when non-zero, else 16 where the device's native
+/// float vector is 16 wide, else 8; `what` names the width in the error.
+int vectorWidthFor(const DeviceInfo& device, int requested, const char* what) {
   if (requested == 8 || requested == 16) return requested;
   if (requested != 0)
-    throw DeviceError("packet width " + std::to_string(requested) + " is not supported (8 or 16)");
-  if (device.nativeFloatWidth < 16) return 8;
-  return triangles > kWidePacketMaxTriangles ? 8 : 16;
+    throw DeviceError(std::string(what) + " " + std::to_string(requested) + " is not supported (8 or 16)");
+  return device.nativeFloatWidth < 16 ? 8 : 16;
+}
+
+}  // namespace
+
+int packetWidthFor(const DeviceInfo& device, int requested, std::size_t triangles) {
+  const int width = vectorWidthFor(device, requested, "packet width");
+  return requested == 0 && triangles > kWidePacketMaxTriangles ? 8 : width;
 }
 
 int shadeLanesWidthFor(const DeviceInfo& device, int requested) {
-  if (requested == 8 || requested == 16) return requested;
-  if (requested != 0)
-    throw DeviceError("shade lanes width " + std::to_string(requested) + " is not supported (8 or 16)");
-  return device.nativeFloatWidth < 16 ? 8 : 16;
+  return vectorWidthFor(device, requested, "shade lanes width");
 }
 
 namespace {
