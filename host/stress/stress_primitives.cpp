@@ -450,6 +450,7 @@ std::vector<StressRow> sdfDegenerate(Context& context, const StressOptions& opti
   };
   scene.sdfGrids.push_back(grid(0.0f));
   scene.sdfGrids.push_back(grid(-1.0f));
+  scene.sdfGrids.push_back(grid(2.0f));
   scene.sdfGrids.push_back(grid(nan));
   SdfGrid empty = grid(1.0f);
   empty.cells = glm::uvec3(0);
@@ -460,7 +461,7 @@ std::vector<StressRow> sdfDegenerate(Context& context, const StressOptions& opti
   scene.sdfGrids.push_back(flat);
   scene.spheres.push_back({glm::vec3(0.0f, 0.0f, -6.0f), 1.0f, 0});
   rows.push_back(leftOutRow(context, options, scene, start,
-                            "SDF grids made in code: constant 0, all inside, all NaN (no bricks), no cells and a "
+                            "SDF grids made in code: constant 0, all inside, all outside, all NaN (no bricks), no cells and a "
                             "singular placement (left out), behind them a good emitter",
                             2));
   return rows;
