@@ -3,7 +3,8 @@
 # cases share a process (the device, the cached programs, the sanitizer's
 # start-up). Set before including: wt_binary, wt_label, wt_env,
 # wt_release_only (cases that keep a test of their own, labelled
-# release-only, and leave their suite's run).
+# release-only, and leave their suite's run; an entry `Suite.*` makes the
+# whole suite one test labelled release-only).
 execute_process(COMMAND "${wt_binary}" --gtest_list_tests
   OUTPUT_VARIABLE wt_listing RESULT_VARIABLE wt_rc ERROR_QUIET)
 get_filename_component(wt_name "${wt_binary}" NAME)
@@ -17,6 +18,7 @@ string(REPLACE "[" "(" wt_listing "${wt_listing}")
 string(REPLACE "]" ")" wt_listing "${wt_listing}")
 string(REPLACE "\n" ";" wt_lines "${wt_listing}")
 set(wt_suites "")
+set(wt_release_suites "")
 set(wt_suite "")
 foreach(wt_line IN LISTS wt_lines)
   if(wt_line MATCHES "^([^ #][^ ]*)\\.")
@@ -29,8 +31,17 @@ foreach(wt_line IN LISTS wt_lines)
     endif()
     # (list(FIND), not if(IN_LIST): CTest reads this file under old policies)
     list(FIND wt_release_only "${wt_case}" wt_at)
+    list(FIND wt_release_only "${wt_suite}.*" wt_suite_at)
     list(FIND wt_suites "${wt_suite}" wt_seen)
-    if(wt_at GREATER -1)
+    if(wt_suite_at GREATER -1)
+      list(FIND wt_release_suites "${wt_suite}" wt_seen)
+      if(wt_seen EQUAL -1)
+        list(APPEND wt_release_suites "${wt_suite}")
+        add_test("${wt_suite}.*" "${wt_binary}" "--gtest_filter=${wt_suite}.*")
+        set_tests_properties("${wt_suite}.*" PROPERTIES LABELS "release-only;${wt_labels}"
+          ENVIRONMENT "${wt_env}" SKIP_REGULAR_EXPRESSION "\\[  SKIPPED \\]")
+      endif()
+    elseif(wt_at GREATER -1)
       add_test("${wt_case}" "${wt_binary}" "--gtest_filter=${wt_case}")
       set_tests_properties("${wt_case}" PROPERTIES LABELS "release-only;${wt_labels}"
         ENVIRONMENT "${wt_env}" SKIP_REGULAR_EXPRESSION "\\[  SKIPPED \\]")
