@@ -13,7 +13,7 @@
 
 #if WT_HAS_INSTANCES
 /// Narrow `hit` to a nearer primitive of the geometry whose tree starts at
-/// node `root` (spheres or curves stored once), the ray in its object space:
+/// node `root` (a geometry of other types stored once), the ray in its object space:
 /// the tree holds no instances. `skip`: the primitive the ray leaves on this
 /// copy (WT_NO_HIT when it leaves another).
 inline bool bvh_prims_closest_root(GeometryScene g, uint root, float3 org, float3 dir, float tmin, uint skip,
@@ -106,7 +106,7 @@ inline bool bvh_prims_occluded_root(GeometryScene g, uint root, float3 org, floa
 }
 
 /// An instance's closest hit, of either kind: triangles (its geometry's
-/// leaf-order triangle in hit->prim) or spheres and curves (its geometry's
+/// leaf-order triangle in hit->prim) or the other types (its geometry's
 /// typed id), the ray moved into the copy's object space (unnormalised, so
 /// t carries over). True when it narrowed `hit`.
 inline bool bvh_prims_instance_closest(BvhScene scene, GeometryScene g, uint prim, float3 org, float3 dir, float tmin,

@@ -1025,7 +1025,7 @@ int runInfo(RenderOptions options) {
               "(%zu base triangles), %zu vertices\n",
               scene.triangles.size(), scene.spheres.size(), scene.curves.size(), curvePoints, scene.sdfGrids.size(),
               scene.displacedMeshes.size(), baseTriangles, scene.positions.size());
-  std::printf("instances: %zu mesh copies and %zu sphere or curve copies in the file; instancing %s: %zu instances, "
+  std::printf("instances: %zu mesh copies and %zu sphere, curve, SDF or displaced copies in the file; instancing %s: %zu instances, "
               "%zu triangles in instanced copies\n",
               scene.instances.size(), scene.primitiveInstances.size(), options.instancing.c_str(),
               buffers.instanceCount(), buffers.instancedTriangles());

@@ -14,7 +14,9 @@
 #include <chrono>
 #include <cmath>
 #include <cstddef>
+#include <cstring>
 #include <map>
+#include <stdexcept>
 #include <tuple>
 
 namespace wt {
@@ -609,6 +611,7 @@ struct InstancedPrimitives {
   std::vector<std::uint32_t> copies;
   glm::dvec3 centre{0.0};      ///< the source's box centre: the geometry's object space is the source's less it
   std::uint32_t base = 0;      ///< the geometry's first item's device index
+  std::vector<Aabb> local;     ///< SDF grids, displaced meshes: the items' boxes in object space, as regathered there
 };
 
 namespace {
@@ -626,7 +629,132 @@ std::pair<std::uint32_t, std::uint32_t> copyItems(const Scene& scene, const Prim
   if (copy.type == WT_PRIM_SPHERE && end <= scene.spheres.size()) return {copy.first, std::uint32_t(end)};
   if (copy.type == WT_PRIM_CURVE && end <= scene.curves.size() && end < rows.curveSegments.size())
     return {rows.curveSegments[copy.first], rows.curveSegments[end]};
+  if (copy.type == WT_PRIM_SDF_GRID && end <= scene.sdfGrids.size() && end < rows.sdfBricks.size())
+    return {rows.sdfBricks[copy.first], rows.sdfBricks[end]};
+  if (copy.type == WT_PRIM_DISPLACED && end <= scene.displacedMeshes.size() && end < rows.displacedTriangles.size())
+    return {rows.displacedTriangles[copy.first], rows.displacedTriangles[end]};
   return {0u, 0u};
+}
+
+/// Whether `material` emits (such copies stay flat: the light list addresses emitters as flat items).
+bool materialEmits(const Scene& scene, std::uint32_t material) {
+  if (material >= scene.materials.size()) return false;
+  const WtVec4& e = scene.materials[material].emission;
+  return e.x > 0.0f || e.y > 0.0f || e.z > 0.0f;
+}
+
+/// Whether two float arrays hold the same bits.
+bool sameBits(const std::vector<float>& a, const std::vector<float>& b) {
+  return a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0);
+}
+
+/// A similarity's scale: the linear part's columns of one length and
+/// perpendicular to float-made rotations' digits; 0 when it is not one.
+double similarityScale(const glm::dmat4& r) {
+  const glm::dmat3 l(r);
+  const double s2 = (glm::dot(l[0], l[0]) + glm::dot(l[1], l[1]) + glm::dot(l[2], l[2])) / 3.0;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j)
+      if (!(std::abs(glm::dot(l[i], l[j]) - (i == j ? s2 : 0.0)) <= 1e-5 * s2)) return 0.0;
+  return std::sqrt(s2);
+}
+
+/// copyMatchesSource for SDF grids and displaced meshes. An SDF grid is its
+/// source's values (the same bits, cells, storage and material) under
+/// another lattice placement, any affine one, the same for every grid of
+/// the copy. A displaced mesh is its source moved by a similarity (as
+/// spheres: an uneven scale would bend the displacement off the normals):
+/// the same triangles, texture coordinates, map bits, level and material,
+/// positions and normals within float rounding of the moved source's, scale
+/// and offset times the similarity's scale. Emitting copies stay flat.
+bool surfaceCopyMatchesSource(const Scene& scene, const PrimitiveRows& rows, const PrimitiveInstance& c,
+                              const PrimitiveInstance& s, glm::dmat4* relative) {
+  const auto [lo, hi] = copyItems(scene, rows, c);
+  const auto [slo, shi] = copyItems(scene, rows, s);
+  if (hi == lo || hi - lo != shi - slo || c.count != s.count) return false;
+  if (c.type == WT_PRIM_SDF_GRID) {
+    glm::dmat4 r(1.0);
+    for (std::uint32_t k = 0; k < c.count; ++k) {
+      const SdfGrid& a = scene.sdfGrids[c.first + k];
+      const SdfGrid& b = scene.sdfGrids[s.first + k];
+      if (!sdfGridUsable(a) || !sdfGridUsable(b) || a.cells != b.cells || a.storage != b.storage ||
+          a.material != b.material || materialEmits(scene, a.material) || !sameBits(a.values, b.values))
+        return false;
+      const glm::dmat4 rk = a.latticeToScene * glm::inverse(b.latticeToScene);
+      if (k == 0) {
+        r = rk;
+        continue;
+      }
+      for (int i = 0; i < 4; ++i)
+        if (!(glm::length(rk[i] - r[i]) <= 1e-9 * (glm::length(r[i]) + glm::length(r[3]) + 1.0))) return false;
+    }
+    *relative = r;
+    return true;
+  }
+  const double det = glm::determinant(glm::dmat3(c.transform)) * glm::determinant(glm::dmat3(s.transform));
+  if (!(std::isfinite(det) && det != 0.0)) return false;
+  const glm::dmat4 r = c.transform * glm::inverse(s.transform);
+  const double scale = similarityScale(r);
+  if (!(scale > 0.0)) return false;
+  const glm::dmat3 linear(r);
+  const double reach = std::max({std::abs(r[3].x), std::abs(r[3].y), std::abs(r[3].z)});
+  for (std::uint32_t k = 0; k < c.count; ++k) {
+    const DisplacedMesh& a = scene.displacedMeshes[c.first + k];
+    const DisplacedMesh& b = scene.displacedMeshes[s.first + k];
+    if (!displacedMeshUsable(a) || !displacedMeshUsable(b) || a.triangles != b.triangles ||
+        a.texcoords != b.texcoords || a.mapWidth != b.mapWidth || a.mapHeight != b.mapHeight ||
+        displacedLevel(a) != displacedLevel(b) || a.material != b.material || materialEmits(scene, a.material) ||
+        !sameBits(a.map, b.map))
+      return false;
+    // a few float roundings of the terms each copy's floats were made from
+    auto near = [&](double x, double y) { return std::abs(x - scale * y) <= 4e-6 * (std::abs(x) + scale * std::abs(y)); };
+    if (!near(a.scale, b.scale) || !near(a.offset, b.offset)) return false;
+    for (std::size_t v = 0; v < a.positions.size(); ++v) {
+      const glm::dvec3 bp(b.positions[v]), at(a.positions[v]);
+      const glm::dvec3 moved(r * glm::dvec4(bp, 1.0));
+      const double tol = 4e-6 * (glm::length(at) + scale * glm::length(bp) + reach);
+      if (!(glm::length(moved - at) <= tol)) return false;
+      const glm::dvec3 n = linear * glm::dvec3(b.normals[v]);
+      const double len = glm::length(n);
+      if (len > 0.0 ? !(glm::length(n / len - glm::dvec3(a.normals[v])) <= 1e-5) : a.normals[v] != glm::vec3(0.0f))
+        return false;
+    }
+  }
+  *relative = r;
+  return true;
+}
+
+/// The box around a copy's items (scene space, double): spheres' and
+/// joints' centres, SDF grids' lattice corners, displaced meshes' vertices.
+void copyBox(const Scene& scene, const PrimitiveRows& rows, const PrimitiveInstance& copy, glm::dvec3* lo,
+             glm::dvec3* hi, bool withRadii) {
+  *lo = glm::dvec3(INFINITY);
+  *hi = glm::dvec3(-INFINITY);
+  auto add = [&](const glm::dvec3& p, double r) {
+    *lo = glm::min(*lo, p - r);
+    *hi = glm::max(*hi, p + r);
+  };
+  if (copy.type == WT_PRIM_SDF_GRID) {
+    for (std::uint32_t k = 0; k < copy.count; ++k) {
+      const SdfGrid& g = scene.sdfGrids[copy.first + k];
+      for (int corner = 0; corner < 8; ++corner)
+        add(glm::dvec3(g.latticeToScene * glm::dvec4((corner & 1) ? g.cells.x : 0u, (corner & 2) ? g.cells.y : 0u,
+                                                     (corner & 4) ? g.cells.z : 0u, 1.0)),
+            0.0);
+    }
+    return;
+  }
+  if (copy.type == WT_PRIM_DISPLACED) {
+    for (std::uint32_t k = 0; k < copy.count; ++k)
+      for (const glm::vec3& p : scene.displacedMeshes[copy.first + k].positions) add(glm::dvec3(p), 0.0);
+    return;
+  }
+  const auto [first, end] = copyItems(scene, rows, copy);
+  const std::uint32_t per = rowsPerItem(copy.type);
+  for (std::uint32_t i = per * first; i < per * end; ++i) {
+    const WtVec4& p = rows.data[rows.dataFirst[copy.type] + i];
+    add(glm::dvec3(p.x, p.y, p.z), withRadii ? std::abs(double(p.w)) : 0.0);  // a sphere's or joint's radius
+  }
 }
 
 /// Whether copy `c` is the source `s` moved by c's transform times the
@@ -636,6 +764,7 @@ std::pair<std::uint32_t, std::uint32_t> copyItems(const Scene& scene, const Prim
 /// spheres), curves ending at the same joints.
 bool copyMatchesSource(const Scene& scene, const PrimitiveRows& rows, const PrimitiveInstance& c,
                        const PrimitiveInstance& s, glm::dmat4* relative) {
+  if (c.type == WT_PRIM_SDF_GRID || c.type == WT_PRIM_DISPLACED) return surfaceCopyMatchesSource(scene, rows, c, s, relative);
   const auto [lo, hi] = copyItems(scene, rows, c);
   const auto [slo, shi] = copyItems(scene, rows, s);
   if (hi == lo || hi - lo != shi - slo) return false;
@@ -680,7 +809,9 @@ std::vector<InstancedPrimitives> choosePrimitiveGeometries(const Scene& scene, c
   std::map<std::pair<std::uint32_t, std::uint32_t>, std::vector<std::uint32_t>> groups;
   for (std::uint32_t c = 0; c < scene.primitiveInstances.size(); ++c) {
     const PrimitiveInstance& copy = scene.primitiveInstances[c];
-    if (copy.type != WT_PRIM_SPHERE && copy.type != WT_PRIM_CURVE) continue;
+    if (copy.type != WT_PRIM_SPHERE && copy.type != WT_PRIM_CURVE && copy.type != WT_PRIM_SDF_GRID &&
+        copy.type != WT_PRIM_DISPLACED)
+      continue;
     const auto [lo, hi] = copyItems(scene, rows, copy);
     if (hi > lo) groups[{copy.type, copy.geometry}].push_back(c);
   }
@@ -691,15 +822,11 @@ std::vector<InstancedPrimitives> choosePrimitiveGeometries(const Scene& scene, c
     std::uint32_t source = copies[0];
     double best = INFINITY;
     for (std::uint32_t c : copies) {
-      const auto [lo, hi] = copyItems(scene, rows, scene.primitiveInstances[c]);
+      glm::dvec3 lo, hi;
+      copyBox(scene, rows, scene.primitiveInstances[c], &lo, &hi, true);
       Aabb box;
-      const std::uint32_t per = rowsPerItem(key.first);
-      for (std::uint32_t i = per * lo; i < per * hi; ++i) {
-        const WtVec4& p = rows.data[rows.dataFirst[key.first] + i];
-        const float r = std::abs(p.w);  // a sphere's or joint's radius
-        box.extend(glm::vec3(p.x, p.y, p.z) - r);
-        box.extend(glm::vec3(p.x, p.y, p.z) + r);
-      }
+      box.extend(glm::vec3(lo));
+      box.extend(glm::vec3(hi));
       const double coarseness = relativeSpacing(box);
       if (c == copies[0] || coarseness < best) best = coarseness, source = c;
     }
@@ -716,14 +843,8 @@ std::vector<InstancedPrimitives> choosePrimitiveGeometries(const Scene& scene, c
     if (g.copies.size() < 2) continue;
     for (std::uint32_t c : g.copies) taken[c] = 1;
     // the centre of the source's items
-    const auto [lo, hi] = copyItems(scene, rows, scene.primitiveInstances[source]);
-    glm::dvec3 a(INFINITY), b(-INFINITY);
-    const std::uint32_t per = rowsPerItem(g.type);
-    for (std::uint32_t i = per * lo; i < per * hi; ++i) {
-      const WtVec4& p = rows.data[rows.dataFirst[g.type] + i];
-      a = glm::min(a, glm::dvec3(p.x, p.y, p.z));
-      b = glm::max(b, glm::dvec3(p.x, p.y, p.z));
-    }
+    glm::dvec3 a, b;
+    copyBox(scene, rows, scene.primitiveInstances[source], &a, &b, false);
     g.centre = 0.5 * (a + b);
     out.push_back(std::move(g));
   }
@@ -859,12 +980,95 @@ PrimitiveRows SceneBuffers::layoutPrimitiveInstances(const Scene& scene, const P
     if (type == WT_PRIM_SPHERE || type == WT_PRIM_CURVE) boxOf[type][primIndex(full.ids[i])] = std::uint32_t(i);
   }
   for (const InstancedPrimitives& g : geometries)
-    for (std::uint32_t c : g.copies) {
-      const auto [lo, hi] = copyItems(scene, full, scene.primitiveInstances[c]);
-      std::fill(omitted[g.type].begin() + lo, omitted[g.type].begin() + hi, 1);
-    }
-  // the ids that enter the scene's tree: other types' as gathered, spheres' and curves' renumbered below
+    if (g.type == WT_PRIM_SPHERE || g.type == WT_PRIM_CURVE)
+      for (std::uint32_t c : g.copies) {
+        const auto [lo, hi] = copyItems(scene, full, scene.primitiveInstances[c]);
+        std::fill(omitted[g.type].begin() + lo, omitted[g.type].begin() + hi, 1);
+      }
+  // the ids that enter the scene's tree: other types' as gathered, the instanced types' renumbered below
   std::array<std::vector<std::uint32_t>, WT_PRIM_TYPES> renumber;
+  // SDF grids and displaced meshes gathered again: every scene item (the
+  // instanced copies' rows without their bricks, values, vertices or maps,
+  // so indices stay the scene's), then each geometry's source once, in
+  // object space (placed less its centre), whose boxes come out there
+  std::array<PrimitiveRows, WT_PRIM_TYPES> regathered;
+  std::vector<DisplacedMesh> objectMeshes;  // the displaced sources less their centres (kept for the gather)
+  for (std::uint32_t type : {WT_PRIM_SDF_GRID, WT_PRIM_DISPLACED}) {
+    if (std::none_of(geometries.begin(), geometries.end(), [&](const InstancedPrimitives& g) { return g.type == type; }))
+      continue;
+    const std::size_t sceneItems = type == WT_PRIM_SDF_GRID ? scene.sdfGrids.size() : scene.displacedMeshes.size();
+    std::vector<std::uint8_t> drawn(sceneItems, 1);
+    for (const InstancedPrimitives& g : geometries)
+      if (g.type == type)
+        for (std::uint32_t c : g.copies) {
+          const PrimitiveInstance& copy = scene.primitiveInstances[c];
+          std::fill(drawn.begin() + copy.first, drawn.begin() + copy.first + copy.count, 0);
+        }
+    PrimitiveRows& part = regathered[type];
+    if (type == WT_PRIM_SDF_GRID) {
+      std::vector<SdfGridRef> list;
+      for (std::size_t i = 0; i < sceneItems; ++i)
+        list.push_back({&scene.sdfGrids[i], scene.sdfGrids[i].latticeToScene, drawn[i] != 0});
+      for (const InstancedPrimitives& g : geometries) {
+        if (g.type != type) continue;
+        const PrimitiveInstance& source = scene.primitiveInstances[g.copies[0]];
+        for (std::uint32_t k = 0; k < source.count; ++k) {
+          const SdfGrid& grid = scene.sdfGrids[source.first + k];
+          list.push_back({&grid, glm::translate(glm::dmat4(1.0), -g.centre) * grid.latticeToScene, true});
+        }
+      }
+      gatherSdfGridList(list, part);
+    } else {
+      std::size_t sources = 0;
+      for (const InstancedPrimitives& g : geometries)
+        if (g.type == type) sources += scene.primitiveInstances[g.copies[0]].count;
+      objectMeshes.reserve(sources);  // no reallocation: the list points into it
+      std::vector<DisplacedRef> list;
+      for (std::size_t i = 0; i < sceneItems; ++i) list.push_back({&scene.displacedMeshes[i], drawn[i] != 0});
+      for (const InstancedPrimitives& g : geometries) {
+        if (g.type != type) continue;
+        const PrimitiveInstance& source = scene.primitiveInstances[g.copies[0]];
+        for (std::uint32_t k = 0; k < source.count; ++k) {
+          DisplacedMesh mesh = scene.displacedMeshes[source.first + k];
+          for (glm::vec3& p : mesh.positions) p = glm::vec3(glm::dvec3(p) - g.centre);
+          objectMeshes.push_back(std::move(mesh));
+          list.push_back({&objectMeshes.back(), true});
+        }
+      }
+      gatherDisplacedList(list, part, WT_DISP_MAX_DEPTH);
+    }
+    const std::vector<std::uint32_t>& first = type == WT_PRIM_SDF_GRID ? part.sdfBricks : part.displacedTriangles;
+    const std::vector<std::uint32_t>& fullFirst = type == WT_PRIM_SDF_GRID ? full.sdfBricks : full.displacedTriangles;
+    // the scene's items: their own index, the copies' left out
+    const std::uint32_t items = fullFirst.back();
+    m_primDevice[type].assign(items, {0xffffffffu, 0xffffffffu});
+    renumber[type].assign(items, 0xffffffffu);
+    for (std::size_t i = 0; i < sceneItems; ++i) {
+      if (!drawn[i]) continue;
+      const std::uint32_t n = fullFirst[i + 1] - fullFirst[i];
+      if (first[i + 1] - first[i] != n) throw std::logic_error("regathered items differ from the scene's");
+      for (std::uint32_t k = 0; k < n; ++k) {
+        renumber[type][fullFirst[i] + k] = first[i] + k;
+        m_primDevice[type][fullFirst[i] + k] = {first[i] + k, 0xffffffffu};
+        m_primScene[type].push_back(fullFirst[i] + k);  // device index first[i] + k: in order, no gaps
+      }
+    }
+    // each geometry's items after them, with their object-space boxes
+    std::vector<std::uint32_t> boxAt(part.count[type], 0xffffffffu);
+    for (std::size_t i = 0; i < part.ids.size(); ++i)
+      if (primType(part.ids[i]) == type) boxAt[primIndex(part.ids[i])] = std::uint32_t(i);
+    std::size_t entry = sceneItems;
+    for (InstancedPrimitives& g : geometries) {
+      if (g.type != type) continue;
+      const PrimitiveInstance& source = scene.primitiveInstances[g.copies[0]];
+      g.base = first[entry];
+      const std::uint32_t end = first[entry + source.count];
+      entry += source.count;
+      const auto [lo, hi] = copyItems(scene, full, source);
+      if (end - g.base != hi - lo) throw std::logic_error("an instanced geometry's items differ from its copies'");
+      for (std::uint32_t k = g.base; k < end; ++k) g.local.push_back(part.bounds[boxAt[k]]);
+    }
+  }
   for (const PrimitiveType& t : primitiveTypes()) {
     const std::uint32_t type = t.id;
     if (type == WT_PRIM_INSTANCE) {
@@ -876,6 +1080,11 @@ PrimitiveRows SceneBuffers::layoutPrimitiveInstances(const Scene& scene, const P
         const auto [lo, hi] = copyItems(scene, full, scene.primitiveInstances[g.copies[0]]);
         for (std::uint32_t k = 0; k < hi - lo; ++k) {
           const std::uint32_t id = primId(g.type, g.base + k);
+          if (!g.local.empty()) {  // regathered in object space
+            local.bounds.push_back(g.local[k]);
+            local.ids.push_back(id);
+            continue;
+          }
           // the source's box moved in double and widened past the float rounding of the move
           const Aabb& box = full.bounds[boxOf[g.type][lo + k]];  // every item of a copy is usable (copyMatchesSource)
           const glm::dvec3 a = glm::dvec3(box.lo) - g.centre, b = glm::dvec3(box.hi) - g.centre;
@@ -913,6 +1122,16 @@ PrimitiveRows SceneBuffers::layoutPrimitiveInstances(const Scene& scene, const P
         }
       }
       gatherInstances(instances, out);
+      continue;
+    }
+    if (!renumber[type].empty() && type != WT_PRIM_SPHERE && type != WT_PRIM_CURVE) {
+      // regathered above: rows count from their type's first row
+      const PrimitiveRows& part = regathered[type];
+      out.dataFirst[type] = std::uint32_t(out.data.size());
+      out.infoFirst[type] = std::uint32_t(out.info.size());
+      out.data.insert(out.data.end(), part.data.begin(), part.data.end());
+      out.info.insert(out.info.end(), part.info.begin(), part.info.end());
+      out.count[type] = part.count[type];
       continue;
     }
     if (type != WT_PRIM_SPHERE && type != WT_PRIM_CURVE) {
@@ -964,7 +1183,7 @@ PrimitiveRows SceneBuffers::layoutPrimitiveInstances(const Scene& scene, const P
   for (std::size_t i = 0; i < full.ids.size(); ++i) {
     const std::uint32_t id = full.ids[i], type = primType(id);
     if (type == WT_PRIM_INSTANCE) continue;
-    if (type == WT_PRIM_SPHERE || type == WT_PRIM_CURVE) {
+    if (!renumber[type].empty()) {
       const std::uint32_t to = renumber[type][primIndex(id)];
       if (to == 0xffffffffu) continue;
       out.bounds.push_back(full.bounds[i]);

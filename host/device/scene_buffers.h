@@ -209,7 +209,7 @@ class SceneBuffers {
   std::pair<std::uint32_t, std::uint32_t> devicePrimitive(std::uint32_t sceneId) const;
   /// The reverse: the flattened scene's typed id of device primitive `deviceId` hit on `instance`.
   std::uint32_t scenePrimitive(std::uint32_t deviceId, std::uint32_t instance) const;
-  /// Whether spheres or curves are stored once (their device ids differ from the flattened scene's).
+  /// Whether spheres, curves, SDF grids or displaced meshes are stored once (their device ids differ from the flattened scene's).
   bool primitivesInstanced() const { return !m_primInstanceFirst.empty(); }
   /// Scene triangles in instanced copies (each stored once per geometry).
   std::size_t instancedTriangles() const { return m_instancedTriangles; }

@@ -433,15 +433,24 @@ TriangleBoxes triangleBoxes(const DisplacedMesh& mesh, const MapView& map, const
 void gatherDisplaced(const Scene& scene, PrimitiveRows& rows) { gatherDisplacedTo(scene, rows, WT_DISP_MAX_DEPTH); }
 
 void gatherDisplacedTo(const Scene& scene, PrimitiveRows& rows, std::uint32_t maxDepth, int threads) {
+  std::vector<DisplacedRef> list;
+  list.reserve(scene.displacedMeshes.size());
+  for (const DisplacedMesh& m : scene.displacedMeshes) list.push_back({&m, true});
+  gatherDisplacedList(list, rows, maxDepth, threads);
+}
+
+void gatherDisplacedList(std::span<const DisplacedRef> list, PrimitiveRows& rows, std::uint32_t maxDepth,
+                         int threads) {
   rows.dataFirst[WT_PRIM_DISPLACED] = std::uint32_t(rows.data.size());
   rows.infoFirst[WT_PRIM_DISPLACED] = std::uint32_t(rows.info.size());
-  const std::size_t meshes = scene.displacedMeshes.size();
+  const std::size_t meshes = list.size();
+  rows.displacedTriangles.clear();
   // rows from the type's first: headers, then vertices (then the boxes, then the maps)
   std::vector<WtVec4> data(WT_DISP_MESH_ROWS * meshes, WtVec4{0, 0, 0, 0});
   std::vector<std::size_t> vertexRow(meshes, 0);
   for (std::size_t mi = 0; mi < meshes; ++mi) {
-    const DisplacedMesh& m = scene.displacedMeshes[mi];
-    if (!displacedMeshUsable(m)) continue;
+    const DisplacedMesh& m = *list[mi].mesh;
+    if (!list[mi].drawn || !displacedMeshUsable(m)) continue;
     vertexRow[mi] = data.size();
     for (std::size_t v = 0; v < m.positions.size(); ++v) {
       const glm::vec3 p = m.positions[v], n = m.normals[v];
@@ -456,7 +465,9 @@ void gatherDisplacedTo(const Scene& scene, PrimitiveRows& rows, std::uint32_t ma
   std::vector<std::size_t> texelWord(meshes, 0), paletteWord(meshes, ~std::size_t(0));
   std::uint32_t prims = 0;
   for (std::size_t mi = 0; mi < meshes; ++mi) {
-    const DisplacedMesh& m = scene.displacedMeshes[mi];
+    const DisplacedMesh& m = *list[mi].mesh;
+    rows.displacedTriangles.push_back(prims);
+    if (!list[mi].drawn) continue;
     if (!displacedMeshUsable(m)) {
       rows.skipped += m.triangles.size();
       continue;
@@ -557,6 +568,7 @@ void gatherDisplacedTo(const Scene& scene, PrimitiveRows& rows, std::uint32_t ma
       rows.ids.push_back(primId(WT_PRIM_DISPLACED, prims++));
     }
   }
+  rows.displacedTriangles.push_back(prims);
   rows.count[WT_PRIM_DISPLACED] = prims;
   // the offsets known now: boxes after the headers and vertices, texels after the boxes
   const std::size_t boxFirst = data.size(), floatBase = 4 * (data.size() + boxRows.size());
@@ -565,7 +577,7 @@ void gatherDisplacedTo(const Scene& scene, PrimitiveRows& rows, std::uint32_t ma
     if (rows.info[r][3] != ~0u) rows.info[r][3] += std::uint32_t(boxFirst);
   }
   for (std::size_t mi = 0; mi < meshes; ++mi)
-    if (displacedMeshUsable(scene.displacedMeshes[mi])) {
+    if (list[mi].drawn && displacedMeshUsable(*list[mi].mesh)) {
       data[WT_DISP_MESH_ROWS * mi + 1].z = std::bit_cast<float>(std::uint32_t(floatBase + texelWord[mi]));
       if (paletteWord[mi] != ~std::size_t(0))
         data[WT_DISP_MESH_ROWS * mi + 1].w = std::bit_cast<float>(std::uint32_t(floatBase + paletteWord[mi]));

@@ -56,6 +56,10 @@ struct PrimitiveRows {
   std::size_t skipped = 0;  ///< primitives left out (degenerate: zero size, non-finite)
   /// gatherCurves: per Scene::curves entry its first kept segment's index, then the end (curves + 1 entries)
   std::vector<std::uint32_t> curveSegments;
+  /// gatherSdfGrids: per grid its first brick's index, then the end (grids + 1 entries)
+  std::vector<std::uint32_t> sdfBricks;
+  /// gatherDisplaced: per mesh its first kept base triangle's index, then the end (meshes + 1 entries)
+  std::vector<std::uint32_t> displacedTriangles;
 };
 
 /// Whether a sphere can be drawn: a finite centre and a finite radius > 0.
@@ -121,6 +125,16 @@ bool sdfGridUsable(const SdfGrid& grid);
 /// combination), boxed around those cells, grid by grid, bricks x fastest.
 /// count: the bricks kept.
 void gatherSdfGrids(const Scene& scene, PrimitiveRows& rows);
+/// A grid for gatherSdfGridList: placed by `latticeToScene` in place of its
+/// own; `drawn` false writes its rows but none of its bricks or values (a
+/// copy stored once as an instance keeps its index).
+struct SdfGridRef {
+  const SdfGrid* grid = nullptr;
+  glm::dmat4 latticeToScene{1.0};
+  bool drawn = true;
+};
+/// gatherSdfGrids over a list of grids: a brick's grid index is its list index.
+void gatherSdfGridList(std::span<const SdfGridRef> grids, PrimitiveRows& rows);
 /// A gathered brick's surface area, estimated as its crossed cells times a
 /// cell's mean face area (the light list's weight for an emitting brick).
 double sdfBrickArea(const Scene& scene, const PrimitiveRows& rows, std::uint32_t index);
@@ -160,6 +174,16 @@ void gatherDisplaced(const Scene& scene, PrimitiveRows& rows);
 /// the stored ones at small L. The base triangles' boxes are built on
 /// `threads` threads (0: every hardware thread), the same rows on any number.
 void gatherDisplacedTo(const Scene& scene, PrimitiveRows& rows, std::uint32_t maxDepth, int threads = 0);
+/// A mesh for gatherDisplacedList; `drawn` false writes its header rows but
+/// none of its vertices, triangles or map (a copy stored once as an instance
+/// keeps its index).
+struct DisplacedRef {
+  const DisplacedMesh* mesh = nullptr;
+  bool drawn = true;
+};
+/// gatherDisplacedTo over a list of meshes: a base triangle's mesh index is its list index.
+void gatherDisplacedList(std::span<const DisplacedRef> meshes, PrimitiveRows& rows, std::uint32_t maxDepth,
+                         int threads = 0);
 
 /// Which mesh and base triangle a WT_PRIM_DISPLACED typed id's index is.
 struct DisplacedTriangleRef {
@@ -198,7 +222,7 @@ std::size_t tessellateDisplaced(Scene& scene, int perEdge);
 struct InstanceDesc {
   glm::dmat4 objectToScene{1.0};  ///< the geometry's object space -> scene space, double
   std::uint32_t root = 0;         ///< the geometry's root node in SceneBuffers::nodes (primNodes for primitives)
-  bool primitives = false;        ///< a geometry of spheres or curves (WT_INSTANCE_PRIMITIVES)
+  bool primitives = false;        ///< a geometry of spheres, curves, SDF grids or displaced meshes (WT_INSTANCE_PRIMITIVES)
   std::array<Aabb, 4> rootBoxes;  ///< the root's child boxes, object space (empty ones unused)
 };
 

@@ -45,17 +45,26 @@ bool cellCrossed(const SdfGrid& g, std::uint32_t x, std::uint32_t y, std::uint32
 }  // namespace
 
 void gatherSdfGrids(const Scene& scene, PrimitiveRows& rows) {
+  std::vector<SdfGridRef> list;
+  list.reserve(scene.sdfGrids.size());
+  for (const SdfGrid& g : scene.sdfGrids) list.push_back({&g, g.latticeToScene, true});
+  gatherSdfGridList(list, rows);
+}
+
+void gatherSdfGridList(std::span<const SdfGridRef> list, PrimitiveRows& rows) {
   rows.dataFirst[WT_PRIM_SDF_GRID] = std::uint32_t(rows.data.size());
   rows.infoFirst[WT_PRIM_SDF_GRID] = std::uint32_t(rows.info.size());
-  const std::size_t grids = scene.sdfGrids.size();
+  const std::size_t grids = list.size();
+  rows.sdfBricks.clear();
   // the grids' rows first, then their values: offsets count floats from the type's first row
-  for (const SdfGrid& g : scene.sdfGrids) {
+  for (const SdfGridRef& ref : list) {
+    const SdfGrid& g = *ref.grid;
     const bool usable = sdfGridUsable(g);
-    const glm::dmat4 toLattice = usable ? glm::inverse(g.latticeToScene) : glm::dmat4(1.0);
+    const glm::dmat4 toLattice = usable ? glm::inverse(ref.latticeToScene) : glm::dmat4(1.0);
     for (int r = 0; r < 3; ++r)
       rows.data.push_back({float(toLattice[0][r]), float(toLattice[1][r]), float(toLattice[2][r]), float(toLattice[3][r])});
     // a lattice unit's scene length at most: the linear part's Frobenius norm
-    const glm::dmat3 linear(g.latticeToScene);
+    const glm::dmat3 linear(ref.latticeToScene);
     const double unit = std::sqrt(glm::dot(linear[0], linear[0]) + glm::dot(linear[1], linear[1]) + glm::dot(linear[2], linear[2]));
     rows.data.push_back({float(g.cells.x), float(g.cells.y), float(g.cells.z), float(unit)});
   }
@@ -64,7 +73,10 @@ void gatherSdfGrids(const Scene& scene, PrimitiveRows& rows) {
   constexpr std::uint32_t B = WT_SDF_BRICK;
   std::uint32_t bricks = 0;
   for (std::size_t gi = 0; gi < grids; ++gi) {
-    const SdfGrid& g = scene.sdfGrids[gi];
+    const SdfGrid& g = *list[gi].grid;
+    const glm::dmat4& latticeToScene = list[gi].latticeToScene;
+    rows.sdfBricks.push_back(bricks);
+    if (!list[gi].drawn) continue;
     if (!sdfGridUsable(g)) {
       ++rows.skipped;
       continue;
@@ -97,7 +109,7 @@ void gatherSdfGrids(const Scene& scene, PrimitiveRows& rows) {
           for (int corner = 0; corner < 8; ++corner) {
             const glm::dvec3 c((corner & 1) ? cmax.x + 1 : cmin.x, (corner & 2) ? cmax.y + 1 : cmin.y,
                                (corner & 4) ? cmax.z + 1 : cmin.z);
-            const glm::dvec3 w(g.latticeToScene * glm::dvec4(c, 1.0));
+            const glm::dvec3 w(latticeToScene * glm::dvec4(c, 1.0));
             blo = glm::min(blo, w);
             bhi = glm::max(bhi, w);
           }
@@ -131,6 +143,7 @@ void gatherSdfGrids(const Scene& scene, PrimitiveRows& rows) {
           rows.ids.push_back(primId(WT_PRIM_SDF_GRID, bricks++));
         }
   }
+  rows.sdfBricks.push_back(bricks);
   rows.count[WT_PRIM_SDF_GRID] = bricks;
   for (std::size_t i = 0; i < values.size(); i += 4) {
     float v[4] = {0.0f, 0.0f, 0.0f, 0.0f};

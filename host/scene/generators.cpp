@@ -424,9 +424,20 @@ void appendScene(Scene& dst, const Scene& src) {
   for (const PrimitiveInstance& copy : dst.primitiveInstances)
     primitiveGeometryBase = std::max(primitiveGeometryBase, copy.geometry + 1);
   for (PrimitiveInstance copy : src.primitiveInstances) {
-    copy.first += std::uint32_t(copy.type == WT_PRIM_SPHERE ? dst.spheres.size() : dst.curves.size());
+    copy.first += std::uint32_t(copy.type == WT_PRIM_SPHERE     ? dst.spheres.size()
+                                : copy.type == WT_PRIM_CURVE    ? dst.curves.size()
+                                : copy.type == WT_PRIM_SDF_GRID ? dst.sdfGrids.size()
+                                                                : dst.displacedMeshes.size());
     copy.geometry += primitiveGeometryBase;
     dst.primitiveInstances.push_back(copy);
+  }
+  for (SdfGrid grid : src.sdfGrids) {
+    grid.material += materialBase;
+    dst.sdfGrids.push_back(std::move(grid));
+  }
+  for (DisplacedMesh mesh : src.displacedMeshes) {
+    mesh.material += materialBase;
+    dst.displacedMeshes.push_back(std::move(mesh));
   }
   for (Sphere sphere : src.spheres) {
     sphere.material += materialBase;
@@ -505,6 +516,30 @@ Scene placeCopies(const Scene& mesh, std::span<const glm::mat4> transforms) {
     for (const WtVec4& p : mesh.curvePoints) {
       const glm::vec3 moved(transform * glm::vec4(p.x, p.y, p.z, 1.0f));
       scene.curvePoints.push_back({moved.x, moved.y, moved.z, p.w * radiusScale});
+    }
+    // SDF grids: the lattice placed by the transform (any affine one), values as they are
+    if (!mesh.sdfGrids.empty())
+      scene.primitiveInstances.push_back({WT_PRIM_SDF_GRID, std::uint32_t(scene.sdfGrids.size()),
+                                          std::uint32_t(mesh.sdfGrids.size()), 0, glm::dmat4(transform)});
+    for (SdfGrid g : mesh.sdfGrids) {
+      g.latticeToScene = glm::dmat4(transform) * g.latticeToScene;
+      scene.sdfGrids.push_back(std::move(g));
+    }
+    // displaced meshes: vertices and normals moved, displacements scaled as radii, corners swapped by a mirror
+    if (!mesh.displacedMeshes.empty())
+      scene.primitiveInstances.push_back({WT_PRIM_DISPLACED, std::uint32_t(scene.displacedMeshes.size()),
+                                          std::uint32_t(mesh.displacedMeshes.size()), 0, glm::dmat4(transform)});
+    for (DisplacedMesh d : mesh.displacedMeshes) {
+      for (glm::vec3& p : d.positions) p = glm::vec3(glm::dmat4(transform) * glm::dvec4(glm::dvec3(p), 1.0));
+      for (glm::vec3& n : d.normals) {
+        const glm::vec3 m = normalMatrix * n;
+        n = glm::dot(m, m) > 0.0f ? glm::normalize(m) : m;
+      }
+      if (flip)
+        for (auto& t : d.triangles) std::swap(t[1], t[2]);
+      d.scale *= radiusScale;
+      d.offset *= radiusScale;
+      scene.displacedMeshes.push_back(std::move(d));
     }
   }
   return scene;

@@ -59,7 +59,7 @@ void addChildCurves(Scene& scene, std::uint32_t firstGuide, std::uint32_t guideC
 /// 100 guides x 100 children make 10 100 curves of 15 segments (151 500).
 Scene makeHairScene(std::uint32_t guides = 100, std::uint32_t children = 100, std::uint32_t seed = 1);
 
-/// Append `src` to `dst` (vertices, triangles, spheres, curves, materials re-indexed;
+/// Append `src` to `dst` (vertices, triangles, spheres, curves, SDF grids, displaced meshes, materials re-indexed;
 /// src's placed copies kept, its geometry ids renumbered past dst's). Both
 /// must share one Scene::origin.
 void appendScene(Scene& dst, const Scene& src);
@@ -70,8 +70,10 @@ void appendScene(Scene& dst, const Scene& src);
 /// bitangent's side, as the glTF loader does; texture coordinates and vertex
 /// colours kept), each recorded in Scene::instances with its transform as a
 /// copy of one geometry; likewise its spheres and curves (radii by the cube
-/// root of the determinant) in Scene::primitiveInstances; the materials and
-/// their textures once.
+/// root of the determinant), SDF grids (the lattice placed by the transform)
+/// and displaced meshes (vertices, normals and corners as triangles',
+/// displacements scaled as radii) in Scene::primitiveInstances; the
+/// materials and their textures once.
 Scene placeCopies(const Scene& mesh, std::span<const glm::mat4> transforms);
 
 /// A Lambertian material; emission from the front face only unless twoSided.

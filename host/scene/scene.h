@@ -64,15 +64,17 @@ struct GeometryInstance {
   glm::dmat4 transform{1.0};
 };
 
-/// A placed copy of a set of spheres or curves: Scene::spheres (type
-/// WT_PRIM_SPHERE) or Scene::curves (WT_PRIM_CURVE) [first, first + count)
-/// are the geometry's items moved by `transform`, which is a similarity
-/// (rotation, uniform scale, translation; radii scale with it). Copies that
-/// share `geometry` (per type) can be stored once (SceneBuffers with
-/// Instancing::On); a copy that is not its source moved by the transforms
-/// (checked on the host) stays flattened.
+/// A placed copy of a set of spheres, curves, SDF grids or displaced
+/// meshes: Scene::spheres (type WT_PRIM_SPHERE), Scene::curves
+/// (WT_PRIM_CURVE), Scene::sdfGrids (WT_PRIM_SDF_GRID) or
+/// Scene::displacedMeshes (WT_PRIM_DISPLACED) [first, first + count) are the
+/// geometry's items moved by `transform`, which is a similarity (rotation,
+/// uniform scale, translation; radii and displacements scale with it), or
+/// for SDF grids any affine map. Copies that share `geometry` (per type) can
+/// be stored once (SceneBuffers with Instancing::On); a copy that is not its
+/// source moved by the transforms (checked on the host) stays flattened.
 struct PrimitiveInstance {
-  std::uint32_t type = WT_PRIM_SPHERE;  ///< WT_PRIM_SPHERE or WT_PRIM_CURVE
+  std::uint32_t type = WT_PRIM_SPHERE;  ///< WT_PRIM_SPHERE, _CURVE, _SDF_GRID or _DISPLACED
   std::uint32_t first = 0, count = 0;
   std::uint32_t geometry = 0;
   glm::dmat4 transform{1.0};  ///< geometry space -> scene space (world less Scene::origin), double
@@ -158,7 +160,7 @@ struct Scene {
   std::vector<GeometryInstance> instances; ///< placed copies, in triangle order; may be empty (no copies known)
   std::vector<Sphere> spheres;            ///< analytic spheres (scene files only: glTF has none)
   std::vector<Curve> curves;              ///< round curves (scene files, .hair and .ply strands)
-  std::vector<PrimitiveInstance> primitiveInstances;  ///< placed copies of spheres and curves; may be empty
+  std::vector<PrimitiveInstance> primitiveInstances;  ///< placed copies of spheres, curves, SDF grids and displaced meshes; may be empty
   std::vector<WtVec4> curvePoints;        ///< the curves' points: xyz world relative to origin, w = radius (world units, >= 0)
   std::vector<SdfGrid> sdfGrids;          ///< grids of signed distances (scene files, or made in code)
   std::vector<DisplacedMesh> displacedMeshes;  ///< displaced triangle meshes (scene files, or made in code)

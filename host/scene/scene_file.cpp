@@ -56,6 +56,9 @@ constexpr std::int64_t kMaxChildren = 100000;
 constexpr std::uint64_t kMaxSpheres = std::uint64_t(1) << 28;
 /// Transforms in one object's "instances".
 constexpr std::size_t kMaxInstances = std::size_t(1) << 20;
+/// Floats the SDF grids' and displaced meshes' copies may hold on the host
+/// (values; vertices and texels), copies included: a copy is flattened there.
+constexpr std::uint64_t kMaxCopiedFloats = std::uint64_t(1) << 30;
 
 // paths and values in messages
 
@@ -198,6 +201,8 @@ struct WorldSphere {
 /// An "sdf" object, its lattice placed in world coordinates (before the origin is subtracted).
 struct WorldSdf {
   SdfGrid grid;
+  std::vector<glm::dmat4> instances;  ///< "instances": each copy's world from the grid's (empty: placed once)
+  std::uint32_t geometry = 0;         ///< with instances: shared by the copies (PrimitiveInstance::geometry)
   std::string path;  ///< "objects[2]"
 };
 
@@ -205,6 +210,8 @@ struct WorldSdf {
 struct WorldDisplaced {
   DisplacedMesh mesh;                   ///< all but the positions
   std::vector<glm::dvec3> positions;    ///< world
+  std::vector<glm::dmat4> instances;    ///< "instances": each copy's world from `positions`' (empty: placed once)
+  std::uint32_t geometry = 0;           ///< with instances: shared by the copies (PrimitiveInstance::geometry)
   std::string path;                     ///< "objects[2]"
 };
 
@@ -640,7 +647,7 @@ class Loader {
 
   /// A triangle mesh (glTF or PLY) displaced along its normals by a map (PNG, JPEG or EXR).
   void readDisplaced(const Json& v, const std::string& path) {
-    checkKeys(v, path, {"type", "mesh", "displacement", "scale", "offset", "level", "transform", "material"});
+    checkKeys(v, path, {"type", "mesh", "displacement", "scale", "offset", "level", "transform", "material", "instances"});
     WorldDisplaced out;
     out.path = path;
     DisplacedMesh& mesh = out.mesh;
@@ -651,6 +658,7 @@ class Loader {
     if (const Json* x = find(v, "level")) mesh.level = int(integer(*x, member(path, "level"), 0, WT_DISP_MAX_LEVEL));
     glm::dmat4 transform(1.0);
     if (const Json* t = find(v, "transform")) transform = readTransform(*t, member(path, "transform"));
+    out.instances = readInstances(v, path, "keep displacements along the normals");
 
     // the base mesh, in the file's world
     const std::string meshWhere = member(path, "mesh");
@@ -756,13 +764,15 @@ class Loader {
                            std::to_string(i / mesh.mapWidth) + ") is " + (std::isnan(mesh.map[i]) ? "NaN" : "infinite") +
                            " (displacements must be finite)");
     mesh.material = materialOf(v, path);
+    if (!out.instances.empty()) out.geometry = m_primitiveGeometries[3]++;
+    countCopiedFloats(path, 4 * out.positions.size() + mesh.map.size(), out.instances.size());
     m_displaced.push_back(std::move(out));
   }
 
   /// A grid of signed distances: a procedural shape at a resolution, or a .vol file.
   void readSdf(const Json& v, const std::string& path) {
     checkKeys(v, path, {"type", "shape", "resolution", "radius", "minor_radius", "half_size", "amplitude", "frequency",
-                        "file", "box", "storage", "transform", "material"});
+                        "file", "box", "storage", "transform", "material", "instances"});
     const Json* shapeValue = find(v, "shape");
     const Json* file = find(v, "file");
     if (shapeValue && file) fail(path, "give \"shape\" (procedural) or \"file\" (a .vol grid), not both");
@@ -848,6 +858,9 @@ class Loader {
     if (const Json* t = find(v, "transform")) transform = readTransform(*t, member(path, "transform"));
     sdf.grid.latticeToScene = transform * volume.latticeToObject();
     sdf.grid.material = materialOf(v, path);
+    sdf.instances = readInstances(v, path, nullptr);  // any affine copy of a grid is a grid
+    if (!sdf.instances.empty()) sdf.geometry = m_primitiveGeometries[2]++;
+    countCopiedFloats(path, sdf.grid.values.size(), sdf.instances.size());
     m_sdfs.push_back(std::move(sdf));
   }
 
@@ -930,7 +943,7 @@ class Loader {
       fail(member(path, "child_radius"), "missing (required with \"children\": how far children stray from their guide)");
     }
     if (const Json* x = find(v, "seed")) curves.seed = std::uint32_t(integer(*x, member(path, "seed"), 0, std::numeric_limits<std::uint32_t>::max()));
-    curves.instances = readInstances(v, path);
+    curves.instances = readInstances(v, path, "keep spheres and curves round");
     if (!curves.instances.empty()) curves.geometry = m_primitiveGeometries[1]++;
     m_curvePoints += std::uint64_t(local.size()) * (std::uint64_t(curves.children) + 1) *
                      std::max<std::uint64_t>(curves.instances.size(), 1);
@@ -984,7 +997,19 @@ class Loader {
   /// shapes, since a sphere or a round curve must stay one: a rotation, one
   /// scale for every axis (negative: a mirror) and a translation. Empty
   /// when the object has none.
-  std::vector<glm::dmat4> readInstances(const Json& v, const std::string& path) const {
+  /// Count an SDF grid's or displaced mesh's floats once per copy (the host
+  /// holds every copy) against kMaxCopiedFloats.
+  void countCopiedFloats(const std::string& path, std::uint64_t floats, std::size_t copies) {
+    m_copiedFloats += floats * std::max<std::uint64_t>(copies, 1);
+    if (m_copiedFloats > kMaxCopiedFloats)
+      fail(copies > 0 ? member(path, "instances") : path,
+           "brings the scene's SDF values, displaced vertices and texels to " + std::to_string(m_copiedFloats) +
+               " floats (copies included), more than the " + std::to_string(kMaxCopiedFloats) + " supported");
+  }
+
+  /// `keeps`: why the transforms must be similarities ("keep spheres and
+  /// curves round"); null for any invertible affine transform (SDF grids).
+  std::vector<glm::dmat4> readInstances(const Json& v, const std::string& path, const char* keeps) const {
     const Json* x = find(v, "instances");
     if (!x) return {};
     const std::string where = member(path, "instances");
@@ -998,6 +1023,10 @@ class Loader {
     for (std::size_t k = 0; k < x->size(); ++k) {
       const std::string at = element(where, k);
       const glm::dmat4 m = readTransform((*x)[k], at);
+      if (!keeps) {
+        out.push_back(m);
+        continue;
+      }
       // columns of one length and perpendicular, to the digits a typed
       // rotation matrix carries (the renderer checks its copies as closely)
       const glm::dmat3 l(m);
@@ -1006,7 +1035,7 @@ class Loader {
       for (int i = 0; i < 3; ++i)
         for (int j = 0; j < 3; ++j)
           if (!(std::abs(glm::dot(l[i], l[j]) - (i == j ? s2 : 0.0)) <= 1e-5 * s2))
-            fail(at, "must keep spheres and curves round: a rotation, one scale for all axes and a translation "
+            fail(at, std::string("must ") + keeps + ": a rotation, one scale for all axes and a translation "
                      "(its axes are scaled by " + formatNumber(lengths.x) + ", " + formatNumber(lengths.y) + ", " +
                      formatNumber(lengths.z) + (i == j ? ")" : " and are not perpendicular)"));
       out.push_back(m);
@@ -1018,7 +1047,7 @@ class Loader {
   /// object's own coordinates: they move to m_instancedSpheres, one
   /// SphereCopy per transform.
   void copySpheres(const Json& v, const std::string& path, std::size_t first) {
-    const std::vector<glm::dmat4> instances = readInstances(v, path);
+    const std::vector<glm::dmat4> instances = readInstances(v, path, "keep spheres and curves round");
     const std::size_t count = m_spheres.size() - first;
     m_sphereCount += count * std::max<std::size_t>(instances.size(), 1);
     if (m_sphereCount > kMaxSpheres)
@@ -1291,25 +1320,61 @@ class Loader {
       }
     }
     for (const WorldCurves& c : m_curves) placeCurves(c, origin);
+    // SDF grids and displaced meshes: one per copy with "instances" (each a PrimitiveInstance), else one
+    const glm::dmat4 toScene = glm::translate(glm::dmat4(1.0), -origin);
     for (WorldSdf& sdf : m_sdfs) {
-      SdfGrid grid = std::move(sdf.grid);
-      grid.latticeToScene[3] -= glm::dvec4(origin, 0.0);
-      for (int corner = 0; corner < 8; ++corner) {
-        const glm::dvec3 c((corner & 1) ? grid.cells.x : 0u, (corner & 2) ? grid.cells.y : 0u, (corner & 4) ? grid.cells.z : 0u);
-        if (!isFinite(glm::vec3(glm::dvec3(grid.latticeToScene * glm::dvec4(c, 1.0)))))
-          fail(sdf.path, "the grid's box lies beyond the range of a float from the scene's origin");
+      const std::size_t copies = std::max<std::size_t>(sdf.instances.size(), 1);
+      for (std::size_t k = 0; k < copies; ++k) {
+        const std::string where = sdf.instances.empty() ? sdf.path : element(member(sdf.path, "instances"), k);
+        const glm::dmat4 world = sdf.instances.empty() ? glm::dmat4(1.0) : sdf.instances[k];
+        SdfGrid grid = k + 1 == copies ? std::move(sdf.grid) : sdf.grid;
+        if (!sdf.instances.empty()) grid.latticeToScene = world * grid.latticeToScene;
+        grid.latticeToScene[3] -= glm::dvec4(origin, 0.0);
+        for (int corner = 0; corner < 8; ++corner) {
+          const glm::dvec3 c((corner & 1) ? grid.cells.x : 0u, (corner & 2) ? grid.cells.y : 0u, (corner & 4) ? grid.cells.z : 0u);
+          if (!isFinite(glm::vec3(glm::dvec3(grid.latticeToScene * glm::dvec4(c, 1.0)))))
+            fail(where, "the grid's box lies beyond the range of a float from the scene's origin");
+        }
+        if (!sdf.instances.empty())
+          scene.primitiveInstances.push_back(
+              {WT_PRIM_SDF_GRID, std::uint32_t(scene.sdfGrids.size()), 1u, sdf.geometry, toScene * world});
+        scene.sdfGrids.push_back(std::move(grid));
       }
-      scene.sdfGrids.push_back(std::move(grid));
     }
     for (WorldDisplaced& d : m_displaced) {
-      DisplacedMesh mesh = std::move(d.mesh);
-      mesh.positions.reserve(d.positions.size());
-      for (std::size_t i = 0; i < d.positions.size(); ++i) {
-        const glm::vec3 q(d.positions[i] - origin);
-        if (!isFinite(q)) fail(d.path, "vertex " + std::to_string(i) + " lies beyond the range of a float from the scene's origin");
-        mesh.positions.push_back(q);
+      const std::size_t copies = std::max<std::size_t>(d.instances.size(), 1);
+      for (std::size_t k = 0; k < copies; ++k) {
+        const std::string where = d.instances.empty() ? d.path : element(member(d.path, "instances"), k);
+        const glm::dmat4 world = d.instances.empty() ? glm::dmat4(1.0) : d.instances[k];
+        DisplacedMesh mesh = k + 1 == copies ? std::move(d.mesh) : d.mesh;
+        const glm::dmat3 linear(world);
+        if (!d.instances.empty()) {
+        // a similarity (readInstances): normals turn with it, displacements scale with it, a mirror swaps corners
+        const double scale = std::cbrt(std::fabs(glm::determinant(linear)));
+        for (glm::vec3& n : mesh.normals) {
+          const glm::dvec3 m = linear * glm::dvec3(n);
+          const double len = glm::length(m);
+          n = len > 0.0 && std::isfinite(len) ? glm::vec3(m / len) : glm::vec3(0.0f);
+        }
+        if (glm::determinant(linear) < 0.0)
+          for (auto& t : mesh.triangles) std::swap(t[1], t[2]);
+        mesh.scale = float(scale * double(mesh.scale));
+        mesh.offset = float(scale * double(mesh.offset));
+        if (!std::isfinite(mesh.scale) || !std::isfinite(mesh.offset))
+          fail(where, "the displacement's scale and offset leave the range of a float");
+        }
+        mesh.positions.clear();
+        mesh.positions.reserve(d.positions.size());
+        for (std::size_t i = 0; i < d.positions.size(); ++i) {
+          const glm::vec3 q(d.instances.empty() ? d.positions[i] - origin : glm::dvec3(world * glm::dvec4(d.positions[i], 1.0)) - origin);
+          if (!isFinite(q)) fail(where, "vertex " + std::to_string(i) + " lies beyond the range of a float from the scene's origin");
+          mesh.positions.push_back(q);
+        }
+        if (!d.instances.empty())
+          scene.primitiveInstances.push_back(
+              {WT_PRIM_DISPLACED, std::uint32_t(scene.displacedMeshes.size()), 1u, d.geometry, toScene * world});
+        scene.displacedMeshes.push_back(std::move(mesh));
       }
-      scene.displacedMeshes.push_back(std::move(mesh));
     }
     if (scene.materials.empty()) {
       scene.materials.push_back(makePbrMaterial(glm::vec3(0.8f), 0.0f, 0.5f));
@@ -1356,17 +1421,24 @@ class Loader {
         }
       }
     for (const WorldSdf& s : m_sdfs)
-      for (int corner = 0; corner < 8; ++corner) {
-        const glm::dvec3 c((corner & 1) ? s.grid.cells.x : 0u, (corner & 2) ? s.grid.cells.y : 0u,
-                           (corner & 4) ? s.grid.cells.z : 0u);
-        const glm::dvec3 w(s.grid.latticeToScene * glm::dvec4(c, 1.0));
-        lo = glm::min(lo, w);
-        hi = glm::max(hi, w);
+      for (std::size_t k = 0; k < std::max<std::size_t>(s.instances.size(), 1); ++k) {
+        const glm::dmat4 m = (s.instances.empty() ? glm::dmat4(1.0) : s.instances[k]) * s.grid.latticeToScene;
+        for (int corner = 0; corner < 8; ++corner) {
+          const glm::dvec3 c((corner & 1) ? s.grid.cells.x : 0u, (corner & 2) ? s.grid.cells.y : 0u,
+                             (corner & 4) ? s.grid.cells.z : 0u);
+          const glm::dvec3 w(m * glm::dvec4(c, 1.0));
+          lo = glm::min(lo, w);
+          hi = glm::max(hi, w);
+        }
       }
     for (const WorldDisplaced& d : m_displaced)
-      for (const glm::dvec3& p : d.positions) {
-        lo = glm::min(lo, p);
-        hi = glm::max(hi, p);
+      for (std::size_t k = 0; k < std::max<std::size_t>(d.instances.size(), 1); ++k) {
+        const glm::dmat4 m = d.instances.empty() ? glm::dmat4(1.0) : d.instances[k];
+        for (const glm::dvec3& p : d.positions) {
+          const glm::dvec3 q(m * glm::dvec4(p, 1.0));
+          lo = glm::min(lo, q);
+          hi = glm::max(hi, q);
+        }
       }
     const double kFloatMax = std::numeric_limits<float>::max();
     if (lo.x <= hi.x && lo.y <= hi.y && lo.z <= hi.z && isFinite(lo) && isFinite(hi) &&
@@ -1539,7 +1611,8 @@ class Loader {
   std::vector<WorldSphere> m_instancedSpheres;  ///< the spheres of objects with "instances", as written
   std::size_t m_sphereCount = 0;                ///< copies included
   std::size_t m_objectIndex = 0;                ///< the object being read
-  std::uint32_t m_primitiveGeometries[2] = {0, 0};  ///< the next PrimitiveInstance::geometry of spheres, curves
+  std::uint32_t m_primitiveGeometries[4] = {0, 0, 0, 0};  ///< the next PrimitiveInstance::geometry of spheres, curves, SDF grids, displaced meshes
+  std::uint64_t m_copiedFloats = 0;                 ///< SDF grids' and displaced meshes' floats, copies included
 };
 
 }  // namespace

@@ -64,17 +64,20 @@ struct DisplacedFiles {
 
 /// The displaced sphere (scale 0.15 h - 0.075 about radius 0.6) on a ground sphere under a sphere light,
 /// everything scaled by `scale` and moved by `translate` on every axis, as a scene file.
+/// `instanced`: placed twice by "instances", the second copy 20 units behind the camera.
 std::string displacedSceneJson(const DisplacedFiles& files, double translate, double scale, double mapScale = 0.15,
-                               double mapOffset = -0.075) {
+                               double mapOffset = -0.075, bool instanced = false) {
   const stress_rows::ScaledJson json{translate, scale};
   auto p = [&](double x, double y, double z) { return json.point(x, y, z); };
   auto r = [&](double v) { return json.length(v); };
+  const std::string copies =
+      instanced ? R"(, "instances": [{"translate": [0, 0, 0]}, {"translate": [0, 0, )" + r(20) + "]}]" : "";
   return json.stage(R"(    "clay": {"base_color": [0.8, 0.5, 0.4], "roughness": 0.5},
 )",
                     R"(    {"type": "displaced", "mesh": ")" + files.ply.string() + R"(", "displacement": ")" +
                         files.exr.string() + R"(", "scale": )" + r(mapScale) + R"(, "offset": )" + r(mapOffset) +
                         R"(, "material": "clay",
-     "transform": {"translate": )" + p(0, 0.6, 0) + R"(, "scale": )" + r(0.6) + R"(}},
+     "transform": {"translate": )" + p(0, 0.6, 0) + R"(, "scale": )" + r(0.6) + "}" + copies + R"(},
 )");
 }
 
@@ -91,6 +94,14 @@ std::vector<StressRow> stressDisplaced(Context& context, const StressOptions& op
       "displaced icosphere (320 base triangles, 32^2 map)", options, study, [&](double translate, double scale) {
         return render(context, load(displacedSceneJson(files, translate, scale)), settings);
       });
+  // as an instance: the full suite only (the quick one's budget; CTest's instancing tests cover the copies)
+  if (!options.quick)
+    for (StressRow& row : stress_rows::instancedTransformRows(
+             context, "displaced icosphere as an instance (two copies, one behind the camera)", options, study, 2,
+             [&](double translate, double scale) {
+               return load(displacedSceneJson(files, translate, scale, 0.15, -0.075, true));
+             }))
+      rows.push_back(std::move(row));
 
   // zero displacement: the base mesh, as a plain triangle mesh
   {

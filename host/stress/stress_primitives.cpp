@@ -360,16 +360,19 @@ std::vector<StressRow> curveDegenerate(Context& context, const StressOptions& op
 
 /// An SDF torus and a noisy SDF sphere (64^3 cells, one sparse, one dense)
 /// on a ground sphere under a sphere light, scaled by `scale` and moved by
-/// `translate` on every axis, as a scene file.
-std::string sdfSceneJson(double translate, double scale) {
+/// `translate` on every axis, as a scene file; `instanced`: the torus placed
+/// twice by "instances", the second copy 20 units behind the camera.
+std::string sdfSceneJson(double translate, double scale, bool instanced = false) {
   const stress_rows::ScaledJson json{translate, scale};
   auto p = [&](double x, double y, double z) { return json.point(x, y, z); };
   auto r = [&](double v) { return json.length(v); };
+  const std::string copies =
+      instanced ? R"(, "instances": [{"translate": [0, 0, 0]}, {"translate": [0, 0, )" + r(20) + "]}]" : "";
   return json.stage(R"(    "metal": {"base_color": [0.9, 0.6, 0.3], "metallic": 1, "roughness": 0.3},
     "white": {"type": "lambert", "base_color": [0.8, 0.8, 0.8]},
 )",
                     R"(    {"type": "sdf", "shape": "torus", "resolution": 64, "storage": "sparse", "material": "metal",
-     "transform": {"translate": )" + p(-0.6, 0.3, 0) + R"(, "scale": )" + r(0.6) + R"(}},
+     "transform": {"translate": )" + p(-0.6, 0.3, 0) + R"(, "scale": )" + r(0.6) + "}" + copies + R"(},
     {"type": "sdf", "shape": "noisy_sphere", "resolution": 64, "storage": "dense", "material": "white",
      "transform": {"translate": )" + p(0.6, 0.45, 0.2) + R"(, "scale": )" + r(0.5) + R"(}},
 )");
@@ -379,11 +382,20 @@ std::string sdfSceneJson(double translate, double scale) {
 /// untransformed image within noise.
 std::vector<StressRow> sdfTransforms(Context& context, const StressOptions& options) {
   const stress_rows::TransformStudy study = stress_rows::transformStudy(options, 4);
-  return stress_rows::transformRows(
+  std::vector<StressRow> rows = stress_rows::transformRows(
       "SDF grids (a sparse torus, a dense noisy sphere, 64^3)", options, study, [&](double translate, double scale) {
         return render(context, loadSceneFileFromMemory(sdfSceneJson(translate, scale), "sdf (stress)", ".").scene,
                       study.settings);
       });
+  // as an instance: the full suite only (the quick one's budget; CTest's instancing tests cover the copies)
+  if (options.quick) return rows;
+  for (StressRow& row : stress_rows::instancedTransformRows(
+           context, "SDF grids, the torus as an instance (two copies, one behind the camera)", options, study, 2,
+           [&](double translate, double scale) {
+             return loadSceneFileFromMemory(sdfSceneJson(translate, scale, true), "sdf (stress)", ".").scene;
+           }))
+    rows.push_back(std::move(row));
+  return rows;
 }
 
 /// SDF grids with NaN, no surface, or an unusable shape: a NaN in a .vol

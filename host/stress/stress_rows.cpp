@@ -1,4 +1,5 @@
 #include "stress/stress_rows.h"
+#include "device/scene_buffers.h"
 
 #include <cmath>
 #include <sstream>
@@ -93,6 +94,29 @@ std::vector<StressRow> transformRows(const std::string& what, const StressOption
     const Rendered r = renderCase(c.translate, c.scale);
     rows.push_back(agreementRow(what + ": " + c.name, r, reference, study, "against the untransformed scene", start));
   }
+  return rows;
+}
+
+std::vector<StressRow> instancedTransformRows(
+    Context& context, const std::string& what, const StressOptions& options, const TransformStudy& study,
+    std::size_t copies, const std::function<Scene(double translate, double scale)>& loadCase) {
+  TransformStudy instanced = study;
+  instanced.settings.instancing = Instancing::On;
+  std::vector<std::size_t> counts;
+  std::vector<StressRow> rows = transformRows(what, options, instanced, [&](double translate, double scale) {
+    const Scene scene = loadCase(translate, scale);
+    BvhBuildOptions bvh;
+    bvh.instancing = Instancing::On;
+    counts.push_back(SceneBuffers(context, scene, bvh).instanceCount());
+    return render(context, scene, instanced.settings);
+  });
+  // counts[0] is the reference's, then one per row
+  for (std::size_t i = 0; i < rows.size(); ++i)
+    for (std::size_t n : {counts[0], counts[i + 1]})
+      if (n != copies) {
+        rows[i].pass = false;
+        rows[i].figure += ", " + std::to_string(n) + " instances (expected " + std::to_string(copies) + ")";
+      }
   return rows;
 }
 

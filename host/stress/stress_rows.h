@@ -65,4 +65,11 @@ std::vector<StressRow> transformRows(const std::string& what, const StressOption
                                      const TransformStudy& study,
                                      const std::function<Rendered(double translate, double scale)>& renderCase);
 
+/// transformRows for a scene file whose copies (`copies` of them) must be
+/// stored as instances (Instancing::On): each row fails, saying so, where
+/// the uploaded scene has another number of instances.
+std::vector<StressRow> instancedTransformRows(
+    Context& context, const std::string& what, const StressOptions& options, const TransformStudy& study,
+    std::size_t copies, const std::function<Scene(double translate, double scale)>& loadCase);
+
 }  // namespace wt::stress_rows

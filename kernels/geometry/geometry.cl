@@ -220,7 +220,7 @@ inline SurfaceHit geometry_surface(GeometryScene g, __global const float4* tri_v
       s.material = tri_info[prim].w;
       return s;
     }
-    // spheres and curves: the surface in object space (t carries over), moved back
+    // the other types: the surface in object space (t carries over), moved back
     s = geometry_local_surface(g, tri_verts, tri_info, normals, prim, instance_point(rows, o),
                                instance_vector(rows, d), hit);
     instance_to_scene(rows, s.p, s.p_error, s.ng, s.ns, s.dpdu, &s.p, &s.p_error, &s.ng, &s.ns, &s.dpdu);

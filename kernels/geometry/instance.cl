@@ -1,6 +1,6 @@
 // Instances (WT_PRIM_INSTANCE): a geometry stored once, in its own "object
 // space" (triangles: its tree in `nodes` after the scene's, its triangles in
-// tri_verts and tri_info after the scene's; spheres or curves: its tree in
+// tri_verts and tri_info after the scene's; other types: its tree in
 // prim_nodes, traversed by kernels/bvh_prims.cl), placed by one affine
 // transform per copy. A copy's rows (shared/types.h, WT_INSTANCE_ROWS): object-from-
 // scene, then scene-from-object, each a 3x4 matrix in three float4 rows,

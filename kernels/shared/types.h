@@ -87,7 +87,7 @@ typedef struct WtBvh4Node {
 /// y = WT_INSTANCE_* flags.
 #define WT_INSTANCE_ROWS 6
 #define WT_INSTANCE_MIRRORED 1u  ///< the transform's determinant is negative (the copy's corners 1 and 2 swapped)
-#define WT_INSTANCE_PRIMITIVES 2u  ///< the root is a node of prim_nodes (spheres, curves), not of nodes (triangles)
+#define WT_INSTANCE_PRIMITIVES 2u  ///< the root is a node of prim_nodes (spheres, curves, SDF grids, displaced meshes), not of nodes (triangles)
 /// A base triangle of a displaced mesh (kernels/geometry/displaced.cl),
 /// intersected as 4^L micro-triangles that are never stored (their
 /// corners' displacements are, up to level WT_DISP_MAX_DEPTH + 1). prim_data: per

@@ -770,6 +770,57 @@ TEST(SceneFileAssets, HeadMeshLoads) {
   EXPECT_EQ(s.triangles.size(), 7694u);
 }
 
+/// "instances" place an SDF grid (any affine transform: one copy here is
+/// scaled unevenly) or a displaced mesh (similarities: its displacement
+/// scales with the copy) once per transform, each a PrimitiveInstance of one
+/// geometry per object: the grid's lattice and the mesh's vertices moved by
+/// the copy's transform after the object's own.
+TEST(SceneFile, SdfGridsAndDisplacedMeshesPlacedAsInstances) {
+  writeFile(testDir() / "uv_square.ply",
+            "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n"
+            "property float u\nproperty float v\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n"
+            "0 0 0 0 0\n1 0 0 1 0\n1 1 0 1 1\n0 1 0 0 1\n4 0 1 2 3\n");
+  Image map;
+  map.width = 4;
+  map.height = 2;
+  for (int i = 0; i < 8; ++i) map.rgb.insert(map.rgb.end(), {0.125f * float(i), 0.0f, 0.0f});
+  writeImage(testDir() / "uv_map.exr", map);
+  GltfLoadOptions options;
+  options.recenter = false;
+  const Scene s = loadText(doc(R"("objects": [
+      {"type": "sdf", "shape": "sphere", "resolution": 8, "transform": {"translate": [0, 2, 0]},
+       "instances": [{"translate": [5, 0, 0]}, {"scale": [1, 2, 3]}, {"rotate": [0, 0, 1, 90]}]},
+      {"type": "displaced", "mesh": "uv_square.ply", "displacement": "uv_map.exr", "scale": 0.5, "offset": -0.25,
+       "transform": {"translate": [0, 0, 1]},
+       "instances": [{"translate": [-3, 0, 0]}, {"rotate": [0, 0, 1, 90], "scale": 2}]}])"), options).scene;
+  ASSERT_EQ(s.sdfGrids.size(), 3u);
+  ASSERT_EQ(s.displacedMeshes.size(), 2u);
+  ASSERT_EQ(s.primitiveInstances.size(), 5u);
+  for (std::uint32_t k = 0; k < 5; ++k) {
+    const PrimitiveInstance& c = s.primitiveInstances[k];
+    EXPECT_EQ(c.type, k < 3 ? WT_PRIM_SDF_GRID : WT_PRIM_DISPLACED);
+    EXPECT_EQ(c.first, k < 3 ? k : k - 3);
+    EXPECT_EQ(c.count, 1u);
+    EXPECT_EQ(c.geometry, s.primitiveInstances[k < 3 ? 0 : 3].geometry);
+  }
+  // the grid's lattice centre (the sphere at the object's origin) moved by each copy after the object's own
+  auto centre = [&](std::size_t i) {
+    const SdfGrid& g = s.sdfGrids[i];
+    return glm::dvec3(g.latticeToScene * glm::dvec4(glm::dvec3(g.cells) * 0.5, 1.0));
+  };
+  EXPECT_LT(glm::distance(centre(0), glm::dvec3(5, 2, 0)), 1e-9);
+  EXPECT_LT(glm::distance(centre(1), glm::dvec3(0, 4, 0)), 1e-9);
+  EXPECT_LT(glm::distance(centre(2), glm::dvec3(-2, 0, 0)), 1e-9);
+  EXPECT_EQ(s.sdfGrids[1].values, s.sdfGrids[0].values);
+  // the square's corner (1, 0, 0) after its transform: moved, or turned and scaled by 2 with its displacement
+  EXPECT_LT(glm::distance(glm::dvec3(s.displacedMeshes[0].positions[1]), glm::dvec3(-2, 0, 1)), 1e-6);
+  EXPECT_LT(glm::distance(glm::dvec3(s.displacedMeshes[1].positions[1]), glm::dvec3(0, 2, 2)), 1e-6);
+  EXPECT_FLOAT_EQ(s.displacedMeshes[0].scale, 0.5f);
+  EXPECT_FLOAT_EQ(s.displacedMeshes[1].scale, 1.0f);
+  EXPECT_FLOAT_EQ(s.displacedMeshes[1].offset, -0.5f);
+  EXPECT_LT(glm::distance(s.displacedMeshes[1].normals[0], s.displacedMeshes[0].normals[0]), 1e-6f);  // (0, 0, 1) both
+}
+
 // ---------------------------------------------------------------------------
 // errors: each names the file, the JSON path and the problem
 
@@ -1023,6 +1074,25 @@ const BadFile kBadFiles[] = {
                 "translation (its axes are scaled by 1, 1, 1 and are not perpendicular)"},
         BadFile{"InstanceZeroScale", sphere(R"(, "instances": [{"scale": 0}])"),
                 "objects[0].instances[0].scale: must not be 0"},
+        BadFile{"InstancesOfSdfNotAnArray", objects(R"({"type": "sdf", "shape": "sphere", "resolution": 8,
+                "instances": {"translate": [1, 0, 0]}})"),
+                "objects[0].instances: must be a non-empty array of transforms (each as \"transform\"), got {"},
+        BadFile{"InstanceOfSdfFlat", objects(R"({"type": "sdf", "shape": "sphere", "resolution": 8,
+                "instances": [{"translate": [1, 0, 0]}, {"scale": [1, 0, 1]}]})"),
+                "objects[0].instances[1].scale: must not be 0"},
+        BadFile{"InstanceOfSdfBeyondFloat", objects(R"({"type": "sdf", "shape": "sphere", "resolution": 8,
+                "instances": [{"translate": [0, 0, 0]}, {"translate": [1e39, 0, 0]}]})"),
+                "objects[0].instances[1]: the grid's box lies beyond the range of a float from the scene's origin"},
+        BadFile{"InstancesOfDisplacedEmpty", objects(R"({"type": "displaced", "mesh": "square.ply",
+                "displacement": "map.exr", "scale": 1, "instances": []})"),
+                "objects[0].instances: must be a non-empty array of transforms (each as \"transform\"), got []"},
+        BadFile{"InstanceOfDisplacedUneven", objects(R"({"type": "displaced", "mesh": "square.ply",
+                "displacement": "map.exr", "scale": 1, "instances": [{"translate": [1, 0, 0]}, {"scale": [1, 2, 1]}]})"),
+                "objects[0].instances[1]: must keep displacements along the normals: a rotation, one scale for all "
+                "axes and a translation (its axes are scaled by 1, 2, 1)"},
+        BadFile{"InstanceOfDisplacedUnknownField", objects(R"({"type": "displaced", "mesh": "square.ply",
+                "displacement": "map.exr", "scale": 1, "instances": [{"shift": [1, 0, 0]}]})"),
+                "objects[0].instances[0].shift: unknown field (expected one of: translate, rotate, quaternion, scale, matrix)"},
         BadFile{"InstancesOfSpheresUneven", objects(R"({"type": "spheres", "centers": [[0, 0, 0]], "radius": 1,
                 "instances": [{"scale": [2, 2, -3]}]})"),
                 "objects[0].instances[0]: must keep spheres and curves round"},
