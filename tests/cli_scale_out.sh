@@ -85,6 +85,13 @@ rankPid() {
     tr '\0' '\n' <"/proc/$p/environ" 2>/dev/null | grep -qx "OMPI_COMM_WORLD_RANK=$1" && echo "$p"
   done
 }
+# the sample count of a wavetrace EXR (its int attribute wavetraceSamples:
+# name, NUL, "int", NUL, size 4, value)
+exrSamples() {
+  local at
+  at=$(grep -abo wavetraceSamples "$1" | head -1 | cut -d: -f1)
+  [ -n "$at" ] && od -An -t d4 -j $((at + 17 + 4 + 4)) -N 4 "$1" | tr -d ' '
+}
 # wait until $1 exists while the job $2 runs (at most 120 s)
 waitForFile() {
   local _
@@ -385,6 +392,9 @@ big=(--width 64 --height 64 --max-bounces 4 --seed 9 --aov all)
 "${mpi[@]}" "$exe" render "${big[@]}" -v --spp 64 --chunk-spp 4 -o "$dir/ranks.exr" >"$dir/ranks.log" 2>&1 ||
   fail "2 ranks (exit status $?): $(cat "$dir/ranks.log")"
 grep -q "2 ranks, on device" "$dir/ranks.log" || fail "not 2 ranks: $(cat "$dir/ranks.log")"
+# no --checkpoint: on by default in a job of several ranks, said once
+grep -q "warning: a job of 2 ranks: every 60 s rank 0 writes the merged samples to .*ranks.exr, and the checkpoint .*--checkpoint 0 turns it off" \
+  "$dir/ranks.log" || fail "no word of the default checkpoint: $(cat "$dir/ranks.log")"
 grep -q "chunks by rank: [1-9][0-9]*, [1-9]" "$dir/ranks.log" || fail "a rank rendered no chunk: $(cat "$dir/ranks.log")"
 "$exe" render "${big[@]}" -q --spp 64 --chunk-spp 4 -o "$dir/process.exr" >/dev/null 2>&1 || fail "1 process failed"
 cmp "$dir/ranks.exr" "$dir/process.exr" || fail "2 ranks differ from 1 process (every AOV layer compared)"
@@ -430,6 +440,31 @@ total=$((done + 6))
 "$exe" render "${dbl[@]}" -q --spp $total -o "$dir/straight.exr" >/dev/null 2>&1 || fail "uninterrupted render failed"
 cmp "$dir/killed.exr" "$dir/straight.exr" || fail "resumed image differs from the uninterrupted one"
 echo "resumed on 2 ranks to $total samples: equals the uninterrupted render, byte for byte (at ${SECONDS} s)"
+
+# --- rank 0 killed with no signal before (as Slurm's srun kills a step) --------
+# nothing is written at the end: what remains is the job's last periodic
+# write (every checkpoint also writes the outputs in a job of several ranks).
+# Rank 0 hangs once it has started its first checkpoint (WT_TEST_STALL), so
+# that the files are of one write when it is killed: the EXR records its
+# sample count, and it and the PNG equal 1 process with that many samples
+rm -f "$dir/sigkill".*
+WT_TEST_STALL=0:process "${mpi[@]}" "$exe" render "${dbl[@]}" -q --spp 1000000 --checkpoint 0.2 \
+  -o "$dir/sigkill.exr" -o "$dir/sigkill.png" >"$dir/sigkill.log" 2>&1 &
+job=$!
+waitForFile "$dir/sigkill.png" $job
+rank0=$(rankPid 0 $job)
+[ -n "$rank0" ] || fail "rank 0's process not found: $(cat "$dir/sigkill.log")"
+kill -9 "$rank0"
+wait $job
+[ $? -eq 124 ] && fail "rank 0 killed: the job did not end: $(cat "$dir/sigkill.log")"
+[ -f "$dir/sigkill.exr" ] || fail "rank 0 killed: no periodic image: $(cat "$dir/sigkill.log")"
+n=$(exrSamples "$dir/sigkill.exr")
+[ -n "$n" ] && [ "$n" -gt 0 ] || fail "rank 0 killed: the image records no sample count"
+"$exe" render "${dbl[@]}" -q --spp "$n" -o "$dir/sigkill1.exr" -o "$dir/sigkill1.png" >/dev/null 2>&1 || fail "1 process failed"
+cmp "$dir/sigkill.exr" "$dir/sigkill1.exr" || fail "rank 0 killed: the periodic image differs from 1 process at $n samples"
+cmp "$dir/sigkill.png" "$dir/sigkill1.png" || fail "rank 0 killed: the periodic PNG differs from 1 process at $n samples"
+ls -A "$dir" | grep -q '^\.sigkill' && fail "rank 0 killed: hidden partial files left: $(ls -A "$dir")"
+echo "rank 0 killed (SIGKILL): its periodic EXR and PNG of $n samples equal 1 process (at ${SECONDS} s)"
 
 # --- a rank that cannot load the scene ------------------------------------------
 # under mpirun --enable-recovery, which exits 0 whatever its ranks' exit

@@ -16,6 +16,7 @@
 #include "render/halting.h"
 #include "render/image_error.h"
 #include "render/renderer.h"
+#include "render/tonemap.h"
 #include "scene/camera_override.h"
 #include "scene/default_scene.h"
 #include "scene/generators.h"
@@ -28,6 +29,7 @@
 #include <filesystem>
 #include <functional>
 #include <memory>
+#include <mutex>
 #include <thread>
 #include <tuple>
 #include <chrono>
@@ -218,7 +220,7 @@ struct RenderOptions {
   TonemapOptions tonemap;
   double timeSeconds = 0.0;        ///< --time; 0: none
   double targetError = 0.0;        ///< --target-error; 0: none
-  double checkpointSeconds = 0.0;  ///< --checkpoint; 0: none
+  double checkpointSeconds = -1.0;  ///< --checkpoint; 0: none; < 0: not given (a job of several ranks: kJobCheckpointSeconds)
   bool resume = false;
   int chunkSpp = 0;    ///< --chunk-spp; 0: defaultChunkSpp
   bool chunkSppGiven = false;
@@ -248,17 +250,58 @@ void applyCameraOptions(const RenderOptions& options, wt::Scene& scene) {
   wt::applyCameraOverride(scene, o);
 }
 
+/// Every file of a render's outputs (the -o images, --aov-out's AOV
+/// images), each with how to write it to a path of its kind.
+using OutputFile = std::pair<std::filesystem::path, std::function<void(const std::filesystem::path&)>>;
+std::vector<OutputFile> outputFiles(const RenderOptions& options, const wt::Image& image) {
+  std::vector<OutputFile> files;
+  for (const std::string& out : options.outputs)
+    files.emplace_back(out, [&](const std::filesystem::path& to) { wt::writeImage(to, image, options.aovs); });
+  if (!options.aovOut.empty())
+    for (wt::Aov aov : options.aovs)
+      files.emplace_back(std::filesystem::path(options.aovOut) / (std::string(wt::aovName(aov)) + ".exr"),
+                         [&image, aov](const std::filesystem::path& to) { wt::writeAovImage(to, image, aov); });
+  return files;
+}
+
 void writeOutputs(const RenderOptions& options, const wt::Image& image, std::FILE* say) {
-  for (const std::string& out : options.outputs) {
-    wt::writeImage(out, image, options.aovs);
+  for (const auto& [out, write] : outputFiles(options, image)) {
+    write(out);
     std::fprintf(say, "wrote %s\n", out.c_str());
   }
-  if (!options.aovOut.empty())
-    for (wt::Aov aov : options.aovs) {
-      std::filesystem::path out = std::filesystem::path(options.aovOut) / (std::string(wt::aovName(aov)) + ".exr");
-      wt::writeAovImage(out, image, aov);
-      std::fprintf(say, "wrote %s\n", out.c_str());
+}
+
+/// The outputs of a render still under way (a job's periodic image): each
+/// file written in full under a hidden name beside it, then all renamed over
+/// theirs, unless `final` was set meanwhile (the render's own outputs were
+/// written: they win). `mutex` guards `final` and the renames.
+void writePartialOutputs(const RenderOptions& options, const wt::Image& image, std::mutex& mutex, const bool& final) {
+  std::vector<std::pair<std::filesystem::path, std::filesystem::path>> parts;  // (hidden, output)
+  auto removeParts = [&] {
+    std::error_code ec;
+    for (const auto& part : parts) std::filesystem::remove(part.first, ec);
+  };
+  try {
+    for (const auto& [out, write] : outputFiles(options, image)) {
+      std::filesystem::path part =
+          out.parent_path() / ("." + out.stem().string() + ".partial" + out.extension().string());
+      write(part);
+      parts.emplace_back(std::move(part), out);
     }
+  } catch (...) {
+    removeParts();
+    throw;
+  }
+  std::lock_guard<std::mutex> lock(mutex);
+  if (final) return removeParts();
+  for (const auto& [part, out] : parts) {
+    std::error_code ec;
+    std::filesystem::rename(part, out, ec);
+    if (ec) {
+      removeParts();
+      throw wt::OutputError(out.string() + ": cannot replace the file with the merged samples: " + ec.message());
+    }
+  }
 }
 
 /// Parse --aov and --debug, check --aov-out; the AOVs are recorded where either asks.
@@ -693,6 +736,13 @@ int runRender(RenderOptions options) {
 /// stops the whole job at start, with its message, on rank 0.
 int runScaleOutRender(RenderOptions options, wt::MpiWorld& world) {
   const bool root = world.rank() == 0;
+  // a job of several ranks keeps its merged samples on disk as it goes: a
+  // launcher may SIGKILL rank 0 with no warning when another rank dies (srun)
+  const bool defaultCheckpoint = world.active() && options.checkpointSeconds < 0.0;
+  if (options.checkpointSeconds < 0.0)
+    options.checkpointSeconds = world.active() ? wt::ScaleOutOptions::kJobCheckpointSeconds : 0.0;
+  // there each checkpoint also writes the outputs: an image that outlives rank 0
+  const bool partialOutputs = world.active() && options.checkpointSeconds > 0.0;
   wt::log::setQuiet(options.quiet || !root);
   wt::log::setVerbose(options.verbose && root);
   std::optional<wt::SceneFile> loaded;
@@ -792,11 +842,22 @@ int runScaleOutRender(RenderOptions options, wt::MpiWorld& world) {
                 "; chunks of " + std::to_string(chunkSpp) + " samples; set up in " +
                 std::to_string(int(setupSeconds * 1e3)) + " ms");
 
-  // Slurm's PMIx plugin SIGKILLs the whole step about a second after any task dies, with no signal before
-  if (world.active() && world.launchedBySrun() && options.checkpointSeconds <= 0.0)
+  if (defaultCheckpoint) {
+    std::string files;
+    for (const std::string& out : options.outputs) files += out + ", ";
+    char every[32];
+    std::snprintf(every, sizeof every, "%g", options.checkpointSeconds);
+    wt::log::warnOnce("a job of " + std::to_string(world.size()) + " ranks: every " + every + " s rank 0 writes the " +
+                      "merged samples to " + files + "and the checkpoint " + checkpointPath.string() +
+                      " (--resume continues from it), so that a job killed as a whole (Slurm kills every rank when "
+                      "one dies) loses at most that; --checkpoint SECONDS sets the interval, --checkpoint 0 turns "
+                      "it off (docs/scale-out.md, Faults)");
+  } else if (world.active() && world.launchedBySrun() && options.checkpointSeconds <= 0.0) {
+    // Slurm's PMIx plugin SIGKILLs the whole step about a second after any task dies, with no signal before
     wt::log::warnOnce("under srun --mpi=pmix, Slurm kills every rank (SIGKILL) about a second after one dies, "
-                      "whatever --kill-on-bad-exit says: rank 0 cannot write the merged samples then; only "
-                      "--checkpoint keeps them (docs/scale-out.md, Faults)");
+                      "whatever --kill-on-bad-exit says: rank 0 cannot write the merged samples then, and with "
+                      "--checkpoint 0 nothing keeps them (docs/scale-out.md, Faults)");
+  }
   wt::ScaleOutOptions run;
   run.samplesPerPixel = spp;
   run.chunkSpp = chunkSpp;
@@ -853,6 +914,27 @@ int runScaleOutRender(RenderOptions options, wt::MpiWorld& world) {
   std::thread checkpointThread;
   std::atomic<bool> checkpointBusy{false};
   std::string checkpointError;
+  // the periodic outputs (partialOutputs) and the final ones: the final win
+  std::mutex outputsMutex;
+  bool finalOutputs = false;
+  std::unique_ptr<wt::Context> toneContext;  // the checkpoint thread's own, for a PNG's tone mapping
+  bool needsTonemap = false;
+  for (const std::string& out : options.outputs)
+    needsTonemap |= options.debugView == wt::DebugView::None && wt::imageFormatFor(out) == wt::ImageFormat::Png;
+  auto writePartial = [&](const wt::Moments& m) {
+    // the image the final write would give for these samples, made on the
+    // host: rank 0's devices are busy rendering chunks
+    wt::Image image = wt::resolvedImage(m, settings.width, settings.height);
+    if (needsTonemap) {
+      if (!toneContext) toneContext = std::make_unique<wt::Context>(devices.contexts.front()->info());
+      wt::tonemapImage(*toneContext, image, settings.tonemap, settings.exposureStops);
+    }
+    wt::applyDebugView(image, options.debugView);
+    writePartialOutputs(options, image, outputsMutex, finalOutputs);
+  };
+  // the default's interval stretches where a write takes long: at most 1/20 of the time writing
+  std::atomic<double> writeSeconds{0.0};
+  auto writeStart = std::chrono::steady_clock::now();
   auto finishCheckpoint = [&] {
     if (checkpointThread.joinable()) checkpointThread.join();
   };
@@ -865,11 +947,20 @@ int runScaleOutRender(RenderOptions options, wt::MpiWorld& world) {
   if (options.checkpointSeconds > 0.0)
     run.checkpoint = [&](const wt::Moments& m) {
       if (checkpointBusy) return;  // the previous one is still being written: the next interval takes this
+      if (defaultCheckpoint && std::chrono::duration<double>(std::chrono::steady_clock::now() - writeStart).count() <
+                                   20.0 * writeSeconds)
+        return;
       finishCheckpoint();
       checkpointBusy = true;
+      writeStart = std::chrono::steady_clock::now();
       checkpointThread = std::thread([&, copy = m] {
         try {
           saveCheckpoint(copy);
+          if (partialOutputs) writePartial(copy);
+          const double took = std::chrono::duration<double>(std::chrono::steady_clock::now() - writeStart).count();
+          writeSeconds = took;
+          wt::log::debug("checkpoint" + std::string(partialOutputs ? " and outputs" : "") + " of " +
+                         std::to_string(copy.sampleEnd) + " samples written in " + std::to_string(took) + " s");
         } catch (const std::exception& e) {
           checkpointError = e.what();
         }
@@ -881,6 +972,11 @@ int runScaleOutRender(RenderOptions options, wt::MpiWorld& world) {
   // only an abort may end the process (a lost device's thread is left behind)
   auto keepMerged = [&](wt::ScaleOutResult& result, int& code) -> bool {
     const int done = result.merged.sampleEnd;
+    {
+      // a periodic write still under way must not replace these
+      std::lock_guard<std::mutex> lock(outputsMutex);
+      finalOutputs = true;
+    }
     if (done > 0) {
       wt::Renderer& out = *devices.renderers[std::size_t(result.outputDevice)];
       out.restoreAccumulation(wt::accumulationFromMoments(result.merged, settings.accumulation));
@@ -910,7 +1006,13 @@ int runScaleOutRender(RenderOptions options, wt::MpiWorld& world) {
     if (failedBefore) sayFailure();  // before the checkpoint too
     finishCheckpoint();
     if (!checkpointError.empty() && result.failure.empty()) result.failure = checkpointError;
-    if (options.checkpointSeconds > 0.0 && done > resumed) {
+    // the default's checkpoint is for a job that did not finish; once the image is whole it goes
+    const bool dropCheckpoint =
+        defaultCheckpoint && !options.resume && result.failure.empty() && !result.interrupted;
+    if (dropCheckpoint) {
+      std::error_code ec;
+      std::filesystem::remove(checkpointPath, ec);
+    } else if (options.checkpointSeconds > 0.0 && done > resumed) {
       try {
         saveCheckpoint(result.merged);
       } catch (const std::exception& e) {
@@ -1321,8 +1423,9 @@ int main(int argc, char** argv) {
       ->check(CLI::PositiveNumber);
   renderCmd->add_option("--checkpoint", render.checkpointSeconds,
                         "Every this many seconds (and at the end) write the running accumulation to OUTPUT.wtckpt "
-                        "beside the first output, atomically")
-      ->check(CLI::PositiveNumber);
+                        "beside the first output, atomically; in an MPI job of several ranks also the outputs, "
+                        "default every 60 s there (removed once the image is whole); 0: never")
+      ->check(CLI::NonNegativeNumber);
   renderCmd->add_flag("--resume", render.resume,
                       "Continue from OUTPUT.wtckpt: the same image as an uninterrupted render of the same total "
                       "--spp; refused for another scene or other settings");

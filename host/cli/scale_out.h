@@ -106,6 +106,9 @@ struct ScaleOutOptions {
   /// lost: its chunks go to the others (--rank-timeout).
   double rankTimeoutSeconds = kDefaultRankTimeout;
   static constexpr double kDefaultRankTimeout = 120.0;
+  /// A job of several ranks checkpoints (and writes its outputs) this often
+  /// when --checkpoint is not given, or less often where a write takes long.
+  static constexpr double kJobCheckpointSeconds = 60.0;
 };
 
 /// How often a worker rank sends its heartbeat for a rank timeout: four

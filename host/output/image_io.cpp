@@ -3,6 +3,7 @@
 #include <ImfChannelList.h>
 #include <ImfFrameBuffer.h>
 #include <ImfHeader.h>
+#include <ImfIntAttribute.h>
 #include <ImfInputFile.h>
 #include <ImfOutputFile.h>
 #include <zlib.h>
@@ -53,9 +54,12 @@ struct ExrChannel {
   std::size_t stride;
 };
 
-void writeExrChannels(const std::filesystem::path& path, int width, int height, const std::vector<ExrChannel>& channels) {
+void writeExrChannels(const std::filesystem::path& path, int width, int height, const std::vector<ExrChannel>& channels,
+                      int samplesDone = 0) {
   try {
     Imf::Header header(width, height);
+    // what the image holds, readable where it outlived its render (a killed job's periodic image)
+    if (samplesDone > 0) header.insert(kExrSamplesAttribute, Imf::IntAttribute(samplesDone));
     for (const ExrChannel& c : channels) header.channels().insert(c.name, Imf::Channel(c.type));
     Imf::OutputFile file(path.c_str(), header);
     Imf::FrameBuffer fb;
@@ -133,7 +137,7 @@ void writeExr(const std::filesystem::path& path, const Image& image, std::span<c
   for (Aov aov : aovs)
     if (aov != Aov::Variance)  // the mean_variance layer above
       addAovChannels(channels, path, image, aov, std::string(aovName(aov)) + ".", meanVariance);
-  writeExrChannels(path, image.width, image.height, channels);
+  writeExrChannels(path, image.width, image.height, channels, image.samplesDone);
 }
 
 /// A PNG chunk: length, type, data, CRC over type and data.
@@ -302,6 +306,8 @@ Image readExr(const std::filesystem::path& path) {
     }
     file.setFrameBuffer(fb);
     file.readPixels(dw.min.y, dw.max.y);
+    if (const auto* n = file.header().findTypedAttribute<Imf::IntAttribute>(kExrSamplesAttribute))
+      image.samplesDone = n->value();
     return image;
   } catch (const std::exception& e) {
     throw OutputError(path.string() + ": reading EXR failed: " + e.what());

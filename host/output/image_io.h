@@ -39,8 +39,12 @@ std::string_view aovName(Aov aov);
 /// Throws std::invalid_argument naming an unknown or empty entry.
 std::vector<Aov> parseAovList(std::string_view list);
 
+/// The EXR header attribute (int) holding image.samplesDone, where known.
+inline constexpr const char* kExrSamplesAttribute = "wavetraceSamples";
+
 /// Write the image in the path's format; an EXR gets the layers of `aovs`
-/// (which need image.aovs, else OutputError; a PNG holds none). Throws OutputError.
+/// (which need image.aovs, else OutputError; a PNG holds none) and the
+/// sample count (kExrSamplesAttribute). Throws OutputError.
 void writeImage(const std::filesystem::path& path, const Image& image, std::span<const Aov> aovs = {});
 
 /// One AOV as an EXR of its own, its channels without the layer's prefix
@@ -50,7 +54,7 @@ void writeAovImage(const std::filesystem::path& path, const Image& image, Aov ao
 
 /// Read an EXR (tests, reference images): RGB floats, and when the file has
 /// wavetrace's mean_variance layer, the variance of each pixel's mean in
-/// rgbVariance with samples = 1.
+/// rgbVariance with samples = 1; samplesDone from kExrSamplesAttribute.
 Image readExr(const std::filesystem::path& path);
 
 }  // namespace wt

@@ -157,6 +157,31 @@ Image imageFromMoments(const Moments& m, int width, int height) {
   return image;
 }
 
+Image resolvedImage(const Moments& m, int width, int height) {
+  Image image;
+  image.width = width;
+  image.height = height;
+  image.samples = m.count;
+  image.samplesDone = m.sampleEnd;
+  const std::size_t pixels = m.pixels();
+  image.rgb.resize(3 * pixels);
+  image.rgbVariance.resize(3 * pixels);
+  for (std::size_t i = 0; i < pixels; ++i) {
+    const std::uint32_t n = m.count[i];
+    for (int c = 0; c < 3; ++c) {
+      // accumulate_resolve's float mean and M2; the variance as Renderer::readResolved divides, in float
+      image.rgb[3 * i + c] = float(m.mean[3 * i + c]);
+      image.rgbVariance[3 * i + c] = n > 1 ? float(m.m2[3 * i + c]) / float(n - 1) : 0.0f;
+    }
+  }
+  if (m.hasAovs()) {
+    // the device's float sums, as accumulationFromMoments restores them
+    const std::vector<float> sums(m.aovSum.begin(), m.aovSum.end());
+    image.aovs = decodeAovs(sums.data(), m.aovIds.data(), pixels);
+  }
+  return image;
+}
+
 ChunkPlan::ChunkPlan(int firstSample, int samplesPerPixel, int chunkSpp)
     : m_first(firstSample), m_end(std::max(firstSample, samplesPerPixel)), m_chunkSpp(std::max(1, chunkSpp)) {
   m_count = (m_end - m_first + m_chunkSpp - 1) / m_chunkSpp;

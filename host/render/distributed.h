@@ -79,6 +79,13 @@ void mergeMoments(Moments& into, const Moments& next);
 /// moments, for the error estimate.
 Image imageFromMoments(const Moments& moments, int width, int height);
 
+/// The Image (rgb mean, variance, sample counts, AOVs, samplesDone; no
+/// srgba) that Renderer::readImage gives after
+/// restoreAccumulation(accumulationFromMoments(moments, mode)) in any mode,
+/// bit for bit, made on the host: the resolve only rounds the mean and M2
+/// to float. So a thread that has no device of its own can write the image.
+Image resolvedImage(const Moments& moments, int width, int height);
+
 /// The chunks of samples [firstSample, samplesPerPixel) of chunkSpp
 /// samples each (the last may be shorter), handed out in order; thread-safe.
 /// A chunk handed out and then given back (its renderer was lost) is

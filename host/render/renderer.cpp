@@ -545,6 +545,7 @@ void Renderer::readResolved(Image& image, bool tonemap) {
   q.enqueueReadBuffer(m_counters, CL_FALSE, 0, sizeof(counters), counters);
   m_context.finish();
   m_stats.nonFiniteSamples = counters[WT_COUNTER_NONFINITE];
+  image.samplesDone = m_stats.samplesDone;
 
   if (m_settings.aovs) readAovs(image);
 
@@ -623,7 +624,11 @@ void Renderer::readAovs(Image& image) {
   q.enqueueReadBuffer(m_path.aovAccum, CL_FALSE, 0, sum.size() * 4, sum.data());
   q.enqueueReadBuffer(m_path.aovIds, CL_FALSE, 0, ids.size() * 4, ids.data());
   m_context.finish();
-  Aovs& a = image.aovs;
+  image.aovs = decodeAovs(sum.data(), ids.data(), pixels);
+}
+
+Aovs decodeAovs(const float* sum, const std::uint32_t* ids, std::size_t pixels) {
+  Aovs a;
   a.albedo.resize(3 * pixels);
   a.normal.resize(3 * pixels);
   a.position.resize(3 * pixels);
@@ -651,6 +656,7 @@ void Renderer::readAovs(Image& image) {
     a.instance[i] = ids[4 * i + 1];
     a.primitive[i] = ids[4 * i + 2];
   }
+  return a;
 }
 
 }  // namespace wt

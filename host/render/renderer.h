@@ -158,7 +158,12 @@ struct Image {
   std::vector<std::uint32_t> samples;  ///< samples folded into each pixel
   std::vector<std::uint8_t> srgba;     ///< tone-mapped 8-bit sRGB, alpha 255
   Aovs aovs;                           ///< with RenderSettings::aovs
+  int samplesDone = 0;                 ///< the render's sample count (an EXR records it); 0: unknown
 };
+
+/// The AOV images of `pixels` pixels from their device sums (kAovSumBytes
+/// per pixel: kernels/aov.cl's 16 floats) and ids (kAovIdBytes per pixel).
+Aovs decodeAovs(const float* sums, const std::uint32_t* ids, std::size_t pixels);
 
 /// The running accumulation exactly as the device holds it: what a
 /// checkpoint saves and a resume restores (host/render/checkpoint.h).

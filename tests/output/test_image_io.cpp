@@ -33,6 +33,11 @@ TEST(ImageIo, ExrRoundTripIsExact) {
   EXPECT_EQ(back.width, 37);
   EXPECT_EQ(back.height, 21);
   EXPECT_EQ(back.rgb, image.rgb);
+  EXPECT_EQ(back.samplesDone, 0);  // unknown: not recorded
+  // the sample count, in the header: what an image that outlived its render holds
+  image.samplesDone = 1234567;
+  writeImage(path, image);
+  EXPECT_EQ(readExr(path).samplesDone, 1234567);
 }
 
 TEST(ImageIo, PngHasTheTonemappedPixels) {
