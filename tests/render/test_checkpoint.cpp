@@ -16,8 +16,9 @@ namespace {
 
 std::filesystem::path scratch(const std::string& name) {
   std::filesystem::path dir = std::filesystem::path(WT_TEST_BINARY_DIR) / "scratch" / "checkpoint";
-  std::filesystem::create_directories(dir);
-  return dir / name;
+  const std::filesystem::path path = dir / name;
+  std::filesystem::create_directories(path.parent_path());
+  return path;
 }
 
 Checkpoint sample(std::uint64_t pixels) {
@@ -54,7 +55,8 @@ std::string readError(const std::filesystem::path& path) {
 }
 
 TEST(Checkpoint, RoundTripIsExact) {
-  const auto path = scratch("round_trip.wtckpt");
+  // a folder of its own: other tests' temporary files may sit beside theirs while they write
+  const auto path = scratch("round_trip/round_trip.wtckpt");
   const Checkpoint written = sample(5);
   writeCheckpoint(path, written);
   const Checkpoint read = readCheckpoint(path);
