@@ -11,6 +11,46 @@
 
 #if WT_HAS_PRIMITIVES
 
+/// Slab test of an oriented node's four child boxes (WT_BVH4_ORIENTED): the
+/// ray rotated into the node's frame (the next slot, WtBvh4Frame), then
+/// bvh4_box_hit's test with the boxes widened by the rotation's rounding:
+/// of the origin (relative to the frame's centre) and of the direction over
+/// the distance to the boxes, which `reach` bounds. Distances along the ray
+/// are the same in the frame.
+inline int4 bvh4_frame_hit(__global const WtBvh4Node* n, float3 org, float3 dir, float tmin, float tmax,
+                           float4* t_entry) {
+  __global const float* f = (__global const float*)(n + 1);
+  float4 r0 = vload4(0, f), r1 = vload4(1, f), r2 = vload4(2, f), c = vload4(3, f);
+  float3 w = org - c.xyz;
+  float3 o = (float3)(dot(r0.xyz, w), dot(r1.xyz, w), dot(r2.xyz, w));
+  float3 inv_d = bvh_safe_rcp((float3)(dot(r0.xyz, dir), dot(r1.xyz, dir), dot(r2.xyz, dir)));
+  float3 m = (2e-6f * (fabs(w.x) + fabs(w.y) + fabs(w.z) + c.w)) * fabs(inv_d);
+  RayPlanes planes = bvh_ray_planes(inv_d);
+  __global const float* b = (__global const float*)n;
+  float4 tn_x = (vload4(0, b + planes.near_x) - o.x) * inv_d.x - m.x;
+  float4 tf_x = (vload4(0, b + planes.far_x) - o.x) * inv_d.x + m.x;
+  float4 tn_y = (vload4(0, b + planes.near_y) - o.y) * inv_d.y - m.y;
+  float4 tf_y = (vload4(0, b + planes.far_y) - o.y) * inv_d.y + m.y;
+  float4 tn_z = (vload4(0, b + planes.near_z) - o.z) * inv_d.z - m.z;
+  float4 tf_z = (vload4(0, b + planes.far_z) - o.z) * inv_d.z + m.z;
+  float4 enter = bvh_max(bvh_max(tn_x, tn_y), bvh_max(tn_z, (float4)(tmin)));
+  float4 exit = bvh_min(bvh_min(tf_x, tf_y), tf_z) * 1.00000036f;
+  exit = bvh_min(exit, (float4)(tmax));
+  *t_entry = enter;
+  return enter <= exit;
+}
+
+/// Node `node` of the primitive tree (its WT_BVH4_ORIENTED bit included)
+/// and its child boxes' slab test.
+inline __global const WtBvh4Node* bvh_prims_node(GeometryScene g, uint node, RayPlanes planes, float3 org,
+                                                 float3 dir, float3 inv_d, float tmin, float tmax, int4* hit4,
+                                                 float4* t4) {
+  __global const WtBvh4Node* n = &g.nodes[node & ~WT_BVH4_ORIENTED];
+  *hit4 = (node & WT_BVH4_ORIENTED) ? bvh4_frame_hit(n, org, dir, tmin, tmax, t4)
+                                    : bvh4_box_hit(n, planes, org, inv_d, tmin, tmax, t4);
+  return n;
+}
+
 #if WT_HAS_INSTANCES
 /// Narrow `hit` to a nearer primitive of the geometry whose tree starts at
 /// node `root` (a geometry of other types stored once), the ray in its object space:
@@ -27,12 +67,12 @@ inline bool bvh_prims_closest_root(GeometryScene g, uint root, float3 org, float
   uint node = root;
   bool found = false;
   for (;;) {
-    __global const WtBvh4Node* n = &g.nodes[node];
     float4 t4;
-    int4 hit4 = bvh4_box_hit(n, planes, org, inv_d, tmin, hit->t, &t4);
+    int4 hit4;
+    __global const WtBvh4Node* n = bvh_prims_node(g, node, planes, org, dir, inv_d, tmin, hit->t, &hit4, &t4);
     float t_child[4] = {t4.s0, t4.s1, t4.s2, t4.s3};
     int hit_child[4] = {hit4.s0, hit4.s1, hit4.s2, hit4.s3};
-    int next = -1;
+    uint next = WT_BVH4_EMPTY;  // (uint: oriented nodes' indices have the top bit set)
     float next_t = INFINITY;
     for (int k = 0; k < 4; ++k) {
       if (!hit_child[k]) continue;
@@ -50,19 +90,19 @@ inline bool bvh_prims_closest_root(GeometryScene g, uint root, float3 org, float
           }
         }
       } else if (t_child[k] < next_t) {
-        if (next >= 0) {
-          stack_node[sp] = (uint)next;
+        if (next != WT_BVH4_EMPTY) {
+          stack_node[sp] = next;
           stack_t[sp++] = next_t;
         }
-        next = (int)first;
+        next = first;
         next_t = t_child[k];
       } else {
         stack_node[sp] = first;
         stack_t[sp++] = t_child[k];
       }
     }
-    if (next >= 0 && next_t <= hit->t) {
-      node = (uint)next;
+    if (next != WT_BVH4_EMPTY && next_t <= hit->t) {
+      node = next;
       continue;
     }
     for (;;) {
@@ -84,9 +124,9 @@ inline bool bvh_prims_occluded_root(GeometryScene g, uint root, float3 org, floa
   int sp = 0;
   uint node = root;
   for (;;) {
-    __global const WtBvh4Node* n = &g.nodes[node];
     float4 t4;
-    int4 hit4 = bvh4_box_hit(n, planes, org, inv_d, tmin, tmax, &t4);
+    int4 hit4;
+    __global const WtBvh4Node* n = bvh_prims_node(g, node, planes, org, dir, inv_d, tmin, tmax, &hit4, &t4);
     int hit_child[4] = {hit4.s0, hit4.s1, hit4.s2, hit4.s3};
     for (int k = 0; k < 4; ++k) {
       if (!hit_child[k]) continue;
@@ -145,12 +185,12 @@ inline void bvh_prims_closest(BvhScene scene, GeometryScene g, float3 org, float
   int sp = 0;
   uint node = 0;
   for (;;) {
-    __global const WtBvh4Node* n = &g.nodes[node];
     float4 t4;
-    int4 hit4 = bvh4_box_hit(n, planes, org, inv_d, tmin, hit->t, &t4);
+    int4 hit4;
+    __global const WtBvh4Node* n = bvh_prims_node(g, node, planes, org, dir, inv_d, tmin, hit->t, &hit4, &t4);
     float t_child[4] = {t4.s0, t4.s1, t4.s2, t4.s3};
     int hit_child[4] = {hit4.s0, hit4.s1, hit4.s2, hit4.s3};
-    int next = -1;
+    uint next = WT_BVH4_EMPTY;  // (uint: oriented nodes' indices have the top bit set)
     float next_t = INFINITY;
     for (int k = 0; k < 4; ++k) {
       if (!hit_child[k]) continue;
@@ -176,19 +216,19 @@ inline void bvh_prims_closest(BvhScene scene, GeometryScene g, float3 org, float
         }
       } else if (t_child[k] < next_t) {
         // the nearest inner child next; the one it displaces waits
-        if (next >= 0) {
-          stack_node[sp] = (uint)next;
+        if (next != WT_BVH4_EMPTY) {
+          stack_node[sp] = next;
           stack_t[sp++] = next_t;
         }
-        next = (int)first;
+        next = first;
         next_t = t_child[k];
       } else {
         stack_node[sp] = first;
         stack_t[sp++] = t_child[k];
       }
     }
-    if (next >= 0 && next_t <= hit->t) {
-      node = (uint)next;
+    if (next != WT_BVH4_EMPTY && next_t <= hit->t) {
+      node = next;
       continue;
     }
     for (;;) {
@@ -212,9 +252,9 @@ inline bool bvh_prims_occluded(BvhScene scene, GeometryScene g, float3 org, floa
   int sp = 0;
   uint node = 0;
   for (;;) {
-    __global const WtBvh4Node* n = &g.nodes[node];
     float4 t4;
-    int4 hit4 = bvh4_box_hit(n, planes, org, inv_d, tmin, tmax, &t4);
+    int4 hit4;
+    __global const WtBvh4Node* n = bvh_prims_node(g, node, planes, org, dir, inv_d, tmin, tmax, &hit4, &t4);
     int hit_child[4] = {hit4.s0, hit4.s1, hit4.s2, hit4.s3};
     for (int k = 0; k < 4; ++k) {
       if (!hit_child[k]) continue;

@@ -190,6 +190,44 @@ inline pint prims_packet_triangles_occluded(BvhScene scene, GeometryScene g, uin
 
 /// A walk's stack: nodes, and (closest hits) the nearest entry among the
 /// lanes that entered each.
+/// A packet's rays in an oriented node's frame (bvh4_frame_hit lane by
+/// lane): origins, reciprocal directions, and the boxes' widening for the
+/// rotation's rounding as a distance along each axis's ray (m |1 / d|).
+typedef struct FramePacket {
+  pfloat o[3], inv_d[3], m[3];
+} FramePacket;
+
+inline void prims_packet_frame(__global const WtBvh4Node* n, const PrimPacket* p, FramePacket* f) {
+  __global const float* fr = (__global const float*)(n + 1);
+  float4 r[3] = {vload4(0, fr), vload4(1, fr), vload4(2, fr)};
+  float4 c = vload4(3, fr);
+  pfloat wx = p->box.o[0] - c.x, wy = p->box.o[1] - c.y, wz = p->box.o[2] - c.z;
+  pfloat dx = packet_vload(p->dx), dy = packet_vload(p->dy), dz = packet_vload(p->dz);
+  pfloat m = 2e-6f * (fabs(wx) + fabs(wy) + fabs(wz) + c.w);
+  for (int i = 0; i < 3; ++i) {
+    f->o[i] = r[i].x * wx + r[i].y * wy + r[i].z * wz;
+    pfloat d = r[i].x * dx + r[i].y * dy + r[i].z * dz;
+    d = select(d, copysign((pfloat)(1e-30f), d), fabs(d) < 1e-30f);  // as bvh_safe_rcp
+    f->inv_d[i] = 1.0f / d;
+    f->m[i] = m * fabs(f->inv_d[i]);
+  }
+}
+
+/// packet_box_hit for child k of an oriented node, the lanes in its frame.
+inline pint packet_frame_box_hit(__global const WtBvh4Node* n, int k, const FramePacket* f, pfloat tmin,
+                                 pfloat tmax, pfloat* enter) {
+  pfloat t0x = (n->lo_x[k] - f->o[0]) * f->inv_d[0], t1x = (n->hi_x[k] - f->o[0]) * f->inv_d[0];
+  pfloat t0y = (n->lo_y[k] - f->o[1]) * f->inv_d[1], t1y = (n->hi_y[k] - f->o[1]) * f->inv_d[1];
+  pfloat t0z = (n->lo_z[k] - f->o[2]) * f->inv_d[2], t1z = (n->hi_z[k] - f->o[2]) * f->inv_d[2];
+  pfloat tn = packet_vmax(packet_vmax(packet_vmin(t0x, t1x) - f->m[0], packet_vmin(t0y, t1y) - f->m[1]),
+                          packet_vmax(packet_vmin(t0z, t1z) - f->m[2], tmin));
+  pfloat tf = packet_vmin(packet_vmin(packet_vmax(t0x, t1x) + f->m[0], packet_vmax(t0y, t1y) + f->m[1]),
+                          packet_vmax(t0z, t1z) + f->m[2]) * 1.00000036f;
+  tf = packet_vmin(tf, tmax);
+  *enter = tn;
+  return packet_mask(tn <= tf);
+}
+
 typedef struct PrimWalk {
   uint node[WT_BVH_STACK_SIZE];
   float t[WT_BVH_STACK_SIZE];
@@ -301,12 +339,16 @@ __attribute__((always_inline)) inline pint prims_packet_tree(GeometryScene g, ui
   w.sp = 0, w.inner_count = 0;
   uint node = root;
   do {
-    __global const WtBvh4Node* n = &g.nodes[node];
+    __global const WtBvh4Node* n = &g.nodes[node & ~WT_BVH4_ORIENTED];
+    bool framed = (node & WT_BVH4_ORIENTED) != 0;
+    FramePacket f;
+    if (framed) prims_packet_frame(n, p, &f);
     for (int k = 0; k < 4; ++k) {
       uint first = n->child[k], count = n->count[k];
       if (first == WT_BVH4_EMPTY) continue;
       pfloat enter;
-      pint hit = packet_box_hit(n, k, &p->box, tmax, &enter) & open;
+      pint hit = (framed ? packet_frame_box_hit(n, k, &f, p->box.tmin, tmax, &enter)
+                         : packet_box_hit(n, k, &p->box, tmax, &enter)) & open;
       if (!packet_any(hit)) continue;
       if (count == 0) {
         prims_walk_push(&w, any, first, hit, enter);
@@ -350,12 +392,16 @@ __attribute__((always_inline)) inline pint prims_packet_walk(BvhScene scene, Geo
   w.sp = 0, w.inner_count = 0;
   uint node = 0;
   do {
-    __global const WtBvh4Node* n = &g.nodes[node];
+    __global const WtBvh4Node* n = &g.nodes[node & ~WT_BVH4_ORIENTED];
+    bool framed = (node & WT_BVH4_ORIENTED) != 0;
+    FramePacket f;
+    if (framed) prims_packet_frame(n, p, &f);
     for (int k = 0; k < 4; ++k) {
       uint first = n->child[k], count = n->count[k];
       if (first == WT_BVH4_EMPTY) continue;
       pfloat enter;
-      pint hit = packet_box_hit(n, k, &p->box, tmax, &enter) & open;
+      pint hit = (framed ? packet_frame_box_hit(n, k, &f, p->box.tmin, tmax, &enter)
+                         : packet_box_hit(n, k, &p->box, tmax, &enter)) & open;
       if (!packet_any(hit)) continue;
       if (count == 0) {
         prims_walk_push(&w, any, first, hit, enter);

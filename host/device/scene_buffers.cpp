@@ -13,6 +13,7 @@
 #include <bit>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <cstddef>
 #include <cstring>
 #include <map>
@@ -547,8 +548,10 @@ double boxArea(const Aabb& b) {
 /// parent's area. Segments whose rows `rows` does not hold stay whole.
 constexpr int kCurvePieces = 4;
 constexpr double kCurveSplitArea = 0.7;
-void splitCurveBoxes(const PrimitiveRows& rows, std::vector<Aabb>& bounds, std::vector<std::uint32_t>& ids) {
+void splitCurveBoxes(const PrimitiveRows& rows, std::vector<Aabb>& bounds, std::vector<std::uint32_t>& ids,
+                     std::vector<glm::vec2>& sweep) {
   const std::size_t n = ids.size();
+  sweep.assign(n, glm::vec2(0.0f, 1.0f));
   for (std::size_t i = 0; i < n; ++i) {
     if (primType(ids[i]) != WT_PRIM_CURVE) continue;
     const std::size_t row = rows.dataFirst[WT_PRIM_CURVE] + 2 * std::size_t(primIndex(ids[i]));
@@ -570,14 +573,164 @@ void splitCurveBoxes(const PrimitiveRows& rows, std::vector<Aabb>& bounds, std::
     if (pieces == 1) continue;
     for (int k = 0; k < pieces; ++k) {
       const Aabb box = curvePieceBox(a, b, double(k) / pieces, double(k + 1) / pieces);
+      const glm::vec2 range(float(k) / float(pieces), float(k + 1) / float(pieces));
       if (k == 0) {
         bounds[i] = box;
+        sweep[i] = range;
       } else {
         bounds.push_back(box);
         ids.push_back(ids[i]);
+        sweep.push_back(range);
       }
     }
   }
+}
+
+/// Nodes whose subtree holds more leaf entries stay axis-aligned: high in
+/// the tree the strands below run every way, and each node's choice reads
+/// its whole subtree.
+constexpr std::uint32_t kOrientMaxEntries = 4096;
+/// A node is oriented where its children's boxes in its frame have at most
+/// this fraction of their axis-aligned area (the chance a ray enters them),
+/// which pays for rotating the ray into the frame.
+constexpr double kOrientArea = 0.8;
+
+float floatDown(double x) {
+  float f = float(x);
+  return double(f) > x ? std::nextafter(f, -INFINITY) : f;
+}
+float floatUp(double x) {
+  float f = float(x);
+  return double(f) < x ? std::nextafter(f, INFINITY) : f;
+}
+
+/// Give nodes low in the tree whose entries are all curve segments a frame
+/// along the segments' common direction (WT_BVH4_ORIENTED), where their
+/// children's boxes in it are much smaller (kOrientArea), and lay the nodes
+/// out again with each frame in the slot after its node. The root stays
+/// aligned. `entry` maps leaf order to the gathered entry (bounds, ids,
+/// sweep index).
+void orientCurveNodes(Bvh4& tree, const PrimitiveRows& rows, const std::vector<std::uint32_t>& ids,
+                      const std::vector<glm::vec2>& sweep, std::span<const std::uint32_t> entry) {
+  const std::size_t nodes = tree.nodes.size();
+  if (nodes < 2) return;
+  // the segment's piece [s0, s1] of each leaf entry; radius < 0: not a curve
+  std::vector<glm::dvec4> ja(entry.size()), jb(entry.size());
+  for (std::size_t i = 0; i < entry.size(); ++i) {
+    const std::uint32_t id = ids[entry[i]];
+    ja[i] = jb[i] = glm::dvec4(0.0, 0.0, 0.0, -1.0);
+    if (primType(id) != WT_PRIM_CURVE) continue;
+    const std::size_t row = rows.dataFirst[WT_PRIM_CURVE] + 2 * std::size_t(primIndex(id));
+    if (row + 1 >= rows.data.size()) continue;
+    const WtVec4 &ra = rows.data[row], &rb = rows.data[row + 1];
+    const glm::dvec4 a(ra.x, ra.y, ra.z, std::fabs(ra.w)), b(rb.x, rb.y, rb.z, std::fabs(rb.w));
+    const glm::vec2 s = sweep[entry[i]];
+    ja[i] = a + double(s.x) * (b - a);
+    jb[i] = a + double(s.y) * (b - a);
+  }
+  // each node's leaf-entry range (a subtree's entries are contiguous), children after parents in index
+  std::vector<std::uint32_t> lo(nodes, 0xffffffffu), hi(nodes, 0), order{0};
+  for (std::size_t i = 0; i < order.size(); ++i)
+    for (int k = 0; k < 4; ++k)
+      if (tree.nodes[order[i]].child[k] != WT_BVH4_EMPTY && tree.nodes[order[i]].count[k] == 0)
+        order.push_back(tree.nodes[order[i]].child[k]);
+  for (std::size_t i = order.size(); i-- > 0;) {
+    const std::uint32_t n = order[i];
+    const WtBvh4Node& node = tree.nodes[n];
+    for (int k = 0; k < 4; ++k) {
+      if (node.child[k] == WT_BVH4_EMPTY) continue;
+      const std::uint32_t c = node.child[k];
+      const std::uint32_t a = node.count[k] > 0 ? c : lo[c], b = node.count[k] > 0 ? c + node.count[k] : hi[c];
+      lo[n] = std::min(lo[n], a), hi[n] = std::max(hi[n], b);
+    }
+  }
+  std::vector<std::uint8_t> oriented(nodes, 0);
+  std::vector<WtBvh4Frame> frames(nodes);
+  auto slotRange = [&](const WtBvh4Node& node, int k) {
+    const std::uint32_t c = node.child[k];
+    return node.count[k] > 0 ? std::pair{c, c + node.count[k]} : std::pair{lo[c], hi[c]};
+  };
+  for (std::size_t n = 1; n < nodes; ++n) {
+    if (hi[n] <= lo[n] || hi[n] - lo[n] > kOrientMaxEntries) continue;
+    bool curves = true;
+    for (std::uint32_t i = lo[n]; i < hi[n] && curves; ++i) curves = ja[i].w >= 0.0;
+    if (!curves) continue;
+    // the segments' main direction: power iteration on the sum of e e^T
+    glm::dmat3 m(0.0);
+    glm::dvec3 axis(0.0), centre(0.0);
+    double longest = -1.0;
+    for (std::uint32_t i = lo[n]; i < hi[n]; ++i) {
+      const glm::dvec3 e = glm::dvec3(jb[i]) - glm::dvec3(ja[i]);
+      m += glm::outerProduct(e, e);
+      if (glm::dot(e, e) > longest) longest = glm::dot(e, e), axis = e;
+      centre += 0.5 * (glm::dvec3(ja[i]) + glm::dvec3(jb[i]));
+    }
+    if (!(longest > 0.0)) continue;
+    for (int it = 0; it < 8; ++it) axis = glm::normalize(m * axis);
+    if (!std::isfinite(axis.x + axis.y + axis.z)) continue;
+    centre /= double(hi[n] - lo[n]);
+    // an orthonormal frame with z along the axis (Duff et al. 2017)
+    const double sign = std::copysign(1.0, axis.z);
+    const double a = -1.0 / (sign + axis.z), b = axis.x * axis.y * a;
+    const glm::dvec3 x(1.0 + sign * axis.x * axis.x * a, sign * b, -sign * axis.x);
+    const glm::dvec3 y(b, sign + axis.y * axis.y * a, -axis.y);
+    WtBvh4Frame f{};
+    const glm::dvec3 r[3] = {x, y, axis};
+    glm::dmat3 rf;  // the float rows, as the kernel reads them (row i in rf[i])
+    for (int i = 0; i < 3; ++i) {
+      f.rows[i][0] = float(r[i].x), f.rows[i][1] = float(r[i].y), f.rows[i][2] = float(r[i].z);
+      rf[i] = glm::dvec3(f.rows[i][0], f.rows[i][1], f.rows[i][2]);
+    }
+    f.centre[0] = float(centre.x), f.centre[1] = float(centre.y), f.centre[2] = float(centre.z);
+    const glm::dvec3 cf(f.centre[0], f.centre[1], f.centre[2]);
+    WtBvh4Node local = tree.nodes[n];
+    double alignedArea = 0.0, orientedArea = 0.0, reach = 0.0;
+    for (int k = 0; k < 4; ++k) {
+      if (local.child[k] == WT_BVH4_EMPTY) continue;
+      const WtBvh4Node& was = tree.nodes[n];
+      Aabb box;
+      box.lo = glm::vec3(was.lo_x[k], was.lo_y[k], was.lo_z[k]);
+      box.hi = glm::vec3(was.hi_x[k], was.hi_y[k], was.hi_z[k]);
+      alignedArea += boxArea(box);
+      glm::dvec3 blo(INFINITY), bhi(-INFINITY);
+      const auto [first, last] = slotRange(tree.nodes[n], k);
+      for (std::uint32_t i = first; i < last; ++i)
+        for (const glm::dvec4& j : {ja[i], jb[i]}) {
+          const glm::dvec3 p(j), w = p - cf;
+          const glm::dvec3 q(glm::dot(rf[0], w), glm::dot(rf[1], w), glm::dot(rf[2], w));
+          // the rows' rounding scales the sphere by 1 + ~1e-7; the joint's own rounding as curvePieceBox
+          const double ext = j.w * (1.0 + 1e-6) + 1e-6 * (std::max({std::fabs(p.x), std::fabs(p.y), std::fabs(p.z)}) + j.w);
+          blo = glm::min(blo, q - ext), bhi = glm::max(bhi, q + ext);
+        }
+      Aabb o;
+      o.lo = glm::vec3(floatDown(blo.x), floatDown(blo.y), floatDown(blo.z));
+      o.hi = glm::vec3(floatUp(bhi.x), floatUp(bhi.y), floatUp(bhi.z));
+      orientedArea += boxArea(o);
+      reach = std::max(reach, glm::length(glm::max(glm::abs(blo), glm::abs(bhi))));
+      local.lo_x[k] = o.lo.x, local.hi_x[k] = o.hi.x;
+      local.lo_y[k] = o.lo.y, local.hi_y[k] = o.hi.y;
+      local.lo_z[k] = o.lo.z, local.hi_z[k] = o.hi.z;
+    }
+    if (!(orientedArea < kOrientArea * alignedArea)) continue;
+    f.reach = floatUp(reach * (1.0 + 1e-6));
+    tree.nodes[n] = local;
+    frames[n] = f;
+    oriented[n] = 1;
+  }
+  // lay out again: an oriented node's frame in the slot after it
+  std::vector<std::uint32_t> at(nodes);
+  std::uint32_t next = 0;
+  for (std::size_t n = 0; n < nodes; ++n) at[n] = next, next += oriented[n] ? 2u : 1u;
+  std::vector<WtBvh4Node> out(next);
+  for (std::size_t n = 0; n < nodes; ++n) {
+    WtBvh4Node node = tree.nodes[n];
+    for (int k = 0; k < 4; ++k)
+      if (node.child[k] != WT_BVH4_EMPTY && node.count[k] == 0)
+        node.child[k] = at[node.child[k]] | (oriented[node.child[k]] ? WT_BVH4_ORIENTED : 0u);
+    out[at[n]] = node;
+    if (oriented[n]) std::memcpy(&out[at[n] + 1], &frames[n], sizeof(WtBvh4Frame));
+  }
+  tree.nodes = std::move(out);
 }
 
 }  // namespace
@@ -589,13 +742,15 @@ PrimitiveTree buildPrimitiveTree(const PrimitiveRows& rows, const BvhBuildOption
   primOptions.maxLeafSize = kPrimitiveLeafSize;
   std::vector<Aabb> bounds = rows.bounds;
   std::vector<std::uint32_t> ids = rows.ids;
-  splitCurveBoxes(rows, bounds, ids);
+  std::vector<glm::vec2> sweep;
+  splitCurveBoxes(rows, bounds, ids, sweep);
   const Bvh bvh = buildBvh(bounds, binaryBuildOptions(primOptions, bounds.size()));
   Bvh4Options collapse = bvh4Options(primOptions);
   collapse.nodeBytesPerPrimitive = 0.0;  // no triangle blocks to weigh the nodes against
   PrimitiveTree tree;
   tree.bvh4 = collapseToBvh4(bvh, collapse);
   orderChildSlots(tree.bvh4);
+  orientCurveNodes(tree.bvh4, rows, ids, sweep, bvh.primIndices);
   tree.refs.resize(bvh.primIndices.size());
   for (std::size_t i = 0; i < tree.refs.size(); ++i) tree.refs[i] = ids[bvh.primIndices[i]];
   tree.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -1234,6 +1389,7 @@ static_assert(wt::kTriangleBlock == WT_TRIANGLE_BLOCK);
 static_assert(sizeof(WtBvhNode) == 32);
 static_assert(offsetof(WtBvhNode, hi_x) == 16);
 static_assert(sizeof(WtBvh4Node) == 128);
+static_assert(sizeof(WtBvh4Frame) == sizeof(WtBvh4Node) && offsetof(WtBvh4Frame, centre) == 48);
 static_assert(offsetof(WtBvh4Node, lo_y) == 32 && offsetof(WtBvh4Node, lo_z) == 64);
 // bvh_ray_planes (kernels/bvh.cl) addresses the planes by these float offsets
 static_assert(offsetof(WtBvh4Node, hi_x) == 16 && offsetof(WtBvh4Node, hi_y) == 48 && offsetof(WtBvh4Node, hi_z) == 80);

@@ -62,6 +62,23 @@ typedef struct WtBvh4Node {
   wt_uint count[4];        ///< 0 for an inner node or an empty slot, primitive count of a leaf
 } WtBvh4Node;
 #define WT_BVH4_EMPTY 0xffffffffu
+/// An inner child slot's node index with this bit set names an oriented node
+/// (primitive trees only): its child boxes are in a frame of their own, which
+/// the next node slot holds as a WtBvh4Frame, so a ray is rotated into it
+/// before the slab test. Thin diagonal curve segments fill a fraction of the
+/// axis-aligned boxes around them; boxes aligned to their run fit them.
+#define WT_BVH4_ORIENTED 0x80000000u
+
+/// The frame of an oriented node, in the node slot after it (128 bytes, as
+/// WtBvh4Node). A world point p is at rows * (p - centre) in the frame; the
+/// rows are orthonormal within float rounding, so distances along a ray are
+/// the same in both.
+typedef struct WtBvh4Frame {
+  float rows[3][4];   ///< rotation rows (x, y, z, unused), world to frame
+  float centre[3];    ///< world space
+  float reach;        ///< the largest world distance from centre to a point of the child boxes
+  float unused[16];
+} WtBvh4Frame;
 
 /// A primitive's identity in hits, skips and lights: its geometry type in
 /// the top four bits (WT_PRIM_*) and its index among that type's primitives

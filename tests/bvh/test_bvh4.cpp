@@ -674,8 +674,10 @@ TEST(Bvh4, SahRegressionIcosphere) {
 /// The primitive tree over every type beside triangles at once (spheres,
 /// curve segments, an SDF grid's bricks, displaced base triangles): every
 /// kept primitive sits in a leaf (once, but for a curve segment's pieces),
-/// a leaf's box holds the gathered box of each primitive it names, an inner
-/// slot's box holds its child's boxes, and no leaf names an unknown id.
+/// the leaf's box and every box above it, each in its node's frame (oriented
+/// nodes), hold the gathered box of each primitive it names (a curve
+/// segment: its hull, shared among the leaves of its pieces), no leaf names
+/// an unknown id, and some curve nodes are oriented.
 TEST(Bvh4, PrimitiveTreeOverEveryTypeKeepsTheInvariants) {
   const WtMaterial white = makeMaterial(glm::vec3(0.5f));
   Scene scene = makeSphereField(300, 5);
@@ -702,21 +704,37 @@ TEST(Bvh4, PrimitiveTreeOverEveryTypeKeepsTheInvariants) {
   std::unordered_map<std::uint32_t, std::size_t> row;
   for (std::size_t i = 0; i < rows.ids.size(); ++i) row[rows.ids[i]] = i;
   std::unordered_map<std::uint32_t, int> seen;
-  auto inside = [](const Aabb& a, const Aabb& b) {
-    return glm::all(glm::greaterThanEqual(a.lo, b.lo)) && glm::all(glm::lessThanEqual(a.hi, b.hi));
+  // a slot as (node with its WT_BVH4_ORIENTED bit, k); a point's place in the slot's frame
+  using Slot = std::pair<std::uint32_t, int>;
+  auto local = [&](Slot s, const glm::dvec3& p) {
+    if (!(s.first & WT_BVH4_ORIENTED)) return p;
+    WtBvh4Frame f;
+    std::memcpy(&f, &tree.bvh4.nodes.at((s.first & ~WT_BVH4_ORIENTED) + 1), sizeof f);
+    const glm::dvec3 w = p - glm::dvec3(f.centre[0], f.centre[1], f.centre[2]);
+    glm::dvec3 q;
+    for (int i = 0; i < 3; ++i) q[i] = glm::dot(glm::dvec3(f.rows[i][0], f.rows[i][1], f.rows[i][2]), w);
+    return q;
   };
-  std::size_t problems = 0;
+  // a ball (centre p, radius r) inside the slot's box, in the slot's frame
+  auto holds = [&](Slot s, const glm::dvec3& p, double r) {
+    const Aabb box = slotBox(tree.bvh4.nodes.at(s.first & ~WT_BVH4_ORIENTED), s.second);
+    const glm::dvec3 q = local(s, p);
+    const double tol = 1e-6 * (std::abs(p.x) + std::abs(p.y) + std::abs(p.z) + r);
+    return glm::all(glm::greaterThanEqual(q - r, glm::dvec3(box.lo) - tol)) &&
+           glm::all(glm::lessThanEqual(q + r, glm::dvec3(box.hi) + tol));
+  };
+  std::size_t problems = 0, oriented = 0;
+  std::unordered_map<std::uint32_t, std::vector<std::vector<Slot>>> curvePaths;  // per segment: the slots down to each leaf naming it
+  std::vector<Slot> path;
   std::function<void(std::uint32_t)> visit = [&](std::uint32_t n) {
-    const WtBvh4Node& node = tree.bvh4.nodes[n];
+    oriented += (n & WT_BVH4_ORIENTED) != 0;
+    const WtBvh4Node& node = tree.bvh4.nodes.at(n & ~WT_BVH4_ORIENTED);
     for (int k = 0; k < 4; ++k) {
       if (node.child[k] == WT_BVH4_EMPTY) continue;
-      const Aabb box = slotBox(node, k);
+      path.push_back({n, k});
       if (node.count[k] == 0) {
-        const WtBvh4Node& child = tree.bvh4.nodes[node.child[k]];
-        for (int j = 0; j < 4; ++j)
-          if (child.child[j] != WT_BVH4_EMPTY && !inside(slotBox(child, j), box))
-            ADD_FAILURE() << "node " << node.child[k] << " slot " << j << " leaves its parent's box", ++problems;
         visit(node.child[k]);
+        path.pop_back();
         continue;
       }
       for (std::uint32_t i = node.child[k]; i < node.child[k] + node.count[k]; ++i) {
@@ -727,13 +745,39 @@ TEST(Bvh4, PrimitiveTreeOverEveryTypeKeepsTheInvariants) {
           continue;
         }
         ++seen[id];
-        // a curve segment's piece holds only its part of the segment (Curves.DiagonalSegmentsEnterTheTreeInPieces)
-        if (primType(id) != WT_PRIM_CURVE && !inside(rows.bounds[at->second], box))
-          ADD_FAILURE() << primTypeName(primType(id)) << " " << primIndex(id) << " leaves its leaf's box", ++problems;
+        if (primType(id) == WT_PRIM_CURVE) {
+          curvePaths[id].push_back(path);
+          continue;
+        }
+        // other types: the gathered box's corners inside the leaf's slot and every slot above it
+        const Aabb& b = rows.bounds[at->second];
+        for (const Slot& s : path)
+          for (int c = 0; c < 8; ++c)
+            if (!holds(s, glm::dvec3(c & 1 ? b.hi.x : b.lo.x, c & 2 ? b.hi.y : b.lo.y, c & 4 ? b.hi.z : b.lo.z), 0.0)) {
+              ADD_FAILURE() << primTypeName(primType(id)) << " " << primIndex(id) << " leaves the box of node "
+                            << (s.first & ~WT_BVH4_ORIENTED) << " slot " << s.second, ++problems;
+              break;
+            }
       }
+      path.pop_back();
     }
   };
   visit(0);
+  // a curve segment: every point of its axis, its radius around it, inside some leaf naming it and that leaf's
+  // ancestors (its pieces share it out: Curves.DiagonalSegmentsEnterTheTreeInPieces)
+  for (const auto& [id, paths] : curvePaths) {
+    const std::size_t r = rows.dataFirst[WT_PRIM_CURVE] + 2 * std::size_t(primIndex(id));
+    const glm::dvec4 a(rows.data[r].x, rows.data[r].y, rows.data[r].z, std::fabs(rows.data[r].w));
+    const glm::dvec4 b(rows.data[r + 1].x, rows.data[r + 1].y, rows.data[r + 1].z, std::fabs(rows.data[r + 1].w));
+    for (int i = 0; i <= 64 && problems <= 20; ++i) {
+      const glm::dvec4 p = a + (i / 64.0) * (b - a);
+      const bool in = std::any_of(paths.begin(), paths.end(), [&](const std::vector<Slot>& slots) {
+        return std::all_of(slots.begin(), slots.end(), [&](Slot s) { return holds(s, glm::dvec3(p), p.w); });
+      });
+      if (!in) ADD_FAILURE() << "curve segment " << primIndex(id) << " at " << i / 64.0 << " is in no leaf's box", ++problems;
+    }
+  }
+  EXPECT_GT(oriented, 0u);  // the strands' nodes low in the tree take frames along them
   for (std::uint32_t id : rows.ids) {
     const int times = seen.count(id) ? seen[id] : 0;
     if (times == 0 || (primType(id) != WT_PRIM_CURVE && times != 1))

@@ -271,6 +271,15 @@ TEST(Curves, ClosestHitMatchesLongDoubleReference) {
   const PrimitiveRows rows = gatherPrimitives(scene);
   const std::vector<RSeg> segs = referenceSegments(rows);
   const std::vector<Ray> rays = raysAtCurves(rows, test::testSize(6000, 300), 2);
+  // the walks' nodes low in the tree are oriented (WT_BVH4_ORIENTED), so the rays cross frames too
+  const PrimitiveTree tree = buildPrimitiveTree(rows, BvhBuildOptions{});
+  std::size_t oriented = 0;
+  for (std::size_t n = 0; n < tree.bvh4.nodes.size(); ++n) {
+    const WtBvh4Node& node = tree.bvh4.nodes[n];
+    for (int k = 0; k < 4; ++k) oriented += node.child[k] != WT_BVH4_EMPTY && node.count[k] == 0 && (node.child[k] & WT_BVH4_ORIENTED);
+    if (oriented > 0) break;
+  }
+  EXPECT_GT(oriented, 0u);
   Tracer tracer(test::deviceContext(), scene);
   for (Traversal traversal : {Traversal::kSingle, Traversal::kPacket}) {
     std::vector<RayHit> hits = tracer.traceClosest(rays, traversal);
