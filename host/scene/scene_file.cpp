@@ -705,6 +705,11 @@ class Loader {
         }
         for (const WtTriangle& t : loaded.triangles) mesh.triangles.push_back({t.v0, t.v1, t.v2});
         for (const std::string& w : loaded.warnings) m_result.scene.addWarning(meshFile.filename().string() + ": " + w);
+        // the object's "material" shades the displaced surface; say so rather than drop the file's textures silently
+        if (!loaded.materialTextures.empty())
+          m_result.scene.addWarning(path + ": " + meshFile.filename().string() +
+                                    ": its materials' textures are not applied to a displaced mesh (the object's "
+                                    "\"material\" shades it, untextured)");
       }
     } catch (const SceneError& e) {
       fail(meshWhere, e.what());

@@ -762,6 +762,42 @@ TEST(SceneFile, DisplacedMeshFromPlyAndExr) {
   EXPECT_EQ(m.texcoords[0].y, 1.0f);
 }
 
+// A displaced glTF mesh is shaded by the object's material: the file's textures are dropped, and a warning names them.
+TEST(SceneFile, DisplacedGltfMeshWarnsThatItsTexturesAreNotApplied) {
+  Image map;
+  map.width = map.height = 2;
+  map.rgb.assign(12, 0.5f);
+  writeImage(testDir() / "uv_map.exr", map);
+  const unsigned char texels[12] = {200, 100, 50, 200, 100, 50, 200, 100, 50, 200, 100, 50};
+  ASSERT_NE(stbi_write_png((testDir() / "albedo.png").string().c_str(), 2, 2, 3, texels, 6), 0);
+  GltfDoc gltf;
+  const int pos = gltf.addVec3({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}});
+  const int uv = gltf.addVec2({{0, 0}, {1, 0}, {0, 1}});
+  gltf.addMesh("{\"attributes\":{\"POSITION\":" + std::to_string(pos) + ",\"TEXCOORD_0\":" + std::to_string(uv) +
+               "},\"material\":0}");
+  gltf.images.push_back("{\"uri\":\"albedo.png\"}");
+  gltf.textures.push_back("{\"source\":0}");
+  gltf.addNode("{\"mesh\":0}");
+  gltf.scenes.push_back("{\"nodes\":[0]}");
+  const auto load = [&](const std::string& material) {
+    gltf.materials = {material};
+    writeFile(testDir() / "uv_triangle.gltf", gltf.embedded());
+    return loadText(doc(R"("objects": [{"type": "displaced", "mesh": "uv_triangle.gltf", "displacement": "uv_map.exr",
+        "scale": 0.1}])")).scene;
+  };
+  const auto warned = [](const Scene& s) {
+    for (const std::string& w : s.warnings)
+      if (w.find("objects[0]: uv_triangle.gltf: its materials' textures are not applied to a displaced mesh") !=
+          std::string::npos)
+        return true;
+    return false;
+  };
+  const Scene textured = load("{\"pbrMetallicRoughness\":{\"baseColorTexture\":{\"index\":0}}}");
+  ASSERT_EQ(textured.displacedMeshes.size(), 1u);
+  EXPECT_TRUE(warned(textured));
+  EXPECT_FALSE(warned(load("{\"pbrMetallicRoughness\":{\"baseColorFactor\":[0.5,0.5,0.5,1]}}")));
+}
+
 TEST(SceneFileAssets, HeadMeshLoads) {
   WT_REQUIRE_ASSET(head, "curves/hairutil_testdata/Bangs_head.ply");
   const Scene s = loadText(doc(R"("objects": [{"type": "mesh", "file": ")" + head.string() + R"("}])")).scene;
