@@ -139,7 +139,11 @@ void mergeMoments(Moments& into, const Moments& next) {
   into.nonFiniteSamples += next.nonFiniteSamples;
 }
 
-Image imageFromMoments(const Moments& m, int width, int height) {
+namespace {
+
+/// The mean and the unbiased variance of the moments; `asDevice`: M2 rounded
+/// to float before the division, as the device's resolve does.
+Image momentsImage(const Moments& m, int width, int height, bool asDevice) {
   Image image;
   image.width = width;
   image.height = height;
@@ -150,30 +154,24 @@ Image imageFromMoments(const Moments& m, int width, int height) {
   for (std::size_t i = 0; i < pixels; ++i) {
     const std::uint32_t n = m.count[i];
     for (int c = 0; c < 3; ++c) {
+      const double m2 = m.m2[3 * i + c];
       image.rgb[3 * i + c] = float(m.mean[3 * i + c]);
-      image.rgbVariance[3 * i + c] = n > 1 ? float(m.m2[3 * i + c] / double(n - 1)) : 0.0f;
+      image.rgbVariance[3 * i + c] =
+          n <= 1 ? 0.0f : asDevice ? float(m2) / float(n - 1) : float(m2 / double(n - 1));
     }
   }
   return image;
 }
 
+}  // namespace
+
+Image imageFromMoments(const Moments& m, int width, int height) { return momentsImage(m, width, height, false); }
+
 Image resolvedImage(const Moments& m, int width, int height) {
-  Image image;
-  image.width = width;
-  image.height = height;
-  image.samples = m.count;
+  // accumulate_resolve's float mean and M2; the variance as Renderer::readResolved divides, in float
+  Image image = momentsImage(m, width, height, true);
   image.samplesDone = m.sampleEnd;
   const std::size_t pixels = m.pixels();
-  image.rgb.resize(3 * pixels);
-  image.rgbVariance.resize(3 * pixels);
-  for (std::size_t i = 0; i < pixels; ++i) {
-    const std::uint32_t n = m.count[i];
-    for (int c = 0; c < 3; ++c) {
-      // accumulate_resolve's float mean and M2; the variance as Renderer::readResolved divides, in float
-      image.rgb[3 * i + c] = float(m.mean[3 * i + c]);
-      image.rgbVariance[3 * i + c] = n > 1 ? float(m.m2[3 * i + c]) / float(n - 1) : 0.0f;
-    }
-  }
   if (m.hasAovs()) {
     // the device's float sums, as accumulationFromMoments restores them
     const std::vector<float> sums(m.aovSum.begin(), m.aovSum.end());

@@ -26,6 +26,8 @@
 namespace wt {
 namespace {
 
+using test::Placed;
+using test::raysAtCopies;
 using test::withInstancing;
 
 /// One geometry: `spheres` spheres of radii 0.05-0.3 in the unit ball (on
@@ -61,12 +63,6 @@ Scene sphereAndCurveGeometry(int spheres, int curves, std::uint32_t seed, bool a
   return s;
 }
 
-struct Placed {
-  Scene scene;
-  std::vector<glm::vec3> centres;
-  std::vector<float> scales;
-};
-
 /// Copies turned, scaled uniformly (one mirrored), near and 1e4 from the
 /// origin; `mesh`: an icosphere in the geometry too (copies of triangles beside those of spheres and curves).
 Placed placedGeometry(int copies = 8, int spheres = 30, int curves = 12, bool apart = false, bool mesh = false) {
@@ -90,30 +86,6 @@ Placed placedGeometry(int copies = 8, int spheres = 30, int curves = 12, bool ap
   }
   out.scene = placeCopies(geometry, transforms);
   return out;
-}
-
-/// Rays from around each copy towards points inside it, some short, some starting ahead.
-std::vector<Ray> raysAtCopies(const Placed& p, std::size_t perCopy, std::uint32_t seed) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<float> unit(-1.0f, 1.0f), t01(0.0f, 1.0f);
-  auto direction = [&] {
-    glm::vec3 d;
-    do d = glm::vec3(unit(rng), unit(rng), unit(rng));
-    while (glm::dot(d, d) > 1.0f || glm::dot(d, d) < 1e-3f);
-    return glm::normalize(d);
-  };
-  std::vector<Ray> rays;
-  for (std::size_t c = 0; c < p.centres.size(); ++c)
-    for (std::size_t i = 0; i < perCopy; ++i) {
-      const float r = p.scales[c];
-      Ray ray;
-      ray.origin = p.centres[c] + 3.0f * r * direction();
-      ray.direction = glm::normalize(p.centres[c] + 0.8f * r * t01(rng) * direction() - ray.origin);
-      ray.tmin = (i % 7 == 3) ? r * t01(rng) : 0.0f;
-      ray.tmax = (i % 5 == 1) ? 2.0f * r + 2.0f * r * t01(rng) : 1e30f;
-      rays.push_back(ray);
-    }
-  return rays;
 }
 
 /// Whether ray r passes within the float rounding of a flattened copy's
@@ -171,7 +143,7 @@ TEST(PrimitiveInstancing, CopiesBecomeInstances) {
 /// nearer hit's silhouette is grazed within that rounding (grazes), another.
 TEST(PrimitiveInstancing, HitsMatchTheFlattenedScene) {
   const Placed p = placedGeometry();
-  const std::vector<Ray> rays = raysAtCopies(p, 500, 11);
+  const std::vector<Ray> rays = raysAtCopies(p, 0.8f, 500, 11);
   Tracer on(test::deviceContext(), p.scene, withInstancing(Instancing::On));
   Tracer off(test::deviceContext(), p.scene, withInstancing(Instancing::Off));
   ASSERT_EQ(on.sceneBuffers().instanceCount(), 16u);
@@ -236,7 +208,7 @@ TEST(PrimitiveInstancing, PacketsInsideInstancesMatchSingleRays) {
   Tracer on(test::deviceContext(), p.scene, withInstancing(Instancing::On));
   ASSERT_EQ(on.sceneBuffers().instanceCount(), 15u + 8u);
   // whole packets at each copy
-  std::vector<Ray> rays = raysAtCopies(p, 320, 31);
+  std::vector<Ray> rays = raysAtCopies(p, 0.8f, 320, 31);
   const std::vector<Ray> spawned = test::raysFromHitPoints(rays, on.traceClosest(rays), 3);
   rays.insert(rays.end(), spawned.begin(), spawned.end());
   ASSERT_GT(rays.size(), p.centres.size() * 320 * 4 / 3);  // a third of them hit
@@ -299,7 +271,7 @@ TEST(PrimitiveInstancing, TheStoredCopyIsTheFinestForItsSize) {
   Tracer off(test::deviceContext(), p.scene, withInstancing(Instancing::Off));
   ASSERT_EQ(on.sceneBuffers().instanceCount(), 4u);  // spheres and curves, two copies each
   const PrimitiveRows rows = gatherPrimitives(p.scene);
-  const std::vector<Ray> rays = raysAtCopies(p, 4000, 17);
+  const std::vector<Ray> rays = raysAtCopies(p, 0.8f, 4000, 17);
   const std::vector<RayHit> flat = off.traceClosest(rays), got = on.traceClosest(rays);
   int bad = 0, grazing = 0, hits = 0;
   for (std::size_t i = 0; i < rays.size(); ++i) {
@@ -330,7 +302,7 @@ TEST(PrimitiveInstancing, SpawnedRaysLeaveTheirSphere) {
   const Placed p = placedGeometry(8, 27, 0, true);
   Tracer on(test::deviceContext(), p.scene, withInstancing(Instancing::On));
   ASSERT_EQ(on.sceneBuffers().instanceCount(), 8u);
-  std::vector<Ray> rays = raysAtCopies(p, 400, 23);
+  std::vector<Ray> rays = raysAtCopies(p, 0.8f, 400, 23);
   for (Ray& r : rays) r.tmin = 0.0f, r.tmax = 1e30f;
   const std::vector<RayHit> hits = on.traceClosest(rays);
   std::vector<Ray> outward, inward;

@@ -27,6 +27,8 @@
 namespace wt {
 namespace {
 
+using test::Placed;
+using test::raysAtCopies;
 using test::withInstancing;
 
 /// One geometry: a torus of signed distances (24^3 cells, sparse) beside a
@@ -45,12 +47,6 @@ Scene surfaceGeometry() {
   s.sdfGrids.push_back(std::move(grid));
   return s;
 }
-
-struct Placed {
-  Scene scene;
-  std::vector<glm::vec3> centres;
-  std::vector<float> scales;
-};
 
 /// `copies` copies, turned and scaled uniformly, near and 1e4 from the
 /// origin; copy 3 mirrored (its displaced mesh then stays flat: its corners
@@ -77,30 +73,6 @@ Placed placedSurfaces(int copies, bool uneven = false) {
   }
   out.scene = placeCopies(geometry, transforms);
   return out;
-}
-
-/// Rays from around each copy towards points inside it, some short, some starting ahead.
-std::vector<Ray> raysAtCopies(const Placed& p, std::size_t perCopy, std::uint32_t seed) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<float> unit(-1.0f, 1.0f), t01(0.0f, 1.0f);
-  auto direction = [&] {
-    glm::vec3 d;
-    do d = glm::vec3(unit(rng), unit(rng), unit(rng));
-    while (glm::dot(d, d) > 1.0f || glm::dot(d, d) < 1e-3f);
-    return glm::normalize(d);
-  };
-  std::vector<Ray> rays;
-  for (std::size_t c = 0; c < p.centres.size(); ++c)
-    for (std::size_t i = 0; i < perCopy; ++i) {
-      const float r = p.scales[c];
-      Ray ray;
-      ray.origin = p.centres[c] + 3.0f * r * direction();
-      ray.direction = glm::normalize(p.centres[c] + 0.7f * r * t01(rng) * direction() - ray.origin);
-      ray.tmin = (i % 7 == 3) ? r * t01(rng) : 0.0f;
-      ray.tmax = (i % 5 == 1) ? 2.0f * r + 2.0f * r * t01(rng) : 1e30f;
-      rays.push_back(ray);
-    }
-  return rays;
 }
 
 /// Every copy of the grid and of the displaced mesh becomes an instance with
@@ -148,7 +120,7 @@ TEST(SurfaceInstancing, StoredOnce) {
 /// one in 200. Any hits agree with closest hits of the same traversal.
 TEST(SurfaceInstancing, HitsMatchTheFlattenedScene) {
   const Placed p = placedSurfaces(6, true);
-  const std::vector<Ray> rays = raysAtCopies(p, test::testSize(600, 200), 11);
+  const std::vector<Ray> rays = raysAtCopies(p, 0.7f, test::testSize(600, 200), 11);
   Tracer on(test::deviceContext(), p.scene, withInstancing(Instancing::On));
   Tracer off(test::deviceContext(), p.scene, withInstancing(Instancing::Off));
   ASSERT_EQ(on.sceneBuffers().instanceCount(), 10u);
