@@ -261,6 +261,11 @@ void writeImage(const std::filesystem::path& path, const Image& image, std::span
     if (aov != Aov::Variance && image.aovs.empty())
       throw OutputError(path.string() + ": the render recorded no AOVs, so '" + std::string(aovName(aov)) +
                         "' cannot be written");
+  if (format == ImageFormat::Png &&
+      (image.width <= 0 || image.height <= 0 ||
+       image.srgba.size() != std::size_t(image.width) * std::size_t(image.height) * 4))
+    throw OutputError(path.string() + ": no 8-bit pixels to write (" + std::to_string(image.width) + " x " +
+                      std::to_string(image.height) + " image, " + std::to_string(image.srgba.size()) + " bytes)");
   writeAtomically(path, [&](const std::filesystem::path& tmp) {
     if (format == ImageFormat::Exr)
       writeExr(tmp, image, aovs);

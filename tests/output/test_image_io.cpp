@@ -113,5 +113,19 @@ TEST(ImageIo, FailedWriteKeepsTheEarlierImage) {
   EXPECT_EQ(files, 0);
 }
 
+// A PNG of an image that was never tone-mapped is an error naming the file, not a read past the pixels.
+TEST(ImageIo, PngWithoutEightBitPixelsIsAnError) {
+  const std::filesystem::path path = test::scratchDir("image_io") / "untoned.png";
+  Image untoned = gradient(8, 8);
+  untoned.srgba.clear();  // linear rgb only
+  try {
+    writeImage(path, untoned);
+    ADD_FAILURE() << "no error";
+  } catch (const OutputError& e) {
+    EXPECT_NE(std::string(e.what()).find("untoned.png"), std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(std::filesystem::exists(path));
+}
+
 }  // namespace
 }  // namespace wt
