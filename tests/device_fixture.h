@@ -2,6 +2,7 @@
 #pragma once
 
 #include "device/context.h"
+#include "core/embedded.h"
 #include "device/program.h"
 
 #include <gtest/gtest.h>
@@ -34,7 +35,7 @@ inline SharedDevice& sharedDevice() {
 inline Context& deviceContext() {
   SharedDevice& shared = sharedDevice();
   if (!shared.context) {
-    setKernelFallbackDirectory(std::filesystem::path(WT_SOURCE_DIR) / "kernels");
+    setKernelFallbackDirectory(wt::embedded::sourceDirectory() / "kernels");
     setenv("WAVETRACE_CACHE_DIR", "off", 0);
     shared.context = std::make_unique<Context>(selectDevice(""), /*profiling=*/true);
   }

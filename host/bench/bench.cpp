@@ -1,4 +1,5 @@
 #include "bench/bench.h"
+#include "core/embedded.h"
 
 #include "bench/embree_reference.h"
 #include "bench/generated_scenes.h"
@@ -891,7 +892,7 @@ std::string findAssets(const std::string& option) {
     if (!fs::is_directory(option)) throw std::invalid_argument("--assets " + option + ": no such folder");
     return option;
   }
-  for (fs::path candidate : {fs::path(WT_SOURCE_DIR) / ".." / "shared" / "assets", fs::path("..") / "shared" / "assets"})
+  for (fs::path candidate : {wt::embedded::sourceDirectory() / ".." / "shared" / "assets", fs::path("..") / "shared" / "assets"})
     if (fs::is_directory(candidate)) return fs::weakly_canonical(candidate).string();
   return {};
 }

@@ -8,4 +8,6 @@ std::optional<std::string_view> find(std::string_view path) {
   return std::nullopt;
 }
 
+std::filesystem::path sourceDirectory() { return WT_SOURCE_DIR; }
+
 }  // namespace wt::embedded

@@ -2,6 +2,7 @@
 // up by their path relative to the source root, e.g. "kernels/extend.cl".
 #pragma once
 
+#include <filesystem>
 #include <optional>
 #include <span>
 #include <string>
@@ -19,5 +20,10 @@ std::span<const File> files();
 
 /// The contents of one embedded file, or nullopt.
 std::optional<std::string_view> find(std::string_view path);
+
+/// The source tree this binary was built from (tests read scenes/ and
+/// kernels/ there). Only embedded.cpp knows it, so that no other object file
+/// carries an absolute path and build caches are shared between checkouts.
+std::filesystem::path sourceDirectory();
 
 }  // namespace wt::embedded

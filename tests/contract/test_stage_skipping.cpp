@@ -4,6 +4,7 @@
 // alpha, each rendered with every stage and buffer, and with the unused ones
 // left out.
 #include "device_fixture.h"
+#include "core/embedded.h"
 #include "render/renderer.h"
 #include "scene/default_scene.h"
 #include "scene/scene_file.h"
@@ -121,7 +122,7 @@ TEST(StageSkipping, NoConnectStageOrShadowBuffersWithoutLightSampling) {
 }
 
 TEST(StageSkipping, ExampleSceneFiles) {
-  const std::filesystem::path dir = std::filesystem::path(WT_SOURCE_DIR) / "scenes";
+  const std::filesystem::path dir = wt::embedded::sourceDirectory() / "scenes";
   int files = 0;
   for (const auto& entry : std::filesystem::directory_iterator(dir)) {
     if (entry.path().extension() != ".json") continue;

@@ -29,7 +29,7 @@ TEST(Embedded, TestKernelsAreNotShipped) {
     EXPECT_EQ(std::string(file.path).find("_tests.cl"), std::string::npos) << file.path << " is embedded";
   for (const char* root : {"unit_tests.cl", "env_tests.cl", "texture_tests.cl"}) {
     EXPECT_FALSE(embedded::find(std::string("kernels/") + root).has_value()) << root;
-    EXPECT_TRUE(std::filesystem::exists(std::filesystem::path(WT_SOURCE_DIR) / "kernels" / root))
+    EXPECT_TRUE(std::filesystem::exists(wt::embedded::sourceDirectory() / "kernels" / root))
         << root << ": the tests read it from the source tree";
   }
 }
@@ -111,7 +111,7 @@ TEST(Embedded, IncludesExpandOnceWithLineMarkers) {
 // (kernels/common.h): without it Intel's CPU runtime vectorises the kernel
 // across work-items and got shading wrong, which PoCL (and so CI) never shows.
 TEST(Embedded, EveryKernelIsWtKernel) {
-  setKernelFallbackDirectory(std::filesystem::path(WT_SOURCE_DIR) / "kernels");  // the test kernels' folder
+  setKernelFallbackDirectory(wt::embedded::sourceDirectory() / "kernels");  // the test kernels' folder
   for (const char* root : {"wavetrace.cl", "trace.cl", "stress.cl", "tonemap.cl", "unit_tests.cl", "env_tests.cl",
                            "texture_tests.cl", "tonemap_tests.cl"}) {
     const std::string source = expandKernelSource(root);

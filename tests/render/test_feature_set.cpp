@@ -3,6 +3,7 @@
 // on the image size or the sample count; and the specialised program renders
 // the same image as the general one (every switch on).
 #include "output/image_io.h"
+#include "core/embedded.h"
 #include "render/feature_set.h"
 #include "render/render_helpers.h"
 #include "scene/default_scene.h"
@@ -495,7 +496,7 @@ TEST(LambertianForms, SpecularZeroRendersAsTheLambertianModelWithTheSameImage) {
 class SpecialisedProgram : public ::testing::TestWithParam<const char*> {};
 
 TEST_P(SpecialisedProgram, RendersTheSameImageAsTheGeneralProgram) {
-  const std::string path = std::string(WT_SOURCE_DIR) + "/scenes/" + GetParam();
+  const std::string path = wt::embedded::sourceDirectory().string() + "/scenes/" + GetParam();
   expectSpecialisedEqualsGeneral(loadSceneAny(path), GetParam());
 }
 
@@ -520,7 +521,7 @@ class SpecialisedProgramExampleAssets : public ::testing::TestWithParam<const ch
 
 TEST_P(SpecialisedProgramExampleAssets, RendersTheSameImageAsTheGeneralProgram) {
   WT_REQUIRE_ASSET(hair, "curves/hairutil_testdata/Bangs_100.hair");
-  const std::string path = std::string(WT_SOURCE_DIR) + "/scenes/" + GetParam();
+  const std::string path = wt::embedded::sourceDirectory().string() + "/scenes/" + GetParam();
   expectSpecialisedEqualsGeneral(loadSceneAny(path), GetParam());
 }
 

@@ -2,6 +2,7 @@
 // tests/data/fuzz/ with what each must give now: a clean error that names
 // the file and the problem, or a load. Every file there is listed here.
 #include "scene/environment.h"
+#include "core/embedded.h"
 #include "scene/gltf_loader.h"
 
 #include <gtest/gtest.h>
@@ -46,7 +47,7 @@ const Finding kFindings[] = {
 
 void PrintTo(const Finding& finding, std::ostream* out) { *out << finding.file; }
 
-std::filesystem::path dataDir() { return std::filesystem::path(WT_SOURCE_DIR) / "tests" / "data" / "fuzz"; }
+std::filesystem::path dataDir() { return wt::embedded::sourceDirectory() / "tests" / "data" / "fuzz"; }
 
 /// Load by extension as the command line would; the error message, or "" when it loads.
 std::string load(const std::filesystem::path& path) {

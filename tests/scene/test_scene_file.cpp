@@ -3,6 +3,7 @@
 // checked numerically; recentring far from the world origin; every error
 // checked for the file and the JSON path it names; mutated files never crash.
 #include "geometry/primitives.h"
+#include "core/embedded.h"
 #include "output/image_io.h"
 #include "scene/default_scene.h"
 #include "scene/gltf_doc.h"
@@ -358,7 +359,7 @@ TEST(SceneFile, LoadSceneDispatchesJson) {
 }
 
 TEST(SceneFile, ExampleScenesLoad) {
-  const fs::path scenes = fs::path(WT_SOURCE_DIR) / "scenes";
+  const fs::path scenes = wt::embedded::sourceDirectory() / "scenes";
   SceneFile spheres = loadSceneFile((scenes / "spheres.json").string());
   expectConsistent(spheres.scene);
   EXPECT_GE(spheres.scene.spheres.size(), 10u);
@@ -386,14 +387,14 @@ TEST(SceneFile, ExampleScenesLoad) {
 
 // The example in docs/scene-format.md is a valid file (its glTF file from scenes/).
 TEST(SceneFile, DocumentedExampleLoads) {
-  std::ifstream in(fs::path(WT_SOURCE_DIR) / "docs" / "scene-format.md");
+  std::ifstream in(wt::embedded::sourceDirectory() / "docs" / "scene-format.md");
   const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   const std::size_t start = text.find("```json\n");
   ASSERT_NE(start, std::string::npos);
   const std::size_t end = text.find("```", start + 8);
   ASSERT_NE(end, std::string::npos);
   const SceneFile f = loadSceneFileFromMemory(text.substr(start + 8, end - start - 8), "scene-format.md",
-                                              (fs::path(WT_SOURCE_DIR) / "scenes").string());
+                                              (wt::embedded::sourceDirectory() / "scenes").string());
   expectConsistent(f.scene);
   EXPECT_GT(f.scene.triangles.size(), 0u);
   EXPECT_EQ(f.scene.spheres.size(), 4u);
@@ -678,7 +679,7 @@ TEST(SceneFile, CurvesInlineFromAFileAndChildren) {
 
 TEST(SceneFileAssets, HairExampleLoads) {
   WT_REQUIRE_ASSET(bangs, "curves/hairutil_testdata/Bangs_100.hair");
-  SceneFile hair = loadSceneFile((fs::path(WT_SOURCE_DIR) / "scenes" / "hair.json").string());
+  SceneFile hair = loadSceneFile((wt::embedded::sourceDirectory() / "scenes" / "hair.json").string());
   expectConsistent(hair.scene);
   EXPECT_TRUE(hair.scene.warnings.empty()) << hair.scene.warnings.front();
   EXPECT_GE(hair.scene.curves.size(), 10000u);
