@@ -10,27 +10,20 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cerrno>
+#include <csignal>
 #include <fstream>
 #include <random>
 #include <system_error>
+#include <unistd.h>
 
 namespace wt {
 namespace {
 
-std::filesystem::path temporaryPath(const std::filesystem::path& path) {
-  std::random_device rd;
-  // Hidden, beside the target (same file system, so rename is atomic).
-  std::string name = ".";
-  name += path.filename().string();
-  name += ".tmp";
-  name += std::to_string(rd() % 1000000);
-  return path.parent_path() / name;
-}
-
 /// Write with `writer` to a temporary file beside `path`, then rename.
 template <typename Writer>
 void writeAtomically(const std::filesystem::path& path, Writer writer) {
-  std::filesystem::path tmp = temporaryPath(path);
+  std::filesystem::path tmp = temporaryPathFor(path);
   try {
     writer(tmp);
   } catch (...) {
@@ -44,6 +37,7 @@ void writeAtomically(const std::filesystem::path& path, Writer writer) {
     std::filesystem::remove(tmp, ec);
     throw OutputError(path.string() + ": cannot replace the file: " + ec.message());
   }
+  removeStaleTemporaries(path);
 }
 
 /// One channel of an EXR: `base` points at pixel 0's value, `stride` bytes apart.
@@ -206,7 +200,7 @@ void checkWritable(const std::filesystem::path& path) {
     throw OutputError(path.string() + ": folder '" + dir.string() + "' does not exist");
   if (std::filesystem::is_directory(path, ec))
     throw OutputError(path.string() + ": is a folder");
-  std::filesystem::path probe = temporaryPath(path);
+  std::filesystem::path probe = temporaryPathFor(path);
   {
     std::ofstream out(probe);
     if (!out) throw OutputError(path.string() + ": folder '" + dir.string() + "' is not writable");
@@ -316,6 +310,41 @@ Image readExr(const std::filesystem::path& path) {
     return image;
   } catch (const std::exception& e) {
     throw OutputError(path.string() + ": reading EXR failed: " + e.what());
+  }
+}
+
+namespace {
+// Built by appending: gcc 12 warns falsely (-Wrestrict) on "." + string.
+std::string temporaryPrefix(const std::filesystem::path& path) {
+  std::string prefix = ".";
+  prefix += path.filename().string();
+  prefix += ".tmp";
+  return prefix;
+}
+}  // namespace
+
+std::filesystem::path temporaryPathFor(const std::filesystem::path& path) {
+  std::random_device rd;
+  std::string name = temporaryPrefix(path);
+  name += std::to_string(::getpid());
+  name += '.';
+  name += std::to_string(rd() % 1000000);
+  return path.parent_path() / name;
+}
+
+void removeStaleTemporaries(const std::filesystem::path& path) {
+  const std::string prefix = temporaryPrefix(path);
+  std::error_code ec;
+  const std::filesystem::path folder = path.parent_path().empty() ? "." : path.parent_path();
+  for (const auto& entry : std::filesystem::directory_iterator(folder, ec)) {
+    const std::string name = entry.path().filename().string();
+    if (name.size() <= prefix.size() || name.compare(0, prefix.size(), prefix) != 0) continue;
+    const std::size_t dot = name.find('.', prefix.size());
+    const std::string digits = name.substr(prefix.size(), dot - prefix.size());
+    if (digits.empty() || digits.size() > 9 || digits.find_first_not_of("0123456789") != std::string::npos) continue;
+    const pid_t pid = pid_t(std::stol(digits));
+    // Another process on this machine may be writing it right now: only a dead writer's file goes.
+    if (pid != ::getpid() && ::kill(pid, 0) != 0 && errno == ESRCH) std::filesystem::remove(entry.path(), ec);
   }
 }
 

@@ -21,6 +21,13 @@ struct OutputError : std::runtime_error {
 
 enum class ImageFormat { Exr, Png };
 
+/// A hidden temporary beside `path` (same file system, so a rename onto `path`
+/// is atomic), named after this process (".name.tmp<pid>.<n>").
+std::filesystem::path temporaryPathFor(const std::filesystem::path& path);
+/// Remove `path`'s temporaries whose process no longer runs: a writer killed
+/// mid-write leaves one, and nothing else would ever remove it.
+void removeStaleTemporaries(const std::filesystem::path& path);
+
 /// The format for a path's extension (.exr, .png, any case). Throws OutputError.
 ImageFormat imageFormatFor(const std::filesystem::path& path);
 

@@ -2,6 +2,7 @@
 
 #include "bvh/builders.h"
 #include "device/program.h"
+#include "output/image_io.h"
 
 #include <cstdio>
 #include <cstring>
@@ -195,7 +196,7 @@ void writeCheckpoint(const std::filesystem::path& path, const Checkpoint& c) {
   const std::uint32_t version = kCheckpointVersion, headerBytes = std::uint32_t(header.size());
   const std::uint64_t payloadBytes = a.state.size() + a.samples.size() * sizeof(std::uint32_t) + a.aovs.size();
   Fnv64 sum;
-  const std::filesystem::path temp = path.string() + ".tmp" + std::to_string(getpid());
+  const std::filesystem::path temp = temporaryPathFor(path);
   std::FILE* f = std::fopen(temp.c_str(), "wb");
   if (!f) fail(path, std::string("cannot write the checkpoint: ") + std::strerror(errno));
   bool ok = true;
@@ -228,6 +229,7 @@ void writeCheckpoint(const std::filesystem::path& path, const Checkpoint& c) {
     std::filesystem::remove(temp);
     fail(path, "cannot rename the checkpoint into place: " + ec.message());
   }
+  removeStaleTemporaries(path);
 }
 
 Checkpoint readCheckpoint(const std::filesystem::path& path) {

@@ -10,6 +10,9 @@
 #include <random>
 #include <utility>
 
+#include <sys/wait.h>
+#include <unistd.h>
+
 namespace wt {
 namespace {
 
@@ -125,6 +128,25 @@ TEST(ImageIo, PngWithoutEightBitPixelsIsAnError) {
     EXPECT_NE(std::string(e.what()).find("untoned.png"), std::string::npos) << e.what();
   }
   EXPECT_FALSE(std::filesystem::exists(path));
+}
+
+// A writer killed mid-write leaves its temporary; the next write of that file
+// removes it, and leaves a running process's temporary alone.
+TEST(ImageIo, NextWriteRemovesADeadWritersTemporary) {
+  const std::filesystem::path path = test::scratchDir("image_io") / "killed.exr";
+  const pid_t child = ::fork();
+  if (child == 0) ::_exit(0);
+  ASSERT_GT(child, 0);
+  ::waitpid(child, nullptr, 0);  // a pid that no longer runs
+  const std::filesystem::path dead = path.parent_path() / (".killed.exr.tmp" + std::to_string(child) + ".17");
+  const std::filesystem::path alive = path.parent_path() / (".killed.exr.tmp" + std::to_string(::getppid()) + ".17");
+  const std::filesystem::path other = path.parent_path() / (".killed.exr.other" + std::to_string(child));
+  for (const auto& p : {dead, alive, other}) std::ofstream(p) << "partial";
+  writeImage(path, gradient(4, 4));
+  EXPECT_FALSE(std::filesystem::exists(dead));
+  EXPECT_TRUE(std::filesystem::exists(alive));
+  EXPECT_TRUE(std::filesystem::exists(other));
+  EXPECT_EQ(readExr(path).width, 4);
 }
 
 }  // namespace
