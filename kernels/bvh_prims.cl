@@ -40,12 +40,6 @@ inline int4 bvh4_frame_hit(__global const WtBvh4Node* n, float3 org, float3 dir,
   return enter <= exit;
 }
 
-/// The slots of a node's slab test that the ray enters, as bits 0-3 (walked
-/// by their set bits: no per-slot branch on a spilled array).
-inline uint bvh_prims_slot_mask(int4 hit4) {
-  return (uint)((hit4.s0 & 1) | (hit4.s1 & 2) | (hit4.s2 & 4) | (hit4.s3 & 8));
-}
-
 /// Node `node` of the primitive tree (its WT_BVH4_ORIENTED bit included)
 /// and its child boxes' slab test.
 inline __global const WtBvh4Node* bvh_prims_node(GeometryScene g, uint node, RayPlanes planes, float3 org,
@@ -70,7 +64,6 @@ inline bool bvh_prims_closest_root(GeometryScene g, uint root, float3 org, float
   uint stack_node[WT_BVH_STACK_SIZE];
   float stack_t[WT_BVH_STACK_SIZE];
   int sp = 0;
-  uint last = WT_NO_HIT;  // the leaf entry tested last: a curve's pieces name one segment, which one test settles
   uint node = root;
   bool found = false;
   for (;;) {
@@ -78,18 +71,15 @@ inline bool bvh_prims_closest_root(GeometryScene g, uint root, float3 org, float
     int4 hit4;
     __global const WtBvh4Node* n = bvh_prims_node(g, node, planes, org, dir, inv_d, tmin, hit->t, &hit4, &t4);
     float t_child[4] = {t4.s0, t4.s1, t4.s2, t4.s3};
-    uint slots = bvh_prims_slot_mask(hit4);
+    int hit_child[4] = {hit4.s0, hit4.s1, hit4.s2, hit4.s3};
     uint next = WT_BVH4_EMPTY;  // (uint: oriented nodes' indices have the top bit set)
     float next_t = INFINITY;
-    while (slots != 0u) {
-      uint k = popcount((slots & (0u - slots)) - 1u);  // the lowest set bit (ctz is OpenCL 2.0)
-      slots &= slots - 1u;
+    for (int k = 0; k < 4; ++k) {
+      if (!hit_child[k]) continue;
       uint first = n->child[k], count = n->count[k];
       if (count > 0) {
         for (uint i = first; i < first + count; ++i) {
           uint prim = g.refs[i];
-          if (prim == last) continue;
-          last = prim;
           float t, u, v;
           if (geometry_intersect(g, prim, org, dir, tmin, hit->t, skip, WT_NO_HIT, false, &t, &u, &v)) {
             hit->t = t;
@@ -132,24 +122,19 @@ inline bool bvh_prims_occluded_root(GeometryScene g, uint root, float3 org, floa
   RayPlanes planes = bvh_ray_planes(inv_d);
   uint stack_node[WT_BVH_STACK_SIZE];
   int sp = 0;
-  uint last = WT_NO_HIT;  // the leaf entry tested last: a curve's pieces name one segment, which one test settles
   uint node = root;
   for (;;) {
     float4 t4;
     int4 hit4;
     __global const WtBvh4Node* n = bvh_prims_node(g, node, planes, org, dir, inv_d, tmin, tmax, &hit4, &t4);
-    uint slots = bvh_prims_slot_mask(hit4);
-    while (slots != 0u) {
-      uint k = popcount((slots & (0u - slots)) - 1u);  // the lowest set bit (ctz is OpenCL 2.0)
-      slots &= slots - 1u;
+    int hit_child[4] = {hit4.s0, hit4.s1, hit4.s2, hit4.s3};
+    for (int k = 0; k < 4; ++k) {
+      if (!hit_child[k]) continue;
       uint first = n->child[k], count = n->count[k];
       if (count > 0) {
         for (uint i = first; i < first + count; ++i) {
-          uint prim = g.refs[i];
-          if (prim == last) continue;
-          last = prim;
           float t, u, v;
-          if (geometry_intersect(g, prim, org, dir, tmin, tmax, skip, WT_NO_HIT, true, &t, &u, &v)) return true;
+          if (geometry_intersect(g, g.refs[i], org, dir, tmin, tmax, skip, WT_NO_HIT, true, &t, &u, &v)) return true;
         }
       } else {
         stack_node[sp++] = first;
@@ -198,25 +183,21 @@ inline void bvh_prims_closest(BvhScene scene, GeometryScene g, float3 org, float
   uint stack_node[WT_BVH_STACK_SIZE];
   float stack_t[WT_BVH_STACK_SIZE];
   int sp = 0;
-  uint last = WT_NO_HIT;  // the leaf entry tested last: a curve's pieces name one segment, which one test settles
   uint node = 0;
   for (;;) {
     float4 t4;
     int4 hit4;
     __global const WtBvh4Node* n = bvh_prims_node(g, node, planes, org, dir, inv_d, tmin, hit->t, &hit4, &t4);
     float t_child[4] = {t4.s0, t4.s1, t4.s2, t4.s3};
-    uint slots = bvh_prims_slot_mask(hit4);
+    int hit_child[4] = {hit4.s0, hit4.s1, hit4.s2, hit4.s3};
     uint next = WT_BVH4_EMPTY;  // (uint: oriented nodes' indices have the top bit set)
     float next_t = INFINITY;
-    while (slots != 0u) {
-      uint k = popcount((slots & (0u - slots)) - 1u);  // the lowest set bit (ctz is OpenCL 2.0)
-      slots &= slots - 1u;
+    for (int k = 0; k < 4; ++k) {
+      if (!hit_child[k]) continue;
       uint first = n->child[k], count = n->count[k];
       if (count > 0) {
         for (uint i = first; i < first + count; ++i) {
           uint prim = g.refs[i];
-          if (prim == last) continue;
-          last = prim;
 #if WT_HAS_INSTANCES
           if (prim_type(prim) == WT_PRIM_INSTANCE) {
             if (bvh_prims_instance_closest(scene, g, prim, org, dir, tmin, skip, skip_instance, hit))
@@ -269,22 +250,18 @@ inline bool bvh_prims_occluded(BvhScene scene, GeometryScene g, float3 org, floa
   RayPlanes planes = bvh_ray_planes(inv_d);
   uint stack_node[WT_BVH_STACK_SIZE];
   int sp = 0;
-  uint last = WT_NO_HIT;  // the leaf entry tested last: a curve's pieces name one segment, which one test settles
   uint node = 0;
   for (;;) {
     float4 t4;
     int4 hit4;
     __global const WtBvh4Node* n = bvh_prims_node(g, node, planes, org, dir, inv_d, tmin, tmax, &hit4, &t4);
-    uint slots = bvh_prims_slot_mask(hit4);
-    while (slots != 0u) {
-      uint k = popcount((slots & (0u - slots)) - 1u);  // the lowest set bit (ctz is OpenCL 2.0)
-      slots &= slots - 1u;
+    int hit_child[4] = {hit4.s0, hit4.s1, hit4.s2, hit4.s3};
+    for (int k = 0; k < 4; ++k) {
+      if (!hit_child[k]) continue;
       uint first = n->child[k], count = n->count[k];
       if (count > 0) {
         for (uint i = first; i < first + count; ++i) {
           uint prim = g.refs[i];
-          if (prim == last) continue;
-          last = prim;
 #if WT_HAS_INSTANCES
           if (prim_type(prim) == WT_PRIM_INSTANCE) {
             if (bvh_prims_instance_occluded(scene, g, prim, org, dir, tmin, tmax, skip_a, skip_instance)) return true;

@@ -301,11 +301,8 @@ __attribute__((always_inline)) inline bool prims_packet_leaf(GeometryScene g, ui
   for (int l = 0; l < WT_PACKET; ++l) {
     if (!lane_hit[l]) continue;
     float3 o = prims_packet_org(p, l), d = prims_packet_dir(p, l);
-    uint last = WT_NO_HIT;  // a curve's pieces side by side in the leaf (sorted): one test settles them
     for (uint i = first; i < first + count; ++i) {
       uint id = g.refs[i];
-      if (id == last) continue;
-      last = id;
       float th, uh, vh;
       if (!geometry_intersect(g, id, o, d, p->tmin[l], t[l], p->skip[l], skip_b ? skip_b[l] : WT_NO_HIT, any, &th,
                               &uh, &vh))

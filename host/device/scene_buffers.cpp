@@ -733,27 +733,6 @@ void orientCurveNodes(Bvh4& tree, const PrimitiveRows& rows, const std::vector<s
   tree.nodes = std::move(out);
 }
 
-/// Each leaf's entries in typed-id order: a curve segment's pieces in one
-/// leaf sit side by side, so the walks' "tested last" check skips the
-/// repeats, and the segments' rows are read in memory order.
-void sortLeafRefs(PrimitiveTree& tree) {
-  if (tree.bvh4.nodes.empty()) return;
-  std::vector<std::uint32_t> stack{0u};
-  while (!stack.empty()) {
-    const WtBvh4Node& node = tree.bvh4.nodes[stack.back() & ~WT_BVH4_ORIENTED];
-    stack.pop_back();
-    for (int k = 0; k < 4; ++k) {
-      if (node.child[k] == WT_BVH4_EMPTY) continue;
-      if (node.count[k] == 0) {
-        stack.push_back(node.child[k]);
-      } else if (std::size_t(node.child[k]) + node.count[k] <= tree.refs.size()) {
-        const auto first = tree.refs.begin() + node.child[k];
-        std::sort(first, first + node.count[k]);
-      }
-    }
-  }
-}
-
 }  // namespace
 
 PrimitiveTree buildPrimitiveTree(const PrimitiveRows& rows, const BvhBuildOptions& options) {
@@ -774,7 +753,6 @@ PrimitiveTree buildPrimitiveTree(const PrimitiveRows& rows, const BvhBuildOption
   orientCurveNodes(tree.bvh4, rows, ids, sweep, bvh.primIndices);
   tree.refs.resize(bvh.primIndices.size());
   for (std::size_t i = 0; i < tree.refs.size(); ++i) tree.refs[i] = ids[bvh.primIndices[i]];
-  sortLeafRefs(tree);
   tree.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return tree;
 }

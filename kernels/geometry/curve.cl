@@ -167,8 +167,7 @@ inline bool curve_intersect(__global const float4* rows, uint k, float3 o, float
   bool left, right;
   curve_segment(rows, k, &a, &b, &left, &right);
   float dd = dot(d, d);
-  float inv_dd = 1.0f / dd;  // one divide: most segments tested are rejected by the bound below
-  float t_mid = dot(0.5f * (a.xyz + b.xyz) - o, d) * inv_dd;
+  float t_mid = dot(0.5f * (a.xyz + b.xyz) - o, d) / dd;
   float3 o_mid = o + t_mid * d;
   // Most segments a ray is tested against it misses: first the cheap bound,
   // the hull lies within max(ra, rb) of the segment from a to b. The ray's
@@ -176,8 +175,8 @@ inline bool curve_intersect(__global const float4* rows, uint k, float3 o, float
   // parts across the ray), least at the s below.
   float3 e_ab = b.xyz - a.xyz;
   float3 w = a.xyz - o_mid;
-  float3 w_perp = w - (dot(w, d) * inv_dd) * d;
-  float3 e_perp = e_ab - (dot(e_ab, d) * inv_dd) * d;
+  float3 w_perp = w - (dot(w, d) / dd) * d;
+  float3 e_perp = e_ab - (dot(e_ab, d) / dd) * d;
   float ee = dot(e_perp, e_perp);
   float s_near = ee > 0.0f ? clamp(-dot(w_perp, e_perp) / ee, 0.0f, 1.0f) : 0.0f;
   float3 gap = w_perp + s_near * e_perp;
