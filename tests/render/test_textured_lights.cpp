@@ -101,15 +101,21 @@ TEST(TexturedLights, TrianglesEnterTheListByTheirTexture) {
 
 /// lampScene's lamp (no emissive texture) with holes: MASK with a checker
 /// of 16 x 16 cells in its base colour texture's alpha (half of it a hole),
-/// or BLEND with an alpha factor of 0.5 and no texture.
+/// or BLEND with an alpha factor of 0.5 and no texture; OPAQUE: no holes.
+/// The floor reads the checker's white as its base colour (an opaque
+/// material: its alpha is not read), so that every mode compiles textures in
+/// and MASK and BLEND share one program per integrator.
 Scene holedLampScene(std::uint32_t mode) {
   Scene scene = lampScene(kAcross);
   const std::uint32_t lamp = 1;
   scene.materials[lamp].texture_mask = 0u;  // no emissive texture: the lamp emits 4 wherever it is there
+  const std::uint32_t checker = test::addCheckerTexture(scene, 16);
+  test::setBaseColorTexture(scene, 0, checker);
+  if (mode == WT_ALPHA_OPAQUE) return scene;
   scene.materials[lamp].alpha_mode = mode;
   scene.materials[lamp].alpha_cutoff = 0.5f;
   if (mode == WT_ALPHA_MASK) {
-    test::setBaseColorTexture(scene, lamp, test::addCheckerTexture(scene, 16));
+    test::setBaseColorTexture(scene, lamp, checker);
   } else {
     scene.materials[lamp].alpha = 0.5f;
   }
@@ -135,10 +141,12 @@ RenderSettings holedLampSettings(Integrator integrator) {
 // distance of 1 or more; their pattern's effect on the irradiance is of the
 // order (cell / distance)^2). With the light list ignoring the holes the
 // floor gets about 3/4 of the opaque lamp's light.
+// The opaque lamp is lit as two triangles (no rectangle light, as the holed
+// ones): its program is PathWithNeeMatchesBsdfSamplingAlone's `path`.
 TEST(TexturedLights, HoledEmittersEmitOnlyWhereTheyAreThere) {
-  Scene opaque = lampScene(kAcross);
-  opaque.materials[1].texture_mask = 0u;
-  Image full = test::render(opaque, holedLampSettings(Integrator::Path), 256);
+  RenderSettings opaque = holedLampSettings(Integrator::Path);
+  opaque.quadLights = false;
+  Image full = test::render(holedLampScene(WT_ALPHA_OPAQUE), opaque, 256);
   test::BlockStat fullFloor = test::blockStat(full, 0, 12, 16, 16, 0);
   ASSERT_GT(fullFloor.mean, 0.01);
   for (std::uint32_t mode : {WT_ALPHA_MASK, WT_ALPHA_BLEND}) {
