@@ -101,11 +101,35 @@ inline SurfacePoint triangle_surface_point(GeometryScene g, __global const float
   __global float2* ray_cone, __global float4* aov_sample, __global uint4* aov_ids, \
   __global uint4* media, WT_SURFACE_PARAMS WT_THIN_SHADOW_SHADE_PARAMS WT_QUAD_SHADE_PARAMS
 
+#if WT_SHADE_LANES && WT_HAS_TRANSMISSION
+/// WT_SHADE_KERNEL_PARAMS' names, to pass them on
+#define WT_SHADE_KERNEL_ARGS                                                                                       \
+  frame, environment, env_texels, env_marginal_cdf, env_conditional_cdf, counters, in_slot, out_slot, queue_in,   \
+      queue_out, ray_o, ray_d, hits, throughput, radiance, tri_info, tri_verts, normals, materials, lights, alias,  \
+      emitter_pdf_area, shadow_queue, shadow_o, shadow_d, shadow_radiance, pbr_table, bounce_counts, ray_skip,     \
+      shadow_skip, light_tree, emitter_leaf, prev_normal, hit_instance, geometry, prim_nodes, prim_refs, prim_data, \
+      prim_info, ray_cone, aov_sample, aov_ids, media, vertex_uv, vertex_color, vertex_tangent, material_textures,  \
+      textures, texture_levels, texels WT_QUAD_SHADE_ARGS
+#if WT_HAS_QUAD_LIGHTS
+#define WT_QUAD_SHADE_ARGS , emitter_quad
+#else
+#define WT_QUAD_SHADE_ARGS
+#endif
+/// One path (queue entry i), shade.cl's whole estimator: the lanes kernel's
+/// paths at volume boundaries, transmitting surfaces or inside a medium.
+/// Not inlined, so its private values stay out of the lanes' work-group frame.
+__attribute__((noinline)) void shade_path(uint i, WT_SHADE_KERNEL_PARAMS);
+#endif
 #if WT_SHADE_LANES
 #include "shade_lanes.cl"
+#endif
+#if !WT_SHADE_LANES || WT_HAS_TRANSMISSION
+#if WT_SHADE_LANES
+__attribute__((noinline)) void shade_path(uint i, WT_SHADE_KERNEL_PARAMS) {
 #else
 WT_KERNEL void shade(WT_SHADE_KERNEL_PARAMS) {
   uint i = get_global_id(0);
+#endif
   if (i >= counters[in_slot]) return;
   // Without WT_FLAG_COMPACT_SHADOWS entry i of the shadow queue is this
   // item's shadow ray, if it makes one: no atomic counter, whose increments
@@ -522,4 +546,4 @@ WT_KERNEL void shade(WT_SHADE_KERNEL_PARAMS) {
 #if WT_HAS_TRANSMISSION
 #undef frame
 #endif
-#endif  // WT_SHADE_LANES
+#endif  // !WT_SHADE_LANES || WT_HAS_TRANSMISSION

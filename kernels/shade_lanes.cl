@@ -1,6 +1,6 @@
 // Stage 3 for scenes whose surfaces are all triangles, Lambertian or
-// metallic-roughness without extensions (no textures, holes, other primitive
-// types, AOVs; the path integrator): the shade kernel over 8 or 16 paths per
+// metallic-roughness without extensions but transmission (no textures, holes,
+// other primitive types, AOVs; the path integrator): the shade kernel over 8 or 16 paths per
 // work-item on vector lanes. PoCL runs a work-group as a loop over its items
 // and vectorises that loop only when the body is scalar, straight-line code,
 // which shade is not (float3 values, loops, atomics), so the work-items are
@@ -9,7 +9,8 @@
 // rectangles take shade.cl's scalar functions one lane at a time; the rest
 // (the surface, light picking, triangle and rectangle sampling, the
 // Lambertian BSDF, the metallic-roughness BSDF without extensions in
-// bsdf.cl's order, roulette) runs on all lanes at once. The host launches one
+// bsdf.cl's order, roulette) runs on all lanes at once. Paths at transmitting
+// surfaces or inside volumes take shade.cl's shade_path. The host launches one
 // work-item per WT_SHADE_LANES_WIDTH queue entries.
 
 // The width, 8 or 16, is the device's preferred float vector (the host's
@@ -706,7 +707,11 @@ WT_KERNEL void shade(WT_SHADE_KERNEL_PARAMS) {
   const uint first = get_global_id(0) * WT_SHADE_LANES_WIDTH;
   if (first >= count) return;
   const uintL entry = first + WT_LANES_IOTA;
+#if WT_HAS_TRANSMISSION
+  intL valid = entry < count;  // less the lanes shade_path takes (below)
+#else
   const intL valid = entry < count;
+#endif
   const bool compact_shadows = (frame.flags & WT_FLAG_COMPACT_SHADOWS) != 0u;
   if (!compact_shadows && (frame.flags & WT_FLAG_SHADOW_QUEUE))
     #pragma unroll
@@ -777,6 +782,26 @@ WT_KERNEL void shade(WT_SHADE_KERNEL_PARAMS) {
   VL base = vl(gather_f(mf, material, mstride, 0u), gather_f(mf, material, mstride, 1u), gather_f(mf, material, mstride, 2u));
   VL le = vl(gather_f(mf, material, mstride, 4u), gather_f(mf, material, mstride, 5u), gather_f(mf, material, mstride, 6u));
   floatL le_both = gather_f(mf, material, mstride, 7u);
+#if WT_HAS_TRANSMISSION
+  // Paths inside a volume, past a false hit (their own bounce, shared/media.h)
+  // or at a transmitting surface take shade.cl's estimator one lane at a
+  // time; the rest are paths in air at opaque surfaces, which the lanes shade.
+  {
+    __global const uint* mu = (__global const uint*)media;
+    intL in_medium = gather_u(mu, path, 4u, 0u) != WT_MEDIUM_NONE || gather_u(mu, path, 4u, 1u) != WT_MEDIUM_NONE ||
+                     gather_u(mu, path, 4u, 2u) != WT_MEDIUM_NONE || gather_u(mu, path, 4u, 3u) != WT_MEDIUM_NONE;
+    intL false_hits = gather_countL(bounce_counts, path, 3u) >= WT_FALSE_HIT_STEP;
+    intL transmits = !miss &&
+                     gather_u((__global const uint*)mf, material, mstride,
+                              __builtin_offsetof(WtMaterial, model) / sizeof(float)) == WT_MATERIAL_PBR &&
+                     gather_f(mf, material, mstride, __builtin_offsetof(WtMaterial, transmission) / sizeof(float)) > 0.0f;
+    intL alone = valid && (in_medium || false_hits || transmits);
+    if (any(alone))
+      for (int k = 0; k < WT_SHADE_LANES_WIDTH; ++k)
+        if (lane_i(alone, k)) shade_path(first + k, WT_SHADE_KERNEL_ARGS);
+    valid = valid && !alone;
+  }
+#endif
   intL inside = vl_dot(ng, dir) > 0.0f;
   intL active = valid && !miss && vl_dot(ng, ng) != 0.0f;
 

@@ -141,13 +141,14 @@
 #endif
 // Shade over 8 or 16 (WT_SHADE_LANES_WIDTH) paths per work-item on vector
 // lanes (kernels/shade_lanes.cl): only for triangles, Lambertian or
-// metallic-roughness without extensions, textures, vertex colours, holes or
-// AOVs, under the path integrator.
+// metallic-roughness without extensions other than transmission (whose
+// paths shade.cl's code shades one lane at a time), textures, vertex
+// colours, holes or AOVs, under the path integrator.
 #ifndef WT_SHADE_LANES
 #error "WT_SHADE_LANES not set (kernelDefines)"
 #elif !WT_SWITCH_IS_BOOL(WT_SHADE_LANES)
 #error "WT_SHADE_LANES must be 0 or 1"
-#elif WT_SHADE_LANES && (WT_HAS_TRANSMISSION || WT_HAS_SPECULAR || WT_HAS_CLEARCOAT || WT_HAS_SHEEN || \
+#elif WT_SHADE_LANES && (WT_HAS_SPECULAR || WT_HAS_CLEARCOAT || WT_HAS_SHEEN || \
                          WT_HAS_ANISOTROPY || WT_HAS_IRIDESCENCE || WT_HAS_THIN_SHADOWS || WT_HAS_TEXTURES || WT_HAS_VERTEX_COLORS || WT_HAS_ALPHA || WT_AOV || \
                          WT_INTEGRATOR_MINIMAL || WT_HAS_SPHERES || WT_HAS_CURVES || WT_HAS_INSTANCES || \
                          WT_HAS_SDF_GRIDS || WT_HAS_DISPLACED)

@@ -251,10 +251,11 @@ KernelFeatures renderKernelFeatures(const FeatureSet& features, const DeviceInfo
   k.aov = settings.aovs;
   k.bvhCost = settings.aovs && settings.bvhCost;
   // shade on vector lanes where every surface is a triangle, Lambertian or
-  // metallic-roughness without extensions (kernels/shade_lanes.cl; its misses
-  // read triangle 0, so there must be one)
+  // metallic-roughness without extensions but transmission, whose paths the
+  // lanes shade one at a time (kernels/shade_lanes.cl; its misses read
+  // triangle 0, so there must be one)
   k.shadeLanes = settings.shadeLanes && !settings.generalProgram && buffers.storedTriangles() > 0 &&
-                 !k.integratorMinimal && !k.transmission &&
+                 !k.integratorMinimal &&
                  !k.thinShadows && !k.specular && !k.clearcoat && !k.sheen && !k.anisotropy && !k.iridescence &&
                  !k.textures && !k.vertexColors && !k.alpha && !k.aov &&
                  std::none_of(k.primitives.begin(), k.primitives.end(), [](bool on) { return on; });

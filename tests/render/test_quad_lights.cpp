@@ -249,6 +249,50 @@ TEST(QuadLights, ShadeLanesRenderMetallicRoughnessTheSameAsOnePathPerWorkItem) {
   shadeLanesAgainstOnePath(scene, settings, 31, "metallic-roughness");
 }
 
+/// An axis-aligned box [lo, hi] of `material`, its faces facing out.
+void addBox(Scene& scene, glm::vec3 lo, glm::vec3 hi, std::uint32_t material) {
+  const glm::vec3 d = hi - lo, x(d.x, 0.0f, 0.0f), y(0.0f, d.y, 0.0f), z(0.0f, 0.0f, d.z);
+  addRect(scene, lo, z, y, material);
+  addRect(scene, lo + x, y, z, material);
+  addRect(scene, lo, x, z, material);
+  addRect(scene, lo + y, z, x, material);
+  addRect(scene, lo, y, x, material);
+  addRect(scene, lo + z, x, y, material);
+}
+
+// With transmission the lanes shade the paths in air at opaque surfaces and
+// hand the rest to shade.cl's code one lane at a time: the same image as one
+// path per work-item. Glass boxes of triangles (which the lanes take): a
+// smooth absorbing one holding a glowing opaque block (paths inside a medium
+// hit it, and the medium absorbs its light) and a lower-priority water block (false hits, which shift a path's
+// bounce), and a rough one (rough transmission), beside the metallic-
+// roughness and Lambertian surfaces that stay on the lanes.
+TEST(QuadLights, ShadeLanesRenderGlassTheSameAsOnePathPerWorkItem) {
+  Scene scene = quadLitScene();
+  scene.materials[0] = makePbrMaterial(glm::vec3(0.7f, 0.6f, 0.5f), 0.0f, 0.6f);
+  const std::uint32_t glass = addMaterial(
+      scene, withPriority(withTransmission(makePbrMaterial(glm::vec3(1.0f), 0.0f, 0.0f), 1.0f, 1.5f, false,
+                                           glm::vec3(0.5f, 1.5f, 3.0f)), 1), "glass");
+  const std::uint32_t water = addMaterial(
+      scene, withTransmission(makePbrMaterial(glm::vec3(1.0f), 0.0f, 0.0f), 1.0f, 1.33f, false, glm::vec3(4.0f)),
+      "water");
+  const std::uint32_t rough = addMaterial(
+      scene, withTransmission(makePbrMaterial(glm::vec3(0.9f, 1.0f, 0.9f), 0.0f, 0.3f), 1.0f, 1.5f, false, glm::vec3(0.0f)),
+      "rough glass");
+  const std::uint32_t block =
+      addMaterial(scene, makeMaterial(glm::vec3(0.9f, 0.2f, 0.1f), glm::vec3(1.5f, 1.0f, 0.8f)), "glowing block");
+  addBox(scene, {-1.4f, 0.02f, 0.3f}, {-0.5f, 0.6f, 1.1f}, glass);
+  addBox(scene, {-1.3f, 0.1f, 0.4f}, {-1.0f, 0.4f, 0.9f}, block);
+  addBox(scene, {-0.9f, 0.1f, 0.45f}, {-0.6f, 0.5f, 0.95f}, water);
+  addBox(scene, {0.6f, 0.02f, 0.3f}, {1.3f, 0.5f, 1.0f}, rough);
+  RenderSettings settings;
+  settings.width = settings.height = 32;
+  settings.maxBounces = 5;
+  settings.rrMinDepth = 1;
+  settings.background = glm::vec3(0.2f, 0.25f, 0.3f);
+  shadeLanesAgainstOnePath(scene, settings, 41, "glass");
+}
+
 TEST(QuadLights, ShadeLanesWidthByDevice) {
   // 16 lanes where the device's float vector is 16 wide, 8 elsewhere; an
   // explicit 8 or 16 wins; anything else is refused
