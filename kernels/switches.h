@@ -109,7 +109,7 @@
 #define WT_SWITCH_VALUE_IS_BOOL(v) WT_SWITCH_SECOND(WT_SWITCH_PROBE_##v, 0, ~)
 #define WT_SWITCH_SET_AND_BOOL(x) WT_SWITCH_VALUE_IS_BOOL(x)
 #define WT_GEOMETRY_CHECK_SWITCH(TAG, ID, NAME, FEATURE, SWITCH, GATHER, AREA) \
-  _Static_assert(WT_SWITCH_SET_AND_BOOL(SWITCH), #SWITCH " not set (kernelDefines), or not 0 or 1");
+  _Static_assert(WT_SWITCH_SET_AND_BOOL(WT_HAS_##SWITCH), "WT_HAS_" #SWITCH " not set (kernelDefines), or not 0 or 1");
 #include "geometry/types.def"
 WT_GEOMETRY_TYPES(WT_GEOMETRY_CHECK_SWITCH)
 

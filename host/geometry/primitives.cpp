@@ -12,7 +12,7 @@ double noArea(const Scene&, const PrimitiveRows&, std::uint32_t) { return std::n
 
 std::span<const PrimitiveType> primitiveTypes() {
 #define WT_GEOMETRY_ROW(TAG, ID, NAME, FEATURE, SWITCH, GATHER, AREA) \
-  PrimitiveType{WT_PRIM_##TAG, NAME, #SWITCH, FEATURE, GATHER, AREA},
+  PrimitiveType{WT_PRIM_##TAG, NAME, "WT_HAS_" #SWITCH, FEATURE, GATHER, AREA},
   static constexpr PrimitiveType kTypes[] = {WT_GEOMETRY_TYPES(WT_GEOMETRY_ROW)};
 #undef WT_GEOMETRY_ROW
   static_assert(std::size(kTypes) + 1 == WT_PRIM_TYPES);
