@@ -97,31 +97,21 @@
 #elif !WT_SWITCH_IS_BOOL(WT_HAS_ALPHA)
 #error "WT_HAS_ALPHA must be 0 or 1"
 #endif
-#ifndef WT_HAS_SPHERES
-#error "WT_HAS_SPHERES not set (kernelDefines)"
-#elif !WT_SWITCH_IS_BOOL(WT_HAS_SPHERES)
-#error "WT_HAS_SPHERES must be 0 or 1"
-#endif
-#ifndef WT_HAS_CURVES
-#error "WT_HAS_CURVES not set (kernelDefines)"
-#elif !WT_SWITCH_IS_BOOL(WT_HAS_CURVES)
-#error "WT_HAS_CURVES must be 0 or 1"
-#endif
-#ifndef WT_HAS_INSTANCES
-#error "WT_HAS_INSTANCES not set (kernelDefines)"
-#elif !WT_SWITCH_IS_BOOL(WT_HAS_INSTANCES)
-#error "WT_HAS_INSTANCES must be 0 or 1"
-#endif
-#ifndef WT_HAS_SDF_GRIDS
-#error "WT_HAS_SDF_GRIDS not set (kernelDefines)"
-#elif !WT_SWITCH_IS_BOOL(WT_HAS_SDF_GRIDS)
-#error "WT_HAS_SDF_GRIDS must be 0 or 1"
-#endif
-#ifndef WT_HAS_DISPLACED
-#error "WT_HAS_DISPLACED not set (kernelDefines)"
-#elif !WT_SWITCH_IS_BOOL(WT_HAS_DISPLACED)
-#error "WT_HAS_DISPLACED must be 0 or 1"
-#endif
+// The geometry types' switches (WT_HAS_SPHERES, ...), one per row of
+// kernels/geometry/types.def. A macro cannot produce #error, so a static
+// assertion names the switch: WT_SWITCH_SET_AND_BOOL(x) is 1 only where x
+// expands to 0 or 1 (pasted onto WT_SWITCH_PROBE_, only those two make a
+// second argument); undefined, it stays a name and gives 0.
+#define WT_SWITCH_SECOND_(a, b, ...) b
+#define WT_SWITCH_SECOND(...) WT_SWITCH_SECOND_(__VA_ARGS__)
+#define WT_SWITCH_PROBE_0 ~, 1
+#define WT_SWITCH_PROBE_1 ~, 1
+#define WT_SWITCH_VALUE_IS_BOOL(v) WT_SWITCH_SECOND(WT_SWITCH_PROBE_##v, 0, ~)
+#define WT_SWITCH_SET_AND_BOOL(x) WT_SWITCH_VALUE_IS_BOOL(x)
+#define WT_GEOMETRY_CHECK_SWITCH(TAG, ID, NAME, FEATURE, SWITCH, GATHER, AREA) \
+  _Static_assert(WT_SWITCH_SET_AND_BOOL(WT_HAS_##SWITCH), "WT_HAS_" #SWITCH " not set (kernelDefines), or not 0 or 1");
+#include "geometry/types.def"
+WT_GEOMETRY_TYPES(WT_GEOMETRY_CHECK_SWITCH)
 
 // Arbitrary output variables (kernels/aov.cl): shade and accumulate record
 // them only when a render asks (RenderSettings::aovs); off, no code exists.
@@ -150,8 +140,7 @@
 #error "WT_SHADE_LANES must be 0 or 1"
 #elif WT_SHADE_LANES && (WT_HAS_SPECULAR || WT_HAS_CLEARCOAT || WT_HAS_SHEEN || \
                          WT_HAS_ANISOTROPY || WT_HAS_IRIDESCENCE || WT_HAS_THIN_SHADOWS || WT_HAS_TEXTURES || WT_HAS_VERTEX_COLORS || WT_HAS_ALPHA || WT_AOV || \
-                         WT_INTEGRATOR_MINIMAL || WT_HAS_SPHERES || WT_HAS_CURVES || WT_HAS_INSTANCES || \
-                         WT_HAS_SDF_GRIDS || WT_HAS_DISPLACED)
+                         WT_INTEGRATOR_MINIMAL WT_GEOMETRY_TYPES(WT_GEOMETRY_OR_SWITCH))
 #error "WT_SHADE_LANES needs untextured Lambertian or plain metallic-roughness triangles under the path integrator"
 #elif WT_SHADE_LANES && WT_SHADE_LANES_WIDTH != 8 && WT_SHADE_LANES_WIDTH != 16
 #error "WT_SHADE_LANES_WIDTH must be 8 or 16 (kernelDefines)"

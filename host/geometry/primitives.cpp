@@ -3,17 +3,24 @@
 
 #include <array>
 #include <cmath>
+#include <iterator>
 
 namespace wt {
 
+void gatherNoRows(const Scene&, PrimitiveRows&) {}
+double noArea(const Scene&, const PrimitiveRows&, std::uint32_t) { return std::nan(""); }
+
 std::span<const PrimitiveType> primitiveTypes() {
-  static constexpr std::array<PrimitiveType, 5> kTypes = {{
-      {WT_PRIM_SPHERE, "spheres", "WT_HAS_SPHERES", gatherSpheres, sphereArea},
-      {WT_PRIM_CURVE, "curve segments", "WT_HAS_CURVES", gatherCurves, curveSegmentArea},
-      {WT_PRIM_INSTANCE, "instances", "WT_HAS_INSTANCES", nullptr, nullptr},
-      {WT_PRIM_SDF_GRID, "SDF bricks", "WT_HAS_SDF_GRIDS", gatherSdfGrids, sdfBrickArea},
-      {WT_PRIM_DISPLACED, "displaced triangles", "WT_HAS_DISPLACED", gatherDisplaced, displacedBaseArea},
-  }};
+#define WT_GEOMETRY_ROW(TAG, ID, NAME, FEATURE, SWITCH, GATHER, AREA) \
+  PrimitiveType{WT_PRIM_##TAG, NAME, "WT_HAS_" #SWITCH, FEATURE, GATHER, AREA},
+  static constexpr PrimitiveType kTypes[] = {WT_GEOMETRY_TYPES(WT_GEOMETRY_ROW)};
+#undef WT_GEOMETRY_ROW
+  static_assert(std::size(kTypes) + 1 == WT_PRIM_TYPES);
+  static_assert([] {  // ids 1 .. WT_PRIM_TYPES - 1, each once (0 is triangles)
+    std::uint32_t seen = 0;
+    for (const PrimitiveType& t : kTypes) seen |= 1u << t.id;
+    return seen == (1u << WT_PRIM_TYPES) - 2u;
+  }());
   return kTypes;
 }
 
@@ -27,10 +34,10 @@ const char* primTypeName(std::uint32_t type) {
 PrimitiveRows gatherPrimitives(const Scene& scene, std::span<const InstanceDesc> instances) {
   PrimitiveRows rows;
   for (const PrimitiveType& t : primitiveTypes()) {
-    if (t.gather)
-      t.gather(scene, rows);
-    else
+    if (t.id == WT_PRIM_INSTANCE)
       gatherInstances(instances, rows);
+    else
+      t.gather(scene, rows);
   }
   return rows;
 }

@@ -1,9 +1,9 @@
 // The primitives other than triangles, gathered type by type into the rows
 // the kernels read (kernels/geometry/geometry.cl): a box and a typed id per
 // primitive for their BVH, and each type's prim_data and prim_info rows.
-// A type's gatherer lives in host/geometry/<type>.cpp; primitiveTypes()
-// (host/geometry/primitives.cpp) lists every type, the one table a new type
-// adds a row to.
+// A type's gatherer lives in host/geometry/<type>.cpp; the list in
+// kernels/geometry/types.def names every type, and primitiveTypes() and the
+// gatherers' declarations below are expanded from it.
 #pragma once
 
 #include "core/math.h"
@@ -31,11 +31,12 @@ struct PrimitiveType {
   std::uint32_t id;    ///< WT_PRIM_*
   const char* name;    ///< plural, for tables ("spheres")
   const char* define;  ///< the kernels' switch that compiles it in ("WT_HAS_SPHERES", kernelDefines)
-  /// Its boxes, typed ids and rows from the scene; null for instances, which
-  /// SceneBuffers lays out from the geometries it stores once.
+  const char* feature;  ///< its name in the feature set ("spheres", featureNames)
+  /// Its boxes, typed ids and rows from the scene; nothing for instances,
+  /// which gatherPrimitives lays out from the geometries SceneBuffers stores once.
   void (*gather)(const Scene&, PrimitiveRows&);
   /// The surface area of gathered primitive `index` (a typed id's index),
-  /// for primitiveScale; null for instances, whose copies the scene holds flat.
+  /// for primitiveScale; NaN (not counted) for instances, whose copies count as their primitives.
   double (*area)(const Scene&, const PrimitiveRows&, std::uint32_t index);
 };
 
@@ -61,6 +62,14 @@ struct PrimitiveRows {
   /// gatherDisplaced: per mesh its first kept base triangle's index, then the end (meshes + 1 entries)
   std::vector<std::uint32_t> displacedTriangles;
 };
+
+/// Every listed type's gatherer and area (kernels/geometry/types.def), each
+/// defined in its host/geometry/<type>.cpp; documented below where a type says more.
+#define WT_GEOMETRY_DECLARE(TAG, ID, NAME, FEATURE, SWITCH, GATHER, AREA) \
+  void GATHER(const Scene& scene, PrimitiveRows& rows);                   \
+  double AREA(const Scene& scene, const PrimitiveRows& rows, std::uint32_t index);
+WT_GEOMETRY_TYPES(WT_GEOMETRY_DECLARE)
+#undef WT_GEOMETRY_DECLARE
 
 /// Whether a sphere can be drawn: a finite centre and a finite radius > 0.
 /// The others are left out of the BVH and of the light list alike.

@@ -1,6 +1,7 @@
 #include "render/feature_set.h"
 
 #include "device/scene_buffers.h"
+#include "geometry/primitives.h"
 #include "render/light_list.h"
 #include "render/renderer.h"
 #include "scene/scene.h"
@@ -23,12 +24,7 @@ FeatureSet sceneFeatures(const Scene& scene, const SceneBuffers& buffers, const 
   // geometry
   f.triangleCount = scene.triangles.size();
   f.triangles = !scene.triangles.empty();
-  const std::array<bool, WT_PRIM_TYPES> present = buffers.primitiveTypesPresent();
-  f.spheres = present[WT_PRIM_SPHERE];
-  f.curves = present[WT_PRIM_CURVE];
-  f.sdfGrids = present[WT_PRIM_SDF_GRID];
-  f.displaced = present[WT_PRIM_DISPLACED];
-  f.instances = present[WT_PRIM_INSTANCE];
+  f.primitives = buffers.primitiveTypesPresent();
   f.bvhStackSize = buffers.stackSize();
 
   // lights: what emits, by kind
@@ -107,11 +103,7 @@ std::vector<std::string> featureNames(const FeatureSet& f) {
     if (on) names.emplace_back(name);
   };
   add(f.triangles, "triangles");
-  add(f.spheres, "spheres");
-  add(f.curves, "curves");
-  add(f.sdfGrids, "sdf_grids");
-  add(f.displaced, "displaced_meshes");
-  add(f.instances, "instances");
+  for (const PrimitiveType& t : primitiveTypes()) add(f.primitives[t.id], t.feature);
   add(f.punctualLights, "punctual_lights");
   add(f.emissiveTriangles, "emissive_triangles");
   add(f.quadLights, "quad_lights");
@@ -167,11 +159,7 @@ KernelFeatures kernelFeaturesFor(const FeatureSet& f, const DeviceInfo& device, 
   k.textures = f.textures;
   k.vertexColors = f.vertexColors;
   k.alpha = f.alphaTest;
-  k.primitives[WT_PRIM_SPHERE] = f.spheres;
-  k.primitives[WT_PRIM_CURVE] = f.curves;
-  k.primitives[WT_PRIM_SDF_GRID] = f.sdfGrids;
-  k.primitives[WT_PRIM_DISPLACED] = f.displaced;
-  k.primitives[WT_PRIM_INSTANCE] = f.instances;
+  k.primitives = f.primitives;
   k.packetWidth = packetWidthFor(device, requestedPacketWidth, f.triangleCount);
   k.streamPrefetch = false;  // by the scene's size where it is uploaded (Renderer, Tracer: streamPrefetchFor)
   return k;

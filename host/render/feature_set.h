@@ -8,6 +8,7 @@
 #include "device/context.h"
 #include "device/program.h"
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <string>
@@ -23,11 +24,8 @@ struct FeatureSet {
   // geometry
   bool triangles = false;  ///< the scene has triangles
   std::size_t triangleCount = 0;  ///< for the packet width (packetWidthFor); a statistic, not a switch
-  bool spheres = false;    ///< analytic spheres
-  bool curves = false;     ///< round curves
-  bool sdfGrids = false;   ///< grids of signed distances
-  bool displaced = false;  ///< displaced triangle meshes
-  bool instances = false;  ///< geometry stored once and placed by instances (SceneBuffers decided)
+  /// Per WT_PRIM_* type beside triangles: the scene has it (instances: SceneBuffers decided)
+  std::array<bool, WT_PRIM_TYPES> primitives{};
   int bvhStackSize = 64;   ///< traversal stack entries the BVH needs (SceneBuffers::stackSize)
   // lights
   bool punctualLights = false;     ///< KHR_lights_punctual

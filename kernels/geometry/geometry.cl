@@ -36,7 +36,7 @@
 #endif
 
 /// Whether any type beside triangles is compiled in (the primitive BVH is traversed).
-#define WT_HAS_PRIMITIVES (WT_HAS_SPHERES || WT_HAS_CURVES || WT_HAS_INSTANCES || WT_HAS_SDF_GRIDS || WT_HAS_DISPLACED)
+#define WT_HAS_PRIMITIVES (0 WT_GEOMETRY_TYPES(WT_GEOMETRY_OR_SWITCH))
 
 /// The non-triangle primitives as the kernels see them (WtGeometry).
 typedef struct GeometryScene {

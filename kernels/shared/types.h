@@ -88,16 +88,26 @@ typedef struct WtBvh4Frame {
 #define WT_PRIM_TYPE_SHIFT 28
 #define WT_PRIM_INDEX_MASK 0x0fffffffu
 #define WT_PRIM_TRIANGLE 0u  ///< kernels/geometry/triangle.cl, in their own BVH (nodes, tri_verts)
-#define WT_PRIM_SPHERE 1u    ///< kernels/geometry/sphere.cl
-#define WT_PRIM_CURVE 2u     ///< kernels/geometry/curve.cl: one segment (a round cone) of a curve
-/// A placed copy of a geometry stored once (kernels/geometry/instance.cl).
+/// The other types' tags, WT_PRIM_<TAG>, from the list in kernels/geometry/types.def.
+#include "geometry/types.def"
+#ifdef __OPENCL_C_VERSION__
+enum {
+#else
+enum : wt_uint {
+#endif
+  WT_GEOMETRY_TYPES(WT_GEOMETRY_TAG)
+};
+/// Type slots in WtGeometry: triangles and the list's types.
+#define WT_PRIM_TYPES (1 WT_GEOMETRY_TYPES(WT_GEOMETRY_ONE))
+/// WT_PRIM_SPHERE: kernels/geometry/sphere.cl.
+/// WT_PRIM_CURVE: kernels/geometry/curve.cl, one segment (a round cone) of a curve.
+/// WT_PRIM_INSTANCE: a placed copy of a geometry stored once (kernels/geometry/instance.cl).
 /// Triangles: its own 4-wide tree in `nodes` after the scene's, its
 /// triangles in tri_verts/tri_info after the scene's (leaf order). Spheres
 /// or curves (WT_INSTANCE_PRIMITIVES): its own tree in prim_nodes after the
 /// scene's, its primitives' rows after the scene's in their type's block.
 /// A hit on it keeps the geometry's primitive (a leaf-order triangle or a
 /// typed id) in the hit and the instance's typed id beside it (hit_instance).
-#define WT_PRIM_INSTANCE 3u
 /// prim_data rows per instance: object-from-scene as three float4 rows of a
 /// 3x4 matrix (xyz the linear part's row, w the translation), then
 /// scene-from-object the same way. prim_info: x = the geometry's root node,
@@ -105,7 +115,7 @@ typedef struct WtBvh4Frame {
 #define WT_INSTANCE_ROWS 6
 #define WT_INSTANCE_MIRRORED 1u  ///< the transform's determinant is negative (the copy's corners 1 and 2 swapped)
 #define WT_INSTANCE_PRIMITIVES 2u  ///< the root is a node of prim_nodes (spheres, curves, SDF grids, displaced meshes), not of nodes (triangles)
-/// A base triangle of a displaced mesh (kernels/geometry/displaced.cl),
+/// WT_PRIM_DISPLACED: a base triangle of a displaced mesh (kernels/geometry/displaced.cl),
 /// intersected as 4^L micro-triangles that are never stored (their
 /// corners' displacements are, up to level WT_DISP_MAX_DEPTH + 1). prim_data: per
 /// mesh WT_DISP_MESH_ROWS rows: (scale, offset, map width, map height),
@@ -131,13 +141,12 @@ typedef struct WtBvh4Frame {
 /// its boxes' first row, its displacements' first row or ~0 for none),
 /// then its corners' first rows in winding order
 /// and its index in its mesh (mesh = first row / WT_DISP_MESH_ROWS).
-#define WT_PRIM_DISPLACED 4u
 #define WT_DISP_MESH_ROWS 2       ///< prim_data rows per displaced mesh
 #define WT_DISP_VERTEX_ROWS 2     ///< prim_data rows per vertex
 #define WT_DISP_INFO_ROWS 2       ///< prim_info rows per base triangle
 #define WT_DISP_MAX_LEVEL 10      ///< L at most: 1024 micro-edges per base edge
 #define WT_DISP_MAX_DEPTH 6       ///< D at most (D = min(L - 1, this)): 1365 stored blocks, 32 KiB a base triangle
-/// A brick of up to WT_SDF_BRICK^3 cells of a grid of signed distances that
+/// WT_PRIM_SDF_GRID: a brick of up to WT_SDF_BRICK^3 cells of a grid of signed distances that
 /// the surface crosses (kernels/geometry/sdf_grid.cl). prim_data: per grid
 /// WT_SDF_GRID_ROWS rows (lattice-from-scene as a 3x4 matrix, then (cells
 /// x, y, z, the longest world edge of a cell)), then the grids' corner
@@ -147,12 +156,10 @@ typedef struct WtBvh4Frame {
 /// WT_SDF_SPARSE; then which of its cells the surface crosses, 512 bits
 /// (cell x + 8 y + 64 z at bit i & 31 of word i >> 5), so the walk skips the
 /// others without reading their corners.
-#define WT_PRIM_SDF_GRID 5u
 #define WT_SDF_BRICK 8          ///< cells per brick edge
 #define WT_SDF_GRID_ROWS 4      ///< prim_data rows per grid
 #define WT_SDF_INFO_ROWS 5      ///< prim_info rows per brick: its row, then its cells' crossing mask
 #define WT_SDF_SPARSE (1u << 27)  ///< the brick's values are its own (WT_SDF_BRICK + 1)^3 corners, x fastest; else the grid's dense array
-#define WT_PRIM_TYPES 6      ///< type slots in WtGeometry
 
 /// The primitives other than triangles (kernels/geometry/geometry.cl): one
 /// BVH over all of them whose leaves are ranges of prim_refs (typed ids),
