@@ -28,13 +28,8 @@ namespace wt {
 namespace {
 
 using test::hitsAgree;
+using test::Placed;
 using test::withInstancing;
-
-struct Placed {
-  Scene scene;
-  std::vector<glm::vec3> centres;  ///< per copy
-  std::vector<float> radii;        ///< per copy: a radius that bounds it
-};
 
 /// Icospheres (1280 triangles each) turned, scaled unevenly, one mirrored,
 /// moved near and far (1e4) from the origin, apart, with a soup of other
@@ -56,36 +51,11 @@ Placed placedIcospheres(bool soup = true) {
     if (c == 3) s.y = -s.y;  // a mirror image
     transforms.push_back(glm::scale(m, s));
     out.centres.push_back(places[c]);
-    out.radii.push_back(std::max({std::abs(s.x), std::abs(s.y), std::abs(s.z)}));
+    out.scales.push_back(std::max({std::abs(s.x), std::abs(s.y), std::abs(s.z)}));
   }
   if (soup) out.scene = makeTriangleSoup(300, 9, 0.5f);
   appendScene(out.scene, placeCopies(mesh, transforms));
   return out;
-}
-
-/// Rays at the copies: from a point around each copy towards a point inside
-/// its bound, some short, some starting ahead.
-std::vector<Ray> raysAtCopies(const Placed& p, std::size_t perCopy, std::uint32_t seed) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<float> unit(-1.0f, 1.0f), t01(0.0f, 1.0f);
-  auto direction = [&] {
-    glm::vec3 d;
-    do d = glm::vec3(unit(rng), unit(rng), unit(rng));
-    while (glm::dot(d, d) > 1.0f || glm::dot(d, d) < 1e-3f);
-    return glm::normalize(d);
-  };
-  std::vector<Ray> rays;
-  for (std::size_t c = 0; c < p.centres.size(); ++c)
-    for (std::size_t i = 0; i < perCopy; ++i) {
-      Ray r;
-      r.origin = p.centres[c] + 3.0f * p.radii[c] * direction();
-      const glm::vec3 target = p.centres[c] + 0.8f * p.radii[c] * t01(rng) * direction();
-      r.direction = glm::normalize(target - r.origin);
-      r.tmin = (i % 7 == 3) ? p.radii[c] * t01(rng) : 0.0f;
-      r.tmax = (i % 5 == 1) ? 2.0f * p.radii[c] + 2.0f * p.radii[c] * t01(rng) : 1e30f;
-      rays.push_back(r);
-    }
-  return rays;
 }
 
 /// Instancing::On stores the icosphere once with one instance per copy that
@@ -122,11 +92,11 @@ TEST(Instancing, TheStoredCopyIsTheFinestForItsSize) {
                                           glm::normalize(glm::vec3(1.0f, 2.0f, 3.0f)))};
   p.scene = placeCopies(mesh, copies);
   p.centres = {glm::vec3(1.0f, 0.5f, 0.0f), glm::vec3(300.0f, 0.0f, 0.0f)};
-  p.radii = {1e-5f, 1.0f};
+  p.scales = {1e-5f, 1.0f};
   Tracer on(test::deviceContext(), p.scene, withInstancing(Instancing::On));
   Tracer off(test::deviceContext(), p.scene, withInstancing(Instancing::Off));
   ASSERT_EQ(on.sceneBuffers().instanceCount(), 2u);
-  std::vector<Ray> rays = raysAtCopies(p, 4000, 13);
+  std::vector<Ray> rays = test::raysAtCopies(p, 0.8f, 4000, 13);
   rays.erase(rays.begin(), rays.begin() + 4000);  // the large copy's
   const std::vector<RayHit> flat = off.traceClosest(rays), got = on.traceClosest(rays);
   int bad = 0, edges = 0, hits = 0;
@@ -145,7 +115,7 @@ TEST(Instancing, TheStoredCopyIsTheFinestForItsSize) {
 /// and those 1e4 from the origin included) and random rays through the rest.
 TEST(Instancing, HitsMatchTheFlattenedScene) {
   const Placed p = placedIcospheres();
-  std::vector<Ray> rays = raysAtCopies(p, 600, 11);
+  std::vector<Ray> rays = test::raysAtCopies(p, 0.8f, 600, 11);
   Tracer on(test::deviceContext(), p.scene, withInstancing(Instancing::On));
   Tracer off(test::deviceContext(), p.scene, withInstancing(Instancing::Off));
   ASSERT_GT(on.sceneBuffers().instanceCount(), 0u);
@@ -197,7 +167,7 @@ TEST(Instancing, HitsMatchTheFlattenedScene) {
 TEST(Instancing, SpawnedRaysLeaveTheirSurface) {
   const Placed p = placedIcospheres(false);
   Tracer on(test::deviceContext(), p.scene, withInstancing(Instancing::On));
-  std::vector<Ray> rays = raysAtCopies(p, 400, 23);
+  std::vector<Ray> rays = test::raysAtCopies(p, 0.8f, 400, 23);
   for (Ray& r : rays) r.tmin = 0.0f, r.tmax = 1e30f;
   const std::vector<RayHit> hits = on.traceClosest(rays);
   std::vector<Ray> outward, inward;
