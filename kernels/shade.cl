@@ -116,7 +116,7 @@ inline SurfacePoint triangle_surface_point(GeometryScene g, __global const float
 #define WT_QUAD_SHADE_ARGS
 #endif
 /// One path (queue entry i), shade.cl's whole estimator: the lanes kernel's
-/// paths at volume boundaries, transmitting surfaces or inside a medium.
+/// paths at transmitting surfaces other than its glass, inside a medium or past false hits.
 /// Not inlined, so its private values stay out of the lanes' work-group frame.
 __attribute__((noinline)) void shade_path(uint i, WT_SHADE_KERNEL_PARAMS);
 #endif

@@ -9,9 +9,11 @@
 // rectangles take shade.cl's scalar functions one lane at a time; the rest
 // (the surface, light picking, triangle and rectangle sampling, the
 // Lambertian BSDF, the metallic-roughness BSDF without extensions in
-// bsdf.cl's order, roulette) runs on all lanes at once. Paths at transmitting
-// surfaces or inside volumes take shade.cl's shade_path. The host launches one
-// work-item per WT_SHADE_LANES_WIDTH queue entries.
+// bsdf.cl's order, the smooth boundary of a plain dielectric volume met from
+// air or from inside the one volume a path is in, roulette) runs on all lanes
+// at once. Paths at other transmitting surfaces, inside volumes or past false
+// hits take shade.cl's shade_path. The host launches one work-item per
+// WT_SHADE_LANES_WIDTH queue entries.
 
 // The width, 8 or 16, is the device's preferred float vector (the host's
 // shadeLanesWidthFor): one register per lane vector on AVX2 and AVX-512.
@@ -783,23 +785,56 @@ WT_KERNEL void shade(WT_SHADE_KERNEL_PARAMS) {
   VL le = vl(gather_f(mf, material, mstride, 4u), gather_f(mf, material, mstride, 5u), gather_f(mf, material, mstride, 6u));
   floatL le_both = gather_f(mf, material, mstride, 7u);
 #if WT_HAS_TRANSMISSION
-  // Paths inside a volume, past a false hit (their own bounce, shared/media.h)
-  // or at a transmitting surface take shade.cl's estimator one lane at a
-  // time; the rest are paths in air at opaque surfaces, which the lanes shade.
+  // The smooth interface of a plain dielectric volume (metallic 0,
+  // transmission 1, no dispersion), met from air or on the way out of the one
+  // volume the path is in, the lanes shade (`glass`: bsdf_sample's smooth
+  // interface and media_crossing's two cases for such a stack). Other paths
+  // inside a volume, past a false hit (their own bounce, shared/media.h) or
+  // at a transmitting surface take shade.cl's estimator one lane at a time;
+  // the rest are paths in air at opaque surfaces, which the lanes shade.
+  intL glass = (intL)(0);
+  floatL glass_eta = 1.0f;  // n far / n near (bsdf.eta at the boundary)
   {
     __global const uint* mu = (__global const uint*)media;
-    intL in_medium = gather_u(mu, path, 4u, 0u) != WT_MEDIUM_NONE || gather_u(mu, path, 4u, 1u) != WT_MEDIUM_NONE ||
-                     gather_u(mu, path, 4u, 2u) != WT_MEDIUM_NONE || gather_u(mu, path, 4u, 3u) != WT_MEDIUM_NONE;
+    uintL medium0 = gather_u(mu, path, 4u, 0u);
+    intL one_deep = gather_u(mu, path, 4u, 1u) == WT_MEDIUM_NONE && gather_u(mu, path, 4u, 2u) == WT_MEDIUM_NONE &&
+                    gather_u(mu, path, 4u, 3u) == WT_MEDIUM_NONE;
+    intL in_medium = medium0 != WT_MEDIUM_NONE || !one_deep;
     intL false_hits = gather_countL(bounce_counts, path, 3u) >= WT_FALSE_HIT_STEP;
     intL transmits = !miss &&
                      gather_u((__global const uint*)mf, material, mstride,
                               __builtin_offsetof(WtMaterial, model) / sizeof(float)) == WT_MATERIAL_PBR &&
                      gather_f(mf, material, mstride, __builtin_offsetof(WtMaterial, transmission) / sizeof(float)) > 0.0f;
-    intL alone = valid && (in_medium || false_hits || transmits);
+    intL candidate = valid && transmits && !false_hits && one_deep;
+    if (any(candidate)) {
+      intL from_inside = vl_dot(ng, dir) > 0.0f;
+      floatL ior = gather_f(mf, material, mstride, __builtin_offsetof(WtMaterial, ior) / sizeof(float));
+      glass_eta = select(ior, 1.0f / ior, from_inside);
+      // in air, or leaving the stack's one volume through its own boundary
+      glass = candidate && (medium0 == WT_MEDIUM_NONE || (from_inside && medium0 == material)) &&
+              gather_f(mf, material, mstride, __builtin_offsetof(WtMaterial, transmission) / sizeof(float)) == 1.0f &&
+              gather_f(mf, material, mstride, 3u) == 0.0f &&
+              gather_f(mf, material, mstride, __builtin_offsetof(WtMaterial, volume) / sizeof(float) + 3u) != 0.0f &&
+              !(gather_f(mf, material, mstride, __builtin_offsetof(WtMaterial, dispersion) / sizeof(float)) > 0.0f) &&
+              (gather_f(mf, material, mstride, __builtin_offsetof(WtMaterial, roughness) / sizeof(float)) <
+                   WT_PBR_MIN_ROUGHNESS ||
+               fabs(glass_eta - 1.0f) < 1e-3f);
+    }
+    intL alone = valid && !glass && (in_medium || false_hits || transmits);
     if (any(alone))
       for (int k = 0; k < WT_SHADE_LANES_WIDTH; ++k)
         if (lane_i(alone, k)) shade_path(first + k, WT_SHADE_KERNEL_ARGS);
     valid = valid && !alone;
+    if (!any(valid)) return;
+  }
+  // the volume a glass lane's path leaves absorbs along its segment (Beer-Lambert)
+  if (any(glass && vl_dot(ng, dir) > 0.0f)) {
+    const uint vo = __builtin_offsetof(WtMaterial, volume) / sizeof(float);
+    VL sigma = vl(gather_f(mf, material, mstride, vo), gather_f(mf, material, mstride, vo + 1u),
+                  gather_f(mf, material, mstride, vo + 2u));
+    floatL d = hit_t * vl_length(dir);
+    VL absorbed = vl(exp(-sigma.x * d), exp(-sigma.y * d), exp(-sigma.z * d));
+    beta = vl_select(beta, vl_mul(beta, absorbed), glass && vl_dot(ng, dir) > 0.0f && vl_positive(sigma));
   }
 #endif
   intL inside = vl_dot(ng, dir) > 0.0f;
@@ -841,7 +876,14 @@ WT_KERNEL void shade(WT_SHADE_KERNEL_PARAMS) {
                 (as_uintL(gather_countL(bounce_counts, path, 1u) < frame.max_specular_bounces) & WT_LOBE_SPECULAR) |
                 (as_uintL(gather_countL(bounce_counts, path, 2u) < frame.max_transmission_bounces) & WT_LOBE_TRANSMISSION);
   intL specular = (lobes & WT_LOBE_SPECULAR) != 0u;
+#if WT_HAS_TRANSMISSION
+  // glass scatters by the interface while reflection or transmission is left (bsdf_sample)
+  intL through = (lobes & WT_LOBE_TRANSMISSION) != 0u;
+  pbr = pbr && !glass;
+  active = active && select(diffuse || (pbr && specular), specular || through, glass);
+#else
   active = active && (diffuse || (pbr && specular));
+#endif
   VL wo_local = vl(vl_dot(wo, frame_t), vl_dot(wo, frame_b), wo_z);
   PbrL mat;
   if (any(pbr)) mat = pbr_makeL(materials, pbr_table, material, base, wo_z, diffuse, specular);
@@ -856,7 +898,11 @@ WT_KERNEL void shade(WT_SHADE_KERNEL_PARAMS) {
 
   // next-event estimation
   uint nee_count = (frame.flags & WT_FLAG_NEE) ? frame.light_count : 0u;
+#if WT_HAS_TRANSMISSION
+  if (nee_count > 0u && any(active && !glass)) {
+#else
   if (nee_count > 0u) {
+#endif
     // light_pick
     __global const float* af = (__global const float*)alias;
     floatL scaled_u = u_pick * (float)nee_count;
@@ -866,7 +912,12 @@ WT_KERNEL void shade(WT_SHADE_KERNEL_PARAMS) {
     floatL pmf = gather_f(af, index, 4u, 2u);
     __global const float* lrow = (__global const float*)lights;
     uintL type = as_uintL(gather_f(lrow, index, 16u, 12u));
+#if WT_HAS_TRANSMISSION
+    // glass's smooth interface finds nothing by light sampling (its bsdf_eval is 0)
+    intL tree = active && !glass && type == WT_LIGHT_TREE;
+#else
     intL tree = active && type == WT_LIGHT_TREE;
+#endif
     if (any(tree)) {
       floatL pmf_tree;
       uintL picked = light_tree_pickL(light_tree, origin, ng, u_tree, tree, &pmf_tree);
@@ -883,7 +934,11 @@ WT_KERNEL void shade(WT_SHADE_KERNEL_PARAMS) {
     s.distance = s.pdf = 0.0f;
     s.is_delta = (intL)(0);
     s.prim = (uintL)(WT_NO_HIT);
+#if WT_HAS_TRANSMISSION
+    intL want = active && !glass && pmf > 0.0f;
+#else
     intL want = active && pmf > 0.0f;
+#endif
     intL tri_lights = want && type == WT_LIGHT_TRIANGLE;
     if (any(tri_lights)) light_sample_triangleL(lrow, tri_verts, index, tri_lights, p, u1, u2, &s);
     intL others = want && !tri_lights;
@@ -1007,8 +1062,45 @@ WT_KERNEL void shade(WT_SHADE_KERNEL_PARAMS) {
     go = select(go, select(ok, ok_delta, delta), pbr);
   }
 #endif
+#if WT_HAS_TRANSMISSION
+  // glass: bsdf_sample's smooth interface, its only technique (probability 1):
+  // Fresnel's reflectance at wo picks reflection or refraction by u_lobe
+  intL crossed = (intL)(0);
+  intL glass_go = active && glass;
+  if (any(glass_go)) {
+    floatL eta = glass_eta;
+    // interface_fresnel (ggx_fresnel_dielectric; specular 1 on the lanes)
+    floatL c = fmin(fmax(wo_z, 0.0f), 1.0f);
+    floatL sin2_c = (1.0f - c * c) / (eta * eta);
+    floatL cos_tc = sqrt(fmax(1.0f - sin2_c, 0.0f));
+    floatL rs = (c - eta * cos_tc) / (c + eta * cos_tc), rp = (eta * c - cos_tc) / (eta * c + cos_tc);
+    floatL f = select(0.5f * (rs * rs + rp * rp), (floatL)(1.0f), sin2_c >= 1.0f);
+    floatL p_reflect = select(select((floatL)(0.0f), (floatL)(1.0f), specular), f, specular && through);
+    intL reflects = fmin(u_lobe, 0x1.fffffep-1f) < p_reflect;
+    // interface_direction about the normal (0, 0, 1)
+    floatL sin2_t = (1.0f - wo_z * wo_z) / (eta * eta);
+    floatL cos_t = sqrt(1.0f - sin2_t);
+    VL refracted = vl_normalize(vl(-wo_local.x / eta, -wo_local.y / eta, -wo_z / eta + (wo_z / eta - cos_t)));
+    VL w = vl_select(refracted, vl(-wo_local.x, -wo_local.y, wo_z), reflects);
+    // F / p_reflect, or base (1 - F) / (eta^2 (1 - p_reflect)): radiance scaled by 1 / eta^2 on the way
+    floatL f_picked = f / p_reflect;
+    VL w_weight = vl_select(vl_scale(base, (1.0f - f) / (eta * eta * (1.0f - p_reflect))),
+                            vl(f_picked, f_picked, f_picked), reflects);
+    wl = vl_select(wl, w, glass);
+    weight = vl_select(weight, w_weight, glass);
+    pdf = select(pdf, (floatL)(0.0f), glass);
+    lobe = select(lobe, select((uintL)(WT_LOBE_TRANSMISSION), (uintL)(WT_LOBE_SPECULAR), reflects), glass);
+    go = select(go, glass_go && wo_z > 0.0f && (reflects || sin2_t < 1.0f) && vl_positive(w_weight), glass);
+    crossed = glass && !reflects;
+  }
+#endif
   VL wi = vl_add(vl_add(vl_scale(frame_t, wl.x), vl_scale(frame_b, wl.y)), vl_scale(ns, wl.z));
+#if WT_HAS_TRANSMISSION
+  // reflection leaves on ng's side, transmission on the other
+  go = go && select(vl_dot(wi, ng) > 0.0f, vl_dot(wi, ng) < 0.0f, crossed);
+#else
   go = go && vl_dot(wi, ng) > 0.0f;
+#endif
   beta = vl_mul(beta, weight);
   if ((frame.flags & WT_FLAG_RR) && frame.bounce >= frame.rr_min_depth) {
     floatL q = fmin(fmax(beta.x, fmax(beta.y, beta.z)), 0.95f);
@@ -1021,8 +1113,15 @@ WT_KERNEL void shade(WT_SHADE_KERNEL_PARAMS) {
   go = go && !(beta.x <= 0.0f && beta.y <= 0.0f && beta.z <= 0.0f);
   if (!any(go)) return;
   scatter_v(throughput, path, go, beta, pdf);
+#if WT_HAS_TRANSMISSION
+  // light may come through glass: the light tree's pmf at a hit the ray finds takes no receiver normal (shade.cl's
+  // tree_normal), and a refracted ray leaves from the far side
+  scatter_v(prev_normal, path, go, vl_select(ng, vl_splat((float3)(0.0f)), glass && through), (floatL)(0.0f));
+  scatter_v(ray_o, path, go, vl_select(origin, ray_offset_originL(p, p_error, vl_neg(ng)), crossed), (floatL)(0.0f));
+#else
   scatter_v(prev_normal, path, go, ng, (floatL)(0.0f));
   scatter_v(ray_o, path, go, origin, (floatL)(0.0f));
+#endif
   scatter_v(ray_d, path, go, wi, (floatL)(INFINITY));
   uint survivors = 0u;
   #pragma unroll
@@ -1030,7 +1129,15 @@ WT_KERNEL void shade(WT_SHADE_KERNEL_PARAMS) {
     if (!lane_i(go, k)) continue;
     uint pk = lane_u(path, k);
     ushort4 counts = bounce_counts[pk];
-#if WT_HAS_PBR
+#if WT_HAS_TRANSMISSION
+    if (lane_u(lobe, k) & WT_LOBE_DIFFUSE) counts.x++;
+    else if (lane_i(crossed, k)) counts.z++;
+    else counts.y++;
+    // media_cross: into the volume from air, or out of the stack's one volume (or one it lacks)
+    if (lane_i(crossed, k))
+      media[pk] = (uint4)(lane_i(inside, k) ? WT_MEDIUM_NONE : lane_u(material, k), WT_MEDIUM_NONE, WT_MEDIUM_NONE,
+                          WT_MEDIUM_NONE);
+#elif WT_HAS_PBR
     if (lane_u(lobe, k) & WT_LOBE_DIFFUSE) counts.x++;
     else counts.y++;
 #else

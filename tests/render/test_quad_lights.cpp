@@ -261,12 +261,15 @@ void addBox(Scene& scene, glm::vec3 lo, glm::vec3 hi, std::uint32_t material) {
 }
 
 // With transmission the lanes shade the paths in air at opaque surfaces and
-// hand the rest to shade.cl's code one lane at a time: the same image as one
-// path per work-item. Glass boxes of triangles (which the lanes take): a
-// smooth absorbing one holding a glowing opaque block (paths inside a medium
-// hit it, and the medium absorbs its light) and a lower-priority water block (false hits, which shift a path's
-// bounce), and a rough one (rough transmission), beside the metallic-
-// roughness and Lambertian surfaces that stay on the lanes.
+// at smooth glass met from air or on the way out of the one volume a path is
+// in, and hand the rest to shade.cl's code one lane at a time: the same
+// image as one path per work-item. Glass boxes of triangles (which the lanes
+// take): a smooth absorbing one (the lanes' Fresnel choice, refraction and
+// absorption on the way out) holding a glowing opaque block (paths inside a
+// medium hit it, and the medium absorbs its light) and a lower-priority water
+// block (false hits, which shift a path's bounce, and two-deep stacks), and a
+// rough one (rough transmission), beside the metallic-roughness and
+// Lambertian surfaces that stay on the lanes.
 TEST(QuadLights, ShadeLanesRenderGlassTheSameAsOnePathPerWorkItem) {
   Scene scene = quadLitScene();
   scene.materials[0] = makePbrMaterial(glm::vec3(0.7f, 0.6f, 0.5f), 0.0f, 0.6f);
@@ -291,6 +294,33 @@ TEST(QuadLights, ShadeLanesRenderGlassTheSameAsOnePathPerWorkItem) {
   settings.rrMinDepth = 1;
   settings.background = glm::vec3(0.2f, 0.25f, 0.3f);
   shadeLanesAgainstOnePath(scene, settings, 41, "glass");
+}
+
+// The same past false hits: a smooth glass slab (priority 1) between the
+// camera and the floor holds four thin layers of a lower-priority medium, so
+// a path through it passes eight false hits, which are no bounces
+// (shared/media.h). Under 4 bounces the floor beyond the slab is lit only
+// at the path's own bounce (2), not the wavefront pass (10): lanes that took
+// the pass for the bounce would leave it dark. The slab's faces met from air
+// and from inside with no false hit behind are the lanes' own glass; a bright
+// sky over a dark floor makes its Fresnel reflection weigh.
+TEST(QuadLights, ShadeLanesRenderGlassPastFalseHitsTheSameAsOnePathPerWorkItem) {
+  Scene scene = quadLitScene();
+  scene.materials[0] = makeMaterial(glm::vec3(0.15f));
+  const std::uint32_t glass = addMaterial(
+      scene, withPriority(withTransmission(makePbrMaterial(glm::vec3(1.0f), 0.0f, 0.0f), 1.0f, 1.5f, false,
+                                           glm::vec3(0.0f)), 1), "slab");
+  const std::uint32_t layer = addMaterial(
+      scene, withTransmission(makePbrMaterial(glm::vec3(1.0f), 0.0f, 0.0f), 1.0f, 1.33f, false, glm::vec3(0.0f)),
+      "layer");
+  addBox(scene, {-2.5f, 0.8f, -0.5f}, {2.5f, 1.2f, 2.6f}, glass);
+  for (float y : {0.85f, 0.93f, 1.01f, 1.09f}) addBox(scene, {-2.4f, y, -0.4f}, {2.4f, y + 0.02f, 2.5f}, layer);
+  RenderSettings settings;
+  settings.width = settings.height = 32;
+  settings.maxBounces = 4;
+  settings.rrMinDepth = 1;
+  settings.background = glm::vec3(1.0f, 1.1f, 1.2f);
+  shadeLanesAgainstOnePath(scene, settings, 61, "glass past false hits");
 }
 
 TEST(QuadLights, ShadeLanesWidthByDevice) {
