@@ -40,6 +40,28 @@ inline int4 bvh4_frame_hit(__global const WtBvh4Node* n, float3 org, float3 dir,
   return enter <= exit;
 }
 
+/// The ray's unit direction for prims_leaf_missed.
+inline float3 prims_ray_unit(float3 dir) {
+#if WT_HAS_CURVES
+  return normalize(dir);
+#else
+  return dir;
+#endif
+}
+
+/// The leaf entries first + k (k < 4, k < count) that certainly miss the
+/// ray through org along unit dn, as bit k: curve pieces passed wide, read
+/// from the leaf joints (WtGeometry::leaf_joints), four at once.
+inline uint prims_leaf_missed(GeometryScene g, uint first, uint count, float3 org, float3 dn) {
+#if WT_HAS_CURVES
+  int4 m = curve_pieces_missed4(g.data + g.header.leaf_joints + WT_LEAF_JOINT_ROWS * first, org, dn);
+  uint bits = (m.s0 ? 1u : 0u) | (m.s1 ? 2u : 0u) | (m.s2 ? 4u : 0u) | (m.s3 ? 8u : 0u);
+  return count >= 4 ? bits : bits & ((1u << count) - 1u);
+#else
+  return 0u;
+#endif
+}
+
 /// Node `node` of the primitive tree (its WT_BVH4_ORIENTED bit included)
 /// and its child boxes' slab test.
 inline __global const WtBvh4Node* bvh_prims_node(GeometryScene g, uint node, RayPlanes planes, float3 org,
@@ -61,6 +83,7 @@ inline bool bvh_prims_closest_root(GeometryScene g, uint root, float3 org, float
   if (!bvh_ray_is_finite(org, dir)) return false;
   float3 inv_d = bvh_safe_rcp(dir);
   RayPlanes planes = bvh_ray_planes(inv_d);
+  float3 dn = prims_ray_unit(dir);
   uint stack_node[WT_BVH_STACK_SIZE];
   float stack_t[WT_BVH_STACK_SIZE];
   int sp = 0;
@@ -78,7 +101,9 @@ inline bool bvh_prims_closest_root(GeometryScene g, uint root, float3 org, float
       if (!hit_child[k]) continue;
       uint first = n->child[k], count = n->count[k];
       if (count > 0) {
+        uint missed = prims_leaf_missed(g, first, count, org, dn);
         for (uint i = first; i < first + count; ++i) {
+          if (i - first < 4u && (missed >> (i - first) & 1u)) continue;
           uint prim = g.refs[i];
           float t, u, v;
           if (geometry_intersect(g, prim, org, dir, tmin, hit->t, skip, WT_NO_HIT, false, &t, &u, &v)) {
@@ -120,6 +145,7 @@ inline bool bvh_prims_occluded_root(GeometryScene g, uint root, float3 org, floa
   if (!bvh_ray_is_finite(org, dir)) return true;
   float3 inv_d = bvh_safe_rcp(dir);
   RayPlanes planes = bvh_ray_planes(inv_d);
+  float3 dn = prims_ray_unit(dir);
   uint stack_node[WT_BVH_STACK_SIZE];
   int sp = 0;
   uint node = root;
@@ -132,7 +158,9 @@ inline bool bvh_prims_occluded_root(GeometryScene g, uint root, float3 org, floa
       if (!hit_child[k]) continue;
       uint first = n->child[k], count = n->count[k];
       if (count > 0) {
+        uint missed = prims_leaf_missed(g, first, count, org, dn);
         for (uint i = first; i < first + count; ++i) {
+          if (i - first < 4u && (missed >> (i - first) & 1u)) continue;
           float t, u, v;
           if (geometry_intersect(g, g.refs[i], org, dir, tmin, tmax, skip, WT_NO_HIT, true, &t, &u, &v)) return true;
         }
@@ -180,6 +208,7 @@ inline void bvh_prims_closest(BvhScene scene, GeometryScene g, float3 org, float
   if (g.header.node_count == 0 || !bvh_ray_is_finite(org, dir)) return;
   float3 inv_d = bvh_safe_rcp(dir);
   RayPlanes planes = bvh_ray_planes(inv_d);
+  float3 dn = prims_ray_unit(dir);
   uint stack_node[WT_BVH_STACK_SIZE];
   float stack_t[WT_BVH_STACK_SIZE];
   int sp = 0;
@@ -196,7 +225,9 @@ inline void bvh_prims_closest(BvhScene scene, GeometryScene g, float3 org, float
       if (!hit_child[k]) continue;
       uint first = n->child[k], count = n->count[k];
       if (count > 0) {
+        uint missed = prims_leaf_missed(g, first, count, org, dn);
         for (uint i = first; i < first + count; ++i) {
+          if (i - first < 4u && (missed >> (i - first) & 1u)) continue;
           uint prim = g.refs[i];
 #if WT_HAS_INSTANCES
           if (prim_type(prim) == WT_PRIM_INSTANCE) {
@@ -248,6 +279,7 @@ inline bool bvh_prims_occluded(BvhScene scene, GeometryScene g, float3 org, floa
   if (!bvh_ray_is_finite(org, dir)) return true;
   float3 inv_d = bvh_safe_rcp(dir);
   RayPlanes planes = bvh_ray_planes(inv_d);
+  float3 dn = prims_ray_unit(dir);
   uint stack_node[WT_BVH_STACK_SIZE];
   int sp = 0;
   uint node = 0;
@@ -260,7 +292,9 @@ inline bool bvh_prims_occluded(BvhScene scene, GeometryScene g, float3 org, floa
       if (!hit_child[k]) continue;
       uint first = n->child[k], count = n->count[k];
       if (count > 0) {
+        uint missed = prims_leaf_missed(g, first, count, org, dn);
         for (uint i = first; i < first + count; ++i) {
+          if (i - first < 4u && (missed >> (i - first) & 1u)) continue;
           uint prim = g.refs[i];
 #if WT_HAS_INSTANCES
           if (prim_type(prim) == WT_PRIM_INSTANCE) {

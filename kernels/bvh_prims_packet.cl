@@ -300,8 +300,10 @@ __attribute__((always_inline)) inline bool prims_packet_leaf(GeometryScene g, ui
   bool won = false;
   for (int l = 0; l < WT_PACKET; ++l) {
     if (!lane_hit[l]) continue;
-    float3 o = prims_packet_org(p, l), d = prims_packet_dir(p, l);
+    float3 o = prims_packet_org(p, l), d = prims_packet_dir(p, l), dn = prims_ray_unit(d);
+    uint missed = prims_leaf_missed(g, first, count, o, dn);
     for (uint i = first; i < first + count; ++i) {
+      if (i - first < 4u && (missed >> (i - first) & 1u)) continue;
       uint id = g.refs[i];
       float th, uh, vh;
       if (!geometry_intersect(g, id, o, d, p->tmin[l], t[l], p->skip[l], skip_b ? skip_b[l] : WT_NO_HIT, any, &th,

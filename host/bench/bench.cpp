@@ -642,17 +642,21 @@ void compareTrees(Context& context, const Scene& scene, std::span<const Aabb> bo
     names.insert(names.begin(), bvhBuilderName(defaultBuilder));
   for (const std::string& name : names) {
     if (name == "none") continue;
+    // no triangles: no tree to compare, only the --ab-* baseline (the scene's tracer)
+    if (bounds.empty() && name != bvhBuilderName(defaultBuilder)) continue;
     TreeResult tree;
     tree.builder = *parseBvhBuilder(name);
     BvhBuildOptions bvhOptions = benchBvhOptions(tree.builder, options);
-    auto [bvh, seconds] =
-        timedBuild(bounds, instances, binaryBuildOptions(bvhOptions, bounds.size()), options.repetitions);
-    tree.buildSeconds = seconds;
-    tree.nodes = bvh.stats.nodeCount;
-    tree.sah = bvh.stats.sahCost;
-    Bvh4 bvh4 = collapseToBvh4(bvh, bvh4Options(bvhOptions));
-    tree.nodes4 = bvh4.stats.nodeCount;
-    tree.sah4 = bvh4.stats.sahCost;
+    if (!bounds.empty()) {
+      auto [bvh, seconds] =
+          timedBuild(bounds, instances, binaryBuildOptions(bvhOptions, bounds.size()), options.repetitions);
+      tree.buildSeconds = seconds;
+      tree.nodes = bvh.stats.nodeCount;
+      tree.sah = bvh.stats.sahCost;
+      Bvh4 bvh4 = collapseToBvh4(bvh, bvh4Options(bvhOptions));
+      tree.nodes4 = bvh4.stats.nodeCount;
+      tree.sah4 = bvh4.stats.sahCost;
+    }
     if (tree.builder == defaultBuilder) {
       tracers.push_back(&defaultTracer);
     } else {
@@ -835,8 +839,9 @@ SceneResult benchScene(Context& context, const std::string& name, const Scene& s
   benchSet(scene, rows, tracer, embree.get(), "diffuse", diffuse, false, false, options, result.sets[1]);
   benchSet(scene, rows, tracer, embree.get(), "shadow", shadow, true, false, options, result.sets[2]);
   embree.reset();
-  // the tree comparison is the triangle builders'
-  if (!scene.triangles.empty())
+  // the tree comparison is the triangle builders'; a scene without triangles has only the --ab-* rows
+  const bool abRows = !options.abKernelDir.empty() || options.abPacketWidth != 0 || !options.abTraversal.empty();
+  if (!scene.triangles.empty() || abRows)
     compareTrees(context, scene, bounds, instances, tracer, bvhOptions.builder, {&primary, &diffuse, &shadow},
                {result.sets[0].traversal, result.sets[1].traversal, result.sets[2].traversal}, options, result.trees);
   primary = {};

@@ -753,6 +753,21 @@ PrimitiveTree buildPrimitiveTree(const PrimitiveRows& rows, const BvhBuildOption
   orientCurveNodes(tree.bvh4, rows, ids, sweep, bvh.primIndices);
   tree.refs.resize(bvh.primIndices.size());
   for (std::size_t i = 0; i < tree.refs.size(); ++i) tree.refs[i] = ids[bvh.primIndices[i]];
+  // each entry's piece of its segment, in leaf order beside the refs
+  tree.joints.assign(WT_LEAF_JOINT_ROWS * tree.refs.size(), WtVec4{0.0f, 0.0f, 0.0f, -1.0f});
+  for (std::size_t i = 0; i < tree.refs.size(); ++i) {
+    const std::uint32_t id = tree.refs[i];
+    if (primType(id) != WT_PRIM_CURVE) continue;
+    const std::size_t row = rows.dataFirst[WT_PRIM_CURVE] + 2 * std::size_t(primIndex(id));
+    if (row + 1 >= rows.data.size()) continue;
+    const WtVec4 &ra = rows.data[row], &rb = rows.data[row + 1];
+    const glm::dvec4 a(ra.x, ra.y, ra.z, std::fabs(ra.w)), b(rb.x, rb.y, rb.z, std::fabs(rb.w));
+    const glm::vec2 s = sweep[bvh.primIndices[i]];
+    for (int end = 0; end < 2; ++end) {
+      const glm::dvec4 j = a + double(end ? s.y : s.x) * (b - a);
+      tree.joints[WT_LEAF_JOINT_ROWS * i + end] = WtVec4{float(j.x), float(j.y), float(j.z), float(j.w)};
+    }
+  }
   tree.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return tree;
 }
@@ -1087,6 +1102,7 @@ void SceneBuffers::uploadPrimitives(Context& context, const Scene& scene, const 
       tree.bvh4.nodes.push_back(n);
     }
     tree.refs.insert(tree.refs.end(), g.refs.begin(), g.refs.end());
+    tree.joints.insert(tree.joints.end(), g.joints.begin(), g.joints.end());
     // the instances of this geometry: their root (gatherInstances wrote the tree's own index)
     for (std::size_t i = triangleInstances; i < instances.size(); ++i)
       if (instances[i].root == std::uint32_t(&g - geometryTrees.data()) + kPrimitiveGeometryTag)
@@ -1105,6 +1121,10 @@ void SceneBuffers::uploadPrimitives(Context& context, const Scene& scene, const 
     geometry.emitter_first[type] = type == WT_PRIM_TRIANGLE ? 0u : emitters;
     if (type != WT_PRIM_TRIANGLE) emitters += std::uint32_t(rows.count[type]);
   }
+  geometry.leaf_joints = std::uint32_t(rows.data.size());
+  rows.data.insert(rows.data.end(), tree.joints.begin(), tree.joints.end());
+  // a leaf's test reads four entries' joints: room for the last leaf's
+  rows.data.resize(rows.data.size() + 3 * WT_LEAF_JOINT_ROWS, WtVec4{0.0f, 0.0f, 0.0f, -1.0f});
   primitiveBytes = 0;
   primNodes = upload(context, tree.bvh4.nodes, primitiveBytes);
   primRefs = upload(context, tree.refs, primitiveBytes);

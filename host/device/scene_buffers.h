@@ -31,6 +31,7 @@ constexpr int kPrimitiveLeafSize = 4;
 struct PrimitiveTree {
   Bvh4 bvh4;
   std::vector<std::uint32_t> refs;
+  std::vector<WtVec4> joints;  ///< WT_LEAF_JOINT_ROWS per ref (WtGeometry::leaf_joints)
   double seconds = 0.0;  ///< wall time of the build and collapse
 };
 /// Curve segments that lie across their boxes enter the tree as several

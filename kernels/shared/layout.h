@@ -37,7 +37,7 @@
   S(WtBvh4Node) F(WtBvh4Node, lo_x) F(WtBvh4Node, hi_x) F(WtBvh4Node, lo_y) F(WtBvh4Node, hi_y) \
   F(WtBvh4Node, lo_z) F(WtBvh4Node, hi_z) F(WtBvh4Node, child) F(WtBvh4Node, count) \
   S(WtBvh4Frame) F(WtBvh4Frame, rows) F(WtBvh4Frame, centre) F(WtBvh4Frame, reach) F(WtBvh4Frame, unused) \
-  S(WtGeometry) F(WtGeometry, node_count) F(WtGeometry, triangle_count) F(WtGeometry, pad0) F(WtGeometry, pad1) \
+  S(WtGeometry) F(WtGeometry, node_count) F(WtGeometry, triangle_count) F(WtGeometry, leaf_joints) F(WtGeometry, pad1) \
   F(WtGeometry, data_first) F(WtGeometry, info_first) F(WtGeometry, emitter_first) \
   S(WtMaterial) F(WtMaterial, base_color) F(WtMaterial, emission) F(WtMaterial, roughness) F(WtMaterial, model) \
   F(WtMaterial, transmission) F(WtMaterial, ior) F(WtMaterial, volume) F(WtMaterial, alpha) \

@@ -164,10 +164,17 @@ enum : wt_uint {
 /// The primitives other than triangles (kernels/geometry/geometry.cl): one
 /// BVH over all of them whose leaves are ranges of prim_refs (typed ids),
 /// and per type its rows of prim_data (float4) and prim_info (uint4).
+/// prim_data rows per prim_refs entry, in leaf order after the types' rows
+/// (WtGeometry::leaf_joints): a curve piece's two joint spheres (x, y, z, r),
+/// the part of its segment the entry's box holds, so the walk rejects most
+/// entries four at once from memory read in order; other entries' rows have
+/// r = -1 (always tested). Three entries' rows of padding follow the last.
+#define WT_LEAF_JOINT_ROWS 2
 typedef struct WtGeometry {
   wt_uint node_count;      ///< nodes of the primitive BVH; 0: no such primitives
   wt_uint triangle_count;  ///< leaf-order triangles: emitter slots [0, triangle_count) are triangles, the other types' follow (emitter_pdf_area)
-  wt_uint pad0, pad1;
+  wt_uint leaf_joints;     ///< where the leaf joints (WT_LEAF_JOINT_ROWS per prim_refs entry) start in prim_data
+  wt_uint pad1;
   wt_uint data_first[WT_PRIM_TYPES];     ///< per type: where its rows start in prim_data
   wt_uint info_first[WT_PRIM_TYPES];     ///< per type: where its rows start in prim_info
   wt_uint emitter_first[WT_PRIM_TYPES];  ///< per type: its first emitter slot (emitter_pdf_area)
