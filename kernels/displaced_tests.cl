@@ -1,7 +1,7 @@
 // Test-only program root: every displaced base triangle tested against
 // every ray, no BVH, with the surface at the hit
 // (kernels/geometry/displaced.cl), and micro-vertices on their own, for
-// tests/kernels/test_displaced.cpp.
+// tests/geometry/test_displaced.cpp.
 #include "common.h"
 #include "geometry/displaced.cl"
 

@@ -1,6 +1,6 @@
 // Test-only program root: every SDF brick tested against every ray, no BVH,
 // with the surface at the hit (kernels/geometry/sdf_grid.cl), for
-// tests/kernels/test_sdf_grid.cpp.
+// tests/geometry/test_sdf_grid.cpp.
 #include "common.h"
 #include "geometry/sdf_grid.cl"
 

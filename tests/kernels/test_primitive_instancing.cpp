@@ -10,7 +10,7 @@
 #include "device_fixture.h"
 #include "geometry/primitives.h"
 #include "instancing_checks.h"
-#include "primitive_checks.h"
+#include "geometry/primitive_checks.h"
 #include "scene/generators.h"
 #include "scene/scene_file.h"
 #include "test_util.h"
