@@ -227,7 +227,8 @@ SceneBuffers::SceneBuffers(Context& context, const Scene& scene, const BvhBuildO
       // cache and the stored-once ones do (docs/lab/2026-12-05-performance-log.md, "Instancing")
       std::size_t copiedTriangles = 0;
       for (const InstancedGeometry& g : instanced) copiedTriangles += g.kept.size() * (g.copies.size() - 1);
-      if (!instancingPays(copiedTriangles, context.info().globalCacheBytes)) instanced.clear();
+      if (!instancingPays(double(copiedTriangles) * kFlatBytesPerTriangle, context.info().globalCacheBytes))
+        instanced.clear();
     }
   }
   std::vector<std::uint8_t> flat = valid;
@@ -1044,6 +1045,22 @@ std::pair<std::size_t, std::size_t> blockOf(const Rows& all, const std::array<st
 
 }  // namespace
 
+std::array<double, WT_PRIM_TYPES> SceneBuffers::flatBytesPerPrimitive(const PrimitiveRows& rows) {
+  // the tree's share: a ref and its joints per item, and a 4-wide node per
+  // two leaves' worth of items (a node's children are mostly leaves)
+  constexpr double tree = sizeof(std::uint32_t) + WT_LEAF_JOINT_ROWS * sizeof(WtVec4) +
+                          double(sizeof(WtBvh4Node)) / (2 * kPrimitiveLeafSize);
+  std::array<double, WT_PRIM_TYPES> out{};
+  for (const PrimitiveType& t : primitiveTypes()) {
+    if (rows.count[t.id] == 0 || t.id == WT_PRIM_INSTANCE) continue;
+    const auto [d0, d1] = blockOf(rows.data, rows.dataFirst, t.id);
+    const auto [i0, i1] = blockOf(rows.info, rows.infoFirst, t.id);
+    const double rowBytes = double(d1 - d0) * sizeof(WtVec4) + double(i1 - i0) * sizeof(std::array<std::uint32_t, 4>);
+    out[t.id] = rowBytes / double(rows.count[t.id]) + tree;
+  }
+  return out;
+}
+
 void SceneBuffers::uploadPrimitives(Context& context, const Scene& scene, const BvhBuildOptions& options,
                                     std::vector<InstanceDesc> instances) {
   PrimitiveRows rows = gatherPrimitives(scene, instances);
@@ -1052,11 +1069,13 @@ void SceneBuffers::uploadPrimitives(Context& context, const Scene& scene, const 
   if (options.instancing != Instancing::Off && !scene.primitiveInstances.empty()) {
     geometries = choosePrimitiveGeometries(scene, rows);
     if (options.instancing == Instancing::Auto) {
-      // as triangles: only where the flattened copies would outgrow the cache
-      std::size_t copied = 0;
+      // as triangles: only where the flattened copies would outgrow the cache,
+      // each item weighed by its own type's bytes
+      const std::array<double, WT_PRIM_TYPES> bytes = flatBytesPerPrimitive(rows);
+      double copied = 0.0;
       for (const InstancedPrimitives& g : geometries) {
         const auto [lo, hi] = copyItems(scene, rows, scene.primitiveInstances[g.copies[0]]);
-        copied += std::size_t(hi - lo) * (g.copies.size() - 1);
+        copied += double(hi - lo) * double(g.copies.size() - 1) * bytes[g.type];
       }
       if (!instancingPays(copied, context.info().globalCacheBytes)) geometries.clear();
     }

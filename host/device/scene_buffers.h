@@ -81,14 +81,20 @@ class SceneBuffers {
   /// than the few nodes and blocks it saves.
   static constexpr std::size_t kMinInstanceTriangles = 64;
   /// Instancing::Auto stores geometries once when their flattened copies
-  /// (beyond the first, kFlatBytesPerTriangle of nodes and triangles each)
-  /// would take more than the device's global memory cache, or than
+  /// (beyond the first: kFlatBytesPerTriangle of nodes and triangles a
+  /// triangle, flatBytesPerPrimitive an item of the other types) would take
+  /// more than the device's global memory cache, or than
   /// kInstancingAutoBytes where the device reports none (instancingPays).
   static constexpr std::size_t kInstancingAutoBytes = std::size_t(32) << 20;
   static constexpr std::size_t kFlatBytesPerTriangle = 64;
-  static bool instancingPays(std::size_t copiedTriangles, std::uint64_t cacheBytes) {
-    return copiedTriangles * kFlatBytesPerTriangle > (cacheBytes > 0 ? cacheBytes : kInstancingAutoBytes);
+  static bool instancingPays(double copiedBytes, std::uint64_t cacheBytes) {
+    return copiedBytes > double(cacheBytes > 0 ? cacheBytes : kInstancingAutoBytes);
   }
+  /// Per type, the device bytes one flattened item of `rows` takes: the
+  /// type's gathered data and info rows (an SDF brick's values, a displaced
+  /// mesh's boxes and map) over its items, plus its share of the primitive
+  /// tree (refs, leaf joints, a node per two leaves); 0 for a type with none.
+  static std::array<double, WT_PRIM_TYPES> flatBytesPerPrimitive(const PrimitiveRows& rows);
 
   /// Build the BVH over the scene's triangles (but degenerate ones), collapse
   /// it to the 4-wide layout the kernels traverse, and upload.

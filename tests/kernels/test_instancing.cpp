@@ -72,9 +72,10 @@ TEST(Instancing, CopiesBecomeInstances) {
   SceneBuffers automatic(test::deviceContext(), p.scene, withInstancing(Instancing::Auto));
   EXPECT_EQ(automatic.instanceCount(), 0u);
   // and stores copies once where their flattened form outgrows the cache
-  EXPECT_TRUE(SceneBuffers::instancingPays(std::size_t(1) << 20, std::uint64_t(32) << 20));
-  EXPECT_FALSE(SceneBuffers::instancingPays(std::size_t(1) << 20, std::uint64_t(128) << 20));
-  EXPECT_FALSE(SceneBuffers::instancingPays(7 * 1279, 0));
+  constexpr double kTriangle = SceneBuffers::kFlatBytesPerTriangle;
+  EXPECT_TRUE(SceneBuffers::instancingPays(double(1 << 20) * kTriangle, std::uint64_t(32) << 20));
+  EXPECT_FALSE(SceneBuffers::instancingPays(double(1 << 20) * kTriangle, std::uint64_t(128) << 20));
+  EXPECT_FALSE(SceneBuffers::instancingPays(7 * 1279 * kTriangle, 0));
 }
 
 /// The geometry is stored as the copy whose floats are finest for its size:

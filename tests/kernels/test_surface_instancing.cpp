@@ -112,6 +112,39 @@ TEST(SurfaceInstancing, StoredOnce) {
   EXPECT_GT(flatPerCopy, 10.0 * perCopy);
 }
 
+/// Instancing::Auto weighs a copied item by its own type's flattened bytes
+/// (SceneBuffers::flatBytesPerPrimitive), not as a triangle: per type the
+/// estimate is within 2x of what each flattened copy adds to the upload, so
+/// 12 copies of a geometry whose copy takes a third of the cache are stored
+/// once and 12 that fit are not (weighed as triangles, neither would be).
+TEST(SurfaceInstancing, AutoWeighsEachTypesBytes) {
+  for (const std::uint32_t type : {WT_PRIM_SDF_GRID, WT_PRIM_DISPLACED}) {
+    SCOPED_TRACE(primTypeName(type));
+    Scene geometry = surfaceGeometry();
+    if (type == WT_PRIM_SDF_GRID) geometry.displacedMeshes.clear();
+    else geometry.sdfGrids.clear();
+    auto placed = [&](int copies) {
+      std::vector<glm::mat4> transforms;
+      for (int c = 0; c < copies; ++c)
+        transforms.push_back(glm::translate(glm::mat4(1.0f), glm::vec3(3.0f * float(c), 0.0f, 0.0f)));
+      return placeCopies(geometry, transforms);
+    };
+    const Scene few = placed(3), many = placed(12);
+    const PrimitiveRows rows = gatherPrimitives(many);
+    ASSERT_GT(rows.count[type], 0u);
+    const double items = double(rows.count[type]) / 12.0;  // a copy's
+    const double bytes = SceneBuffers::flatBytesPerPrimitive(rows)[type];
+    const SceneBuffers offFew(test::deviceContext(), few, withInstancing(Instancing::Off));
+    const SceneBuffers offMany(test::deviceContext(), many, withInstancing(Instancing::Off));
+    const double copyBytes = (double(offMany.primitiveBytes) - double(offFew.primitiveBytes)) / 9.0;
+    EXPECT_GT(items * bytes, 0.5 * copyBytes);
+    EXPECT_LT(items * bytes, 2.0 * copyBytes);
+    const double copied = 11.0 * items * bytes;
+    EXPECT_TRUE(SceneBuffers::instancingPays(copied, std::uint64_t(3.0 * copyBytes)));
+    EXPECT_FALSE(SceneBuffers::instancingPays(copied, std::uint64_t(20.0 * copyBytes)));
+  }
+}
+
 /// Closest and any hits, in every traversal mode: the instanced form against
 /// the flattened one, on rays at every copy (mirrored, unevenly scaled and
 /// 1e4 away included): the same flattened primitive (brick or base
