@@ -26,15 +26,25 @@
 #define WT_QUAD_SHADE_PARAMS
 #endif
 
+/// Whether a vertex weighs by the power heuristic where the frame as a whole
+/// does not: WT_FLAG_POWER_LAMBERTIAN at a Lambertian vertex. Both of its
+/// techniques must use the same heuristic: its light sample here, the light
+/// its BSDF sample finds by the sign of the pdf it leaves (shade_emission_weight).
+inline bool shade_power_here(WtFrameParams frame, bool lambertian) {
+  return lambertian && (frame.flags & WT_FLAG_POWER_LAMBERTIAN) && !(frame.flags & WT_FLAG_POWER_HEURISTIC);
+}
+
 /// Weight of emission found by BSDF sampling (pdf_bsdf, solid angle) from a
 /// light that NEE could also have sampled with pdf_light (0: NEE cannot).
 inline float shade_emission_weight(WtFrameParams frame, float pdf_bsdf, float pdf_light) {
   // camera rays, and lights NEE never samples, count in full
-  if (frame.bounce == 0 || pdf_bsdf <= 0.0f || pdf_light <= 0.0f) return 1.0f;
+  if (frame.bounce == 0 || pdf_bsdf == 0.0f || pdf_light <= 0.0f) return 1.0f;
   if (WT_INTEGRATOR_MINIMAL || !(frame.flags & WT_FLAG_NEE)) return 1.0f;
   // NEE without MIS already counted this light
   if (!(frame.flags & WT_FLAG_MIS)) return 0.0f;
-  return mis_weight(pdf_bsdf, pdf_light, frame.flags);
+  // a negative pdf: the vertex weighed its light sample by the power heuristic (shade_power_here)
+  return pdf_bsdf < 0.0f ? mis_weight(-pdf_bsdf, pdf_light, frame.flags | WT_FLAG_POWER_HEURISTIC)
+                         : mis_weight(pdf_bsdf, pdf_light, frame.flags);
 }
 
 #if WT_HAS_TRANSMISSION
@@ -435,7 +445,10 @@ WT_KERNEL void shade(WT_SHADE_KERNEL_PARAMS) {
       float pdf_light = s.pdf * pmf;
       float w = (s.is_delta || !(frame.flags & WT_FLAG_MIS) || WT_INTEGRATOR_MINIMAL)
                     ? 1.0f
-                    : mis_weight(pdf_light, pdf_bsdf, frame.flags);
+                    : mis_weight(pdf_light, pdf_bsdf,
+                                 frame.flags | (shade_power_here(frame, bsdf.model == WT_MATERIAL_DIFFUSE)
+                                                    ? WT_FLAG_POWER_HEURISTIC
+                                                    : 0u));
       float3 contribution = beta * f_cos * s.radiance * (w / pdf_light);
 #if WT_HAS_TRANSMISSION
       // the medium on the shadow ray's side absorbs along it, as along a path's segment
@@ -521,7 +534,8 @@ WT_KERNEL void shade(WT_SHADE_KERNEL_PARAMS) {
   }
 #endif
 
-  throughput[path] = (float4)(beta, bs.pdf);
+  // the pdf's sign carries the vertex's MIS heuristic to the light the ray may find
+  throughput[path] = (float4)(beta, shade_power_here(frame, bsdf.model == WT_MATERIAL_DIFFUSE) ? -bs.pdf : bs.pdf);
 #if WT_HAS_TEXTURES
   // the next segment's cone: as wide as the sample's pdf says, narrowed for
   // the pixel's later samples as the camera's cone is (generate.cl), so the

@@ -992,6 +992,15 @@ WT_KERNEL void shade(WT_SHADE_KERNEL_PARAMS) {
     floatL pdf_light = s.pdf * pmf;
     floatL a = pdf_light, b = pdf_bsdf;
     if (frame.flags & WT_FLAG_POWER_HEURISTIC) a *= a, b *= b;
+    else if (frame.flags & WT_FLAG_POWER_LAMBERTIAN) {
+      // Lambertian lanes weigh by the power heuristic (shade.cl's shade_power_here)
+      intL lambertian = active;
+#if WT_HAS_PBR
+      lambertian = lambertian && !pbr;
+#endif
+      a = select(a, a * a, lambertian);
+      b = select(b, b * b, lambertian);
+    }
     floatL mis = select((floatL)(0.0f), a / (a + b), a + b > 0.0f);
     floatL w = select(mis, (floatL)(1.0f), s.is_delta != 0 || (intL)(!(frame.flags & WT_FLAG_MIS) ? -1 : 0));
     VL contribution = vl_scale(vl_mul(vl_mul(beta, f_cos), s.radiance), w / pdf_light);
@@ -1112,6 +1121,14 @@ WT_KERNEL void shade(WT_SHADE_KERNEL_PARAMS) {
       if (lane_i(go, k)) shade_check_finite(frame, counters, lane_u(path, k), lane_v(beta, k), WT_NONFINITE_THROUGHPUT);
   go = go && !(beta.x <= 0.0f && beta.y <= 0.0f && beta.z <= 0.0f);
   if (!any(go)) return;
+  {
+    // the pdf's sign carries a Lambertian lane's power heuristic to the light the ray may find
+    intL lambertian = active && (intL)(shade_power_here(frame, true) ? -1 : 0);
+#if WT_HAS_PBR
+    lambertian = lambertian && !pbr;
+#endif
+    pdf = select(pdf, -pdf, lambertian);
+  }
   scatter_v(throughput, path, go, beta, pdf);
 #if WT_HAS_TRANSMISSION
   // light may come through glass: the light tree's pmf at a hit the ray finds takes no receiver normal (shade.cl's

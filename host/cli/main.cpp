@@ -193,7 +193,7 @@ struct RenderOptions {
   std::string device;
   std::vector<float> background{0.0f, 0.0f, 0.0f};
   std::string integrator = "path";
-  std::string misHeuristic = "balance";
+  std::string misHeuristic = "auto";  ///< power at Lambertian vertices (docs/integrators.md)
   bool noNee = false, noMis = false, noRr = false;
   std::string sampler = "sobol";  ///< chosen by efficiency, 1 / (relMSE x time) (docs/integrators.md, "Samplers")
   std::string textureFilter = "footprint";
@@ -380,6 +380,7 @@ wt::RenderSettings renderSettings(const RenderOptions& options) {
   if (options.stopOnNan) settings.stopOnNonFinite = true;
   settings.useRussianRoulette = !options.noRr;
   settings.powerHeuristic = options.misHeuristic == "power";
+  settings.powerAtLambertian = options.misHeuristic == "auto";
   settings.sobol = options.sampler == "sobol";
   settings.textureFootprint = options.textureFilter == "footprint";
   settings.lightSampler = options.lightSampler == "power" ? wt::LightSampler::Power
@@ -1308,8 +1309,9 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"minimal", "path"}))->capture_default_str();
   renderCmd->add_flag("--no-nee", render.noNee, "path: no next-event estimation");
   renderCmd->add_flag("--no-mis", render.noMis, "path: NEE without multiple importance sampling");
-  renderCmd->add_option("--mis-heuristic", render.misHeuristic, "path: balance or power")
-      ->check(CLI::IsMember({"balance", "power"}))->capture_default_str();
+  renderCmd->add_option("--mis-heuristic", render.misHeuristic,
+                        "path: balance, power, or auto (power at Lambertian vertices, balance elsewhere)")
+      ->check(CLI::IsMember({"auto", "balance", "power"}))->capture_default_str();
   renderCmd->add_flag("--no-rr", render.noRr, "path: no Russian roulette");
   renderCmd->add_option("--sampler", render.sampler,
                         "sobol (Owen-scrambled Sobol; the default, for its error per unit of time) or independent (hashed)")

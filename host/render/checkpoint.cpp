@@ -158,7 +158,7 @@ std::vector<CheckpointField> checkpointIdentity(const Scene& scene, const Render
       {"integrator", path ? "path" : "minimal"},
       {"nee", path && s.useNee ? "yes" : "no"},
       {"mis", path && s.useMis ? "yes" : "no"},
-      {"mis_heuristic", s.powerHeuristic ? "power" : "balance"},
+      {"mis_heuristic", s.powerHeuristic ? "power" : s.powerAtLambertian ? "auto" : "balance"},
       {"russian_roulette", path && s.useRussianRoulette ? "yes" : "no"},
       {"rr_depth", std::to_string(s.rrMinDepth)},
       {"sampler", s.sobol ? "sobol" : "independent"},

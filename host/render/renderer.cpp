@@ -35,7 +35,8 @@ WtFrameParams frameParams(const RenderSettings& s, const LightList& lights, int 
   p.rr_min_depth = cl_uint(std::max(0, s.rrMinDepth));
   if (s.integrator == Integrator::Path) {
     p.flags = (s.useNee ? WT_FLAG_NEE : 0u) | (s.useMis ? WT_FLAG_MIS : 0u) |
-              (s.powerHeuristic ? WT_FLAG_POWER_HEURISTIC : 0u) | (s.useRussianRoulette ? WT_FLAG_RR : 0u);
+              (s.powerHeuristic ? WT_FLAG_POWER_HEURISTIC : 0u) | (s.powerAtLambertian ? WT_FLAG_POWER_LAMBERTIAN : 0u) |
+              (s.useRussianRoulette ? WT_FLAG_RR : 0u);
   }
   if (s.sobol) p.flags |= WT_FLAG_SOBOL;
   if (s.textureFootprint) p.flags |= WT_FLAG_TEXTURE_FOOTPRINT;

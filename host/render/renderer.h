@@ -53,6 +53,8 @@ struct RenderSettings {
   bool useNee = true;           ///< path: next-event estimation
   bool useMis = true;           ///< path: MIS between NEE and BSDF sampling
   bool powerHeuristic = false;  ///< path: power heuristic instead of balance
+  /// path, without powerHeuristic: the power heuristic at Lambertian vertices, balance elsewhere
+  bool powerAtLambertian = true;
   bool useRussianRoulette = true;  ///< path
   int rrMinDepth = 3;           ///< path: first bounce at which roulette may end a path
   bool sobol = false;           ///< Owen-scrambled Sobol instead of independent random numbers

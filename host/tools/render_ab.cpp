@@ -13,7 +13,8 @@
 // from that folder), rr-depth D, sampler independent|sobol, rr 0|1,
 // lambertian-forms 0|1 (RenderSettings::lambertianForms), quad-lights 0|1
 // (RenderSettings::quadLights), shade-lanes 0|1 (RenderSettings::shadeLanes),
-// shade-lanes-width 0|8|16 (RenderSettings::shadeLanesWidth).
+// shade-lanes-width 0|8|16 (RenderSettings::shadeLanesWidth), power-heuristic 0|1
+// (RenderSettings::powerHeuristic), power-lambertian 0|1 (RenderSettings::powerAtLambertian).
 #include "device/context.h"
 #include "device/program.h"
 #include "output/image_io.h"
@@ -61,6 +62,8 @@ void setOption(Config& c, const std::string& name, const std::string& v) {
   else if (name == "quad-lights") c.settings.quadLights = toInt(name, v) != 0;
   else if (name == "shade-lanes") c.settings.shadeLanes = toInt(name, v) != 0;
   else if (name == "shade-lanes-width") c.settings.shadeLanesWidth = toInt(name, v);
+  else if (name == "power-heuristic") c.settings.powerHeuristic = toInt(name, v) != 0;
+  else if (name == "power-lambertian") c.settings.powerAtLambertian = toInt(name, v) != 0;
   else if (name == "sampler") {
     if (v != "independent" && v != "sobol") usage("--sampler: independent or sobol");
     c.settings.sobol = v == "sobol";

@@ -303,6 +303,7 @@ typedef struct WtFrameParams {
 #define WT_FLAG_COMPACT_SHADOWS 128u ///< shade appends shadow rays to its queue with an atomic counter, dense for connect_packet; otherwise entry i is item i's (WT_NO_HIT: none) and no atomic is contended
 #define WT_FLAG_TEXTURE_FOOTPRINT 256u ///< textures are read at the mip level of the path's footprint (materials/textured.cl); otherwise at the finest
 #define WT_FLAG_SHADOW_QUEUE 512u ///< the connect stage runs: shade clears its shadow-queue entries (without it the shadow buffers hold one entry)
+#define WT_FLAG_POWER_LAMBERTIAN 1024u ///< the power heuristic at Lambertian vertices (where cosine sampling matches f cos exactly), the balance heuristic elsewhere
 
 /// Slots of the queue-counter buffer.
 #define WT_COUNTER_QUEUE_A 0      ///< paths in queue A

@@ -465,6 +465,7 @@ TEST(LambertianForms, SpecularZeroRendersAsTheLambertianModelWithTheSameImage) {
     s.samplesPerPixel = 4;
     s.seed = 5;
     s.lambertianForms = forms;
+    s.powerAtLambertian = false;  // one MIS heuristic for both models (auto's follows the model)
     Renderer renderer(test::deviceContext(), scene, s);
     *used = renderer.kernelFeatures();
     for (int i = 0; i < s.samplesPerPixel; ++i) renderer.renderSample();
