@@ -195,6 +195,13 @@ inline bool curve_intersect(__global const float4* rows, uint k, float3 o, float
   float4 a, b;
   bool left, right;
   curve_segment(rows, k, &a, &b, &left, &right);
+  float3 n_o;
+  float s_o;
+  if (leaving) {
+    // headed out of the hull it leaves: no hit whatever the roots (on_surface's test below, done first)
+    curve_hull_distance(a, b, o, &n_o, &s_o);
+    if (dot(d, n_o) >= 0.0f) return false;
+  }
   float dd = dot(d, d);
   float t_mid = dot(0.5f * (a.xyz + b.xyz) - o, d) / dd;
   float3 o_mid = o + t_mid * d;
@@ -224,8 +231,6 @@ inline bool curve_intersect(__global const float4* rows, uint k, float3 o, float
   // the scale of the coordinates and of the segment, for rounding bounds
   float scale = curve_max3(a.xyz) + length(b.xyz - a.xyz) + fmax(a.w, b.w);
   // a ray that starts on the hull's surface (within rounding of it)
-  float3 n_o;
-  float s_o;
   float dist_o = curve_hull_distance(a, b, o, &n_o, &s_o);
   // (wider than a spawned ray's offset, which is at most about gamma(11) of that)
   bool on_surface = leaving || fabs(dist_o) <= spawn_gamma(16) * (curve_max3(o) + scale);
