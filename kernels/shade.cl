@@ -374,7 +374,10 @@ WT_KERNEL void shade(WT_SHADE_KERNEL_PARAMS) {
   if (dot(coat_ns, coat_ns) > 0.0f)
     bsdf_coat_normal(&bsdf, (float3)(dot(coat_ns, frame_t), dot(coat_ns, frame_b), dot(coat_ns, ns)));
 #endif
+  // the index of the medium the path is in on each side of this surface (for roulette)
+  float n_near = 1.0f, n_far = 1.0f;
 #if WT_HAS_TRANSMISSION
+  n_near = n_far = media_ior(&stack, materials, current);
   // a volume boundary refracts by the indices the stack gives its two sides
   // (n far / n near: the material's own index against air outside every other volume)
   if (boundary) {
@@ -393,6 +396,7 @@ WT_KERNEL void shade(WT_SHADE_KERNEL_PARAMS) {
       ior_far = media_channel_ior(ior_far, dispersion_far, (counts.w & WT_DISPERSION_BITS) - 1u);
     }
     bsdf.eta = ior_far / ior_near;
+    n_near = ior_near, n_far = ior_far;
     bsdf.smooth = bsdf.mirror || fabs(bsdf.eta - 1.0f) < 1e-3f;
   }
 #endif
@@ -508,9 +512,13 @@ WT_KERNEL void shade(WT_SHADE_KERNEL_PARAMS) {
   else if (crossed) counts.z++;
   else counts.y++;
 
-  // Russian roulette: survive with probability from the throughput, reweight
+  // Russian roulette: survive with probability from the throughput, reweight.
+  // The throughput counts n^2 less inside a medium of index n (radiance
+  // scaling at each crossing), which comes back on the way out: undone here,
+  // so paths inside glass are not culled for it.
   if (!WT_INTEGRATOR_MINIMAL && (frame.flags & WT_FLAG_RR) && frame.bounce >= frame.rr_min_depth) {
-    float q = fmin(fmax(beta.x, fmax(beta.y, beta.z)), 0.95f);
+    float n = crossed ? n_far : n_near;
+    float q = fmin(fmax(beta.x, fmax(beta.y, beta.z)) * n * n, 0.95f);
     if (u_pick_rr.y >= q) return;
     beta /= q;
   }

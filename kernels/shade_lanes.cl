@@ -1112,7 +1112,12 @@ WT_KERNEL void shade(WT_SHADE_KERNEL_PARAMS) {
 #endif
   beta = vl_mul(beta, weight);
   if ((frame.flags & WT_FLAG_RR) && frame.bounce >= frame.rr_min_depth) {
-    floatL q = fmin(fmax(beta.x, fmax(beta.y, beta.z)), 0.95f);
+    // the throughput without the radiance scaling of the glass the path goes on in (shade.cl)
+    floatL n2 = 1.0f;
+#if WT_HAS_TRANSMISSION
+    n2 = select(n2, select(glass_eta * glass_eta, 1.0f / (glass_eta * glass_eta), inside), glass && (inside != crossed));
+#endif
+    floatL q = fmin(fmax(beta.x, fmax(beta.y, beta.z)) * n2, 0.95f);
     go = go && u_rr < q;
     beta = vl_div(beta, q);
   }
