@@ -494,7 +494,7 @@ bool storeDeferredProgramsInBackground(const DeviceInfo& device) {
   ::close(fds[1]);
   log::debug(std::to_string(mine.size()) + " program(s) handed to a background process (pid " + std::to_string(pid) +
              ") to store in the kernel cache" + (written ? "" : "; writing its jobs failed"));
-  return written;
+  return true;
 }
 
 bool storeProgramEntry(Context& context, const std::string& source, const DeferredStore& job) {
