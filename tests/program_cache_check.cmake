@@ -2,7 +2,8 @@
 # first run on an empty cache compiles and stores, the second loads; two
 # processes started together on an empty cache both succeed and leave one
 # valid entry per program (the render program and the frame program); other
-# build options (the minimal integrator) miss, and share the frame program.
+# build options (the minimal integrator) miss, and share the frame program;
+# with the default folder on PoCL's CPU device a background process stores.
 # Inputs: EXE (wavetrace), SCRATCH (a folder this test may empty).
 set(cache "${SCRATCH}/kernels")
 file(REMOVE_RECURSE "${SCRATCH}")
@@ -20,6 +21,8 @@ function(render name pattern)
   if(NOT "${out}${err}" MATCHES "${pattern}")
     message(FATAL_ERROR "${name}: output does not match '${pattern}'")
   endif()
+  set(out "${out}" PARENT_SCOPE)
+  set(err "${err}" PARENT_SCOPE)
 endfunction()
 
 # one entry each for wavetrace.cl and frame.cl, and no temporary files
@@ -77,4 +80,37 @@ file(REMOVE_RECURSE "${cache}")
 render(off "program wavetrace.cl: cache off" ${tiny} --kernel-cache off)
 if(EXISTS "${cache}")
   message(FATAL_ERROR "off: the cache folder was created")
+endif()
+
+# The default folder (no folder chosen): on PoCL's CPU device the first run
+# compiles without fetching the binary and hands the entries to a background
+# `wavetrace store-programs` after the image is written; once they are
+# stored, the next run loads them and renders the same image.
+set(ENV{WAVETRACE_CACHE_DIR} "")
+set(ENV{XDG_CACHE_HOME} "${SCRATCH}/xdg")
+set(default_cache "${SCRATCH}/xdg/wavetrace/kernels")
+render(default_first "program wavetrace.cl: cache miss" ${tiny})
+if("${out}${err}" MATCHES "stored after the render, in the background")
+  if(NOT "${out}${err}" MATCHES "2 program\\(s\\) handed to a background process")
+    message(FATAL_ERROR "default_first: the deferred entries were not handed on")
+  endif()
+endif()
+# the store runs at the lowest priority: give it time on a loaded machine
+foreach(second RANGE 600)
+  file(GLOB stored "${default_cache}/*.bin")
+  file(GLOB pending "${default_cache}/*.pending")
+  list(LENGTH stored stored_count)
+  if(stored_count EQUAL 2 AND NOT pending)
+    break()
+  endif()
+  execute_process(COMMAND ${CMAKE_COMMAND} -E sleep 1)
+endforeach()
+if(NOT stored_count EQUAL 2 OR pending)
+  message(FATAL_ERROR "default folder: expected two entries and no pending store in ${default_cache}, found: ${stored} ${pending}")
+endif()
+render(default_second "program wavetrace.cl: cache hit.*program frame.cl: cache hit" ${tiny})
+file(SHA256 "${SCRATCH}/default_first.png" compiled)
+file(SHA256 "${SCRATCH}/default_second.png" loaded)
+if(NOT compiled STREQUAL loaded)
+  message(FATAL_ERROR "default_second: the image from the stored entry differs from the compiled program's")
 endif()

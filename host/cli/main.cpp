@@ -39,6 +39,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <iostream>
 #include <sstream>
 #include <ctime>
 #include <sys/resource.h>
@@ -702,6 +703,8 @@ int runRender(RenderOptions options) {
     wt::applyDebugView(image, options.debugView);
     writeOutputs(options, image, say);
     startup.mark("written");
+    // the kernel cache entries this render's misses left: written by a process of their own
+    wt::storeDeferredProgramsInBackground(device);
     wt::log::debug(startup.line());
     if (settings.tonemap.autoExposure) {
       const float scale = renderer.autoExposure();
@@ -726,7 +729,10 @@ int runRender(RenderOptions options) {
                    " samples; the image so far was written");
     return 130;
   }
-  return 0;
+  // Every output is written and closed: leave without releasing the device's
+  // buffers, programs and worker threads one by one (the exit frees them).
+  std::fflush(nullptr);
+  std::_Exit(0);
 }
 
 /// `wavetrace info`: the scene's feature set (as `render` would derive it
@@ -1217,6 +1223,22 @@ int runTonemap(const TonemapCommand& cmd) {
   return 0;
 }
 
+/// `store-programs`: write the kernel cache entries a render left to the
+/// background (storeDeferredProgramsInBackground), jobs on standard input.
+/// It yields to everything else on the machine, and fails silently.
+int runStorePrograms(int device, const std::string& kernelDir) {
+  setpriority(PRIO_PROCESS, 0, 19);
+  std::ostringstream jobs;
+  jobs << std::cin.rdbuf();
+  if (!kernelDir.empty()) wt::setKernelDirectory(std::filesystem::path(kernelDir));
+  wt::DeviceInfo info = wt::selectDevice(std::to_string(device));
+  wt::Context context(info);
+  int stored = 0;
+  const std::vector<wt::DeferredStore> list = wt::parseDeferredStores(jobs.str());
+  for (const wt::DeferredStore& job : list) stored += wt::storeProgramEntry(context, wt::expandKernelSource(job.label), job);
+  return stored == int(list.size()) ? 0 : 1;
+}
+
 int runDevices() {
   std::vector<wt::DeviceInfo> devices = wt::listDevices();
   if (devices.empty()) {
@@ -1464,6 +1486,13 @@ int main(int argc, char** argv) {
 
   CLI::App* devicesCmd = app.add_subcommand("devices", "List OpenCL platforms and devices");
 
+  // started by a render (storeDeferredProgramsInBackground), not by users: no help entry
+  int storeDevice = 0;
+  std::string storeKernelDir;
+  CLI::App* storeCmd = app.add_subcommand("store-programs", "")->group("");
+  storeCmd->add_option("--device", storeDevice)->required();
+  storeCmd->add_option("--kernel-dir", storeKernelDir);
+
   TonemapCommand tonemapArgs;
   CLI::App* tonemapCmd = app.add_subcommand("tonemap", "Tone-map a linear EXR (e.g. a render's) to an 8-bit sRGB PNG");
   tonemapCmd->add_option("input", tonemapArgs.input, "Linear EXR")->required()->check(CLI::ExistingFile);
@@ -1583,6 +1612,7 @@ int main(int argc, char** argv) {
   // (docs/lab/2026-12-02-performance-log.md, "PoCL's worker threads").
   if (*benchCmd) setenv("POCL_AFFINITY", "1", 0);
   if (!kernelCache.empty()) wt::setProgramCacheDirectory(kernelCache);
+  wt::setProgramStoreExecutable("/proc/self/exe");
 
   try {
     if (*renderCmd) {
@@ -1601,6 +1631,7 @@ int main(int argc, char** argv) {
       return runInfo(info);
     }
     if (*devicesCmd) return runDevices();
+    if (*storeCmd) return runStorePrograms(storeDevice, storeKernelDir);
     if (*tonemapCmd) {
       tonemapArgs.tonemap.physical =
           tonemapCmd->count("--aperture") + tonemapCmd->count("--shutter") + tonemapCmd->count("--iso") > 0;

@@ -1,17 +1,25 @@
 #include "device/program_cache.h"
 
 #include "core/log.h"
+#include "device/program.h"
 
 #include <chrono>
+#include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
+#include <mutex>
 #include <random>
 #include <sstream>
 #include <system_error>
 
+#include <fcntl.h>
+#include <spawn.h>
+#include <sys/stat.h>
 #include <unistd.h>
+
+extern char** environ;
 
 namespace wt {
 namespace {
@@ -62,6 +70,9 @@ struct EntryHeader {
 static_assert(sizeof(EntryHeader) == 88, "the header is written as it is laid out");
 
 std::optional<std::string> g_directoryOverride;  // set by --kernel-cache
+std::mutex g_deferredMutex;
+std::vector<DeferredStore> g_deferred;               // misses whose entries are still to be written
+std::optional<std::filesystem::path> g_storeExecutable;  // set by the command line only
 
 double secondsSince(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -280,17 +291,12 @@ CachedProgram buildCachedProgram(Context& context, const std::string& source, co
   const auto start = std::chrono::steady_clock::now();
   CachedProgram result;
   // Oclgrind checks the kernels as they are compiled: a binary would skip that.
-  // PoCL's CPU device compiles every kernel once more to hand out a binary,
-  // and keeps its own kernel cache: there only a folder the user chose is used.
-  const bool dear = ownCacheMakesBinariesDear(context.info()) && !programCacheDirectoryChosen();
   const std::optional<std::filesystem::path> dir =
-      context.underOclgrind() || dear ? std::nullopt : programCacheDirectory();
+      context.underOclgrind() ? std::nullopt : programCacheDirectory();
   if (!dir) {
     result.program = compile(context, source, options, label);
     result.seconds = secondsSince(start);
-    log::debug("program " + label + ": cache off" +
-               (dear ? " (PoCL's CPU device keeps its own; --kernel-cache DIR uses ours)" : "") + ", compiled in " +
-               secondsText(result.seconds));
+    log::debug("program " + label + ": cache off, compiled in " + secondsText(result.seconds));
     return result;
   }
 
@@ -318,6 +324,21 @@ CachedProgram buildCachedProgram(Context& context, const std::string& source, co
 
   result.program = compile(context, source, options, label);
   const double compileSeconds = secondsSince(start);
+  if (ownCacheMakesBinariesDear(context.info()) && !programCacheDirectoryChosen()) {
+    // the binary would compile every kernel once more here, on the render's critical path
+    result.deferred = true;
+    {
+      std::lock_guard<std::mutex> lock(g_deferredMutex);
+      const std::string hex = toHex(key);
+      bool known = false;
+      for (const DeferredStore& job : g_deferred) known = known || (job.key == hex && job.dir == *dir);
+      if (!known) g_deferred.push_back({*dir, hex, label, options});
+    }
+    result.seconds = compileSeconds;
+    log::debug("program " + label + ": cache " + cacheOutcomeName(result.outcome) + ", compiled in " +
+               secondsText(compileSeconds) + "; its entry is stored after the render, in the background");
+    return result;
+  }
   std::vector<std::vector<unsigned char>> binaries;
   try {
     binaries = result.program.getInfo<CL_PROGRAM_BINARIES>();
@@ -339,6 +360,170 @@ CachedProgram buildCachedProgram(Context& context, const std::string& source, co
                                        secondsText(result.seconds - compileSeconds) + ")"
                                  : std::string()));
   return result;
+}
+
+// ---------------------------------------------------------------- deferred stores
+
+namespace {
+
+std::filesystem::path pendingMark(const DeferredStore& job) { return job.dir / (job.key + ".pending"); }
+
+/// Claim the job with its pending mark; false where another process holds a
+/// mark younger than ten minutes (an older one is a store that died: taken over).
+bool markPending(const DeferredStore& job) {
+  std::error_code ec;
+  std::filesystem::create_directories(job.dir, ec);
+  const std::filesystem::path mark = pendingMark(job);
+  for (int attempt = 0; attempt < 2; ++attempt) {
+    const int fd = ::open(mark.c_str(), O_CREAT | O_EXCL | O_WRONLY | O_CLOEXEC, 0644);
+    if (fd >= 0) {
+      ::close(fd);
+      return true;
+    }
+    if (errno != EEXIST) return false;
+    struct stat st {};
+    if (::stat(mark.c_str(), &st) != 0) continue;  // removed meanwhile: try again
+    if (std::time(nullptr) - st.st_mtime < 600) return false;
+    std::filesystem::remove(mark, ec);
+  }
+  return false;
+}
+
+}  // namespace
+
+std::vector<DeferredStore> deferredProgramStores() {
+  std::lock_guard<std::mutex> lock(g_deferredMutex);
+  return g_deferred;
+}
+
+void setProgramStoreExecutable(const std::filesystem::path& exe) {
+  if (exe.empty())
+    g_storeExecutable.reset();
+  else
+    g_storeExecutable = exe;
+}
+
+std::string formatDeferredStores(const std::vector<DeferredStore>& jobs) {
+  std::string text;
+  for (const DeferredStore& job : jobs) text += job.dir.string() + "\t" + job.key + "\t" + job.label + "\t" + job.options + "\n";
+  return text;
+}
+
+std::vector<DeferredStore> parseDeferredStores(const std::string& text) {
+  std::vector<DeferredStore> jobs;
+  std::istringstream lines(text);
+  std::string line;
+  while (std::getline(lines, line)) {
+    std::vector<std::string> fields;
+    std::size_t from = 0;
+    for (std::size_t tab; fields.size() < 3 && (tab = line.find('\t', from)) != std::string::npos; from = tab + 1)
+      fields.push_back(line.substr(from, tab - from));
+    if (fields.size() != 3 || fields[0].empty() || fields[1].size() != 64 || fields[2].empty()) continue;
+    fields.push_back(line.substr(from));
+    jobs.push_back({fields[0], fields[1], fields[2], fields[3]});
+  }
+  return jobs;
+}
+
+bool storeDeferredProgramsInBackground(const DeviceInfo& device) {
+  std::vector<DeferredStore> jobs;
+  {
+    std::lock_guard<std::mutex> lock(g_deferredMutex);
+    jobs.swap(g_deferred);
+  }
+  if (jobs.empty() || !g_storeExecutable) return false;
+  std::vector<DeferredStore> mine;
+  for (const DeferredStore& job : jobs)
+    if (markPending(job)) mine.push_back(job);
+  auto unmark = [&mine]() {
+    std::error_code ec;
+    for (const DeferredStore& job : mine) std::filesystem::remove(pendingMark(job), ec);
+  };
+  if (mine.empty()) return false;
+
+  int fds[2];
+  if (::pipe2(fds, O_CLOEXEC) != 0) {
+    unmark();
+    return false;
+  }
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_adddup2(&actions, fds[0], 0);
+  posix_spawn_file_actions_addopen(&actions, 1, "/dev/null", O_WRONLY, 0);
+  posix_spawn_file_actions_addopen(&actions, 2, "/dev/null", O_WRONLY, 0);
+  posix_spawnattr_t attr;
+  posix_spawnattr_init(&attr);
+  sigset_t none, defaults;
+  sigemptyset(&none);
+  sigemptyset(&defaults);
+  sigaddset(&defaults, SIGINT);
+  sigaddset(&defaults, SIGTERM);
+  sigaddset(&defaults, SIGPIPE);
+  posix_spawnattr_setsigmask(&attr, &none);
+  posix_spawnattr_setsigdefault(&attr, &defaults);
+  // its own process group, so a terminal's Ctrl-C does not reach it; the same session, so that
+  // at its lowest priority it yields to the user's next command (one scheduling group per session)
+  posix_spawnattr_setpgroup(&attr, 0);
+  posix_spawnattr_setflags(&attr, POSIX_SPAWN_SETPGROUP | POSIX_SPAWN_SETSIGMASK | POSIX_SPAWN_SETSIGDEF);
+  const std::string exe = g_storeExecutable->string(), index = std::to_string(device.index);
+  std::vector<std::string> args = {exe, "store-programs", "--device", index};
+  if (std::optional<std::filesystem::path> kernels = kernelDirectory()) {
+    args.push_back("--kernel-dir");
+    args.push_back(kernels->string());
+  }
+  std::vector<char*> argv;
+  for (std::string& a : args) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  pid_t pid = 0;
+  const int spawned = posix_spawn(&pid, exe.c_str(), &actions, &attr, argv.data(), environ);
+  posix_spawn_file_actions_destroy(&actions);
+  posix_spawnattr_destroy(&attr);
+  ::close(fds[0]);
+  if (spawned != 0) {
+    ::close(fds[1]);
+    unmark();
+    return false;
+  }
+  // a few hundred bytes: the pipe takes them whole; a child that died must not kill this process
+  const std::string text = formatDeferredStores(mine);
+  struct sigaction ignore {}, previous {};
+  ignore.sa_handler = SIG_IGN;
+  sigaction(SIGPIPE, &ignore, &previous);
+  const bool written = ::write(fds[1], text.data(), text.size()) == ssize_t(text.size());
+  sigaction(SIGPIPE, &previous, nullptr);
+  ::close(fds[1]);
+  log::debug(std::to_string(mine.size()) + " program(s) handed to a background process (pid " + std::to_string(pid) +
+             ") to store in the kernel cache" + (written ? "" : "; writing its jobs failed"));
+  return true;
+}
+
+bool storeProgramEntry(Context& context, const std::string& source, const DeferredStore& job) {
+  struct Unmark {
+    std::filesystem::path mark;
+    ~Unmark() {
+      std::error_code ec;
+      std::filesystem::remove(mark, ec);
+    }
+  } unmark{pendingMark(job)};
+  const Digest key = programCacheKey(context.info(), source, job.options);
+  if (toHex(key) != job.key) {
+    log::debug("program " + job.label + ": not stored (this source, these options and this device give another key)");
+    return false;
+  }
+  const std::filesystem::path entry = job.dir / (job.key + ".bin");
+  if (std::optional<std::string> bytes = readFile(entry); bytes && !checkEntry(*bytes, key)) return true;
+  cl::Program program = compile(context, source, job.options, job.label);
+  std::vector<std::vector<unsigned char>> binaries;
+  try {
+    binaries = program.getInfo<CL_PROGRAM_BINARIES>();
+  } catch (const cl::Error&) {
+  }
+  if (binaries.size() != 1 || binaries[0].empty()) {
+    log::debug("program " + job.label + ": the device gives no binary; not cached");
+    return false;
+  }
+  storeEntry(job.dir, entry, key, binaries[0]);
+  return true;
 }
 
 }  // namespace wt

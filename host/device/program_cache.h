@@ -12,6 +12,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace wt {
 
@@ -30,15 +31,16 @@ void setProgramCacheDirectory(const std::string& dir);
 /// Whether the folder was chosen (flag or variable) rather than the default.
 bool programCacheDirectoryChosen();
 /// PoCL's CPU device: handing out a binary compiles every kernel once more
-/// (for any work-group size), and PoCL caches compiled kernels itself, so
-/// the default folder is not used there; a chosen one is.
+/// (for any work-group size). There a miss in the default folder compiles
+/// without asking for the binary, and leaves the entry to a background
+/// process (storeDeferredProgramsInBackground); a chosen folder stores at once.
 bool ownCacheMakesBinariesDear(const DeviceInfo& device);
 
 /// What happened to one program.
 enum class CacheOutcome {
   kOff,       ///< no cache: turned off, Oclgrind, or the device gives no binary
   kHit,       ///< loaded from a valid entry
-  kMiss,      ///< no entry: compiled and stored
+  kMiss,      ///< no entry: compiled and stored (or its store deferred: CachedProgram::deferred)
   kRejected,  ///< an entry was there but corrupt, truncated or stale: compiled and replaced
 };
 const char* cacheOutcomeName(CacheOutcome outcome);
@@ -49,6 +51,7 @@ struct CachedProgram {
   double seconds = 0.0;          ///< compile or load time, build included
   std::size_t binaryBytes = 0;   ///< the device binary's size (0: none)
   std::filesystem::path entry;   ///< the entry file (empty: no cache)
+  bool deferred = false;         ///< compiled without its binary: storeDeferredProgramsInBackground stores it
 };
 
 /// The cache key: SHA-256 over the expanded source, the build options, the
@@ -56,12 +59,47 @@ struct CachedProgram {
 Digest programCacheKey(const DeviceInfo& device, std::string_view source, std::string_view options);
 
 /// Build `source` with `options` for the context's device through the cache
-/// (none under Oclgrind, nor on PoCL's CPU device unless the folder was chosen):
-/// load a valid entry, else compile and store one (written to a temporary
-/// file in the same folder and renamed, so concurrent processes never see a
-/// partial entry). `label` names the program in messages. Throws DeviceError
-/// carrying the build log when compiling fails.
+/// (none under Oclgrind): load a valid entry, else compile and store one
+/// (written to a temporary file in the same folder and renamed, so
+/// concurrent processes never see a partial entry); on PoCL's CPU device
+/// with the default folder, a miss records a DeferredStore instead.
+/// `label` names the program in messages (the kernels/ root of its source).
+/// Throws DeviceError carrying the build log when compiling fails.
 CachedProgram buildCachedProgram(Context& context, const std::string& source, const std::string& options,
                                  const std::string& label);
+
+/// A program compiled without fetching its binary, whose entry is still to
+/// be written: by a process of its own after the render, off its critical path.
+struct DeferredStore {
+  std::filesystem::path dir;  ///< the cache folder
+  std::string key;            ///< the entry's key (hex): its source, options and device
+  std::string label;          ///< the kernels/ root its source expands from
+  std::string options;
+};
+/// The stores recorded so far in this process (not yet handed on).
+std::vector<DeferredStore> deferredProgramStores();
+
+/// The executable that `storeDeferredProgramsInBackground` starts as
+/// `EXE store-programs`; unset (the tests, the bench; "" unsets) nothing is started.
+void setProgramStoreExecutable(const std::filesystem::path& exe);
+
+/// Hand the deferred stores to a background process (`EXE store-programs
+/// --device N`, the jobs on its standard input; its own process group,
+/// lowest priority) and forget them; the caller does not wait. A job whose entry
+/// another process is storing (a `KEY.pending` file under 10 minutes old)
+/// is skipped. False when nothing was started.
+bool storeDeferredProgramsInBackground(const DeviceInfo& device);
+
+/// The jobs as `storeDeferredProgramsInBackground` writes them, one a line;
+/// parseDeferredStores reads them back (malformed lines are dropped).
+std::string formatDeferredStores(const std::vector<DeferredStore>& jobs);
+std::vector<DeferredStore> parseDeferredStores(const std::string& text);
+
+/// Compile `source` (a PoCL cache hit where the render just built it), fetch
+/// its binary and write the entry for `job`, unless a valid one is there;
+/// then remove the job's pending mark. False (with a debug message) where
+/// the source, options and device do not give the job's key, or the device
+/// gives no binary.
+bool storeProgramEntry(Context& context, const std::string& source, const DeferredStore& job);
 
 }  // namespace wt

@@ -1,12 +1,14 @@
 // The program cache (host/device/program_cache.cpp): a second build loads
 // the entry; a truncated, bit-flipped or stale entry is detected, warned
-// about and rebuilt; other options miss; an unwritable folder only warns.
+// about and rebuilt; other options miss; an unwritable folder only warns;
+// on PoCL's CPU device the default folder's stores are deferred.
 // Two processes at once: tests/program_cache_check.cmake.
 #include "device/program_cache.h"
 #include "device_fixture.h"
 
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <filesystem>
 #include <cstdlib>
 #include <fstream>
@@ -246,21 +248,98 @@ TEST(ProgramCache, FolderFollowsFlagVariableAndXdg) {
   EXPECT_FALSE(programCacheDirectory().has_value()) << "no HOME and no XDG_CACHE_HOME: nowhere to cache";
 }
 
-// PoCL's CPU device hands out a binary only after compiling every kernel
-// once more, and caches kernels itself: the default folder is not used there.
-TEST(ProgramCache, PoclCpuUsesOnlyAChosenFolder) {
-  if (!ownCacheMakesBinariesDear(test::deviceContext().info()))
-    GTEST_SKIP() << "not PoCL's CPU device: the default folder is used";
+// PoCL's CPU device compiles every kernel once more to hand out a binary:
+// with the default folder a miss does not ask for it and leaves the entry
+// to storeProgramEntry (run by a background process after the render); the
+// next build loads it, and a damaged one is rebuilt, never trusted.
+TEST(ProgramCache, PoclCpuDefaultFolderDefersTheStore) {
+  Context& ctx = test::deviceContext();
+  if (!ownCacheMakesBinariesDear(ctx.info())) GTEST_SKIP() << "not PoCL's CPU device: a miss stores at once";
   ScratchCache cache("pocl_default");
   ScopedEnv home("HOME", cache.dir.c_str());
   ScopedEnv xdg("XDG_CACHE_HOME", nullptr);
   ScopedEnv var("WAVETRACE_CACHE_DIR", nullptr);
   setProgramCacheDirectory("");
   EXPECT_FALSE(programCacheDirectoryChosen());
-  CachedProgram built = build();
-  EXPECT_EQ(built.outcome, CacheOutcome::kOff) << cacheOutcomeName(built.outcome);
-  EXPECT_FALSE(fs::exists(cache.dir / ".cache" / "wavetrace"));
-  expectRuns(built, 1);
+  storeDeferredProgramsInBackground(ctx.info());  // forgets earlier tests' stores: no executable is set here
+  const fs::path folder = cache.dir / ".cache" / "wavetrace" / "kernels";
+
+  CachedProgram first = build();
+  EXPECT_EQ(first.outcome, CacheOutcome::kMiss) << cacheOutcomeName(first.outcome);
+  EXPECT_TRUE(first.deferred);
+  EXPECT_EQ(first.binaryBytes, 0u) << "the binary was fetched on the render's path";
+  EXPECT_FALSE(fs::exists(first.entry));
+  expectRuns(first, 1);
+  const std::vector<DeferredStore> jobs = deferredProgramStores();
+  ASSERT_EQ(jobs.size(), 1u);
+  EXPECT_EQ(jobs[0].dir, folder);
+  EXPECT_EQ(jobs[0].dir / (jobs[0].key + ".bin"), first.entry);
+  // the jobs cross a pipe as text
+  const std::vector<DeferredStore> parsed = parseDeferredStores(formatDeferredStores(jobs) + "a malformed line\n");
+  ASSERT_EQ(parsed.size(), 1u);
+  EXPECT_EQ(parsed[0].dir, jobs[0].dir);
+  EXPECT_EQ(parsed[0].key, jobs[0].key);
+  EXPECT_EQ(parsed[0].label, "test");
+  EXPECT_EQ(parsed[0].options, jobs[0].options);
+  EXPECT_FALSE(storeDeferredProgramsInBackground(ctx.info())) << "no executable set: nothing starts";
+  EXPECT_TRUE(deferredProgramStores().empty()) << "handed on (or dropped) once";
+
+  // what the background process does
+  EXPECT_TRUE(storeProgramEntry(ctx, kSource, parsed[0]));
+  ASSERT_TRUE(fs::exists(first.entry));
+  CachedProgram second = build();
+  EXPECT_EQ(second.outcome, CacheOutcome::kHit) << cacheOutcomeName(second.outcome);
+  EXPECT_FALSE(second.deferred);
+  expectRuns(second, 1);
+
+  // a bit flipped in the payload: rejected with a warning, compiled, the store deferred again
+  std::string bytes = readAll(first.entry);
+  bytes[bytes.size() - 1] ^= 0x10;
+  writeAll(first.entry, bytes);
+  CachedProgram third;
+  const std::string err = buildCapturing(third);
+  EXPECT_EQ(third.outcome, CacheOutcome::kRejected) << cacheOutcomeName(third.outcome);
+  EXPECT_TRUE(third.deferred);
+  EXPECT_NE(err.find("is corrupt (checksum mismatch)"), std::string::npos) << err;
+  expectRuns(third, 1);
+  // the store replaces the damaged entry
+  EXPECT_TRUE(storeProgramEntry(ctx, kSource, parsed[0]));
+  EXPECT_EQ(build().outcome, CacheOutcome::kHit);
+
+  // a job whose key this source and these options do not give is not stored
+  DeferredStore other = parsed[0];
+  other.options += " -D UNUSED=1";
+  fs::remove(first.entry);
+  EXPECT_FALSE(storeProgramEntry(ctx, kSource, other));
+  EXPECT_FALSE(fs::exists(first.entry));
+  storeDeferredProgramsInBackground(ctx.info());
+}
+
+// A job another process is storing (its pending mark) is not handed on twice.
+TEST(ProgramCache, PendingStoreIsNotStartedTwice) {
+  Context& ctx = test::deviceContext();
+  if (!ownCacheMakesBinariesDear(ctx.info())) GTEST_SKIP() << "not PoCL's CPU device: a miss stores at once";
+  ScratchCache cache("pending");
+  ScopedEnv home("HOME", cache.dir.c_str());
+  ScopedEnv xdg("XDG_CACHE_HOME", nullptr);
+  ScopedEnv var("WAVETRACE_CACHE_DIR", nullptr);
+  setProgramCacheDirectory("");
+  storeDeferredProgramsInBackground(ctx.info());
+  // a stand-in for `wavetrace store-programs` that reads nothing and leaves the mark
+  setProgramStoreExecutable("/bin/true");
+  CachedProgram first = build();
+  ASSERT_TRUE(first.deferred);
+  const fs::path mark = first.entry.parent_path() / (first.entry.stem().string() + ".pending");
+  EXPECT_TRUE(storeDeferredProgramsInBackground(ctx.info()));
+  EXPECT_TRUE(fs::exists(mark));
+  build();
+  EXPECT_FALSE(storeDeferredProgramsInBackground(ctx.info())) << "started again while the first store is pending";
+  // a mark ten minutes old is a store that died: taken over
+  fs::last_write_time(mark, fs::file_time_type::clock::now() - std::chrono::minutes(11));
+  build();
+  EXPECT_TRUE(storeDeferredProgramsInBackground(ctx.info()));
+  setProgramStoreExecutable("");
+  storeDeferredProgramsInBackground(ctx.info());
 }
 
 TEST(ProgramCache, OffCompilesWithoutAnEntry) {
