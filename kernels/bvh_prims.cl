@@ -283,6 +283,16 @@ inline bool bvh_prims_occluded(BvhScene scene, GeometryScene g, float3 org, floa
                                uint skip_a, uint skip_b, uint skip_instance) {
   if (g.header.node_count == 0) return false;
   if (!bvh_ray_is_finite(org, dir)) return true;
+#if WT_HAS_CURVES || WT_HAS_SPHERES
+  // The convex primitive the ray leaves, first: headed out, its test ends at
+  // once; headed in (a shadow ray through a fibre), its far wall blocks it,
+  // which a walk in slot order finds late.
+  if (skip_instance == WT_NO_HIT && (prim_type(skip_a) == WT_PRIM_CURVE || prim_type(skip_a) == WT_PRIM_SPHERE) &&
+      skip_a != WT_NO_HIT) {
+    float t, u, v;
+    if (geometry_intersect(g, skip_a, org, dir, tmin, tmax, skip_a, skip_b, true, &t, &u, &v)) return true;
+  }
+#endif
   float3 inv_d = bvh_safe_rcp(dir);
   RayPlanes planes = bvh_ray_planes(inv_d);
   float3 dn = prims_ray_unit(dir);
