@@ -11,33 +11,39 @@
 
 #if WT_HAS_PRIMITIVES
 
-/// Slab test of an oriented node's four child boxes (WT_BVH4_ORIENTED): the
-/// ray rotated into the node's frame (the next slot, WtBvh4Frame), then
-/// bvh4_box_hit's test with the boxes widened by the rotation's rounding:
-/// of the origin (relative to the frame's centre) and of the direction over
-/// the distance to the boxes, which `reach` bounds. Distances along the ray
-/// are the same in the frame.
-inline int4 bvh4_frame_hit(__global const WtBvh4Node* n, float3 org, float3 dir, float tmin, float tmax,
+/// Slab test of an oriented node's four child boxes (WT_BVH4_ORIENTED, a
+/// WtBvh4Oriented): the ray rotated into the node's frame, then
+/// bvh4_box_hit's test on the boxes' grid planes, widened by the rounding of
+/// the rotation and the planes: of the origin (relative to the frame's
+/// centre) and of the direction over the distance to the boxes, which the
+/// grid's far corner bounds. Distances along the ray are the same in the frame.
+inline int4 bvh4_frame_hit(__global const WtBvh4Node* node, float3 org, float3 dir, float tmin, float tmax,
                            float4* t_entry) {
-  __global const float* f = (__global const float*)(n + 1);
-  float4 r0 = vload4(0, f), r1 = vload4(1, f), r2 = vload4(2, f), c = vload4(3, f);
-  float3 w = org - c.xyz;
+  __global const WtBvh4Oriented* n = (__global const WtBvh4Oriented*)node;
+  __global const float* f = (__global const float*)n;
+  float4 r0 = vload4(0, f), r1 = vload4(1, f), r2 = vload4(2, f);
+  float3 q0 = vload3(0, f + 12), qs = vload3(0, f + 15);
+  float3 w = org - (float3)(r0.w, r1.w, r2.w);
   float3 o = (float3)(dot(r0.xyz, w), dot(r1.xyz, w), dot(r2.xyz, w));
   float3 inv_d = bvh_safe_rcp((float3)(dot(r0.xyz, dir), dot(r1.xyz, dir), dot(r2.xyz, dir)));
-  float3 m = (2e-6f * (fabs(w.x) + fabs(w.y) + fabs(w.z) + c.w)) * fabs(inv_d);
+  float3 reach = fmax(fabs(q0), fabs(q0 + 255.0f * qs));
+  float3 m = (2e-6f * (fabs(w.x) + fabs(w.y) + fabs(w.z) + reach.x + reach.y + reach.z)) * fabs(inv_d);
+  // plane = origin + byte * step: t = (origin - o) / d + byte * (step / d)
+  float3 a = (q0 - o) * inv_d, s = qs * inv_d;
   RayPlanes planes = bvh_ray_planes(inv_d);
-  __global const float* b = (__global const float*)n;
-  float4 tn_x = (vload4(0, b + planes.near_x) - o.x) * inv_d.x - m.x;
-  float4 tf_x = (vload4(0, b + planes.far_x) - o.x) * inv_d.x + m.x;
-  float4 tn_y = (vload4(0, b + planes.near_y) - o.y) * inv_d.y - m.y;
-  float4 tf_y = (vload4(0, b + planes.far_y) - o.y) * inv_d.y + m.y;
-  float4 tn_z = (vload4(0, b + planes.near_z) - o.z) * inv_d.z - m.z;
-  float4 tf_z = (vload4(0, b + planes.far_z) - o.z) * inv_d.z + m.z;
+  __global const uchar* g = (__global const uchar*)n->grid;
+  float4 tn_x = a.x + convert_float4(vload4(0, g + planes.near_x)) * s.x - m.x;
+  float4 tf_x = a.x + convert_float4(vload4(0, g + planes.far_x)) * s.x + m.x;
+  float4 tn_y = a.y + convert_float4(vload4(0, g + planes.near_y)) * s.y - m.y;
+  float4 tf_y = a.y + convert_float4(vload4(0, g + planes.far_y)) * s.y + m.y;
+  float4 tn_z = a.z + convert_float4(vload4(0, g + planes.near_z)) * s.z - m.z;
+  float4 tf_z = a.z + convert_float4(vload4(0, g + planes.far_z)) * s.z + m.z;
   float4 enter = bvh_max(bvh_max(tn_x, tn_y), bvh_max(tn_z, (float4)(tmin)));
   float4 exit = bvh_min(bvh_min(tf_x, tf_y), tf_z) * 1.00000036f;
   exit = bvh_min(exit, (float4)(tmax));
   *t_entry = enter;
-  return enter <= exit;
+  // an empty slot's grid box is inverted by whole steps, which the widening could bridge on a thin axis
+  return (enter <= exit) & (vload4(0, n->child) != (uint4)(WT_BVH4_EMPTY));
 }
 
 /// The ray's unit direction for prims_leaf_missed.
@@ -277,6 +283,16 @@ inline bool bvh_prims_occluded(BvhScene scene, GeometryScene g, float3 org, floa
                                uint skip_a, uint skip_b, uint skip_instance) {
   if (g.header.node_count == 0) return false;
   if (!bvh_ray_is_finite(org, dir)) return true;
+#if WT_HAS_CURVES || WT_HAS_SPHERES
+  // The convex primitive the ray leaves, first: headed out, its test ends at
+  // once; headed in (a shadow ray through a fibre), its far wall blocks it,
+  // which a walk in slot order finds late.
+  if (skip_instance == WT_NO_HIT && (prim_type(skip_a) == WT_PRIM_CURVE || prim_type(skip_a) == WT_PRIM_SPHERE) &&
+      skip_a != WT_NO_HIT) {
+    float t, u, v;
+    if (geometry_intersect(g, skip_a, org, dir, tmin, tmax, skip_a, skip_b, true, &t, &u, &v)) return true;
+  }
+#endif
   float3 inv_d = bvh_safe_rcp(dir);
   RayPlanes planes = bvh_ray_planes(inv_d);
   float3 dn = prims_ray_unit(dir);

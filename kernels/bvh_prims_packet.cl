@@ -192,18 +192,22 @@ inline pint prims_packet_triangles_occluded(BvhScene scene, GeometryScene g, uin
 /// lanes that entered each.
 /// A packet's rays in an oriented node's frame (bvh4_frame_hit lane by
 /// lane): origins, reciprocal directions, and the boxes' widening for the
-/// rotation's rounding as a distance along each axis's ray (m |1 / d|).
+/// rounding as a distance along each axis's ray (m |1 / d|).
 typedef struct FramePacket {
   pfloat o[3], inv_d[3], m[3];
+  float q0[3], qs[3];  ///< the node's grid (WtBvh4Oriented origin, step)
 } FramePacket;
 
-inline void prims_packet_frame(__global const WtBvh4Node* n, const PrimPacket* p, FramePacket* f) {
-  __global const float* fr = (__global const float*)(n + 1);
+inline void prims_packet_frame(__global const WtBvh4Node* node, const PrimPacket* p, FramePacket* f) {
+  __global const float* fr = (__global const float*)node;
   float4 r[3] = {vload4(0, fr), vload4(1, fr), vload4(2, fr)};
-  float4 c = vload4(3, fr);
-  pfloat wx = p->box.o[0] - c.x, wy = p->box.o[1] - c.y, wz = p->box.o[2] - c.z;
+  float3 q0 = vload3(0, fr + 12), qs = vload3(0, fr + 15);
+  float3 reach = fmax(fabs(q0), fabs(q0 + 255.0f * qs));
+  f->q0[0] = q0.x, f->q0[1] = q0.y, f->q0[2] = q0.z;
+  f->qs[0] = qs.x, f->qs[1] = qs.y, f->qs[2] = qs.z;
+  pfloat wx = p->box.o[0] - r[0].w, wy = p->box.o[1] - r[1].w, wz = p->box.o[2] - r[2].w;
   pfloat dx = packet_vload(p->dx), dy = packet_vload(p->dy), dz = packet_vload(p->dz);
-  pfloat m = 2e-6f * (fabs(wx) + fabs(wy) + fabs(wz) + c.w);
+  pfloat m = 2e-6f * (fabs(wx) + fabs(wy) + fabs(wz) + (reach.x + reach.y + reach.z));
   for (int i = 0; i < 3; ++i) {
     f->o[i] = r[i].x * wx + r[i].y * wy + r[i].z * wz;
     pfloat d = r[i].x * dx + r[i].y * dy + r[i].z * dz;
@@ -214,15 +218,18 @@ inline void prims_packet_frame(__global const WtBvh4Node* n, const PrimPacket* p
 }
 
 /// packet_box_hit for child k of an oriented node, the lanes in its frame.
-inline pint packet_frame_box_hit(__global const WtBvh4Node* n, int k, const FramePacket* f, pfloat tmin,
+inline pint packet_frame_box_hit(__global const WtBvh4Node* node, int k, const FramePacket* f, pfloat tmin,
                                  pfloat tmax, pfloat* enter) {
-  pfloat t0x = (n->lo_x[k] - f->o[0]) * f->inv_d[0], t1x = (n->hi_x[k] - f->o[0]) * f->inv_d[0];
-  pfloat t0y = (n->lo_y[k] - f->o[1]) * f->inv_d[1], t1y = (n->hi_y[k] - f->o[1]) * f->inv_d[1];
-  pfloat t0z = (n->lo_z[k] - f->o[2]) * f->inv_d[2], t1z = (n->hi_z[k] - f->o[2]) * f->inv_d[2];
-  pfloat tn = packet_vmax(packet_vmax(packet_vmin(t0x, t1x) - f->m[0], packet_vmin(t0y, t1y) - f->m[1]),
-                          packet_vmax(packet_vmin(t0z, t1z) - f->m[2], tmin));
-  pfloat tf = packet_vmin(packet_vmin(packet_vmax(t0x, t1x) + f->m[0], packet_vmax(t0y, t1y) + f->m[1]),
-                          packet_vmax(t0z, t1z) + f->m[2]) * 1.00000036f;
+  __global const uchar* g = (__global const uchar*)((__global const WtBvh4Oriented*)node)->grid;
+  pfloat t[6];
+  for (int j = 0; j < 6; ++j) {
+    float plane = f->q0[j / 2] + (float)g[4 * j + k] * f->qs[j / 2];
+    t[j] = (plane - f->o[j / 2]) * f->inv_d[j / 2];
+  }
+  pfloat tn = packet_vmax(packet_vmax(packet_vmin(t[0], t[1]) - f->m[0], packet_vmin(t[2], t[3]) - f->m[1]),
+                          packet_vmax(packet_vmin(t[4], t[5]) - f->m[2], tmin));
+  pfloat tf = packet_vmin(packet_vmin(packet_vmax(t[0], t[1]) + f->m[0], packet_vmax(t[2], t[3]) + f->m[1]),
+                          packet_vmax(t[4], t[5]) + f->m[2]) * 1.00000036f;
   tf = packet_vmin(tf, tmax);
   *enter = tn;
   return packet_mask(tn <= tf);

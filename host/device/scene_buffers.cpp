@@ -1,6 +1,7 @@
 #include "device/scene_buffers.h"
 
 #include "bvh/builders.h"
+#include "bvh/parallel.h"
 #include "scene/generators.h"
 #include "shared/alpha.h"
 #include "shared/lights.h"
@@ -607,12 +608,12 @@ float floatUp(double x) {
 
 /// Give nodes low in the tree whose entries are all curve segments a frame
 /// along the segments' common direction (WT_BVH4_ORIENTED), where their
-/// children's boxes in it are much smaller (kOrientArea), and lay the nodes
-/// out again with each frame in the slot after its node. The root stays
+/// children's boxes in it are much smaller (kOrientArea): such a node's
+/// slot then holds a WtBvh4Oriented, its boxes on a grid. The root stays
 /// aligned. `entry` maps leaf order to the gathered entry (bounds, ids,
 /// sweep index).
 void orientCurveNodes(Bvh4& tree, const PrimitiveRows& rows, const std::vector<std::uint32_t>& ids,
-                      const std::vector<glm::vec2>& sweep, std::span<const std::uint32_t> entry) {
+                      const std::vector<glm::vec2>& sweep, std::span<const std::uint32_t> entry, int threads) {
   const std::size_t nodes = tree.nodes.size();
   if (nodes < 2) return;
   // the segment's piece [s0, s1] of each leaf entry; radius < 0: not a curve
@@ -646,16 +647,17 @@ void orientCurveNodes(Bvh4& tree, const PrimitiveRows& rows, const std::vector<s
     }
   }
   std::vector<std::uint8_t> oriented(nodes, 0);
-  std::vector<WtBvh4Frame> frames(nodes);
+  std::vector<WtBvh4Oriented> framed(nodes);
   auto slotRange = [&](const WtBvh4Node& node, int k) {
     const std::uint32_t c = node.child[k];
     return node.count[k] > 0 ? std::pair{c, c + node.count[k]} : std::pair{lo[c], hi[c]};
   };
-  for (std::size_t n = 1; n < nodes; ++n) {
-    if (hi[n] <= lo[n] || hi[n] - lo[n] > kOrientMaxEntries) continue;
+  // each node's choice reads only the tree as collapsed; nodes dealt out in turn, whose sizes vary by level
+  auto orient = [&](std::size_t n) {
+    if (hi[n] <= lo[n] || hi[n] - lo[n] > kOrientMaxEntries) return;
     bool curves = true;
     for (std::uint32_t i = lo[n]; i < hi[n] && curves; ++i) curves = ja[i].w >= 0.0;
-    if (!curves) continue;
+    if (!curves) return;
     // the segments' main direction: power iteration on the sum of e e^T
     glm::dmat3 m(0.0);
     glm::dvec3 axis(0.0), centre(0.0);
@@ -666,72 +668,90 @@ void orientCurveNodes(Bvh4& tree, const PrimitiveRows& rows, const std::vector<s
       if (glm::dot(e, e) > longest) longest = glm::dot(e, e), axis = e;
       centre += 0.5 * (glm::dvec3(ja[i]) + glm::dvec3(jb[i]));
     }
-    if (!(longest > 0.0)) continue;
+    if (!(longest > 0.0)) return;
     for (int it = 0; it < 8; ++it) axis = glm::normalize(m * axis);
-    if (!std::isfinite(axis.x + axis.y + axis.z)) continue;
+    if (!std::isfinite(axis.x + axis.y + axis.z)) return;
     centre /= double(hi[n] - lo[n]);
     // an orthonormal frame with z along the axis (Duff et al. 2017)
     const double sign = std::copysign(1.0, axis.z);
     const double a = -1.0 / (sign + axis.z), b = axis.x * axis.y * a;
     const glm::dvec3 x(1.0 + sign * axis.x * axis.x * a, sign * b, -sign * axis.x);
     const glm::dvec3 y(b, sign + axis.y * axis.y * a, -axis.y);
-    WtBvh4Frame f{};
+    WtBvh4Oriented f{};
     const glm::dvec3 r[3] = {x, y, axis};
     glm::dmat3 rf;  // the float rows, as the kernel reads them (row i in rf[i])
     for (int i = 0; i < 3; ++i) {
       f.rows[i][0] = float(r[i].x), f.rows[i][1] = float(r[i].y), f.rows[i][2] = float(r[i].z);
+      f.rows[i][3] = float(centre[i]);
       rf[i] = glm::dvec3(f.rows[i][0], f.rows[i][1], f.rows[i][2]);
     }
-    f.centre[0] = float(centre.x), f.centre[1] = float(centre.y), f.centre[2] = float(centre.z);
-    const glm::dvec3 cf(f.centre[0], f.centre[1], f.centre[2]);
-    WtBvh4Node local = tree.nodes[n];
-    double alignedArea = 0.0, orientedArea = 0.0, reach = 0.0;
+    const glm::dvec3 cf(f.rows[0][3], f.rows[1][3], f.rows[2][3]);
+    const WtBvh4Node& was = tree.nodes[n];
+    double alignedArea = 0.0, orientedArea = 0.0;
+    glm::dvec3 blo[4], bhi[4], all_lo(INFINITY), all_hi(-INFINITY);
     for (int k = 0; k < 4; ++k) {
-      if (local.child[k] == WT_BVH4_EMPTY) continue;
-      const WtBvh4Node& was = tree.nodes[n];
+      if (was.child[k] == WT_BVH4_EMPTY) continue;
       Aabb box;
       box.lo = glm::vec3(was.lo_x[k], was.lo_y[k], was.lo_z[k]);
       box.hi = glm::vec3(was.hi_x[k], was.hi_y[k], was.hi_z[k]);
       alignedArea += boxArea(box);
-      glm::dvec3 blo(INFINITY), bhi(-INFINITY);
-      const auto [first, last] = slotRange(tree.nodes[n], k);
+      blo[k] = glm::dvec3(INFINITY), bhi[k] = glm::dvec3(-INFINITY);
+      const auto [first, last] = slotRange(was, k);
       for (std::uint32_t i = first; i < last; ++i)
         for (const glm::dvec4& j : {ja[i], jb[i]}) {
           const glm::dvec3 p(j), w = p - cf;
           const glm::dvec3 q(glm::dot(rf[0], w), glm::dot(rf[1], w), glm::dot(rf[2], w));
           // the rows' rounding scales the sphere by 1 + ~1e-7; the joint's own rounding as curvePieceBox
           const double ext = j.w * (1.0 + 1e-6) + 1e-6 * (std::max({std::fabs(p.x), std::fabs(p.y), std::fabs(p.z)}) + j.w);
-          blo = glm::min(blo, q - ext), bhi = glm::max(bhi, q + ext);
+          blo[k] = glm::min(blo[k], q - ext), bhi[k] = glm::max(bhi[k], q + ext);
         }
-      Aabb o;
-      o.lo = glm::vec3(floatDown(blo.x), floatDown(blo.y), floatDown(blo.z));
-      o.hi = glm::vec3(floatUp(bhi.x), floatUp(bhi.y), floatUp(bhi.z));
-      orientedArea += boxArea(o);
-      reach = std::max(reach, glm::length(glm::max(glm::abs(blo), glm::abs(bhi))));
-      local.lo_x[k] = o.lo.x, local.hi_x[k] = o.hi.x;
-      local.lo_y[k] = o.lo.y, local.hi_y[k] = o.hi.y;
-      local.lo_z[k] = o.lo.z, local.hi_z[k] = o.hi.z;
+      all_lo = glm::min(all_lo, blo[k]), all_hi = glm::max(all_hi, bhi[k]);
     }
-    if (!(orientedArea < kOrientArea * alignedArea)) continue;
-    f.reach = floatUp(reach * (1.0 + 1e-6));
-    tree.nodes[n] = local;
-    frames[n] = f;
+    // the grid: 255 steps from a float corner below the boxes to past them
+    std::uint8_t grid[24];
+    for (int a = 0; a < 3; ++a) {
+      const float q0 = floatDown(all_lo[a]);
+      float qs = std::max(floatUp((all_hi[a] - double(q0)) / 255.0), std::numeric_limits<float>::min());
+      while (double(q0) + 255.0 * double(qs) < all_hi[a]) qs = std::nextafter(qs, INFINITY);
+      f.origin[a] = q0, f.step[a] = qs;
+      for (int k = 0; k < 4; ++k) {
+        std::uint8_t& qlo = grid[8 * a + k];
+        std::uint8_t& qhi = grid[8 * a + 4 + k];
+        if (was.child[k] == WT_BVH4_EMPTY) {
+          qlo = 255, qhi = 0;
+          continue;
+        }
+        double l = std::clamp(std::floor((blo[k][a] - double(q0)) / double(qs)), 0.0, 255.0);
+        while (l > 0.0 && double(q0) + l * double(qs) > blo[k][a]) l -= 1.0;
+        double h = std::clamp(std::ceil((bhi[k][a] - double(q0)) / double(qs)), 0.0, 255.0);
+        while (h < 255.0 && double(q0) + h * double(qs) < bhi[k][a]) h += 1.0;
+        qlo = std::uint8_t(l), qhi = std::uint8_t(h);
+      }
+    }
+    for (int k = 0; k < 4; ++k) {
+      if (was.child[k] == WT_BVH4_EMPTY) continue;
+      glm::dvec3 e;
+      for (int a = 0; a < 3; ++a) e[a] = double(grid[8 * a + 4 + k] - grid[8 * a + k]) * double(f.step[a]);
+      orientedArea += 2.0 * (e.x * e.y + e.y * e.z + e.z * e.x);
+    }
+    if (!(orientedArea < kOrientArea * alignedArea)) return;
+    std::memcpy(f.grid, grid, sizeof grid);
+    std::memcpy(f.child, was.child, sizeof f.child);
+    std::memcpy(f.count, was.count, sizeof f.count);
+    framed[n] = f;
     oriented[n] = 1;
-  }
-  // lay out again: an oriented node's frame in the slot after it
-  std::vector<std::uint32_t> at(nodes);
-  std::uint32_t next = 0;
-  for (std::size_t n = 0; n < nodes; ++n) at[n] = next, next += oriented[n] ? 2u : 1u;
-  std::vector<WtBvh4Node> out(next);
+  };
+  bvh_detail::runTeam(bvh_detail::teamThreads(threads, entry.size()), [&](int rank, int size, auto&) {
+    for (std::size_t n = 1 + std::size_t(rank); n < nodes; n += std::size_t(size)) orient(n);
+  });
+  // each oriented node in its own slot (child and count where a WtBvh4Node has them); its parent's child index names it so
+  for (std::size_t n = 0; n < nodes; ++n)
+    if (oriented[n]) std::memcpy(&tree.nodes[n], &framed[n], sizeof(WtBvh4Oriented));
   for (std::size_t n = 0; n < nodes; ++n) {
-    WtBvh4Node node = tree.nodes[n];
+    WtBvh4Node& node = tree.nodes[n];
     for (int k = 0; k < 4; ++k)
-      if (node.child[k] != WT_BVH4_EMPTY && node.count[k] == 0)
-        node.child[k] = at[node.child[k]] | (oriented[node.child[k]] ? WT_BVH4_ORIENTED : 0u);
-    out[at[n]] = node;
-    if (oriented[n]) std::memcpy(&out[at[n] + 1], &frames[n], sizeof(WtBvh4Frame));
+      if (node.child[k] != WT_BVH4_EMPTY && node.count[k] == 0 && oriented[node.child[k]]) node.child[k] |= WT_BVH4_ORIENTED;
   }
-  tree.nodes = std::move(out);
 }
 
 }  // namespace
@@ -751,7 +771,7 @@ PrimitiveTree buildPrimitiveTree(const PrimitiveRows& rows, const BvhBuildOption
   PrimitiveTree tree;
   tree.bvh4 = collapseToBvh4(bvh, collapse);
   orderChildSlots(tree.bvh4);
-  orientCurveNodes(tree.bvh4, rows, ids, sweep, bvh.primIndices);
+  orientCurveNodes(tree.bvh4, rows, ids, sweep, bvh.primIndices, options.threads);
   tree.refs.resize(bvh.primIndices.size());
   for (std::size_t i = 0; i < tree.refs.size(); ++i) tree.refs[i] = ids[bvh.primIndices[i]];
   // each entry's piece of its segment, in leaf order beside the refs
@@ -1428,7 +1448,11 @@ static_assert(wt::kTriangleBlock == WT_TRIANGLE_BLOCK);
 static_assert(sizeof(WtBvhNode) == 32);
 static_assert(offsetof(WtBvhNode, hi_x) == 16);
 static_assert(sizeof(WtBvh4Node) == 128);
-static_assert(sizeof(WtBvh4Frame) == sizeof(WtBvh4Node) && offsetof(WtBvh4Frame, centre) == 48);
+// an oriented node takes a node's slot, its child and count where bvh_prims.cl's walks read them;
+// bvh4_frame_hit reads origin and step as floats 12 and 15 and grid's planes by bvh_ray_planes' offsets
+static_assert(sizeof(WtBvh4Oriented) == sizeof(WtBvh4Node) && offsetof(WtBvh4Oriented, child) == offsetof(WtBvh4Node, child) &&
+              offsetof(WtBvh4Oriented, count) == offsetof(WtBvh4Node, count));
+static_assert(offsetof(WtBvh4Oriented, origin) == 48 && offsetof(WtBvh4Oriented, step) == 60 && offsetof(WtBvh4Oriented, grid) == 72);
 static_assert(offsetof(WtBvh4Node, lo_y) == 32 && offsetof(WtBvh4Node, lo_z) == 64);
 // bvh_ray_planes (kernels/bvh.cl) addresses the planes by these float offsets
 static_assert(offsetof(WtBvh4Node, hi_x) == 16 && offsetof(WtBvh4Node, hi_y) == 48 && offsetof(WtBvh4Node, hi_z) == 80);

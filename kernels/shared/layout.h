@@ -36,7 +36,8 @@
   F(WtBvhNode, hi_y) F(WtBvhNode, hi_z) F(WtBvhNode, count) \
   S(WtBvh4Node) F(WtBvh4Node, lo_x) F(WtBvh4Node, hi_x) F(WtBvh4Node, lo_y) F(WtBvh4Node, hi_y) \
   F(WtBvh4Node, lo_z) F(WtBvh4Node, hi_z) F(WtBvh4Node, child) F(WtBvh4Node, count) \
-  S(WtBvh4Frame) F(WtBvh4Frame, rows) F(WtBvh4Frame, centre) F(WtBvh4Frame, reach) F(WtBvh4Frame, unused) \
+  S(WtBvh4Oriented) F(WtBvh4Oriented, rows) F(WtBvh4Oriented, origin) F(WtBvh4Oriented, step) F(WtBvh4Oriented, grid) \
+  F(WtBvh4Oriented, child) F(WtBvh4Oriented, count) \
   S(WtGeometry) F(WtGeometry, node_count) F(WtGeometry, triangle_count) F(WtGeometry, leaf_joints) F(WtGeometry, pad1) \
   F(WtGeometry, data_first) F(WtGeometry, info_first) F(WtGeometry, emitter_first) \
   S(WtMaterial) F(WtMaterial, base_color) F(WtMaterial, emission) F(WtMaterial, roughness) F(WtMaterial, model) \

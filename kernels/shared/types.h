@@ -63,22 +63,28 @@ typedef struct WtBvh4Node {
 } WtBvh4Node;
 #define WT_BVH4_EMPTY 0xffffffffu
 /// An inner child slot's node index with this bit set names an oriented node
-/// (primitive trees only): its child boxes are in a frame of their own, which
-/// the next node slot holds as a WtBvh4Frame, so a ray is rotated into it
-/// before the slab test. Thin diagonal curve segments fill a fraction of the
+/// (primitive trees only): a WtBvh4Oriented in the node's slot, whose child
+/// boxes are in a frame of their own, so a ray is rotated into it before the
+/// slab test. Thin diagonal curve segments fill a fraction of the
 /// axis-aligned boxes around them; boxes aligned to their run fit them.
 #define WT_BVH4_ORIENTED 0x80000000u
 
-/// The frame of an oriented node, in the node slot after it (128 bytes, as
-/// WtBvh4Node). A world point p is at rows * (p - centre) in the frame; the
+/// An oriented node, 128 bytes (the size of WtBvh4Node, whose child and
+/// count it keeps in place): its frame and its child boxes in it, the boxes
+/// on a grid of 255 steps per axis so that the frame fits the node's two
+/// cache lines. A world point p is at rows * (p - centre) in the frame; the
 /// rows are orthonormal within float rounding, so distances along a ray are
-/// the same in both.
-typedef struct WtBvh4Frame {
-  float rows[3][4];   ///< rotation rows (x, y, z, unused), world to frame
-  float centre[3];    ///< world space
-  float reach;        ///< the largest world distance from centre to a point of the child boxes
-  float unused[16];
-} WtBvh4Frame;
+/// the same in both. Byte j of grid is plane j in WtBvh4Node's order (lo_x[4],
+/// hi_x[4], lo_y[4], ...) at origin + byte * step on its axis, never inside
+/// the child's true box; an empty slot has lo 255 and hi 0.
+typedef struct WtBvh4Oriented {
+  float rows[3][4];     ///< rotation rows (x, y, z), world to frame; w: the frame's centre, world space
+  float origin[3];      ///< the grid's low corner, frame space
+  float step[3];        ///< the grid's step per axis, frame space
+  wt_uint grid[6];      ///< 24 bytes: the child boxes' planes in steps, WtBvh4Node's order
+  wt_uint child[4];     ///< as WtBvh4Node
+  wt_uint count[4];
+} WtBvh4Oriented;
 
 /// A primitive's identity in hits, skips and lights: its geometry type in
 /// the top four bits (WT_PRIM_*) and its index among that type's primitives

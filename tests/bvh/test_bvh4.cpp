@@ -708,20 +708,37 @@ TEST(Bvh4, PrimitiveTreeOverEveryTypeKeepsTheInvariants) {
   using Slot = std::pair<std::uint32_t, int>;
   auto local = [&](Slot s, const glm::dvec3& p) {
     if (!(s.first & WT_BVH4_ORIENTED)) return p;
-    WtBvh4Frame f;
-    std::memcpy(&f, &tree.bvh4.nodes.at((s.first & ~WT_BVH4_ORIENTED) + 1), sizeof f);
-    const glm::dvec3 w = p - glm::dvec3(f.centre[0], f.centre[1], f.centre[2]);
+    WtBvh4Oriented f;
+    std::memcpy(&f, &tree.bvh4.nodes.at(s.first & ~WT_BVH4_ORIENTED), sizeof f);
+    const glm::dvec3 w = p - glm::dvec3(f.rows[0][3], f.rows[1][3], f.rows[2][3]);
     glm::dvec3 q;
     for (int i = 0; i < 3; ++i) q[i] = glm::dot(glm::dvec3(f.rows[i][0], f.rows[i][1], f.rows[i][2]), w);
     return q;
   };
+  // the slot's box: an oriented node's from its grid (WtBvh4Oriented), in exact arithmetic
+  auto box = [&](Slot s) {
+    const WtBvh4Node& node = tree.bvh4.nodes.at(s.first & ~WT_BVH4_ORIENTED);
+    if (!(s.first & WT_BVH4_ORIENTED)) {
+      const Aabb b = slotBox(node, s.second);
+      return std::pair{glm::dvec3(b.lo), glm::dvec3(b.hi)};
+    }
+    WtBvh4Oriented f;
+    std::memcpy(&f, &node, sizeof f);
+    std::uint8_t grid[24];
+    std::memcpy(grid, f.grid, sizeof grid);
+    glm::dvec3 lo, hi;
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = double(f.origin[a]) + double(grid[8 * a + s.second]) * double(f.step[a]);
+      hi[a] = double(f.origin[a]) + double(grid[8 * a + 4 + s.second]) * double(f.step[a]);
+    }
+    return std::pair{lo, hi};
+  };
   // a ball (centre p, radius r) inside the slot's box, in the slot's frame
   auto holds = [&](Slot s, const glm::dvec3& p, double r) {
-    const Aabb box = slotBox(tree.bvh4.nodes.at(s.first & ~WT_BVH4_ORIENTED), s.second);
+    const auto [lo, hi] = box(s);
     const glm::dvec3 q = local(s, p);
     const double tol = 1e-6 * (std::abs(p.x) + std::abs(p.y) + std::abs(p.z) + r);
-    return glm::all(glm::greaterThanEqual(q - r, glm::dvec3(box.lo) - tol)) &&
-           glm::all(glm::lessThanEqual(q + r, glm::dvec3(box.hi) + tol));
+    return glm::all(glm::greaterThanEqual(q - r, lo - tol)) && glm::all(glm::lessThanEqual(q + r, hi + tol));
   };
   std::size_t problems = 0, oriented = 0;
   std::unordered_map<std::uint32_t, std::vector<std::vector<Slot>>> curvePaths;  // per segment: the slots down to each leaf naming it

@@ -399,6 +399,22 @@ TEST(Curves, SpawnedRaysLeaveTheSurfaceOrCrossItOnce) {
   EXPECT_EQ(badOut, 0) << "of " << s.from.size() << " rays leaving a curve";
   EXPECT_EQ(badIn, 0) << "of " << s.from.size() << " rays entering a curve";
   EXPECT_GT(reentered, int(0.5 * double(s.from.size())));  // the rest leave through a neighbour's wall
+  // any hit inwards (a shadow ray through the fibre; bvh_prims_occluded tests the segment it leaves first):
+  // nothing before half the closest hit's distance, something before 1.5 times it
+  std::vector<Ray> shortRays, longRays;
+  for (std::size_t i = 0; i < s.from.size(); ++i) {
+    if (through[i].prim == RayHit::kNoHit || !(through[i].t > 0.0f)) continue;
+    Ray a = s.in[i], b = s.in[i];
+    a.tmax = 0.5f * through[i].t, b.tmax = 1.5f * through[i].t;
+    shortRays.push_back(a), longRays.push_back(b);
+  }
+  ASSERT_GT(shortRays.size(), 100u);
+  const std::vector<std::uint8_t> shortBlocked = tracer.traceOccluded(shortRays, Traversal::kSingle),
+                                  longBlocked = tracer.traceOccluded(longRays, Traversal::kSingle);
+  int wrongShort = 0, wrongLong = 0;
+  for (std::size_t i = 0; i < shortRays.size(); ++i) wrongShort += shortBlocked[i] != 0, wrongLong += longBlocked[i] == 0;
+  EXPECT_EQ(wrongShort, 0) << "of " << shortRays.size() << " rays into a curve, blocked before its closest hit";
+  EXPECT_EQ(wrongLong, 0) << "of " << longRays.size() << " rays into a curve, not blocked past its closest hit";
 }
 
 TEST(Curves, PacketsMatchSingleRaysAtCurveEnds) {
