@@ -159,6 +159,11 @@ if [ "$withMpi" != ON ]; then
 fi
 command -v mpirun >/dev/null || { echo "SKIP: no mpirun on PATH (openmpi-bin)"; exit 77; }
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
+# an Open MPI session folder of this test's own: two mpiruns of parallel tests
+# starting at once race to create /tmp/ompi.HOST.UID and one fails ("File exists")
+TMPDIR=$(mktemp -d /tmp/wt-mpi.XXXXXX) || fail "mktemp"
+export TMPDIR
+trap 'rm -rf "$TMPDIR"' EXIT
 # every job bounded: a hang fails the section it is in, with its log
 mpi=(timeout -k 5 120 mpirun --oversubscribe -np 2)
 

@@ -25,6 +25,15 @@ function(render name pattern)
   set(err "${err}" PARENT_SCOPE)
 endfunction()
 
+# the PNG of a run from a loaded binary is byte for byte the compiled run's
+function(expect_same_image compiled_run loaded_run what)
+  file(SHA256 "${SCRATCH}/${compiled_run}.png" compiled)
+  file(SHA256 "${SCRATCH}/${loaded_run}.png" loaded)
+  if(NOT compiled STREQUAL loaded)
+    message(FATAL_ERROR "${loaded_run}: ${what}")
+  endif()
+endfunction()
+
 # one entry each for wavetrace.cl and frame.cl, and no temporary files
 function(expect_two_entries when)
   file(GLOB entries "${cache}/*")
@@ -39,11 +48,7 @@ render(first "program wavetrace.cl: cache miss, compiled in [0-9.]+ s, binary [0
 expect_two_entries("after the first run")
 render(second "program wavetrace.cl: cache hit, loaded [0-9.]+ MB in [0-9.]+ s.*program frame.cl: cache hit" ${cached})
 # the loaded program renders the same image
-file(SHA256 "${SCRATCH}/first.png" compiled)
-file(SHA256 "${SCRATCH}/second.png" loaded)
-if(NOT compiled STREQUAL loaded)
-  message(FATAL_ERROR "second: the image from the cached binary differs from the compiled program's")
-endif()
+expect_same_image(first second "the image from the cached binary differs from the compiled program's")
 
 # two processes started together on an empty cache
 file(REMOVE_RECURSE "${cache}")
@@ -109,8 +114,4 @@ if(NOT stored_count EQUAL 2 OR pending)
   message(FATAL_ERROR "default folder: expected two entries and no pending store in ${default_cache}, found: ${stored} ${pending}")
 endif()
 render(default_second "program wavetrace.cl: cache hit.*program frame.cl: cache hit" ${tiny})
-file(SHA256 "${SCRATCH}/default_first.png" compiled)
-file(SHA256 "${SCRATCH}/default_second.png" loaded)
-if(NOT compiled STREQUAL loaded)
-  message(FATAL_ERROR "default_second: the image from the stored entry differs from the compiled program's")
-endif()
+expect_same_image(default_first default_second "the image from the stored entry differs from the compiled program's")
