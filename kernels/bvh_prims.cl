@@ -56,11 +56,11 @@ inline float3 prims_ray_unit(float3 dir) {
 }
 
 /// The leaf entries first + k (k < 4, k < count) that certainly miss the
-/// ray through org along unit dn, as bit k: curve pieces passed wide, read
+/// ray through org along unit dn, as bit k: curve segments passed wide, read
 /// from the leaf joints (WtGeometry::leaf_joints), four at once.
 inline uint prims_leaf_missed(GeometryScene g, uint first, uint count, float3 org, float3 dn) {
 #if WT_HAS_CURVES
-  int4 m = curve_pieces_missed4(g.data + g.header.leaf_joints + WT_LEAF_JOINT_ROWS * first, org, dn);
+  int4 m = curve_segments_missed4(g.data + g.header.leaf_joints + WT_LEAF_JOINT_ROWS * first, org, dn);
   uint bits = (m.s0 ? 1u : 0u) | (m.s1 ? 2u : 0u) | (m.s2 ? 4u : 0u) | (m.s3 ? 8u : 0u);
   return count >= 4 ? bits : bits & ((1u << count) - 1u);
 #else

@@ -521,71 +521,9 @@ void SceneBuffers::uploadSurface(Context& context, const Scene& scene) {
 
 namespace {
 
-/// The box of the piece [s0, s1] of a curve segment (joints a, b; radius
-/// in w): the boxes of the joint spheres at its ends, whose hull holds the
-/// piece (centre and radius vary linearly), widened past float rounding.
-Aabb curvePieceBox(const glm::dvec4& a, const glm::dvec4& b, double s0, double s1) {
-  Aabb box;
-  for (double s : {s0, s1}) {
-    const glm::dvec4 p = a + s * (b - a);
-    const glm::dvec3 c(p);
-    const glm::dvec3 reach = glm::dvec3(p.w) + 1e-6 * (glm::abs(c) + glm::dvec3(p.w));
-    box.extend(glm::vec3(c - reach));
-    box.extend(glm::vec3(c + reach));
-  }
-  return box;
-}
-
 double boxArea(const Aabb& b) {
   const glm::dvec3 e = glm::max(glm::dvec3(b.hi) - glm::dvec3(b.lo), glm::dvec3(0.0));
   return e.x * e.y + e.y * e.z + e.z * e.x;
-}
-
-/// The tree's entries with thin curve segments that lie across their boxes
-/// entered as up to kCurvePieces boxes along their length, the same typed
-/// id in each (reference splitting): a ray through the empty corners of a
-/// diagonal hair's box tests it no more. Every point of the segment stays
-/// in some piece's box, so rays meet it where they did. A segment is
-/// halved while the halves' boxes take less than kCurveSplitArea of their
-/// parent's area. Segments whose rows `rows` does not hold stay whole.
-constexpr int kCurvePieces = 4;
-constexpr double kCurveSplitArea = 0.7;
-void splitCurveBoxes(const PrimitiveRows& rows, std::vector<Aabb>& bounds, std::vector<std::uint32_t>& ids,
-                     std::vector<glm::vec2>& sweep) {
-  const std::size_t n = ids.size();
-  sweep.assign(n, glm::vec2(0.0f, 1.0f));
-  for (std::size_t i = 0; i < n; ++i) {
-    if (primType(ids[i]) != WT_PRIM_CURVE) continue;
-    const std::size_t row = rows.dataFirst[WT_PRIM_CURVE] + 2 * std::size_t(primIndex(ids[i]));
-    if (row + 1 >= rows.data.size()) continue;
-    const WtVec4 &ra = rows.data[row], &rb = rows.data[row + 1];
-    const glm::dvec4 a(ra.x, ra.y, ra.z, std::fabs(ra.w)), b(rb.x, rb.y, rb.z, std::fabs(rb.w));
-    int pieces = 1;
-    while (pieces < kCurvePieces) {
-      // halving every piece: worth it where the halves' boxes are much smaller than the whole's
-      double whole = 0.0, halves = 0.0;
-      for (int k = 0; k < pieces; ++k) {
-        const double s0 = double(k) / pieces, s1 = double(k + 1) / pieces, sm = 0.5 * (s0 + s1);
-        whole += boxArea(curvePieceBox(a, b, s0, s1));
-        halves += boxArea(curvePieceBox(a, b, s0, sm)) + boxArea(curvePieceBox(a, b, sm, s1));
-      }
-      if (!(halves < kCurveSplitArea * whole)) break;
-      pieces *= 2;
-    }
-    if (pieces == 1) continue;
-    for (int k = 0; k < pieces; ++k) {
-      const Aabb box = curvePieceBox(a, b, double(k) / pieces, double(k + 1) / pieces);
-      const glm::vec2 range(float(k) / float(pieces), float(k + 1) / float(pieces));
-      if (k == 0) {
-        bounds[i] = box;
-        sweep[i] = range;
-      } else {
-        bounds.push_back(box);
-        ids.push_back(ids[i]);
-        sweep.push_back(range);
-      }
-    }
-  }
 }
 
 /// Nodes whose subtree holds more leaf entries stay axis-aligned: high in
@@ -610,13 +548,12 @@ float floatUp(double x) {
 /// along the segments' common direction (WT_BVH4_ORIENTED), where their
 /// children's boxes in it are much smaller (kOrientArea): such a node's
 /// slot then holds a WtBvh4Oriented, its boxes on a grid. The root stays
-/// aligned. `entry` maps leaf order to the gathered entry (bounds, ids,
-/// sweep index).
+/// aligned. `entry` maps leaf order to the gathered entry (bounds, ids).
 void orientCurveNodes(Bvh4& tree, const PrimitiveRows& rows, const std::vector<std::uint32_t>& ids,
-                      const std::vector<glm::vec2>& sweep, std::span<const std::uint32_t> entry, int threads) {
+                      std::span<const std::uint32_t> entry, int threads) {
   const std::size_t nodes = tree.nodes.size();
   if (nodes < 2) return;
-  // the segment's piece [s0, s1] of each leaf entry; radius < 0: not a curve
+  // the joints of each leaf entry's segment; radius < 0: not a curve
   std::vector<glm::dvec4> ja(entry.size()), jb(entry.size());
   for (std::size_t i = 0; i < entry.size(); ++i) {
     const std::uint32_t id = ids[entry[i]];
@@ -625,10 +562,8 @@ void orientCurveNodes(Bvh4& tree, const PrimitiveRows& rows, const std::vector<s
     const std::size_t row = rows.dataFirst[WT_PRIM_CURVE] + 2 * std::size_t(primIndex(id));
     if (row + 1 >= rows.data.size()) continue;
     const WtVec4 &ra = rows.data[row], &rb = rows.data[row + 1];
-    const glm::dvec4 a(ra.x, ra.y, ra.z, std::fabs(ra.w)), b(rb.x, rb.y, rb.z, std::fabs(rb.w));
-    const glm::vec2 s = sweep[entry[i]];
-    ja[i] = a + double(s.x) * (b - a);
-    jb[i] = a + double(s.y) * (b - a);
+    ja[i] = glm::dvec4(ra.x, ra.y, ra.z, std::fabs(ra.w));
+    jb[i] = glm::dvec4(rb.x, rb.y, rb.z, std::fabs(rb.w));
   }
   // each node's leaf-entry range (a subtree's entries are contiguous), children after parents in index
   std::vector<std::uint32_t> lo(nodes, 0xffffffffu), hi(nodes, 0), order{0};
@@ -701,7 +636,7 @@ void orientCurveNodes(Bvh4& tree, const PrimitiveRows& rows, const std::vector<s
         for (const glm::dvec4& j : {ja[i], jb[i]}) {
           const glm::dvec3 p(j), w = p - cf;
           const glm::dvec3 q(glm::dot(rf[0], w), glm::dot(rf[1], w), glm::dot(rf[2], w));
-          // the rows' rounding scales the sphere by 1 + ~1e-7; the joint's own rounding as curvePieceBox
+          // the rows' rounding scales the sphere by 1 + ~1e-7; the joint's own rounding
           const double ext = j.w * (1.0 + 1e-6) + 1e-6 * (std::max({std::fabs(p.x), std::fabs(p.y), std::fabs(p.z)}) + j.w);
           blo[k] = glm::min(blo[k], q - ext), bhi[k] = glm::max(bhi[k], q + ext);
         }
@@ -760,33 +695,29 @@ PrimitiveTree buildPrimitiveTree(const PrimitiveRows& rows, const BvhBuildOption
   const auto start = std::chrono::steady_clock::now();
   // Each leaf entry is a typed id, tested one by one, so leaves stay small.
   BvhBuildOptions primOptions = options;
-  primOptions.maxLeafSize = kPrimitiveLeafSize;
-  std::vector<Aabb> bounds = rows.bounds;
-  std::vector<std::uint32_t> ids = rows.ids;
-  std::vector<glm::vec2> sweep;
-  splitCurveBoxes(rows, bounds, ids, sweep);
+  static const int scratchLeaf = getenv("WT_SCRATCH_LEAF") ? atoi(getenv("WT_SCRATCH_LEAF")) : 4;
+  primOptions.maxLeafSize = scratchLeaf;
+  const std::vector<Aabb>& bounds = rows.bounds;
+  const std::vector<std::uint32_t>& ids = rows.ids;
   const Bvh bvh = buildBvh(bounds, binaryBuildOptions(primOptions, bounds.size()));
   Bvh4Options collapse = bvh4Options(primOptions);
   collapse.nodeBytesPerPrimitive = 0.0;  // no triangle blocks to weigh the nodes against
   PrimitiveTree tree;
   tree.bvh4 = collapseToBvh4(bvh, collapse);
   orderChildSlots(tree.bvh4);
-  orientCurveNodes(tree.bvh4, rows, ids, sweep, bvh.primIndices, options.threads);
+  orientCurveNodes(tree.bvh4, rows, ids, bvh.primIndices, options.threads);
   tree.refs.resize(bvh.primIndices.size());
   for (std::size_t i = 0; i < tree.refs.size(); ++i) tree.refs[i] = ids[bvh.primIndices[i]];
-  // each entry's piece of its segment, in leaf order beside the refs
+  // each entry's segment joints, in leaf order beside the refs
   tree.joints.assign(WT_LEAF_JOINT_ROWS * tree.refs.size(), WtVec4{0.0f, 0.0f, 0.0f, -1.0f});
   for (std::size_t i = 0; i < tree.refs.size(); ++i) {
     const std::uint32_t id = tree.refs[i];
     if (primType(id) != WT_PRIM_CURVE) continue;
     const std::size_t row = rows.dataFirst[WT_PRIM_CURVE] + 2 * std::size_t(primIndex(id));
     if (row + 1 >= rows.data.size()) continue;
-    const WtVec4 &ra = rows.data[row], &rb = rows.data[row + 1];
-    const glm::dvec4 a(ra.x, ra.y, ra.z, std::fabs(ra.w)), b(rb.x, rb.y, rb.z, std::fabs(rb.w));
-    const glm::vec2 s = sweep[bvh.primIndices[i]];
     for (int end = 0; end < 2; ++end) {
-      const glm::dvec4 j = a + double(end ? s.y : s.x) * (b - a);
-      tree.joints[WT_LEAF_JOINT_ROWS * i + end] = WtVec4{float(j.x), float(j.y), float(j.z), float(j.w)};
+      const WtVec4& j = rows.data[row + end];
+      tree.joints[WT_LEAF_JOINT_ROWS * i + end] = WtVec4{j.x, j.y, j.z, std::fabs(j.w)};
     }
   }
   tree.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -1162,8 +1093,8 @@ void SceneBuffers::uploadPrimitives(Context& context, const Scene& scene, const 
   }
   geometry.leaf_joints = std::uint32_t(rows.data.size());
   rows.data.insert(rows.data.end(), tree.joints.begin(), tree.joints.end());
-  // a leaf's test reads four entries' joints: room for the last leaf's
-  rows.data.resize(rows.data.size() + 3 * WT_LEAF_JOINT_ROWS, WtVec4{0.0f, 0.0f, 0.0f, -1.0f});
+  // a leaf's test reads its entries' joints four at a time: room for the last leaf's
+  rows.data.resize(rows.data.size() + (kPrimitiveLeafSize - 1) * WT_LEAF_JOINT_ROWS, WtVec4{0.0f, 0.0f, 0.0f, -1.0f});
   primitiveBytes = 0;
   primNodes = upload(context, tree.bvh4.nodes, primitiveBytes);
   primRefs = upload(context, tree.refs, primitiveBytes);

@@ -151,12 +151,11 @@ inline float curve_max3(float3 v) { return fmax(fabs(v.x), fmax(fabs(v.y), fabs(
 inline float4 curve_max3_4(float4 x, float4 y, float4 z) { return fmax(fabs(x), fmax(fabs(y), fabs(z))); }
 
 /// Whether the ray through o along unit dn passes wider of each of four
-/// pieces of segments (joint spheres rows 2k and 2k + 1 of j, k = 0..3;
-/// radius < 0: no curve, never missed) than the piece's larger radius, by
-/// curve_intersect's bound and its rounding margin, in float4 lanes. Every
-/// hit of a segment lies in the swept sphere of some piece, so a hit this
-/// skips is found through that piece's leaf entry.
-inline int4 curve_pieces_missed4(__global const float4* j, float3 o, float3 dn) {
+/// segments (joint spheres rows 2k and 2k + 1 of j, k = 0..3; radius < 0:
+/// no curve, never missed) than the segment's larger radius, by
+/// curve_intersect's bound and its rounding margin, in float4 lanes: every
+/// hit of a segment lies within that radius of its axis.
+inline int4 curve_segments_missed4(__global const float4* j, float3 o, float3 dn) {
   float4 a0 = j[0], b0 = j[1], a1 = j[2], b1 = j[3], a2 = j[4], b2 = j[5], a3 = j[6], b3 = j[7];
   float4 ax = (float4)(a0.x, a1.x, a2.x, a3.x), ay = (float4)(a0.y, a1.y, a2.y, a3.y);
   float4 az = (float4)(a0.z, a1.z, a2.z, a3.z), ar = (float4)(a0.w, a1.w, a2.w, a3.w);
@@ -170,7 +169,7 @@ inline int4 curve_pieces_missed4(__global const float4* j, float3 o, float3 dn) 
   float4 s = select((float4)(0.0f), clamp(-(wx * ex + wy * ey + wz * ez) / ee, 0.0f, 1.0f), ee > 0.0f);
   float4 gx = wx + s * ex, gy = wy + s * ey, gz = wz + s * ez;
   float4 r = fmax(ar, br);
-  // the unprojected e's size, as curve_piece_missed's margin
+  // the unprojected e's size, as curve_intersect's margin
   float4 e_max = curve_max3_4((float4)(b0.x, b1.x, b2.x, b3.x) - ax, (float4)(b0.y, b1.y, b2.y, b3.y) - ay,
                               (float4)(b0.z, b1.z, b2.z, b3.z) - az);
   float4 reach = r * 1.001f + spawn_gamma(32) * (curve_max3(o) + curve_max3_4(ax, ay, az) + e_max + r);

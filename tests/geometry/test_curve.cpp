@@ -679,47 +679,5 @@ TEST(CurveGather, BSplinesAreSubdividedToTheirFlatness) {
   EXPECT_FLOAT_EQ(curveSegment(rows, std::uint32_t(n - 1)).u1, 1.0f);
 }
 
-/// The primitive tree enters a thin diagonal segment as several boxes
-/// along its length (reference splitting), each bounding its piece: the
-/// leaves' boxes that hold it cover its hull; a segment along an axis stays
-/// one box (the speed it buys: docs/lab/2026-12-05-curve-pieces.md).
-TEST(Curves, DiagonalSegmentsEnterTheTreeInPieces) {
-  Scene scene;
-  scene.materials.push_back(makeMaterial(glm::vec3(0.5f)));
-  auto add = [&](glm::vec3 a, glm::vec3 b, float r) {
-    scene.curves.push_back({std::uint32_t(scene.curvePoints.size()), 2, 0, CurveBasis::kLinear});
-    scene.curvePoints.push_back({a.x, a.y, a.z, r});
-    scene.curvePoints.push_back({b.x, b.y, b.z, r});
-  };
-  add(glm::vec3(0.0f), glm::vec3(1.0f, 1.0f, 1.0f), 0.01f);     // diagonal, thin
-  add(glm::vec3(3.0f, 0, 0), glm::vec3(3.0f, 0, 2.0f), 0.01f);  // along z
-  const PrimitiveRows rows = gatherPrimitives(scene);
-  ASSERT_EQ(rows.ids.size(), 2u);
-  const PrimitiveTree tree = buildPrimitiveTree(rows, BvhBuildOptions{});
-  const auto count = [&](std::uint32_t id) { return std::count(tree.refs.begin(), tree.refs.end(), id); };
-  EXPECT_EQ(count(rows.ids[0]), 4);
-  EXPECT_EQ(count(rows.ids[1]), 1);
-  // the leaves' boxes: every point of the diagonal segment's axis, its radius around it, inside one of them
-  std::vector<Aabb> boxes;
-  for (const WtBvh4Node& n : tree.bvh4.nodes)
-    for (int k = 0; k < 4; ++k)
-      if (n.child[k] != WT_BVH4_EMPTY && n.count[k] > 0)
-        for (std::uint32_t i = n.child[k]; i < n.child[k] + n.count[k]; ++i)
-          if (tree.refs[i] == rows.ids[0])
-            boxes.push_back({glm::vec3(n.lo_x[k], n.lo_y[k], n.lo_z[k]), glm::vec3(n.hi_x[k], n.hi_y[k], n.hi_z[k])});
-  ASSERT_FALSE(boxes.empty());
-  int outside = 0;
-  for (int i = 0; i <= 1000; ++i)
-    for (int corner = 0; corner < 8; ++corner) {
-      const glm::vec3 c = glm::vec3(float(i) / 1000.0f) +
-                          0.01f * glm::vec3(corner & 1 ? 1 : -1, corner & 2 ? 1 : -1, corner & 4 ? 1 : -1);
-      bool in = false;
-      for (const Aabb& b : boxes)
-        in = in || (glm::all(glm::greaterThanEqual(c, b.lo)) && glm::all(glm::lessThanEqual(c, b.hi)));
-      outside += !in;
-    }
-  EXPECT_EQ(outside, 0);
-}
-
 }  // namespace
 }  // namespace wt
