@@ -148,7 +148,7 @@ constexpr double kAnisoTableError = 0.02;
 // interpolation adds its error (SharedTable test below). The tolerance is 5
 // standard errors of the mean plus 2e-3 for the table.
 TEST(Bsdf, WhiteMaterialsReflectEverythingAtEveryRoughnessAndAngle) {
-  std::vector<cl_float4> u = stratified(128, 3);
+  std::vector<cl_float4> u = stratified(int(test::testSize(128, 16)), 3);
   int failures = 0;
   for (float metallic : {0.0f, 0.5f, 1.0f})
     for (int j : {0, 3, 8, 16, 24, 31})
@@ -186,6 +186,7 @@ void expectSamplingMatchesPdf(const WtMaterial& m, glm::vec3 wo, cl_uint lobes, 
                               bool sphere = false, int kSub = 8, std::uint32_t seed = 17, bool inside = false,
                               glm::vec3 coatNormal = kNoCoatNormal) {
   const int kTheta = sphere ? 32 : 16, kPhi = 32;
+  // 512 x 512 samples: the anisotropic D with alpha_t 3% off fails here and passes at 256 x 256
   const int kSide = int(test::testSize(512, 64));
   const float lo = sphere ? -1.0f : 0.0f;
   Sampled s = sampleOnDevice(m, wo, lobes, stratified(kSide, seed), inside, coatNormal);
@@ -531,7 +532,7 @@ double integrateOverSphere(const WtMaterial& m, glm::vec3 wo, cl_uint lobes, boo
 // less: its sampled mean must equal the quadrature of bsdf_eval over the
 // sphere and stay at or below 1.
 TEST(Bsdf, WhiteGlassConservesEnergySmoothAndLosesOnlyWhatSingleScatteringLosesRough) {
-  std::vector<cl_float4> u = stratified(128, 31);
+  std::vector<cl_float4> u = stratified(int(test::testSize(128, 16)), 31);
   int failures = 0;
   double lowest[2] = {1.0, 1.0}, highest[2] = {0.0, 0.0};  // rough glass's albedo outside, inside (docs/materials.md)
   for (float ior : {1.33f, 1.5f, 2.4f})
@@ -708,9 +709,11 @@ TEST(Bsdf, LayeredSamplingMatchesItsPdfChiSquare) {
 // maximum and keeps exactly 1 in that one. Angles and roughnesses sit on
 // the table's nodes; the tolerance is 5 standard errors plus 2e-3 (the
 // existing white-material test's). Each combination's mean and worst
-// deviation are recorded (furnace_*; docs/materials.md).
+// deviation are recorded (furnace_*; docs/materials.md). 64 x 64 samples:
+// the coat's albedo with half its Schlick term, or the sheen's scaled by 0.9,
+// still fail hundreds of checks there (docs/lab/2026-12-07-ci-time-s17.md).
 TEST(Bsdf, WhiteLayeredMaterialsReflectEverything) {
-  std::vector<cl_float4> u = stratified(int(test::testSize(128, 16)), 3);
+  std::vector<cl_float4> u = stratified(int(test::testSize(64, 16)), 3);
   struct Combo {
     const char* name;
     float coat, sheen, specular;
@@ -1228,9 +1231,12 @@ TEST(Bsdf, AnisotropyStrengthZeroIsTheIsotropicLobe) {
 // albedo tables at the view's azimuth. The tolerance is 5 standard errors
 // plus the table's interpolation bound (kAnisoTableError). Turning the
 // compensation off makes metals lose up to 0.6 (roughness 0, strength 1,
-// grazing: a lobe with alpha_t = 1 scatters once).
+// grazing: a lobe with alpha_t = 1 scatters once). 64 x 64 samples: the
+// tables read at azimuth 0 whatever the view's, or the isotropic average in
+// place of the anisotropic one, still fail dozens of checks there
+// (docs/lab/2026-12-07-ci-time-s17.md).
 TEST(Bsdf, WhiteAnisotropicMaterialsReflectEverything) {
-  std::vector<cl_float4> u = stratified(128, 5);
+  std::vector<cl_float4> u = stratified(64, 5);
   float metallic = 1.0f;
   auto albedo = [&](float roughness, float strength, float mu, float phi, double* se) {
     Sampled s = sampleOnDevice(anisotropic(glm::vec3(1.0f), metallic, roughness, strength), localDirection(mu, phi), kBothLobes, u);
@@ -1498,7 +1504,7 @@ TEST(Iridescence, FilmFresnelMatchesTheAirySummationIntegratedOverWavelength) {
 // several thicknesses, roughness and angles. The film's share scatters once
 // and the base under it keeps 1 - max(F_film), the extension's rgb_mix.
 TEST(Bsdf, WhiteIridescentMaterialsReflectAtMostEverything) {
-  std::vector<cl_float4> u = stratified(128, 9);
+  std::vector<cl_float4> u = stratified(int(test::testSize(128, 16)), 9);
   int failures = 0;
   double highest = 0.0;
   for (float metallic : {1.0f, 0.0f})

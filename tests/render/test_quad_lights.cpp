@@ -138,6 +138,11 @@ Scene quadLitScene() {
   return scene;
 }
 
+/// Samples per pixel of the image comparisons below: the z test takes its
+/// tolerance from the renders' own variances, so it holds at the small size
+/// (the sanitizer pass: the host code is the same per sample).
+int comparisonSpp() { return int(test::testSize(256, 64)); }
+
 // The same image, rectangles sampled as one or as two triangles each, NEE
 // with MIS, the lights picked by power and by the light tree (4 x 4 blocks,
 // z 4.5 from the two renders' own variances).
@@ -149,10 +154,10 @@ TEST(QuadLights, RenderTheSameAsTheirTriangles) {
     settings.maxBounces = 3;
     settings.lightSampler = sampler;
     settings.seed = 11;
-    const Image quads = test::render(scene, settings, 256);
+    const Image quads = test::render(scene, settings, comparisonSpp());
     settings.quadLights = false;
     settings.seed = 12;
-    const Image triangles = test::render(scene, settings, 256);
+    const Image triangles = test::render(scene, settings, comparisonSpp());
     const double worst = test::expectSameImage(quads, triangles, 4, 4.5,
                                                sampler == LightSampler::Power ? "lights by power" : "light tree");
     std::printf("rectangle lights against their triangles (%s): worst |z| %.2f\n",
@@ -161,14 +166,14 @@ TEST(QuadLights, RenderTheSameAsTheirTriangles) {
 }
 
 /// Renders `scene` on shade's lanes (seed `seed`) and one path per work-item
-/// (seed + 1), 256 spp each, and expects the same image (4 x 4 blocks, z 4.5);
+/// (seed + 1), comparisonSpp() each, and expects the same image (4 x 4 blocks, z 4.5);
 /// the worst |z|.
 double shadeLanesAgainstOnePath(const Scene& scene, RenderSettings settings, std::uint32_t seed, const char* what) {
   settings.seed = seed;
-  const Image lanes = test::render(scene, settings, 256);
+  const Image lanes = test::render(scene, settings, comparisonSpp());
   settings.shadeLanes = false;
   settings.seed = seed + 1;
-  const Image single = test::render(scene, settings, 256);
+  const Image single = test::render(scene, settings, comparisonSpp());
   const double worst = test::expectSameImage(lanes, single, 4, 4.5, what);
   std::printf("shade on lanes against one path per work-item (%s): worst |z| %.2f\n", what, worst);
   return worst;
