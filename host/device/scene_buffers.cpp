@@ -695,8 +695,7 @@ PrimitiveTree buildPrimitiveTree(const PrimitiveRows& rows, const BvhBuildOption
   const auto start = std::chrono::steady_clock::now();
   // Each leaf entry is a typed id, tested one by one, so leaves stay small.
   BvhBuildOptions primOptions = options;
-  static const int scratchLeaf = getenv("WT_SCRATCH_LEAF") ? atoi(getenv("WT_SCRATCH_LEAF")) : 4;
-  primOptions.maxLeafSize = scratchLeaf;
+  primOptions.maxLeafSize = kPrimitiveLeafSize;
   const std::vector<Aabb>& bounds = rows.bounds;
   const std::vector<std::uint32_t>& ids = rows.ids;
   const Bvh bvh = buildBvh(bounds, binaryBuildOptions(primOptions, bounds.size()));
