@@ -11,6 +11,7 @@
 #include <fstream>
 #include <mutex>
 #include <random>
+#include <span>
 #include <sstream>
 #include <system_error>
 
@@ -58,7 +59,7 @@ void sha256Block(std::uint32_t h[8], const std::uint8_t* block) {
 
 // entry layout: the header, then the payload (the device binary)
 constexpr char kMagic[8] = {'W', 'T', 'K', 'C', 'A', 'C', 'H', 'E'};
-constexpr std::uint32_t kFormatVersion = 1;
+constexpr std::uint32_t kFormatVersion = 2;  // 2: PoCL CPU binaries without their bitcode
 struct EntryHeader {
   char magic[8];
   std::uint32_t formatVersion;
@@ -119,14 +120,19 @@ std::optional<std::string> readFile(const std::filesystem::path& path) {
 }
 
 /// Write the entry beside its final name and rename it there: a reader sees
-/// the old entry or the whole new one, never a partial file.
-void storeEntry(const std::filesystem::path& dir, const std::filesystem::path& entry, const Digest& key,
-                const std::vector<unsigned char>& binary) {
+/// the old entry or the whole new one, never a partial file. PoCL's CPU
+/// binaries are stored without their program bitcode (poclBinaryWithoutBitcode).
+/// Returns the payload's size.
+std::size_t storeEntry(const std::filesystem::path& dir, const std::filesystem::path& entry, const Digest& key,
+                       const std::vector<unsigned char>& fetched, bool poclCpu) {
+  std::optional<std::vector<unsigned char>> lean;
+  if (poclCpu) lean = poclBinaryWithoutBitcode(fetched);
+  const std::vector<unsigned char>& binary = lean ? *lean : fetched;
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);
   if (ec) {
     log::warnOnce("kernel cache: cannot create " + dir.string() + " (" + ec.message() + "); kernels are not cached");
-    return;
+    return binary.size();
   }
   EntryHeader header{};
   std::memcpy(header.magic, kMagic, sizeof kMagic);
@@ -148,7 +154,7 @@ void storeEntry(const std::filesystem::path& dir, const std::filesystem::path& e
     if (!out) {
       std::filesystem::remove(temp, ec);
       log::warnOnce("kernel cache: cannot write in " + dir.string() + "; kernels are not cached");
-      return;
+      return binary.size();
     }
   }
   std::filesystem::rename(temp, entry, ec);
@@ -156,6 +162,7 @@ void storeEntry(const std::filesystem::path& dir, const std::filesystem::path& e
     std::filesystem::remove(temp, ec);
     log::warnOnce("kernel cache: cannot write " + entry.string() + " (" + ec.message() + "); kernels are not cached");
   }
+  return binary.size();
 }
 
 cl::Program compile(Context& context, const std::string& source, const std::string& options,
@@ -191,7 +198,99 @@ std::optional<cl::Program> load(Context& context, std::string_view payload, cons
   return program;
 }
 
+// PoCL 3.1's binary (lib/CL/pocl_binary.c, format 9): a header, the
+// program folder's files (program.bc), then each kernel's record, whose
+// files are its work-group functions (.so) under the program's build hash
+constexpr char kPoclMagic[8] = {'p', 'o', 'c', 'l', 'b', 'i', 'n', '\0'};
+constexpr std::uint32_t kPoclFormat = 9;
+constexpr std::size_t kPoclHashOffset = 8 + 8 + 4 + 4 + 8 + 4;  // id, device, version, kernels, flags, root entries
+constexpr std::size_t kPoclHashBytes = 41;                       // "XX/" + 37 letters + NUL
+constexpr std::size_t kPoclHeaderBytes = kPoclHashOffset + kPoclHashBytes;
+
+/// Little-endian reads that fail past the end instead of reading it.
+struct PoclReader {
+  std::span<const unsigned char> bytes;
+  std::size_t at = 0;
+  bool ok = true;
+  std::uint64_t number(std::size_t width) {
+    if (!ok || bytes.size() - at < width) return ok = false, 0;
+    std::uint64_t v = 0;
+    for (std::size_t i = 0; i < width; ++i) v |= std::uint64_t(bytes[at + i]) << (8 * i);
+    at += width;
+    return v;
+  }
+  std::string_view text() {  // a u32 length, then that many bytes
+    const std::uint64_t n = number(4);
+    if (!ok || bytes.size() - at < n) return ok = false, std::string_view();
+    std::string_view s(reinterpret_cast<const char*>(bytes.data() + at), n);
+    at += n;
+    return s;
+  }
+};
+
+void appendLe(std::vector<unsigned char>& out, std::uint64_t v, std::size_t width) {
+  for (std::size_t i = 0; i < width; ++i) out.push_back(static_cast<unsigned char>(v >> (8 * i)));
+}
+
+void appendText(std::vector<unsigned char>& out, std::string_view s) {
+  appendLe(out, s.size(), 4);
+  out.insert(out.end(), s.begin(), s.end());
+}
+
 }  // namespace
+
+std::optional<std::vector<unsigned char>> poclBinaryWithoutBitcode(std::span<const unsigned char> binary) {
+  PoclReader r{binary};
+  if (binary.size() < kPoclHeaderBytes || std::memcmp(binary.data(), kPoclMagic, sizeof kPoclMagic) != 0) return std::nullopt;
+  r.at = sizeof kPoclMagic;
+  r.number(8);  // the device's id
+  const std::uint64_t version = r.number(4), kernels = r.number(4);
+  r.number(8);  // flags
+  const std::uint64_t roots = r.number(4);
+  if (version != kPoclFormat || roots != 1 || kernels == 0) return std::nullopt;
+  r.at = kPoclHeaderBytes;
+  // the program folder: only program.bc goes, anything else keeps the binary whole
+  const std::uint64_t rootBytes = r.number(8);
+  if (!r.ok || binary.size() - r.at < rootBytes) return std::nullopt;
+  const std::size_t rootEnd = r.at + std::size_t(rootBytes);
+  bool bitcode = false;
+  while (r.ok && r.at < rootEnd) {
+    const std::string_view name = r.text();
+    r.text();
+    if (name != "/program.bc") return std::nullopt;
+    bitcode = true;
+  }
+  if (!r.ok || r.at != rootEnd || !bitcode) return std::nullopt;
+  // every kernel record whole, up to the last byte
+  for (std::uint64_t k = 0; k < kernels; ++k) {
+    const std::size_t start = r.at;
+    const std::uint64_t recordBytes = r.number(8), fileBytes = r.number(8);
+    if (!r.ok || recordBytes < fileBytes || binary.size() - start < recordBytes) return std::nullopt;
+    PoclReader files{binary.subspan(start + std::size_t(recordBytes - fileBytes), std::size_t(fileBytes))};
+    while (files.ok && files.at < files.bytes.size()) files.text(), files.text();
+    if (!files.ok) return std::nullopt;
+    r.at = start + std::size_t(recordBytes);
+  }
+  if (r.at != binary.size()) return std::nullopt;
+
+  std::vector<unsigned char> lean(binary.begin(), binary.begin() + kPoclHashOffset);
+  // A build hash of its own: under the original one PoCL would find program.bc
+  // in its cache and parse it; this one names these files alone.
+  const Digest digest = sha256(std::string_view(reinterpret_cast<const char*>(binary.data()), binary.size()));
+  std::string hash;
+  for (std::uint8_t b : digest) hash += char('A' + (b >> 4)), hash += char('A' + (b & 15));
+  hash = hash.substr(0, 2) + "/" + hash.substr(2, kPoclHashBytes - 4);
+  lean.insert(lean.end(), hash.begin(), hash.end());
+  lean.push_back(0);
+  // PoCL requires a non-empty program folder: one small marker file
+  std::vector<unsigned char> root;
+  appendText(root, "/wavetrace-without-bitcode");
+  appendText(root, "1\n");
+  appendLe(lean, root.size(), 8);
+  lean.insert(lean.end(), root.begin(), root.end());
+  lean.insert(lean.end(), binary.begin() + std::ptrdiff_t(rootEnd), binary.end());
+  return lean;
+}
 
 Digest sha256(std::string_view data) {
   std::uint32_t h[8] = {0x6a09e667, 0xbb67ae85, 0x3c6ef372, 0xa54ff53a,
@@ -346,8 +445,7 @@ CachedProgram buildCachedProgram(Context& context, const std::string& source, co
     // no binary to keep: compiled each time, as below
   }
   if (binaries.size() == 1 && !binaries[0].empty()) {
-    result.binaryBytes = binaries[0].size();
-    storeEntry(*dir, result.entry, key, binaries[0]);
+    result.binaryBytes = storeEntry(*dir, result.entry, key, binaries[0], ownCacheMakesBinariesDear(context.info()));
   } else {
     log::debug("program " + label + ": the device gives no binary; not cached");
     result.outcome = CacheOutcome::kOff;
@@ -522,7 +620,7 @@ bool storeProgramEntry(Context& context, const std::string& source, const Deferr
     log::debug("program " + job.label + ": the device gives no binary; not cached");
     return false;
   }
-  storeEntry(job.dir, entry, key, binaries[0]);
+  storeEntry(job.dir, entry, key, binaries[0], ownCacheMakesBinariesDear(context.info()));
   return true;
 }
 

@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <optional>
+#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -53,6 +54,13 @@ struct CachedProgram {
   std::filesystem::path entry;   ///< the entry file (empty: no cache)
   bool deferred = false;         ///< compiled without its binary: storeDeferredProgramsInBackground stores it
 };
+
+/// A PoCL 3.1 binary (format 9) without its program bitcode, under a build
+/// hash of its own: loading it skips parsing the bitcode, and each kernel
+/// runs the work-group functions it carries (specialised ones where the
+/// render that preceded the fetch compiled them, else the generic one).
+/// Nothing where `binary` is not such a binary or holds other program files.
+std::optional<std::vector<unsigned char>> poclBinaryWithoutBitcode(std::span<const unsigned char> binary);
 
 /// The cache key: SHA-256 over the expanded source, the build options, the
 /// device's name and version, the driver version and the platform.

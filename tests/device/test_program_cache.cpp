@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
 #include <filesystem>
 #include <cstdlib>
@@ -340,6 +341,109 @@ TEST(ProgramCache, PendingStoreIsNotStartedTwice) {
   EXPECT_TRUE(storeDeferredProgramsInBackground(ctx.info()));
   setProgramStoreExecutable("");
   storeDeferredProgramsInBackground(ctx.info());
+}
+
+/// A PoCL format-9 binary as pocl_binary_serialize lays it out: `rootFiles`
+/// (name, content) in the program folder, one kernel "k" carrying one file.
+std::vector<unsigned char> poclBinary(const std::vector<std::pair<std::string, std::string>>& rootFiles,
+                                      std::uint32_t version = 9) {
+  std::vector<unsigned char> b;
+  auto le = [&b](std::uint64_t v, int width) {
+    for (int i = 0; i < width; ++i) b.push_back(static_cast<unsigned char>(v >> (8 * i)));
+  };
+  auto text = [&](const std::string& s) { le(s.size(), 4), b.insert(b.end(), s.begin(), s.end()); };
+  const std::string id("poclbin\0", 8);
+  b.insert(b.end(), id.begin(), id.end());
+  le(0x1234, 8), le(version, 4), le(1, 4), le(0, 8), le(1, 4);
+  std::string hash = "AB/" + std::string(37, 'C') + '\0';
+  b.insert(b.end(), hash.begin(), hash.end());
+  std::vector<unsigned char> root;
+  std::swap(b, root);
+  for (const auto& [name, content] : rootFiles) text(name), text(content);
+  std::swap(b, root);
+  le(root.size(), 8);
+  b.insert(b.end(), root.begin(), root.end());
+  // the kernel record: sizes, name, counts, metadata, then its files
+  std::vector<unsigned char> files;
+  std::swap(b, files);
+  text("/k/64-1-1-goffs0/k.so"), text("machine code");
+  std::swap(b, files);
+  const std::size_t start = b.size();
+  le(0, 8), le(files.size(), 8), le(0, 4);
+  text("k"), le(0, 4), le(0, 4), le(0, 8), le(0, 8), le(0, 8), text(""), le(0, 8);
+  b.insert(b.end(), files.begin(), files.end());
+  const std::uint64_t record = b.size() - start;
+  for (int i = 0; i < 8; ++i) b[start + std::size_t(i)] = static_cast<unsigned char>(record >> (8 * i));
+  return b;
+}
+
+bool holds(const std::vector<unsigned char>& bytes, const std::string& text) {
+  return std::search(bytes.begin(), bytes.end(), text.begin(), text.end()) != bytes.end();
+}
+
+// The stored binary drops program.bc (PoCL would parse it on every load)
+// and names a build hash of its own; the kernels' records stay byte for byte.
+TEST(ProgramCache, PoclBinaryWithoutBitcodeKeepsTheKernels) {
+  const std::vector<unsigned char> full = poclBinary({{"/program.bc", std::string(1000, 'x')}});
+  std::optional<std::vector<unsigned char>> lean = poclBinaryWithoutBitcode(full);
+  ASSERT_TRUE(lean);
+  EXPECT_FALSE(holds(*lean, "/program.bc"));
+  EXPECT_LT(lean->size() + 900, full.size()) << "the bitcode went, a small marker came";
+  const std::size_t hashAt = 36, hashEnd = hashAt + 41;
+  EXPECT_TRUE(std::equal(full.begin(), full.begin() + hashAt, lean->begin())) << "the header before the hash";
+  const std::string hash(lean->begin() + hashAt, lean->begin() + hashEnd);
+  EXPECT_NE(hash, std::string(full.begin() + hashAt, full.begin() + hashEnd));
+  EXPECT_EQ(hash[2], '/');
+  EXPECT_EQ(hash.back(), '\0');
+  // the kernel's record is the tail of both
+  const std::size_t tail = full.size() - (hashEnd + 8 + 4 + 11 + 4 + 1000);
+  EXPECT_TRUE(std::equal(full.end() - std::ptrdiff_t(tail), full.end(), lean->end() - std::ptrdiff_t(tail)));
+  EXPECT_EQ(poclBinaryWithoutBitcode(*lean), std::nullopt) << "nothing left to drop";
+  // another binary gets another hash (its files must not meet these)
+  const std::vector<unsigned char> other = poclBinaryWithoutBitcode(poclBinary({{"/program.bc", "y"}})).value();
+  EXPECT_NE(std::string(other.begin() + hashAt, other.begin() + hashEnd), hash);
+
+  // anything not exactly this layout is stored whole
+  std::vector<unsigned char> cut = full;
+  cut.pop_back();
+  EXPECT_EQ(poclBinaryWithoutBitcode(cut), std::nullopt) << "truncated";
+  std::vector<unsigned char> longer = full;
+  longer.push_back(0);
+  EXPECT_EQ(poclBinaryWithoutBitcode(longer), std::nullopt) << "a byte past the last kernel";
+  EXPECT_EQ(poclBinaryWithoutBitcode(poclBinary({{"/program.bc", "x"}}, 8)), std::nullopt) << "another format";
+  EXPECT_EQ(poclBinaryWithoutBitcode(poclBinary({{"/program.bc", "x"}, {"/other", "y"}})), std::nullopt)
+      << "other program files";
+  std::vector<unsigned char> notPocl = full;
+  notPocl[0] = 'P';
+  EXPECT_EQ(poclBinaryWithoutBitcode(notPocl), std::nullopt);
+}
+
+// On PoCL's CPU device the entry holds no bitcode, and the program it loads
+// runs at the local size it was fetched for and at another (PoCL's generic
+// work-group function).
+TEST(ProgramCache, PoclCpuEntryLoadsWithoutBitcode) {
+  Context& ctx = test::deviceContext();
+  if (!ownCacheMakesBinariesDear(ctx.info())) GTEST_SKIP() << "not PoCL's CPU device";
+  ScratchCache cache("pocl_lean");
+  CachedProgram first = build(3);
+  ASSERT_EQ(first.outcome, CacheOutcome::kMiss);
+  expectRuns(first, 3);
+  const std::string bytes = readAll(first.entry);
+  EXPECT_EQ(bytes.find("/program.bc"), std::string::npos);
+  EXPECT_NE(bytes.find("/wavetrace-without-bitcode"), std::string::npos);
+  EXPECT_NE(bytes.find("twice.so"), std::string::npos) << "the work-group functions travel in the entry";
+  for (std::size_t local : {64, 32}) {
+    CachedProgram hit = build(3);
+    ASSERT_EQ(hit.outcome, CacheOutcome::kHit) << cacheOutcomeName(hit.outcome);
+    const cl_uint count = 100;
+    cl::Buffer out(ctx.context(), CL_MEM_WRITE_ONLY, count * sizeof(cl_uint));
+    cl::Kernel k(hit.program, "twice");
+    k.setArg(0, out), k.setArg(1, count);
+    ctx.launch("twice", k, count, local);
+    std::vector<cl_uint> got(count);
+    ctx.queue().enqueueReadBuffer(out, CL_TRUE, 0, count * sizeof(cl_uint), got.data());
+    for (cl_uint i = 0; i < count; ++i) ASSERT_EQ(got[i], 2u * i + 3u) << "item " << i << ", local size " << local;
+  }
 }
 
 TEST(ProgramCache, OffCompilesWithoutAnEntry) {
