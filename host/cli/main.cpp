@@ -698,7 +698,14 @@ int runRender(RenderOptions options) {
     const bool png = std::any_of(options.outputs.begin(), options.outputs.end(), [](const std::string& out) {
       return wt::imageFormatFor(out) == wt::ImageFormat::Png;
     });
-    wt::Image image = png || settings.tonemap.autoExposure ? renderer.readImage() : renderer.readRadiance();
+    // PNGs alone (no EXR, AOV folder or debug view) need only the 8-bit pixels
+    const bool pngOnly = options.aovOut.empty() && options.debugView == wt::DebugView::None &&
+                         std::all_of(options.outputs.begin(), options.outputs.end(), [](const std::string& out) {
+                           return wt::imageFormatFor(out) == wt::ImageFormat::Png;
+                         });
+    wt::Image image = pngOnly                                   ? renderer.readDisplayImage()
+                      : png || settings.tonemap.autoExposure ? renderer.readImage()
+                                                              : renderer.readRadiance();
     startup.mark("image read");
     wt::applyDebugView(image, options.debugView);
     writeOutputs(options, image, say);

@@ -523,7 +523,13 @@ Image Renderer::readRadiance() {
   return image;
 }
 
-void Renderer::readResolved(Image& image, bool tonemap) {
+Image Renderer::readDisplayImage() {
+  Image image;
+  readResolved(image, true, false);
+  return image;
+}
+
+void Renderer::readResolved(Image& image, bool tonemap, bool floats) {
   const std::size_t pixels = std::size_t(m_settings.width) * std::size_t(m_settings.height);
   cl::CommandQueue& q = m_context.queue();
   m_resolve.set("frame", frameParams(m_settings, m_lights, m_stats.samplesDone, 0));
@@ -532,12 +538,14 @@ void Renderer::readResolved(Image& image, bool tonemap) {
     m_tonemapper.run(frameParams(m_settings, m_lights, m_stats.samplesDone, 0), tonemapParams(m_settings.tonemap),
                      m_path.mean, m_path.pixels);
 
-  std::vector<float> mean(4 * pixels), m2(4 * pixels);
+  std::vector<float> mean(floats ? 4 * pixels : 0), m2(floats ? 4 * pixels : 0);
   image.width = m_settings.width;
   image.height = m_settings.height;
   image.samples.resize(pixels);
-  q.enqueueReadBuffer(m_path.mean, CL_FALSE, 0, mean.size() * 4, mean.data());
-  q.enqueueReadBuffer(m_path.m2, CL_FALSE, 0, m2.size() * 4, m2.data());
+  if (floats) {
+    q.enqueueReadBuffer(m_path.mean, CL_FALSE, 0, mean.size() * 4, mean.data());
+    q.enqueueReadBuffer(m_path.m2, CL_FALSE, 0, m2.size() * 4, m2.data());
+  }
   q.enqueueReadBuffer(m_path.sampleCount, CL_FALSE, 0, pixels * 4, image.samples.data());
   if (tonemap) {
     image.srgba.resize(4 * pixels);
@@ -550,6 +558,7 @@ void Renderer::readResolved(Image& image, bool tonemap) {
   image.samplesDone = m_stats.samplesDone;
 
   if (m_settings.aovs) readAovs(image);
+  if (!floats) return;
 
   image.rgb.resize(3 * pixels);
   image.rgbVariance.resize(3 * pixels);

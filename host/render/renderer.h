@@ -217,6 +217,9 @@ class Renderer {
   /// The mean, variance and sample counts only (no tone mapping, srgba
   /// left empty): the cheaper read the halting criteria make.
   Image readRadiance();
+  /// The tone-mapped 8-bit pixels and the per-pixel counts only (rgb and
+  /// its variance left empty): all a PNG needs, a quarter of the bytes.
+  Image readDisplayImage();
   /// The running accumulation, for a checkpoint.
   Accumulation saveAccumulation();
   /// Continue from a saved accumulation of the same scene and settings:
@@ -249,9 +252,9 @@ class Renderer {
   float autoExposure() { return m_settings.tonemap.autoExposure ? m_tonemapper.autoExposure() : 1.0f; }
 
  private:
-  /// Resolve the accumulation state into mean and m2, and read them with
-  /// the per-pixel counts into `image` (srgba untouched).
-  void readResolved(Image& image, bool tonemap);
+  /// Resolve the accumulation state into mean and m2, and read the per-pixel
+  /// counts into `image`, with mean and m2 where `floats`, the 8-bit pixels where `tonemap`.
+  void readResolved(Image& image, bool tonemap, bool floats = true);
   void readAovs(Image& image);
   [[noreturn]] void throwNonFinite(int sample, std::uint32_t path, std::uint32_t where);
   Context& m_context;

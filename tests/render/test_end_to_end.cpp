@@ -124,6 +124,29 @@ TEST(EndToEnd, StopOnNonFiniteNamesThePixelSampleAndBounce) {
   EXPECT_GT(counting.stats().nonFiniteSamples, 0u);
 }
 
+// A PNG-only render reads the 8-bit pixels alone: the same pixels and counts
+// as the full read, without the float channels.
+TEST(EndToEnd, DisplayImageIsTheFullReadsPixels) {
+  Scene scene = loadDefaultScene();
+  RenderSettings settings;
+  settings.width = 40;
+  settings.height = 24;
+  settings.maxBounces = 3;
+  Renderer renderer(test::deviceContext(), scene, settings);
+  for (int s = 0; s < 2; ++s) renderer.renderSample();
+  const Image display = renderer.readDisplayImage();
+  const Image full = renderer.readImage();
+  EXPECT_EQ(display.width, 40);
+  EXPECT_EQ(display.height, 24);
+  ASSERT_EQ(display.srgba.size(), std::size_t(40 * 24 * 4));
+  EXPECT_TRUE(display.srgba == full.srgba) << "the tone-mapped pixels differ";
+  EXPECT_TRUE(display.samples == full.samples);
+  EXPECT_EQ(display.samplesDone, 2);
+  EXPECT_TRUE(display.rgb.empty() && display.rgbVariance.empty());
+  EXPECT_NE(std::count(full.srgba.begin(), full.srgba.end(), std::uint8_t(0)), std::ptrdiff_t(full.srgba.size()))
+      << "a black image would pass anything";
+}
+
 TEST(EndToEnd, DeterministicForASeed) {
   Image a = renderCornell(3), b = renderCornell(3), c = renderCornell(4);
   EXPECT_EQ(a.rgb, b.rgb);
