@@ -4,9 +4,13 @@
 #include <gtest/gtest.h>
 
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace wt::test {
 
@@ -28,6 +32,15 @@ inline std::filesystem::path assetsDir() { return WT_ASSETS_DIR; }
 inline unsigned testSize(unsigned full, unsigned small) {
   const char* value = std::getenv("WT_TEST_SMALL");
   return value && *value && std::string_view(value) != "0" ? small : full;
+}
+
+/// The same bit pattern (so +0 and -0 differ and a NaN matches itself).
+inline bool sameBits(float a, float b) { return std::memcmp(&a, &b, sizeof a) == 0; }
+
+/// A file's bytes (none if it cannot be read).
+inline std::vector<char> readAll(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
 }
 
 /// A scratch folder under the build tree for files a test writes.

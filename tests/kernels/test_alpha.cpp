@@ -100,7 +100,7 @@ struct AlphaReference {
   }
 };
 
-bool sameBits(float a, float b) { return std::memcmp(&a, &b, sizeof a) == 0; }
+using test::sameBits;
 
 /// Four large triangles stacked along z (z = 0, -1, -2, -3, in one leaf and
 /// one block of four), each covering the square [-2, 2]^2 seen from +z: a

@@ -85,7 +85,7 @@ double packetShare(const std::vector<Ray>& rays, std::size_t width) {
   return packets ? double(uniform) / packets : 0.0;
 }
 
-bool sameBits(float a, float b) { return std::memcmp(&a, &b, sizeof a) == 0; }
+using test::sameBits;
 
 /// Packets against single rays on the same tree: identical answers, except
 /// that of two hits at exactly the same distance either may win.

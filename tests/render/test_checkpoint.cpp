@@ -2,6 +2,7 @@
 // with a message naming what is wrong.
 #include "render/checkpoint.h"
 #include "scene/default_scene.h"
+#include "test_util.h"
 
 #include <gtest/gtest.h>
 
@@ -34,10 +35,7 @@ Checkpoint sample(std::uint64_t pixels) {
   return c;
 }
 
-std::vector<char> readAll(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
+using test::readAll;
 
 void writeAll(const std::filesystem::path& path, const std::vector<char>& bytes) {
   std::ofstream out(path, std::ios::binary | std::ios::trunc);

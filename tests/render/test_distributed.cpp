@@ -16,7 +16,7 @@
 namespace wt {
 namespace {
 
-RenderSettings tinySettings(std::uint32_t accumulation) {
+RenderSettings tinyMergeSettings(std::uint32_t accumulation) {
   RenderSettings s;
   s.width = 16;
   s.height = 12;
@@ -82,7 +82,7 @@ TEST(DistributedRender, TwoDevicesEqualOneBitwise) {
   Context& context = test::deviceContext();
   Context second(context.info());
   const Scene scene = loadDefaultScene();
-  const RenderSettings settings = tinySettings(WT_ACCUMULATE_KAHAN);
+  const RenderSettings settings = tinyMergeSettings(WT_ACCUMULATE_KAHAN);
   Renderer a(context, scene, settings), b(second, scene, settings);
   const Moments one = renderChunked({&a}, 24, 4);
   const Moments two = renderChunked({&a, &b}, 24, 4);
@@ -104,7 +104,7 @@ TEST(DistributedRender, ChunkedEqualsOnePassToTheAccumulationPrecision) {
   for (std::uint32_t mode : {WT_ACCUMULATE_DOUBLE, WT_ACCUMULATE_KAHAN}) {
     if (mode == WT_ACCUMULATE_DOUBLE && !context.info().fp64) continue;
     const Scene scene = loadDefaultScene();
-    const RenderSettings settings = tinySettings(mode);
+    const RenderSettings settings = tinyMergeSettings(mode);
     const int spp = 32;
     Renderer straight(context, scene, settings);
     for (int s = 0; s < spp; ++s) straight.renderSample();
@@ -147,7 +147,7 @@ TEST(DistributedRender, AovsMergedEqualOnePass) {
   Context& context = test::deviceContext();
   Context second(context.info());
   const Scene scene = loadDefaultScene();
-  RenderSettings settings = tinySettings(WT_ACCUMULATE_KAHAN);
+  RenderSettings settings = tinyMergeSettings(WT_ACCUMULATE_KAHAN);
   settings.aovs = true;
   const int spp = 24;
   Renderer straight(context, scene, settings);

@@ -65,10 +65,7 @@ std::filesystem::path writeHdr(const std::string& name, int w, int h, const std:
   return path;
 }
 
-std::vector<char> readAll(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  return std::vector<char>((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-}
+using test::readAll;
 
 void writeBytes(const std::filesystem::path& path, const std::vector<char>& bytes, std::size_t count) {
   std::ofstream out(path, std::ios::binary | std::ios::trunc);
