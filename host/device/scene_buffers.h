@@ -34,8 +34,7 @@ struct PrimitiveTree {
   std::vector<WtVec4> joints;  ///< WT_LEAF_JOINT_ROWS per ref (WtGeometry::leaf_joints)
   double seconds = 0.0;  ///< wall time of the build and collapse
 };
-/// Curve segments that lie across their boxes enter the tree as several
-/// boxes along their length (refs then holds their id more than once).
+/// Every primitive, curve segments included, is in exactly one leaf.
 PrimitiveTree buildPrimitiveTree(const PrimitiveRows& rows, const BvhBuildOptions& options);
 
 /// Whether scene triangle `tri` can have a hole under its material's alpha
