@@ -14,7 +14,8 @@
 // lambertian-forms 0|1 (RenderSettings::lambertianForms), quad-lights 0|1
 // (RenderSettings::quadLights), shade-lanes 0|1 (RenderSettings::shadeLanes),
 // shade-lanes-width 0|8|16 (RenderSettings::shadeLanesWidth), power-heuristic 0|1
-// (RenderSettings::powerHeuristic), power-lambertian 0|1 (RenderSettings::powerAtLambertian).
+// (RenderSettings::powerHeuristic), power-lambertian 0|1 (RenderSettings::powerAtLambertian),
+// shadow-traversal auto|single|packet|stream (RenderSettings::shadowTraversal: every bounce's shadow rays).
 #include "device/context.h"
 #include "device/program.h"
 #include "output/image_io.h"
@@ -64,7 +65,12 @@ void setOption(Config& c, const std::string& name, const std::string& v) {
   else if (name == "shade-lanes-width") c.settings.shadeLanesWidth = toInt(name, v);
   else if (name == "power-heuristic") c.settings.powerHeuristic = toInt(name, v) != 0;
   else if (name == "power-lambertian") c.settings.powerAtLambertian = toInt(name, v) != 0;
-  else if (name == "sampler") {
+  else if (name == "shadow-traversal") {
+    if (v == "single") c.settings.shadowTraversal = wt::Traversal::kSingle;
+    else if (v == "packet") c.settings.shadowTraversal = wt::Traversal::kPacket;
+    else if (v == "stream") c.settings.shadowTraversal = wt::Traversal::kStream;
+    else if (v != "auto") usage("--shadow-traversal: auto, single, packet or stream");
+  } else if (name == "sampler") {
     if (v != "independent" && v != "sobol") usage("--sampler: independent or sobol");
     c.settings.sobol = v == "sobol";
   } else usage("unknown option --a-" + name);
