@@ -243,6 +243,31 @@ struct TimedCommand {
   cl::Event event;
 };
 
+/// Elements [first, first + count) of a buffer mapped for reading, unmapped on leaving.
+template <class T>
+class MappedRead {
+ public:
+  MappedRead(cl::CommandQueue& q, const cl::Buffer& buffer, std::size_t first, std::size_t count)
+      : m_queue(q), m_buffer(buffer),
+        m_data(static_cast<const T*>(
+            q.enqueueMapBuffer(buffer, CL_TRUE, CL_MAP_READ, first * sizeof(T), count * sizeof(T)))) {}
+  MappedRead(const MappedRead&) = delete;
+  MappedRead& operator=(const MappedRead&) = delete;
+  ~MappedRead() {
+    try {
+      m_queue.enqueueUnmapMemObject(m_buffer, const_cast<T*>(m_data));
+    } catch (const cl::Error&) {
+      // a failed unmap leaves the mapping; the next command reports the device's state
+    }
+  }
+  const T* data() const { return m_data; }
+
+ private:
+  cl::CommandQueue& m_queue;
+  const cl::Buffer& m_buffer;
+  const T* m_data;
+};
+
 }  // namespace
 
 KernelFeatures renderKernelFeatures(const FeatureSet& features, const DeviceInfo& device, const RenderSettings& settings,
@@ -285,10 +310,11 @@ Traversal Renderer::probeShadowRays(int bounce) {
   cl::CommandQueue& q = m_context.queue();
   cl_uint count = 0;
   q.enqueueReadBuffer(m_counters, CL_TRUE, WT_COUNTER_SHADOW * sizeof(cl_uint), sizeof(cl_uint), &count);
-  std::vector<cl_uint> queue(count);
-  if (queue.empty()) return Traversal::kSingle;
-  q.enqueueReadBuffer(m_path.shadowQueue, CL_TRUE, 0, queue.size() * sizeof(cl_uint), queue.data());
-  queue = shadowProbeEntries(std::move(queue), kProbeRays);
+  if (count == 0) return Traversal::kSingle;
+  // mapped, not copied: on a CPU device a map is the buffer itself, and the
+  // probe reads only the rays it keeps
+  MappedRead<cl_uint> entries(q, m_path.shadowQueue, 0, count);
+  std::vector<cl_uint> queue = shadowProbeEntries(std::vector<cl_uint>(entries.data(), entries.data() + count), kProbeRays);
   // a sample of paths no more than 16 times its size apart: fewer entries where they spread
   std::size_t n = queue.size();
   cl_uint lo = 0, hi = 0;
@@ -298,12 +324,11 @@ Traversal Renderer::probeShadowRays(int bounce) {
     if (std::size_t(hi - lo) < 16 * kProbeRays || n <= 64) break;
     n /= 2;
   }
-  std::vector<cl_float4> o(std::size_t(hi - lo) + 1), d(o.size());
-  q.enqueueReadBuffer(m_path.shadowO, CL_TRUE, std::size_t(lo) * sizeof(cl_float4), o.size() * sizeof(cl_float4), o.data());
-  q.enqueueReadBuffer(m_path.shadowD, CL_TRUE, std::size_t(lo) * sizeof(cl_float4), d.size() * sizeof(cl_float4), d.data());
+  MappedRead<cl_float4> o(q, m_path.shadowO, lo, std::size_t(hi - lo) + 1);
+  MappedRead<cl_float4> d(q, m_path.shadowD, lo, std::size_t(hi - lo) + 1);
   std::vector<Ray> rays(n);
   for (std::size_t i = 0; i < n; ++i) {
-    const cl_float4 &ro = o[queue[i] - lo], &rd = d[queue[i] - lo];
+    const cl_float4 &ro = o.data()[queue[i] - lo], &rd = d.data()[queue[i] - lo];
     rays[i].origin = glm::vec3(ro.s[0], ro.s[1], ro.s[2]);
     rays[i].tmin = ro.s[3];
     rays[i].direction = glm::vec3(rd.s[0], rd.s[1], rd.s[2]);
