@@ -15,6 +15,7 @@
 #include <fstream>
 #include <random>
 #include <system_error>
+#include <thread>
 #include <unistd.h>
 
 namespace wt {
@@ -147,24 +148,61 @@ void appendPngChunk(std::string& out, const char (&type)[5], const std::string& 
   be32(std::uint32_t(crc32(0, reinterpret_cast<const Bytef*>(out.data() + crcFrom), uInt(out.size() - crcFrom))));
 }
 
-void writePng(const std::filesystem::path& path, const Image& image) {
-  // Each row filtered by its difference to the one above (PNG filter 2)
-  // and deflated at zlib's fastest level: several times faster than
-  // stb_image_write's encoder, and smaller on the dithered renders.
+/// Rows [first, last) of `image`, each filtered by its difference to the
+/// one above (PNG filter 2), as raw deflate data: the final block where
+/// `final`, else ended by a sync flush so that the next part can follow it.
+/// False where zlib fails.
+bool deflatePngRows(const Image& image, std::size_t first, std::size_t last, bool final, std::string& out,
+                    uLong& adler) {
   const std::size_t rowBytes = std::size_t(image.width) * 4;
-  std::string raw(std::size_t(image.height) * (rowBytes + 1), '\0');
-  for (std::size_t y = 0; y < std::size_t(image.height); ++y) {
-    char* row = raw.data() + y * (rowBytes + 1);
+  std::string raw((last - first) * (rowBytes + 1), '\0');
+  for (std::size_t y = first; y < last; ++y) {
+    char* row = raw.data() + (y - first) * (rowBytes + 1);
     const std::uint8_t* src = image.srgba.data() + y * rowBytes;
     row[0] = 2;
     for (std::size_t x = 0; x < rowBytes; ++x) row[1 + x] = char(y == 0 ? src[x] : std::uint8_t(src[x] - src[x - rowBytes]));
   }
-  uLongf packedBytes = compressBound(uLong(raw.size()));
-  std::string packed(packedBytes, '\0');
-  if (compress2(reinterpret_cast<Bytef*>(packed.data()), &packedBytes, reinterpret_cast<const Bytef*>(raw.data()),
-                uLong(raw.size()), 1) != Z_OK)
-    throw OutputError(path.string() + ": compressing the PNG failed");
-  packed.resize(packedBytes);
+  adler = adler32(adler32(0, nullptr, 0), reinterpret_cast<const Bytef*>(raw.data()), uInt(raw.size()));
+  z_stream z{};
+  // the fastest level, runs only (Z_RLE): the filtered rows of renders, noisy or converged,
+  // compress smaller and faster that way than with zlib's default matching
+  if (deflateInit2(&z, 1, Z_DEFLATED, -15, 8, Z_RLE) != Z_OK) return false;
+  out.resize(deflateBound(&z, uLong(raw.size())) + 16);
+  z.next_in = reinterpret_cast<Bytef*>(raw.data());
+  z.avail_in = uInt(raw.size());
+  z.next_out = reinterpret_cast<Bytef*>(out.data());
+  z.avail_out = uInt(out.size());
+  const int result = deflate(&z, final ? Z_FINISH : Z_SYNC_FLUSH);
+  const bool done = final ? result == Z_STREAM_END : result == Z_OK && z.avail_in == 0;
+  out.resize(out.size() - z.avail_out);
+  deflateEnd(&z);
+  return done;
+}
+
+void writePng(const std::filesystem::path& path, const Image& image) {
+  // Deflated in two halves at once where there are enough rows (one zlib
+  // stream: the first half ends on a sync flush, the checksums combine): the
+  // write is the last serial step of a render. The same bytes on any machine.
+  const std::size_t height = std::size_t(image.height), rowBytes = std::size_t(image.width) * 4;
+  const bool split = height >= 2 && height * rowBytes >= (std::size_t(1) << 18);
+  const std::size_t middle = split ? height / 2 : height;
+  std::string second;
+  uLong secondAdler = 1;
+  bool secondDone = true;
+  std::thread helper;
+  if (split)
+    helper = std::thread([&]() { secondDone = deflatePngRows(image, middle, height, true, second, secondAdler); });
+  std::string body;
+  uLong adler = 1;
+  const bool firstDone = deflatePngRows(image, 0, middle, !split, body, adler);
+  if (helper.joinable()) helper.join();
+  if (!firstDone || !secondDone) throw OutputError(path.string() + ": compressing the PNG failed");
+  if (split) adler = adler32_combine(adler, secondAdler, z_off_t((height - middle) * (rowBytes + 1)));
+  // zlib header (deflate, 32 KB window, fastest level) and the Adler-32 of all rows
+  std::string packed("\x78\x01", 2);
+  packed += body;
+  packed += second;
+  for (int shift = 24; shift >= 0; shift -= 8) packed += char((adler >> shift) & 0xff);
 
   std::string header(13, '\0');  // IHDR: width, height, 8 bits, RGBA, deflate, adaptive filters, not interlaced
   for (int i = 0; i < 4; ++i) {

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 #include <stb_image.h>
+#include <zlib.h>
 
 #include <fstream>
 #include <random>
@@ -77,6 +78,39 @@ TEST(ImageIo, PngRoundTripsAnyPixels) {
     EXPECT_EQ(std::vector<std::uint8_t>(data, data + 4 * rw * rh), image.srgba) << w << "x" << h;
     stbi_image_free(data);
   }
+}
+
+// An image large enough to be deflated in parts at once (writePng) is still
+// one zlib stream whose checksum zlib itself verifies, with the same pixels.
+TEST(ImageIo, PngDeflatedInPartsIsOneStream) {
+  std::mt19937 rng(11);
+  const int w = 300, h = 257;  // 300 KB of rows, an odd row count
+  Image image;
+  image.width = w;
+  image.height = h;
+  image.rgb.assign(std::size_t(3 * w * h), 0.0f);
+  // noise above, flat below: both halves' data differ in kind
+  for (int i = 0; i < 4 * w * h; ++i) image.srgba.push_back(i < 2 * w * h ? std::uint8_t(rng()) : std::uint8_t(i % 4 * 60));
+  const std::filesystem::path path = test::scratchDir("image_io") / "large.png";
+  writeImage(path, image);
+  std::ifstream in(path, std::ios::binary);
+  const std::string file((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  std::string idat;
+  for (std::size_t at = 8; at + 12 <= file.size();) {
+    const auto byte = [&](std::size_t k) { return std::uint32_t(std::uint8_t(file[at + k])); };
+    const std::size_t length = (byte(0) << 24) | (byte(1) << 16) | (byte(2) << 8) | byte(3);
+    if (file.compare(at + 4, 4, "IDAT") == 0) idat += file.substr(at + 8, length);
+    at += 12 + length;
+  }
+  std::vector<Bytef> rows(std::size_t(h) * (4 * w + 1));
+  uLongf rowBytes = uLongf(rows.size());
+  ASSERT_EQ(uncompress(rows.data(), &rowBytes, reinterpret_cast<const Bytef*>(idat.data()), uLong(idat.size())), Z_OK);
+  EXPECT_EQ(rowBytes, rows.size());
+  int rw = 0, rh = 0, n = 0;
+  unsigned char* data = stbi_load(path.c_str(), &rw, &rh, &n, 4);
+  ASSERT_NE(data, nullptr) << stbi_failure_reason();
+  EXPECT_EQ(std::vector<std::uint8_t>(data, data + 4 * rw * rh), image.srgba);
+  stbi_image_free(data);
 }
 
 TEST(ImageIo, FormatFromExtension) {
