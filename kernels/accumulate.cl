@@ -56,16 +56,22 @@ WT_KERNEL void accumulate(WtFrameParams frame, __global const float4* radiance,
   aov_fold(aov_sample + WT_AOV_SAMPLE_SLOTS * i, aov_accum + WT_AOV_SAMPLE_SLOTS * i);
 #endif
   float4 value = radiance[i];
+  __global float4* s = state + 4u * i;
+  // the first fold into never-written buffers: zero where the state was read, every word written
+  const bool blank = (frame.flags & WT_FLAG_BLANK_ACCUMULATION) != 0u;
   if (!all(isfinite(value.xyz))) {
     atomic_inc(&counters[WT_COUNTER_NONFINITE]);
+    if (blank) {
+      s[0] = s[1] = s[2] = s[3] = (float4)(0.0f);
+      sample_count[i] = 0u;
+    }
     return;
   }
-  uint n = sample_count[i] + 1u;
-  __global float4* s = state + 4u * i;
+  uint n = (blank ? 0u : sample_count[i]) + 1u;
 #if WT_HAS_FP64
   if (frame.accumulate_mode == WT_ACCUMULATE_DOUBLE) {
     __global double4* d = (__global double4*)s;
-    double4 mean = d[0], m2 = d[1];
+    double4 mean = blank ? (double4)(0.0) : d[0], m2 = blank ? (double4)(0.0) : d[1];
     accumulate_double(value, (double)n, &mean, &m2);
     d[0] = mean;
     d[1] = m2;
@@ -73,14 +79,16 @@ WT_KERNEL void accumulate(WtFrameParams frame, __global const float4* radiance,
     return;
   }
 #endif
-  float4 mean = s[0], m2 = s[1];
+  const float4 zero = (float4)(0.0f);
+  float4 mean = blank ? zero : s[0], m2 = blank ? zero : s[1];
   if (frame.accumulate_mode == WT_ACCUMULATE_KAHAN) {
-    float4 c_mean = s[2], c_m2 = s[3];
+    float4 c_mean = blank ? zero : s[2], c_m2 = blank ? zero : s[3];
     accumulate_kahan(value, (float)n, &mean, &m2, &c_mean, &c_m2);
     s[2] = c_mean;
     s[3] = c_m2;
   } else {
     accumulate_single(value, (float)n, &mean, &m2);
+    if (blank) s[2] = s[3] = zero;
   }
   s[0] = mean;
   s[1] = m2;

@@ -155,9 +155,8 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
   m_envConditional = uploadSpan(env.conditionalCdf);
 
   cl::CommandQueue& q = context.queue();
-  // zero bits are 0.0f as well
-  context.fill(m_path.state, 0u, 0, pixels * 64);
-  context.fill(m_path.sampleCount, 0u, 0, pixels * 4);
+  // the state and sample counts are left unwritten: the first fold writes them
+  // (WT_FLAG_BLANK_ACCUMULATION), a read before it clears them (writeBlankAccumulation)
   if (settings.aovs) context.fill(m_path.aovAccum, 0u, 0, pixels * 64);
   context.fill(m_counters, 0u, 0, WT_COUNTER_COUNT * sizeof(cl_uint));
   context.fill(m_counters, 0xffffffffu, WT_COUNTER_FIRST_NONFINITE * sizeof(cl_uint), sizeof(cl_uint));
@@ -476,8 +475,11 @@ void Renderer::renderSample() {
   }
 
   // accumulate: fold the pass into the running mean
-  m_accumulate.set("frame", frameParams(m_settings, m_lights, sample, 0));
+  WtFrameParams foldParams = frameParams(m_settings, m_lights, sample, 0);
+  if (m_accumulationBlank) foldParams.flags |= WT_FLAG_BLANK_ACCUMULATION;
+  m_accumulate.set("frame", foldParams);
   launch(m_accumulate, pixels, event(Command::Accumulate, 0));
+  m_accumulationBlank = false;
   m_context.finish();
   ++m_stats.samplesDone;
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -557,6 +559,7 @@ Image Renderer::readDisplayImage() {
 void Renderer::readResolved(Image& image, bool tonemap, bool floats) {
   const std::size_t pixels = std::size_t(m_settings.width) * std::size_t(m_settings.height);
   cl::CommandQueue& q = m_context.queue();
+  writeBlankAccumulation();
   m_resolve.set("frame", frameParams(m_settings, m_lights, m_stats.samplesDone, 0));
   launch(m_resolve, pixels);
   if (tonemap)
@@ -599,6 +602,7 @@ void Renderer::readResolved(Image& image, bool tonemap, bool floats) {
 Accumulation Renderer::saveAccumulation() {
   const std::size_t pixels = std::size_t(m_settings.width) * std::size_t(m_settings.height);
   cl::CommandQueue& q = m_context.queue();
+  writeBlankAccumulation();
   Accumulation a;
   a.samplesDone = m_stats.samplesDone;
   a.state.resize(pixels * kAccumulationStateBytes);
@@ -636,8 +640,18 @@ void Renderer::restoreAccumulation(const Accumulation& saved) {
   const cl_uint nonFinite = cl_uint(saved.nonFiniteSamples);
   q.enqueueWriteBuffer(m_counters, CL_FALSE, WT_COUNTER_NONFINITE * sizeof(cl_uint), sizeof(cl_uint), &nonFinite);
   m_context.finish();
+  m_accumulationBlank = false;
   m_stats.samplesDone = saved.samplesDone;
   m_stats.nonFiniteSamples = saved.nonFiniteSamples;
+}
+
+void Renderer::writeBlankAccumulation() {
+  if (!m_accumulationBlank) return;
+  const std::size_t pixels = std::size_t(m_settings.width) * std::size_t(m_settings.height);
+  // zero bits are 0.0f (and 0.0) as well
+  m_context.fill(m_path.state, 0u, 0, pixels * kAccumulationStateBytes);
+  m_context.fill(m_path.sampleCount, 0u, 0, pixels * 4);
+  m_accumulationBlank = false;
 }
 
 void Renderer::resetAccumulation(int nextSample) {
@@ -648,6 +662,7 @@ void Renderer::resetAccumulation(int nextSample) {
   if (m_settings.aovs) m_context.fill(m_path.aovAccum, 0u, 0, pixels * 64);
   m_context.fill(m_counters, 0u, WT_COUNTER_NONFINITE * sizeof(cl_uint), sizeof(cl_uint));
   m_context.finish();
+  m_accumulationBlank = false;
   m_stats.samplesDone = nextSample;
   m_stats.nonFiniteSamples = 0;
 }

@@ -294,6 +294,11 @@ class Renderer {
   }
   /// Whether shade can queue shadow rays, so connect and its buffers exist.
   bool m_connectStage = true;
+  /// The accumulation state and sample counts were never written (the first
+  /// fold writes them whole: WT_FLAG_BLANK_ACCUMULATION).
+  bool m_accumulationBlank = true;
+  /// Zero the accumulation where it was never written, before it is read.
+  void writeBlankAccumulation();
   LightList m_lights;
   Environment m_environment;
   cl::Buffer m_envTexels, m_envMarginal, m_envConditional;
