@@ -112,7 +112,7 @@ inline bool bvh_prims_closest_root(GeometryScene g, uint root, float3 org, float
           if (i - first < 4u && (missed >> (i - first) & 1u)) continue;
           uint prim = g.refs[i];
           float t, u, v;
-          if (geometry_intersect(g, prim, org, dir, tmin, hit->t, skip, WT_NO_HIT, false, &t, &u, &v)) {
+          if (geometry_intersect_entry(g, i, prim, org, dir, tmin, hit->t, skip, WT_NO_HIT, false, &t, &u, &v)) {
             hit->t = t;
             hit->b1 = u;
             hit->b2 = v;
@@ -168,7 +168,7 @@ inline bool bvh_prims_occluded_root(GeometryScene g, uint root, float3 org, floa
         for (uint i = first; i < first + count; ++i) {
           if (i - first < 4u && (missed >> (i - first) & 1u)) continue;
           float t, u, v;
-          if (geometry_intersect(g, g.refs[i], org, dir, tmin, tmax, skip, WT_NO_HIT, true, &t, &u, &v)) return true;
+          if (geometry_intersect_entry(g, i, g.refs[i], org, dir, tmin, tmax, skip, WT_NO_HIT, true, &t, &u, &v)) return true;
         }
       } else {
         stack_node[sp++] = first;
@@ -243,7 +243,7 @@ inline void bvh_prims_closest(BvhScene scene, GeometryScene g, float3 org, float
           }
 #endif
           float t, u, v;
-          if (geometry_intersect(g, prim, org, dir, tmin, hit->t, skip, WT_NO_HIT, false, &t, &u, &v)) {
+          if (geometry_intersect_entry(g, i, prim, org, dir, tmin, hit->t, skip, WT_NO_HIT, false, &t, &u, &v)) {
             hit->t = t;
             hit->b1 = u;
             hit->b2 = v;
@@ -319,7 +319,7 @@ inline bool bvh_prims_occluded(BvhScene scene, GeometryScene g, float3 org, floa
           }
 #endif
           float t, u, v;
-          if (geometry_intersect(g, prim, org, dir, tmin, tmax, skip_a, skip_b, true, &t, &u, &v)) return true;
+          if (geometry_intersect_entry(g, i, prim, org, dir, tmin, tmax, skip_a, skip_b, true, &t, &u, &v)) return true;
         }
       } else {
         stack_node[sp++] = first;

@@ -294,7 +294,7 @@ __attribute__((always_inline)) inline bool prims_walk_next(PrimWalk* w, bool any
 }
 
 /// The primitives refs[first, first + count) (no instances) against the
-/// lanes of lane_hit, each lane's ray alone (geometry_intersect in (tmin,
+/// lanes of lane_hit, each lane's ray alone (geometry_intersect_entry in (tmin,
 /// t[l]), leaving skip and skip_b[l]; no skip_b: none), a lane at a time
 /// (so one the leaf blocks stops at once): where one hits, found[l] set,
 /// and the lane narrowed to it (closest hit: t, u, v, prim; instance[l]
@@ -313,8 +313,8 @@ __attribute__((always_inline)) inline bool prims_packet_leaf(GeometryScene g, ui
       if (i - first < 4u && (missed >> (i - first) & 1u)) continue;
       uint id = g.refs[i];
       float th, uh, vh;
-      if (!geometry_intersect(g, id, o, d, p->tmin[l], t[l], p->skip[l], skip_b ? skip_b[l] : WT_NO_HIT, any, &th,
-                              &uh, &vh))
+      if (!geometry_intersect_entry(g, i, id, o, d, p->tmin[l], t[l], p->skip[l], skip_b ? skip_b[l] : WT_NO_HIT,
+                                    any, &th, &uh, &vh))
         continue;
       found[l] = -1;
       won = true;

@@ -10,6 +10,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 
 #include <algorithm>
+#include <limits>
 #include <array>
 #include <bit>
 #include <chrono>
@@ -689,6 +690,9 @@ void orientCurveNodes(Bvh4& tree, const PrimitiveRows& rows, const std::vector<s
   }
 }
 
+/// A leaf joint row that is no curve's: its infinite radius passes every ray through the leaf's reject.
+constexpr WtVec4 kNoJoint{0.0f, 0.0f, 0.0f, -std::numeric_limits<float>::infinity()};
+
 }  // namespace
 
 PrimitiveTree buildPrimitiveTree(const PrimitiveRows& rows, const BvhBuildOptions& options) {
@@ -708,15 +712,14 @@ PrimitiveTree buildPrimitiveTree(const PrimitiveRows& rows, const BvhBuildOption
   tree.refs.resize(bvh.primIndices.size());
   for (std::size_t i = 0; i < tree.refs.size(); ++i) tree.refs[i] = ids[bvh.primIndices[i]];
   // each entry's segment joints, in leaf order beside the refs
-  tree.joints.assign(WT_LEAF_JOINT_ROWS * tree.refs.size(), WtVec4{0.0f, 0.0f, 0.0f, -1.0f});
+  tree.joints.assign(WT_LEAF_JOINT_ROWS * tree.refs.size(), kNoJoint);
   for (std::size_t i = 0; i < tree.refs.size(); ++i) {
     const std::uint32_t id = tree.refs[i];
     if (primType(id) != WT_PRIM_CURVE) continue;
     const std::size_t row = rows.dataFirst[WT_PRIM_CURVE] + 2 * std::size_t(primIndex(id));
     if (row + 1 >= rows.data.size()) continue;
     for (int end = 0; end < 2; ++end) {
-      const WtVec4& j = rows.data[row + end];
-      tree.joints[WT_LEAF_JOINT_ROWS * i + end] = WtVec4{j.x, j.y, j.z, std::fabs(j.w)};
+      tree.joints[WT_LEAF_JOINT_ROWS * i + end] = rows.data[row + end];  // the sign bits too: the segment test reads these
     }
   }
   tree.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -1093,7 +1096,7 @@ void SceneBuffers::uploadPrimitives(Context& context, const Scene& scene, const 
   geometry.leaf_joints = std::uint32_t(rows.data.size());
   rows.data.insert(rows.data.end(), tree.joints.begin(), tree.joints.end());
   // a leaf's test reads its entries' joints four at a time: room for the last leaf's
-  rows.data.resize(rows.data.size() + (kPrimitiveLeafSize - 1) * WT_LEAF_JOINT_ROWS, WtVec4{0.0f, 0.0f, 0.0f, -1.0f});
+  rows.data.resize(rows.data.size() + (kPrimitiveLeafSize - 1) * WT_LEAF_JOINT_ROWS, kNoJoint);
   primitiveBytes = 0;
   primNodes = upload(context, tree.bvh4.nodes, primitiveBytes);
   primRefs = upload(context, tree.refs, primitiveBytes);

@@ -114,11 +114,12 @@ inline void curve_cone_roots(float4 a, float4 b, float3 o, float3 d, float* lo, 
   }
 }
 
-/// The joint rows of segment k with their radii made positive; *left and
-/// *right: whether the curve goes on past p0 and past p1.
-inline void curve_segment(__global const float4* rows, uint k, float4* a, float4* b, bool* left, bool* right) {
-  *a = rows[2u * k];
-  *b = rows[2u * k + 1u];
+/// A segment's two joint rows (its prim_data rows, or the same values in
+/// the leaf joints) with their radii made positive; *left and *right:
+/// whether the curve goes on past p0 and past p1.
+inline void curve_segment(__global const float4* joints, float4* a, float4* b, bool* left, bool* right) {
+  *a = joints[0];
+  *b = joints[1];
   *left = !signbit(a->w);
   *right = !signbit(b->w);
   a->w = fabs(a->w);
@@ -151,16 +152,16 @@ inline float curve_max3(float3 v) { return fmax(fabs(v.x), fmax(fabs(v.y), fabs(
 inline float4 curve_max3_4(float4 x, float4 y, float4 z) { return fmax(fabs(x), fmax(fabs(y), fabs(z))); }
 
 /// Whether the ray through o along unit dn passes wider of each of four
-/// segments (joint spheres rows 2k and 2k + 1 of j, k = 0..3; radius < 0:
-/// no curve, never missed) than the segment's larger radius, by
+/// segments (joint spheres rows 2k and 2k + 1 of j, k = 0..3, the radii's
+/// sign bits as in prim_data; radius -infinity: no curve, never missed) than the segment's larger radius, by
 /// curve_intersect's bound and its rounding margin, in float4 lanes: every
 /// hit of a segment lies within that radius of its axis.
 inline int4 curve_segments_missed4(__global const float4* j, float3 o, float3 dn) {
   float4 a0 = j[0], b0 = j[1], a1 = j[2], b1 = j[3], a2 = j[4], b2 = j[5], a3 = j[6], b3 = j[7];
   float4 ax = (float4)(a0.x, a1.x, a2.x, a3.x), ay = (float4)(a0.y, a1.y, a2.y, a3.y);
-  float4 az = (float4)(a0.z, a1.z, a2.z, a3.z), ar = (float4)(a0.w, a1.w, a2.w, a3.w);
+  float4 az = (float4)(a0.z, a1.z, a2.z, a3.z), ar = fabs((float4)(a0.w, a1.w, a2.w, a3.w));
   float4 ex = (float4)(b0.x, b1.x, b2.x, b3.x) - ax, ey = (float4)(b0.y, b1.y, b2.y, b3.y) - ay;
-  float4 ez = (float4)(b0.z, b1.z, b2.z, b3.z) - az, br = (float4)(b0.w, b1.w, b2.w, b3.w);
+  float4 ez = (float4)(b0.z, b1.z, b2.z, b3.z) - az, br = fabs((float4)(b0.w, b1.w, b2.w, b3.w));
   float4 wx = ax - o.x, wy = ay - o.y, wz = az - o.z;
   float4 wd = wx * dn.x + wy * dn.y + wz * dn.z, ed = ex * dn.x + ey * dn.y + ez * dn.z;
   wx -= wd * dn.x, wy -= wd * dn.y, wz -= wd * dn.z;
@@ -173,12 +174,15 @@ inline int4 curve_segments_missed4(__global const float4* j, float3 o, float3 dn
   float4 e_max = curve_max3_4((float4)(b0.x, b1.x, b2.x, b3.x) - ax, (float4)(b0.y, b1.y, b2.y, b3.y) - ay,
                               (float4)(b0.z, b1.z, b2.z, b3.z) - az);
   float4 reach = r * 1.001f + spawn_gamma(32) * (curve_max3(o) + curve_max3_4(ax, ay, az) + e_max + r);
-  return (gx * gx + gy * gy + gz * gz > reach * reach) & (ar >= 0.0f);
+  return gx * gx + gy * gy + gz * gz > reach * reach;  // (an infinite reach never misses)
 }
 
 /// Ray (o, d) against curve segment k in (tmin, tmax): the distance and the
-/// sweep parameter u in [0, 1] from p0 to p1. `leaving`: the ray starts on
-/// this segment's surface (it is the primitive the ray leaves).
+/// sweep parameter u in [0, 1] from p0 to p1. `joints`: its two rows, read
+/// from the leaf joints in a walk (in cache after the leaf's reject; the
+/// neighbours' rows are read only for a root about to be reported).
+/// `leaving`: the ray starts on this segment's surface (it is the primitive
+/// the ray leaves).
 ///
 /// The roots are taken from an origin moved along the ray to where it
 /// passes the segment's middle, so a ray from afar keeps the precision of
@@ -189,11 +193,11 @@ inline int4 curve_segments_missed4(__global const float4* j, float3 o, float3 dn
 /// sharing a joint) and heads out of the hull cannot meet it again; one
 /// heading in meets it at the far root only. Roots inside a neighbour's
 /// hull are dropped.
-inline bool curve_intersect(__global const float4* rows, uint k, float3 o, float3 d, float tmin, float tmax,
-                            bool leaving, float* t_hit, float* u_hit) {
+inline bool curve_intersect(__global const float4* rows, uint k, __global const float4* joints, float3 o, float3 d,
+                            float tmin, float tmax, bool leaving, float* t_hit, float* u_hit) {
   float4 a, b;
   bool left, right;
-  curve_segment(rows, k, &a, &b, &left, &right);
+  curve_segment(joints, &a, &b, &left, &right);
   float3 n_o;
   float s_o;
   if (leaving) {
@@ -262,7 +266,7 @@ inline void curve_surface(__global const float4* rows, uint k, uint4 info, float
                           float3* p_error, float3* normal, float2* uv, float3* dpdu) {
   float4 a, b;
   bool left, right;
-  curve_segment(rows, k, &a, &b, &left, &right);
+  curve_segment(rows + 2u * k, &a, &b, &left, &right);
   float3 e = b.xyz - a.xyz;
   float dr = b.w - a.w;
   float3 h = o + t * d - a.xyz;

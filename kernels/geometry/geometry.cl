@@ -114,7 +114,8 @@ inline bool geometry_intersect(GeometryScene g, uint prim, float3 o, float3 d, f
 #endif
 #if WT_HAS_CURVES
     case WT_PRIM_CURVE:
-      return curve_intersect(g.data + g.header.data_first[WT_PRIM_CURVE], prim_index(prim), o, d, tmin, tmax,
+      return curve_intersect(g.data + g.header.data_first[WT_PRIM_CURVE], prim_index(prim),
+                             g.data + g.header.data_first[WT_PRIM_CURVE] + 2u * prim_index(prim), o, d, tmin, tmax,
                              leaving, t, u);
 #endif
 #if WT_HAS_SDF_GRIDS
@@ -132,6 +133,23 @@ inline bool geometry_intersect(GeometryScene g, uint prim, float3 o, float3 d, f
     default:
       return false;
   }
+}
+
+/// geometry_intersect on entry `entry` of the primitive tree's leaves: a
+/// curve segment's joints come from the leaf joints the leaf's reject has
+/// just read, not from its own rows, a cache miss per segment tested.
+inline bool geometry_intersect_entry(GeometryScene g, uint entry, uint prim, float3 o, float3 d, float tmin, float tmax,
+                                     uint skip_a, uint skip_b, bool any_hit, float* t, float* u, float* v) {
+#if WT_HAS_CURVES
+  if (prim_type(prim) == WT_PRIM_CURVE) {
+    *u = 0.0f;
+    *v = 0.0f;
+    return curve_intersect(g.data + g.header.data_first[WT_PRIM_CURVE], prim_index(prim),
+                           g.data + g.header.leaf_joints + WT_LEAF_JOINT_ROWS * entry, o, d, tmin, tmax,
+                           prim == skip_a || prim == skip_b, t, u);
+  }
+#endif
+  return geometry_intersect(g, prim, o, d, tmin, tmax, skip_a, skip_b, any_hit, t, u, v);
 }
 
 /// The surface at a hit, for shading.

@@ -172,8 +172,9 @@ enum : wt_uint {
 /// and per type its rows of prim_data (float4) and prim_info (uint4).
 /// prim_data rows per prim_refs entry, in leaf order after the types' rows
 /// (WtGeometry::leaf_joints): a curve segment's two joint spheres (x, y, z,
-/// r), so the walk rejects most entries four at once from memory read in
-/// order; other entries' rows have r = -1 (always tested). Three entries' rows of padding follow the last.
+/// r, its sign bit as in the curve's rows), so the walk rejects most entries
+/// four at once from memory read in order and the segment test reads its
+/// joints from there; other entries' rows have r = -infinity (always tested). Three entries' rows of padding follow the last.
 #define WT_LEAF_JOINT_ROWS 2
 typedef struct WtGeometry {
   wt_uint node_count;      ///< nodes of the primitive BVH; 0: no such primitives
