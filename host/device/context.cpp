@@ -97,10 +97,12 @@ void Context::launch(const char* stage, cl::Kernel& kernel, std::size_t count, s
   // the extra work-items return at the kernels' count guard
   // PoCL keeps its work-group functions by program and kernel name, so a new
   // kernel object of a function launched before needs no wide launch
-  if (m_widenFirstLaunches &&
-      m_launched.emplace(kernel.getInfo<CL_KERNEL_PROGRAM>()(), kernel.getInfo<CL_KERNEL_FUNCTION_NAME>(), localSize)
-          .second)
-    global = std::max(global, (kPoclSmallGridWidth + localSize - 1) / localSize * localSize);
+  if (m_widenFirstLaunches) {
+    cl::Program program = kernel.getInfo<CL_KERNEL_PROGRAM>();
+    LaunchedProgram& launched = m_launched.try_emplace(program(), LaunchedProgram{program, {}}).first->second;
+    if (launched.kernels.emplace(kernel.getInfo<CL_KERNEL_FUNCTION_NAME>(), localSize).second)
+      global = std::max(global, (kPoclSmallGridWidth + localSize - 1) / localSize * localSize);
+  }
   m_lastGlobal = global;
   cl::Event event;
   try {

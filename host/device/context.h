@@ -114,7 +114,13 @@ class Context {
   bool m_profiling;
   bool m_oclgrind;
   bool m_widenFirstLaunches;
-  std::set<std::tuple<cl_program, std::string, std::size_t>> m_launched;  ///< (program, kernel, local size) launched
+  /// Programs launched here, each held (so a released program's address
+  /// cannot come back as a new one's), with its (kernel, local size) launched.
+  struct LaunchedProgram {
+    cl::Program program;
+    std::set<std::pair<std::string, std::size_t>> kernels;
+  };
+  std::map<cl_program, LaunchedProgram> m_launched;
   std::size_t m_lastGlobal = 0;
   std::vector<std::pair<std::string, cl::Event>> m_pending;
   std::vector<std::pair<std::string, cl::Program>> m_programs;  ///< oldest first

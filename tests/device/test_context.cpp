@@ -106,5 +106,31 @@ TEST(Context, PoclCompilesOneWorkGroupFunctionForNarrowAndWideLaunches) {
   EXPECT_EQ(variants[0].find("smallgrid"), std::string::npos) << "a narrow variant: " << variants[0];
 }
 
+// A program released and another built at once may get the same address
+// (PoCL allocates both alike): the new program's first launch is still wide,
+// or PoCL compiles a narrow variant for it (one per kernel of every later
+// program in a process that builds many, as a test binary does).
+TEST(Context, EveryNewProgramsFirstLaunchIsWide) {
+  Context& ctx = test::deviceContext();
+  if (!ctx.widenFirstLaunches()) GTEST_SKIP() << "not PoCL's CPU device: " << ctx.info().platformName;
+  const std::string source =
+      "__kernel void widen_again(uint count, __global uint* out) {\n"
+      "  uint i = get_global_id(0);\n"
+      "  if (i >= count) return;\n"
+      "  out[i] = i + 1u;\n"
+      "}\n";
+  cl::Buffer out(ctx.context(), CL_MEM_READ_WRITE, 128 * sizeof(cl_uint));
+  for (int round = 0; round < 12; ++round) {
+    cl::Program program(ctx.context(), source);
+    program.build();
+    cl::Kernel kernel(program, "widen_again");
+    kernel.setArg(0, cl_uint(100));
+    kernel.setArg(1, out);
+    ctx.launch("widen_again", kernel, 100);
+    ctx.finish();
+    EXPECT_GE(ctx.lastGlobalSize(), Context::kPoclSmallGridWidth) << "program " << round;
+  }
+}
+
 }  // namespace
 }  // namespace wt
