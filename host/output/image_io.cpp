@@ -189,9 +189,15 @@ void writePng(const std::filesystem::path& path, const Image& image) {
   std::string second;
   uLong secondAdler = 1;
   bool secondDone = true;
+  const auto deflateSecond = [&]() { secondDone = deflatePngRows(image, middle, height, true, second, secondAdler); };
   std::thread helper;
-  if (split)
-    helper = std::thread([&]() { secondDone = deflatePngRows(image, middle, height, true, second, secondAdler); });
+  if (split) {
+    try {
+      helper = std::thread(deflateSecond);
+    } catch (const std::system_error&) {
+      deflateSecond();  // no thread to be had: the same bytes, one half after the other
+    }
+  }
   std::string body;
   uLong adler = 1;
   const bool firstDone = deflatePngRows(image, 0, middle, !split, body, adler);
