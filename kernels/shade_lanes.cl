@@ -99,11 +99,66 @@ WT_LANES_INLINE VL gather_v(__global const float4* rows, uintL row) {
   return vl(gather_f(f, row, 4u, 0u), gather_f(f, row, 4u, 1u), gather_f(f, row, 4u, 2u));
 }
 
+/// A float4 row per lane as four lane vectors (x: every lane's row's x, ...).
+typedef struct ColsL {
+  floatL x, y, z, w;
+} ColsL;
+typedef struct Cols8 {
+  float8 x, y, z, w;
+} Cols8;
+
+/// 8 rows of 4 to their 4 columns and back (the same shuffles): one load or
+/// store a row and 12 shuffles instead of an element insert or extract each.
+WT_LANES_INLINE Cols8 lanes_transpose8(float8 a0, float8 a1, float8 a2, float8 a3) {
+  float8 t0 = __builtin_shufflevector(a0, a1, 0, 8, 1, 9, 4, 12, 5, 13);
+  float8 t1 = __builtin_shufflevector(a0, a1, 2, 10, 3, 11, 6, 14, 7, 15);
+  float8 t2 = __builtin_shufflevector(a2, a3, 0, 8, 1, 9, 4, 12, 5, 13);
+  float8 t3 = __builtin_shufflevector(a2, a3, 2, 10, 3, 11, 6, 14, 7, 15);
+  return (Cols8){__builtin_shufflevector(t0, t2, 0, 1, 8, 9, 4, 5, 12, 13),
+                 __builtin_shufflevector(t0, t2, 2, 3, 10, 11, 6, 7, 14, 15),
+                 __builtin_shufflevector(t1, t3, 0, 1, 8, 9, 4, 5, 12, 13),
+                 __builtin_shufflevector(t1, t3, 2, 3, 10, 11, 6, 7, 14, 15)};
+}
+#define WT_LANES_PAIR(a, b) __builtin_shufflevector(a, b, 0, 1, 2, 3, 4, 5, 6, 7)
+WT_LANES_INLINE Cols8 gather_rows8(__global const float4* rows, uint8 i) {
+  // a_k: rows k and k + 4, so the transpose's columns come out in lane order
+  return lanes_transpose8(WT_LANES_PAIR(rows[i.s0], rows[i.s4]), WT_LANES_PAIR(rows[i.s1], rows[i.s5]),
+                          WT_LANES_PAIR(rows[i.s2], rows[i.s6]), WT_LANES_PAIR(rows[i.s3], rows[i.s7]));
+}
+WT_LANES_INLINE void scatter_rows8(__global float4* rows, uint8 i, int8 m, float8 x, float8 y, float8 z, float8 w) {
+  Cols8 r = lanes_transpose8(x, y, z, w);  // .x: rows 0 and 4, .y: 1 and 5, .z: 2 and 6, .w: 3 and 7
+  if (m.s0) rows[i.s0] = r.x.lo;
+  if (m.s1) rows[i.s1] = r.y.lo;
+  if (m.s2) rows[i.s2] = r.z.lo;
+  if (m.s3) rows[i.s3] = r.w.lo;
+  if (m.s4) rows[i.s4] = r.x.hi;
+  if (m.s5) rows[i.s5] = r.y.hi;
+  if (m.s6) rows[i.s6] = r.z.hi;
+  if (m.s7) rows[i.s7] = r.w.hi;
+}
+
+/// Each lane's row of a float4 buffer, whole.
+WT_LANES_INLINE ColsL gather_rows(__global const float4* rows, uintL row) {
+#if WT_SHADE_LANES_WIDTH == 16
+#define WT_LANES_JOIN(a, b) __builtin_shufflevector(a, b, 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15)
+  Cols8 lo = gather_rows8(rows, row.lo), hi = gather_rows8(rows, row.hi);
+  return (ColsL){WT_LANES_JOIN(lo.x, hi.x), WT_LANES_JOIN(lo.y, hi.y), WT_LANES_JOIN(lo.z, hi.z),
+                 WT_LANES_JOIN(lo.w, hi.w)};
+#else
+  Cols8 c = gather_rows8(rows, row);
+  return (ColsL){c.x, c.y, c.z, c.w};
+#endif
+}
+WT_LANES_INLINE VL cols_v(ColsL c) { return (VL){c.x, c.y, c.z}; }
+
 /// Rows `row` of a float4 buffer set to (v, w) where m.
 WT_LANES_INLINE void scatter_v(__global float4* rows, uintL row, intL m, VL v, floatL w) {
-  #pragma unroll
-  for (int k = 0; k < WT_SHADE_LANES_WIDTH; ++k)
-    if (lane_i(m, k)) rows[lane_u(row, k)] = (float4)(lane_v(v, k), lane_f(w, k));
+#if WT_SHADE_LANES_WIDTH == 16
+  scatter_rows8(rows, row.lo, m.lo, v.x.lo, v.y.lo, v.z.lo, w.lo);
+  scatter_rows8(rows, row.hi, m.hi, v.x.hi, v.y.hi, v.z.hi, w.hi);
+#else
+  scatter_rows8(rows, row, m, v.x, v.y, v.z, w);
+#endif
 }
 
 // ---- the sampler (sampler.cl, shared/rng.h, shared/sampler.h) on lanes
@@ -730,21 +785,22 @@ WT_KERNEL void shade(WT_SHADE_KERNEL_PARAMS) {
   LightScene ls = {lights, alias, frame.light_count, tri_verts, env, g, tri_info, ss};
 
   // lanes past the queue's end shade its first entry and write nothing
-  uintL path = gather_u(queue_in, select((uintL)(first), entry, valid), 1u, 0u);
-  __global const float* hf = (__global const float*)hits;
-  floatL hit_t = gather_f(hf, path, 4u, 0u), hit_b1 = gather_f(hf, path, 4u, 1u), hit_b2 = gather_f(hf, path, 4u, 2u);
-  uintL prim = as_uintL(gather_f(hf, path, 4u, 3u));
-  __global const float* tf = (__global const float*)throughput;
-  VL beta = gather_v(throughput, path);
-  floatL pdf_prev = gather_f(tf, path, 4u, 3u);
-  VL dir = gather_v(ray_d, path);
+  uintL path = first + WT_SHADE_LANES_WIDTH <= count ? vloadL(0, queue_in + first)
+                                                     : gather_u(queue_in, select((uintL)(first), entry, valid), 1u, 0u);
+  ColsL hit_row = gather_rows(hits, path);
+  floatL hit_t = hit_row.x, hit_b1 = hit_row.y, hit_b2 = hit_row.z;
+  uintL prim = as_uintL(hit_row.w);
+  ColsL beta_pdf = gather_rows(throughput, path);
+  VL beta = cols_v(beta_pdf);
+  floatL pdf_prev = beta_pdf.w;
+  VL dir = cols_v(gather_rows(ray_d, path));
   intL miss = prim == WT_NO_HIT;
   uintL tri = select(prim, (uintL)(0u), miss);  // a miss reads triangle 0 and uses nothing of it
 
   // the surface (geometry_local_surface, triangle_surface)
-  __global const uint* info = (__global const uint*)tri_info;
-  uintL v0 = gather_u(info, tri, 4u, 0u), v1 = gather_u(info, tri, 4u, 1u), v2 = gather_u(info, tri, 4u, 2u);
-  uintL material = gather_u(info, tri, 4u, 3u);
+  ColsL info = gather_rows((__global const float4*)tri_info, tri);
+  uintL v0 = as_uintL(info.x), v1 = as_uintL(info.y), v2 = as_uintL(info.z);
+  uintL material = as_uintL(info.w);
   VL p0, p1, p2;
   triangle_cornersL(tri_verts, tri, &p0, &p1, &p2);
   VL p_error;
@@ -770,7 +826,7 @@ WT_KERNEL void shade(WT_SHADE_KERNEL_PARAMS) {
   }
   ng = vl_select(vl_splat((float3)(0.0f)), vl_div(ng, len), len > 0.0f && isfinite(len));
   {
-    VL n0 = gather_v(normals, v0), n1 = gather_v(normals, v1), n2 = gather_v(normals, v2);
+    VL n0 = cols_v(gather_rows(normals, v0)), n1 = cols_v(gather_rows(normals, v1)), n2 = cols_v(gather_rows(normals, v2));
     floatL b0 = 1.0f - hit_b1 - hit_b2;
     VL ns_sum = vl_add(vl_add(vl_scale(n0, b0), vl_scale(n1, hit_b1)), vl_scale(n2, hit_b2));
     intL has_normals = vl_dot(n0, n0) > 0.0f && vl_dot(n1, n1) > 0.0f && vl_dot(n2, n2) > 0.0f;
@@ -781,9 +837,27 @@ WT_KERNEL void shade(WT_SHADE_KERNEL_PARAMS) {
   VL ns = p0;
   __global const float* mf = (__global const float*)materials;
   const uint mstride = sizeof(WtMaterial) / sizeof(float);
-  VL base = vl(gather_f(mf, material, mstride, 0u), gather_f(mf, material, mstride, 1u), gather_f(mf, material, mstride, 2u));
-  VL le = vl(gather_f(mf, material, mstride, 4u), gather_f(mf, material, mstride, 5u), gather_f(mf, material, mstride, 6u));
-  floatL le_both = gather_f(mf, material, mstride, 7u);
+  // base_color and emission, rows 0 and 1 of the material's (types.h)
+  const uint mrows = sizeof(WtMaterial) / sizeof(float4);
+  VL base = cols_v(gather_rows((__global const float4*)materials, material * mrows));
+  ColsL emission = gather_rows((__global const float4*)materials, material * mrows + 1u);
+  VL le = cols_v(emission);
+  floatL le_both = emission.w;
+  // A miss under a black constant sky adds 0 x (a finite MIS weight) x (a
+  // finite throughput): nothing, so it skips the emission lane loop. A weight
+  // is finite where |pdf_prev| < 1e18 (its square, the power heuristic's, is too).
+  const bool black_sky = environment.mode == WT_ENV_CONSTANT &&
+                         all(vec4_xyz(environment.color) * environment.intensity == (float3)(0.0f));
+  intL dark_miss = miss && (intL)(black_sky ? -1 : 0) && isfinite(beta.x) && isfinite(beta.y) && isfinite(beta.z) &&
+                   fabs(pdf_prev) < 1e18f;
+  {
+    // an emission event's read-modify-write of radiance (below) finds a line
+    // no stream prefetch brings: ask for it while the surface is computed
+    intL may_emit = valid && ((miss && !dark_miss) || vl_positive(le));
+    if (any(may_emit))
+      for (int k = 0; k < WT_SHADE_LANES_WIDTH; ++k)
+        if (lane_i(may_emit, k)) __builtin_prefetch(&radiance[lane_u(path, k)], 1);
+  }
 #if WT_HAS_TRANSMISSION
   // The smooth interface of a plain dielectric volume (metallic 0,
   // transmission 1, no dispersion), met from air or on the way out of the one
@@ -842,7 +916,7 @@ WT_KERNEL void shade(WT_SHADE_KERNEL_PARAMS) {
 
   // misses and emitters' hits, lane by lane (shade.cl's code)
   intL emits = active && (le_both != 0.0f || !inside) && vl_positive(le);
-  intL lit = valid && (miss || emits);
+  intL lit = valid && ((miss && !dark_miss) || emits);
   if (any(lit)) {
     for (int k = 0; k < WT_SHADE_LANES_WIDTH; ++k) {
       if (!lane_i(lit, k)) continue;
@@ -894,7 +968,9 @@ WT_KERNEL void shade(WT_SHADE_KERNEL_PARAMS) {
   VL origin = ray_offset_originL(p, p_error, ng);
   floatL u_pick, u_rr, u_lobe, u_tree;
   sampler_get2_L(frame, path, WT_DIM_LIGHT_PICK, &u_pick, &u_rr);
+#if WT_HAS_PBR || WT_HAS_TRANSMISSION
   sampler_get2_L(frame, path, WT_DIM_BSDF_LOBE, &u_lobe, &u_tree);
+#endif
 
   // next-event estimation
   uint nee_count = (frame.flags & WT_FLAG_NEE) ? frame.light_count : 0u;
@@ -919,6 +995,10 @@ WT_KERNEL void shade(WT_SHADE_KERNEL_PARAMS) {
     intL tree = active && type == WT_LIGHT_TREE;
 #endif
     if (any(tree)) {
+#if !(WT_HAS_PBR || WT_HAS_TRANSMISSION)
+      // without the metallic-roughness lobes, u_lobe's pair serves the tree alone
+      sampler_get2_L(frame, path, WT_DIM_BSDF_LOBE, &u_lobe, &u_tree);
+#endif
       floatL pmf_tree;
       uintL picked = light_tree_pickL(light_tree, origin, ng, u_tree, tree, &pmf_tree);
       pmf = select(pmf, pmf * pmf_tree, tree);
@@ -1017,11 +1097,19 @@ WT_KERNEL void shade(WT_SHADE_KERNEL_PARAMS) {
     floatL tmax = select((floatL)(INFINITY), target_len * (1.0f - WT_SHADOW_MARGIN), finite_light);
     intL queued = carries && vl_positive(contribution) && tmax > 0.0f;
     if (any(queued)) {
+      // one atomic for the work-item's shadow rays: each is a full fence on x86
+      uint shadow_slot = 0u;
+      if (compact_shadows) {
+        uint n = 0u;
+        #pragma unroll
+        for (int k = 0; k < WT_SHADE_LANES_WIDTH; ++k) n += lane_i(queued, k) ? 1u : 0u;
+        shadow_slot = atomic_add(&counters[WT_COUNTER_SHADOW], n);
+      }
       #pragma unroll
       for (int k = 0; k < WT_SHADE_LANES_WIDTH; ++k) {
         if (!lane_i(queued, k)) continue;
         uint pk = lane_u(path, k);
-        shadow_queue[compact_shadows ? atomic_inc(&counters[WT_COUNTER_SHADOW]) : first + k] = pk;
+        shadow_queue[compact_shadows ? shadow_slot++ : first + k] = pk;
         shadow_o[pk] = (float4)(lane_v(origin, k), 0.0f);
         shadow_d[pk] = (float4)(lane_v(shadow_dir, k), lane_f(tmax, k));
         shadow_radiance[pk] = (float4)(lane_v(contribution, k), 0.0f);
@@ -1134,6 +1222,11 @@ WT_KERNEL void shade(WT_SHADE_KERNEL_PARAMS) {
 #endif
     pdf = select(pdf, -pdf, lambertian);
   }
+  // the survivors' slots first: the atomic waits for every store before it to leave the core
+  uint survivors = 0u;
+  #pragma unroll
+  for (int k = 0; k < WT_SHADE_LANES_WIDTH; ++k) survivors += lane_i(go, k) ? 1u : 0u;
+  uint slot = atomic_add(&counters[out_slot], survivors);
   scatter_v(throughput, path, go, beta, pdf);
 #if WT_HAS_TRANSMISSION
   // light may come through glass: the light tree's pmf at a hit the ray finds takes no receiver normal (shade.cl's
@@ -1145,7 +1238,6 @@ WT_KERNEL void shade(WT_SHADE_KERNEL_PARAMS) {
   scatter_v(ray_o, path, go, origin, (floatL)(0.0f));
 #endif
   scatter_v(ray_d, path, go, wi, (floatL)(INFINITY));
-  uint survivors = 0u;
   #pragma unroll
   for (int k = 0; k < WT_SHADE_LANES_WIDTH; ++k) {
     if (!lane_i(go, k)) continue;
@@ -1167,10 +1259,6 @@ WT_KERNEL void shade(WT_SHADE_KERNEL_PARAMS) {
 #endif
     bounce_counts[pk] = counts;
     ray_skip[pk] = lane_u(prim, k);
-    ++survivors;
+    queue_out[slot++] = pk;
   }
-  uint slot = atomic_add(&counters[out_slot], survivors);
-  #pragma unroll
-  for (int k = 0; k < WT_SHADE_LANES_WIDTH; ++k)
-    if (lane_i(go, k)) queue_out[slot++] = lane_u(path, k);
 }
