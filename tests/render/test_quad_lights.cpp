@@ -328,6 +328,49 @@ TEST(QuadLights, ShadeLanesRenderGlassPastFalseHitsTheSameAsOnePathPerWorkItem) 
   shadeLanesAgainstOnePath(scene, settings, 61, "glass past false hits");
 }
 
+// Shade's lanes at 16 wide (AVX-512's) and at 8 compute each path alike:
+// the same image bit for bit, under a grey sky and under a black one (whose
+// misses skip the emission loop). Every lane width takes the path state's
+// rows whole (kernels/shade_lanes.cl's gather_rows and scatter_v), 16 lanes
+// as two halves of 8. The glass scene above: Lambertian, metallic-roughness
+// and glass on the lanes, paths handed to shade_path, rectangles, a point light.
+TEST(QuadLights, ShadeLanesAt16WideRenderBitForBitAsAt8) {
+  Scene scene = quadLitScene();
+  scene.materials[0] = makePbrMaterial(glm::vec3(0.7f, 0.6f, 0.5f), 0.0f, 0.6f);
+  const std::uint32_t glass = addMaterial(
+      scene, withTransmission(makePbrMaterial(glm::vec3(1.0f), 0.0f, 0.0f), 1.0f, 1.5f, false, glm::vec3(0.5f, 1.5f, 3.0f)),
+      "glass");
+  const std::uint32_t metal = addMaterial(scene, makePbrMaterial(glm::vec3(0.9f, 0.6f, 0.5f), 1.0f, 0.3f), "metal");
+  const std::uint32_t white = addMaterial(scene, makeMaterial(glm::vec3(0.8f)), "white");
+  addBox(scene, {-1.4f, 0.02f, 0.3f}, {-0.5f, 0.6f, 1.1f}, glass);
+  addBox(scene, {0.6f, 0.02f, 0.3f}, {1.3f, 0.5f, 1.0f}, metal);
+  addRect(scene, {-2.0f, 0.0f, -1.2f}, {0.0f, 1.5f, 0.0f}, {4.0f, 0.0f, 0.0f}, white);
+  PunctualLight point;
+  point.position = glm::vec3(-1.0f, 1.2f, 1.0f);
+  point.intensity = glm::vec3(0.6f, 0.8f, 1.0f);
+  scene.lights.push_back(point);
+  for (glm::vec3 sky : {glm::vec3(0.2f, 0.25f, 0.3f), glm::vec3(0.0f)}) {
+    RenderSettings settings;
+    settings.width = settings.height = 24;
+    settings.maxBounces = 4;
+    settings.rrMinDepth = 1;
+    settings.seed = 71;
+    settings.background = sky;
+    settings.shadeLanesWidth = 8;
+    const Image eight = test::render(scene, settings, 4);
+    settings.shadeLanesWidth = 16;
+    const Image sixteen = test::render(scene, settings, 4);
+    ASSERT_EQ(eight.rgb.size(), sixteen.rgb.size());
+    std::size_t differ = 0, lit = 0;
+    for (std::size_t i = 0; i < eight.rgb.size(); ++i) {
+      differ += eight.rgb[i] != sixteen.rgb[i];
+      lit += eight.rgb[i] > 0.0f;
+    }
+    EXPECT_EQ(differ, 0u) << "sky " << sky.x;
+    EXPECT_GT(lit, eight.rgb.size() / 2) << "sky " << sky.x;  // the comparison saw a lit image
+  }
+}
+
 TEST(QuadLights, ShadeLanesWidthByDevice) {
   // 16 lanes where the device's float vector is 16 wide, 8 elsewhere; an
   // explicit 8 or 16 wins; anything else is refused
