@@ -850,14 +850,17 @@ WT_KERNEL void shade(WT_SHADE_KERNEL_PARAMS) {
                          all(vec4_xyz(environment.color) * environment.intensity == (float3)(0.0f));
   intL dark_miss = miss && (intL)(black_sky ? -1 : 0) && isfinite(beta.x) && isfinite(beta.y) && isfinite(beta.z) &&
                    fabs(pdf_prev) < 1e18f;
+#if !WT_NO_PREFETCH
   {
     // an emission event's read-modify-write of radiance (below) finds a line
     // no stream prefetch brings: ask for it while the surface is computed
+    // (not under Oclgrind, which lacks the intrinsic: tests/oclgrind/prefetch.cl)
     intL may_emit = valid && ((miss && !dark_miss) || vl_positive(le));
     if (any(may_emit))
       for (int k = 0; k < WT_SHADE_LANES_WIDTH; ++k)
         if (lane_i(may_emit, k)) __builtin_prefetch(&radiance[lane_u(path, k)], 1);
   }
+#endif
 #if WT_HAS_TRANSMISSION
   // The smooth interface of a plain dielectric volume (metallic 0,
   // transmission 1, no dispersion), met from air or on the way out of the one
