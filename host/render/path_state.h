@@ -80,8 +80,15 @@ struct PathState {
   /// Every buffer above, once.
   static const std::array<PathBufferDesc, 27> kBuffers;
 
-  /// Allocate every buffer for `pixels` pixels (one element where `needs` lacks its need).
-  void allocate(const cl::Context& context, std::size_t pixels, const PathNeeds& needs);
+  /// Allocate every buffer for `pixels` pixels (one element where `needs`
+  /// lacks its need). With `host` (a CPU device's), the buffers are that
+  /// memory (CL_MEM_USE_HOST_PTR), hostBytes() of it, which must outlive
+  /// them and every command that uses them; else the device allocates.
+  void allocate(const cl::Context& context, std::size_t pixels, const PathNeeds& needs, std::byte* host = nullptr);
+  /// Bytes allocate() takes from `host`: each buffer starts on a kHostAlignment boundary.
+  static std::size_t hostBytes(std::size_t pixels, const PathNeeds& needs);
+  /// A page: more than any device's CL_DEVICE_MEM_BASE_ADDR_ALIGN asks of a host pointer.
+  static constexpr std::size_t kHostAlignment = 4096;
   /// Bytes allocated by allocate().
   std::size_t bytes = 0;
 
@@ -123,11 +130,27 @@ inline const std::array<PathBufferDesc, 27> PathState::kBuffers{{
     {"media", "uint4", 16, &PathState::media, PathNeed::Media},
 }};
 
-inline void PathState::allocate(const cl::Context& context, std::size_t pixelCount, const PathNeeds& needs) {
-  bytes = 0;
+inline std::size_t PathState::hostBytes(std::size_t pixelCount, const PathNeeds& needs) {
+  std::size_t total = 0;
   for (const PathBufferDesc& b : kBuffers) {
     const std::size_t size = b.elementBytes * (needs.has(b.need) ? pixelCount : 1);
-    this->*b.member = cl::Buffer(context, CL_MEM_READ_WRITE, size);
+    total += (size + kHostAlignment - 1) / kHostAlignment * kHostAlignment;
+  }
+  return total;
+}
+
+inline void PathState::allocate(const cl::Context& context, std::size_t pixelCount, const PathNeeds& needs,
+                                std::byte* host) {
+  bytes = 0;
+  std::size_t offset = 0;
+  for (const PathBufferDesc& b : kBuffers) {
+    const std::size_t size = b.elementBytes * (needs.has(b.need) ? pixelCount : 1);
+    if (host) {
+      this->*b.member = cl::Buffer(context, CL_MEM_READ_WRITE | CL_MEM_USE_HOST_PTR, size, host + offset);
+      offset += (size + kHostAlignment - 1) / kHostAlignment * kHostAlignment;
+    } else {
+      this->*b.member = cl::Buffer(context, CL_MEM_READ_WRITE, size);
+    }
     bytes += size;
   }
 }

@@ -131,7 +131,14 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
   needs.aovs = settings.aovs;
   needs.media = features.transmission;
   needs.thinShadows = built.thinShadows;
-  m_path.allocate(ctx, pixels, needs);
+  // a CPU device's kernels address host memory: the path state is pages
+  // mapped here, faulted in by the huge page where the system allows (not
+  // under Oclgrind, which takes CL_MEM_USE_HOST_PTR contents as never written)
+  if (settings.hostPathMemory && context.info().isCpu && !context.underOclgrind()) {
+    auto memory = std::make_unique<ZeroedMemory>(PathState::hostBytes(pixels, needs));
+    if (memory->data()) m_pathMemory = std::move(memory);
+  }
+  m_path.allocate(ctx, pixels, needs, m_pathMemory ? m_pathMemory->data() : nullptr);
   m_counters = cl::Buffer(ctx, CL_MEM_READ_WRITE, WT_COUNTER_COUNT * sizeof(cl_uint));
   auto upload = [&](const auto& data) {
     using T = typename std::decay_t<decltype(data)>::value_type;
@@ -230,7 +237,16 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
   m_path.bind(m_resolve);
 }
 
-Renderer::~Renderer() = default;
+Renderer::~Renderer() {
+  // commands still queued may write the path state: done before its memory is unmapped
+  if (m_pathMemory) {
+    try {
+      m_context.queue().finish();
+    } catch (const cl::Error&) {
+      // a failed queue runs nothing more
+    }
+  }
+}
 
 namespace {
 

@@ -4,6 +4,7 @@
 // accumulate.
 #pragma once
 
+#include "core/zeroed_memory.h"
 #include "device/context.h"
 #include "device/program.h"
 #include "device/scene_buffers.h"
@@ -105,6 +106,10 @@ struct RenderSettings {
   /// Record the AOVs (Image::aovs, kernels/aov.cl): compiled in and their
   /// buffers allocated only when set.
   bool aovs = false;
+  /// On a CPU device the per-pixel buffers are memory the renderer maps
+  /// itself (ZeroedMemory: huge pages, CL_MEM_USE_HOST_PTR); false: the
+  /// device allocates them, for the tests that the image is the same.
+  bool hostPathMemory = true;
   /// With aovs: traversal counts the nodes each camera ray visits
   /// (Aovs::bvhCost; WT_BVH_COST, kernels compiled for the debug view only).
   /// Counted by single-ray traversal: camera rays are not traced in packets.
@@ -305,6 +310,8 @@ class Renderer {
   cl::Buffer m_lightBuffer, m_aliasBuffer, m_emitterPdfBuffer;
   cl::Buffer m_pbrTable;
   cl::Buffer m_lightTree, m_emitterLeaf, m_emitterQuad;
+  /// The memory m_path's buffers are (RenderSettings::hostPathMemory), unmapped after them.
+  std::unique_ptr<ZeroedMemory> m_pathMemory;
   PathState m_path;      ///< per pixel: path state, queues, shadow rays, accumulation
   cl::Buffer m_counters;  ///< WT_COUNTER_*
   RenderStats m_stats;
