@@ -1,7 +1,9 @@
 // Stage 5: exposure (manual, physical or automatic), white balance, the tone
 // mapping operator (shared/tonemap.h), the sRGB curve and a dithered 8-bit
-// quantisation. The mean image is only read: the EXR stays linear. Part of
-// the frame program (frame.cl): reads no compile-time switch.
+// quantisation. The mean image (accumulate_resolve's, or with
+// WT_FLAG_MEAN_IN_STATE the accumulation state's) is only read: the EXR
+// stays linear. Part of the frame program (frame.cl): reads no compile-time
+// switch.
 #include "base.h"
 #include "shared/tonemap.h"
 
@@ -14,9 +16,10 @@ WT_KERNEL void tonemap_log_luminance(WtFrameParams frame, __global const float4*
   uint count = (pixels + WT_TONEMAP_CHUNK - 1u) / WT_TONEMAP_CHUNK;
   if (i >= count) return;
   uint end = min(pixels, (i + 1u) * WT_TONEMAP_CHUNK);
+  const uint stride = (frame.flags & WT_FLAG_MEAN_IN_STATE) != 0u ? 4u : 1u;
   float sum = 0.0f;
   for (uint p = i * WT_TONEMAP_CHUNK; p < end; ++p) {
-    float4 c = mean[p];
+    float4 c = mean[p * stride];
     float l = tonemap_luminance(tonemap_rgb(c.x, c.y, c.z));
     // NaN and negative luminances count as the floor, not as poison
     sum += log2(l > WT_TONEMAP_MIN_LUMINANCE ? l : WT_TONEMAP_MIN_LUMINANCE);
@@ -46,7 +49,8 @@ WT_KERNEL void tonemap(WtFrameParams frame, WtTonemapParams tonemap, __global co
   if (i >= frame.width * frame.height) return;
   float scale = frame.exposure;
   if (tonemap.flags & WT_TONEMAP_FLAG_AUTO_EXPOSURE) scale *= exposure[0];
-  float4 m = mean[i];
+  // the state's first float4 is the mean (WT_FLAG_MEAN_IN_STATE)
+  float4 m = mean[(frame.flags & WT_FLAG_MEAN_IN_STATE) != 0u ? 4u * i : i];
   TonemapRgb c = tonemap_scale(tonemap_rgb(m.x, m.y, m.z), scale);
   c = tonemap_mat3(c, tonemap.balance_r.x, tonemap.balance_r.y, tonemap.balance_r.z, tonemap.balance_g.x,
                    tonemap.balance_g.y, tonemap.balance_g.z, tonemap.balance_b.x, tonemap.balance_b.y,

@@ -576,11 +576,18 @@ void Renderer::readResolved(Image& image, bool tonemap, bool floats) {
   const std::size_t pixels = std::size_t(m_settings.width) * std::size_t(m_settings.height);
   cl::CommandQueue& q = m_context.queue();
   writeBlankAccumulation();
-  m_resolve.set("frame", frameParams(m_settings, m_lights, m_stats.samplesDone, 0));
-  launch(m_resolve, pixels);
-  if (tonemap)
-    m_tonemapper.run(frameParams(m_settings, m_lights, m_stats.samplesDone, 0), tonemapParams(m_settings.tonemap),
-                     m_path.mean, m_path.pixels);
+  WtFrameParams frame = frameParams(m_settings, m_lights, m_stats.samplesDone, 0);
+  // the 8-bit pixels alone: tone-mapped from the state's float mean in place,
+  // without resolving mean and m2 (the double state needs its conversion)
+  const bool meanInState = tonemap && !floats && m_settings.accumulation != WT_ACCUMULATE_DOUBLE;
+  if (!meanInState) {
+    m_resolve.set("frame", frame);
+    launch(m_resolve, pixels);
+  }
+  if (tonemap) {
+    if (meanInState) frame.flags |= WT_FLAG_MEAN_IN_STATE;
+    m_tonemapper.run(frame, tonemapParams(m_settings.tonemap), meanInState ? m_path.state : m_path.mean, m_path.pixels);
+  }
 
   std::vector<float> mean(floats ? 4 * pixels : 0), m2(floats ? 4 * pixels : 0);
   image.width = m_settings.width;

@@ -311,6 +311,7 @@ typedef struct WtFrameParams {
 #define WT_FLAG_SHADOW_QUEUE 512u ///< the connect stage runs: shade clears its shadow-queue entries (without it the shadow buffers hold one entry)
 #define WT_FLAG_POWER_LAMBERTIAN 1024u ///< the power heuristic at Lambertian vertices (where cosine sampling matches f cos exactly), the balance heuristic elsewhere
 #define WT_FLAG_BLANK_ACCUMULATION 2048u ///< accumulate: the state and sample counts were never written (read as zero; all written), so the host need not clear them first
+#define WT_FLAG_MEAN_IN_STATE 4096u ///< tonemap: `mean` is the accumulation state (float4[4] per pixel, the float mean first: single and Kahan modes), read in place without accumulate_resolve
 
 /// Slots of the queue-counter buffer.
 #define WT_COUNTER_QUEUE_A 0      ///< paths in queue A
