@@ -11,13 +11,14 @@
 // rays (camera rays, shadow rays from neighbouring pixels) share the cost of
 // fetching and testing a node.
 //
-// Lanes are the watertight test's, so a packet's triangle tests need one
-// axis permutation (the dominant axis and sign of the directions). A packet
-// whose rays do not agree is traced in passes, one per permutation, each a
-// packet of the lanes that have it (packet_next_pass): with the same
-// answers, and faster than tracing the minority lanes ray by ray
-// (docs/lab/2026-12-04-performance-log.md, "The cheap rays' overhead, and
-// mixed packets in passes").
+// Lanes are the watertight test's, whose axis permutation needs only each
+// ray's dominant axis kz: swapping the other two (triangle_ray_shear's flip
+// where d[kz] < 0) negates u, v, w, det and the scaled t alike, so t, b1 and
+// b2 come out bit for bit the same without it. A packet whose lanes agree on
+// kz loads each corner's coordinates by its row; one whose lanes do not
+// picks each lane's own in one pass (packet_triangle), so incoherent rays
+// (every bounce's extend, shadow rays) trace in one pass, not one per
+// permutation.
 #ifndef WT_BVH_PACKET_CL
 #define WT_BVH_PACKET_CL
 
@@ -142,8 +143,10 @@ typedef struct RayPacket {
   pfloat o[3];       ///< origin per world axis
   pfloat inv_d[3];   ///< bvh_safe_rcp of the direction per world axis
   pfloat o_kx, o_ky, o_kz;  ///< the origin along the permuted axes
-  pfloat sx, sy, sz; ///< each lane's shear (RayShear)
-  int kx, ky, kz;    ///< the permutation every lane shares
+  pfloat sx, sy, sz; ///< each lane's shear (RayShear, never flipped)
+  pint kz_is_x, kz_is_y;  ///< each lane's dominant axis kz (z where neither)
+  int per_lane;      ///< the valid lanes disagree on kz: each picks its own corners
+  int kx, ky, kz;    ///< the permutation every lane shares (unless per_lane)
   pfloat tmin;
   puint skip_a, skip_b;  ///< leaf-order triangles a lane never hits
 #if WT_HAS_ALPHA
@@ -195,16 +198,33 @@ __attribute__((always_inline)) inline pint packet_triangle(const RayPacket* p, _
   // the block layout (WT_TRIANGLE_BLOCK) gives each corner's coordinate on
   // the packet's permuted axes by one load: row 3 k + axis of the block
   __global const float* f = triangle_block_lane(tri_verts, prim);
-  const int ox = 4 * p->kx, oy = 4 * p->ky, oz = 4 * p->kz;
-  pfloat az = f[oz] - p->o_kz;
-  pfloat bz = f[12 + oz] - p->o_kz;
-  pfloat cz = f[24 + oz] - p->o_kz;
-  pfloat ax = (f[ox] - p->o_kx) - p->sx * az;
-  pfloat ay = (f[oy] - p->o_ky) - p->sy * az;
-  pfloat bx = (f[12 + ox] - p->o_kx) - p->sx * bz;
-  pfloat by = (f[12 + oy] - p->o_ky) - p->sy * bz;
-  pfloat cx = (f[24 + ox] - p->o_kx) - p->sx * cz;
-  pfloat cy = (f[24 + oy] - p->o_ky) - p->sy * cz;
+  pfloat ax0, ay0, az, bx0, by0, bz, cx0, cy0, cz;
+  if (p->per_lane) {
+    // each lane's own permutation: two blends per coordinate (coherent
+    // packets keep the row loads below, which cost less)
+    const pint zx = p->kz_is_x, zy = p->kz_is_y;
+#define WT_CORNER(c, X, Y, Z)                                                          \
+  {                                                                                    \
+    pfloat vx = (pfloat)(f[c]), vy = (pfloat)(f[c + 4]), vz = (pfloat)(f[c + 8]);      \
+    Z = packet_pick(zx, vx, packet_pick(zy, vy, vz)) - p->o_kz;                        \
+    X = packet_pick(zx, vy, packet_pick(zy, vz, vx)) - p->o_kx;                        \
+    Y = packet_pick(zx, vz, packet_pick(zy, vx, vy)) - p->o_ky;                        \
+  }
+    WT_CORNER(0, ax0, ay0, az) WT_CORNER(12, bx0, by0, bz) WT_CORNER(24, cx0, cy0, cz)
+#undef WT_CORNER
+  } else {
+    const int ox = 4 * p->kx, oy = 4 * p->ky, oz = 4 * p->kz;
+    az = f[oz] - p->o_kz, bz = f[12 + oz] - p->o_kz, cz = f[24 + oz] - p->o_kz;
+    ax0 = f[ox] - p->o_kx, ay0 = f[oy] - p->o_ky;
+    bx0 = f[12 + ox] - p->o_kx, by0 = f[12 + oy] - p->o_ky;
+    cx0 = f[24 + ox] - p->o_kx, cy0 = f[24 + oy] - p->o_ky;
+  }
+  pfloat ax = ax0 - p->sx * az;
+  pfloat ay = ay0 - p->sy * az;
+  pfloat bx = bx0 - p->sx * bz;
+  pfloat by = by0 - p->sy * bz;
+  pfloat cx = cx0 - p->sx * cz;
+  pfloat cy = cy0 - p->sy * cz;
 
   pfloat u = cx * by - cy * bx;
   pfloat v = ax * cy - ay * cx;
@@ -240,10 +260,9 @@ __attribute__((always_inline)) inline pint packet_triangle(const RayPacket* p, _
   return ok;
 }
 
-/// What packet_load found: a packet to trace, rays of more than one axis
-/// permutation, or (where the caller asks) rays that all miss the scene.
+/// What packet_load found: a packet to trace, or (where the caller asks)
+/// rays that all miss the scene.
 #define WT_PACKET_TRACE 0
-#define WT_PACKET_MIXED 1
 #define WT_PACKET_MISSES 2
 
 /// Whether a packet's lanes are rays index[0], index[0] + 1, ... of a batch,
@@ -255,25 +274,20 @@ inline bool packet_contiguous(const uint* index, uint lanes) {
   return contiguous;
 }
 
-/// The axis permutation the packet's triangle tests use: code 2 kz + flip
-/// (packet_load's codes; a negative code, no lane, takes +z).
-inline void packet_permute(RayPacket* p, int code) {
-  if (code < 0) code = 4;
-  int pkz = code >> 1;
+/// The axis permutation every lane's triangle test uses: dominant axis kz,
+/// kx = kz + 1 and ky = kz + 2 (mod 3), never flipped (a negative kz, no
+/// lane, takes z).
+inline void packet_permute(RayPacket* p, int pkz) {
+  if (pkz < 0) pkz = 2;
   int pkx = pkz == 2 ? 0 : pkz + 1;
   int pky = pkx == 2 ? 0 : pkx + 1;
-  if (code & 1) {
-    int t = pkx;
-    pkx = pky;
-    pky = t;
-  }
   p->kx = pkx, p->ky = pky, p->kz = pkz;
   p->o_kx = pkx == 0 ? p->o[0] : (pkx == 1 ? p->o[1] : p->o[2]);
   p->o_ky = pky == 0 ? p->o[0] : (pky == 1 ? p->o[1] : p->o[2]);
   p->o_kz = pkz == 0 ? p->o[0] : (pkz == 1 ? p->o[1] : p->o[2]);
 }
 
-__attribute__((always_inline)) inline int packet_load_lanes(RayPacket* p, pint* valid, pfloat* tmax, pfloat* codes,
+__attribute__((always_inline)) inline int packet_load_lanes(RayPacket* p, pint* valid, pfloat* tmax,
                                                            pfloat vox, pfloat voy, pfloat voz, pfloat vtn, pfloat vdx,
                                                            pfloat vdy, pfloat vdz, pfloat vtx, pint in_v,
                                                            const BvhScene* root);
@@ -281,14 +295,13 @@ __attribute__((always_inline)) inline int packet_load_lanes(RayPacket* p, pint* 
 /// Loads a packet: lane l takes ray index[l] of a batch (o.w = tmin,
 /// d.w = tmax) for l < lanes; the other lanes, and lanes whose ray is not
 /// finite, are left out of `valid`. Each lane's shear is its own ray's
-/// (triangle_ray_shear), and codes[l] its permutation's code (2 kz + flip;
-/// -1 for a lane left out). Returns WT_PACKET_TRACE with the permutation set
-/// when every valid lane shares one, else WT_PACKET_MIXED: the caller then
-/// traces one pass per permutation (packet_next_pass). With `root` (the
-/// scene; closest hits), first returns WT_PACKET_MISSES when no valid lane
-/// enters the box around the root's children, with only the rays' origins,
-/// intervals (tmax the misses' distances) and reciprocal directions set.
-__attribute__((always_inline)) inline int packet_load(RayPacket* p, pint* valid, pfloat* tmax, pfloat* codes,
+/// (triangle_ray_shear without the flip), with its dominant axis; where the
+/// valid lanes share one, the packet's permutation is set to it, else
+/// per_lane. Returns WT_PACKET_TRACE; with `root` (the scene; closest hits),
+/// first WT_PACKET_MISSES when no valid lane enters the box around the
+/// root's children, with only the rays' origins, intervals (tmax the misses'
+/// distances) and reciprocal directions set.
+__attribute__((always_inline)) inline int packet_load(RayPacket* p, pint* valid, pfloat* tmax,
                                                      const uint* index, uint lanes, bool contiguous,
                                                      __global const float4* ray_o, __global const float4* ray_d,
                                                      const BvhScene* root) {
@@ -344,30 +357,27 @@ __attribute__((always_inline)) inline int packet_load(RayPacket* p, pint* valid,
     vdx = packet_vload(dx), vdy = packet_vload(dy), vdz = packet_vload(dz), vtx = packet_vload(tx);
     in_v = packet_vload(in);
   }
-  return packet_load_lanes(p, valid, tmax, codes, vox, voy, voz, vtn, vdx, vdy, vdz, vtx, in_v, root);
+  return packet_load_lanes(p, valid, tmax, vox, voy, voz, vtn, vdx, vdy, vdz, vtx, in_v, root);
 }
 
 /// packet_load from the rays already in lanes (origin, tmin, direction,
 /// tmax per axis; in_v the lanes to trace, whose rays are finite): also the
 /// entry for rays moved into an instance's object space
 /// (kernels/bvh_prims_packet.cl), with no `root`.
-__attribute__((always_inline)) inline int packet_load_lanes(RayPacket* p, pint* valid, pfloat* tmax, pfloat* codes,
+__attribute__((always_inline)) inline int packet_load_lanes(RayPacket* p, pint* valid, pfloat* tmax,
                                                            pfloat vox, pfloat voy, pfloat voz, pfloat vtn, pfloat vdx,
                                                            pfloat vdy, pfloat vdz, pfloat vtx, pint in_v,
                                                            const BvhScene* root) {
-  // Each lane's permutation, in lanes: triangle_ray_shear's dominant axis
-  // kz (x over y over z on ties, as there) and whether that component is
-  // negative, as a code 2 kz + negative; a lane left out traces (0, 0, 1),
-  // as bvh_closest would never see it
+  // Each lane's dominant axis kz, in lanes: triangle_ray_shear's (x over y
+  // over z on ties, as there); a lane left out traces (0, 0, 1), as
+  // bvh_closest would never see it
   pfloat ux = packet_pick(in_v, vdx, (pfloat)(0.0f));
   pfloat uy = packet_pick(in_v, vdy, (pfloat)(0.0f));
   pfloat uz = packet_pick(in_v, vdz, (pfloat)(1.0f));
   pfloat adx = fabs(ux), ady = fabs(uy), adz = fabs(uz);
   pint kz_is_x = packet_mask(adx > ady) & packet_mask(adx > adz);
   pint kz_is_y = packet_mask(adx <= ady) & packet_mask(ady > adz);
-  pint flip = packet_mask(packet_pick(kz_is_x, ux, packet_pick(kz_is_y, uy, uz)) < 0.0f);
-  pfloat codef = packet_pick(kz_is_x, (pfloat)(0.0f), packet_pick(kz_is_y, (pfloat)(2.0f), (pfloat)(4.0f))) +
-                 packet_pick(flip, (pfloat)(1.0f), (pfloat)(0.0f));
+  pfloat codef = packet_pick(kz_is_x, (pfloat)(0.0f), packet_pick(kz_is_y, (pfloat)(1.0f), (pfloat)(2.0f)));
   p->o[0] = vox, p->o[1] = voy, p->o[2] = voz;
   p->tmin = vtn;
   *tmax = vtx;
@@ -389,34 +399,26 @@ __attribute__((always_inline)) inline int packet_load_lanes(RayPacket* p, pint* 
   // (the axis masks used as they are: integer arithmetic on them came out
   // wrong under Oclgrind's optimised build, tests/oclgrind/mask_arithmetic.cl)
   pfloat dk_z = packet_pick(kz_is_x, d[0], packet_pick(kz_is_y, d[1], d[2]));
-  // kx = kz + 1 and ky = kz + 2 (mod 3), swapped when flipped
+  // kx = kz + 1 and ky = kz + 2 (mod 3), never swapped (see the top)
   pfloat d_next = packet_pick(kz_is_x, d[1], packet_pick(kz_is_y, d[2], d[0]));
   pfloat d_after = packet_pick(kz_is_x, d[2], packet_pick(kz_is_y, d[0], d[1]));
-  pfloat dk_x = packet_pick(flip, d_after, d_next), dk_y = packet_pick(flip, d_next, d_after);
-  p->sx = dk_x / dk_z;
-  p->sy = dk_y / dk_z;
+  p->sx = d_next / dk_z;
+  p->sy = d_after / dk_z;
   p->sz = 1.0f / dk_z;
   p->skip_a = p->skip_b = (puint)(WT_NO_HIT);
+  p->kz_is_x = kz_is_x, p->kz_is_y = kz_is_y;
 
-  *codes = packet_pick(in_v, codef, (pfloat)(-1.0f));
   float code_lo = packet_min(packet_pick(in_v, codef, (pfloat)(99.0f)));
-  float code_hi = packet_max(*codes);
-  if (code_hi >= 0.0f && code_lo != code_hi) return WT_PACKET_MIXED;
-  packet_permute(p, (int)code_hi);
+  float code_hi = packet_max(packet_pick(in_v, codef, (pfloat)(-1.0f)));
+  p->per_lane = code_hi >= 0.0f && code_lo != code_hi;
+  if (!p->per_lane) {
+    packet_permute(p, (int)code_hi);
+  } else {
+    p->o_kz = packet_pick(kz_is_x, vox, packet_pick(kz_is_y, voy, voz));
+    p->o_kx = packet_pick(kz_is_x, voy, packet_pick(kz_is_y, voz, vox));
+    p->o_ky = packet_pick(kz_is_x, voz, packet_pick(kz_is_y, vox, voy));
+  }
   return WT_PACKET_TRACE;
-}
-
-/// The next pass over a packet of mixed permutations: the lanes in `todo`
-/// that share its lowest code, taken out of `todo`, with the packet's
-/// permutation set to theirs. Each pass traces its lanes as a packet, so a
-/// packet of n permutations takes n passes (shadow rays where the dominant
-/// axis of their directions changes, a few camera rays of a wide view).
-inline pint packet_next_pass(RayPacket* p, pfloat codes, pint* todo) {
-  float code = packet_min(packet_pick(*todo, codes, (pfloat)(99.0f)));
-  pint pass = *todo & packet_mask(codes == code);
-  *todo &= ~pass;
-  packet_permute(p, (int)code);
-  return pass;
 }
 
 /// The triangles each lane never hits (the surface its ray leaves, the
@@ -481,6 +483,7 @@ typedef struct PacketLanes {
   float sx[WT_PACKET], sy[WT_PACKET], sz[WT_PACKET];
   float tmin[WT_PACKET];
   uint skip_a[WT_PACKET], skip_b[WT_PACKET];
+  int kz_is_x[WT_PACKET], kz_is_y[WT_PACKET];
 #if WT_HAS_ALPHA
   AlphaScene alpha;  ///< the scene's alpha test (the lanes' streams in alpha_ray)
   uint alpha_ray[WT_PACKET];
@@ -492,6 +495,7 @@ inline void packet_lanes(const RayPacket* p, PacketLanes* lanes) {
   packet_vstore(p->sx, lanes->sx), packet_vstore(p->sy, lanes->sy), packet_vstore(p->sz, lanes->sz);
   packet_vstore(p->tmin, lanes->tmin);
   packet_vstore(p->skip_a, lanes->skip_a), packet_vstore(p->skip_b, lanes->skip_b);
+  packet_vstore(p->kz_is_x, lanes->kz_is_x), packet_vstore(p->kz_is_y, lanes->kz_is_y);
 #if WT_HAS_ALPHA
   packet_vstore(p->alpha_ray, lanes->alpha_ray);
 #endif
@@ -503,7 +507,9 @@ inline void packet_lanes(const RayPacket* p, PacketLanes* lanes) {
 /// first found; WT_NO_HIT when none, t, b1 and b2 set only on a hit.
 inline uint packet_lane_leaf(__global const float4* tri_verts, const RayPacket* p, const PacketLanes* lanes, int l,
                              uint first, uint count, float tmax, bool any, float* t, float* b1, float* b2) {
-  RayShear shear = {p->kx, p->ky, p->kz, lanes->sx[l], lanes->sy[l], lanes->sz[l]};
+  // the lane's own permutation, unflipped as its shear (packet_load_lanes)
+  const int kz = lanes->kz_is_x[l] ? 0 : (lanes->kz_is_y[l] ? 1 : 2);
+  RayShear shear = {kz == 2 ? 0 : kz + 1, kz == 0 ? 2 : kz - 1, kz, lanes->sx[l], lanes->sy[l], lanes->sz[l]};
   float3 org = (float3)(lanes->ox[l], lanes->oy[l], lanes->oz[l]);
   // the lane's view of the scene: the triangles, and the alpha test with the lane's stream
   BvhScene scene = {0, 0u, tri_verts};
@@ -750,9 +756,9 @@ inline void packet_trace_closest(BvhScene scene, const uint* index, uint lanes, 
                                  __global const float4* ray_d, __global const uint* skip, __global float4* hits) {
   RayPacket p;
   pint valid;
-  pfloat tmax, codes;
+  pfloat tmax;
   const bool contiguous = packet_contiguous(index, lanes);
-  int loaded = packet_load(&p, &valid, &tmax, &codes, index, lanes, contiguous, ray_o, ray_d, &scene);
+  int loaded = packet_load(&p, &valid, &tmax, index, lanes, contiguous, ray_o, ray_d, &scene);
   pfloat b1 = (pfloat)(0.0f), b2 = (pfloat)(0.0f);
   puint prim = (puint)(WT_NO_HIT);
   if (loaded != WT_PACKET_MISSES) {
@@ -760,14 +766,7 @@ inline void packet_trace_closest(BvhScene scene, const uint* index, uint lanes, 
 #if WT_HAS_ALPHA
     packet_set_alpha(&p, scene, index);
 #endif
-    if (loaded == WT_PACKET_TRACE) {
-      packet_closest(scene, &p, valid, &tmax, &b1, &b2, &prim);
-    } else {
-      for (pint todo = valid; packet_any(todo);) {
-        pint pass = packet_next_pass(&p, codes, &todo);
-        packet_closest(scene, &p, pass, &tmax, &b1, &b2, &prim);
-      }
-    }
+    packet_closest(scene, &p, valid, &tmax, &b1, &b2, &prim);
   }
   packet_store_hits(hits, index, lanes, tmax, b1, b2, prim);
 }
@@ -781,21 +780,15 @@ inline pint packet_trace_occluded(BvhScene scene, const uint* index, uint lanes,
                                   __global const uint2* skip_ab) {
   RayPacket p;
   pint valid;
-  pfloat tmax, codes;
+  pfloat tmax;
   const bool contiguous = packet_contiguous(index, lanes);
-  int loaded = packet_load(&p, &valid, &tmax, &codes, index, lanes, contiguous, ray_o, ray_d, 0);
+  packet_load(&p, &valid, &tmax, index, lanes, contiguous, ray_o, ray_d, 0);
   packet_set_skip(&p, index, lanes, contiguous, skip, skip_ab);
 #if WT_HAS_ALPHA
   packet_set_alpha(&p, scene, index);
 #endif
   // a lane whose ray is not finite counts as blocked, as in bvh_occluded
-  pint blocked = ~valid;
-  if (loaded == WT_PACKET_TRACE) return blocked | packet_occluded(scene, &p, valid, tmax);
-  for (pint todo = valid; packet_any(todo);) {
-    pint pass = packet_next_pass(&p, codes, &todo);
-    blocked |= packet_occluded(scene, &p, pass, tmax);
-  }
-  return blocked;
+  return ~valid | packet_occluded(scene, &p, valid, tmax);
 }
 
 #endif  // WT_BVH_PACKET_CL

@@ -15,8 +15,8 @@
 // differs (nearest entry among the lanes), so of two hits at exactly the
 // same distance another may win. Inside an instance of triangles the packet
 // is the triangles' own (kernels/bvh_packet.cl: packet_load_lanes, then
-// packet_closest_root / packet_occluded_root from the geometry's root), in
-// one pass per axis permutation as in the scene's tree.
+// packet_closest_root / packet_occluded_root from the geometry's root), each
+// lane with its own axis permutation as in the scene's tree.
 #ifndef WT_BVH_PRIMS_PACKET_CL
 #define WT_BVH_PRIMS_PACKET_CL
 
@@ -95,10 +95,10 @@ inline void prims_packet_into_instance(GeometryScene g, uint prim, const PrimPac
 /// tmax[l] their interval's end; lane l skips its geometry's triangle on
 /// this copy only, and tests alpha with the stream its ray uses on this copy
 /// alone (rng_alpha_instance). *not_finite: the lanes whose object-space
-/// ray is not finite (left out of *valid). Returns packet_load's answer.
-inline int prims_packet_triangles_into(BvhScene scene, GeometryScene g, uint prim, const PrimPacket* p,
+/// ray is not finite (left out of *valid).
+inline void prims_packet_triangles_into(BvhScene scene, GeometryScene g, uint prim, const PrimPacket* p,
                                        const int* lanes, const uint* index, const uint* skip_instance,
-                                       const float* tmax, RayPacket* q, pint* valid, pfloat* q_tmax, pfloat* codes,
+                                       const float* tmax, RayPacket* q, pint* valid, pfloat* q_tmax,
                                        pint* not_finite) {
   __global const float4* rows = geometry_instance_rows(g, prim);
   float ox[WT_PACKET], oy[WT_PACKET], oz[WT_PACKET], dx[WT_PACKET], dy[WT_PACKET], dz[WT_PACKET];
@@ -123,16 +123,14 @@ inline int prims_packet_triangles_into(BvhScene scene, GeometryScene g, uint pri
     alpha[l] = rng_alpha_instance(rng_alpha_ray(scene.alpha.key, index[l]), prim);
 #endif
   }
-  int loaded = packet_load_lanes(q, valid, q_tmax, codes, packet_vload(ox), packet_vload(oy), packet_vload(oz),
-                                 packet_vload(p->tmin), packet_vload(dx), packet_vload(dy), packet_vload(dz),
-                                 packet_vload(tmax), packet_vload(in), 0);
+  packet_load_lanes(q, valid, q_tmax, packet_vload(ox), packet_vload(oy), packet_vload(oz), packet_vload(p->tmin),
+                    packet_vload(dx), packet_vload(dy), packet_vload(dz), packet_vload(tmax), packet_vload(in), 0);
   q->skip_a = packet_vload(skip);
   q->skip_b = (puint)(WT_NO_HIT);
 #if WT_HAS_ALPHA
   q->alpha_ray = packet_vload(alpha);
 #endif
   *not_finite = packet_vload(bad);
-  return loaded;
 }
 
 /// Closest hits narrowed by instance `prim`'s triangles, the lanes of
@@ -143,22 +141,14 @@ inline pint prims_packet_triangles_closest(BvhScene scene, GeometryScene g, uint
                                            float* u, float* v, uint* hit) {
   RayPacket q;
   pint valid, not_finite;
-  pfloat tmax, codes;
-  int loaded = prims_packet_triangles_into(scene, g, prim, p, lanes, index, skip_instance, t, &q, &valid, &tmax,
-                                           &codes, &not_finite);
+  pfloat tmax;
+  prims_packet_triangles_into(scene, g, prim, p, lanes, index, skip_instance, t, &q, &valid, &tmax, &not_finite);
   if (!packet_any(valid)) return (pint)(0);
   const pfloat before = tmax;
   pfloat b1 = packet_vload(u), b2 = packet_vload(v);
   puint h = packet_vload(hit);
   uint root = geometry_instance_info(g, prim).x;
-  if (loaded == WT_PACKET_TRACE) {
-    packet_closest_root(scene, root, &q, valid, &tmax, &b1, &b2, &h);
-  } else {
-    for (pint todo = valid; packet_any(todo);) {
-      pint pass = packet_next_pass(&q, codes, &todo);
-      packet_closest_root(scene, root, &q, pass, &tmax, &b1, &b2, &h);
-    }
-  }
+  packet_closest_root(scene, root, &q, valid, &tmax, &b1, &b2, &h);
   // a hit is nearer than where the lane searched to (bvh_closest_root's t < tmax)
   pint won = valid & packet_mask(tmax < before);
   packet_vstore(tmax, t), packet_vstore(b1, u), packet_vstore(b2, v), packet_vstore(h, hit);
@@ -173,18 +163,12 @@ inline pint prims_packet_triangles_occluded(BvhScene scene, GeometryScene g, uin
                                             const float* tmax) {
   RayPacket q;
   pint valid, not_finite;
-  pfloat q_tmax, codes;
-  int loaded = prims_packet_triangles_into(scene, g, prim, p, lanes, index, skip_instance, tmax, &q, &valid, &q_tmax,
-                                           &codes, &not_finite);
+  pfloat q_tmax;
+  prims_packet_triangles_into(scene, g, prim, p, lanes, index, skip_instance, tmax, &q, &valid, &q_tmax, &not_finite);
   pint blocked = not_finite;
   if (!packet_any(valid)) return blocked;
   uint root = geometry_instance_info(g, prim).x;
-  if (loaded == WT_PACKET_TRACE) return blocked | packet_occluded_root(scene, root, &q, valid, q_tmax);
-  for (pint todo = valid; packet_any(todo);) {
-    pint pass = packet_next_pass(&q, codes, &todo);
-    blocked |= packet_occluded_root(scene, root, &q, pass, q_tmax);
-  }
-  return blocked;
+  return blocked | packet_occluded_root(scene, root, &q, valid, q_tmax);
 }
 #endif
 

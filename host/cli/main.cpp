@@ -1369,7 +1369,8 @@ int main(int argc, char** argv) {
                         "flattened copies would not fit the device's global memory cache (32 MiB where it reports none)")
       ->check(CLI::IsMember({"auto", "on", "off"}))->capture_default_str();
   renderCmd->add_option("--traversal", render.traversal,
-                        "auto: camera rays in packets of neighbouring pixels, later bounces one ray per work-item; "
+                        "auto: camera rays in packets of neighbouring pixels, later bounces in packets or one ray per "
+                        "work-item, whichever traced faster in timed trials over the second to fifth samples; "
                         "each bounce's shadow rays in packets, streams (CPUs) or alone, chosen from a sample of them "
                         "measured in the first sample (docs/performance.md); single: every ray alone")
       ->check(CLI::IsMember({"auto", "single"}))->capture_default_str();

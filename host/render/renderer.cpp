@@ -89,6 +89,8 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
     for (int k = 0; k < WT_MEDIA_STACK; ++k) m_cameraMedia.s[k] = stack.id[k];
   }
   m_shadowTraversal.assign(std::size_t(passLimit()) + 1, std::nullopt);
+  m_extendTraversal.assign(std::size_t(passLimit()) + 1, std::nullopt);
+  m_extendTrialTime.assign(std::size_t(passLimit()) + 1, {0.0, 0.0});
   const KernelFeatures& features = m_kernelFeatures;
   m_stats.lightsSeconds = lap();
   m_program = buildProgram(context, features);
@@ -401,9 +403,20 @@ void Renderer::renderSample() {
     m_profile.bounces[bounce].paths += alive;
     fill(0u, outSlot, bounce);
     // extend: closest hit of every queued path; camera rays in packets
-    // (one origin: chooseTraversal's packets on any scene)
+    // (one origin: chooseTraversal's packets on any scene); later bounces'
+    // rays as timed trials of both found faster on this scene and device
+    // (whether a packet's incoherent lanes share nodes depends on the tree,
+    // which the rays' directions and origins alone do not tell)
     const bool choose = m_settings.packets && !m_kernelFeatures.bvhCost;
-    const bool packets = choose && bounce == 0;
+    std::optional<Traversal>& extendChoice = m_extendTraversal[std::size_t(bounce)];
+    if (choose && bounce > 0 && m_settings.extendTraversal) extendChoice = m_settings.extendTraversal;
+    // samples 1 .. kExtendTrials alternate packets and single rays (sample 0
+    // launches each kernel first, which a trial would time)
+    const int trial = choose && bounce > 0 && !extendChoice && m_samplesRendered >= 1 &&
+                              m_samplesRendered <= kExtendTrials
+                          ? m_samplesRendered
+                          : 0;
+    const bool packets = choose && (bounce == 0 || (trial ? trial % 2 == 1 : extendChoice == Traversal::kPacket));
     // the shadow rays' traversal, measured on them in the first sample
     if (choose && m_settings.shadowTraversal) m_shadowTraversal[std::size_t(bounce)] = m_settings.shadowTraversal;
     const bool probe = choose && m_connectStage && !m_shadowTraversal[std::size_t(bounce)];
@@ -424,10 +437,20 @@ void Renderer::renderSample() {
         k.set("alpha_key", rng_alpha_key(cl_uint(sample), cl_uint(bounce), WT_DIM_ALPHA_EXTEND, m_settings.seed));
       launch(k, items, event(Command::Extend, bounce));
     };
+    std::chrono::steady_clock::time_point extendStart;
+    if (trial) {
+      q.finish();  // the bounce's fills: the trial times extend alone
+      extendStart = std::chrono::steady_clock::now();
+    }
     if (packets)
       extend(m_extendPacket, (alive + m_packetWidth - 1) / m_packetWidth);
     else
       extend(m_extend, alive);
+    if (trial) {
+      q.finish();
+      const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - extendStart).count();
+      m_extendTrialTime[std::size_t(bounce)][packets ? 1 : 0] += seconds / double(alive);
+    }
 
     // shade: emission and the next direction; survivors go to the other queue
     WtFrameParams shadeParams = frameParams(m_settings, m_lights, sample, bounce);
@@ -498,6 +521,16 @@ void Renderer::renderSample() {
   m_accumulationBlank = false;
   m_context.finish();
   ++m_stats.samplesDone;
+  if (++m_samplesRendered == kExtendTrials + 1 && m_settings.packets && !m_kernelFeatures.bvhCost) {
+    // the trials are over: each bounce both ways traced keeps the faster
+    for (std::size_t b = 1; b < m_extendTraversal.size(); ++b) {
+      const std::array<double, 2>& t = m_extendTrialTime[b];
+      if (m_extendTraversal[b] || !(t[0] > 0.0) || !(t[1] > 0.0)) continue;
+      m_extendTraversal[b] = t[1] < t[0] ? Traversal::kPacket : Traversal::kSingle;
+      log::debug("closest hits of bounce " + std::to_string(b) + ": packets " + std::to_string(t[1] / t[0]) +
+                 "x single rays' time per ray: " + (t[1] < t[0] ? "packets" : "single rays"));
+    }
+  }
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   m_stats.seconds += wall;
   m_profile.pixels = pixels;

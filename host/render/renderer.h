@@ -4,6 +4,8 @@
 // accumulate.
 #pragma once
 
+#include <array>
+
 #include "core/zeroed_memory.h"
 #include "device/context.h"
 #include "device/program.h"
@@ -81,8 +83,9 @@ struct RenderSettings {
   BvhBuilder bvhBuilder = BvhBuilder::Auto;  ///< which tree the scene's BVH is (host/bvh/builders.h)
   Instancing instancing = Instancing::Off;   ///< whether repeated geometry is stored once (SceneBuffers)
   /// Camera rays traced in packets of packetWidth neighbouring pixels
-  /// (kernels/bvh_packet.cl), later bounces' one ray per work-item; each
-  /// bounce's shadow rays as chooseTraversal (host/device/tracer.h) picks
+  /// (kernels/bvh_packet.cl); each later bounce's closest hits in packets or
+  /// one ray per work-item, whichever traced that bounce faster in timed
+  /// trials of both (the second to fifth samples this renderer renders); each bounce's shadow rays as chooseTraversal (host/device/tracer.h) picks
   /// from a sample of them measured in the first sample: packets, streams
   /// (kernels/bvh_stream.cl) or one ray per work-item. false: every ray
   /// alone. The same hits either way (of two at exactly the same distance,
@@ -91,6 +94,10 @@ struct RenderSettings {
   /// Developer setting (tests): with `packets`, every bounce's shadow rays
   /// traced this way instead of as chooseTraversal picks; nullopt: picked.
   std::optional<Traversal> shadowTraversal;
+  /// Developer setting (tests): with `packets`, bounces after the first
+  /// trace their closest hits this way (kPacket or kSingle) with no trials;
+  /// nullopt: timed.
+  std::optional<Traversal> extendTraversal;
   int packetWidth = 0;  ///< rays per packet, 8 or 16; 0: by the device and the scene (packetWidthFor)
   /// Developer setting (--general-program): build every kernel switch on
   /// (generalKernelFeatures) instead of the scene's; the same image, for the
@@ -217,6 +224,13 @@ class Renderer {
     return bounce >= 0 && std::size_t(bounce) < m_shadowTraversal.size() ? m_shadowTraversal[std::size_t(bounce)]
                                                                           : std::nullopt;
   }
+  /// How bounce `bounce`'s closest hits are traced once the trials have
+  /// decided (kPacket or kSingle); nullopt before, for bounce 0 (always
+  /// packets), or where packets are off.
+  std::optional<Traversal> extendTraversal(int bounce) const {
+    return bounce > 0 && std::size_t(bounce) < m_extendTraversal.size() ? m_extendTraversal[std::size_t(bounce)]
+                                                                         : std::nullopt;
+  }
   /// Read the accumulated image (and tone-map it on the device).
   Image readImage();
   /// The mean, variance and sample counts only (no tone mapping, srgba
@@ -283,6 +297,14 @@ class Renderer {
   /// from a sample of them in the first sample (probeShadowRays); absent
   /// until then. Packets only where shade appends them densely.
   std::vector<std::optional<Traversal>> m_shadowTraversal;
+  /// Each later bounce's extend traversal (m_settings.packets): packets and
+  /// single rays alternate over kExtendTrials samples after the first, each
+  /// bounce's extend timed (seconds per ray summed in m_extendTrialTime,
+  /// [bounce][packets]); then the faster is kept. Absent until decided.
+  static constexpr int kExtendTrials = 4;
+  std::vector<std::optional<Traversal>> m_extendTraversal;
+  std::vector<std::array<double, 2>> m_extendTrialTime;
+  int m_samplesRendered = 0;  ///< samples this renderer has rendered (the trials count them, not the sample index)
   double m_primitiveScale = 1.0;  ///< primitiveScale of the scene, for chooseTraversal
   /// chooseTraversal for bounce `bounce`'s queued shadow rays (counters read back).
   Traversal probeShadowRays(int bounce);

@@ -16,6 +16,7 @@
 // shade-lanes-width 0|8|16 (RenderSettings::shadeLanesWidth), power-heuristic 0|1
 // (RenderSettings::powerHeuristic), power-lambertian 0|1 (RenderSettings::powerAtLambertian),
 // shadow-traversal auto|single|packet|stream (RenderSettings::shadowTraversal: every bounce's shadow rays).
+// extend-traversal auto|single|packet (RenderSettings::extendTraversal: bounces after the first).
 #include "device/context.h"
 #include "device/program.h"
 #include "output/image_io.h"
@@ -70,6 +71,10 @@ void setOption(Config& c, const std::string& name, const std::string& v) {
     else if (v == "packet") c.settings.shadowTraversal = wt::Traversal::kPacket;
     else if (v == "stream") c.settings.shadowTraversal = wt::Traversal::kStream;
     else if (v != "auto") usage("--shadow-traversal: auto, single, packet or stream");
+  } else if (name == "extend-traversal") {
+    if (v == "single") c.settings.extendTraversal = wt::Traversal::kSingle;
+    else if (v == "packet") c.settings.extendTraversal = wt::Traversal::kPacket;
+    else if (v != "auto") usage("--extend-traversal: auto, single or packet");
   } else if (name == "sampler") {
     if (v != "independent" && v != "sobol") usage("--sampler: independent or sobol");
     c.settings.sobol = v == "sobol";

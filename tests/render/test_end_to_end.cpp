@@ -18,7 +18,8 @@ namespace wt {
 namespace {
 
 Image renderCornell(std::uint32_t seed, int spp = 4, bool packets = true, int packetWidth = 0,
-                    std::optional<Traversal> shadows = std::nullopt) {
+                    std::optional<Traversal> shadows = std::nullopt,
+                    std::optional<Traversal> extend = std::nullopt) {
   Scene scene = loadDefaultScene();
   RenderSettings settings;
   settings.width = 48;
@@ -28,6 +29,7 @@ Image renderCornell(std::uint32_t seed, int spp = 4, bool packets = true, int pa
   settings.packets = packets;
   settings.packetWidth = packetWidth;
   settings.shadowTraversal = shadows;
+  settings.extendTraversal = extend;
   Renderer renderer(test::deviceContext(), scene, settings);
   for (int s = 0; s < spp; ++s) renderer.renderSample();
   return renderer.readImage();
@@ -222,6 +224,38 @@ TEST(EndToEnd, PacketsGiveTheSameImageAsSingleRays) {
       RecordProperty("pixels_differing_" + how, differ);
       EXPECT_LE(differ, 2) << differ << " of " << packets.rgb.size() / 3 << " pixels differ, shadow rays " << how;
     }
+}
+
+TEST(EndToEnd, ExtendTraversalAfterTheFirstBounceLeavesTheImage) {
+  // Later bounces' closest hits in packets (each lane its own axis
+  // permutation) and one ray per work-item, forced each way and as the timed
+  // trials pick (samples 1-4 alternate, the choice is kept from sample 5):
+  // the same image bit for bit, at both packet widths. The shadow rays are
+  // traced one way throughout, so extend is all that differs.
+  const int spp = 6;
+  const auto single = std::optional<Traversal>(Traversal::kSingle);
+  for (int width : {8, 16}) {
+    Image reference = renderCornell(7, spp, true, width, single, single);
+    for (std::optional<Traversal> extend : {std::optional<Traversal>(Traversal::kPacket), std::optional<Traversal>()}) {
+      SCOPED_TRACE(std::string(extend ? "packets" : "timed") + " at width " + std::to_string(width));
+      Image image = renderCornell(7, spp, true, width, single, extend);
+      ASSERT_EQ(image.rgb.size(), reference.rgb.size());
+      EXPECT_TRUE(image.rgb == reference.rgb) << "the images differ";
+    }
+  }
+  // the trials (samples 1-4) decide every bounce that reached them, and only after them
+  Scene scene = loadDefaultScene();
+  RenderSettings settings;
+  settings.width = settings.height = 48;
+  settings.maxBounces = 4;
+  Renderer renderer(test::deviceContext(), scene, settings);
+  for (int s = 0; s < 4; ++s) {
+    renderer.renderSample();
+    EXPECT_FALSE(renderer.extendTraversal(1).has_value()) << "after sample " << s;
+  }
+  renderer.renderSample();
+  EXPECT_TRUE(renderer.extendTraversal(1).has_value());
+  EXPECT_FALSE(renderer.extendTraversal(0).has_value());
 }
 
 }  // namespace
