@@ -28,6 +28,7 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <memory>
 #include <optional>
 #include <string>
@@ -173,6 +174,15 @@ int main(int argc, char** argv) {
     std::printf("time: A %.3f s, B %.3f s over %d rounds of %d passes; B/A %.3f (median round %.3f, %.3f-%.3f)\n",
                 total[0], total[1], rounds, common.samplesPerPixel, total[1] / total[0], median, ratios.front(),
                 ratios.back());
+    {
+      // the last round's images: the same samples of the same paths, so a
+      // traversal change that finds the same hits leaves them equal bit for bit
+      const wt::Image ia = renderers[0]->readRadiance(), ib = renderers[1]->readRadiance();
+      std::size_t differ = 0;
+      for (std::size_t i = 0; i < std::min(ia.rgb.size(), ib.rgb.size()); ++i)
+        differ += std::memcmp(&ia.rgb[i], &ib.rgb[i], sizeof(float)) != 0;
+      std::printf("last round's radiance: %zu of %zu values differ between A and B\n", differ, ia.rgb.size());
+    }
     if (ref) {
       const double effA = 1.0 / (relMse[0] * total[0]), effB = 1.0 / (relMse[1] * total[1]);
       std::printf("relMSE (mean over rounds): A %.4g, B %.4g, B/A %.3f; efficiency 1/(relMSE t) B/A %.3f\n", relMse[0],
