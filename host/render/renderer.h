@@ -85,7 +85,8 @@ struct RenderSettings {
   /// Camera rays traced in packets of packetWidth neighbouring pixels
   /// (kernels/bvh_packet.cl); each later bounce's closest hits in packets or
   /// one ray per work-item, whichever traced that bounce faster in timed
-  /// trials of both (the second to fifth samples this renderer renders); each bounce's shadow rays as chooseTraversal (host/device/tracer.h) picks
+  /// trials of both (the second to fifth samples this renderer renders);
+  /// each bounce's shadow rays as chooseTraversal (host/device/tracer.h) picks
   /// from a sample of them measured in the first sample: packets, streams
   /// (kernels/bvh_stream.cl) or one ray per work-item. false: every ray
   /// alone. The same hits either way (of two at exactly the same distance,
