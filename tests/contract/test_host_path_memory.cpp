@@ -22,7 +22,7 @@
 namespace wt {
 namespace {
 
-RenderSettings smallSettings() {
+RenderSettings hostMemorySettings() {
   RenderSettings s;
   s.width = 48;
   s.height = 40;
@@ -32,7 +32,7 @@ RenderSettings smallSettings() {
 }
 
 /// Float arrays compared by their bits (NaN == NaN, -0 != +0).
-std::size_t differingWords(const std::vector<float>& a, const std::vector<float>& b) {
+std::size_t hostMemoryDifferingWords(const std::vector<float>& a, const std::vector<float>& b) {
   if (a.size() != b.size()) return std::max(a.size(), b.size());
   std::size_t n = 0;
   for (std::size_t i = 0; i < a.size(); ++i) n += std::memcmp(&a[i], &b[i], sizeof(float)) != 0;
@@ -50,15 +50,15 @@ void expectHostMemoryChangesNothing(const Scene& scene, RenderSettings settings)
     bytes[host] = renderer.pathStateBytes();
   }
   EXPECT_EQ(bytes[0], bytes[1]);
-  EXPECT_EQ(differingWords(images[0].rgb, images[1].rgb), 0u) << "mean";
-  EXPECT_EQ(differingWords(images[0].rgbVariance, images[1].rgbVariance), 0u) << "variance";
+  EXPECT_EQ(hostMemoryDifferingWords(images[0].rgb, images[1].rgb), 0u) << "mean";
+  EXPECT_EQ(hostMemoryDifferingWords(images[0].rgbVariance, images[1].rgbVariance), 0u) << "variance";
   EXPECT_EQ(images[0].samples, images[1].samples);
   EXPECT_EQ(images[0].srgba, images[1].srgba);
   const Aovs& a = images[0].aovs;
   const Aovs& b = images[1].aovs;
-  EXPECT_EQ(differingWords(a.albedo, b.albedo), 0u) << "albedo";
-  EXPECT_EQ(differingWords(a.normal, b.normal), 0u) << "normal";
-  EXPECT_EQ(differingWords(a.depth, b.depth), 0u) << "depth";
+  EXPECT_EQ(hostMemoryDifferingWords(a.albedo, b.albedo), 0u) << "albedo";
+  EXPECT_EQ(hostMemoryDifferingWords(a.normal, b.normal), 0u) << "normal";
+  EXPECT_EQ(hostMemoryDifferingWords(a.depth, b.depth), 0u) << "depth";
   EXPECT_EQ(a.material, b.material);
   EXPECT_EQ(a.primitive, b.primitive);
   // a black image would pass without showing anything
@@ -69,7 +69,7 @@ void expectHostMemoryChangesNothing(const Scene& scene, RenderSettings settings)
 
 TEST(HostPathMemory, CornellBoxWithAndWithoutAovs) {
   const Scene scene = loadDefaultScene();
-  RenderSettings s = smallSettings();
+  RenderSettings s = hostMemorySettings();
   expectHostMemoryChangesNothing(scene, s);
   s.aovs = true;
   expectHostMemoryChangesNothing(scene, s);
@@ -91,7 +91,7 @@ TEST(HostPathMemory, ExampleSceneFiles) {
     SceneFile file = loadSceneFile(entry.path().string());
     // the level changes nothing here; level 6's boxes take seconds to build
     for (DisplacedMesh& m : file.scene.displacedMeshes) m.level = m.level < 0 ? 3 : std::min(m.level, 3);
-    RenderSettings s = smallSettings();
+    RenderSettings s = hostMemorySettings();
     if (file.settings.environment && file.settings.environment->color) s.background = *file.settings.environment->color;
     if (file.settings.integrator == "minimal") s.integrator = Integrator::Minimal;
     if (file.settings.maxBounces) s.maxBounces = *file.settings.maxBounces;
