@@ -693,6 +693,21 @@ void orientCurveNodes(Bvh4& tree, const PrimitiveRows& rows, const std::vector<s
 /// A leaf joint row that is no curve's: its infinite radius passes every ray through the leaf's reject.
 constexpr WtVec4 kNoJoint{0.0f, 0.0f, 0.0f, -std::numeric_limits<float>::infinity()};
 
+/// Each entry's segment joints, in leaf order beside the refs: a curve's
+/// rows in `rows` (the sign bits too: the segment test reads these), kNoJoint
+/// for the other types, and for a curve whose rows `rows` does not hold.
+std::vector<WtVec4> leafJoints(const std::vector<std::uint32_t>& refs, const PrimitiveRows& rows) {
+  std::vector<WtVec4> joints(WT_LEAF_JOINT_ROWS * refs.size(), kNoJoint);
+  for (std::size_t i = 0; i < refs.size(); ++i) {
+    const std::uint32_t id = refs[i];
+    if (primType(id) != WT_PRIM_CURVE) continue;
+    const std::size_t row = rows.dataFirst[WT_PRIM_CURVE] + 2 * std::size_t(primIndex(id));
+    if (row + 1 >= rows.data.size()) continue;
+    for (int end = 0; end < 2; ++end) joints[WT_LEAF_JOINT_ROWS * i + end] = rows.data[row + end];
+  }
+  return joints;
+}
+
 }  // namespace
 
 PrimitiveTree buildPrimitiveTree(const PrimitiveRows& rows, const BvhBuildOptions& options) {
@@ -711,17 +726,7 @@ PrimitiveTree buildPrimitiveTree(const PrimitiveRows& rows, const BvhBuildOption
   orientCurveNodes(tree.bvh4, rows, ids, bvh.primIndices, options.threads);
   tree.refs.resize(bvh.primIndices.size());
   for (std::size_t i = 0; i < tree.refs.size(); ++i) tree.refs[i] = ids[bvh.primIndices[i]];
-  // each entry's segment joints, in leaf order beside the refs
-  tree.joints.assign(WT_LEAF_JOINT_ROWS * tree.refs.size(), kNoJoint);
-  for (std::size_t i = 0; i < tree.refs.size(); ++i) {
-    const std::uint32_t id = tree.refs[i];
-    if (primType(id) != WT_PRIM_CURVE) continue;
-    const std::size_t row = rows.dataFirst[WT_PRIM_CURVE] + 2 * std::size_t(primIndex(id));
-    if (row + 1 >= rows.data.size()) continue;
-    for (int end = 0; end < 2; ++end) {
-      tree.joints[WT_LEAF_JOINT_ROWS * i + end] = rows.data[row + end];  // the sign bits too: the segment test reads these
-    }
-  }
+  tree.joints = leafJoints(tree.refs, rows);
   tree.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return tree;
 }
@@ -1074,7 +1079,9 @@ void SceneBuffers::uploadPrimitives(Context& context, const Scene& scene, const 
       tree.bvh4.nodes.push_back(n);
     }
     tree.refs.insert(tree.refs.end(), g.refs.begin(), g.refs.end());
-    tree.joints.insert(tree.joints.end(), g.joints.begin(), g.joints.end());
+    // its joints from the scene's rows, which hold the geometry's segments in object space (its own rows held none)
+    const std::vector<WtVec4> joints = leafJoints(g.refs, rows);
+    tree.joints.insert(tree.joints.end(), joints.begin(), joints.end());
     // the instances of this geometry: their root (gatherInstances wrote the tree's own index)
     for (std::size_t i = triangleInstances; i < instances.size(); ++i)
       if (instances[i].root == std::uint32_t(&g - geometryTrees.data()) + kPrimitiveGeometryTag)

@@ -146,8 +146,6 @@ inline bool geometry_intersect_entry(GeometryScene g, uint entry, uint prim, flo
     *v = 0.0f;
     __global const float4* rows = g.data + g.header.data_first[WT_PRIM_CURVE];
     __global const float4* joints = g.data + g.header.leaf_joints + WT_LEAF_JOINT_ROWS * entry;
-    // an instanced geometry's tree has no leaf joints (radius -infinity): its segment's own rows
-    if (isinf(joints[0].w)) joints = rows + 2u * prim_index(prim);
     return curve_intersect(rows, prim_index(prim), joints, o, d, tmin, tmax, prim == skip_a || prim == skip_b, t, u);
   }
 #endif

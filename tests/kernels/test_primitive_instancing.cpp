@@ -20,6 +20,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <random>
 #include <string>
 
@@ -490,6 +491,34 @@ TEST(PrimitiveInstancing, StoredOnce) {
   const double overhead = 2.0 * 98.0 * (7 * 16 + 4 + 128.0 / 2) / flatBytes;
   EXPECT_LT(ratio, 1.0 / 98.0 * 1.1 + overhead);
   EXPECT_GT(ratio, 1.0 / 98.0 * 0.9);
+}
+
+/// Every curve entry of the primitive trees, the instanced geometries' own
+/// trees included, carries its segment's rows as its leaf joints (the
+/// leaf's reject and the segment test read them in place of the rows).
+TEST(PrimitiveInstancing, InstancedCurveEntriesCarryTheirJoints) {
+  const Scene geometry = sphereAndCurveGeometry(20, 30, 5);
+  std::vector<glm::mat4> transforms;
+  for (int c = 0; c < 6; ++c) transforms.push_back(glm::translate(glm::mat4(1.0f), glm::vec3(3.0f * float(c), 0, 0)));
+  SceneBuffers on(test::deviceContext(), placeCopies(geometry, transforms), withInstancing(Instancing::On));
+  ASSERT_TRUE(on.primitivesInstanced());
+  Context& ctx = test::deviceContext();
+  std::vector<std::uint32_t> refs(on.primRefs.getInfo<CL_MEM_SIZE>() / sizeof(std::uint32_t));
+  std::vector<WtVec4> data(on.primData.getInfo<CL_MEM_SIZE>() / sizeof(WtVec4));
+  ctx.queue().enqueueReadBuffer(on.primRefs, CL_TRUE, 0, refs.size() * sizeof(std::uint32_t), refs.data());
+  ctx.queue().enqueueReadBuffer(on.primData, CL_TRUE, 0, data.size() * sizeof(WtVec4), data.data());
+  std::size_t curves = 0;
+  for (std::size_t i = 0; i < refs.size(); ++i) {
+    if (primType(refs[i]) != WT_PRIM_CURVE) continue;
+    ++curves;
+    const std::size_t row = on.geometry.data_first[WT_PRIM_CURVE] + 2 * std::size_t(primIndex(refs[i]));
+    for (std::size_t end = 0; end < 2; ++end) {
+      const WtVec4& joint = data.at(on.geometry.leaf_joints + WT_LEAF_JOINT_ROWS * i + end);
+      const WtVec4& want = data.at(row + end);
+      ASSERT_EQ(std::memcmp(&joint, &want, sizeof(WtVec4)), 0) << "entry " << i << " end " << end;
+    }
+  }
+  EXPECT_GT(curves, 0u);  // the copies' curves: all in the geometry's own tree
 }
 
 }  // namespace
