@@ -223,6 +223,12 @@ inline bool curve_intersect(__global const float4* rows, uint k, __global const 
   // wide of the rounding of o_mid, of the projections and of the radii
   float reach = r_max * 1.001f + spawn_gamma(32) * (curve_max3(o_mid) + curve_max3(a.xyz) + curve_max3(e_ab) + r_max);
   if (dot(gap, gap) > reach * reach) return false;
+#if !(defined(WT_NO_PREFETCH) && WT_NO_PREFETCH)
+  // a ray this near mostly hits: ask for the neighbours' rows (a root's test
+  // below reads them, scattered from the leaf joints) while its roots are solved
+  if (left) __builtin_prefetch(rows + 2u * k - 2u, 0, 3);
+  if (right) __builtin_prefetch(rows + 2u * k + 2u, 0, 3);
+#endif
   float lo = INFINITY, hi = -INFINITY;
   curve_cone_roots(a, b, o_mid, d, &lo, &hi);
   curve_sphere_roots(a.xyz, a.w, o_mid, d, dd, &lo, &hi);
