@@ -12,3 +12,10 @@ WT_KERNEL void test_tonemap_apply(uint count, uint op, float white, __global con
   TonemapRgb t = tonemap_apply(op, tonemap_rgb(c.x, c.y, c.z), white);
   out[i] = (float4)(t.r, t.g, t.b, 0.0f);
 }
+
+// out[i] = the sRGB curve of the float whose bits are first + i.
+WT_KERNEL void test_srgb_encode(uint first, uint count, __global float* out) {
+  uint i = get_global_id(0);
+  if (i >= count) return;
+  out[i] = tonemap_srgb_encode(as_float(first + i));
+}

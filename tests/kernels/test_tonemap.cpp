@@ -15,6 +15,7 @@
 #include <stb_image.h>
 
 #include <array>
+#include <bit>
 #include <cmath>
 #include <fstream>
 #include <iterator>
@@ -209,6 +210,48 @@ TEST(Tonemap, OperatorsMatchTheirClosedFormsInDouble) {
         << "), closed form (" << closedForm(op, colours[at], white)[0] << ", " << closedForm(op, colours[at], white)[1]
         << ", " << closedForm(op, colours[at], white)[2] << ")";
   }
+}
+
+// The curve's mantissa power is a degree-7 fit on [1, 2) whose float
+// evaluation strays 1.8e-7 at most (the fit 8e-8 plus seven fma roundings),
+// scaled by at most 1.055, then one more rounding of 1 at most (6e-8): 3e-7.
+// A level of the 8-bit output is 3.9e-3.
+constexpr double kSrgbCurveTolerance = 3e-7;
+
+TEST(Tonemap, SrgbCurveIsWithinItsBoundAtEveryFloat) {
+  // every float in [0, 1] above the linear segment's 2^-9 (75 M values), a
+  // few on the segment and past its ends, on the device, against the
+  // curve in double
+  Context& ctx = test::deviceContext();
+  cl::Kernel k(test::testProgram("tonemap_tests.cl"), "test_srgb_encode");
+  constexpr cl_uint kChunk = 1u << 23;
+  cl::Buffer outBuffer(ctx.context(), CL_MEM_WRITE_ONLY, kChunk * sizeof(float));
+  std::vector<float> out(kChunk);
+  const auto curve = [](double c) {
+    c = std::isnan(c) ? 0.0 : sat(c);  // fmax and fmin drop a NaN
+    return c <= 0.0031308 ? 12.92 * c : 1.055 * std::pow(c, 1.0 / 2.4) - 0.055;
+  };
+  double worst = 0.0;
+  float worstAt = 0.0f;
+  const auto check = [&](std::uint32_t first, cl_uint count) {
+    k.setArg(0, cl_uint(first)), k.setArg(1, count), k.setArg(2, outBuffer);
+    ctx.launch("test_srgb_encode", k, count);
+    ctx.queue().enqueueReadBuffer(outBuffer, CL_TRUE, 0, count * sizeof(float), out.data());
+    for (cl_uint i = 0; i < count; ++i) {
+      const float c = std::bit_cast<float>(first + i);
+      const double error = std::fabs(double(out[i]) - curve(double(c)));
+      if (!(error <= worst)) worst = error, worstAt = c;  // a NaN output counts as worst
+    }
+  };
+  const std::uint32_t one = std::bit_cast<std::uint32_t>(1.0f);
+  for (std::uint32_t first = std::bit_cast<std::uint32_t>(0x1p-9f); first < one; first += kChunk)
+    check(first, std::min<cl_uint>(kChunk, one - first + 1u));
+  check(one, 4096);                                               // above 1: saturated
+  check(std::bit_cast<std::uint32_t>(0.0f), 4096);                // 0 and denormals
+  check(std::bit_cast<std::uint32_t>(0.0031308f) - 2048u, 4096);  // across the linear segment's end
+  check(std::bit_cast<std::uint32_t>(-0.0f), 4096);               // negative: 0
+  check(0x7f800000u, 4096);                                       // infinity: 1; NaNs: 0
+  EXPECT_LE(worst, kSrgbCurveTolerance) << "at " << worstAt;
 }
 
 TEST(Tonemap, HostBuildOfTheHeaderMatchesTheDevice) {
