@@ -99,6 +99,18 @@ RayBatchStats measureRays(std::span<const Ray> rays, std::size_t width, std::siz
   return stats;
 }
 
+void TraversalTrials::add(Traversal traversal, double secondsPerRay) {
+  double& fastest = m_fastest[traversal == Traversal::kPacket ? 1 : 0];
+  if (secondsPerRay > 0.0 && (fastest == 0.0 || secondsPerRay < fastest)) fastest = secondsPerRay;
+}
+
+std::optional<Traversal> TraversalTrials::faster() const {
+  if (m_fastest[0] == 0.0 || m_fastest[1] == 0.0) return std::nullopt;
+  return m_fastest[1] < m_fastest[0] ? Traversal::kPacket : Traversal::kSingle;
+}
+
+double TraversalTrials::packetRatio() const { return m_fastest[0] > 0.0 ? m_fastest[1] / m_fastest[0] : 0.0; }
+
 Traversal chooseTraversal(const RayBatchStats& stats, double scale, bool occlusion, bool cpu) {
   const bool streams = occlusion && cpu;
   const Traversal incoherent = streams ? Traversal::kStream : Traversal::kSingle;

@@ -9,8 +9,10 @@
 
 #include <glm/glm.hpp>
 
+#include <array>
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -97,6 +99,23 @@ inline constexpr double kLeafScales = 2.0;
 /// kStreamGain. Camera rays (one origin, n = 1) always come out as packets;
 /// random directions never do.
 Traversal chooseTraversal(const RayBatchStats& stats, double scale, bool occlusion, bool cpu);
+
+/// Timed trials of packets against single rays on the same kind of rays:
+/// the faster is the one with the fastest trial. A trial that other work on
+/// the machine interrupted says how busy the machine was, not how fast the
+/// traversal is; the quickest of several is the least disturbed.
+class TraversalTrials {
+ public:
+  /// A trial of `traversal` (kPacket or kSingle) that took `secondsPerRay`.
+  void add(Traversal traversal, double secondsPerRay);
+  /// The faster of the two once both have a trial; absent before.
+  std::optional<Traversal> faster() const;
+  /// Packets' fastest trial over single rays' (for the log); 0 before both ran.
+  double packetRatio() const;
+
+ private:
+  std::array<double, 2> m_fastest{0.0, 0.0};  ///< [single, packet]; 0: no trial yet
+};
 
 class Tracer {
  public:

@@ -90,7 +90,7 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
   }
   m_shadowTraversal.assign(std::size_t(passLimit()) + 1, std::nullopt);
   m_extendTraversal.assign(std::size_t(passLimit()) + 1, std::nullopt);
-  m_extendTrialTime.assign(std::size_t(passLimit()) + 1, {0.0, 0.0});
+  m_extendTrials.assign(std::size_t(passLimit()) + 1, TraversalTrials{});
   const KernelFeatures& features = m_kernelFeatures;
   m_stats.lightsSeconds = lap();
   m_program = buildProgram(context, features);
@@ -449,7 +449,8 @@ void Renderer::renderSample() {
     if (trial) {
       q.finish();
       const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - extendStart).count();
-      m_extendTrialTime[std::size_t(bounce)][packets ? 1 : 0] += seconds / double(alive);
+      m_extendTrials[std::size_t(bounce)].add(packets ? Traversal::kPacket : Traversal::kSingle,
+                                              seconds / double(alive));
     }
 
     // shade: emission and the next direction; survivors go to the other queue
@@ -524,11 +525,12 @@ void Renderer::renderSample() {
   if (++m_samplesRendered == kExtendTrials + 1 && m_settings.packets && !m_kernelFeatures.bvhCost) {
     // the trials are over: each bounce both ways traced keeps the faster
     for (std::size_t b = 1; b < m_extendTraversal.size(); ++b) {
-      const std::array<double, 2>& t = m_extendTrialTime[b];
-      if (m_extendTraversal[b] || !(t[0] > 0.0) || !(t[1] > 0.0)) continue;
-      m_extendTraversal[b] = t[1] < t[0] ? Traversal::kPacket : Traversal::kSingle;
-      log::debug("closest hits of bounce " + std::to_string(b) + ": packets " + std::to_string(t[1] / t[0]) +
-                 "x single rays' time per ray: " + (t[1] < t[0] ? "packets" : "single rays"));
+      const std::optional<Traversal> faster = m_extendTrials[b].faster();
+      if (m_extendTraversal[b] || !faster) continue;
+      m_extendTraversal[b] = faster;
+      log::debug("closest hits of bounce " + std::to_string(b) + ": packets " +
+                 std::to_string(m_extendTrials[b].packetRatio()) +
+                 "x single rays' fastest trial: " + (*faster == Traversal::kPacket ? "packets" : "single rays"));
     }
   }
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -300,11 +300,11 @@ class Renderer {
   std::vector<std::optional<Traversal>> m_shadowTraversal;
   /// Each later bounce's extend traversal (m_settings.packets): packets and
   /// single rays alternate over kExtendTrials samples after the first, each
-  /// bounce's extend timed (seconds per ray summed in m_extendTrialTime,
-  /// [bounce][packets]); then the faster is kept. Absent until decided.
-  static constexpr int kExtendTrials = 4;
+  /// bounce's extend timed (seconds per ray, m_extendTrials[bounce]); then
+  /// the one with the fastest trial is kept. Absent until decided.
+  static constexpr int kExtendTrials = 6;
   std::vector<std::optional<Traversal>> m_extendTraversal;
-  std::vector<std::array<double, 2>> m_extendTrialTime;
+  std::vector<TraversalTrials> m_extendTrials;
   int m_samplesRendered = 0;  ///< samples this renderer has rendered (the trials count them, not the sample index)
   double m_primitiveScale = 1.0;  ///< primitiveScale of the scene, for chooseTraversal
   /// chooseTraversal for bounce `bounce`'s queued shadow rays (counters read back).

@@ -57,6 +57,29 @@ std::vector<Ray> randomRays(std::size_t count) {
   return rays;
 }
 
+TEST(TraversalChoice, TimedTrialsKeepTheFastestTrialOfEach) {
+  TraversalTrials trials;
+  EXPECT_FALSE(trials.faster().has_value()) << "no trial yet";
+  trials.add(Traversal::kPacket, 2e-8);
+  EXPECT_FALSE(trials.faster().has_value()) << "single rays not tried yet";
+  // packets are faster, but one of their trials was interrupted by other work:
+  // its time is not an average's share of the choice
+  trials.add(Traversal::kSingle, 3e-8);
+  trials.add(Traversal::kPacket, 9e-8);
+  trials.add(Traversal::kSingle, 3.1e-8);
+  ASSERT_TRUE(trials.faster().has_value());
+  EXPECT_EQ(*trials.faster(), Traversal::kPacket);
+  EXPECT_DOUBLE_EQ(trials.packetRatio(), 2e-8 / 3e-8);
+  // a faster single-ray trial turns it
+  trials.add(Traversal::kSingle, 1e-8);
+  EXPECT_EQ(*trials.faster(), Traversal::kSingle);
+  // an empty trial (no rays timed: 0 s) counts as none
+  TraversalTrials empty;
+  empty.add(Traversal::kPacket, 0.0);
+  empty.add(Traversal::kSingle, 1e-8);
+  EXPECT_FALSE(empty.faster().has_value());
+}
+
 TEST(TraversalChoice, MeasuresCoherenceOctantsAndOriginSpread) {
   EXPECT_EQ(measureRays({}, 8).packets, 0u);
   // one eye: no spread, every packet in one octant, coherence near 1

@@ -229,10 +229,10 @@ TEST(EndToEnd, PacketsGiveTheSameImageAsSingleRays) {
 TEST(EndToEnd, ExtendTraversalAfterTheFirstBounceLeavesTheImage) {
   // Later bounces' closest hits in packets (each lane its own axis
   // permutation) and one ray per work-item, forced each way and as the timed
-  // trials pick (samples 1-4 alternate, the choice is kept from sample 5):
+  // trials pick (samples 1-6 alternate, the choice is kept from sample 7):
   // the same image bit for bit, at both packet widths. The shadow rays are
   // traced one way throughout, so extend is all that differs.
-  const int spp = 6;
+  const int spp = 8;
   const auto single = std::optional<Traversal>(Traversal::kSingle);
   for (int width : {8, 16}) {
     Image reference = renderCornell(7, spp, true, width, single, single);
@@ -243,13 +243,13 @@ TEST(EndToEnd, ExtendTraversalAfterTheFirstBounceLeavesTheImage) {
       EXPECT_TRUE(image.rgb == reference.rgb) << "the images differ";
     }
   }
-  // the trials (samples 1-4) decide every bounce that reached them, and only after them
+  // the trials (samples 1-6) decide every bounce that reached them, and only after them
   Scene scene = loadDefaultScene();
   RenderSettings settings;
   settings.width = settings.height = 48;
   settings.maxBounces = 4;
   Renderer renderer(test::deviceContext(), scene, settings);
-  for (int s = 0; s < 4; ++s) {
+  for (int s = 0; s < 6; ++s) {
     renderer.renderSample();
     EXPECT_FALSE(renderer.extendTraversal(1).has_value()) << "after sample " << s;
   }
