@@ -304,9 +304,11 @@ WT_KERNEL void shade(WT_SHADE_KERNEL_PARAMS) {
     } else
 #endif
     {
+#if WT_HAS_LIGHT_TREE
       uint leaf = emitter_leaf[prim];
       if (select > 0.0f && leaf != WT_LIGHT_NODE_NONE)
         select *= light_tree_pmf(light_tree, leaf, ray_o[path].xyz, prev_normal[path].xyz);
+#endif
       float3 p0, p1, p2;
 #if WT_HAS_QUAD_LIGHTS
       // half of a rectangle light: the pdf its sampler has, from the same corners
@@ -430,11 +432,13 @@ WT_KERNEL void shade(WT_SHADE_KERNEL_PARAMS) {
     } else {
       index = light_pick(ls, u_pick, &pmf);
       // the light tree entry: an emitter by its importance here
+#if WT_HAS_LIGHT_TREE
       if (ls.lights[index].type == WT_LIGHT_TREE) {
         float pmf_tree;
         index = light_tree_pick(light_tree, origin, tree_normal, u_lobe_tree.y, &pmf_tree);
         pmf *= pmf_tree;
       }
+#endif
     }
     LightSample s;
     float2 u_light = sampler_get2(frame, path, WT_DIM_LIGHT_U);  // (LIGHT_U, LIGHT_V)

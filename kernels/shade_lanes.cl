@@ -582,9 +582,11 @@ inline float3 shade_lane_emission(WtFrameParams frame, EnvScene env, __global co
     return env_le * shade_emission_weight(frame, pdf_prev, frame.env_pmf * env_pdf(env, dir));
   }
   float select_pdf = frame.bounce > 0u ? emitter_pdf_area[prim] : 0.0f;
+#if WT_HAS_LIGHT_TREE
   uint leaf = emitter_leaf[prim];
   if (select_pdf > 0.0f && leaf != WT_LIGHT_NODE_NONE)
     select_pdf *= light_tree_pmf(light_tree, leaf, origin, prev_normal[path].xyz);
+#endif
   float3 p0, p1, p2;
   float pdf_light;
 #if WT_HAS_QUAD_LIGHTS
@@ -997,6 +999,7 @@ WT_KERNEL void shade(WT_SHADE_KERNEL_PARAMS) {
 #else
     intL tree = active && type == WT_LIGHT_TREE;
 #endif
+#if WT_HAS_LIGHT_TREE
     if (any(tree)) {
 #if !(WT_HAS_PBR || WT_HAS_TRANSMISSION)
       // without the metallic-roughness lobes, u_lobe's pair serves the tree alone
@@ -1009,6 +1012,7 @@ WT_KERNEL void shade(WT_SHADE_KERNEL_PARAMS) {
       index = select(index, select(picked, (uintL)(0u), picked == WT_NO_HIT), tree);
       type = as_uintL(gather_f(lrow, index, 16u, 12u));
     }
+#endif
     floatL u1, u2;
     sampler_get2_L(frame, path, WT_DIM_LIGHT_U, &u1, &u2);
     LightSampleL s;
@@ -1030,6 +1034,7 @@ WT_KERNEL void shade(WT_SHADE_KERNEL_PARAMS) {
     if (any(quads)) light_sample_quadL(lrow, tri_verts, index, quads, p, u1, u2, &s);
     others = others && !quads;
 #endif
+#if WT_HAS_OTHER_LIGHTS
     if (any(others)) {
       // point, spot, directional lights and the environment: light_sample, lane by lane
       const int n = WT_SHADE_LANES_WIDTH;
@@ -1056,6 +1061,7 @@ WT_KERNEL void shade(WT_SHADE_KERNEL_PARAMS) {
       s.distance = vloadL(0, di), s.pdf = vloadL(0, pd), s.ok = vloadL(0, ok), s.is_delta = vloadL(0, dl);
       s.prim = vloadL(0, pr);
     }
+#endif
     // the Lambertian BSDF (bsdf_eval)
     intL connect = want && s.ok && vl_dot(ng, s.wi) > 0.0f;
     floatL wi_z = vl_dot(s.wi, ns);

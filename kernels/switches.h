@@ -82,6 +82,16 @@
 #elif !WT_SWITCH_IS_BOOL(WT_HAS_QUAD_LIGHTS)
 #error "WT_HAS_QUAD_LIGHTS must be 0 or 1"
 #endif
+#ifndef WT_HAS_LIGHT_TREE
+#error "WT_HAS_LIGHT_TREE not set (kernelDefines)"
+#elif !WT_SWITCH_IS_BOOL(WT_HAS_LIGHT_TREE)
+#error "WT_HAS_LIGHT_TREE must be 0 or 1"
+#endif
+#ifndef WT_HAS_OTHER_LIGHTS
+#error "WT_HAS_OTHER_LIGHTS not set (kernelDefines)"
+#elif !WT_SWITCH_IS_BOOL(WT_HAS_OTHER_LIGHTS)
+#error "WT_HAS_OTHER_LIGHTS must be 0 or 1"
+#endif
 #ifndef WT_HAS_TEXTURES
 #error "WT_HAS_TEXTURES not set (kernelDefines)"
 #elif !WT_SWITCH_IS_BOOL(WT_HAS_TEXTURES)

@@ -1128,7 +1128,11 @@ int runInfo(RenderOptions options) {
   std::printf("features:");
   for (const std::string& name : wt::featureNames(features)) std::printf(" %s", name.c_str());
   std::printf("\nswitches (on %s):", device.name.c_str());
-  for (const std::string& d : wt::kernelDefines(wt::renderKernelFeatures(features, device, settings, buffers)))
+  // the light kinds as the renderer's list holds them (an environment entry where the settings give one)
+  const wt::LightList lights =
+      wt::buildLightList(scene, buffers, features.environmentMap || features.constantSky ? 1.0 : 0.0,
+                         settings.lightSampler, settings.lightCoverageWeights, settings.quadLights);
+  for (const std::string& d : wt::kernelDefines(wt::renderKernelFeatures(features, device, settings, buffers, lights)))
     std::printf(" %s", d.substr(3).c_str());  // without "-D "
   std::printf("\n");
 

@@ -136,6 +136,8 @@ std::vector<std::string> kernelDefines(const KernelFeatures& features) {
       "-D WT_HAS_TRANSMISSION=" + std::string(features.pbr && features.transmission ? "1" : "0"),
       "-D WT_HAS_THIN_SHADOWS=" + std::string(features.pbr && features.transmission && features.thinShadows ? "1" : "0"),
       "-D WT_HAS_QUAD_LIGHTS=" + std::string(features.quadLights ? "1" : "0"),
+      "-D WT_HAS_LIGHT_TREE=" + std::string(features.lightTree ? "1" : "0"),
+      "-D WT_HAS_OTHER_LIGHTS=" + std::string(features.otherLights ? "1" : "0"),
       "-D WT_HAS_TEXTURES=" + std::string(features.textures ? "1" : "0"),
       "-D WT_HAS_VERTEX_COLORS=" + std::string(features.vertexColors ? "1" : "0"),
       "-D WT_HAS_SPECULAR=" + std::string(features.pbr && features.specular ? "1" : "0"),

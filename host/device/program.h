@@ -32,6 +32,13 @@ struct KernelFeatures {
   /// (WT_LIGHT_QUAD; set by the renderer from its light list): shade takes
   /// WT_QUAD_SHADE_PARAMS
   bool quadLights = false;
+  /// The light list picks its emissive triangles by the light tree
+  /// (WT_LIGHT_TREE): shade compiles the tree's pick and pmf in
+  bool lightTree = true;
+  /// NEE may pick a light other than a triangle, a rectangle or the tree
+  /// (point, spot, directional, the environment, another type's primitive):
+  /// the lanes shade compiles their lane-by-lane sampling in
+  bool otherLights = true;
   bool textures = false;          ///< a material reads a texture (materials/textured.cl)
   bool vertexColors = false;      ///< the scene's vertices have COLOR_0
   bool specular = false;          ///< a dielectric's F0 is not 0.04 or its Fresnel is weighted (KHR_materials_specular, KHR_materials_ior)

@@ -484,4 +484,15 @@ LightList buildLightList(const Scene& scene, const SceneBuffers& buffers, double
   return list;
 }
 
+void setLightFeatures(KernelFeatures& features, const LightList& lights) {
+  features.lightTree = !lights.tree.empty();
+  // the alias table's entries: the tree's triangles after them are reached through the tree
+  const std::size_t picked = std::min(lights.alias.size(), lights.lights.size());
+  features.otherLights = std::any_of(lights.lights.begin(), lights.lights.begin() + std::ptrdiff_t(picked),
+                                     [](const WtLight& l) {
+                                       return l.type != WT_LIGHT_TRIANGLE && l.type != WT_LIGHT_QUAD &&
+                                              l.type != WT_LIGHT_TREE;
+                                     });
+}
+
 }  // namespace wt

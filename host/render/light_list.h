@@ -6,6 +6,7 @@
 // the tree's leaves point.
 #pragma once
 
+#include "device/program.h"
 #include "device/scene_buffers.h"
 #include "scene/scene.h"
 #include "shared/lights.h"
@@ -86,6 +87,10 @@ std::vector<WtAliasSlot> buildAliasTable(std::span<const double> weights);
 LightList buildLightList(const Scene& scene, const SceneBuffers& buffers, double environmentPower,
                          LightSampler sampler = LightSampler::Auto, bool coverageWeights = true,
                          bool quadLights = true);
+
+/// Set KernelFeatures::lightTree and otherLights from the light kinds `lights`
+/// holds: a program built so samples every light the list can pick.
+void setLightFeatures(KernelFeatures& features, const LightList& lights);
 
 /// The least share of its power an emitter with holes is weighed by.
 constexpr double kMinCoverageWeight = 1e-3;

@@ -78,7 +78,7 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
                             settings.lightSampler, settings.lightCoverageWeights, settings.quadLights);
 
   m_features = sceneFeatures(scene, *m_scene, settings);
-  m_kernelFeatures = renderKernelFeatures(m_features, context.info(), settings, *m_scene);
+  m_kernelFeatures = renderKernelFeatures(m_features, context.info(), settings, *m_scene, m_lights);
   m_packetWidth = m_kernelFeatures.packetWidth;
   m_primitiveScale = m_scene->primitiveScale();
   {
@@ -101,6 +101,10 @@ Renderer::Renderer(Context& context, const Scene& scene, const RenderSettings& s
   // the feature set found the light list's rectangles (findQuadLights both times)
   if (m_lights.quadLights > 0 && !features.quadLights)
     throw std::logic_error("the light list has rectangle lights the program was built without");
+  KernelFeatures lightKinds;
+  setLightFeatures(lightKinds, m_lights);
+  if ((lightKinds.lightTree && !features.lightTree) || (lightKinds.otherLights && !features.otherLights))
+    throw std::logic_error("the light list has light kinds the program was built without");
   const ParamFeatures built{features.alpha, features.pbr && features.transmission && features.thinShadows,
                             features.quadLights};
   m_generate = {m_program, built};
@@ -288,9 +292,10 @@ class MappedRead {
 }  // namespace
 
 KernelFeatures renderKernelFeatures(const FeatureSet& features, const DeviceInfo& device, const RenderSettings& settings,
-                                    const SceneBuffers& buffers) {
+                                    const SceneBuffers& buffers, const LightList& lights) {
   KernelFeatures k = settings.generalProgram ? generalKernelFeatures(features, device, settings.packetWidth)
                                              : kernelFeaturesFor(features, device, settings.packetWidth);
+  if (!settings.generalProgram) setLightFeatures(k, lights);
   k.aov = settings.aovs;
   k.bvhCost = settings.aovs && settings.bvhCost;
   // shade on vector lanes where every surface is a triangle, Lambertian or

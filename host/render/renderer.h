@@ -342,9 +342,10 @@ class Renderer {
 };
 
 /// The render program's switches for a scene's feature set on a device
-/// (what `wavetrace info` prints and the Renderer builds).
+/// (what `wavetrace info` prints and the Renderer builds); `lights` decides
+/// which light kinds shade samples (setLightFeatures).
 KernelFeatures renderKernelFeatures(const FeatureSet& features, const DeviceInfo& device, const RenderSettings& settings,
-                                    const SceneBuffers& buffers);
+                                    const SceneBuffers& buffers, const LightList& lights);
 
 /// The `count` lowest of a dense shadow queue's path indices, ascending:
 /// the same whatever order the device's threads appended them in.

@@ -309,7 +309,9 @@ TEST(FeatureSwitches, EachFeatureTurnsOnItsSwitchOnly) {
     BvhBuildOptions o = options;
     o.instancing = s.instancing;
     SceneBuffers buffers(test::deviceContext(), scene, o);
-    return kernelDefines(kernelFeaturesFor(sceneFeatures(scene, buffers, s), test::deviceContext().info()));
+    KernelFeatures k = kernelFeaturesFor(sceneFeatures(scene, buffers, s), test::deviceContext().info());
+    setLightFeatures(k, buildLightList(scene, buffers, 0.0));  // as renderKernelFeatures, without a sky
+    return kernelDefines(k);
   };
   const std::vector<std::string> base = defines(lambertFloor(), settings);
   for (const std::string& d : base) {
@@ -329,6 +331,15 @@ TEST(FeatureSwitches, EachFeatureTurnsOnItsSwitchOnly) {
   Scene lamp = lambertFloor();
   lamp.materials[0] = makeMaterial(glm::vec3(0.5f), glm::vec3(2.0f));
   EXPECT_EQ(changed(lamp), std::vector<std::string>{"-D WT_HAS_QUAD_LIGHTS=1"});
+  // a point light is sampled lane by lane; kLightTreeMinEmitters emissive triangles are picked by the tree
+  Scene bulb = lambertFloor();
+  PunctualLight point;
+  point.position = glm::vec3(0.0f, 1.0f, 0.0f);
+  bulb.lights.push_back(point);
+  EXPECT_EQ(changed(bulb), std::vector<std::string>{"-D WT_HAS_OTHER_LIGHTS=1"});
+  Scene soup = makeTriangleSoup(2 * kLightTreeMinEmitters, 5);
+  for (WtMaterial& m : soup.materials) m.emission = {1.0f, 1.0f, 1.0f, 0.0f};
+  EXPECT_EQ(changed(soup), std::vector<std::string>{"-D WT_HAS_LIGHT_TREE=1"});
   Scene mask = lambertFloor();
   mask.materials[0].alpha_mode = WT_ALPHA_MASK;
   mask.materials[0].alpha = 0.25f;
