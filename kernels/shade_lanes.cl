@@ -43,7 +43,6 @@ typedef WT_LANES_N(ushort) ushortL;
 #define WT_LANES_IOTA (uintL)(0, 1, 2, 3, 4, 5, 6, 7)
 #endif
 #define WT_LANES_AT_BASE(j) base[j]
-#define WT_LANES_AT_CF(j) cf[j]
 
 // Every helper inlined: a lane vector passed by pointer to a called function
 // lives in memory, which PoCL keeps per work-item of the group. Under
@@ -603,11 +602,36 @@ inline float3 shade_lane_emission(WtFrameParams frame, EnvScene env, __global co
   return le * shade_emission_weight(frame, pdf_prev, pdf_light);
 }
 
-/// Counter c (x diffuse, y specular, z transmission) of each lane's path's bounce_counts.
-WT_LANES_INLINE uintL gather_countL(__global const ushort4* bounce_counts, uintL path, uint c) {
-  __global const ushort* cf = (__global const ushort*)bounce_counts;
-  uintL i = 4u * path + c;
-  return convert_uintL((ushortL)(WT_LANES_MAP(WT_LANES_AT_CF, i)));
+/// Each lane's path's bounce_counts (x diffuse, y specular, z transmission, w
+/// false hits) as four lane vectors.
+typedef struct CountsL {
+  uintL x, y, z, w;
+} CountsL;
+typedef struct Counts8 {
+  ushort8 x, y, z, w;
+} Counts8;
+/// One 8-byte load a row and shuffles, as gather_rows8, instead of a 2-byte insert per lane and counter.
+WT_LANES_INLINE Counts8 gather_counts8(__global const ushort4* rows, uint8 i) {
+  ushort8 a = __builtin_shufflevector(rows[i.s0], rows[i.s1], 0, 1, 2, 3, 4, 5, 6, 7);
+  ushort8 b = __builtin_shufflevector(rows[i.s2], rows[i.s3], 0, 1, 2, 3, 4, 5, 6, 7);
+  ushort8 c = __builtin_shufflevector(rows[i.s4], rows[i.s5], 0, 1, 2, 3, 4, 5, 6, 7);
+  ushort8 d = __builtin_shufflevector(rows[i.s6], rows[i.s7], 0, 1, 2, 3, 4, 5, 6, 7);
+  ushort16 ab = __builtin_shufflevector(a, b, 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
+  ushort16 cd = __builtin_shufflevector(c, d, 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
+  return (Counts8){__builtin_shufflevector(ab, cd, 0, 4, 8, 12, 16, 20, 24, 28),
+                   __builtin_shufflevector(ab, cd, 1, 5, 9, 13, 17, 21, 25, 29),
+                   __builtin_shufflevector(ab, cd, 2, 6, 10, 14, 18, 22, 26, 30),
+                   __builtin_shufflevector(ab, cd, 3, 7, 11, 15, 19, 23, 27, 31)};
+}
+WT_LANES_INLINE CountsL gather_counts(__global const ushort4* rows, uintL path) {
+#if WT_SHADE_LANES_WIDTH == 16
+  Counts8 lo = gather_counts8(rows, path.lo), hi = gather_counts8(rows, path.hi);
+  return (CountsL){convert_uintL(WT_LANES_JOIN(lo.x, hi.x)), convert_uintL(WT_LANES_JOIN(lo.y, hi.y)),
+                   convert_uintL(WT_LANES_JOIN(lo.z, hi.z)), convert_uintL(WT_LANES_JOIN(lo.w, hi.w))};
+#else
+  Counts8 c = gather_counts8(rows, path);
+  return (CountsL){convert_uintL(c.x), convert_uintL(c.y), convert_uintL(c.z), convert_uintL(c.w)};
+#endif
 }
 
 #if WT_HAS_PBR
@@ -692,14 +716,11 @@ WT_LANES_INLINE floatL pbr_dielectric_albedoL(floatL e, floatL s, floatL fms) {
 }
 
 /// bsdf_make, pbr_view and bsdf_techniques at local wo for the lanes' materials.
-WT_LANES_INLINE PbrL pbr_makeL(__global const WtMaterial* materials, __global const float* table, uintL material, VL base,
-                               floatL wo_z, intL diffuse, intL specular) {
-  __global const float* mf = (__global const float*)materials;
-  const uint mstride = sizeof(WtMaterial) / sizeof(float);
+WT_LANES_INLINE PbrL pbr_makeL(__global const float* table, VL base, floatL metallic, floatL roughness, floatL wo_z,
+                               intL diffuse, intL specular) {
   PbrL b;
   b.base = base;
-  b.metallic = gather_f(mf, material, mstride, 3u);
-  floatL roughness = gather_f(mf, material, mstride, __builtin_offsetof(WtMaterial, roughness) / sizeof(float));
+  b.metallic = metallic;
   b.alpha = roughness * roughness;
   b.mirror = roughness < WT_PBR_MIN_ROUGHNESS;
   b.row = sqrt(fmin(fmax((roughness - WT_PBR_MIN_ROUGHNESS) / (1.0f - WT_PBR_MIN_ROUGHNESS), 0.0f), 1.0f)) *
@@ -796,6 +817,11 @@ WT_KERNEL void shade(WT_SHADE_KERNEL_PARAMS) {
   VL beta = cols_v(beta_pdf);
   floatL pdf_prev = beta_pdf.w;
   VL dir = cols_v(gather_rows(ray_d, path));
+  // the other per-path rows now, so that their cache misses overlap these
+  const CountsL counts = gather_counts(bounce_counts, path);
+#if WT_HAS_TRANSMISSION
+  const ColsL media_row = gather_rows((__global const float4*)media, path);
+#endif
   intL miss = prim == WT_NO_HIT;
   uintL tri = select(prim, (uintL)(0u), miss);  // a miss reads triangle 0 and uses nothing of it
 
@@ -841,7 +867,16 @@ WT_KERNEL void shade(WT_SHADE_KERNEL_PARAMS) {
   const uint mstride = sizeof(WtMaterial) / sizeof(float);
   // base_color and emission, rows 0 and 1 of the material's (types.h)
   const uint mrows = sizeof(WtMaterial) / sizeof(float4);
-  VL base = cols_v(gather_rows((__global const float4*)materials, material * mrows));
+  ColsL base_row = gather_rows((__global const float4*)materials, material * mrows);
+  VL base = cols_v(base_row);
+#if WT_HAS_PBR || WT_HAS_TRANSMISSION
+  // row 2: roughness, model, transmission, ior
+  _Static_assert(__builtin_offsetof(WtMaterial, roughness) == 32 && __builtin_offsetof(WtMaterial, model) == 36 &&
+                     __builtin_offsetof(WtMaterial, transmission) == 40 && __builtin_offsetof(WtMaterial, ior) == 44,
+                 "WtMaterial's row 2 is (roughness, model, transmission, ior)");
+  ColsL mrow2 = gather_rows((__global const float4*)materials, material * mrows + 2u);
+  uintL model = as_uintL(mrow2.y);
+#endif
   ColsL emission = gather_rows((__global const float4*)materials, material * mrows + 1u);
   VL le = cols_v(emission);
   floatL le_both = emission.w;
@@ -874,29 +909,23 @@ WT_KERNEL void shade(WT_SHADE_KERNEL_PARAMS) {
   intL glass = (intL)(0);
   floatL glass_eta = 1.0f;  // n far / n near (bsdf.eta at the boundary)
   {
-    __global const uint* mu = (__global const uint*)media;
-    uintL medium0 = gather_u(mu, path, 4u, 0u);
-    intL one_deep = gather_u(mu, path, 4u, 1u) == WT_MEDIUM_NONE && gather_u(mu, path, 4u, 2u) == WT_MEDIUM_NONE &&
-                    gather_u(mu, path, 4u, 3u) == WT_MEDIUM_NONE;
+    uintL medium0 = as_uintL(media_row.x);
+    intL one_deep = as_uintL(media_row.y) == WT_MEDIUM_NONE && as_uintL(media_row.z) == WT_MEDIUM_NONE &&
+                    as_uintL(media_row.w) == WT_MEDIUM_NONE;
     intL in_medium = medium0 != WT_MEDIUM_NONE || !one_deep;
-    intL false_hits = gather_countL(bounce_counts, path, 3u) >= WT_FALSE_HIT_STEP;
-    intL transmits = !miss &&
-                     gather_u((__global const uint*)mf, material, mstride,
-                              __builtin_offsetof(WtMaterial, model) / sizeof(float)) == WT_MATERIAL_PBR &&
-                     gather_f(mf, material, mstride, __builtin_offsetof(WtMaterial, transmission) / sizeof(float)) > 0.0f;
+    intL false_hits = counts.w >= WT_FALSE_HIT_STEP;
+    intL transmits = !miss && model == WT_MATERIAL_PBR && mrow2.z > 0.0f;
     intL candidate = valid && transmits && !false_hits && one_deep;
     if (any(candidate)) {
       intL from_inside = vl_dot(ng, dir) > 0.0f;
-      floatL ior = gather_f(mf, material, mstride, __builtin_offsetof(WtMaterial, ior) / sizeof(float));
+      floatL ior = mrow2.w;
       glass_eta = select(ior, 1.0f / ior, from_inside);
       // in air, or leaving the stack's one volume through its own boundary
       glass = candidate && (medium0 == WT_MEDIUM_NONE || (from_inside && medium0 == material)) &&
-              gather_f(mf, material, mstride, __builtin_offsetof(WtMaterial, transmission) / sizeof(float)) == 1.0f &&
-              gather_f(mf, material, mstride, 3u) == 0.0f &&
+              mrow2.z == 1.0f && base_row.w == 0.0f &&
               gather_f(mf, material, mstride, __builtin_offsetof(WtMaterial, volume) / sizeof(float) + 3u) != 0.0f &&
               !(gather_f(mf, material, mstride, __builtin_offsetof(WtMaterial, dispersion) / sizeof(float)) > 0.0f) &&
-              (gather_f(mf, material, mstride, __builtin_offsetof(WtMaterial, roughness) / sizeof(float)) <
-                   WT_PBR_MIN_ROUGHNESS ||
+              (mrow2.x < WT_PBR_MIN_ROUGHNESS ||
                fabs(glass_eta - 1.0f) < 1e-3f);
     }
     intL alone = valid && !glass && (in_medium || false_hits || transmits);
@@ -946,14 +975,13 @@ WT_KERNEL void shade(WT_SHADE_KERNEL_PARAMS) {
   floatL wo_z = vl_dot(wo, ns);
   // a Lambertian surface scatters by its diffuse lobe alone: past its limit
   // neither light sampling nor the BSDF finds anything (shade.cl's lobes)
-  intL diffuse = gather_countL(bounce_counts, path, 0u) < frame.max_diffuse_bounces;
+  intL diffuse = counts.x < frame.max_diffuse_bounces;
 #if WT_HAS_PBR
   // a metallic-roughness one by the lobes shade.cl allows its path
-  intL pbr = active && gather_u((__global const uint*)mf, material, mstride,
-                                __builtin_offsetof(WtMaterial, model) / sizeof(float)) == WT_MATERIAL_PBR;
+  intL pbr = active && model == WT_MATERIAL_PBR;
   uintL lobes = (as_uintL(diffuse) & WT_LOBE_DIFFUSE) |
-                (as_uintL(gather_countL(bounce_counts, path, 1u) < frame.max_specular_bounces) & WT_LOBE_SPECULAR) |
-                (as_uintL(gather_countL(bounce_counts, path, 2u) < frame.max_transmission_bounces) & WT_LOBE_TRANSMISSION);
+                (as_uintL(counts.y < frame.max_specular_bounces) & WT_LOBE_SPECULAR) |
+                (as_uintL(counts.z < frame.max_transmission_bounces) & WT_LOBE_TRANSMISSION);
   intL specular = (lobes & WT_LOBE_SPECULAR) != 0u;
 #if WT_HAS_TRANSMISSION
   // glass scatters by the interface while reflection or transmission is left (bsdf_sample)
@@ -965,16 +993,27 @@ WT_KERNEL void shade(WT_SHADE_KERNEL_PARAMS) {
 #endif
   VL wo_local = vl(vl_dot(wo, frame_t), vl_dot(wo, frame_b), wo_z);
   PbrL mat;
-  if (any(pbr)) mat = pbr_makeL(materials, pbr_table, material, base, wo_z, diffuse, specular);
+  if (any(pbr)) mat = pbr_makeL(pbr_table, base, base_row.w, mrow2.x, wo_z, diffuse, specular);
 #else
   active = active && diffuse;
 #endif
   if (!any(active)) return;
   VL origin = ray_offset_originL(p, p_error, ng);
-  floatL u_pick, u_rr, u_lobe, u_tree;
+  floatL u_pick, u_rr, u_lobe = 0.0f, u_tree = 0.0f;
   sampler_get2_L(frame, path, WT_DIM_LIGHT_PICK, &u_pick, &u_rr);
-#if WT_HAS_PBR || WT_HAS_TRANSMISSION
-  sampler_get2_L(frame, path, WT_DIM_BSDF_LOBE, &u_lobe, &u_tree);
+  // the lobe pair where a lane picks a metallic-roughness or glass technique
+  // by it, or descends the light tree (there, below): a pure function of the
+  // path and dimension, drawn late or not at all for the same values
+  bool lobe_drawn = false;
+#if WT_HAS_PBR
+#if WT_HAS_TRANSMISSION
+  if (any(active && (pbr || glass))) {
+#else
+  if (any(active && pbr)) {
+#endif
+    sampler_get2_L(frame, path, WT_DIM_BSDF_LOBE, &u_lobe, &u_tree);
+    lobe_drawn = true;
+  }
 #endif
 
   // next-event estimation
@@ -1001,10 +1040,7 @@ WT_KERNEL void shade(WT_SHADE_KERNEL_PARAMS) {
 #endif
 #if WT_HAS_LIGHT_TREE
     if (any(tree)) {
-#if !(WT_HAS_PBR || WT_HAS_TRANSMISSION)
-      // without the metallic-roughness lobes, u_lobe's pair serves the tree alone
-      sampler_get2_L(frame, path, WT_DIM_BSDF_LOBE, &u_lobe, &u_tree);
-#endif
+      if (!lobe_drawn) sampler_get2_L(frame, path, WT_DIM_BSDF_LOBE, &u_lobe, &u_tree);
       floatL pmf_tree;
       uintL picked = light_tree_pickL(light_tree, origin, ng, u_tree, tree, &pmf_tree);
       pmf = select(pmf, pmf * pmf_tree, tree);
@@ -1251,22 +1287,22 @@ WT_KERNEL void shade(WT_SHADE_KERNEL_PARAMS) {
   for (int k = 0; k < WT_SHADE_LANES_WIDTH; ++k) {
     if (!lane_i(go, k)) continue;
     uint pk = lane_u(path, k);
-    ushort4 counts = bounce_counts[pk];
+    ushort4 bounces = (ushort4)(lane_u(counts.x, k), lane_u(counts.y, k), lane_u(counts.z, k), lane_u(counts.w, k));
 #if WT_HAS_TRANSMISSION
-    if (lane_u(lobe, k) & WT_LOBE_DIFFUSE) counts.x++;
-    else if (lane_i(crossed, k)) counts.z++;
-    else counts.y++;
+    if (lane_u(lobe, k) & WT_LOBE_DIFFUSE) bounces.x++;
+    else if (lane_i(crossed, k)) bounces.z++;
+    else bounces.y++;
     // media_cross: into the volume from air, or out of the stack's one volume (or one it lacks)
     if (lane_i(crossed, k))
       media[pk] = (uint4)(lane_i(inside, k) ? WT_MEDIUM_NONE : lane_u(material, k), WT_MEDIUM_NONE, WT_MEDIUM_NONE,
                           WT_MEDIUM_NONE);
 #elif WT_HAS_PBR
-    if (lane_u(lobe, k) & WT_LOBE_DIFFUSE) counts.x++;
-    else counts.y++;
+    if (lane_u(lobe, k) & WT_LOBE_DIFFUSE) bounces.x++;
+    else bounces.y++;
 #else
-    counts.x++;
+    bounces.x++;
 #endif
-    bounce_counts[pk] = counts;
+    bounce_counts[pk] = bounces;
     ray_skip[pk] = lane_u(prim, k);
     queue_out[slot++] = pk;
   }
