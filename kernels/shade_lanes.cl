@@ -607,30 +607,40 @@ inline float3 shade_lane_emission(WtFrameParams frame, EnvScene env, __global co
 typedef struct CountsL {
   uintL x, y, z, w;
 } CountsL;
-typedef struct Counts8 {
-  ushort8 x, y, z, w;
-} Counts8;
-/// One 8-byte load a row and shuffles, as gather_rows8, instead of a 2-byte insert per lane and counter.
-WT_LANES_INLINE Counts8 gather_counts8(__global const ushort4* rows, uint8 i) {
-  ushort8 a = __builtin_shufflevector(rows[i.s0], rows[i.s1], 0, 1, 2, 3, 4, 5, 6, 7);
-  ushort8 b = __builtin_shufflevector(rows[i.s2], rows[i.s3], 0, 1, 2, 3, 4, 5, 6, 7);
-  ushort8 c = __builtin_shufflevector(rows[i.s4], rows[i.s5], 0, 1, 2, 3, 4, 5, 6, 7);
-  ushort8 d = __builtin_shufflevector(rows[i.s6], rows[i.s7], 0, 1, 2, 3, 4, 5, 6, 7);
-  ushort16 ab = __builtin_shufflevector(a, b, 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
-  ushort16 cd = __builtin_shufflevector(c, d, 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
-  return (Counts8){__builtin_shufflevector(ab, cd, 0, 4, 8, 12, 16, 20, 24, 28),
-                   __builtin_shufflevector(ab, cd, 1, 5, 9, 13, 17, 21, 25, 29),
-                   __builtin_shufflevector(ab, cd, 2, 6, 10, 14, 18, 22, 26, 30),
-                   __builtin_shufflevector(ab, cd, 3, 7, 11, 15, 19, 23, 27, 31)};
+/// Each lane's row as two 32-bit halves (x | y << 16, z | w << 16 on a
+/// little-endian device): one 8-byte load a row and two shuffles per 8 lanes,
+/// where 16-bit lanes cost an element insert each.
+WT_LANES_INLINE uint8 counts_half8(__global const uint2* rows, uint8 i, uint h) {
+  uint4 a = (uint4)(rows[i.s0], rows[i.s1]), b = (uint4)(rows[i.s2], rows[i.s3]);
+  uint4 c = (uint4)(rows[i.s4], rows[i.s5]), d = (uint4)(rows[i.s6], rows[i.s7]);
+  uint8 ab = (uint8)(a, b), cd = (uint8)(c, d);
+  return h == 0u ? __builtin_shufflevector(ab, cd, 0, 2, 4, 6, 8, 10, 12, 14)
+                 : __builtin_shufflevector(ab, cd, 1, 3, 5, 7, 9, 11, 13, 15);
 }
 WT_LANES_INLINE CountsL gather_counts(__global const ushort4* rows, uintL path) {
+#if defined(__ENDIAN_LITTLE__)
+  __global const uint2* r = (__global const uint2*)rows;
 #if WT_SHADE_LANES_WIDTH == 16
-  Counts8 lo = gather_counts8(rows, path.lo), hi = gather_counts8(rows, path.hi);
-  return (CountsL){convert_uintL(WT_LANES_JOIN(lo.x, hi.x)), convert_uintL(WT_LANES_JOIN(lo.y, hi.y)),
-                   convert_uintL(WT_LANES_JOIN(lo.z, hi.z)), convert_uintL(WT_LANES_JOIN(lo.w, hi.w))};
+  uintL lo = WT_LANES_JOIN(counts_half8(r, path.lo, 0u), counts_half8(r, path.hi, 0u));
+  uintL hi = WT_LANES_JOIN(counts_half8(r, path.lo, 1u), counts_half8(r, path.hi, 1u));
 #else
-  Counts8 c = gather_counts8(rows, path);
-  return (CountsL){convert_uintL(c.x), convert_uintL(c.y), convert_uintL(c.z), convert_uintL(c.w)};
+  uintL lo = counts_half8(r, path, 0u), hi = counts_half8(r, path, 1u);
+#endif
+  return (CountsL){lo & 0xffffu, lo >> 16u, hi & 0xffffu, hi >> 16u};
+#else
+  __global const ushort* cf = (__global const ushort*)rows;
+#define WT_LANES_AT_CF(j) cf[j]
+  uintL i = 4u * path;
+  CountsL c;
+  c.x = convert_uintL((ushortL)(WT_LANES_MAP(WT_LANES_AT_CF, i)));
+  i += 1u;
+  c.y = convert_uintL((ushortL)(WT_LANES_MAP(WT_LANES_AT_CF, i)));
+  i += 1u;
+  c.z = convert_uintL((ushortL)(WT_LANES_MAP(WT_LANES_AT_CF, i)));
+  i += 1u;
+  c.w = convert_uintL((ushortL)(WT_LANES_MAP(WT_LANES_AT_CF, i)));
+#undef WT_LANES_AT_CF
+  return c;
 #endif
 }
 
