@@ -742,8 +742,6 @@ int runRender(RenderOptions options) {
   std::_Exit(0);
 }
 
-/// `wavetrace info`: the scene's feature set (as `render` would derive it
-/// with the same options), the switches it compiles in, and its statistics.
 /// `render` split into sample chunks over several devices (--device 0,1,
 /// all) and, under an MPI launcher, several processes (cli/scale_out.h).
 /// Every rank loads the scene and builds its renderers; a rank that cannot
@@ -1104,6 +1102,8 @@ int runScaleOutRender(RenderOptions options, wt::MpiWorld& world) {
   return code;
 }
 
+/// `wavetrace info`: the scene's feature set (as `render` would derive it
+/// with the same options), the switches it compiles in, and its statistics.
 int runInfo(RenderOptions options) {
   wt::log::setQuiet(options.quiet);
   wt::GltfLoadOptions loadOptions;
@@ -1183,6 +1183,15 @@ int runInfo(RenderOptions options) {
               "spheres, %zu emissive curves; environment: %s\n",
               scene.lights.size(), kinds[WT_LIGHT_POINT], kinds[WT_LIGHT_SPOT], kinds[WT_LIGHT_DIRECTIONAL],
               emissiveTriangles, emissiveSpheres, emissiveCurves, environment.c_str());
+  // how next-event estimation picks among them (the switches above follow it)
+  std::printf("light sampling: alias table %zu (punctual %u, environment %s); light tree ", lights.alias.size(),
+              lights.analyticCount, lights.environmentPmf > 0.0f ? "yes" : "no");
+  if (lights.tree.empty())
+    std::printf("none");
+  else
+    std::printf("%zu nodes over the emissive triangles", lights.tree.size());
+  std::printf("; rectangle lights %zu; emissive primitives of other types %zu%s\n", lights.quadLights,
+              lights.emissivePrimitives, lights.sampleable ? "" : "; nothing to sample (no NEE)");
   // textures: the images' finest levels
   const wt::TextureSet& ts = scene.textures;
   std::printf("textures: %zu images, %zu textures, %.2f MiB with mips (%.2f MiB on the device)",
