@@ -314,7 +314,7 @@ WT_KERNEL void shade(WT_SHADE_KERNEL_PARAMS) {
       // half of a rectangle light: the pdf its sampler has, from the same corners
       uint quad = emitter_quad[prim];
       if (quad != WT_NO_QUAD) {
-        light_quad_rect(tri_verts, lights[quad], &p0, &p1, &p2);
+        light_quad_rect(lights[quad], &p0, &p1, &p2);
         pdf_light = light_quad_pdf(select, ray_o[path].xyz, p0, p1, p2, hit.x, dir, ng);
       } else {
         triangle_corners(tri_verts, prim, &p0, &p1, &p2);

@@ -459,20 +459,17 @@ WT_LANES_INLINE void light_sample_spherical_rectL(RectViewL v, floatL solid_angl
 }
 
 /// light_sample_quad for lanes `m`.
-WT_LANES_INLINE void light_sample_quadL(__global const float* lrow, __global const float4* tri_verts, uintL index, intL m,
+WT_LANES_INLINE void light_sample_quadL(__global const float* lrow, uintL index, intL m,
                                VL p, floatL u1, floatL u2, LightSampleL* s) {
-  uintL first = as_uintL(gather_f(lrow, index, 16u, 13u));
-  uintL second = as_uintL(gather_f(lrow, index, 16u, 1u));
-  uintL corner = convert_uintL(gather_f(lrow, index, 16u, 0u));
-  floatL two_sided = gather_f(lrow, index, 16u, 3u);
-  VL le = vl(gather_f(lrow, index, 16u, 8u), gather_f(lrow, index, 16u, 9u), gather_f(lrow, index, 16u, 10u));
-  VL p0, p1, p2;
-  triangle_cornersL(tri_verts, first, &p0, &p1, &p2);
-  // light_quad_rect: the corner at the right angle and its two edges
-  intL k0 = corner == 0u, k1 = corner == 1u;
-  VL c = vl_select(vl_select(p2, p1, k1), p0, k0);
-  VL e1 = vl_sub(vl_select(vl_select(p0, p2, k1), p1, k0), c);
-  VL e2 = vl_sub(vl_select(vl_select(p1, p0, k1), p2, k0), c);
+  // the light's four rows whole (WtLight: a rectangle's c, e1, e2 and halves)
+  __global const float4* rows = (__global const float4*)lrow;
+  uintL row = index * 4u;
+  ColsL r0 = gather_rows(rows, row), r1 = gather_rows(rows, row + 1u), r2 = gather_rows(rows, row + 2u),
+        r3 = gather_rows(rows, row + 3u);
+  uintL first = as_uintL(r3.y), second = as_uintL(r1.w);
+  floatL two_sided = r0.w;
+  VL le = cols_v(r2);
+  VL c = cols_v(r0), e1 = cols_v(r1), e2 = vl(r2.w, r3.z, r3.w);
   // light_sample_rect
   VL n = vl_cross(e1, e2);
   floatL area = vl_length(n);
@@ -591,7 +588,7 @@ inline float3 shade_lane_emission(WtFrameParams frame, EnvScene env, __global co
 #if WT_HAS_QUAD_LIGHTS
   uint quad = emitter_quad_or_null[prim];
   if (quad != WT_NO_QUAD) {
-    light_quad_rect(tri_verts, lights[quad], &p0, &p1, &p2);
+    light_quad_rect(lights[quad], &p0, &p1, &p2);
     pdf_light = light_quad_pdf(select_pdf, origin, p0, p1, p2, hit.x, dir, ng);
   } else
 #endif
@@ -1077,7 +1074,7 @@ WT_KERNEL void shade(WT_SHADE_KERNEL_PARAMS) {
     intL others = want && !tri_lights;
 #if WT_HAS_QUAD_LIGHTS
     intL quads = want && type == WT_LIGHT_QUAD;
-    if (any(quads)) light_sample_quadL(lrow, tri_verts, index, quads, p, u1, u2, &s);
+    if (any(quads)) light_sample_quadL(lrow, index, quads, p, u1, u2, &s);
     others = others && !quads;
 #endif
 #if WT_HAS_OTHER_LIGHTS

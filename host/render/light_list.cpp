@@ -265,6 +265,7 @@ LightList buildLightList(const Scene& scene, const SceneBuffers& buffers, double
   std::vector<std::uint32_t> lightOfLeaf(order.size(), ~0u);
   std::vector<double> lightArea(list.lights.size(), 0.0);  ///< per light so far: a triangle's or rectangle's area
   std::vector<std::uint32_t> otherHalf(list.lights.size(), ~0u);  ///< per light: a rectangle's second half
+  std::vector<std::uint32_t> quadCorner(list.lights.size(), ~0u);  ///< per light: a rectangle's right-angle corner
   std::vector<QuadLight> quads = quadLights ? findQuadLights(scene, buffers) : std::vector<QuadLight>{};
   std::vector<std::uint32_t> quadOfLeaf(order.size(), ~0u);
   for (std::size_t q = 0; q < quads.size(); ++q) quadOfLeaf[quads[q].first] = quadOfLeaf[quads[q].second] = std::uint32_t(q);
@@ -284,13 +285,22 @@ LightList buildLightList(const Scene& scene, const SceneBuffers& buffers, double
       l.triangle = std::uint32_t(leaf);
       l.intensity = {le.x, le.y, le.z, 0.0f};
       const bool twoSided = e.w != 0.0f;
-      l.position.w = twoSided ? 1.0f : 0.0f;
-      l.position.x = float(quad.corner);
-      l.position.y = std::bit_cast<float>(quad.second);
+      // the corner and edges in float as the kernels' triangle_corners reads them (e1 = p1 - c in float)
+      auto corner = [&](std::uint32_t k) {
+        const auto& q = scene.positions[v[(quad.corner + k) % 3]];
+        return glm::vec3(q.x, q.y, q.z);
+      };
+      const glm::vec3 cf = corner(0), e1 = corner(1) - cf, e2 = corner(2) - cf;
+      l.position = {cf.x, cf.y, cf.z, twoSided ? 1.0f : 0.0f};
+      l.direction = {e1.x, e1.y, e1.z, std::bit_cast<float>(quad.second)};
+      l.intensity.w = e2.x;
+      l.cos_inner = e2.y;
+      l.cos_outer = e2.z;
       lightOfLeaf[quad.first] = lightOfLeaf[quad.second] = std::uint32_t(list.lights.size());
       power.push_back((twoSided ? 2.0 : 1.0) * std::numbers::pi * area * luminance(le));
       lightArea.push_back(area);
       otherHalf.push_back(quad.second);
+      quadCorner.push_back(quad.corner);
       list.lights.push_back(l);
       list.emissiveTriangles += 2;
       ++list.quadLights;
@@ -330,6 +340,7 @@ LightList buildLightList(const Scene& scene, const SceneBuffers& buffers, double
     power.push_back((twoSided ? 2.0 : 1.0) * std::numbers::pi * area * luminance(average) * coverage);
     lightArea.push_back(area);
     otherHalf.push_back(~0u);
+    quadCorner.push_back(~0u);
     list.lights.push_back(l);
     ++list.emissiveTriangles;
   }
@@ -367,7 +378,7 @@ LightList buildLightList(const Scene& scene, const SceneBuffers& buffers, double
       // a rectangle's fourth corner: its first half's two diagonal ends less its right-angle corner
       if (triangleLights[k].type == WT_LIGHT_QUAD) {
         const std::array<glm::vec3, 3> p = {emitters[k].p0, emitters[k].p1, emitters[k].p2};
-        const std::uint32_t c = std::uint32_t(triangleLights[k].position.x);
+        const std::uint32_t c = quadCorner[first + k];
         emitters[k].p3 = p[(c + 1) % 3] + p[(c + 2) % 3] - p[c];
         emitters[k].quad = true;
       }

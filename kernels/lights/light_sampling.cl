@@ -147,15 +147,12 @@ inline float3 light_sample_spherical_triangle(float3 A, float3 B, float3 C, floa
 
 #if WT_HAS_QUAD_LIGHTS
 /// A rectangle light's corner c at its right angle and its edges e1, e2
-/// (world), from its first half's corners as stored: the sampler and the
-/// pdf of an emitter hit read the same floats.
-inline void light_quad_rect(__global const float4* tri_verts, WtLight light, float3* c, float3* e1, float3* e2) {
-  float3 p0, p1, p2;
-  triangle_corners(tri_verts, light.triangle, &p0, &p1, &p2);
-  uint k = (uint)light.position.x;
-  *c = k == 0u ? p0 : (k == 1u ? p1 : p2);
-  *e1 = (k == 0u ? p1 : (k == 1u ? p2 : p0)) - *c;
-  *e2 = (k == 0u ? p2 : (k == 1u ? p0 : p1)) - *c;
+/// (world), as its row holds them (WtLight): the sampler and the pdf of an
+/// emitter hit read the same floats.
+inline void light_quad_rect(WtLight light, float3* c, float3* e1, float3* e2) {
+  *c = vec4_xyz(light.position);
+  *e1 = vec4_xyz(light.direction);
+  *e2 = (float3)(light.intensity.w, light.cos_inner, light.cos_outer);
 }
 
 /// Rectangle (c, e1, e2) seen from a point in the rectangle's own frame
@@ -286,12 +283,12 @@ inline bool light_sample_rect(float3 p, float3 c, float3 e1, float3 e2, bool two
 /// Sample rectangle light `light` from p (light_sample_rect).
 inline bool light_sample_quad(LightScene ls, WtLight light, float3 p, float u1, float u2, LightSample* s) {
   float3 c, e1, e2;
-  light_quad_rect(ls.tri_verts, light, &c, &e1, &e2);
+  light_quad_rect(light, &c, &e1, &e2);
   float2 st;
   if (!light_sample_rect(p, c, e1, e2, light.position.w != 0.0f, u1, u2, s, &st)) return false;
   s->radiance = vec4_xyz(light.intensity);
   // the half the point is on, past the diagonal the second (its shadow ray skips it)
-  s->prim = st.x + st.y <= 1.0f ? light.triangle : as_uint(light.position.y);
+  s->prim = st.x + st.y <= 1.0f ? light.triangle : as_uint(light.direction.w);
   return true;
 }
 #endif

@@ -19,13 +19,13 @@
 
 /// One light of the scene's light list, 64 bytes.
 typedef struct WtLight {
-  WtVec4 position;   ///< point/spot: world position; triangle: w = 1 when both faces emit, y = 1 when its material's emission is textured (materials/textured.cl); quad: w as a triangle's, x the corner (0, 1, 2) of its first half where the rectangle's right angle is, y the other half's leaf-order index (its bits)
-  WtVec4 direction;  ///< spot/directional: unit world direction the light travels in; triangle: x its material's WT_ALPHA_* where it may have holes (0: none), y alphaCutoff, z the alpha factor, w = 1 when the base colour texture's alpha counts (lights/light_sampling.cl); primitive: w = 1 when both faces emit
-  WtVec4 intensity;  ///< point/spot: cd per channel; directional: lux; triangle, quad: nits (the material's emission)
+  WtVec4 position;   ///< point/spot: world position; triangle: w = 1 when both faces emit, y = 1 when its material's emission is textured (materials/textured.cl); quad: xyz the corner c at the rectangle's right angle, w as a triangle's
+  WtVec4 direction;  ///< spot/directional: unit world direction the light travels in; triangle: x its material's WT_ALPHA_* where it may have holes (0: none), y alphaCutoff, z the alpha factor, w = 1 when the base colour texture's alpha counts (lights/light_sampling.cl); primitive: w = 1 when both faces emit; quad: xyz the edge e1 from c, w the second half's leaf-order index (its bits)
+  WtVec4 intensity;  ///< point/spot: cd per channel; directional: lux; triangle, quad: nits (the material's emission); quad: w the x of the edge e2 from c
   wt_uint type;      ///< WT_LIGHT_*
   wt_uint triangle;  ///< WT_LIGHT_TRIANGLE: leaf-order triangle index; WT_LIGHT_QUAD: its first half's; WT_LIGHT_PRIMITIVE: the primitive's typed id (WT_PRIM_TYPE_SHIFT)
-  float cos_inner;   ///< spot: cosine of the inner cone angle (full intensity inside)
-  float cos_outer;   ///< spot: cosine of the outer cone angle (zero outside)
+  float cos_inner;   ///< spot: cosine of the inner cone angle (full intensity inside); quad: e2's y
+  float cos_outer;   ///< spot: cosine of the outer cone angle (zero outside); quad: e2's z
 } WtLight;
 
 /// One slot of the alias table that picks a light with probability
