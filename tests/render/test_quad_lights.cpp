@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
 #include <set>
 #include <utility>
@@ -107,6 +108,20 @@ TEST(QuadLights, FoundExactlyWhereTwoTrianglesMakeARectangle) {
     EXPECT_EQ(list.emitterQuad[q.second], light);
     EXPECT_EQ(list.lights[light].type, std::uint32_t(WT_LIGHT_QUAD));
     EXPECT_EQ(list.lights[light].triangle, q.first);
+    // the row's corner and edges: the first half's right-angle corner and its edges in float, bit for bit
+    // (the kernels sample from them and the emitter hit's pdf reads them); the second half's index
+    const WtLight& row = list.lights[light];
+    const WtTriangle& first = scene.triangles[order[q.first]];
+    const std::array<std::uint32_t, 3> v = {first.v0, first.v1, first.v2};
+    auto at = [&](std::uint32_t k) {
+      const WtVec4& p = scene.positions[v[(q.corner + k) % 3]];
+      return glm::vec3(p.x, p.y, p.z);
+    };
+    const glm::vec3 e1 = at(1) - at(0), e2 = at(2) - at(0);
+    EXPECT_EQ(glm::vec3(row.position.x, row.position.y, row.position.z), at(0));
+    EXPECT_EQ(glm::vec3(row.direction.x, row.direction.y, row.direction.z), e1);
+    EXPECT_EQ(glm::vec3(row.intensity.w, row.cos_inner, row.cos_outer), e2);
+    EXPECT_EQ(std::bit_cast<std::uint32_t>(row.direction.w), q.second);
     // pi L area, both halves' power: twice a triangle's of the same emission and half the area
     EXPECT_NEAR(list.alias[light].pmf / list.alias[triangleLight].pmf, 2.0, 1e-5);
     EXPECT_NEAR(list.emitterPdfArea[q.first], list.alias[light].pmf / rectArea, 1e-5 * list.emitterPdfArea[q.first]);
