@@ -68,6 +68,25 @@ inline uint prims_leaf_missed(GeometryScene g, uint first, uint count, float3 or
 #endif
 }
 
+/// Ask for what a hit child holds before the slot loop reads it, so that its
+/// miss overlaps the other children's work: a leaf's joint rows (the eight its
+/// reject reads) and refs, an inner node's two lines.
+inline void prims_prefetch_child(GeometryScene g, uint first, uint count) {
+#if !WT_NO_PREFETCH
+  if (count > 0) {
+    __global const float4* j = g.data + g.header.leaf_joints + WT_LEAF_JOINT_ROWS * first;
+    __builtin_prefetch(j, 0, 3);
+    __builtin_prefetch(j + 4, 0, 3);
+    __builtin_prefetch(j + 7, 0, 3);
+    __builtin_prefetch(g.refs + first, 0, 3);
+  } else {
+    __global const char* c = (__global const char*)&g.nodes[first & ~WT_BVH4_ORIENTED];
+    __builtin_prefetch(c, 0, 3);
+    __builtin_prefetch(c + 64, 0, 3);
+  }
+#endif
+}
+
 /// Node `node` of the primitive tree (its WT_BVH4_ORIENTED bit included)
 /// and its child boxes' slab test.
 inline __global const WtBvh4Node* bvh_prims_node(GeometryScene g, uint node, RayPlanes planes, float3 org,
@@ -101,6 +120,8 @@ inline bool bvh_prims_closest_root(GeometryScene g, uint root, float3 org, float
     __global const WtBvh4Node* n = bvh_prims_node(g, node, planes, org, dir, inv_d, tmin, hit->t, &hit4, &t4);
     float t_child[4] = {t4.s0, t4.s1, t4.s2, t4.s3};
     int hit_child[4] = {hit4.s0, hit4.s1, hit4.s2, hit4.s3};
+    for (int k = 0; k < 4; ++k)
+      if (hit_child[k]) prims_prefetch_child(g, n->child[k], n->count[k]);
     uint next = WT_BVH4_EMPTY;  // (uint: oriented nodes' indices have the top bit set)
     float next_t = INFINITY;
     for (int k = 0; k < 4; ++k) {
@@ -225,6 +246,8 @@ inline void bvh_prims_closest(BvhScene scene, GeometryScene g, float3 org, float
     __global const WtBvh4Node* n = bvh_prims_node(g, node, planes, org, dir, inv_d, tmin, hit->t, &hit4, &t4);
     float t_child[4] = {t4.s0, t4.s1, t4.s2, t4.s3};
     int hit_child[4] = {hit4.s0, hit4.s1, hit4.s2, hit4.s3};
+    for (int k = 0; k < 4; ++k)
+      if (hit_child[k]) prims_prefetch_child(g, n->child[k], n->count[k]);
     uint next = WT_BVH4_EMPTY;  // (uint: oriented nodes' indices have the top bit set)
     float next_t = INFINITY;
     for (int k = 0; k < 4; ++k) {

@@ -334,6 +334,9 @@ __attribute__((always_inline)) inline pint prims_packet_tree(GeometryScene g, ui
   do {
     __global const WtBvh4Node* n = &g.nodes[node & ~WT_BVH4_ORIENTED];
     bool framed = (node & WT_BVH4_ORIENTED) != 0;
+    // most children are entered by some lane: ask for them all while the boxes are tested
+    for (int k = 0; k < 4; ++k)
+      if (n->child[k] != WT_BVH4_EMPTY) prims_prefetch_child(g, n->child[k], n->count[k]);
     FramePacket f;
     if (framed) prims_packet_frame(n, p, &f);
     for (int k = 0; k < 4; ++k) {
@@ -387,6 +390,9 @@ __attribute__((always_inline)) inline pint prims_packet_walk(BvhScene scene, Geo
   do {
     __global const WtBvh4Node* n = &g.nodes[node & ~WT_BVH4_ORIENTED];
     bool framed = (node & WT_BVH4_ORIENTED) != 0;
+    // most children are entered by some lane: ask for them all while the boxes are tested
+    for (int k = 0; k < 4; ++k)
+      if (n->child[k] != WT_BVH4_EMPTY) prims_prefetch_child(g, n->child[k], n->count[k]);
     FramePacket f;
     if (framed) prims_packet_frame(n, p, &f);
     for (int k = 0; k < 4; ++k) {
