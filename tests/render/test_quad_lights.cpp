@@ -221,10 +221,20 @@ TEST(QuadLights, ShadeLanesRenderTheSameAsOnePathPerWorkItem) {
     }
     scene.triangles.push_back({first, first + 1, first + 2, material});
   }
+  // a tilted rectangle whose edges have distinct non-zero y and z (dyadic: exactly a
+  // rectangle in float), so that a lane reading an edge's components out of order shows
+  const std::uint32_t tilted = addMaterial(scene, makeMaterial(glm::vec3(0.0f), glm::vec3(8.0f), true), "tilted");
+  addRect(scene, {0.75f, 0.375f, -0.75f}, {1.0f, 0.25f, 0.5f}, {0.0f, 0.5f, -0.25f}, tilted);
   PunctualLight point;
   point.position = glm::vec3(-1.0f, 1.2f, 1.0f);
   point.intensity = glm::vec3(0.6f, 0.8f, 1.0f);
   scene.lights.push_back(point);
+  {
+    RenderSettings probe;
+    probe.width = probe.height = 4;
+    Renderer renderer(test::deviceContext(), scene, probe);
+    ASSERT_EQ(findQuadLights(scene, renderer.sceneBuffers()).size(), 3u) << "the tilted rectangle is one light";
+  }
   for (LightSampler sampler : {LightSampler::Power, LightSampler::Tree}) {
     RenderSettings settings;
     settings.width = settings.height = 32;
